@@ -1,0 +1,44 @@
+"""``pltf``: the toolkit's one command line.
+
+Subcommands register themselves in ``COMMANDS`` (a table, not a chain of ifs); each module adds its own
+arguments and a ``run(args) -> int``. Errors a user can cause print one line on stderr and exit 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+from collections.abc import Sequence
+
+# name -> (module, help). The module defines add_arguments(parser) and run(args) -> int.
+COMMANDS: dict[str, tuple[str, str]] = {
+    "decode": ("pltf_cli.codec_cmds", "decode frames (hex) into JSON, one object per telegram"),
+    "encode": ("pltf_cli.codec_cmds", "encode a telegram from its name and fields JSON into hex"),
+}
+
+
+def make_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="pltf", description="Neobotix PlatformCtrl protocol toolkit")
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+    for name, (module, help_text) in COMMANDS.items():
+        mod = importlib.import_module(module)
+        p = sub.add_parser(name, help=help_text, description=help_text)
+        getattr(mod, f"add_{name.replace('-', '_')}_arguments")(p)
+        p.set_defaults(_run=getattr(mod, f"run_{name.replace('-', '_')}"))
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = make_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args._run(args))
+    except KeyboardInterrupt:
+        return 130
+    except BrokenPipeError:
+        return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
