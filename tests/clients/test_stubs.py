@@ -230,3 +230,14 @@ def test_smoke_against_live_reference_server(lang: str, stub_builds: dict[str, F
     value = _smoke(_built(lang, stub_builds), host, int(port))
     assert isinstance(value["x"], int) and isinstance(value["y"], int)
     assert isinstance(value["angle"], (int, float))
+
+
+# ------------------------------------------------------------------------------------------ formatting
+
+
+def test_go_is_gofmt_clean() -> None:
+    """Generated Go is reviewed as Go: it must be exactly what gofmt would print."""
+    if "go" not in LANGS or shutil.which("gofmt") is None:
+        pytest.skip("TOOLCHAIN MISSING for go: gofmt not on PATH")
+    proc = _run(["gofmt", "-l", "."], GENERATED / "go", 60)
+    assert proc.returncode == 0 and proc.stdout.strip() == "", _tail(proc)
