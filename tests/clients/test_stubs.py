@@ -241,3 +241,13 @@ def test_go_is_gofmt_clean() -> None:
         pytest.skip("TOOLCHAIN MISSING for go: gofmt not on PATH")
     proc = _run(["gofmt", "-l", "."], GENERATED / "go", 60)
     assert proc.returncode == 0 and proc.stdout.strip() == "", _tail(proc)
+
+
+def test_rust_is_rustfmt_clean(tmp_path: Path) -> None:
+    """wire.rs and the programs are as rustfmt prints them; the per-telegram modules are #[rustfmt::skip]."""
+    if "rust" not in LANGS or shutil.which("rustfmt") is None:
+        pytest.skip("TOOLCHAIN MISSING for rust: rustfmt not on PATH")
+    generate("rust", tmp_path)
+    proc = _run(["rustfmt", "--check", "--edition", "2021", "src/lib.rs", "src/bin/smoke.rs", "src/bin/vectors.rs"],
+                tmp_path, 60)
+    assert proc.returncode == 0, _tail(proc)
