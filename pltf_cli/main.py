@@ -15,6 +15,7 @@ from collections.abc import Sequence
 COMMANDS: dict[str, tuple[str, str]] = {
     "decode": ("pltf_cli.codec_cmds", "decode frames (hex) into JSON, one object per telegram"),
     "encode": ("pltf_cli.codec_cmds", "encode a telegram from its name and fields JSON into hex"),
+    "serve": ("pltf_cli.serve_cmd", "run the reference server (PlatformCtrl stand-in) on two TCP ports"),
     "stubs": ("pltf_cli.stubs_cmd", "generate the client stubs of one language (or --check a generated copy)"),
 }
 

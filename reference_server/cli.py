@@ -1,0 +1,93 @@
+"""Command line of the reference server: ``python -m reference_server`` and ``pltf serve`` share it.
+
+Rules: options are parsed here, the data dir is opened (and seeded from the repository's fixtures when it is
+empty), then reference_server.network runs until CMD_EXIT or a signal. User errors print one line on stderr
+and exit 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+from collections.abc import Sequence
+
+from reference_server import network
+from reference_server.platform import Platform
+from reference_server.storage import Storage
+
+LOG_FORMAT = "%(asctime)s.%(msecs)03d %(levelname)-7s %(message)s"
+LOG_DATE = "%Y-%m-%d %H:%M:%S"
+DEFAULT_PORTS = (10000, 10002)  # guide 6.1: "listens for clients on the socket ports 10000 and 10002"
+
+log = logging.getLogger("pltf.server")
+
+
+def parse_ports(text: str) -> list[int]:
+    try:
+        ports = [int(part) for part in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected comma-separated port numbers, got {text!r}") from None
+    if not ports or any(not 0 <= p <= 65535 for p in ports):
+        raise argparse.ArgumentTypeError(f"ports must be 0..65535 (0: any free port), got {text!r}")
+    return ports
+
+
+def positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not 0 < value < float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}")
+    return value
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1)")
+    p.add_argument(
+        "--ports",
+        type=parse_ports,
+        default=list(DEFAULT_PORTS),
+        help="comma-separated ports, 0 = any free port (default 10000,10002)",
+    )
+    p.add_argument("--data-dir", default="data", help="the platform's hard disk; seeded from fixtures/ when empty")
+    p.add_argument(
+        "--time-scale",
+        type=positive_float,
+        default=1.0,
+        help="simulated seconds per wall second (default 1)",
+    )
+    p.add_argument("--seed", type=int, default=0, help="seed of the simulation's random numbers (default 0)")
+    p.add_argument(
+        "--log-level",
+        default="INFO",
+        choices=["DEBUG", "INFO", "WARNING", "ERROR"],
+        help="log level (default INFO)",
+    )
+
+
+def run(args: argparse.Namespace) -> int:
+    logging.basicConfig(level=args.log_level, format=LOG_FORMAT, datefmt=LOG_DATE, stream=sys.stderr, force=True)
+    try:
+        storage = Storage(args.data_dir)
+    except OSError as exc:
+        print(f"pltf: error: data dir {args.data_dir}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    seeded = storage.seed_from_fixtures()
+    if seeded:
+        log.info("data dir %s was empty: seeded %d files from fixtures", storage.root, len(seeded))
+    platform = Platform(storage, seed=args.seed)
+    try:
+        return network.run(platform, args.host, args.ports, args.time_scale)
+    except OSError as exc:
+        print(f"pltf: error: cannot listen on {args.host} {args.ports}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:  # a signal before the handlers were installed
+        return 0
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m reference_server", description="PlatformCtrl reference server")
+    add_arguments(parser)
+    return run(parser.parse_args(argv))
