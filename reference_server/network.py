@@ -20,6 +20,7 @@ import asyncio
 import contextlib
 import functools
 import logging
+import math
 import signal
 from collections.abc import Callable, Sequence
 
@@ -31,7 +32,7 @@ log = logging.getLogger("pltf.server")
 
 CONTROL_PERIOD = 0.02  # simulated s (50 Hz)
 STALL_TIMEOUT = 5.0  # wall s a partial frame may wait for its rest
-MAX_CATCH_UP = 50  # ticks run at once before the loop gives up catching up
+MAX_CATCH_UP = 500  # periods (10 s simulated) caught up at once; beyond that they are skipped
 READ_SIZE = 65536
 
 
@@ -84,13 +85,18 @@ class Server:
 
     async def start(self) -> list[int]:
         self._clock = SimClock(asyncio.get_running_loop(), self.time_scale)
-        for index, port in enumerate(self.requested_ports):
-            listener = await asyncio.start_server(
-                functools.partial(self._client, index=index), self.host, port, reuse_address=True
-            )
-            self._listeners.append(listener)
-            self.ports.append(listener.sockets[0].getsockname()[1])
-            log.info("server started at port %d", self.ports[-1])
+        try:
+            for index, port in enumerate(self.requested_ports):
+                listener = await asyncio.start_server(
+                    functools.partial(self._client, index=index), self.host, port, reuse_address=True
+                )
+                self._listeners.append(listener)
+                self.ports.append(listener.sockets[0].getsockname()[1])
+                log.info("server started at port %d", self.ports[-1])
+        except OSError:
+            for listener in self._listeners:
+                listener.close()
+            raise
         return self.ports
 
     def stop(self) -> None:
@@ -120,10 +126,13 @@ class Server:
     async def _simulate(self) -> None:
         clock, loop = self.clock, asyncio.get_running_loop()
         ticks = int(clock.now() / CONTROL_PERIOD)
+        warned_at = -math.inf
         while True:
             due = int(clock.now() / CONTROL_PERIOD) - ticks
-            if due > MAX_CATCH_UP:
-                log.warning("control loop %d periods behind: skipped", due - 1)
+            if due > MAX_CATCH_UP:  # the loop was blocked (or the time scale is beyond this machine)
+                if ticks * CONTROL_PERIOD - warned_at >= 10.0:
+                    log.warning("control loop %d periods behind: skipped", due - 1)
+                    warned_at = ticks * CONTROL_PERIOD
                 ticks += due - 1
                 due = 1
             for _ in range(due):
@@ -150,6 +159,8 @@ class Server:
             log.warning("client %s at port %d: %s: %s; connection closed", peer, port, type(exc).__name__, exc)
         except (ConnectionError, OSError) as exc:
             log.warning("client %s at port %d: %s; connection closed", peer, port, exc)
+        except Exception:  # a bug of the platform model must not take the server down
+            log.exception("client %s at port %d: internal error; connection closed", peer, port)
         finally:
             del self._busy[index]
             writer.close()

@@ -298,3 +298,39 @@ def test_simulated_time_follows_the_time_scale(server: ServerThread) -> None:
         assert time.monotonic() - start < 2.3 / server.time_scale * 3 + 0.1
         s = c.status()
         assert abs(s.est_x - (HOME[0] + 1000)) <= 20 and s.est_y == HOME[1]
+
+
+def test_emergency_stop_is_seen_over_tcp(server: ServerThread) -> None:
+    def press(pressed: bool) -> None:
+        server.platform.set_emergency(pressed, server.server.clock.now())  # type: ignore[union-attr]
+
+    with Client(server.ports[0]) as c:
+        go_to(c, State.RUNNING)
+        c.send(R.CMD_MOVE_REL(x=2000, y=0, angle=0))
+        wait_for(lambda: c.status().vel_trans > 0)
+        server.call(press, True)
+        s = c.status()
+        assert (s.emergency_state, s.operation_state, s.vel_trans) == (1, OperationState.ST_OP_READY, 0)
+        c.send(R.CMD_START())
+        assert c.status().operation_state == OperationState.ST_OP_READY  # refused while the stop is active
+        server.call(press, False)
+        assert c.status().emergency_state == 2  # ST_EM_RESET
+        wait_for(lambda: c.status().emergency_state == 0, timeout=2)  # after 1 s simulated
+        c.send(R.CMD_START())
+        assert c.status().operation_state == OperationState.ST_OP_RUNNING
+
+
+def test_an_internal_error_closes_only_that_connection(server: ServerThread, monkeypatch: pytest.MonkeyPatch) -> None:
+    from reference_server import platform
+
+    def broken(*args: object) -> None:
+        raise RuntimeError("bug")
+
+    monkeypatch.setitem(platform._HANDLERS, "CMD_SPEAK_TEXT", broken)
+    with Client(server.ports[1]) as bystander:
+        bystander.status()
+        with Client(server.ports[0]) as c:
+            c.send(R.CMD_SPEAK_TEXT(text="hello"))
+            assert c.closed_by_server()
+        assert bystander.status().NAME == "CMD_GET_STATUS"
+    assert server.alive
