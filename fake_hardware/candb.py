@@ -1,0 +1,132 @@
+"""The platform's CAN database (``spec/can/pltf.dbc``), loaded once with cantools, and the node table.
+
+Rules:
+- Identifiers, signals, scales, units and cycle times live in the DBC only. Code names a message by node and
+  function (``message_for(Node.MOTOR_RIGHT, "Encoder")`` is ``MotorRight_Encoder``); no id is written in Python.
+- Identifier = node * 0x100 + function (erratum E-HW-001): 0x01-0x05 probe / self test / shutdown, 0x10-0x1F
+  commands to the node, 0x20-0x2F data from the node; 0x700-0x7FF is left to applications.
+- Status words are shared by every board (erratum E-HW-006): the low byte comes from the board, the second byte
+  is added by the controller, ``ABSENT`` (-1) stands for a node that is not connected.
+"""
+
+from __future__ import annotations
+
+import enum
+import functools
+from collections.abc import Mapping
+from typing import Any
+
+import can
+import cantools
+from cantools.database.can import Database, Message
+
+from spec.model import SPEC_DIR
+
+DBC_PATH = SPEC_DIR / "can" / "pltf.dbc"
+Signals = Mapping[str, Any]
+
+
+class Node(enum.IntEnum):
+    """CAN node numbers: 0-3 from the Neobotix driver code (field evidence), 4-6 ours (erratum E-HW-001)."""
+
+    IOBOARD = 0
+    MOTOR_RIGHT = 1  # CANNODE_MOTORRIGHT of CMD_SET_BRAKE
+    MOTOR_LEFT = 2  # CANNODE_MOTORLEFT
+    USBOARD = 3
+    RELAYBOARD = 4
+    RADARBOARD = 5
+    GYROBOARD = 6
+
+
+ALL_NODES: tuple[Node, ...] = tuple(Node)
+MOTORS: tuple[Node, Node] = (Node.MOTOR_RIGHT, Node.MOTOR_LEFT)
+PREFIX: dict[Node, str] = {
+    Node.IOBOARD: "IoBoard",
+    Node.MOTOR_RIGHT: "MotorRight",
+    Node.MOTOR_LEFT: "MotorLeft",
+    Node.USBOARD: "UsBoard",
+    Node.RELAYBOARD: "RelayBoard",
+    Node.RADARBOARD: "RadarBoard",
+    Node.GYROBOARD: "GyroBoard",
+}
+APPLICATION_IDS = range(0x700, 0x800)  # never used by a board: free for CMD_SEND_CAN_MESSAGE
+
+
+class St:
+    """Status bits (erratum E-HW-006). Low byte: reported by the board in its frames."""
+
+    NOT_INITIALIZED = 0x01
+    SELFTEST_FAILED = 0x02
+    EMERGENCY_STOP = 0x04
+    OVER_TEMPERATURE = 0x08
+    # board specific, 0x10-0x80
+    BRAKE_ENGAGED = 0x10  # motor
+    SETPOINT_TIMEOUT = 0x20  # motor
+    STALL = 0x40  # motor: the wheel does not turn although driven
+    LOW_BATTERY = 0x10  # IO board
+    MEASURING = 0x10  # ultrasonic board
+    # second byte: added by the controller
+    NODE_TIMEOUT = 0x100  # no frame from the node for NODE_TIMEOUT seconds
+    FRAMES_LOST = 0x200  # a gap in a rolling counter within the last second
+    BUS_OFF = 0x400  # the controller's CAN interface is bus-off
+    ABSENT = -1  # not connected: not fitted, no answer to the probe, or the bus is not connected
+
+
+@functools.cache
+def database() -> Database:
+    db = cantools.database.load_file(str(DBC_PATH), strict=True)
+    assert isinstance(db, Database)
+    return db
+
+
+def message_for(node: Node, function: str) -> Message:
+    return database().get_message_by_name(f"{PREFIX[node]}_{function}")
+
+
+@functools.cache
+def _by_id() -> dict[int, Message]:
+    return {m.frame_id: m for m in database().messages}
+
+
+def message_by_id(can_id: int) -> Message | None:
+    return _by_id().get(can_id)
+
+
+def node_of(can_id: int) -> Node | None:
+    """The node owning an identifier of the database (None for application ids)."""
+    m = message_by_id(can_id)
+    return None if m is None else Node(can_id >> 8)
+
+
+def cycle_time(msg: Message) -> float | None:
+    """The cycle time of a cyclic message in seconds (DBC attribute GenMsgCycleTime), None when event driven."""
+    return None if not msg.cycle_time else msg.cycle_time / 1000.0
+
+
+@functools.cache
+def _bounds(msg: Message) -> dict[str, tuple[float, float]]:
+    return {
+        s.name: (float(s.minimum), float(s.maximum))
+        for s in msg.signals
+        if s.minimum is not None and s.maximum is not None
+    }
+
+
+def build(msg: Message, signals: Signals, now: float) -> can.Message:
+    """A frame of ``msg`` stamped with simulated time ``now``; values are clamped to the signals' ranges."""
+    bounds = _bounds(msg)
+    values = {}
+    for name, value in signals.items():
+        lo, hi = bounds[name]
+        values[name] = lo if value < lo else hi if value > hi else value
+    data = msg.encode(values, scaling=True, strict=False)
+    return can.Message(arbitration_id=msg.frame_id, data=data, is_extended_id=False, timestamp=now)
+
+
+def decode(msg: Message, frame: can.Message) -> dict[str, Any] | None:
+    """The signals of a frame, or None when it is too short for ``msg`` (longer frames are accepted)."""
+    if len(frame.data) < msg.length:
+        return None
+    out = msg.decode(bytes(frame.data[: msg.length]), decode_choices=False)
+    assert isinstance(out, dict)
+    return out

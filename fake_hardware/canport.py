@@ -1,0 +1,161 @@
+"""One node's attachment to the CAN bus: a python-can bus plus the faults that can sit between them.
+
+Rules:
+- Every node (each board and the controller) owns one ``CanPort`` on its own python-can bus object, all on the
+  same channel, as real nodes each have a transceiver. Nothing else touches the python-can bus.
+- Sans-IO in spirit: ``send(frame, now)`` and ``poll(now)`` take simulated time and never block
+  (``recv(timeout=0)``). A frame's timestamp is the simulated time it went on the bus.
+- ``interface="virtual"`` opens ``SimVirtualBus``: python-can's virtual bus (same channel registry, so a plain
+  virtual bus on the channel - a test's sniffer - sees and sends the same traffic) with a cheaper delivery:
+  one shared copy of a frame for all receivers and a ``SimpleQueue`` inbox. Receivers must not mutate frames.
+- Faults are plain attributes: ``connected`` (unplugged: nothing in, nothing out), ``bus_off`` (the same, and
+  the port says so), ``loss`` / ``delay`` (this sender only) on top of the channel-wide ``BusConditions``.
+  Delayed frames wait in the port and go out at the first ``send``/``poll`` at or after their due time.
+"""
+
+from __future__ import annotations
+
+import queue
+import random
+from collections import deque
+from dataclasses import dataclass, field
+from typing import Any
+
+import can
+from can.interfaces import virtual
+
+
+@dataclass
+class BusConditions:
+    """Faults of the whole channel (every sender): frame loss probability and transmission delay (s)."""
+
+    rng: random.Random = field(default_factory=lambda: random.Random(0))
+    loss: float = 0.0
+    delay: float = 0.0
+
+
+class SimVirtualBus(virtual.VirtualBus):
+    """The virtual bus with simulated timestamps kept and a cheap fan-out (see the module rules)."""
+
+    def __init__(self, channel: str, **kwargs: Any) -> None:
+        super().__init__(channel=channel, preserve_timestamps=True, **kwargs)
+        inbox: queue.SimpleQueue[can.Message] = queue.SimpleQueue()
+        with virtual.channels_lock:
+            self.channel[self.channel.index(self.queue)] = inbox  # type: ignore[call-overload]
+            self.queue = inbox  # type: ignore[assignment]
+
+    def send(self, msg: can.Message, timeout: float | None = None) -> None:
+        self._check_if_open()
+        shared = can.Message(
+            timestamp=msg.timestamp,
+            arbitration_id=msg.arbitration_id,
+            is_extended_id=msg.is_extended_id,
+            is_remote_frame=msg.is_remote_frame,
+            is_error_frame=msg.is_error_frame,
+            channel=self.channel_id,
+            dlc=msg.dlc,
+            data=bytes(msg.data),
+            is_rx=True,
+        )
+        own = self.queue
+        for inbox in self.channel:
+            if inbox is not own:
+                inbox.put(shared)
+
+    def drain(self) -> list[can.Message]:
+        """Everything in the inbox, without blocking (the fast path of ``CanPort.poll``)."""
+        self._check_if_open()
+        out: list[can.Message] = []
+        get = self.queue.get_nowait
+        try:
+            while True:
+                out.append(get())
+        except queue.Empty:
+            return out
+
+
+def open_bus(interface: str, channel: str, **kwargs: Any) -> can.BusABC:
+    """A python-can bus: ``SimVirtualBus`` for ``virtual``, else ``can.Bus`` (socketcan on vcan0, a real adapter)."""
+    if interface == "virtual":
+        return SimVirtualBus(channel, **kwargs)
+    return can.Bus(interface=interface, channel=channel, **kwargs)
+
+
+@dataclass
+class PortStats:
+    sent: int = 0
+    received: int = 0
+    dropped_tx: int = 0  # lost, unplugged or bus-off
+    discarded_rx: int = 0  # arrived while unplugged or bus-off
+
+
+class CanPort:
+    def __init__(self, bus: can.BusABC, conditions: BusConditions | None = None, name: str = "") -> None:
+        self.bus = bus
+        self.conditions = conditions or BusConditions()
+        self.name = name
+        self.connected = True
+        self.bus_off = False
+        self.loss = 0.0
+        self.delay = 0.0
+        self.stats = PortStats()
+        self._pending: deque[tuple[float, can.Message]] = deque()
+
+    @property
+    def attached(self) -> bool:
+        return self.connected and not self.bus_off
+
+    def send(self, frame: can.Message, now: float) -> bool:
+        """Put a frame on the bus (or into the delay line); False when it is lost."""
+        self._flush(now)
+        if not self.attached:
+            self.stats.dropped_tx += 1
+            return False
+        cond = self.conditions
+        loss = self.loss + cond.loss
+        if loss > 0.0 and cond.rng.random() < loss:
+            self.stats.dropped_tx += 1
+            return False
+        delay = self.delay + cond.delay
+        if delay > 0.0:
+            self._pending.append((now + delay, frame))
+            return True
+        self._transmit(frame, now)
+        return True
+
+    def poll(self, now: float) -> list[can.Message]:
+        """Every frame that arrived since the last poll (none while unplugged or bus-off)."""
+        self._flush(now)
+        if isinstance(self.bus, SimVirtualBus):
+            out = self.bus.drain()
+        else:
+            out = []
+            recv = self.bus.recv
+            while (frame := recv(timeout=0)) is not None:
+                out.append(frame)
+        if not self.attached:
+            self.stats.discarded_rx += len(out)
+            return []
+        self.stats.received += len(out)
+        return out
+
+    def close(self) -> None:
+        self.bus.shutdown()
+
+    def _flush(self, now: float) -> None:
+        pending = self._pending
+        while pending and pending[0][0] <= now:
+            _, frame = pending.popleft()
+            if self.attached:
+                self._transmit(frame, now)
+            else:
+                self.stats.dropped_tx += 1
+
+    def _transmit(self, frame: can.Message, now: float) -> None:
+        frame.timestamp = now
+        try:
+            self.bus.send(frame, timeout=0)
+        except can.CanError:
+            self.stats.dropped_tx += 1
+            return
+        self.stats.sent += 1
