@@ -1,0 +1,255 @@
+"""The blocking client: one TCP socket with timeouts, around the sans-IO ``ClientCore``.
+
+Rules:
+- All protocol decisions live in ``core`` (framing, reply routing) and ``waits`` (wait verdicts); this
+  module only moves bytes, keeps time and sleeps.
+- A reply is read by the caller that waits for it: there is no reader thread. A lock serialises callers,
+  so one client may be shared by threads (their requests simply take turns).
+- Any transport or protocol failure closes the socket; every later call raises ConnectionClosed.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import socket
+import threading
+import time
+from collections.abc import Callable
+from types import TracebackType
+
+from clients.pltf_client._commands import Commands
+from clients.pltf_client._enums import MotionMode, OperationState
+from clients.pltf_client._replies import Status
+from clients.pltf_client.core import ClientCore, PendingReply
+from clients.pltf_client.errors import ConnectionClosed, InvalidArgument, ProtocolError, Timeout
+from clients.pltf_client.waits import ConditionWait, Judge, ModeWait, StateWait, TargetWait
+from spec.codec import DEFAULT_MAX_LENGTH, build
+from spec.telegram import Telegram
+
+DEFAULT_PORT = 10002  # guide 4.2: PlatformCtrl listens on 10000 and 10002; the field client's default
+DEFAULT_TIMEOUT = 5.0
+
+WireLog = Callable[[str, bytes], None]
+"""``wire_log(direction, data)``: ``"send"`` with each whole frame, ``"recv"`` with each chunk read."""
+
+
+class PlatformClient(Commands):
+    """A blocking connection to PlatformCtrl: one method per command, typed replies, waits.
+
+    Connects in the constructor; use it as a context manager (or call ``close``) to close the socket::
+
+        with PlatformClient("127.0.0.1", 10002) as pltf:
+            pltf.connect_to_pltf()
+            pltf.init_pltf()
+            pltf.wait_state(OperationState.ST_OP_READY, timeout=10)
+
+    Args:
+        host: the platform PC's address.
+        port: its PlatformCtrl port (guide 4.2: 10000 or 10002; one client per port).
+        timeout: default seconds to wait for a reply (each GET_* method takes its own ``timeout`` too).
+        connect_timeout: seconds to wait for the TCP connection.
+        wire_log: optional callback ``(direction, data)`` seeing every frame sent and every chunk received.
+        max_length: largest reply frame accepted, in data bytes (erratum E-WIRE-004).
+
+    Raises:
+        ConnectionClosed: the TCP connection could not be made (the OSError is the cause).
+    """
+
+    def __init__(
+        self,
+        host: str = "127.0.0.1",
+        port: int = DEFAULT_PORT,
+        *,
+        timeout: float = DEFAULT_TIMEOUT,
+        connect_timeout: float = DEFAULT_TIMEOUT,
+        wire_log: WireLog | None = None,
+        max_length: int = DEFAULT_MAX_LENGTH,
+    ) -> None:
+        self.host = host
+        self.port = port
+        self.timeout = timeout
+        self.wire_log = wire_log
+        self.core = ClientCore(max_length)
+        self._lock = threading.RLock()
+        try:
+            self._sock: socket.socket = socket.create_connection((host, port), timeout=connect_timeout)
+        except OSError as exc:
+            self.core.connection_lost(f"cannot connect to {host}:{port}: {exc}")
+            raise ConnectionClosed(f"cannot connect to {host}:{port}: {exc}") from exc
+        self._sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+
+    # ------------------------------------------------------------------------------------ lifecycle
+    def __enter__(self) -> PlatformClient:
+        return self
+
+    def __exit__(
+        self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        self.close()
+
+    def __repr__(self) -> str:
+        return f"<PlatformClient {self.host}:{self.port}{' closed' if self.closed else ''}>"
+
+    @property
+    def closed(self) -> bool:
+        """True once the connection is closed (by ``close``, by the peer or after a protocol error)."""
+        return self.core.closed
+
+    def close(self) -> None:
+        """Close the socket (idempotent). Requests still waiting fail with ConnectionClosed."""
+        self.core.close()
+        if self._sock.fileno() != -1:
+            with contextlib.suppress(OSError):  # the peer may be gone already
+                self._sock.shutdown(socket.SHUT_RDWR)
+            self._sock.close()
+
+    # ------------------------------------------------------------------------------------ telegrams
+    def send(self, telegram: Telegram) -> PendingReply | None:
+        """Send one request telegram; returns its PendingReply when the platform answers it (GET_*).
+
+        Raises:
+            InvalidArgument: a field value cannot be encoded.
+            ConnectionClosed: the connection is closed or sending failed.
+        """
+        with self._lock:
+            frame, pending = self.core.send(telegram)
+            if self.wire_log is not None:
+                self.wire_log("send", frame)
+            try:
+                self._sock.settimeout(self.timeout)
+                self._sock.sendall(frame)
+            except OSError as exc:
+                self._lost(f"sending {telegram.NAME} failed: {exc}")
+                raise ConnectionClosed(f"sending {telegram.NAME} failed: {exc}") from exc
+            return pending
+
+    def wait_reply(self, pending: PendingReply, timeout: float | None = None) -> Telegram:
+        """Wait for the reply of a request sent with ``send`` (replies to other requests are kept for them).
+
+        Raises:
+            Timeout: no reply within ``timeout`` (default: the client's); its late reply will be dropped.
+            ConnectionClosed, ProtocolError: the connection ended (it is closed).
+        """
+        wait = self.timeout if timeout is None else timeout
+        deadline = time.monotonic() + wait
+        with self._lock:
+            while not pending.done:
+                remaining = deadline - time.monotonic()
+                if remaining <= 0:
+                    self.core.abandon(pending)
+                    raise Timeout(f"no reply to {pending.request.NAME} within {wait:g} s")
+                self._receive(remaining)
+        return pending.result()
+
+    def request(self, telegram: Telegram, timeout: float | None = None) -> Telegram:
+        """Send an answered request (a GET_*) and return its reply telegram.
+
+        Raises:
+            InvalidArgument: the telegram is not answered, or a field value cannot be encoded.
+            Timeout, ConnectionClosed, ProtocolError: as ``wait_reply``.
+        """
+        if not telegram.DEF.answered:
+            raise InvalidArgument(f"{telegram.NAME} is not answered (guide 6.1): use send()")
+        pending = self.send(telegram)
+        assert pending is not None  # an answered request always gets one
+        return self.wait_reply(pending, timeout)
+
+    def _receive(self, timeout: float) -> None:
+        try:
+            self._sock.settimeout(timeout)
+            data = self._sock.recv(65536)
+        except TimeoutError:
+            return
+        except OSError as exc:
+            self._lost(f"receiving failed: {exc}")
+            return
+        if self.wire_log is not None and data:
+            self.wire_log("recv", data)
+        try:
+            self.core.receive_data(data)
+        except ProtocolError:
+            self.close()
+            raise
+        if not data:
+            self.close()
+
+    def _lost(self, reason: str) -> None:
+        self.core.connection_lost(reason)
+        self.close()
+
+    # ------------------------------------------------------------------------------------ waits
+    def _poll(self, judge: Judge, poll: float) -> Status:
+        while True:
+            pending = self.send(self._status_request())
+            assert pending is not None  # CMD_GET_STATUS is answered
+            status = Status.from_telegram(self.wait_reply(pending))
+            now = time.monotonic()
+            if judge.observe(status, now, pending.seq):
+                return status
+            time.sleep(min(poll, judge.remaining(now)))
+
+    @staticmethod
+    def _status_request() -> Telegram:
+        return build("request", "CMD_GET_STATUS")
+
+    def wait_state(self, state: OperationState, timeout: float = 10.0, poll: float = 0.05) -> Status:
+        """Poll the status until the operation state is ``state``; returns that status.
+
+        Args:
+            state: the operation state to wait for (guide 4.2 figure 2).
+            timeout: seconds to wait.
+            poll: seconds between two status requests.
+
+        Raises:
+            CommandRejected: the last state command sent (CMD_INIT_PLTF, CMD_START, CMD_BREAK, CMD_CONTINUE,
+                CMD_STOP, CMD_SHUTDOWN_PLTF) leads to ``state`` and the state never came: the message says what
+                the guide requires.
+            Timeout: the state did not come (and no command sent here explains it).
+        """
+        return self._poll(StateWait(state, self.core.last_sent, time.monotonic(), timeout), poll)
+
+    def wait_mode(self, mode: MotionMode, timeout: float = 10.0, poll: float = 0.05) -> Status:
+        """Poll the status until the motion mode is ``mode``; returns that status.
+
+        Raises:
+            CommandRejected: CMD_SET_MODE was sent and the mode did not change (it needs state Ready).
+            Timeout: the mode did not come.
+        """
+        return self._poll(ModeWait(mode, self.core.last_sent, time.monotonic(), timeout), poll)
+
+    def wait_target_reached(self, timeout: float = 60.0, poll: float = 0.05) -> Status:
+        """Poll the status until the platform reports its target reached; returns that status.
+
+        Only statuses requested after the last move command (CMD_MOVE_ABS, _REL, _PATH, _TO_STATION) count.
+
+        Raises:
+            CommandRejected: the status shows the move cannot run: the state is not Running/Breaked, the
+                mode is not MODE_MOTION_AUTOMATIC (guide 4.3), or the planner failed.
+            Timeout: the target was not reached in time (the message gives the pose and planner state).
+        """
+        return self._poll(TargetWait(self.core.last_sent, time.monotonic(), timeout), poll)
+
+    def wait_until(
+        self, condition: Callable[[Status], bool], timeout: float = 10.0, poll: float = 0.05, what: str = "condition"
+    ) -> Status:
+        """Poll the status until ``condition(status)`` is true; returns that status.
+
+        Raises:
+            Timeout: the condition did not hold within ``timeout`` (the message names ``what``).
+        """
+        return self._poll(ConditionWait(condition, what, time.monotonic(), timeout), poll)
+
+    def bring_up(self, timeout: float = 10.0, poll: float = 0.05) -> Status:
+        """Connect and initialize the platform (CMD_CONNECT_TO_PLTF, CMD_INIT_PLTF) and wait for state Ready.
+
+        Does nothing but the wait when the platform is already initialized.
+
+        Raises:
+            CommandRejected, Timeout: as ``wait_state``.
+        """
+        status = self.get_status()
+        if status.operation_state != OperationState.ST_OP_NOT_INITIALIZED:
+            return status
+        self.connect_to_pltf()
+        self.init_pltf()
+        return self.wait_state(OperationState.ST_OP_READY, timeout, poll)
