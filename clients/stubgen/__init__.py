@@ -16,7 +16,7 @@ import importlib
 from collections.abc import Callable
 from pathlib import Path
 
-LANGS = ("python", "go", "rust", "typescript")  # cpp and java land next
+LANGS = ("python", "cpp", "java", "typescript", "go", "rust")
 TEMPLATES = Path(__file__).resolve().parent / "templates"
 # Build outputs the generated smoke.sh and the usual tools leave beside the sources: never compared.
 BUILD_OUTPUTS = ("build", "target", "node_modules", "dist", "Cargo.lock", "package-lock.json", "__pycache__")

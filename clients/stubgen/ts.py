@@ -192,7 +192,10 @@ BUILD_SH = """#!/bin/sh
 set -e
 cd "$(dirname "$0")"
 [ -x node_modules/.bin/tsc ] || npm install --no-audit --no-fund --prefer-offline --loglevel=error >/dev/null
-node_modules/.bin/tsc -p .
+if [ ! -f dist/.stamp ] || [ -n "$(find src tsconfig.json -newer dist/.stamp)" ]; then
+  node_modules/.bin/tsc -p .
+  touch dist/.stamp
+fi
 """
 SMOKE_SH = """#!/bin/sh
 {banner}# sh smoke.sh HOST PORT: build, then connect, init and print the position as one JSON line.

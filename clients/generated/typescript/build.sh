@@ -4,4 +4,7 @@
 set -e
 cd "$(dirname "$0")"
 [ -x node_modules/.bin/tsc ] || npm install --no-audit --no-fund --prefer-offline --loglevel=error >/dev/null
-node_modules/.bin/tsc -p .
+if [ ! -f dist/.stamp ] || [ -n "$(find src tsconfig.json -newer dist/.stamp)" ]; then
+  node_modules/.bin/tsc -p .
+  touch dist/.stamp
+fi
