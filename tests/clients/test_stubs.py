@@ -13,10 +13,13 @@ from __future__ import annotations
 import asyncio
 import json
 import os
+import re
 import shutil
+import socket
 import subprocess
 import sys
 import threading
+import time
 from collections.abc import Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
@@ -25,7 +28,7 @@ import pytest
 
 from clients.stubgen import LANGS, check, generate, render
 from clients.stubgen import vectors as stub_vectors
-from spec.codec import REPLIES, TelegramDecoder, encode
+from spec.codec import REPLIES, REQUESTS, TelegramDecoder, encode
 
 REPO = Path(__file__).resolve().parents[2]
 GENERATED = REPO / "clients" / "generated"
@@ -77,6 +80,16 @@ def test_check_reports_an_edited_file(tmp_path: Path) -> None:
     (tmp_path / "smoke.py").write_text("edited\n")
     (tmp_path / "extra.py").write_text("")
     assert check("python", tmp_path) == ["stale: smoke.py", "not generated: extra.py"]
+
+
+def test_pltf_stubs_writes_and_checks(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    from pltf_cli.main import main
+
+    assert main(["stubs", "--lang", "go", "--out", str(tmp_path)]) == 0
+    assert main(["stubs", "--lang", "go", "--check", str(tmp_path)]) == 0
+    (tmp_path / "protocol.go").write_text("package platformctrl\n")
+    assert main(["stubs", "--lang", "go", "--check", str(tmp_path)]) == 1
+    assert "stale: protocol.go" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize("lang", LANGS)
@@ -214,22 +227,87 @@ def test_smoke_against_fake_server(lang: str, stub_builds: dict[str, Future[Path
     assert fake_server.seen[before:] == [["CMD_CONNECT_TO_PLTF", "CMD_INIT_PLTF", "CMD_GET_POSITION"]]
 
 
+# The reference server (python -m reference_server) in a subprocess. Set to False to switch the live
+# smoke runs off; PLTF_LIVE_SERVER=host:port points them at a server that is already running instead.
+LIVE_REFERENCE_SERVER = True
 LIVE_SERVER_ENV = "PLTF_LIVE_SERVER"
+STARTED = re.compile(r"server started at port (\d+)")
+
+
+@pytest.fixture(scope="module")
+def live_server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str, int]]:
+    target = os.environ.get(LIVE_SERVER_ENV)
+    if target:
+        host, _, port = target.rpartition(":")
+        yield host, int(port)
+        return
+    if not LIVE_REFERENCE_SERVER:
+        pytest.skip(f"live reference server switched off: LIVE_REFERENCE_SERVER, or set {LIVE_SERVER_ENV}")
+    root = tmp_path_factory.mktemp("reference-server")
+    log_path = root / "server.log"
+    with log_path.open("wb") as log:
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "reference_server", "--ports", "0,0", "--data-dir", str(root / "data"),
+             "--time-scale", "20"], cwd=REPO, stdout=log, stderr=subprocess.STDOUT)
+        try:
+            deadline = time.monotonic() + 30
+            while True:
+                text = log_path.read_text(encoding="utf-8", errors="replace")
+                ports = STARTED.findall(text)
+                if len(ports) == 2 and "system state" in text:
+                    break
+                assert proc.poll() is None and time.monotonic() < deadline, f"reference server did not start:\n{text}"
+                time.sleep(0.1)
+            yield "127.0.0.1", int(ports[0])
+        finally:
+            proc.terminate()
+            try:
+                proc.wait(10)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()
+
+
+def _position_by_python_codec(host: str, port: int) -> dict[str, object]:
+    """GET_POSITION through spec.codec on a plain socket: the independent reading the stubs must match."""
+    with socket.create_connection((host, port), timeout=10) as sock:
+        sock.sendall(encode(REQUESTS.CMD_GET_POSITION()))
+        decoder = TelegramDecoder("reply")
+        while True:
+            data = sock.recv(65536)
+            assert data, "the reference server closed the connection"
+            decoder.receive_data(data)
+            for t in decoder:
+                if t.NAME == "CMD_GET_POSITION":
+                    return {"x": t.x, "y": t.y, "angle": t.angle}
 
 
 @pytest.mark.parametrize("lang", LANGS)
-def test_smoke_against_live_reference_server(lang: str, stub_builds: dict[str, Future[Path]]) -> None:
-    """The same smoke run against the reference server (issue 9 "against a live reference server").
-
-    Switched off until reference_server lands: set PLTF_LIVE_SERVER=host:port (or start the server here).
-    """
-    target = os.environ.get(LIVE_SERVER_ENV)
-    if not target:
-        pytest.skip(f"live reference server not wired yet: set {LIVE_SERVER_ENV}=host:port to run")
-    host, _, port = target.rpartition(":")
-    value = _smoke(_built(lang, stub_builds), host, int(port))
+def test_smoke_against_live_reference_server(lang: str, stub_builds: dict[str, Future[Path]],
+                                             live_server: tuple[str, int]) -> None:
+    """The same smoke run against the reference server (issue 9 "against a live reference server")."""
+    out = _built(lang, stub_builds)
+    host, port = live_server
+    value = _smoke(out, host, port)
     assert isinstance(value["x"], int) and isinstance(value["y"], int)
-    assert isinstance(value["angle"], (int, float))
+    assert value == _position_by_python_codec(host, port)
+
+
+# ------------------------------------------------------------------------------------------ runners
+
+
+@pytest.mark.parametrize("lang", LANGS)
+def test_runner_reports_failures(lang: str, stub_builds: dict[str, Future[Path]], tmp_path: Path) -> None:
+    """A runner that cannot fail proves nothing: a wrong dump, a wrong error class and a wrong name all fail."""
+    out = _built(lang, stub_builds)
+    good = "V request CMD_SET_MODE ff01fe02000000050f00000003 mode=3"
+    lines = [good, good.replace("mode=3", "mode=4"), "E request bad ff01fe0300000001 Truncated",
+             good.replace("CMD_SET_MODE", "CMD_START"), "E reply cut ff01fe02000000 Truncated"]
+    path = tmp_path / "broken.txt"
+    path.write_text("\n".join(lines) + "\n", encoding="ascii")
+    proc = _run(["sh", "vectors.sh", str(path)], out, 300)
+    assert proc.stdout.strip().splitlines()[-1] == "2 passed, 3 failed", _tail(proc)
+    assert proc.returncode != 0
 
 
 # ------------------------------------------------------------------------------------------ formatting
