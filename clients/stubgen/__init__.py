@@ -64,10 +64,10 @@ def check(lang: str, out_dir: str | Path) -> list[str]:
         elif path.read_bytes() != text.encode("utf-8"):
             problems.append(f"stale: {rel}")
     if out.is_dir():
-        for path in sorted(out.rglob("*")):
-            rel = path.relative_to(out)
-            if path.is_file() and not _ignored(rel) and rel.as_posix() not in files:
-                problems.append(f"not generated: {rel.as_posix()}")
+        for found in sorted(out.rglob("*")):
+            relative = found.relative_to(out)
+            if found.is_file() and not _ignored(relative) and relative.as_posix() not in files:
+                problems.append(f"not generated: {relative.as_posix()}")
     return problems
 
 

@@ -245,7 +245,7 @@ def dump_value(f: Field, value: Any) -> str:
 
 def _scalar_text(ftype: str, v: Any) -> str:
     if ftype in ("STRING", "XML"):
-        return "s" + v.encode("latin-1").hex()
+        return "s" + str(v).encode("latin-1").hex()
     if ftype == "DOUBLE":
         v = float(v)
         return "nan" if math.isnan(v) else struct.pack(">d", v).hex()

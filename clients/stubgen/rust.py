@@ -137,7 +137,7 @@ def _protocol() -> str:
         out += [f"/// {doc_line(e.description)} [guide {doc_line(e.section)}]",
                 "#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]", "#[repr(i32)]", f"pub enum {name} {{"]
         for i, (k, v) in enumerate(e.values.items()):
-            out += [f"    /// {k}", "    #[default]" if i == 0 else None, f"    {pascal(k)} = {v},"]
+            out += [f"    /// {k}", *(["    #[default]"] if i == 0 else []), f"    {pascal(k)} = {v},"]
         out += ["}\n", f"impl {name} {{", "    /// The value with this number, if the guide defines one.",
                 "    pub fn from_i64(v: i64) -> Option<Self> {", "        match v {"]
         out += [f"            {v} => Some({name}::{pascal(k)})," for k, v in e.values.items()]
@@ -157,7 +157,7 @@ def _protocol() -> str:
         out.append(f"telegram_set! {{\n    /// Every {direction} telegram, by identifier.\n    {set_name}, {set_name},")
         out += [f"    {pascal(m.base)}({m.type_name}) = {m.id}," for m in messages(direction)]
         out.append("}\n")
-    return "\n".join(line for line in out if line is not None).rstrip("\n") + "\n"
+    return "\n".join(out).rstrip("\n") + "\n"
 
 
 def method_name(m: Message) -> str:

@@ -135,7 +135,7 @@ def sample_entries(seed: int = 9, per_telegram: int = 3) -> list[dict[str, Any]]
                     fields = {f.name: _sample(f, rnd) for f in m.user_fields}
                 t = _build(direction, m, fields)
                 data = encode(t)
-                back = telegram_to_json(decode_frame(data, direction))  # type: ignore[arg-type]
+                back = telegram_to_json(decode_frame(data, direction))
                 valid.append({"name": f"{m.name}-{i}", "telegram": m.name, "direction": direction,
                               "hex": data.hex(), "fields": back["fields"]})
                 body = data[8:]
