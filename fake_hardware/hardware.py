@@ -128,17 +128,20 @@ def build_platform_hardware(
     *,
     nodes: Iterable[Node] = ALL_NODES,
     expected: Iterable[Node] | None = None,
-    scanner: str | None = "loop://",
+    scanner: str | None = "sim://",
     scan_source: RangeSource | None = None,
     us_source: UsRangeSource | None = None,
     radar_source: VelocitySource | None = None,
     motion_source: MotionSource | None = None,
     bus_kwargs: dict[str, Any] | None = None,
 ) -> Hardware:
-    """The boards ``nodes`` (default: all seven) on one bus, a controller that expects ``expected`` (default: the
-    same nodes; name more to simulate a board that is missing), and an S300 on ``scanner`` (a pyserial URL,
-    ``"pty"``, or None for no scanner). ``rng`` seeds the random parts (initial encoder positions, frame loss,
-    serial corruption); ``params`` is the server's parameter lookup (``RadiusWheel`` is read from it)."""
+    """One platform's hardware.
+
+    ``nodes``: the boards fitted (default all seven); ``expected``: the nodes the controller probes (default the
+    same; name more to simulate a missing board); ``scanner``: the S300's link (``sim://``, another pyserial URL,
+    ``"pty"``, or None for none); ``rng`` seeds every random part (initial encoder positions, frame loss, serial
+    corruption); ``params`` is the server's parameter lookup (``RadiusWheel`` is read from it).
+    """
     rng = rng or random.Random(0)
     if channel is None:
         if interface != "virtual":

@@ -7,11 +7,15 @@ Rules (erratum E-HW-015):
   (u16 little-endian: bits 0-12 distance in cm, 13 reflector, 14 protective field, 15 warning field) and a
   CRC-16/CCITT (poly 0x1021, initial 0xFFFF) of the bytes after the 4 zero bytes, sent low byte first.
 - 270 degrees from -135 to +135 degrees in 0.5-degree steps, one telegram per 40 ms of simulated time.
-- ``ScanDecoder`` is sans-IO (bytes in, scans out): it resynchronises on the header, rejects a telegram whose
-  CRC is wrong (``crc_errors``) and counts telegrams it never saw from gaps in the telegram number (``lost``).
+- ``ScanDecoder`` is sans-IO (bytes in, scans out): it resynchronises on the header, skips a header whose size
+  is beyond the longest S300 telegram (it never waits for a corrupt length), rejects a telegram whose CRC is
+  wrong (``crc_errors``) and counts telegrams it never saw from gaps in the telegram number (``lost``).
 - ``S300Simulator`` writes to anything with ``write(bytes)`` in ``step(now)``; ``ScanReader`` polls a pyserial
-  port without blocking (``timeout=0``). ``open_serial_link`` gives both ends for ``loop://``, a pty pair
-  (``"pty"``), or only the reading end for a real port URL.
+  port without blocking (``timeout=0``). ``open_serial_link`` gives both ends for ``sim://`` (the default: an
+  in-memory pyserial loopback, ``fake_hardware/protocol_sim.py``, deterministic in simulated time), ``loop://``
+  (pyserial's own: slow, blocks when 4 KiB are unread), a pty pair (``"pty"``: real file descriptors, but the
+  kernel delivers in wall-clock time, so only for a server paced in real time), or only the reading end for a
+  real port URL.
 """
 
 from __future__ import annotations
@@ -27,6 +31,9 @@ from typing import NamedTuple, Protocol
 
 import serial  # type: ignore[import-untyped]  # no stubs; types-pyserial is not a dependency
 
+if "fake_hardware" not in serial.protocol_handler_packages:
+    serial.protocol_handler_packages.append("fake_hardware")  # sim:// (fake_hardware/protocol_sim.py)
+
 POINTS = 541
 START_ANGLE = math.radians(-135.0)
 ANGLE_STEP = math.radians(0.5)
@@ -36,8 +43,8 @@ MAX_CM = 0x1FFF
 _HEAD = struct.Struct(">4xHHBBBBHIH")  # zeros, trigger, size, 0xFF, address, protocol (2 bytes), status, scan, tel
 _ZEROS = b"\0" * 6
 _BLOCK = b"\xbb\xbb\x11\x11"
-TELEGRAM_BYTES = _HEAD.size + len(_BLOCK) + 2 * POINTS + 2
-MAX_TELEGRAM = 4 + 2 * 0xFFFF
+TELEGRAM_BYTES = _HEAD.size + len(_BLOCK) + 2 * POINTS + 2  # 1108: the longest telegram (270 degrees)
+MIN_TELEGRAM = _HEAD.size + 2
 
 RangeSource = Callable[[float], Sequence[float | None]]
 
@@ -113,7 +120,8 @@ class ScanDecoder:
                 return
             _, size, flag, address, proto, minor, _, scan, number = _HEAD.unpack_from(buf)
             total = 4 + 2 * size
-            if (flag, address, minor) != (0xFF, self.address, 1) or proto not in (2, 3) or total < TELEGRAM_BYTES:
+            header_ok = (flag, address, minor) == (0xFF, self.address, 1) and proto in (2, 3)
+            if not header_ok or not MIN_TELEGRAM <= total <= TELEGRAM_BYTES:  # never wait for a corrupt size
                 self._skip(1)
                 continue
             if len(buf) < total:
@@ -239,13 +247,13 @@ class SerialLink:
             os.close(fd)
 
 
-def open_serial_link(url: str = "loop://", baudrate: int = 500_000) -> SerialLink:
-    """``loop://`` (one pyserial object, both ends), ``pty`` (a pty pair: pyserial on the slave), or any
-    pyserial URL / device path of a real scanner."""
+def open_serial_link(url: str = "sim://", baudrate: int = 500_000) -> SerialLink:
+    """``sim://`` or ``loop://`` (one pyserial object, both ends), ``pty`` (a pty pair: pyserial on the slave),
+    or any pyserial URL / device path of a real scanner (reading end only)."""
     if url == "pty":
         master, slave = os.openpty()
         os.set_blocking(master, False)
         host = serial.Serial(os.ttyname(slave), baudrate=baudrate, timeout=0)
         return SerialLink(host, _PtyMaster(master), (master, slave))
     port = serial.serial_for_url(url, baudrate=baudrate, timeout=0)
-    return SerialLink(port, port if url.startswith("loop://") else None)
+    return SerialLink(port, port if url.startswith(("sim://", "loop://")) else None)
