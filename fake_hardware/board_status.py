@@ -16,7 +16,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import asdict, dataclass
 from typing import Any
 
-from fake_hardware.candb import Node
+from fake_hardware.candb import Node, St
 
 Readings = Mapping[str, Mapping[str, Any]]  # message function ("Encoder") -> last decoded signals
 
@@ -88,6 +88,8 @@ def _motor(side: str) -> Callable[[Readings], dict[str, Any]]:
 
 def _us(r: Readings) -> dict[str, Any]:
     distances: tuple[int, ...] = ()
+    if not int(r.get("Status", {}).get("Status", 0)) & St.MEASURING:  # stopped: no measurement (E-HW-012)
+        return {"us_distance": (0,) * 16, "us_analog_in": _analog(r, "Analog1_4", None)}
     for k in range(4):
         first = 4 * k + 1
         group = r.get(f"Distances{first}_{first + 3}", {})

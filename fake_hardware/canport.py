@@ -144,7 +144,7 @@ class CanPort:
 
     def _flush(self, now: float) -> None:
         pending = self._pending
-        while pending and pending[0][0] <= now:
+        while pending and pending[0][0] <= now + 1e-9:  # due times are sums of floats
             _, frame = pending.popleft()
             if self.attached:
                 self._transmit(frame, now)

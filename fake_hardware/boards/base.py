@@ -26,7 +26,7 @@ from fake_hardware.candb import Node, Signals, St
 from fake_hardware.canport import CanPort
 
 Handler = Callable[[dict[str, Any], float], None]
-Builder = Callable[[float], Signals]
+Builder = Callable[[float], Signals | None]  # None: nothing to send this cycle
 
 
 @dataclass
@@ -119,7 +119,8 @@ class Board:
         if self.started:
             for c in self._cyclic:
                 if now >= c.next_due - 1e-9:
-                    self.port.send(candb.build(c.msg, c.build(now), now), now)
+                    if (signals := c.build(now)) is not None:
+                        self.port.send(candb.build(c.msg, signals, now), now)
                     c.next_due += c.period
                     if c.next_due <= now:  # late (slow stepping): no burst, resume the period from now
                         c.next_due = now + c.period
@@ -138,8 +139,8 @@ class Board:
     def publish_now(self, function: str, now: float) -> None:
         """Send one cyclic message out of turn (an event such as the emergency circuit opening)."""
         for c in self._cyclic:
-            if c.msg.name.endswith("_" + function) and self.started:
-                self.port.send(candb.build(c.msg, c.build(now), now), now)
+            if c.msg.name.endswith("_" + function) and self.started and (signals := c.build(now)) is not None:
+                self.port.send(candb.build(c.msg, signals, now), now)
 
     def _receive(self, frame: can.Message, now: float) -> None:
         if frame.is_error_frame or frame.is_remote_frame:

@@ -44,7 +44,9 @@ class UltrasonicBoard(Board):
         return out
 
     def _group(self, k: int) -> Builder:
-        def build(now: float) -> Signals:
+        def build(now: float) -> Signals | None:
+            if not self.measuring:
+                return None
             return {f"Distance{i + 1}": self.distances[i] for i in range(4 * k, 4 * k + 4)}
 
         return build
