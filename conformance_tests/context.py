@@ -1,0 +1,347 @@
+"""What a case works with: the target's sessions, simulated time, the known state, and clean-up.
+
+Rules:
+- ``Target`` lives for the whole run: the configuration, the coverage recorder and one persistent session per
+  port (guide 6.1: one client per port, so the suite holds at most one connection per port unless a case tests
+  exactly that). ``CaseContext`` lives for one case: its wire log, its deviations and notes, and the
+  finalizers that restore what it changed (parameters, pose, documents, outputs), run even when it fails.
+- Time: every duration a case names is simulated seconds (the target's clock); ``wall`` converts with the
+  declared ``--time-scale``, never below a floor that absorbs the scheduling noise of a loaded machine.
+- The known state: ``ensure(state, mode)`` drives the target there through the chart (chart.PATH_FROM_READY)
+  and checks it through CMD_GET_STATUS; when it cannot, the case fails as a precondition failure.
+- A new connection is probed with CMD_GET_STATUS and retried for ``connect_window`` seconds: the target may
+  not yet have noticed that our previous client on that port is gone (one client per port).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, TypeVar
+
+from conformance_tests import chart
+from conformance_tests.catalogue import Case, Tier
+from conformance_tests.chart import St
+from conformance_tests.coverage import Coverage
+from conformance_tests.outcome import ConnectionClosed, Deviation, Fail, ReplyTimeout, TargetFailure, Unreachable
+from conformance_tests.wire import Session, WireLog
+from spec.codec import REQUESTS, build
+from spec.model import enum_classes
+from spec.telegram import Telegram
+
+T = TypeVar("T")
+MotionMode = enum_classes()["MotionMode"]
+OperationState = enum_classes()["OperationState"]
+
+
+@dataclass
+class Config:
+    host: str
+    port: int
+    second_port: int | None = None
+    time_scale: float = 1.0
+    profile: str = "strict"  # or "original"
+    tier: Tier = Tier.STANDARD
+    keyword: str | None = None
+    allow_motion: bool = False
+    simulator: bool = False  # the user declares the target a simulator: motion and outputs are allowed
+    allow_shutdown: bool = False  # CMD_EXIT / CMD_SHUTDOWN_HOST may be sent (the target stops)
+    reruns: int = 2
+    reply_timeout: float = 3.0  # wall seconds for one reply
+    connect_window: float = 5.0  # wall seconds to get a port back after our previous client left
+    min_wall: float = 0.25  # wall floor of every wait derived from simulated time
+
+    @property
+    def motion_allowed(self) -> bool:
+        return self.allow_motion or self.simulator
+
+
+@dataclass(frozen=True)
+class Status:
+    """The part of CMD_GET_STATUS the chart cares about."""
+
+    op: int
+    initialized: int
+    mode: int
+    telegram: Telegram
+
+    def describe(self) -> str:
+        op = OperationState(self.op).name if self.op in OperationState._value2member_map_ else self.op
+        mode = MotionMode(self.mode).name if self.mode in MotionMode._value2member_map_ else self.mode
+        return f"{op}, initialized {self.initialized}, {mode}"
+
+
+class Target:
+    """Run-wide state: configuration, coverage and the persistent sessions."""
+
+    def __init__(self, config: Config, coverage: Coverage | None = None) -> None:
+        self.config = config
+        self.coverage = coverage or Coverage()
+        self._sessions: dict[str, Session] = {}
+
+    def port_of(self, label: str) -> int:
+        if label.startswith("B"):
+            if self.config.second_port is None:
+                raise Fail("no --second-port given")
+            return self.config.second_port
+        return self.config.port
+
+    def connect(self, label: str, log: WireLog, observer: Any, *, probe: bool = True) -> Session:
+        """A new session on the port of ``label``, probed with GET_STATUS and retried (see the module rules)."""
+        cfg = self.config
+        deadline = time.monotonic() + cfg.connect_window
+        delay, last = 0.01, "no attempt"
+        while True:
+            s = Session(cfg.host, self.port_of(label), label=label, log=log, timeout=cfg.reply_timeout,
+                        observer=observer, profile=cfg.profile)
+            try:
+                s.connect()
+                if not probe:
+                    return s
+                s.request(build("request", "CMD_GET_STATUS"), timeout=min(cfg.reply_timeout, 1.0))
+                return s
+            except (Unreachable, TargetFailure) as exc:
+                last = str(exc)
+                s.close()
+            if time.monotonic() + delay > deadline:
+                raise Unreachable(f"port {label} ({cfg.host}:{self.port_of(label)}): no working connection "
+                                  f"within {cfg.connect_window:.0f} s: {last}")
+            time.sleep(delay)
+            delay = min(delay * 2, 0.2)
+
+    def session(self, label: str, log: WireLog, observer: Any) -> Session:
+        s = self._sessions.get(label)
+        if s is None or not s.is_open:
+            if s is not None:
+                s.close()
+            s = self._sessions[label] = self.connect(label, log, observer)
+        s.log, s.observer = log, observer
+        return s
+
+    def drop(self, label: str) -> None:
+        s = self._sessions.pop(label, None)
+        if s is not None:
+            s.close()
+
+    def close(self) -> None:
+        for label in list(self._sessions):
+            self.drop(label)
+
+
+@dataclass
+class CaseContext:
+    target: Target
+    case: Case
+    log: WireLog = field(default_factory=WireLog)
+    deviations: list[Deviation] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)
+    unsolicited: list[tuple[str, bytes]] = field(default_factory=list)
+    abuse_from: Status | None = None  # the status just before a case sent malformed input
+    _finalizers: list[tuple[str, Callable[[], None]]] = field(default_factory=list)
+    _extra: list[Session] = field(default_factory=list)
+
+    # ---- observer hooks (wire.Observer)
+    def on_sent(self, telegram: Telegram) -> None:
+        self.target.coverage.sent(telegram)
+
+    def on_received(self, telegram: Telegram) -> None:
+        self.target.coverage.received(telegram)
+
+    def on_deviation(self, deviation: Deviation) -> None:
+        if deviation not in self.deviations:
+            self.deviations.append(deviation)
+
+    def on_unsolicited(self, port: str, data: bytes) -> None:
+        self.unsolicited.append((port, data))
+
+    # ---- configuration
+    @property
+    def config(self) -> Config:
+        return self.target.config
+
+    @property
+    def profile(self) -> str:
+        return self.config.profile
+
+    def wall(self, sim_seconds: float) -> float:
+        return max(self.config.min_wall, sim_seconds / self.config.time_scale)
+
+    def sleep(self, sim_seconds: float) -> None:
+        time.sleep(sim_seconds / self.config.time_scale)
+
+    # ---- outcomes
+    def deviate(self, erratum: str, reading: int | None, detail: str) -> None:
+        self.on_deviation(Deviation(erratum, reading, detail))
+
+    def note(self, text: str) -> None:
+        self.notes.append(text)
+
+    def on_exit(self, what: str, fn: Callable[[], None]) -> None:
+        self._finalizers.append((what, fn))
+
+    def finish(self) -> None:
+        """Run the finalizers (last registered first) and close the case's extra sessions."""
+        while self._finalizers:
+            what, fn = self._finalizers.pop()
+            try:
+                fn()
+            except Exception as exc:
+                self.note(f"clean-up '{what}' failed: {exc}")
+        for s in self._extra:
+            s.close()
+        self._extra.clear()
+
+    # ---- sessions
+    def session(self, label: str = "A") -> Session:
+        try:
+            return self.target.session(label, self.log, self)
+        except Unreachable as exc:
+            raise ConnectionClosed(f"target unreachable: {exc}") from None
+
+    def fresh(self, label: str = "A", *, probe: bool = True) -> Session:
+        """A new connection of our own on the port of ``label``; the persistent one there is closed first."""
+        self.target.drop(label[:1])
+        try:
+            s = self.target.connect(label, self.log, self, probe=probe)
+        except Unreachable as exc:
+            raise ConnectionClosed(f"target unreachable: {exc}") from None
+        self._extra.append(s)
+        return s
+
+    def extra(self, label: str) -> Session:
+        """An additional raw connection (no probe, no retry) - e.g. a second client on a busy port."""
+        s = Session(self.config.host, self.target.port_of(label), label=label, log=self.log,
+                    timeout=self.config.reply_timeout, observer=self, profile=self.profile)
+        try:
+            s.connect()
+        except Unreachable as exc:
+            raise ConnectionClosed(str(exc)) from None
+        self._extra.append(s)
+        return s
+
+    def before_abuse(self) -> Status:
+        """Record the state the abuse must not change (the runner compares it after the case)."""
+        self.abuse_from = self.status()
+        return self.abuse_from
+
+    def reset_session(self, label: str = "A") -> None:
+        self.target.drop(label)
+
+    # ---- telegrams
+    def send(self, telegram: str, /, label: str = "A", **fields: Any) -> None:
+        """Send request ``telegram`` (by name) with ``fields`` on the session of ``label``."""
+        self.session(label).send(build("request", telegram, **fields))
+
+    def get(self, telegram: str, /, label: str = "A", **fields: Any) -> Telegram:
+        """Send GET_* request ``telegram`` and return its reply (decoded strictly)."""
+        return self.session(label).request(build("request", telegram, **fields))
+
+    def status(self, label: str = "A") -> Status:
+        t = self.get("CMD_GET_STATUS", label)
+        return Status(t.operation_state, t.initialized, t.motion_mode, t)  # type: ignore[attr-defined]
+
+    def position(self, label: str = "A") -> Telegram:
+        return self.get("CMD_GET_POSITION", label)
+
+    def quiet(self, sim_seconds: float = 0.3, label: str = "A") -> None:
+        """Fail when the target sends anything unasked within the time (guide 6.1, erratum E-CMD-013)."""
+        got = self.session(label).silence(self.wall(sim_seconds))
+        if got:
+            raise Fail(f"the target sent {len(got)} bytes nobody asked for: {got[:24].hex()}",
+                       erratum="E-CMD-013")
+
+    def poll(self, fn: Callable[[], T], until: Callable[[T], bool], within: float, every: float = 0.05) -> T:
+        """Call ``fn`` until ``until(result)`` or ``within`` simulated seconds passed; the last result."""
+        deadline = time.monotonic() + self.wall(within)
+        while True:
+            value = fn()
+            if until(value) or time.monotonic() >= deadline:
+                return value
+            time.sleep(max(0.002, every / self.config.time_scale))
+
+    def settle(self) -> None:
+        """Let a command that should have no effect have its chance to show one."""
+        time.sleep(max(0.02, 0.3 / self.config.time_scale))
+
+    # ---- the known state
+    def ensure(self, state: St, mode: int = MotionMode.MODE_MOTION_NO) -> Status:
+        """Drive the target to ``state`` with motion mode ``mode`` (set in Ready); precondition failure if not."""
+        s = self.status()
+        if s.op in (OperationState.ST_OP_RUNNING, OperationState.ST_OP_BREAKED):
+            self.send("CMD_STOP")
+            s = self._await_op(OperationState.ST_OP_READY, "CMD_STOP", within=10.0)
+        elif s.op == OperationState.ST_OP_NOT_INITIALIZED:
+            self.send("CMD_CONNECT_TO_PLTF")
+            self.send("CMD_INIT_PLTF")
+            s = self._await_op(OperationState.ST_OP_READY, "CMD_CONNECT_TO_PLTF + CMD_INIT_PLTF", within=30.0)
+        if s.mode != mode:
+            self.send("CMD_SET_MODE", mode=mode)
+            s = self.poll(self.status, lambda x: x.mode == mode, within=5.0)
+            if s.mode != mode:
+                raise Fail(f"precondition: CMD_SET_MODE({MotionMode(mode).name}) in Ready left {s.describe()}",
+                           precondition=True)
+        for cmd in chart.PATH_FROM_READY[state]:
+            self.send(cmd)
+        if chart.PATH_FROM_READY[state]:
+            s = self._await_op(chart.REPORTED[state], " + ".join(chart.PATH_FROM_READY[state]), within=10.0)
+        return s
+
+    def _await_op(self, op: int, how: str, within: float) -> Status:
+        s = self.poll(self.status, lambda x: x.op == op, within=within)
+        if s.op != op:
+            raise Fail(f"precondition: {how} did not bring the target to {OperationState(op).name} "
+                       f"(status: {s.describe()})", precondition=True)
+        return s
+
+    def ready(self, mode: int = MotionMode.MODE_MOTION_NO) -> Status:
+        return self.ensure(St.READY, mode)
+
+    # ---- restoring what a case changes
+    def preserve_pose(self) -> Telegram:
+        pos = self.position()
+
+        def restore() -> None:
+            self.send("CMD_SET_FRM_PLTF", x=pos.x, y=pos.y, angle=round(_deg(pos.angle) * 1000))  # type: ignore[attr-defined]
+
+        self.on_exit("restore the estimated pose", restore)
+        return pos
+
+    def preserve_param(self, key: str) -> str:
+        value: str = self.get("CMD_GET_PLTF_PARAM", key=key).value  # type: ignore[attr-defined]
+        self.on_exit(f"restore parameter {key}", lambda: self.send("CMD_SET_PLTF_PARAM", key=key, value=value))
+        return value
+
+    def preserve_document(self, kind: str) -> tuple[str, str]:
+        """GET the active map/roadmap/program; restore it with SET at the end. Returns (xml, name)."""
+        reply = self.get(f"CMD_GET_{kind.upper()}")
+        xml: str = reply.xml  # type: ignore[attr-defined]
+        name: str = getattr(reply, "name", "")
+
+        def restore() -> None:
+            if not xml.strip():
+                return  # nothing was active: nothing to restore
+            if kind == "program":
+                self.send("CMD_SET_PROGRAM", xml=xml)
+            else:
+                self.send(f"CMD_SET_{kind.upper()}", name=name, xml=xml)
+
+        self.on_exit(f"restore the active {kind}", restore)
+        return xml, name
+
+
+def _deg(rad: float) -> float:
+    import math
+
+    return math.degrees(rad)
+
+
+def request_names() -> list[str]:
+    return [cls.NAME for cls in REQUESTS]
+
+
+@contextlib.contextmanager
+def suppress_target_failure() -> Any:
+    with contextlib.suppress(TargetFailure, ReplyTimeout):
+        yield

@@ -1,0 +1,304 @@
+"""Run the selected cases against a target and turn what they raise into verdicts.
+
+Rules:
+- Before each group the target is put into the known state (Ready, MODE_MOTION_NO); each case then sets up
+  what it needs itself, so a case selected alone with ``-k`` behaves as in a full run.
+- The safety gate is checked here, not in the cases: ``moves_platform``/``switches_outputs`` cases run only
+  with ``--allow-motion`` or ``--target-is-simulator``, ``destructive`` ones only with ``--allow-shutdown``;
+  the others are SKIPPED with the reason.
+- Re-runs: an INCONCLUSIVE attempt is re-run up to ``reruns`` times; a FAIL of a ``timing`` case is re-run
+  too. Attempts that disagree (one PASS, one FAIL) make the case INCONCLUSIVE: a flake is reported, not hidden.
+- After every ``abuse`` case the runner checks liveness: a new client is served on each port and the operation
+  state and motion mode are what they were before the abuse.
+- Exit status (``RunResult.exit_code``): 2 when a harness error occurred, 1 when a case FAILed or a MUST case
+  stayed INCONCLUSIVE (unless the baseline expects it) or a baseline entry is stale, else 0.
+"""
+
+from __future__ import annotations
+
+import time
+import traceback
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Protocol
+
+from conformance_tests.baseline import Baseline
+from conformance_tests.catalogue import Case, Level, Verdict
+from conformance_tests.context import CaseContext, Config, Status, Target
+from conformance_tests.outcome import (
+    Deviation,
+    Fail,
+    Inconclusive,
+    NotApplicable,
+    Unreachable,
+    deviation_verdict,
+    verdict_for_level,
+    worst,
+)
+from conformance_tests.wire import WireEntry, WireLog
+
+
+@dataclass
+class Attempt:
+    verdict: Verdict
+    message: str
+    duration: float
+    wire: list[WireEntry]
+    deviations: list[Deviation]
+    notes: list[str]
+    precondition: bool = False
+
+
+@dataclass
+class CaseResult:
+    case: Case
+    verdict: Verdict
+    message: str
+    attempts: list[Attempt] = field(default_factory=list)
+    expected_failure: bool = False  # listed in the baseline and still failing
+
+    @property
+    def duration(self) -> float:
+        return sum(a.duration for a in self.attempts)
+
+    @property
+    def wire(self) -> list[WireEntry]:
+        return self.attempts[-1].wire if self.attempts else []
+
+    @property
+    def deviations(self) -> list[Deviation]:
+        return self.attempts[-1].deviations if self.attempts else []
+
+    @property
+    def notes(self) -> list[str]:
+        return self.attempts[-1].notes if self.attempts else []
+
+    @property
+    def blocking(self) -> bool:
+        """Does this result fail the run (exit status 1)?"""
+        if self.expected_failure:
+            return False
+        return self.verdict is Verdict.FAIL or (
+            self.verdict is Verdict.INCONCLUSIVE and self.case.level is Level.MUST
+        )
+
+
+@dataclass
+class RunResult:
+    config: Config
+    results: list[CaseResult]
+    target: Target
+    started: float
+    duration: float
+    stale: list[str] = field(default_factory=list)
+    harness_error: str | None = None
+
+    @property
+    def exit_code(self) -> int:
+        if self.harness_error or any(r.verdict is Verdict.ERROR for r in self.results):
+            return 2
+        if self.stale or any(r.blocking for r in self.results):
+            return 1
+        return 0
+
+    def counts(self) -> dict[Verdict, int]:
+        out = dict.fromkeys(Verdict, 0)
+        for r in self.results:
+            out[r.verdict] += 1
+        return out
+
+
+class Reporter(Protocol):
+    def on_start(self, config: Config, cases: Sequence[Case], gate: list[str]) -> None: ...
+    def on_case_start(self, case: Case) -> None: ...
+    def on_case_end(self, result: CaseResult) -> None: ...
+    def on_finish(self, run: RunResult) -> None: ...
+
+
+def gate_notice(config: Config) -> list[str]:
+    """What the safety gate lets through, in plain words (shown at start)."""
+    lines = []
+    if config.simulator:
+        lines.append("The target is declared a simulator (--target-is-simulator): cases that MOVE the platform "
+                     "and SWITCH outputs will run.")
+    elif config.allow_motion:
+        lines.append("--allow-motion: cases will MOVE THE PLATFORM (up to 0.6 m from where it stands, turns on "
+                     "the spot) and SWITCH OUTPUTS (digital outputs, brakes, head drive, CAN frames). Keep the "
+                     "area clear and the emergency stop at hand.")
+    else:
+        lines.append("Safety gate closed: cases that move the platform or switch outputs are SKIPPED "
+                     "(use --allow-motion on a real platform, or --target-is-simulator).")
+    if config.allow_shutdown:
+        lines.append("--allow-shutdown: the last case sends CMD_EXIT; the target will stop.")
+    lines.append("The suite changes parameters, documents and the estimated pose and restores them after each "
+                 "case; CMD_SAVE_* cases rewrite the stored files with the content they had.")
+    return lines
+
+
+class Runner:
+    def __init__(self, config: Config, cases: Sequence[Case], reporters: Sequence[Reporter] = (),
+                 baseline: Baseline | None = None) -> None:
+        self.config = config
+        self.cases = list(cases)
+        self.reporters = list(reporters)
+        self.baseline = baseline or Baseline()
+        self.target = Target(config)
+
+    def _emit(self, hook: str, *args: object) -> None:
+        for r in self.reporters:
+            getattr(r, hook)(*args)
+
+    def run(self) -> RunResult:
+        started = time.time()
+        t0 = time.monotonic()
+        self._emit("on_start", self.config, self.cases, gate_notice(self.config))
+        results: list[CaseResult] = []
+        harness_error = None
+        try:
+            self.target.connect("A", WireLog(), _NullCtx()).close()
+        except Unreachable as exc:
+            harness_error = str(exc)
+        if harness_error is None:
+            group = None
+            for c in self.cases:
+                if c.group != group:
+                    group = c.group
+                    self._reset()
+                self._emit("on_case_start", c)
+                result = self.run_case(c)
+                results.append(result)
+                self._emit("on_case_end", result)
+        self.target.close()
+        ran = {r.case.id: r for r in results}
+        stale = self.baseline.stale(ran)
+        for r in results:
+            r.expected_failure = self.baseline.expects(r)
+        run = RunResult(self.config, results, self.target, started, time.monotonic() - t0, stale, harness_error)
+        self._emit("on_finish", run)
+        return run
+
+    def _reset(self) -> None:
+        ctx = CaseContext(self.target, self.cases[0])
+        try:
+            ctx.ready()
+        except Exception:
+            pass
+        finally:
+            ctx.finish()
+
+    # ---- one case
+    def run_case(self, c: Case) -> CaseResult:
+        skip = self._gate(c)
+        if skip:
+            return CaseResult(c, Verdict.SKIPPED, skip)
+        attempts: list[Attempt] = []
+        for _ in range(1 + max(0, self.config.reruns)):
+            a = self._attempt(c)
+            attempts.append(a)
+            again = a.verdict is Verdict.INCONCLUSIVE or (
+                c.timing and a.verdict in (Verdict.FAIL, Verdict.NON_STRICT) and not a.precondition
+            )
+            if not again:
+                break
+        verdict, message = _resolve(attempts)
+        return CaseResult(c, verdict, message, attempts)
+
+    def _gate(self, c: Case) -> str:
+        if c.destructive and not self.config.allow_shutdown:
+            return "safety gate: stops the target (needs --allow-shutdown)"
+        if c.gated and not self.config.motion_allowed:
+            what = "moves the platform" if c.moves_platform else "switches outputs"
+            return f"safety gate: {what} (needs --allow-motion or --target-is-simulator)"
+        return ""
+
+    def _attempt(self, c: Case) -> Attempt:
+        ctx = CaseContext(self.target, c)
+        t0 = time.monotonic()
+        verdict, message, pre = Verdict.PASS, "", False
+        try:
+            c.func(ctx)
+        except Fail as exc:
+            verdict, message, pre = _fail_verdict(c, exc), str(exc), exc.precondition
+        except NotApplicable as exc:
+            verdict, message = Verdict.NA, str(exc)
+        except Inconclusive as exc:
+            verdict, message = Verdict.INCONCLUSIVE, str(exc)
+        except Exception as exc:
+            tb = traceback.format_exception(exc)
+            verdict, message = Verdict.ERROR, f"harness error: {exc!r}\n{''.join(tb[-6:])}"
+        finally:
+            ctx.finish()
+        if c.abuse and verdict is not Verdict.ERROR:
+            problem = _liveness(ctx, ctx.abuse_from)
+            if problem:
+                verdict, message = Verdict.FAIL, (message + "; " if message else "") + problem
+        for dev in ctx.deviations:
+            dv = deviation_verdict(dev, self.config.profile)
+            if dv is not Verdict.PASS:
+                if worst(verdict, dv) is not verdict and verdict in (Verdict.PASS, Verdict.NA):
+                    message = (message + "; " if message else "") + dev.describe()
+                verdict = worst(verdict, dv)
+            else:
+                ctx.note(f"informative: {dev.describe()}")
+        if ctx.unsolicited:
+            ctx.note(f"{len(ctx.unsolicited)} unsolicited frame(s) received (guide 6.1, erratum E-CMD-013)")
+        return Attempt(verdict, message, time.monotonic() - t0, list(ctx.log.entries), list(ctx.deviations),
+                       list(ctx.notes), pre)
+
+
+def _fail_verdict(c: Case, exc: Fail) -> Verdict:
+    return verdict_for_level(c.level)
+
+
+def _liveness(ctx: CaseContext, before: Status | None) -> str:
+    """'' when the target still serves every port in the state it had before the abuse; else the problem."""
+    labels = ["A"] + (["B"] if ctx.config.second_port is not None else [])
+    for label in labels:
+        ctx.reset_session(label)
+        try:
+            s = ctx.status(label)
+        except Exception as exc:
+            return f"liveness after abuse: port {label} no longer serves a new client ({exc})"
+        if before is not None and (s.op, s.mode) != (before.op, before.mode):
+            return (f"liveness after abuse: the state changed from {before.describe()} to {s.describe()} "
+                    "(malformed input must change nothing, erratum E-WIRE-006)")
+    return ""
+
+
+def _resolve(attempts: list[Attempt]) -> tuple[Verdict, str]:
+    verdicts = [a.verdict for a in attempts]
+    last = attempts[-1]
+    definite = [v for v in verdicts if v is not Verdict.INCONCLUSIVE]
+    if not definite:
+        return Verdict.INCONCLUSIVE, last.message
+    if Verdict.PASS in definite and any(v in (Verdict.FAIL, Verdict.NON_STRICT) for v in definite):
+        bad = next(a for a in attempts if a.verdict in (Verdict.FAIL, Verdict.NON_STRICT))
+        return Verdict.INCONCLUSIVE, (f"flaky: {verdicts.count(Verdict.PASS)} of {len(attempts)} attempts "
+                                      f"passed; a failing attempt said: {bad.message}")
+    final = definite[-1]
+    msg = next(a.message for a in reversed(attempts) if a.verdict is final)
+    if len(attempts) > 1 and final is Verdict.PASS:
+        msg = f"passed on attempt {len(attempts)}"
+    return final, msg
+
+
+class _NullCtx:
+    """An observer that records nothing (the reachability probe before the run)."""
+
+    def on_sent(self, telegram: object) -> None:
+        pass
+
+    def on_received(self, telegram: object) -> None:
+        pass
+
+    def on_deviation(self, deviation: object) -> None:
+        pass
+
+    def on_unsolicited(self, port: str, data: bytes) -> None:
+        pass
+
+
+
+def run(config: Config, cases: Sequence[Case], reporters: Sequence[Reporter] = (),
+        baseline: Baseline | None = None) -> RunResult:
+    return Runner(config, cases, reporters, baseline).run()
