@@ -1,0 +1,89 @@
+"""Helpers shared by the case modules: state checks, tolerances and small oracles."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from typing import Any
+
+from conformance_tests import chart
+from conformance_tests.chart import St
+from conformance_tests.context import CaseContext, Status
+from conformance_tests.outcome import Fail, NotApplicable
+from spec.model import enum_classes
+
+MotionMode = enum_classes()["MotionMode"]
+OperationState = enum_classes()["OperationState"]
+NO = MotionMode.MODE_MOTION_NO
+
+STATES: tuple[St, ...] = (St.NOT_CONNECTED, St.CONNECTED, St.READY, St.RUNNING, St.BREAKED)
+
+
+def expect_state(ctx: CaseContext, state: St, how: str, *, mode: int | None = None, within: float = 0.0) -> Status:
+    """The status shows ``state`` (op state and initialized flag), and ``mode`` when given."""
+    op, init = chart.REPORTED[state], chart.INITIALIZED[state]
+
+    def ok(s: Status) -> bool:
+        return s.op == op and s.initialized == init and (mode is None or s.mode == mode)
+
+    s = ctx.poll(ctx.status, ok, within=within) if within else ctx.status()
+    if not ok(s):
+        want = f"{OperationState(op).name}, initialized {init}"
+        if mode is not None:
+            want += f", {MotionMode(mode).name}"
+        raise Fail(f"{how}: expected {want}, status says {s.describe()}")
+    return s
+
+
+def expect_unchanged(ctx: CaseContext, state: St, before: Status, how: str) -> Status:
+    """After ``how`` (a command that must have no effect): nothing the status shows has changed."""
+    ctx.settle()
+    s = ctx.status()
+    if (s.op, s.initialized, s.mode) != (before.op, before.initialized, before.mode):
+        raise Fail(f"{how} must change nothing: the status went from {before.describe()} to {s.describe()}")
+    if state is St.CONNECTED:
+        probe_connected(ctx, how)
+    return s
+
+
+def probe_connected(ctx: CaseContext, how: str) -> None:
+    """Connected (CAN up) and Not connected look alike in the status; CMD_INIT_PLTF tells them apart."""
+    ctx.send("CMD_INIT_PLTF")
+    s = ctx.poll(ctx.status, lambda x: x.op == OperationState.ST_OP_READY, within=30.0)
+    if s.op != OperationState.ST_OP_READY:
+        raise Fail(f"after {how} the CAN connection was lost: CMD_INIT_PLTF no longer initializes "
+                   f"(status: {s.describe()})")
+
+
+def no_unsolicited(ctx: CaseContext, what: str) -> None:
+    if ctx.unsolicited:
+        port, data = ctx.unsolicited[0]
+        raise Fail(f"{what} was answered (port {port}: {data[:16].hex()}...), but only GET_* requests are "
+                   "(guide 6.1 'returns data only on request')", erratum="E-CMD-013")
+
+
+def near(value: float, target: float, tol: float) -> bool:
+    return abs(value - target) <= tol
+
+
+def angle_diff(a: float, b: float) -> float:
+    """a - b in (-pi, pi] (radians)."""
+    d = math.fmod(a - b, 2 * math.pi)
+    if d <= -math.pi:
+        d += 2 * math.pi
+    elif d > math.pi:
+        d -= 2 * math.pi
+    return d
+
+
+def param_table(ctx: CaseContext) -> dict[str, Any]:
+    """The target's parameters (CMD_GET_PLTF_PARAM_VEC) by key."""
+    reply = ctx.get("CMD_GET_PLTF_PARAM_VEC")
+    return {p.key: p for p in reply.parameters}  # type: ignore[attr-defined]
+
+
+def pick(table: dict[str, Any], names: Iterable[str], what: str) -> str:
+    for n in names:
+        if n in table:
+            return n
+    raise NotApplicable(f"the target lists none of the parameters {what} needs ({', '.join(names)})")

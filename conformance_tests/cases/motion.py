@@ -1,0 +1,448 @@
+"""Guide 4.3 motion modes and the motion commands of 6.3 (every case here moves the platform, or could).
+
+Rules of this module:
+- Distances stay within 0.6 m of where the platform stands and every case drives back to its start pose
+  (MOVE_ABS in mode Automatic) in a finalizer; the estimated pose is never reset after a real motion.
+- Tolerances are generous (errata E-PAR-021: the suite's bounds, not the platform's): position 100 mm, angle
+  5 degrees, velocity 15 % + 30 mm/s; time limits allow for a slow platform (100 mm/s) plus 10 s.
+- "No motion" means less than 5 mm and 0.5 degrees in 1 simulated second, with velocities 0.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from functools import partial
+from typing import Any
+
+from conformance_tests import docdata
+from conformance_tests.cases._common import MotionMode, angle_diff, expect_state, no_unsolicited
+from conformance_tests.catalogue import Level, add, case
+from conformance_tests.chart import St
+from conformance_tests.context import CaseContext
+from conformance_tests.outcome import Fail
+
+NO, VEL, JOYSOFT = MotionMode.MODE_MOTION_NO, MotionMode.MODE_MOTION_VEL, MotionMode.MODE_MOTION_JOYSOFT
+AUTO, JOYHARD = MotionMode.MODE_MOTION_AUTOMATIC, MotionMode.MODE_MOTION_JOYHARD
+POS_TOL, ANG_TOL = 100.0, math.radians(5.0)
+STILL_POS, STILL_ANG = 5.0, math.radians(0.5)
+
+
+@dataclass(frozen=True)
+class Pose:
+    x: float
+    y: float
+    th: float  # rad
+    v: float = 0.0  # mm/s
+    w: float = 0.0  # rad/s
+
+    def ahead(self, forward: float, left: float = 0.0, turn_deg: float = 0.0) -> Pose:
+        c, s = math.cos(self.th), math.sin(self.th)
+        return Pose(self.x + c * forward - s * left, self.y + s * forward + c * left,
+                    self.th + math.radians(turn_deg))
+
+    def dist(self, other: Pose) -> float:
+        return math.hypot(self.x - other.x, self.y - other.y)
+
+    def describe(self) -> str:
+        return f"({self.x:.0f}, {self.y:.0f}, {math.degrees(self.th):.1f} deg, v {self.v:.0f}, w {self.w:.3f})"
+
+
+def pose(ctx: CaseContext) -> Pose:
+    p = ctx.position()
+    return Pose(p.x, p.y, p.angle, p.vel_trans, p.vel_rot)  # type: ignore[attr-defined]
+
+
+def _milli(th: float) -> int:
+    return round(math.degrees(th) * 1000)
+
+
+def go_back(ctx: CaseContext, start: Pose) -> None:
+    """Drive back to ``start`` in mode Automatic, then stop (a finalizer of every motion case)."""
+    ctx.ensure(St.RUNNING, AUTO)
+    ctx.send("CMD_MOVE_ABS", x=round(start.x), y=round(start.y), angle=_milli(start.th))
+    at_pose(ctx, start, "driving back to the start pose")
+    ctx.ready()
+
+
+def begin(ctx: CaseContext, mode: int) -> Pose:
+    ctx.ensure(St.RUNNING, mode)
+    start = rest(ctx)
+    ctx.on_exit("drive back to the start pose", lambda: go_back(ctx, start))
+    return start
+
+
+def rest(ctx: CaseContext, within: float = 10.0) -> Pose:
+    p = ctx.poll(lambda: pose(ctx), lambda q: abs(q.v) < 3.0 and abs(q.w) < 0.01, within=within)
+    if abs(p.v) >= 3.0 or abs(p.w) >= 0.01:
+        raise Fail(f"the platform did not come to rest within {within:g} s: {p.describe()}")
+    return p
+
+
+def at_pose(ctx: CaseContext, target: Pose, how: str, *, check_angle: bool = True) -> Pose:
+    limit = target.dist(pose(ctx)) / 100.0 + 15.0
+
+    def there(p: Pose) -> bool:
+        return (p.dist(target) <= POS_TOL and (not check_angle or abs(angle_diff(p.th, target.th)) <= ANG_TOL)
+                and abs(p.v) < 3.0 and abs(p.w) < 0.02)
+
+    p = ctx.poll(lambda: pose(ctx), there, within=limit)
+    if not there(p):
+        raise Fail(f"{how}: target {target.describe()} not reached within {limit:.0f} s - the platform is at "
+                   f"{p.describe()} ({p.dist(target):.0f} mm, "
+                   f"{math.degrees(angle_diff(p.th, target.th)):.1f} deg away)")
+    return p
+
+
+def still(ctx: CaseContext, start: Pose, how: str, seconds: float = 1.0) -> None:
+    ctx.sleep(seconds)
+    p = pose(ctx)
+    if p.dist(start) > STILL_POS or abs(angle_diff(p.th, start.th)) > STILL_ANG or abs(p.v) > 1 or abs(p.w) > 0.01:
+        raise Fail(f"{how} must not move the platform: it went from {start.describe()} to {p.describe()}")
+
+
+def hold(ctx: CaseContext, name: str, fields: dict[str, Any], seconds: float, period: float = 0.15) -> list[Pose]:
+    """Send ``name`` every ``period`` simulated seconds for ``seconds``; the poses sampled in between."""
+    samples = []
+    for _ in range(max(1, round(seconds / period))):
+        ctx.send(name, **fields)
+        ctx.sleep(period)
+        samples.append(pose(ctx))
+    return samples
+
+
+def _vel_near(value: float, want: float) -> bool:
+    return abs(value - want) <= 0.15 * abs(want) + 30.0
+
+
+def _rot_near(value: float, want: float) -> bool:
+    return abs(value - want) <= 0.15 * abs(want) + 0.03
+
+
+def _dist_wheels(ctx: CaseContext) -> float | None:
+    reply = ctx.get("CMD_GET_PLTF_PARAM_VEC")
+    for p in reply.parameters:  # type: ignore[attr-defined]
+        if p.key == "DistWheels":
+            return float(p.value)
+    return None
+
+
+_GATE: dict[str, Any] = {"moves_platform": True, "group": "motion"}
+
+
+@case("4.3/MODE_MOTION_VEL/move-vel-wheel", **_GATE, errata=("E-CMD-014",), timing=True,
+      requirement="guide 4.3 Mode Velocity: \"The desired velocities are set to the platform using the commands "
+                  "CMD_MOVE_VEL_WHEEL or CMD_MOVE_VEL. The platform keeps the last set velocity until a new "
+                  "velocity value is set or a watchdog time expired\"; 6.3 CMD_MOVE_VEL_WHEEL [mm/s]",
+      telegrams=("CMD_MOVE_VEL_WHEEL", "CMD_GET_POSITION"))
+def move_vel_wheel(ctx: CaseContext) -> None:
+    start = begin(ctx, VEL)
+    samples = hold(ctx, "CMD_MOVE_VEL_WHEEL", {"vel_right": 200, "vel_left": 200}, 1.5)
+    late = samples[len(samples) // 2 :]
+    if not all(_vel_near(p.v, 200) for p in late):
+        raise Fail(f"wheels at 200 mm/s: translational velocity {[round(p.v) for p in late]} (expected 200)")
+    moved = samples[-1].dist(start)
+    heading = math.atan2(samples[-1].y - start.y, samples[-1].x - start.x)
+    if moved < 100 or abs(angle_diff(heading, start.th)) > math.radians(10):
+        raise Fail(f"wheels at 200 mm/s for 1.5 s: moved {moved:.0f} mm in direction "
+                   f"{math.degrees(heading):.0f} deg (heading {math.degrees(start.th):.0f} deg)")
+    dist = _dist_wheels(ctx)
+    spin = hold(ctx, "CMD_MOVE_VEL_WHEEL", {"vel_right": 100, "vel_left": -100}, 1.0)[-1]
+    want = 200.0 / dist if dist else None
+    if spin.w <= 0.02 or (want is not None and not _rot_near(spin.w, want)):
+        raise Fail(f"right wheel +100, left -100 mm/s: rotation {spin.w:.3f} rad/s (expected "
+                   f"{'counter-clockwise' if want is None else f'{want:.3f}'})")
+    ctx.send("CMD_MOVE_VEL_WHEEL", vel_right=0, vel_left=0)
+    rest(ctx)
+    no_unsolicited(ctx, "CMD_MOVE_VEL_WHEEL")
+
+
+@case("4.3/MODE_MOTION_VEL/move-vel", **_GATE, errata=("E-REP-005",), timing=True,
+      requirement="guide 4.3 Mode Velocity and 6.3 CMD_MOVE_VEL: translational velocity [mm/s] and rotational "
+                  "velocity in 1000*rad/s (erratum E-REP-005: mrad/s); CMD_GET_STATUS reports the commanded "
+                  "velocities in mm/s and 1/1000 rad/s",
+      telegrams=("CMD_MOVE_VEL", "CMD_GET_STATUS"))
+def move_vel(ctx: CaseContext) -> None:
+    begin(ctx, VEL)
+    p = hold(ctx, "CMD_MOVE_VEL", {"vel_trans": 300, "vel_rot": 0}, 1.5)[-1]
+    if not _vel_near(p.v, 300):
+        raise Fail(f"CMD_MOVE_VEL(300 mm/s): velocity {p.v:.0f} mm/s")
+    p = hold(ctx, "CMD_MOVE_VEL", {"vel_trans": 0, "vel_rot": 400}, 1.5)[-1]
+    if not _rot_near(p.w, 0.4):
+        raise Fail(f"CMD_MOVE_VEL(rotation 400 mrad/s): rotation {p.w:.3f} rad/s (expected 0.4)", erratum="E-REP-005")
+    st = ctx.status().telegram
+    if abs(st.vel_rot - 400) > 60 or abs(st.vel_trans) > 30:  # type: ignore[attr-defined]
+        raise Fail(f"CMD_GET_STATUS commanded velocities {st.vel_trans} mm/s, {st.vel_rot} mrad/s "  # type: ignore[attr-defined]
+                   "(expected 0 and 400)", erratum="E-REP-005")
+    ctx.send("CMD_MOVE_VEL", vel_trans=0, vel_rot=0)
+    rest(ctx)
+
+
+def _watchdog(ctx: CaseContext, mode: int, name: str, fields: dict[str, Any], back: dict[str, Any],
+              within: float) -> None:
+    begin(ctx, mode)
+    for f in (fields, back):  # forward, then the same backward: the platform ends near its start
+        ctx.send(name, **f)
+        moving = ctx.poll(lambda: pose(ctx), lambda p: abs(p.v) > 50, within=2.0)
+        if abs(moving.v) <= 50:
+            raise Fail(f"precondition: one {name} did not set the platform moving ({moving.describe()})",
+                       precondition=True)
+        p = ctx.poll(lambda: pose(ctx), lambda q: abs(q.v) < 3.0, within=within)
+        if abs(p.v) >= 3.0:
+            raise Fail(f"one {name} and no more: still moving at {p.v:.0f} mm/s after {within:g} s")
+
+
+@case("4.3/MODE_MOTION_VEL/watchdog", **_GATE, errata=("E-PAR-018",), timing=True,
+      requirement="guide 4.3 Mode Velocity: \"The platform keeps the last set velocity until ... a watchdog time "
+                  "expired\"; erratum E-PAR-018: the platform stops within 5 s of the last velocity command",
+      telegrams=("CMD_MOVE_VEL_WHEEL",))
+def vel_watchdog(ctx: CaseContext) -> None:
+    _watchdog(ctx, VEL, "CMD_MOVE_VEL_WHEEL", {"vel_right": 200, "vel_left": 200},
+              {"vel_right": -200, "vel_left": -200}, within=5.0)
+
+
+@case("4.3/MODE_MOTION_JOYSOFT/decays", **_GATE, errata=("E-PAR-019",), timing=True,
+      requirement="guide 6.3 CMD_MOVE_VEL: \"If no velocity commands are received, the platform will decelerate "
+                  "to zero after few seconds\"; erratum E-PAR-019: at rest within 10 s",
+      telegrams=("CMD_MOVE_VEL",))
+def joysoft_decays(ctx: CaseContext) -> None:
+    _watchdog(ctx, JOYSOFT, "CMD_MOVE_VEL", {"vel_trans": 200, "vel_rot": 0}, {"vel_trans": -200, "vel_rot": 0},
+              within=10.0)
+
+
+@case("4.3/MODE_MOTION_JOYSOFT/move-vel-only", **_GATE, timing=True,
+      requirement="guide 4.3 Mode Joystick (Software): \"The desired translation and rotation velocities are set "
+                  "to the platform using the command CMD MOVE VEL. Other move commands have no effect.\"",
+      telegrams=("CMD_MOVE_VEL", "CMD_MOVE_VEL_WHEEL", "CMD_MOVE_REL"))
+def joysoft(ctx: CaseContext) -> None:
+    begin(ctx, JOYSOFT)
+    p = hold(ctx, "CMD_MOVE_VEL", {"vel_trans": 250, "vel_rot": 0}, 1.2)[-1]
+    if not _vel_near(p.v, 250):
+        raise Fail(f"CMD_MOVE_VEL(250 mm/s) in JOYSOFT: velocity {p.v:.0f} mm/s")
+    hold(ctx, "CMD_MOVE_VEL", {"vel_trans": -250, "vel_rot": 0}, 1.2)
+    ctx.send("CMD_MOVE_VEL", vel_trans=0, vel_rot=0)
+    here = rest(ctx)
+    ctx.send("CMD_MOVE_VEL_WHEEL", vel_right=300, vel_left=300)
+    ctx.send("CMD_MOVE_REL", x=300, y=0, angle=0)
+    still(ctx, here, "CMD_MOVE_VEL_WHEEL / CMD_MOVE_REL in JOYSOFT")
+
+
+def _auto(ctx: CaseContext, target: Pose, how: str) -> Pose:
+    return at_pose(ctx, target, how)
+
+
+@case("4.3/MODE_MOTION_AUTOMATIC/move-abs", **_GATE,
+      requirement="guide 4.3 CMD MOVE ABS: \"The platform drives to a specified frame. ... If the target is "
+                  "reached, the platform stops\"; 6.3: X, Y [mm], angle [1000*deg] in world coordinates",
+      telegrams=("CMD_MOVE_ABS",))
+def move_abs(ctx: CaseContext) -> None:
+    start = begin(ctx, AUTO)
+    target = start.ahead(400, 300, 30)
+    ctx.send("CMD_MOVE_ABS", x=round(target.x), y=round(target.y), angle=_milli(target.th))
+    _auto(ctx, target, "CMD_MOVE_ABS")
+
+
+@case("4.3/MODE_MOTION_AUTOMATIC/move-rel", **_GATE,
+      requirement="guide 6.3 CMD_MOVE_REL: \"The platform moves to a frame according to platform coordinates\" "
+                  "(x forward, y left, angle counter-clockwise: erratum E-PAR-013)",
+      telegrams=("CMD_MOVE_REL",))
+def move_rel(ctx: CaseContext) -> None:
+    start = begin(ctx, AUTO)
+    ctx.send("CMD_MOVE_REL", x=400, y=-200, angle=-45000)
+    _auto(ctx, start.ahead(400, -200, -45), "CMD_MOVE_REL(400, -200, -45 deg)")
+
+
+@case("4.3/MODE_MOTION_AUTOMATIC/move-path", **_GATE, errata=("E-CMD-007",),
+      requirement="guide 4.3 CMD_MOVE_PATH: \"The platform drives on a specified path to the target ... and turns "
+                  "to the specified end orientation\"; erratum E-CMD-007: a count and that many frames",
+      telegrams=("CMD_MOVE_PATH",))
+def move_path(ctx: CaseContext) -> None:
+    start = begin(ctx, AUTO)
+    frames = [start.ahead(300), start.ahead(300, 300), start.ahead(0, 300, 90)]
+    ctx.send("CMD_MOVE_PATH", frames=tuple((round(f.x), round(f.y), _milli(f.th)) for f in frames))
+    _auto(ctx, frames[-1], "CMD_MOVE_PATH (3 frames)")
+
+
+def _local_roadmap(start: Pose) -> bytes:
+    a, b, c = start, start.ahead(500), start.ahead(500, 400)
+    deg = math.degrees(start.th)
+    doc = f"""<?xml version="1.0" encoding="UTF-8"?>
+<roadmap Version="1.0">
+  <stations>
+    <station id="s_a" name="ConfA" angle="{deg:.1f}"><point x="{a.x:.0f}" y="{a.y:.0f}"/></station>
+    <station id="s_b" name="ConfB" angle="{deg:.1f}"><point x="{b.x:.0f}" y="{b.y:.0f}"/></station>
+    <station id="s_c" name="ConfC" angle="{deg + 90:.1f}"><point x="{c.x:.0f}" y="{c.y:.0f}"/></station>
+  </stations>
+  <edges>
+    <edge startstation="s_a" endstation="s_b"><points/></edge>
+    <edge startstation="s_b" endstation="s_c"><points/></edge>
+  </edges>
+</roadmap>
+"""
+    return doc.encode()
+
+
+@case("4.3/MODE_MOTION_AUTOMATIC/move-to-station", **_GATE,
+      requirement="guide 4.3 CMD_MOVE_TO_STATION: \"The shortest path on the roadmap from the current platform "
+                  "position to the target station is calculated. Following the command CMD_MOVE_PATH is executed\"",
+      telegrams=("CMD_MOVE_TO_STATION", "CMD_SET_ROADMAP"))
+def move_to_station(ctx: CaseContext) -> None:
+    ctx.preserve_document("roadmap")
+    start = begin(ctx, AUTO)
+    doc = _local_roadmap(start)
+    ctx.send("CMD_SET_ROADMAP", name="conformance_local", xml=doc.decode())
+    root = docdata.parse(doc)
+    if root is not None:
+        ctx.target.coverage.document("roadmap", root)
+    ctx.send("CMD_MOVE_TO_STATION", station="ConfC")
+    _auto(ctx, start.ahead(500, 400, 90), "CMD_MOVE_TO_STATION(ConfC)")
+
+
+@case("4.3/MODE_MOTION_AUTOMATIC/new-command-preempts", **_GATE,
+      requirement="guide 4.3 Mode Automatic: \"If a new move command is set while the platform is moving, the "
+                  "execution of the old command will be stopped immediately and the new command will be started.\"",
+      telegrams=("CMD_MOVE_ABS",))
+def preempts(ctx: CaseContext) -> None:
+    start = begin(ctx, AUTO)
+    far = start.ahead(600)
+    ctx.send("CMD_MOVE_ABS", x=round(far.x), y=round(far.y), angle=_milli(start.th))
+    ctx.poll(lambda: pose(ctx), lambda p: abs(p.v) > 50 or p.dist(start) > 50, within=5.0)
+    second = start.ahead(0, 0, 90)
+    ctx.send("CMD_MOVE_ABS", x=round(second.x), y=round(second.y), angle=_milli(second.th))
+    _auto(ctx, second, "the second CMD_MOVE_ABS")
+    still(ctx, pose(ctx), "a preempted CMD_MOVE_ABS")
+
+
+def _moving(ctx: CaseContext, start: Pose) -> Pose:
+    far = start.ahead(600)
+    ctx.send("CMD_MOVE_ABS", x=round(far.x), y=round(far.y), angle=_milli(start.th))
+    p = ctx.poll(lambda: pose(ctx), lambda q: q.dist(start) > 100 and abs(q.v) > 50, within=10.0)
+    if p.dist(start) <= 100:
+        raise Fail(f"precondition: CMD_MOVE_ABS 600 mm ahead did not start the platform ({p.describe()})",
+                   precondition=True)
+    return far
+
+
+@case("6.3/CMD_BREAK/halts-and-continues", **_GATE,
+      requirement="guide 6.3 CMD_BREAK: \"Break a platform motion mode\"; CMD_CONTINUE: \"Continue the execution "
+                  "of a platform motion mode\" - the platform stops in Breaked and completes the move after "
+                  "CMD_CONTINUE",
+      telegrams=("CMD_BREAK", "CMD_CONTINUE", "CMD_MOVE_ABS"))
+def break_continue(ctx: CaseContext) -> None:
+    start = begin(ctx, AUTO)
+    far = _moving(ctx, start)
+    ctx.send("CMD_BREAK")
+    expect_state(ctx, St.BREAKED, "CMD_BREAK while moving")
+    halted = rest(ctx, within=3.0)
+    still(ctx, halted, "the platform in Breaked")
+    ctx.send("CMD_CONTINUE")
+    expect_state(ctx, St.RUNNING, "CMD_CONTINUE")
+    _auto(ctx, far, "CMD_CONTINUE: the interrupted CMD_MOVE_ABS")
+
+
+def _halts(ctx: CaseContext, command: str, state: St) -> None:
+    start = begin(ctx, AUTO)
+    _moving(ctx, start)
+    ctx.send(command)
+    expect_state(ctx, state, f"{command} while moving", within=5.0)
+    halted = rest(ctx, within=3.0)
+    ctx.ensure(St.RUNNING, AUTO)
+    still(ctx, halted, f"CMD_START after {command} (the old move must not resume)")
+
+
+@case("6.3/CMD_STOP/halts-motion", **_GATE,
+      requirement="guide 6.3 CMD_STOP: \"Stop the motion of the platform. The operation state changes into the "
+                  "state 'Ready' and waits for the next command.\"",
+      telegrams=("CMD_STOP", "CMD_MOVE_ABS"))
+def stop_halts(ctx: CaseContext) -> None:
+    _halts(ctx, "CMD_STOP", St.READY)
+
+
+@case("6.3/CMD_SHUTDOWN_PLTF/halts-motion", **_GATE, level=Level.SHOULD,
+      requirement="guide 6.3 CMD_SHUTDOWN_PLTF: \"Used to shutdown the CAN communication\" - without CAN the drives "
+                  "cannot move: the platform stops",
+      telegrams=("CMD_SHUTDOWN_PLTF", "CMD_MOVE_ABS"))
+def shutdown_halts(ctx: CaseContext) -> None:
+    _halts(ctx, "CMD_SHUTDOWN_PLTF", St.NOT_CONNECTED)
+
+
+@case("6.4/CMD_GET_STATUS/target-reached", **_GATE, level=Level.SHOULD, errata=("E-PAR-021",),
+      requirement="guide 6.4 CMD_GET_STATUS 'Platform target reached 0: Target not reached 1: Target reached' - 0 "
+                  "while a move is under way, 1 once its target is reached",
+      telegrams=("CMD_GET_STATUS", "CMD_MOVE_REL"))
+def target_reached(ctx: CaseContext) -> None:
+    start = begin(ctx, AUTO)
+    ctx.send("CMD_MOVE_REL", x=500, y=0, angle=0)
+    st = ctx.status().telegram
+    if st.target_reached:  # type: ignore[attr-defined]
+        raise Fail("'target reached' is 1 right after a new CMD_MOVE_REL")
+    _auto(ctx, start.ahead(500), "CMD_MOVE_REL(500)")
+    st = ctx.poll(lambda: ctx.status().telegram, lambda t: t.target_reached == 1, within=2.0)
+    if st.target_reached != 1:  # type: ignore[attr-defined]
+        raise Fail("the target is reached but 'target reached' stays 0")
+
+
+# ---- moves where they must have no effect: other states (4.2) and other motion modes (4.3)
+_MOVES: dict[str, tuple[int, Callable[[Pose], dict[str, Any]]]] = {
+    "CMD_MOVE_VEL": (VEL, lambda p: {"vel_trans": 300, "vel_rot": 0}),
+    "CMD_MOVE_VEL_WHEEL": (VEL, lambda p: {"vel_right": 300, "vel_left": 300}),
+    "CMD_MOVE_ABS": (AUTO, lambda p: {"x": round(p.ahead(400).x), "y": round(p.ahead(400).y), "angle": _milli(p.th)}),
+    "CMD_MOVE_REL": (AUTO, lambda p: {"x": 400, "y": 0, "angle": 0}),
+    "CMD_MOVE_PATH": (AUTO, lambda p: {"frames": ((round(p.ahead(400).x), round(p.ahead(400).y), _milli(p.th)),)}),
+    "CMD_MOVE_TO_STATION": (AUTO, lambda p: {"station": "ConfB"}),
+}
+
+
+def _only_in_running(ctx: CaseContext, name: str) -> None:
+    mode, fields = _MOVES[name]
+    if name == "CMD_MOVE_TO_STATION":
+        ctx.preserve_document("roadmap")
+        p = pose(ctx)
+        ctx.send("CMD_SET_ROADMAP", name="conformance_local", xml=_local_roadmap(p).decode())
+    for state in (St.NOT_CONNECTED, St.CONNECTED, St.READY, St.BREAKED):
+        ctx.ensure(state, mode)
+        here = pose(ctx)
+        ctx.send(name, **fields(here))
+        still(ctx, here, f"{name} in {state.value}")
+        if state is St.BREAKED:
+            ctx.send("CMD_CONTINUE")
+            still(ctx, here, f"CMD_CONTINUE after a {name} sent in breaked")
+    ctx.ready()
+
+
+def _mode_ignores(ctx: CaseContext, mode: int, names: tuple[str, ...]) -> None:
+    ctx.ensure(St.RUNNING, mode)
+    here = rest(ctx)
+    for name in names:
+        ctx.send(name, **_MOVES[name][1](here))
+    still(ctx, here, f"{', '.join(names)} in {MotionMode(mode).name}")
+    ctx.ready()
+
+
+for _name in _MOVES:
+    add(f"6.3/{_name}/only-in-running", partial(_only_in_running, name=_name), **_GATE,
+        requirement=f"guide 4.2: \"A movement of the platform is only possible in the state 'Running'\" - {_name} "
+                    "(in its motion mode) moves nothing in Not connected, Connected, Ready or Breaked, nor after "
+                    "a CMD_CONTINUE",
+        telegrams=(_name,))
+
+add("4.3/MODE_MOTION_NO/moves-ignored", partial(_mode_ignores, mode=NO, names=tuple(_MOVES)), **_GATE,
+    requirement="guide 4.3 Mode No Motion: \"All move commands have no effects.\"", telegrams=tuple(_MOVES))
+add("4.3/MODE_MOTION_AUTOMATIC/velocity-commands-ignored",
+    partial(_mode_ignores, mode=AUTO, names=("CMD_MOVE_VEL", "CMD_MOVE_VEL_WHEEL")), **_GATE, level=Level.SHOULD,
+    requirement="guide 4.3: velocities are set with CMD_MOVE_VEL_WHEEL / CMD_MOVE_VEL in the modes Velocity and "
+                "Joystick (Software); in Automatic \"several move commands are executed\" - not these",
+    telegrams=("CMD_MOVE_VEL", "CMD_MOVE_VEL_WHEEL"))
+add("4.3/MODE_MOTION_VEL/path-commands-ignored",
+    partial(_mode_ignores, mode=VEL, names=("CMD_MOVE_ABS", "CMD_MOVE_REL", "CMD_MOVE_PATH")), **_GATE,
+    level=Level.SHOULD,
+    requirement="guide 4.3 Mode Velocity: \"The desired velocities are set to the platform using the commands "
+                "CMD_MOVE_VEL_WHEEL or CMD_MOVE_VEL\" - path commands belong to mode Automatic",
+    telegrams=("CMD_MOVE_ABS", "CMD_MOVE_REL", "CMD_MOVE_PATH"))
+add("4.3/MODE_MOTION_JOYHARD/socket-moves-ignored",
+    partial(_mode_ignores, mode=JOYHARD, names=("CMD_MOVE_VEL", "CMD_MOVE_VEL_WHEEL", "CMD_MOVE_REL")), **_GATE,
+    level=Level.SHOULD,
+    requirement="guide 4.3 Mode Joystick (Hardware): \"The platform is controlled with a wireless remote "
+                "controller\" - not by socket move commands",
+    telegrams=("CMD_MOVE_VEL", "CMD_MOVE_VEL_WHEEL", "CMD_MOVE_REL"))

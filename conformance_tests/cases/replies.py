@@ -1,0 +1,115 @@
+"""Guide 6.4: every reply telegram, in every state, decoded strictly; what the replies say agrees."""
+
+from __future__ import annotations
+
+import math
+from functools import partial
+from typing import Any
+
+from conformance_tests.cases._common import STATES, no_unsolicited
+from conformance_tests.catalogue import Level, Tier, add, case
+from conformance_tests.context import CaseContext
+from conformance_tests.outcome import Fail, ReplyTimeout
+from spec.codec import REPLIES, build
+from spec.errata import errata_for
+
+ANSWERED = [cls.NAME for cls in REPLIES if cls.DEF.answered]
+_SMOKE = {"CMD_GET_STATUS", "CMD_GET_POSITION"}
+
+
+def _args(ctx: CaseContext, name: str) -> dict[str, Any]:
+    if name == "CMD_GET_CAN_MESSAGES":
+        return {"delete": 0}
+    if name == "CMD_GET_PLTF_PARAM":
+        return {"key": ctx.get("CMD_GET_PLTF_PARAM_VEC").parameters[0].key}  # type: ignore[attr-defined]
+    return {}
+
+
+def _strict(ctx: CaseContext, name: str) -> None:
+    for state in STATES:
+        before = ctx.ensure(state)
+        s = ctx.session()
+        try:
+            reply = s.request(build("request", name, **_args(ctx, name)))
+        except ReplyTimeout:
+            if name != "CMD_GET_CAMERA":
+                raise
+            ctx.deviate("E-REP-020", 0, f"CMD_GET_CAMERA was not answered in {state.value}")
+            ctx.reset_session()
+            continue
+        if name != reply.NAME:
+            raise Fail(f"{name} in {state.value} was answered with {reply.NAME}")
+        after = ctx.status()
+        if (after.op, after.mode) != (before.op, before.mode):
+            raise Fail(f"{name} changed the platform: {before.describe()} -> {after.describe()}")
+    no_unsolicited(ctx, name)
+    ctx.ready()
+
+
+for _name in ANSWERED:
+    _errata = tuple(e.id for e in errata_for(_name) if e.id.startswith(("E-REP", "E-WIRE")))
+    add(
+        f"6.4/{_name}/strict-decode",
+        partial(_strict, name=_name),
+        requirement=(f"guide 6.4 '{_name}': the reply telegram has exactly the layout of its table - no trailing "
+                     "bytes, counts consistent with the data, enum values and constants as printed - in every "
+                     "operation state (guide 6.1: data are returned on request)"
+                     + (f"; errata {', '.join(_errata)} decide the garbled rows" if _errata else "")),
+        level=Level.MUST,
+        tier=Tier.SMOKE if _name in _SMOKE else Tier.STANDARD,
+        errata=_errata,
+        group="replies",
+        telegrams=(_name,),
+    )
+
+
+@case("6.4/CMD_GET_POSITION/agrees-with-status", errata=("E-REP-012",),
+      requirement="guide 6.4: CMD_GET_POSITION's estimated position and angle are the estimated platform frame of "
+                  "CMD_GET_STATUS (erratum E-REP-012: mm, angle in rad; the status angle is [deg*1000])",
+      telegrams=("CMD_GET_POSITION", "CMD_GET_STATUS"))
+def position_agrees(ctx: CaseContext) -> None:
+    ctx.ready()
+    pos, st = ctx.position(), ctx.status().telegram
+    if abs(pos.x - st.est_x) > 2 or abs(pos.y - st.est_y) > 2:  # type: ignore[attr-defined]
+        raise Fail(f"GET_POSITION ({pos.x}, {pos.y}) vs GET_STATUS estimate ({st.est_x}, {st.est_y})")  # type: ignore[attr-defined]
+    deg = st.est_angle / 1000.0  # type: ignore[attr-defined]
+    if abs(math.degrees(pos.angle) - deg) <= 0.1 or abs(math.degrees(pos.angle) - deg) >= 359.9:  # type: ignore[attr-defined]
+        return
+    if abs(pos.angle - deg) <= 0.1:  # type: ignore[attr-defined]
+        ctx.deviate("E-REP-012", 0, f"GET_POSITION angle {pos.angle} is in degrees")  # type: ignore[attr-defined]
+        return
+    raise Fail(f"GET_POSITION angle {pos.angle} rad does not match the status angle {deg} deg")  # type: ignore[attr-defined]
+
+
+@case("6.4/CMD_GET_STATUS/timestamp-advances", errata=("E-REP-010",), timing=True,
+      requirement="guide 6.4 CMD_GET_STATUS 'INT Message time stamp'; erratum E-REP-010: milliseconds since start",
+      telegrams=("CMD_GET_STATUS",))
+def timestamp_advances(ctx: CaseContext) -> None:
+    import time
+
+    t1 = ctx.status().telegram.timestamp  # type: ignore[attr-defined]
+    w0 = time.monotonic()
+    ctx.sleep(2.0)
+    t2 = ctx.status().telegram.timestamp  # type: ignore[attr-defined]
+    elapsed = (time.monotonic() - w0) * ctx.config.time_scale
+    if abs((t2 - t1) - elapsed * 1000) <= 0.25 * elapsed * 1000 + 100:
+        return
+    if abs((t2 - t1) - elapsed) <= 0.25 * elapsed + 1:
+        ctx.deviate("E-REP-010", 0, f"the time stamp advanced by {t2 - t1} in {elapsed:.2f} s (seconds)")
+        return
+    raise Fail(f"the time stamp advanced by {t2 - t1} in {elapsed:.2f} simulated s (expected about "
+               f"{elapsed * 1000:.0f} ms)")
+
+
+@case("6.4/CMD_GET_STATUS/at-rest", level=Level.SHOULD,
+      requirement="guide 6.4: in Ready the 'current commanded velocities' are 0 and CMD_GET_POSITION reports no "
+                  "motion",
+      telegrams=("CMD_GET_STATUS", "CMD_GET_POSITION"))
+def at_rest(ctx: CaseContext) -> None:
+    ctx.ready()
+    ctx.sleep(1.0)
+    st, pos = ctx.status().telegram, ctx.position()
+    if st.vel_trans or st.vel_rot:  # type: ignore[attr-defined]
+        raise Fail(f"commanded velocities in Ready: {st.vel_trans} mm/s, {st.vel_rot} mrad/s")  # type: ignore[attr-defined]
+    if abs(pos.vel_trans) > 1 or abs(pos.vel_rot) > 0.001:  # type: ignore[attr-defined]
+        raise Fail(f"GET_POSITION velocities in Ready: {pos.vel_trans} mm/s, {pos.vel_rot} rad/s")  # type: ignore[attr-defined]
