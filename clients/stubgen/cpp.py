@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from clients.stubgen import banner, fill, template
+from clients.stubgen import banner, fill, readme, template
 from clients.stubgen.model import (
     ERRORS,
     Field,
@@ -248,9 +248,29 @@ exec ./build/vectors "$FILE"
 """
 
 
+README = readme(
+    title="C++17",
+    build=(
+        "plain `g++ -std=c++17`, or CMake"
+    ),
+    snippet_lang="cpp",
+    snippet="""
+platformctrl::Client client("192.168.0.10", 10002);
+client.connect_to_pltf();
+client.set_mode(platformctrl::MotionMode::MODE_MOTION_VEL);
+platformctrl::GetPositionReply pos = client.get_position();
+""",
+    notes=(
+        "Sockets are POSIX (Linux, macOS). Errors are exception classes deriving from "
+        "`platformctrl::ProtocolError` (`kind()` names the class)."
+    ),
+)
+
+
 def render() -> dict[str, str]:
     sh = HEAD.replace("// ", "# ")
     return {
+        "README.md": README,
         "include/platformctrl.hpp": _header(),
         "src/runtime.cpp": HEAD + template("cpp", "runtime.cpp.tmpl"),
         "src/protocol.cpp": _protocol(),

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from clients.stubgen import banner, fill, template
+from clients.stubgen import banner, fill, readme, template
 from clients.stubgen.model import (
     ERRORS,
     Field,
@@ -249,8 +249,32 @@ exec ./build/vectors "$FILE"
 """
 
 
+README = readme(
+    title="Go",
+    build=(
+        "`go build ./cmd/...`, Go 1.21+"
+    ),
+    snippet_lang="go",
+    snippet="""
+c, err := platformctrl.Dial("192.168.0.10:10002", 10*time.Second)
+if err != nil {
+	return err
+}
+defer c.Close()
+_ = c.ConnectToPltf()
+_ = c.SetMode(platformctrl.ModeMotionVel)
+pos, err := c.GetPosition() // *GetPositionReply
+""",
+    notes=(
+        "Match errors with `errors.Is(err, platformctrl.ErrTruncated)` (or `ErrRemoteProtocolError`). The "
+        "code is gofmt-clean."
+    ),
+)
+
+
 def render() -> dict[str, str]:
     return {
+        "README.md": README,
         "go.mod": HEAD + "module platformctrl\n\ngo 1.21\n",
         "wire.go": HEAD + fill(template("go", "wire.go.tmpl"), ERRORS=_errors()),
         "protocol.go": _protocol(),

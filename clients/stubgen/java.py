@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from clients.stubgen import banner, fill, template
+from clients.stubgen import banner, fill, readme, template
 from clients.stubgen.model import (
     ERRORS,
     Field,
@@ -256,9 +256,30 @@ exec java -cp build/classes platformctrl.VectorRunner "$FILE"
 """
 
 
+README = readme(
+    title="Java 17",
+    build=(
+        "plain `javac`; `mvn package` works too"
+    ),
+    snippet_lang="java",
+    snippet="""
+try (Client client = new Client("192.168.0.10", 10002, 10000)) {
+    client.connectToPltf();
+    client.setMode(Protocol.MotionMode.MODE_MOTION_VEL);
+    Protocol.GetPositionReply pos = client.getPosition();
+}
+""",
+    notes=(
+        "Telegrams and group items are records nested in `Protocol`; errors are `ProtocolException` "
+        "subclasses (`ProtocolException.Truncated`, ...), checked as they extend IOException."
+    ),
+)
+
+
 def render() -> dict[str, str]:
     sh = HEAD.replace("// ", "# ")
     files = {
+        "README.md": README,
         "pom.xml": POM.format(text=banner("").strip()),
         SRC + "ProtocolException.java": _errors(),
         SRC + "Protocol.java": _protocol(),

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import keyword
 
-from clients.stubgen import banner, fill, template
+from clients.stubgen import banner, fill, readme, template
 from clients.stubgen.model import (
     ERRORS,
     Field,
@@ -268,8 +268,31 @@ packages = ["platformctrl"]
 """
 
 
+README = readme(
+    title="Python 3.10+",
+    build=(
+        "byte-compiles with `python3 -m compileall`"
+    ),
+    snippet_lang="python",
+    snippet="""
+from platformctrl import Client, MotionMode
+
+with Client("192.168.0.10", 10002) as client:
+    client.connect_to_pltf()
+    client.init_pltf()
+    client.set_mode(MotionMode.MODE_MOTION_VEL)
+    pos = client.get_position()  # GetPositionReply(x=..., y=..., angle=..., ...)
+""",
+    notes=(
+        "Methods are the commands in snake_case; GET_* methods return the typed reply. `platformctrl.codec` "
+        "is sans-IO: `encode`, `decode_frame`, `TelegramDecoder`."
+    ),
+)
+
+
 def render() -> dict[str, str]:
     return {
+        "README.md": README,
         "platformctrl/__init__.py": HEAD + INIT_PY,
         "platformctrl/wire.py": HEAD + fill(template("python", "wire.py.tmpl"), ERRORS=_errors()),
         "platformctrl/codec.py": HEAD + template("python", "codec.py.tmpl"),

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from clients.stubgen import banner, fill, template
+from clients.stubgen import banner, fill, readme, template
 from clients.stubgen.model import (
     ERRORS,
     LEAF_ERRORS,
@@ -246,9 +246,29 @@ exec "${{CARGO_TARGET_DIR:-target}}/debug/vectors" "$FILE"
 """
 
 
+README = readme(
+    title="Rust",
+    build=(
+        "`cargo build`, no dependencies"
+    ),
+    snippet_lang="rust",
+    snippet="""
+let mut client = platformctrl::Client::connect(("192.168.0.10", 10002), Some(Duration::from_secs(10)))?;
+client.connect_to_pltf()?;
+client.set_mode(platformctrl::MotionMode::ModeMotionVel)?;
+let pos = client.get_position()?; // GetPositionReply
+""",
+    notes=(
+        "`decode_frame::<Reply>(bytes)` and `Decoder::<Reply>::new()` are sans-IO; `Request`/`Reply` are "
+        "enums of every telegram. `Error::kind` names the error class."
+    ),
+)
+
+
 def render() -> dict[str, str]:
     sh = HEAD.replace("// ", "# ")
     return {
+        "README.md": README,
         "Cargo.toml": CARGO.format(banner=sh),
         "src/lib.rs": LIB.format(banner=HEAD),
         "src/wire.rs": HEAD + fill(template("rust", "wire.rs.tmpl"), ERRORS=_errors()),

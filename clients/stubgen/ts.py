@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from clients.stubgen import banner, fill, template
+from clients.stubgen import banner, fill, readme, template
 from clients.stubgen.model import (
     ERRORS,
     Field,
@@ -225,9 +225,32 @@ def _package() -> str:
             f'  "devDependencies": {{\n{deps}\n  }}\n}}\n')
 
 
+README = readme(
+    title="TypeScript (Node)",
+    build=(
+        "`npm install` then `tsc`; typescript and @types/node are the only (dev) dependencies"
+    ),
+    snippet_lang="ts",
+    snippet="""
+import { Client, MotionMode } from "platformctrl";
+
+const client = await Client.connect("192.168.0.10", 10002);
+await client.connectToPltf();
+await client.setMode(MotionMode.MODE_MOTION_VEL);
+const pos = await client.getPosition(); // GetPositionReply
+client.close();
+""",
+    notes=(
+        "Methods return promises; errors are classes (`instanceof Truncated`). `decodeFrame`, `encode` and "
+        "`TelegramDecoder` are sans-IO."
+    ),
+)
+
+
 def render() -> dict[str, str]:
     sh = HEAD.replace("// ", "# ")
     return {
+        "README.md": README,
         "package.json": _package(),
         "tsconfig.json": TSCONFIG.format(banner=HEAD),
         "src/index.ts": INDEX.format(banner=HEAD),
