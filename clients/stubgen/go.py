@@ -225,7 +225,7 @@ def _methods() -> str:
 
 
 BUILD_SH = """#!/bin/sh
-{banner}# sh build.sh: build the package and the programs into build/ (Go 1.21+, no dependencies).
+{banner}# sh build.sh: build the package and the programs into build/ (Go 1.19+, no dependencies).
 set -e
 cd "$(dirname "$0")"
 export GOTOOLCHAIN="${{GOTOOLCHAIN:-local}}"
@@ -252,7 +252,7 @@ exec ./build/vectors "$FILE"
 README = readme(
     title="Go",
     build=(
-        "`go build ./cmd/...`, Go 1.21+"
+        "`go build ./cmd/...`, Go 1.19+"
     ),
     snippet_lang="go",
     snippet="""
@@ -275,7 +275,7 @@ pos, err := c.GetPosition() // *GetPositionReply
 def render() -> dict[str, str]:
     return {
         "README.md": README,
-        "go.mod": HEAD + "module platformctrl\n\ngo 1.21\n",
+        "go.mod": HEAD + "module platformctrl\n\ngo 1.19\n",
         "wire.go": HEAD + fill(template("go", "wire.go.tmpl"), ERRORS=_errors()),
         "protocol.go": _protocol(),
         "client.go": HEAD + fill(template("go", "client.go.tmpl"), METHODS=_methods()),

@@ -4,7 +4,7 @@
 package platformctrl
 
 import (
-	"errors"
+	"fmt"
 	"net"
 	"time"
 )
@@ -69,7 +69,7 @@ func (c *Client) Receive() (Telegram, error) {
 			if t, derr := c.dec.Next(); derr != nil || t != nil {
 				return t, derr
 			}
-			return nil, errors.Join(errors.New("the server closed the connection"), err)
+			return nil, fmt.Errorf("the server closed the connection: %w", err)
 		}
 	}
 }
