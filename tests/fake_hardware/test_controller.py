@@ -219,3 +219,25 @@ def test_receive_stamping_for_real_interfaces(make_hw: Any) -> None:
     hw.controller.add_listening_id(0x220)
     run(hw, 0.0, 0.1)
     assert [r.timestamp for r in hw.controller.get_can_messages(True)] == pytest.approx([0.02, 0.04, 0.06, 0.08, 0.1])
+
+
+def test_the_non_virtual_path(monkeypatch: pytest.MonkeyPatch, make_hw: Any) -> None:
+    """interface="socketcan" (vcan0 or a real adapter): stock python-can buses, polled with recv(timeout=0), frames
+    stamped at reception. No kernel CAN device here, so can.Bus is routed to python-can's own virtual bus."""
+    opened: list[str] = []
+    real_bus = can.Bus
+
+    def fake_bus(interface: str, channel: str, **kwargs: Any) -> can.BusABC:
+        opened.append(interface)
+        return real_bus(interface="virtual", channel=f"fake-{channel}", **kwargs)
+
+    monkeypatch.setattr(can, "Bus", fake_bus)
+    with pytest.raises(ValueError, match="needs a channel"):
+        make_hw(interface="socketcan")
+    hw = make_hw(interface="socketcan", channel="vcan0")
+    assert opened == ["socketcan"] * 8 and hw.controller.stamp == "receive"
+    assert hw.connect(0.0).ok and hw.init(0.0).ok
+    hw.controller.set_wheel_velocities(250, 250)
+    run(hw, 0.0, 1.0)
+    assert hw.motors[0] is not None and hw.motors[0].wheel_velocity == pytest.approx(250)
+    assert hw.controller.board_status().motor_right_status == 0
