@@ -7,7 +7,8 @@ Rules:
   encoder cycle): scheduled faults, then every board, the scanner, the controller and the scan reader. A
   request the controller sends in one tick is answered by the boards in the next one.
 - ``connect``/``init`` start the controller's transaction and run one step at the same ``now``, so on a complete
-  platform they are done on return; a missing node makes them last until their simulated deadline.
+  platform they are done on return; a missing node makes them last until their simulated deadline. The events
+  of that inner step come out of the next ``step``.
 - The world simulation (later) reads ``motors[i].wheel_velocity`` after ``step`` and may report the true
   wheel travel back (``report_wheel_travel``) before the next one; range callbacks feed the ultrasonic board
   and the scanner.
@@ -60,6 +61,7 @@ class Hardware:
     scans: list[Scan] = field(default_factory=list)  # the scans read in the last step
     faults: FaultInjector = field(init=False)
     _scanner_silent: bool = False
+    _carry: list[HwEvent] = field(default_factory=list)  # events of the steps inside connect/init/shutdown
 
     def __post_init__(self) -> None:
         self.faults = FaultInjector(self)
@@ -71,7 +73,8 @@ class Hardware:
         return (right if isinstance(right, MotorBoard) else None, left if isinstance(left, MotorBoard) else None)
 
     def step(self, now: float) -> list[HwEvent]:
-        events = self.faults.step(now)
+        events, self._carry = self._carry, []
+        events += self.faults.step(now)
         for board in self.boards.values():
             board.step(now)
         if self.scanner is not None:
@@ -93,19 +96,19 @@ class Hardware:
     def connect(self, now: float) -> Transaction:
         """CMD_CONNECT_TO_PLTF: probe every node; done on return unless a node is missing."""
         txn = self.controller.connect(now)
-        self.step(now)
+        self._carry = self.step(now)
         return txn
 
     def init(self, now: float) -> Transaction:
         """CMD_INIT_PLTF: self test of every connected node; done on return unless a node does not answer."""
         txn = self.controller.init(now)
-        self.step(now)
+        self._carry = self.step(now)
         return txn
 
     def shutdown(self, now: float) -> None:
         """CMD_SHUTDOWN_PLTF."""
         self.controller.shutdown(now)
-        self.step(now)
+        self._carry = self.step(now)
 
     def close(self) -> None:
         for port in [*self.ports.values(), self.controller_port]:

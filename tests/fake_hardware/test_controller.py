@@ -81,6 +81,14 @@ def test_a_missing_node_is_reported_not_faked(make_hw: Any) -> None:
     assert s.radar_status == 0 and s.motor_right_status == 0
 
 
+def test_the_events_of_connect_and_init_come_out_of_the_next_step(make_hw: Any) -> None:
+    hw = make_hw()
+    hw.connect(0.0)
+    hw.init(0.0)
+    kinds = [e.kind for e in hw.step(0.02)]
+    assert kinds == ["connect_done", "init_done"] and hw.step(0.04) == []
+
+
 def test_init_results_and_a_failing_self_test(make_hw: Any) -> None:
     hw = make_hw()
     hw.connect(0.0)
@@ -203,7 +211,7 @@ def test_socketcan_error_frames_signal_bus_off(hw: Hardware) -> None:
     try:
         sniffer.bus.send(can.Message(arbitration_id=CAN_ERR_BUSOFF, is_error_frame=True, timestamp=0.0))
         _, events = run(hw, 0.0, 0.04)
-        assert hw.controller.bus_off and [e.kind for e in events] == ["bus_off"]
+        assert hw.controller.bus_off and [e.kind for e in events] == ["connect_done", "init_done", "bus_off"]
         assert hw.controller.board_status().io_status & St.BUS_OFF
         sniffer.bus.send(can.Message(arbitration_id=CAN_ERR_RESTARTED, is_error_frame=True, timestamp=0.04))
         _, events = run(hw, 0.04, 0.08)
