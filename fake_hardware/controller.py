@@ -18,8 +18,7 @@ from __future__ import annotations
 import math
 from collections import deque
 from collections.abc import Callable, Iterable
-from dataclasses import dataclass, field
-from typing import Any, Literal, NamedTuple
+from typing import Any, Literal
 
 import can
 
@@ -27,6 +26,9 @@ from fake_hardware import candb
 from fake_hardware.board_status import BoardStatus, assemble
 from fake_hardware.candb import ALL_NODES, MOTORS, PREFIX, Node, St
 from fake_hardware.canport import CanPort
+from fake_hardware.records import CanRecord, ControllerError, HwEvent, SelfTestResult, Transaction
+
+__all__ = ["CanController", "CanRecord", "ControllerError", "HwEvent", "SelfTestResult", "Transaction"]
 
 PROBE_TIMEOUT = 0.1  # s: connect waits this long for the probe replies
 SELFTEST_TIMEOUT = 0.5  # s
@@ -42,70 +44,6 @@ DIGOUT_CHANNELS = {Node.IOBOARD: 16, Node.RELAYBOARD: 8}
 ANSWERS = {"ProbeReply": "connect", "SelfTestResult": "init"}  # answer -> transaction kind
 
 Params = Callable[[str], Any]
-
-
-class HwEvent(NamedTuple):
-    kind: str  # emergency_pressed/_released, node_lost/_back, bus_off/_on, frames_lost, connect_done, init_done
-    node: Node | None
-    text: str
-
-    def __str__(self) -> str:
-        return self.text
-
-
-class SelfTestResult(NamedTuple):
-    node: Node
-    passed: bool
-    errors: int  # board specific error bits; 0xFFFF: no answer
-    status: int
-
-
-@dataclass
-class Transaction:
-    kind: Literal["connect", "init"]
-    started: float
-    deadline: float
-    sequence: int
-    pending: set[Node]
-    answers: dict[Node, dict[str, Any]] = field(default_factory=dict)
-    finished_at: float | None = None
-
-    @property
-    def done(self) -> bool:
-        return self.finished_at is not None
-
-    @property
-    def missing(self) -> tuple[Node, ...]:
-        """Nodes that did not answer (final once ``done``)."""
-        return tuple(sorted(self.pending))
-
-    @property
-    def results(self) -> dict[Node, SelfTestResult]:
-        """Self-test results of an init transaction, a node without answer as failed with errors 0xFFFF."""
-        if self.kind != "init":
-            return {}
-        out = {
-            n: SelfTestResult(n, bool(a["Passed"]), int(a["Errors"]), int(a["Status"])) for n, a in self.answers.items()
-        }
-        out.update({n: SelfTestResult(n, False, 0xFFFF, St.ABSENT) for n in self.pending})
-        return dict(sorted(out.items()))
-
-    @property
-    def ok(self) -> bool:
-        """Done, every node answered, and (init) every self test passed."""
-        return self.done and not self.pending and all(r.passed for r in self.results.values())
-
-
-class CanRecord(NamedTuple):
-    """One frame of CMD_GET_CAN_MESSAGES: simulated seconds, 11-bit id, 8 data bytes (zero padded, E-REP-001)."""
-
-    timestamp: float
-    can_id: int
-    data: bytes
-
-
-class ControllerError(Exception):
-    """A command the controller cannot carry out in its present state (bus down, wrong node, bad channel)."""
 
 
 class CanController:
