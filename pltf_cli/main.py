@@ -13,6 +13,7 @@ from collections.abc import Sequence
 
 # name -> (module, help). The module defines add_arguments(parser) and run(args) -> int.
 COMMANDS: dict[str, tuple[str, str]] = {
+    "conform": ("pltf_cli.conform_cmd", "check a PlatformCtrl implementation over TCP: the conformance suite"),
     "decode": ("pltf_cli.codec_cmds", "decode frames (hex) into JSON, one object per telegram"),
     "encode": ("pltf_cli.codec_cmds", "encode a telegram from its name and fields JSON into hex"),
     "serve": ("pltf_cli.serve_cmd", "run the reference server (PlatformCtrl stand-in) on two TCP ports"),

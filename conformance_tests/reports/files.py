@@ -1,0 +1,89 @@
+"""JUnit XML and JSON reports of a run (per case: requirement, verdict, messages and the wire log)."""
+
+from __future__ import annotations
+
+import json
+import xml.etree.ElementTree as ET
+from pathlib import Path
+from typing import Any
+
+from conformance_tests.catalogue import SECTIONS, Level, Verdict
+from conformance_tests.reports import first_line
+from conformance_tests.runner import CaseResult, RunResult
+
+
+def wire_lines(result: CaseResult) -> list[str]:
+    return [f"{e.t:9.4f} {e.port:>3} {e.direction} {e.note:<28} {e.hex()}" for e in result.wire]
+
+
+def case_dict(r: CaseResult) -> dict[str, Any]:
+    c = r.case
+    return {
+        "id": c.id, "section": c.section, "group": c.group, "level": c.level.value, "tier": c.tier.name.lower(),
+        "requirement": c.requirement, "errata": list(c.errata), "telegrams": list(c.telegrams),
+        "flags": [f for f in ("moves_platform", "switches_outputs", "destructive", "abuse", "timing")
+                  if getattr(c, f)],
+        "verdict": r.verdict.value, "message": r.message, "duration": round(r.duration, 4),
+        "expected_failure": r.expected_failure,
+        "attempts": [{"verdict": a.verdict.value, "message": a.message, "duration": round(a.duration, 4)}
+                     for a in r.attempts],
+        "deviations": [{"erratum": d.erratum, "reading": d.reading, "reading_text": d.reading_text,
+                        "detail": d.detail} for d in r.deviations],
+        "notes": list(r.notes),
+        "wire": [{"t": round(e.t, 5), "port": e.port, "dir": e.direction, "note": e.note, "hex": e.hex()}
+                 for e in r.wire],
+    }  # fmt: skip
+
+
+def run_dict(run: RunResult) -> dict[str, Any]:
+    cfg = run.config
+    return {
+        "target": f"{cfg.host}:{cfg.port}", "second_port": cfg.second_port, "profile": cfg.profile,
+        "tier": cfg.tier.name.lower(), "time_scale": cfg.time_scale, "started": run.started,
+        "duration": round(run.duration, 3), "exit_code": run.exit_code, "harness_error": run.harness_error,
+        "counts": {v.value: n for v, n in run.counts().items()}, "stale_baseline": run.stale,
+        "coverage": run.target.coverage.as_dict(), "cases": [case_dict(r) for r in run.results],
+    }  # fmt: skip
+
+
+def write_json(run: RunResult, path: str | Path) -> None:
+    Path(path).write_text(json.dumps(run_dict(run), indent=1) + "\n", encoding="utf-8")
+
+
+def write_junit(run: RunResult, path: str | Path) -> None:
+    suites = ET.Element("testsuites", name="pltf conform", tests=str(len(run.results)),
+                        time=f"{run.duration:.3f}")
+    by_section: dict[str, list[CaseResult]] = {}
+    for r in run.results:
+        by_section.setdefault(r.case.section, []).append(r)
+    for section in sorted(by_section):
+        results = by_section[section]
+        failures = sum(r.verdict in (Verdict.FAIL, Verdict.INCONCLUSIVE) and not r.expected_failure for r in results)
+        suite = ET.SubElement(
+            suites, "testsuite", name=f"guide {section} {SECTIONS.get(section, '')}".strip(), tests=str(len(results)),
+            failures=str(failures), errors=str(sum(r.verdict is Verdict.ERROR for r in results)),
+            skipped=str(sum(r.verdict in (Verdict.NA, Verdict.SKIPPED) for r in results)),
+            time=f"{sum(r.duration for r in results):.3f}",
+        )
+        for r in results:
+            tc = ET.SubElement(suite, "testcase", classname=f"guide.{section}.{r.case.group}", name=r.case.id,
+                               time=f"{r.duration:.3f}")
+            props = ET.SubElement(tc, "properties")
+            for name, value in (("level", r.case.level.value), ("verdict", r.verdict.value),
+                                ("requirement", r.case.requirement), ("errata", " ".join(r.case.errata))):
+                ET.SubElement(props, "property", name=name, value=value)
+            msg = first_line(r.message)
+            if r.expected_failure:
+                ET.SubElement(tc, "skipped", message=f"expected by the baseline: {r.verdict} {msg}")
+            elif r.verdict is Verdict.FAIL or (r.verdict is Verdict.INCONCLUSIVE and r.case.level is Level.MUST):
+                ET.SubElement(tc, "failure", type=r.verdict.value, message=msg).text = r.message
+            elif r.verdict is Verdict.ERROR:
+                ET.SubElement(tc, "error", type="ERROR", message=msg).text = r.message
+            elif r.verdict in (Verdict.NA, Verdict.SKIPPED):
+                ET.SubElement(tc, "skipped", message=f"{r.verdict}: {msg}")
+            out = [f"verdict: {r.verdict} ({r.case.level})", f"requirement: {r.case.requirement}"]
+            out += [f"deviation: {d.describe()}" for d in r.deviations] + [f"note: {n}" for n in r.notes]
+            out += ["wire log (t, port, dir, telegram, hex):", *wire_lines(r)]
+            ET.SubElement(tc, "system-out").text = "\n".join(out)
+    ET.indent(suites)
+    ET.ElementTree(suites).write(path, encoding="utf-8", xml_declaration=True)

@@ -1,0 +1,135 @@
+"""``pltf conform``: run the conformance suite against a PlatformCtrl target over TCP (conformance_tests).
+
+Exit status: 0 when every selected MUST case passes (and no baseline entry is stale, coverage is not below
+``--coverage-threshold``), 1 when a case fails, 2 for a harness error (target unreachable, bad arguments).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from rich.console import Console
+
+from conformance_tests.baseline import Baseline, BaselineError
+from conformance_tests.catalogue import Tier, load_all, select
+from conformance_tests.context import Config
+
+
+def _target(text: str) -> tuple[str, int]:
+    host, sep, port = text.rpartition(":")
+    if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
+        raise argparse.ArgumentTypeError(f"expected HOST:PORT, got {text!r}")
+    return host.strip("[]"), int(port)
+
+
+def _port(text: str) -> int:
+    if not text.isdigit() or not 0 < int(text) < 65536:
+        raise argparse.ArgumentTypeError(f"expected a port number, got {text!r}")
+    return int(text)
+
+
+def _positive(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}")
+    return value
+
+
+def add_conform_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--target", type=_target, required=True, metavar="HOST:PORT", help="the server to check")
+    p.add_argument("--second-port", type=_port, metavar="PORT", help="the target's second port (guide 6.1: 10002)")
+    p.add_argument("--time-scale", type=_positive, default=1.0, metavar="X",
+                   help="the target's simulated seconds per wall second (default 1: a real platform)")
+    p.add_argument("--profile", choices=("strict", "original"), default="strict",
+                   help="original: accept the alternative readings the errata register marks 'accept'")
+    p.add_argument("--tier", choices=[t.name.lower() for t in Tier], default="standard")
+    p.add_argument("-k", dest="keyword", metavar="EXPR", help="select cases: and/or/not over id substrings or globs")
+    p.add_argument("--junit", metavar="FILE", help="write a JUnit XML report")
+    p.add_argument("--json", metavar="FILE", help="write a JSON report (with wire logs and coverage)")
+    p.add_argument("--html", metavar="FILE", help="write a self-contained HTML report")
+    gate = p.add_argument_group("safety gate")
+    gate.add_argument("--allow-motion", action="store_true",
+                      help="run the cases that move the platform and switch outputs (real platform: keep clear)")
+    gate.add_argument("--target-is-simulator", action="store_true",
+                      help="declare the target a simulator: motion and output cases run")
+    gate.add_argument("--allow-shutdown", action="store_true", help="end with CMD_EXIT (the target stops)")
+    p.add_argument("--baseline", metavar="FILE", help="known failures; a stale entry fails the run")
+    p.add_argument("--write-baseline", metavar="FILE", help="write the failures of this run as a baseline")
+    p.add_argument("--coverage-threshold", type=float, metavar="PCT",
+                   help="exit 1 when an enforced coverage metric is below PCT percent")
+    p.add_argument("--reruns", type=int, default=2, metavar="N", help="re-runs of an inconclusive case (default 2)")
+    p.add_argument("--reply-timeout", type=_positive, default=3.0, metavar="S", help="wall seconds per reply")
+    p.add_argument("--list", action="store_true", help="list the selected cases and exit")
+    p.add_argument("--verbose", action="store_true", help="print every verdict, not only the non-PASS ones")
+    p.add_argument("--differential", action="store_true",
+                   help="also replay a session against an in-process reference server and diff the replies")
+    p.add_argument("--stateful", type=int, default=0, metavar="N",
+                   help="also run N stateful (Hypothesis) examples; a failure is saved as a replay script")
+    p.add_argument("--stateful-out", default="conform-failures", metavar="DIR",
+                   help="where stateful failures are saved (default conform-failures/)")
+
+
+def run_conform(args: argparse.Namespace) -> int:
+    from conformance_tests.reports.console import ConsoleReporter
+    from conformance_tests.reports.files import write_json, write_junit
+    from conformance_tests.reports.html import write_html
+    from conformance_tests.runner import Runner
+
+    host, port = args.target
+    config = Config(host=host, port=port, second_port=args.second_port, time_scale=args.time_scale,
+                    profile=args.profile, tier=Tier[args.tier.upper()], keyword=args.keyword,
+                    allow_motion=args.allow_motion, simulator=args.target_is_simulator,
+                    allow_shutdown=args.allow_shutdown, reruns=max(0, args.reruns), reply_timeout=args.reply_timeout)
+    try:
+        cases = select(load_all().values(), tier=config.tier, keyword=config.keyword)
+        baseline = Baseline.load(args.baseline) if args.baseline else Baseline()
+    except (ValueError, BaselineError) as exc:
+        print(f"pltf conform: {exc}", file=sys.stderr)
+        return 2
+    console = Console(width=None if sys.stdout.isatty() else 140)
+    if args.list:
+        for c in cases:
+            flags = " ".join(f for f in ("moves_platform", "switches_outputs", "destructive", "abuse")
+                             if getattr(c, f))
+            console.print(f"{c.id}  [dim]{c.level} {c.tier.name.lower()} {flags}[/]", highlight=False)
+        console.print(f"{len(cases)} cases")
+        return 0
+    if not cases:
+        print("pltf conform: no case selected", file=sys.stderr)
+        return 2
+    run = Runner(config, cases, [ConsoleReporter(console, verbose=args.verbose)], baseline).run()
+    code = run.exit_code
+    for path, write in ((args.junit, write_junit), (args.json, write_json), (args.html, write_html)):
+        if path:
+            write(run, path)
+            console.print(f"report written to {path}")
+    if args.write_baseline:
+        Path(args.write_baseline).write_text(Baseline.render(run.results), encoding="utf-8")
+    if args.coverage_threshold is not None and code != 2:
+        below = run.target.coverage.below(args.coverage_threshold)
+        for m in below:
+            console.print(f"[bold red]coverage below {args.coverage_threshold:g}%:[/] {m.name} {m.percent:.1f}% "
+                          f"(missing: {', '.join(m.missing[:5])})")
+        code = max(code, 1 if below else 0)
+    if code != 2 and args.differential:
+        code = max(code, _differential(config, console))
+    if code != 2 and args.stateful:
+        code = max(code, _stateful(config, args.stateful, args.stateful_out, console))
+    return code
+
+
+def _differential(config: Config, console: Console) -> int:
+    from conformance_tests.differential import run_differential
+
+    return run_differential(config, console)
+
+
+def _stateful(config: Config, examples: int, out: str, console: Console) -> int:
+    from conformance_tests.stateful import run_stateful
+
+    return run_stateful(config, examples, Path(out), console)
