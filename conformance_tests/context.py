@@ -102,7 +102,12 @@ class Target:
                     return s
                 s.request(build("request", "CMD_GET_STATUS"), timeout=min(cfg.reply_timeout, 1.0))
                 return s
-            except (Unreachable, TargetFailure) as exc:
+            except Unreachable as exc:
+                if "refused" in str(exc).lower():
+                    raise  # nothing listens: a busy port accepts and closes, it does not refuse
+                last = str(exc)
+                s.close()
+            except TargetFailure as exc:
                 last = str(exc)
                 s.close()
             if time.monotonic() + delay > deadline:

@@ -151,6 +151,12 @@ class Session:
         self._sendall(data, telegram.NAME)
         self.observer.on_sent(telegram)
 
+    def send_many(self, telegrams: list[Telegram], note: str) -> None:
+        """Send several telegrams back to back in one write, logged as one entry."""
+        self._sendall(b"".join(encode(t) for t in telegrams), note)
+        for t in telegrams:
+            self.observer.on_sent(t)
+
     def send_raw(self, data: bytes, note: str = "raw bytes") -> None:
         self._sendall(data, note)
 

@@ -24,10 +24,8 @@ _BUFFER = ("guide 6.3 CMD_ADD_CAN_LISTENING_ID: \"Add a CAN-ID to the receive li
 
 
 def _listen(ctx: CaseContext, ids: range, add: bool = True) -> None:
-    s = ctx.session()
     name = "CMD_ADD_CAN_LISTENING_ID" if add else "CMD_REMOVE_CAN_LISTENING_ID"
-    for i in ids:
-        s.send(build("request", name, can_id=i))
+    ctx.session().send_many([build("request", name, can_id=i) for i in ids], f"{len(ids)} x {name}")
 
 
 def _listen_all(ctx: CaseContext) -> None:

@@ -335,18 +335,26 @@ def break_continue(ctx: CaseContext) -> None:
     ctx.send("CMD_BREAK")
     expect_state(ctx, St.BREAKED, "CMD_BREAK while moving")
     halted = rest(ctx, within=3.0)
+    short_of(halted, far, "CMD_BREAK")
     still(ctx, halted, "the platform in Breaked")
     ctx.send("CMD_CONTINUE")
     expect_state(ctx, St.RUNNING, "CMD_CONTINUE")
     _auto(ctx, far, "CMD_CONTINUE: the interrupted CMD_MOVE_ABS")
 
 
+def short_of(halted: Pose, target: Pose, command: str) -> None:
+    """The platform stopped on ``command`` (sent early in a 600 mm move), not at the move's target."""
+    if halted.dist(target) <= POS_TOL:
+        raise Fail(f"{command} sent early in a 600 mm move: the platform went on to the target {target.describe()}")
+
+
 def _halts(ctx: CaseContext, command: str, state: St) -> None:
     start = begin(ctx, AUTO)
-    _moving(ctx, start)
+    far = _moving(ctx, start)
     ctx.send(command)
     expect_state(ctx, state, f"{command} while moving", within=5.0)
     halted = rest(ctx, within=3.0)
+    short_of(halted, far, command)
     ctx.ensure(St.RUNNING, AUTO)
     still(ctx, halted, f"CMD_START after {command} (the old move must not resume)")
 

@@ -69,13 +69,19 @@ for _name in ANSWERED:
       telegrams=("CMD_GET_POSITION", "CMD_GET_STATUS"))
 def position_agrees(ctx: CaseContext) -> None:
     ctx.ready()
+    p0 = ctx.preserve_pose()
+    ctx.send("CMD_SET_FRM_PLTF", x=p0.x, y=p0.y, angle=30000)  # type: ignore[attr-defined]  # 0 deg would hide units
     pos, st = ctx.position(), ctx.status().telegram
     if abs(pos.x - st.est_x) > 2 or abs(pos.y - st.est_y) > 2:  # type: ignore[attr-defined]
         raise Fail(f"GET_POSITION ({pos.x}, {pos.y}) vs GET_STATUS estimate ({st.est_x}, {st.est_y})")  # type: ignore[attr-defined]
     deg = st.est_angle / 1000.0  # type: ignore[attr-defined]
-    if abs(math.degrees(pos.angle) - deg) <= 0.1 or abs(math.degrees(pos.angle) - deg) >= 359.9:  # type: ignore[attr-defined]
+
+    def off(a: float, b: float) -> float:
+        return abs((a - b + 180.0) % 360.0 - 180.0)
+
+    if off(math.degrees(pos.angle), deg) <= 0.1:  # type: ignore[attr-defined]
         return
-    if abs(pos.angle - deg) <= 0.1:  # type: ignore[attr-defined]
+    if off(pos.angle, deg) <= 0.1:  # type: ignore[attr-defined]
         ctx.deviate("E-REP-012", 0, f"GET_POSITION angle {pos.angle} is in degrees")  # type: ignore[attr-defined]
         return
     raise Fail(f"GET_POSITION angle {pos.angle} rad does not match the status angle {deg} deg")  # type: ignore[attr-defined]
