@@ -106,7 +106,7 @@ def encode(telegram: Telegram) -> bytes:
     return frame(_SETS[telegram.DIRECTION].encode_data(telegram))
 
 
-def build(direction: Direction, name: str, **fields: Any) -> Telegram:
+def build(direction: Direction, name: str, /, **fields: Any) -> Telegram:
     """Construct a telegram by name; unknown or missing fields raise FieldValueError."""
     try:
         cls = _SETS[direction].by_name[name]
@@ -121,6 +121,10 @@ def build(direction: Direction, name: str, **fields: Any) -> Telegram:
 
 def decode_frame(data: bytes, direction: Direction, max_length: int = DEFAULT_MAX_LENGTH) -> Telegram:
     """Decode exactly one frame; anything before, after or missing is an error."""
+    if len(data) >= FRAME_OVERHEAD:  # fast path for a well-formed frame; anything irregular takes the slow one
+        head, length = _FRAME_HEAD.unpack_from(data)
+        if head == HEADER and length <= max_length and len(data) == FRAME_OVERHEAD + length:
+            return _SETS[direction].decode_data(bytes(data[FRAME_OVERHEAD:]))
     dec = TelegramDecoder(direction, max_length)
     dec.receive_data(data)
     telegram = dec.next_telegram()

@@ -11,6 +11,7 @@ Rules:
 
 from __future__ import annotations
 
+import itertools
 import struct
 from collections.abc import Callable
 from typing import Any
@@ -127,6 +128,7 @@ class _Source:
             "_range": range,
             "_bytes": bytes,
             "_isinstance": isinstance,
+            "_starmap": itertools.starmap,
         }
         self._n = 0
 
@@ -265,7 +267,7 @@ def _emit_encode(src: _Source, depth: int, fields: tuple[FieldDef, ...], names: 
                 g.repeat or _needs_checks(g) for g in f.fields
             ):
                 s = src.const("S", _struct_of(list(f.fields)))
-                src.emit(depth, f"parts.extend([{s}.pack(*_it) for _it in {var}])")
+                src.emit(depth, f"parts.extend(_starmap({s}.pack, {var}))")
             else:
                 locs = [src.name(g.name) for g in sub]
                 src.emit(depth, f"for _it in {var}:")

@@ -86,9 +86,9 @@ def render() -> str:
         if t.reply is not None:
             lines += _layout("Reply", t, t.reply)
     lines += ["## Enums", ""]
-    for e in load_enums().values():
-        lines += [f"### {e.name}", "", f"{e.description} Guide: {e.section}.", "", "| name | value |", "|---|---|"]
-        lines += [f"| {k} | {v} |" for k, v in e.values.items()]
+    for en in load_enums().values():
+        lines += [f"### {en.name}", "", f"{en.description} Guide: {en.section}.", "", "| name | value |", "|---|---|"]
+        lines += [f"| {k} | {v} |" for k, v in en.values.items()]
         lines.append("")
     lines += ["## Parameters (guide 5.9)", "", "| name | category | type | default | unit | min | max | meaning |"]
     lines.append("|---|---|---|---|---|---|---|---|")

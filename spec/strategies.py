@@ -51,9 +51,9 @@ def telegram_strategy(cls: type[Telegram], max_items: int = 8) -> st.SearchStrat
     tdef = cls.DEF
     layout = tdef.layout(cls.DIRECTION) if tdef.layout_known else None
     if layout is None:
-        return st.binary(max_size=64).map(lambda p: cls._make((p,)))  # type: ignore[attr-defined, no-any-return]
+        return st.binary(max_size=64).map(lambda p: cls._make((p,)))  # type: ignore[attr-defined]
     fields = [field_strategy(f, max_items) for f in user_fields(layout)]
-    return st.tuples(*fields).map(cls._make)  # type: ignore[attr-defined, no-any-return]
+    return st.tuples(*fields).map(cls._make)  # type: ignore[attr-defined]
 
 
 def any_telegram(direction: Direction, max_items: int = 8) -> st.SearchStrategy[Telegram]:
