@@ -1,0 +1,361 @@
+"""The network campaign: schedule cases, run them in batches or alone, judge each unit, report findings.
+
+Rules:
+- A *unit* is what one oracle verdict covers: a *batch* (the cases the strict codec accepts, pipelined on one
+  kept connection and closed by a GET_STATUS ``sync`` whose reply proves all of them were processed; the
+  server answers nothing else, erratum E-CMD-013) or a *single* (a case the server should refuse or that
+  needs its own delivery: a fresh connection, our write side shut, read until the peer closes).
+- The oracle after every unit: the unit's own outcome (connect refused = dead, no reply and no close within
+  the deadline = hang or stall, replies that do not decode strictly or answer the wrong request = bad reply)
+  and the liveness probe, GET_STATUS on the OTHER port within the deadline.
+- Before fuzzing in a state, its prelude (``fuzz.schedule.StatePlan``) drives the target there; the probe's
+  status shows whether it got there. Values from every reply go to ``fuzz.knowledge``.
+- A finding is confirmed and delta-debugged against fresh instances when we launch the target
+  (``--launch``); against a target we cannot restart it is written as found and the campaign stops when the
+  target is gone.
+"""
+
+from __future__ import annotations
+
+import collections
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from fuzz import safety
+from fuzz.case import Case
+from fuzz.corpus import Corpus
+from fuzz.findings import FindingWriter
+from fuzz.knowledge import Knowledge
+from fuzz.launch import Launcher
+from fuzz.schedule import HARVEST, StatePlan, Scheduler
+from fuzz.target import Conn, Outcome, Prober, Session, play, play_on
+from fuzz.wire import KEEP
+
+WINDOW = 256  # cases drawn at a time, then run batch-first
+BATCH_CASES = 128
+BATCH_BYTES = 1 << 18
+UNITS_PER_STATE = 200
+HISTORY = 64  # sessions kept for a finding that needs more than its last unit
+
+
+class HarnessError(RuntimeError):
+    """The fuzzer itself cannot go on (target unreachable at the start, launch failure): exit status 2."""
+
+
+@dataclass
+class Options:
+    host: str
+    port: int
+    second_port: int
+    duration: float
+    seed: int
+    out: Path
+    corpus: Path | None = None
+    allow_motion: bool = False
+    launch: str | None = None
+    max_cases: int | None = None
+    max_findings: int | None = None
+    deadline: float = 2.0
+    minimize_seconds: float = 60.0
+    command: str = "pltf fuzz"
+
+
+@dataclass
+class Stats:
+    started: float = field(default_factory=time.monotonic)
+    cases: int = 0
+    units: int = 0
+    batches: int = 0
+    singles: int = 0
+    probes: int = 0
+    restarts: int = 0
+    unexpected_closes: int = 0
+    dropped_unsafe: int = 0
+    duplicates: int = 0
+    origins: collections.Counter[str] = field(default_factory=collections.Counter)
+    telegrams: set[str] = field(default_factory=set)
+    states: set[tuple[str, int | None]] = field(default_factory=set)
+    state_targets: int = 0
+    findings: list[dict[str, Any]] = field(default_factory=list)
+
+    @property
+    def elapsed(self) -> float:
+        return time.monotonic() - self.started
+
+    @property
+    def rate(self) -> float:
+        return self.cases / self.elapsed if self.elapsed > 0 else 0.0
+
+
+class Campaign:
+    def __init__(self, opts: Options, on_tick: Callable[[Stats], None] | None = None) -> None:
+        self.o = opts
+        self.on_tick = on_tick
+        self.stats = Stats()
+        self.kb = Knowledge()
+        self.plan = StatePlan(opts.allow_motion)
+        self.stats.state_targets = len(self.plan.targets)
+        self.corpus = Corpus(opts.corpus)
+        self.forbidden = safety.forbidden(opts.allow_motion)
+        self.sched = Scheduler(opts.seed, self.forbidden, self.kb, self.corpus.load_cases())
+        self.index = self.corpus.next_index(opts.seed)
+        self.launcher = Launcher(opts.launch, opts.host, opts.port, opts.second_port) if opts.launch else None
+        self.ports = (opts.port, opts.second_port)
+        self.keeper: Conn | None = None
+        self.prober: Prober | None = None
+        self.history: collections.deque[Session] = collections.deque(maxlen=HISTORY)
+        self.prev_unit: list[Session] = []
+        self.need_prelude = True
+        self.prelude_tries = 0
+        self.units_here = 0
+        self.stop = False
+        self.coverage: set[tuple[Any, ...]] = set()
+        self.writer = FindingWriter(self, self.corpus.known_findings())
+
+    # ------------------------------------------------------------------ lifecycle
+    def start_target(self) -> None:
+        if self.launcher is not None:
+            self.ports = self.launcher.start()
+        self.prober = Prober(self.o.host, self.ports[1], self.o.deadline)
+        verdict = self.prober.probe()
+        if verdict is not None:
+            raise HarnessError(f"the target does not answer GET_STATUS on {self.o.host}:{self.ports[1]}: {verdict}")
+        self._learn_status()
+
+    def close(self) -> None:
+        self.drop_keeper()
+        if self.prober is not None:
+            self.prober.close()
+        if self.launcher is not None:
+            self.launcher.cleanup()
+
+    def run(self) -> int:
+        self.start_target()
+        end = time.monotonic() + self.o.duration
+        last_tick = 0.0
+        try:
+            while not self.stop and time.monotonic() < end:
+                if self.o.max_cases is not None and self.stats.cases >= self.o.max_cases:
+                    break
+                self.step()
+                now = time.monotonic()
+                if self.on_tick is not None and now - last_tick > 0.25:
+                    last_tick = now
+                    self.on_tick(self.stats)
+            self.final_probe()
+        finally:
+            self.stats.dropped_unsafe = self.sched.dropped
+            self.corpus.save(self.o.seed, self.index, self.writer.signatures)
+            self.close()
+            if self.on_tick is not None:
+                self.on_tick(self.stats)
+        return 1 if self.stats.findings else 0
+
+    # ------------------------------------------------------------------ one window of cases
+    def step(self) -> None:
+        if self.need_prelude:
+            self.run_prelude()
+            if self.stop:
+                return
+        n = WINDOW
+        if self.o.max_cases is not None:
+            n = max(1, min(n, self.o.max_cases - self.stats.cases))
+        cases = [self.sched.case(self.index + k) for k in range(n)]
+        self.index += n
+        batchable = [c for c in cases if c.expect == KEEP and c.delivery.mode == "whole" and c.size < BATCH_BYTES // 4]
+        singles = [c for c in cases if not (c.expect == KEEP and c.delivery.mode == "whole" and c.size < BATCH_BYTES // 4)]
+        batch: list[Case] = []
+        size = 0
+        for c in batchable:
+            batch.append(c)
+            size += c.size
+            if len(batch) >= BATCH_CASES or size >= BATCH_BYTES:
+                self.run_batch(batch)
+                batch, size = [], 0
+                if self.stop or self.need_prelude:
+                    return
+        if batch:
+            self.run_batch(batch)
+        for c in singles:
+            if self.stop or self.need_prelude:
+                return
+            self.run_single(c)
+        self.units_here += 1
+        if self.units_here >= UNITS_PER_STATE // 16:
+            self.units_here = 0
+            self.plan.advance()
+            self.need_prelude = True
+
+    def run_prelude(self) -> None:
+        target = self.plan.current
+        frames = self.plan.prelude(target)
+        if self.stats.units % 50 == 0:
+            frames = frames + HARVEST
+        session = Session(frames, sync=True)
+        out = self._on_keeper(session)
+        if out is None:
+            return
+        self.need_prelude = False
+        status = out.replies[-1] if out.replies else None
+        if status is not None and status.NAME == "CMD_GET_STATUS":
+            if self.plan.matches(target, status.operation_state, status.motion_mode):  # type: ignore[attr-defined]
+                self.plan.reached.add(target)
+                self.stats.states.add(target)
+                self.prelude_tries = 0
+                self.history.clear()
+                self.history.append(session)
+                return
+        self.prelude_tries += 1
+        if self.prelude_tries >= 3:
+            self.plan.unreachable.add(target)
+            self.prelude_tries = 0
+            self.plan.advance()
+        self.need_prelude = True
+        time.sleep(0.01)
+
+    # ------------------------------------------------------------------ units
+    def _on_keeper(self, session: Session) -> Outcome | None:
+        """Run a sync'ed session on the kept connection; None when a failure was handled."""
+        out = Outcome()
+        if self.keeper is None:
+            try:
+                self.keeper = Conn(self.o.host, self.ports[0], self.o.deadline)
+            except ConnectionRefusedError:
+                self.failure("dead", "connection refused on the fuzzed port", [session], [])
+                return None
+            except OSError as exc:
+                out.closed = True
+                self.stats.unexpected_closes += 1
+                return out if self._probe_ok([session], []) else None
+            self.stats.units += 0
+        play_on(self.keeper, session, self.o.deadline, out)
+        self.stats.units += 1
+        for r in out.replies:
+            self.kb.learn(r)
+        if out.bad_reply is not None:
+            self.drop_keeper()
+            self.failure("bad-reply", out.bad_reply, [session], [])
+            return None
+        if out.timed_out:
+            self.drop_keeper()
+            self._timed_out([session], [], "no reply to the sync GET_STATUS of a batch")
+            return None
+        if out.closed:
+            self.stats.unexpected_closes += 1
+            self.drop_keeper()
+        return out if self._probe_ok([session], []) else None
+
+    def run_batch(self, cases: list[Case]) -> None:
+        session = Session([f for c in cases for f in c.frames], sync=True)
+        self.history.append(session)
+        out = self._on_keeper(session)
+        self.stats.batches += 1
+        self._count(cases, "kept" if out is not None and not out.closed else "closed")
+
+    def run_single(self, case: Case) -> None:
+        self.drop_keeper()
+        session = Session(list(case.frames), case.delivery, half_close=True, sync=case.expect == KEEP)
+        self.history.append(session)
+        out = play(self.o.host, self.ports[0], session, self.o.deadline)
+        self.stats.units += 1
+        self.stats.singles += 1
+        self._count([case], "closed" if out.closed else "open")
+        for r in out.replies:
+            self.kb.learn(r)
+        if out.refused:
+            self.failure("dead", "connection refused on the fuzzed port", [session], [case])
+        elif out.bad_reply is not None:
+            self.failure("bad-reply", out.bad_reply, [session], [case])
+        elif out.timed_out:
+            self._timed_out([session], [case], "the connection neither answered nor closed after our end-of-stream")
+        else:
+            self._probe_ok([session], [case])
+
+    def drop_keeper(self) -> None:
+        """Release the kept connection in order: shut our side, wait for the peer's close (frees its slot)."""
+        if self.keeper is None:
+            return
+        keeper, self.keeper = self.keeper, None
+        keeper.shut_write()
+        keeper.read_replies(None, time.monotonic() + self.o.deadline)
+        keeper.close()
+
+    # ------------------------------------------------------------------ oracle
+    def _probe_ok(self, sessions: list[Session], cases: list[Case]) -> bool:
+        """Collect the probe sent after the previous unit, then send the probe of this one (pipelined: its
+        round trip overlaps the next unit). A failed probe covers the previous unit and this one."""
+        assert self.prober is not None
+        verdict = self.prober.collect()
+        covered, self.prev_unit = self.prev_unit + sessions, list(sessions)
+        if verdict is None:
+            self._learn_status()
+            self.stats.probes += 1
+            self.prober.send()
+            return True
+        kind, _, detail = verdict.partition(": ")
+        reasons = {
+            "dead": "the liveness probe on the other port was refused: the target died",
+            "hang": "the liveness probe on the other port got no answer within the deadline",
+            "deaf": "the other port closes every connection without answering GET_STATUS",
+        }
+        self.failure(kind, reasons.get(kind, f"probe: {detail}"), covered, cases)
+        return False
+
+    def final_probe(self) -> None:
+        if self.prober is not None and self.prober.pending and not self.stop:
+            self._probe_ok([], [])
+
+    def _timed_out(self, sessions: list[Session], cases: list[Case], what: str) -> None:
+        assert self.prober is not None
+        verdict = self.prober.probe()
+        if verdict is None:
+            self.failure("stall", f"{what} within {self.o.deadline} s; the other port still answers", sessions, cases)
+        else:
+            self.failure(verdict.partition(":")[0], f"{what}; then the liveness probe: {verdict}", sessions, cases)
+
+    def _learn_status(self) -> None:
+        if self.prober is not None and self.prober.last_status is not None:
+            self.kb.learn(self.prober.last_status)
+
+    def _count(self, cases: list[Case], outcome: str) -> None:
+        st = self.stats
+        st.cases += len(cases)
+        target = self.plan.current
+        for c in cases:
+            st.origins[c.origin] += 1
+            st.telegrams.add(c.telegram)
+            key = (target, c.telegram, c.origin, outcome)
+            if key not in self.coverage:
+                self.coverage.add(key)
+                self.corpus.add(c)
+
+    # ------------------------------------------------------------------ findings
+    def failure(self, kind: str, reason: str, sessions: list[Session], cases: list[Case]) -> None:
+        self.drop_keeper_quietly()
+        prelude = Session(self.plan.prelude(self.plan.current), sync=True)
+        self.prev_unit = []
+        finding = self.writer.handle(kind, reason, prelude, sessions, list(self.history), cases)
+        if finding is not None:
+            self.stats.findings.append(finding)
+        else:
+            self.stats.duplicates += 1
+        if self.o.max_findings is not None and len(self.stats.findings) >= self.o.max_findings:
+            self.stop = True
+            return
+        if self.launcher is not None:
+            self.stats.restarts += 1
+            if self.prober is not None:
+                self.prober.close()
+            self.start_target()
+            self.history.clear()
+            self.need_prelude = True
+        elif kind in ("dead", "hang", "deaf", "stall"):
+            self.stop = True  # a target we cannot restart is gone (or its port is)
+
+    def drop_keeper_quietly(self) -> None:
+        if self.keeper is not None:
+            self.keeper.close()
+            self.keeper = None

@@ -1,0 +1,293 @@
+"""The socket side of the fuzzer: sessions on the fuzzed port, the liveness probe on the other one.
+
+Rules:
+- Blocking sockets with deadlines (one client, no concurrency needed: a Python event loop would only add
+  overhead). Loopback only is the caller's choice: nothing here resolves names or picks addresses.
+- A ``Session`` is what one connection carries: frames, how they are written, whether our side shuts its
+  write half, and whether a GET_STATUS ``sync`` is appended so that a kept connection proves it processed
+  everything. ``play`` runs one and returns an ``Outcome``; it never raises for anything the peer does.
+- Reply sanity (guide 6.4, erratum E-WIRE-001): every reply decodes strictly, and reply ids come in the
+  order of the answered requests (a prefix of it when the peer closes early).
+"""
+
+from __future__ import annotations
+
+import select
+import socket
+import time
+from dataclasses import dataclass, field
+
+from fuzz.case import WHOLE, Delivery
+from fuzz.wire import split_frames
+from spec import errors
+from spec.codec import REQUESTS, TelegramDecoder, encode
+from spec.model import load_telegrams
+from spec.telegram import Telegram
+
+GET_STATUS = encode(REQUESTS.CMD_GET_STATUS())
+ANSWERED = frozenset(t.id for t in load_telegrams() if t.answered)
+RECV = 1 << 16
+BIG_SEND = 1 << 16  # bytes; bigger writes interleave reading (see Conn._send_reading)
+PER_FRAME = 0.002  # s of deadline added per frame of a session (floods of slow commands are not hangs)
+PER_MIB = 1.0  # s of deadline added per MiB sent (documents take time to validate)
+
+
+def session_deadline(base: float, frames: int, size: int) -> float:
+    """The time a session may take: the base deadline plus an allowance for its amount of work."""
+    return base + PER_FRAME * frames + PER_MIB * size / (1 << 20)
+
+
+@dataclass
+class Session:
+    frames: list[bytes]
+    delivery: Delivery = WHOLE
+    half_close: bool = False
+    sync: bool = False
+
+    @property
+    def data(self) -> bytes:
+        return b"".join(self.frames)
+
+    def to_json(self) -> dict[str, object]:
+        d = self.delivery
+        return {"frames": [f.hex() for f in self.frames], "delivery": {"mode": d.mode, "pieces": d.pieces,
+                "pause": d.pause}, "half_close": self.half_close, "sync": self.sync}  # fmt: skip
+
+
+@dataclass
+class Outcome:
+    refused: bool = False  # connect refused: nobody listens any more
+    closed: bool = False  # the peer closed (EOF or reset)
+    timed_out: bool = False  # neither the expected replies nor a close within the deadline
+    bad_reply: str | None = None
+    replies: list[Telegram] = field(default_factory=list)
+    sent: list[tuple[float, bytes]] = field(default_factory=list)  # (time, bytes) for the pcapng
+    received: list[tuple[float, bytes]] = field(default_factory=list)
+
+
+def expected_reply_ids(data: bytes) -> list[int]:
+    """Ids of the answered requests among the frames of ``data``, up to the first malformed frame."""
+    dec = TelegramDecoder("request")
+    dec.receive_data(data)
+    ids = []
+    try:
+        for t in dec:
+            if t.ID in ANSWERED:
+                ids.append(t.ID)
+    except errors.RemoteProtocolError:
+        pass
+    return ids
+
+
+def connect(host: str, port: int, timeout: float) -> socket.socket:
+    s = socket.create_connection((host, port), timeout=timeout)
+    s.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+    return s
+
+
+class Conn:
+    """One connection with its reply decoder; ``send`` and ``read_replies`` record what passed."""
+
+    def __init__(self, host: str, port: int, timeout: float, record: bool = False) -> None:
+        self.sock = connect(host, port, timeout)
+        self.decoder = TelegramDecoder("reply")
+        self.record = record
+        self.sent: list[tuple[float, bytes]] = []
+        self.received: list[tuple[float, bytes]] = []
+        self.eof = False
+
+    def close(self) -> None:
+        try:
+            self.sock.close()
+        except OSError:
+            pass
+
+    def send(self, data: bytes, delivery: Delivery = WHOLE) -> None:
+        for chunk, pause in delivery.chunks(data):
+            if pause:
+                time.sleep(pause)
+            if len(chunk) <= BIG_SEND:
+                self.sock.sendall(chunk)
+            else:
+                self._send_reading(chunk)
+            if self.record:
+                self.sent.append((time.time(), chunk))
+
+    def _send_reading(self, data: bytes) -> None:
+        """Send a big chunk while reading replies, so a peer blocked on writing to us cannot deadlock us."""
+        view, pos = memoryview(data), 0
+        deadline = time.monotonic() + session_deadline(self.sock.gettimeout() or 1.0, 0, len(data))
+        while pos < len(data):
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise TimeoutError("send timed out")
+            readable, writable, _ = select.select([self.sock], [self.sock], [], left)
+            if readable and not self.eof:
+                got = self.sock.recv(RECV)
+                if not got:
+                    self.eof = True
+                    raise ConnectionResetError("peer closed while we were sending")
+                if self.record:
+                    self.received.append((time.time(), got))
+                self.decoder.receive_data(got)
+            if writable:
+                pos += self.sock.send(view[pos : pos + BIG_SEND])
+
+    def shut_write(self) -> None:
+        try:
+            self.sock.shutdown(socket.SHUT_WR)
+        except OSError:
+            pass
+
+    def read_replies(self, want: int | None, deadline: float) -> tuple[list[Telegram], str | None, bool]:
+        """Replies until ``want`` of them (None: until EOF); (replies, bad reply reason, timed out)."""
+        replies: list[Telegram] = []
+        while want is None or len(replies) < want:
+            try:
+                t = self.decoder.next_telegram()
+            except errors.RemoteProtocolError as exc:
+                return replies, f"reply does not decode: {type(exc).__name__}: {exc}", False
+            if t is not None:
+                replies.append(t)
+                continue
+            if self.eof:
+                try:
+                    self.decoder.receive_data(b"")
+                    self.decoder.next_telegram()
+                except errors.RemoteProtocolError as exc:
+                    return replies, f"reply cut off by the close: {exc}", False
+                return replies, None, False
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return replies, None, True
+            self.sock.settimeout(left)
+            try:
+                data = self.sock.recv(RECV)
+            except TimeoutError:
+                return replies, None, True
+            except OSError:
+                data = b""
+            if self.record and data:
+                self.received.append((time.time(), data))
+            if not data:
+                self.eof = True
+                continue
+            self.decoder.receive_data(data)
+        return replies, None, False
+
+
+def check_order(replies: list[Telegram], expected: list[int]) -> str | None:
+    got = [r.ID for r in replies]
+    if got != expected[: len(got)] or len(got) > len(expected):
+        return f"reply ids {got[:20]} do not follow the answered requests {expected[:20]}"
+    return None
+
+
+def play(host: str, port: int, session: Session, deadline_s: float, record: bool = False) -> Outcome:
+    """Run one session on a fresh connection."""
+    out = Outcome()
+    try:
+        conn = Conn(host, port, deadline_s, record)
+    except ConnectionRefusedError:
+        out.refused = True
+        return out
+    except OSError:
+        out.closed = True
+        return out
+    try:
+        play_on(conn, session, deadline_s, out)
+    finally:
+        conn.close()
+        out.sent, out.received = conn.sent, conn.received
+    return out
+
+
+def play_on(conn: Conn, session: Session, deadline_s: float, out: Outcome) -> None:
+    """Run ``session`` on an open connection (a kept batch connection, or a fresh one)."""
+    data = session.data
+    expected = expected_reply_ids(data)
+    try:
+        conn.send(data, session.delivery)
+        if session.sync:
+            conn.send(GET_STATUS)
+            expected.append(REQUESTS.CMD_GET_STATUS.ID)
+        if session.half_close:
+            conn.shut_write()
+    except OSError:
+        conn.eof = True  # the peer is gone; read what it said before it went
+    deadline = time.monotonic() + session_deadline(deadline_s, len(session.frames), len(data))
+    want = len(expected) if session.sync and not session.half_close else None
+    replies, bad, timed_out = conn.read_replies(want, deadline)
+    out.replies = replies
+    out.bad_reply = bad or check_order(replies, expected)
+    out.timed_out = timed_out
+    out.closed = conn.eof or (want is not None and len(replies) < want)
+
+
+class Prober:
+    """GET_STATUS on the other port over one kept connection; reconnects once when the peer dropped it."""
+
+    def __init__(self, host: str, port: int, deadline_s: float) -> None:
+        self.host, self.port, self.deadline_s = host, port, deadline_s
+        self.conn: Conn | None = None
+        self.last_status: Telegram | None = None
+        self.pending = False
+
+    def close(self) -> None:
+        if self.conn is not None:
+            self.conn.close()
+            self.conn = None
+
+    def probe(self) -> str | None:
+        """None when the target answered; else "dead" (refused), "hang" (no answer in time), "deaf" (every
+        connection closed without an answer) or "bad-reply: ..."."""
+        self.collect()
+        self.send()
+        return self.collect()
+
+    def send(self) -> None:
+        """Send a probe now, read its answer later (``collect``): the round trip overlaps our next unit."""
+        self.pending = True
+        try:
+            if self.conn is None:
+                self.conn = Conn(self.host, self.port, self.deadline_s)
+            self.conn.send(GET_STATUS)
+        except OSError:
+            self.close()  # collect() reconnects and asks again
+
+    def collect(self) -> str | None:
+        """The verdict of the probe sent last (None: none pending, or it was answered)."""
+        if not self.pending:
+            return None
+        self.pending = False
+        for attempt in range(2):
+            try:
+                if self.conn is None:
+                    self.conn = Conn(self.host, self.port, self.deadline_s)
+                    self.conn.send(GET_STATUS)
+                replies, bad, timed_out = self.conn.read_replies(1, time.monotonic() + self.deadline_s)
+            except ConnectionRefusedError:
+                self.close()
+                return "dead"
+            except OSError:
+                replies, bad, timed_out = [], None, False
+            if bad is not None:
+                self.close()
+                return f"bad-reply: {bad}"
+            if timed_out:
+                self.close()
+                return "hang"
+            if replies:
+                if replies[0].ID != REQUESTS.CMD_GET_STATUS.ID:
+                    self.close()
+                    return f"bad-reply: probe answered with id {replies[0].ID}"
+                self.last_status = replies[0]
+                return None
+            self.close()  # closed under us: reconnect once (a restart, or the server dropped an idle client)
+            if attempt:
+                return "deaf"
+        return "deaf"
+
+
+def frames_of(data: bytes) -> list[bytes]:
+    return split_frames(data) if data else []

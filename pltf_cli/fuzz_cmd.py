@@ -1,0 +1,95 @@
+"""``pltf fuzz``: the protocol fuzzer (fuzz/); exit 0 nothing found, 1 findings written to --out, 2 harness error."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shlex
+import sys
+from pathlib import Path
+
+
+def _target(text: str) -> tuple[str, int]:
+    host, _, port = text.rpartition(":")
+    if not host or not port.isdigit():
+        raise argparse.ArgumentTypeError("expected HOST:PORT")
+    return host, int(port)
+
+
+def add_fuzz_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--target", type=_target, metavar="HOST:PORT", help="the port to fuzz (port 0 with --launch: "
+                   "ephemeral ports read from the target's 'server started at port N' lines)")  # fmt: skip
+    p.add_argument("--second-port", type=int, help="port of the liveness probe (default: PORT+2, guide 6.1 10000/10002)")
+    p.add_argument("--duration", type=float, default=60.0, metavar="SECONDS")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--out", type=Path, default=Path("fuzz-findings"), metavar="DIR", help="findings are written here")
+    p.add_argument("--corpus", type=Path, metavar="DIR", help="resume from / save progress and interesting inputs")
+    p.add_argument("--allow-motion", action="store_true",
+                   help="also send the telegrams that make a platform move, and fuzz in Running/Breaked")
+    p.add_argument("--in-process", action="store_true", help="fuzz spec.codec and the XML validation directly")
+    p.add_argument("--launch", metavar="CMD", help="start (and restart) the target with CMD; {port} {second_port} "
+                   "{ports} {tmpdir} are replaced. Needed to minimize deaths and hangs.")  # fmt: skip
+    p.add_argument("--deadline", type=float, default=2.0, metavar="SECONDS", help="liveness and reply deadline")
+    p.add_argument("--max-cases", type=int, help="stop after this many cases")
+    p.add_argument("--max-findings", type=int, help="stop after this many findings")
+    p.add_argument("--minimize-seconds", type=float, default=60.0, help="time budget of one delta debugging")
+    p.add_argument("--quiet", action="store_true", help="no live view")
+
+
+def run_fuzz(args: argparse.Namespace) -> int:
+    from fuzz.view import LiveView
+
+    args.out.mkdir(parents=True, exist_ok=True)
+    command = "pltf " + " ".join(shlex.quote(a) for a in sys.argv[1:])
+    if args.in_process:
+        from fuzz.inprocess import InProcessCampaign
+
+        ip = InProcessCampaign(args.seed, args.duration, args.out, args.max_cases, args.deadline, command)
+        with LiveView("pltf fuzz --in-process", args.quiet) as view:
+            code = ip.run(view.update)
+        view.final(ip.stats)
+        _summary(args.out, ip.stats)
+        return code
+    if args.target is None:
+        print("pltf fuzz: --target HOST:PORT is required (or --in-process)", file=sys.stderr)
+        return 2
+    from fuzz.engine import Campaign, HarnessError, Options
+    from fuzz.launch import LaunchError
+
+    host, port = args.target
+    second = args.second_port if args.second_port is not None else (0 if port == 0 else port + 2)
+    if host not in ("127.0.0.1", "localhost", "::1") and args.launch:
+        print("pltf fuzz: --launch needs a loopback --target", file=sys.stderr)
+        return 2
+    opts = Options(
+        host=host, port=port, second_port=second, duration=args.duration, seed=args.seed, out=args.out,
+        corpus=args.corpus, allow_motion=args.allow_motion, launch=args.launch, max_cases=args.max_cases,
+        max_findings=args.max_findings, deadline=args.deadline, minimize_seconds=args.minimize_seconds,
+        command=command,
+    )  # fmt: skip
+    campaign = Campaign(opts)
+    try:
+        with LiveView(f"pltf fuzz {host}:{port}", args.quiet) as view:
+            campaign.on_tick = view.update
+            code = campaign.run()
+    except (HarnessError, LaunchError, OSError) as exc:
+        print(f"pltf fuzz: {exc}", file=sys.stderr)
+        campaign.close()
+        return 2
+    view.final(campaign.stats)
+    _summary(args.out, campaign.stats)
+    return code
+
+
+def _summary(out: Path, stats: object) -> None:
+    s = stats
+    doc = {
+        "cases": s.cases,  # type: ignore[attr-defined]
+        "seconds": round(s.elapsed, 3),  # type: ignore[attr-defined]
+        "cases_per_second": round(s.rate, 1),  # type: ignore[attr-defined]
+        "origins": dict(s.origins),  # type: ignore[attr-defined]
+        "telegrams": sorted(s.telegrams),  # type: ignore[attr-defined]
+        "states": sorted(str(x) for x in getattr(s, "states", ())),
+        "findings": s.findings,  # type: ignore[attr-defined]
+    }
+    (out / "summary.json").write_text(json.dumps(doc, indent=2) + "\n")
