@@ -97,6 +97,8 @@ class ServerProcess:
                 self.proc.wait()
         if self._reader is not None:
             self._reader.join(2.0)
+        if self.proc.stdout is not None:
+            self.proc.stdout.close()
         code = self.proc.returncode
         if self._tmp is not None:
             self._tmp.cleanup()

@@ -261,7 +261,8 @@ def _combinations(name: str) -> list[tuple[Reading, ...]]:
     combos: list[tuple[Reading, ...]] = []
     for size in range(1, len(layout_readings) + 1):
         combos.extend(itertools.combinations(layout_readings, size))
-    return combos
+    # the most permissive reading (trailing fields) last: it would otherwise explain a shorter layout's leftovers
+    return sorted(combos, key=lambda c: (any(r.trailing for r in c), len(c)))
 
 
 def decode_reply(data: bytes, name: str) -> tuple[Telegram, list[Deviation]]:

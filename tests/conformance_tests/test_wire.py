@@ -1,0 +1,100 @@
+"""The wire session: frames, strict replies, header-less replies, unsolicited frames, timeouts, closing."""
+
+from __future__ import annotations
+
+import socket
+from typing import Any
+
+import pytest
+
+from conformance_tests.outcome import ConnectionClosed, Deviation, ReplyTimeout, Unreachable
+from conformance_tests.wire import Session, WireLog
+from spec.codec import REPLIES, build, encode, frame
+from tests.conformance_tests.fakes import ScriptedServer
+
+POSITION = REPLIES.CMD_GET_POSITION(x=1, y=-2, angle=0.5, vel_trans=0.0, vel_rot=0.0)
+
+
+class Recorder:
+    def __init__(self) -> None:
+        self.sent: list[Any] = []
+        self.received: list[Any] = []
+        self.deviations: list[Deviation] = []
+        self.unsolicited: list[bytes] = []
+
+    def on_sent(self, t: Any) -> None:
+        self.sent.append(t)
+
+    def on_received(self, t: Any) -> None:
+        self.received.append(t)
+
+    def on_deviation(self, d: Deviation) -> None:
+        self.deviations.append(d)
+
+    def on_unsolicited(self, port: str, data: bytes) -> None:
+        self.unsolicited.append(data)
+
+
+def serve(reply: bytes, *, close: bool = False) -> ScriptedServer:
+    def handler(conn: socket.socket) -> None:
+        conn.recv(100)
+        conn.sendall(reply)
+        if not close:
+            conn.recv(100)
+
+    return ScriptedServer(handler)
+
+
+def session(server: ScriptedServer, rec: Recorder | None = None) -> Session:
+    return Session("127.0.0.1", server.ports[0], timeout=0.5, observer=rec).connect()
+
+
+def test_a_reply_is_read_and_decoded_strictly_and_logged() -> None:
+    rec = Recorder()
+    with serve(encode(POSITION)) as srv, session(srv, rec) as s:
+        assert s.request(build("request", "CMD_GET_POSITION")) == POSITION
+    assert rec.sent[0].NAME == "CMD_GET_POSITION" and rec.received == [POSITION] and not rec.deviations
+    dirs = [e.direction for e in s.log.entries]
+    assert dirs[:3] == ["ev", "tx", "rx"] and s.log.entries[2].hex().startswith("ff01fe02")
+
+
+def test_a_reply_without_header_is_a_deviation_from_e_wire_001() -> None:
+    rec = Recorder()
+    with serve(encode(POSITION)[4:]) as srv, session(srv, rec) as s:
+        assert s.request(build("request", "CMD_GET_POSITION")) == POSITION
+    assert [d.erratum for d in rec.deviations] == ["E-WIRE-001"]
+
+
+def test_unsolicited_frames_are_reported_and_skipped() -> None:
+    rec = Recorder()
+    with serve(frame(b"\x0e") + encode(POSITION)) as srv, session(srv, rec) as s:
+        assert s.request(build("request", "CMD_GET_POSITION")) == POSITION
+    assert rec.unsolicited == [b"\x0e"]
+
+
+def test_no_reply_is_a_timeout_and_a_torn_reply_a_closed_connection() -> None:
+    with serve(b"") as srv, session(srv) as s, pytest.raises(ReplyTimeout, match="no complete"):
+        s.request(build("request", "CMD_GET_POSITION"))
+    with serve(encode(POSITION)[:12], close=True) as srv, session(srv) as s:
+        with pytest.raises(ConnectionClosed, match="inside reply frame"):
+            s.request(build("request", "CMD_GET_POSITION"))
+        assert s.log.entries[-1].note == "incomplete reply frame"
+
+
+def test_wait_closed_and_silence() -> None:
+    with serve(b"xyz", close=True) as srv, session(srv) as s:
+        s.send_raw(b"\x00")
+        assert s.wait_closed(1.0)
+    with serve(b"junk") as srv, session(srv) as s:
+        s.send_raw(b"\x00")
+        assert s.silence(0.2) == b"junk"
+        assert not s.wait_closed(0.1)
+
+
+def test_unreachable() -> None:
+    probe = socket.socket()
+    probe.bind(("127.0.0.1", 0))
+    port = probe.getsockname()[1]
+    probe.close()
+    with pytest.raises(Unreachable):
+        Session("127.0.0.1", port, log=WireLog()).connect()
