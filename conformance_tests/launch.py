@@ -13,6 +13,7 @@ Rules:
 from __future__ import annotations
 
 import contextlib
+import logging
 import os
 import re
 import subprocess
@@ -124,6 +125,7 @@ class InProcessServer:
         self._loop: Any = None
         self._thread: threading.Thread | None = None
         self._error: BaseException | None = None
+        self._log_level = logging.NOTSET
 
     def start(self) -> InProcessServer:
         import asyncio
@@ -132,6 +134,9 @@ class InProcessServer:
         from reference_server.platform import Platform
         from reference_server.storage import Storage
 
+        log = logging.getLogger("pltf.server")
+        self._log_level = log.level
+        log.setLevel(logging.CRITICAL)  # its log lines are not the suite's output
         storage = Storage(self.data_dir)
         storage.seed_from_fixtures()
         platform = Platform(storage, seed=self.seed)
@@ -164,6 +169,7 @@ class InProcessServer:
                 self._loop.call_soon_threadsafe(self._server.stop)
         if self._thread is not None:
             self._thread.join(10.0)
+        logging.getLogger("pltf.server").setLevel(self._log_level)
         if self._tmp is not None:
             self._tmp.cleanup()
             self._tmp = None

@@ -1,0 +1,219 @@
+"""Differential mode: one scripted session against an in-process reference server and against the target, the
+replies diffed field by field.
+
+Rules:
+- Both sides start from the same known state: Ready in MODE_MOTION_NO, the same estimated pose, the suite's own
+  map, roadmap and program (the target's active documents and pose are restored afterwards).
+- The script is data (``script``): the chart walk with every GET_* request in every state, every motion mode,
+  parameter reads and writes, documents; with motion allowed, relative moves in Automatic, each followed by a
+  wait until the platform is at rest. Only the replies are compared; volatile fields (clocks, noise, sensor
+  readings, values the guide leaves open) are ignored or compared within tolerances from ``volatile.yaml``.
+- A diff is (step, request, field path, reference value, target value).
+"""
+
+from __future__ import annotations
+
+import fnmatch
+import functools
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import yaml
+from rich.console import Console
+from rich.table import Table
+
+from conformance_tests import docdata
+from conformance_tests.cases.motion import rest
+from conformance_tests.catalogue import Case, Level, Tier
+from conformance_tests.chart import St
+from conformance_tests.context import CaseContext, Config, Target
+from conformance_tests.launch import InProcessServer
+from spec.model import enum_classes
+from spec.telegram import Telegram
+
+VOLATILE_PATH = Path(__file__).resolve().parent / "volatile.yaml"
+MotionMode = enum_classes()["MotionMode"]
+
+
+@functools.cache
+def volatile() -> dict[str, dict[str, Any]]:
+    return yaml.safe_load(VOLATILE_PATH.read_text(encoding="utf-8")) or {}
+
+
+@dataclass(frozen=True)
+class Step:
+    kind: str  # "send", "get", "rest" (wait until the platform is at rest), "state"
+    name: str = ""
+    fields: tuple[tuple[str, Any], ...] = ()
+
+    def describe(self) -> str:
+        args = ", ".join(f"{k}={v!r}"[:40] for k, v in self.fields)
+        return f"{self.name}({args})" if self.kind in ("send", "get") else f"{self.kind} {self.name}"
+
+
+def _get(telegram: str, /, **fields: Any) -> Step:
+    return Step("get", telegram, tuple(fields.items()))
+
+
+def _send(telegram: str, /, **fields: Any) -> Step:
+    return Step("send", telegram, tuple(fields.items()))
+
+
+GETS = ("CMD_GET_STATUS", "CMD_GET_POSITION", "CMD_GET_MAP", "CMD_GET_ROADMAP", "CMD_GET_PROGRAM",
+        "CMD_GET_PLTF_PARAM_VEC", "CMD_GET_CAMERA", "CMD_GET_DEBUG_DATA")
+
+
+def script(motion: bool) -> list[Step]:
+    steps: list[Step] = []
+    for state in (St.NOT_CONNECTED, St.CONNECTED, St.READY, St.RUNNING, St.BREAKED):
+        steps.append(Step("state", state.value))
+        steps += [_get(g) for g in GETS]
+        steps.append(_get("CMD_GET_CAN_MESSAGES", delete=0))
+        steps.append(_get("CMD_GET_PLTF_PARAM", key="IpoTransVel"))
+        for command in ("CMD_START", "CMD_STOP", "CMD_BREAK", "CMD_CONTINUE", "CMD_INIT_PLTF"):
+            steps += [_send(command), _get("CMD_GET_STATUS")]
+        steps.append(Step("state", state.value))
+        steps += [_send("CMD_SET_MODE", mode=MotionMode.MODE_MOTION_VEL), _get("CMD_GET_STATUS")]
+    steps.append(Step("state", St.READY.value))
+    for mode in sorted(MotionMode._value2member_map_):
+        steps += [_send("CMD_SET_MODE", mode=mode), _get("CMD_GET_STATUS")]
+    steps += [_send("CMD_SET_MODE", mode=0)]
+    for key, value in (("IpoTransVel", "800"), ("IpoRotVel", "0.5"), ("EndTurnEnabled", "false"),
+                       ("IpoTransVel", "99999"), ("NoSuchParameter", "1")):
+        steps += [_send("CMD_SET_PLTF_PARAM", key=key, value=value), _get("CMD_GET_PLTF_PARAM", key=key)]
+    steps.append(_get("CMD_GET_PLTF_PARAM_VEC"))
+    for kind in ("map", "roadmap"):
+        up = kind.upper()
+        steps += [_send(f"CMD_SET_{up}", name="diff", xml=docdata.variant(kind).decode()), _get(f"CMD_GET_{up}"),
+                  _send(f"CMD_SET_{up}", name="diff", xml=docdata.invalid(kind)[3][1].decode("latin-1")),
+                  _get(f"CMD_GET_{up}")]
+    steps += [_send("CMD_SET_PROGRAM", xml=docdata.variant("program").decode()), _get("CMD_GET_PROGRAM")]
+    if motion:
+        steps += [Step("state", St.RUNNING.value, (("mode", MotionMode.MODE_MOTION_AUTOMATIC),))]
+        for x, y, a in ((400, 0, 0), (0, 0, 90000), (300, -200, -45000)):
+            steps += [_send("CMD_MOVE_REL", x=x, y=y, angle=a), Step("rest"), _get("CMD_GET_POSITION"),
+                      _get("CMD_GET_STATUS")]
+        steps += [_send("CMD_STOP"), _get("CMD_GET_STATUS")]
+    return steps
+
+
+@dataclass(frozen=True)
+class Diff:
+    step: int
+    request: str
+    path: str
+    reference: Any
+    target: Any
+
+
+def _rule(telegram: str, name: str) -> tuple[bool, float | None]:
+    spec = volatile().get(telegram, {})
+    if any(fnmatch.fnmatchcase(name, pat) for pat in spec.get("ignore", ())):
+        return True, None
+    tol = spec.get("tolerance", {}).get(name)
+    return False, None if tol is None else float(tol)
+
+
+def _values_differ(a: Any, b: Any, tol: float | None) -> bool:
+    if tol is not None and isinstance(a, (int, float)) and isinstance(b, (int, float)):
+        return not (math.isfinite(a) and math.isfinite(b) and abs(a - b) <= tol)
+    return bool(a != b)
+
+
+def _is_group(value: Any) -> bool:
+    return isinstance(value, tuple) and bool(value) and hasattr(value[0], "_fields")
+
+
+def diff_replies(step: int, request: str, ref: Telegram, tgt: Telegram) -> list[Diff]:
+    if ref.NAME != tgt.NAME:
+        return [Diff(step, request, "(telegram)", ref.NAME, tgt.NAME)]
+    out: list[Diff] = []
+    for name, a, b in zip(ref._fields, ref, tgt, strict=True):
+        ignored, tol = _rule(ref.NAME, name)
+        if ignored:
+            continue
+        if _is_group(a) or _is_group(b):
+            if len(a) != len(b):
+                out.append(Diff(step, request, f"{name} (count)", len(a), len(b)))
+                continue
+            for i, (ia, ib) in enumerate(zip(a, b, strict=True)):
+                for sub, va, vb in zip(ia._fields, ia, ib, strict=True):
+                    if _values_differ(va, vb, tol):
+                        out.append(Diff(step, request, f"{name}[{i}].{sub}", va, vb))
+        elif name == "xml" and isinstance(a, str) and isinstance(b, str):
+            if not docdata.same(a, b) and a != b:
+                out.append(Diff(step, request, name, a[:60] + "...", b[:60] + "..."))
+        elif _values_differ(a, b, tol):
+            out.append(Diff(step, request, name, a, b))
+    return out
+
+
+_CASE = Case(id="6.4/differential/session", func=lambda ctx: None, requirement="differential session",
+             level=Level.MUST, tier=Tier.EXHAUSTIVE, group="replies")
+
+
+def play(config: Config, steps: list[Step]) -> list[Telegram | None]:
+    """Run ``steps`` against one side; the reply of every "get" step (None for the others)."""
+    target = Target(config)
+    ctx = CaseContext(target, _CASE)
+    replies: list[Telegram | None] = []
+    try:
+        ctx.ready()
+        for kind in ("map", "roadmap", "program"):
+            ctx.preserve_document(kind)
+        ctx.preserve_pose()
+        ctx.send("CMD_SET_FRM_PLTF", x=2000, y=10000, angle=0)
+        for kind in ("map", "roadmap"):
+            ctx.send(f"CMD_SET_{kind.upper()}", name="diff", xml=docdata.valid(kind).decode())
+        ctx.send("CMD_SET_PROGRAM", xml=docdata.valid("program").decode())
+        for key in ("IpoTransVel", "IpoRotVel", "EndTurnEnabled"):
+            ctx.preserve_param(key)
+        for step in steps:
+            fields = dict(step.fields)
+            if step.kind == "state":
+                ctx.ensure(St(step.name) if step.name else St.READY, fields.get("mode", 0))
+                replies.append(None)
+            elif step.kind == "rest":
+                ctx.sleep(0.5)  # the move has started by now
+                rest(ctx, within=30.0)
+                replies.append(None)
+            elif step.kind == "send":
+                ctx.send(step.name, **fields)
+                replies.append(None)
+            else:
+                replies.append(ctx.get(step.name, **fields))
+        ctx.ready()
+    finally:
+        ctx.finish()
+        target.close()
+    return replies
+
+
+def compare(reference: Config, target: Config, motion: bool) -> list[Diff]:
+    steps = script(motion)
+    ref, tgt = play(reference, steps), play(target, steps)
+    diffs: list[Diff] = []
+    for i, (step, a, b) in enumerate(zip(steps, ref, tgt, strict=True)):
+        if a is not None and b is not None:
+            diffs += diff_replies(i, step.describe(), a, b)
+    return diffs
+
+
+def run_differential(config: Config, console: Console) -> int:
+    """``pltf conform --differential``: 0 when the target answers like the reference server, else 1."""
+    with InProcessServer(time_scale=config.time_scale) as ref:
+        ref_config = Config("127.0.0.1", ref.ports[0], time_scale=config.time_scale, simulator=True)
+        diffs = compare(ref_config, config, motion=config.motion_allowed)
+    if not diffs:
+        steps = len(script(config.motion_allowed))
+        console.print(f"differential: the target answered like the reference server ({steps} steps)")
+        return 0
+    table = Table(title=f"differential: {len(diffs)} field(s) differ from the reference server")
+    for col in ("step", "request", "field", "reference", "target"):
+        table.add_column(col)
+    for d in diffs[:200]:
+        table.add_row(str(d.step), d.request, d.path, repr(d.reference)[:50], repr(d.target)[:50])
+    console.print(table)
+    return 1

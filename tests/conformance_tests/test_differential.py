@@ -1,0 +1,32 @@
+"""Differential mode: the reference server in-process against the same server as a process shows no difference;
+a broken variant shows exactly where it differs; volatile fields are ignored or compared within tolerance."""
+
+from __future__ import annotations
+
+from conformance_tests.context import Config
+from conformance_tests.differential import compare, diff_replies, script, volatile
+from conformance_tests.launch import InProcessServer, ServerProcess
+from conformance_tests.mutants.catalogue import BY_ID
+from conformance_tests.mutants.proxy import FrameProxy
+from conformance_tests.readings import canonical
+
+
+def test_volatile_fields_are_ignored_and_tolerances_applied() -> None:
+    a = canonical("CMD_GET_STATUS", {})
+    assert diff_replies(0, "x", a, a.replace(timestamp=12345, est_x=25, us_distance=(5,) * 16)) == []
+    (d,) = diff_replies(3, "CMD_GET_STATUS()", a, a.replace(est_x=31))
+    assert (d.step, d.path, d.reference, d.target) == (3, "est_x", 0, 31)
+    assert [x.path for x in diff_replies(0, "x", a, a.replace(operation_state=1))] == ["operation_state"]
+    assert "CMD_GET_STATUS" in volatile() and "timestamp" in volatile()["CMD_GET_STATUS"]["ignore"]
+
+
+def test_the_reference_agrees_with_itself_and_a_mutant_does_not() -> None:
+    with InProcessServer(time_scale=10.0) as ref, ServerProcess(time_scale=10.0) as tgt:
+        rc = Config("127.0.0.1", ref.ports[0], time_scale=10.0, simulator=True)
+        tc = Config("127.0.0.1", tgt.ports[0], time_scale=10.0, simulator=True)
+        assert compare(rc, tc, motion=True) == []
+        assert len(script(True)) > 150
+        with FrameProxy("127.0.0.1", tgt.ports, BY_ID["mode-not-reported"].make()) as proxy:
+            diffs = compare(rc, Config("127.0.0.1", proxy.ports[0], time_scale=10.0), motion=False)
+    assert diffs and {d.path for d in diffs} == {"motion_mode"}
+    assert all(d.target == 0 and d.reference != 0 for d in diffs)
