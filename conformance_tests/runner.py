@@ -163,7 +163,7 @@ class Runner:
             for c in self.cases:
                 if c.group != group:
                     group = c.group
-                    self._reset()
+                    self.reset(c)
                 self._emit("on_case_start", c)
                 result = self.run_case(c)
                 results.append(result)
@@ -177,8 +177,9 @@ class Runner:
         self._emit("on_finish", run)
         return run
 
-    def _reset(self) -> None:
-        ctx = CaseContext(self.target, self.cases[0])
+    def reset(self, c: Case) -> None:
+        """The known state before a group: Ready, MODE_MOTION_NO (best effort; the cases report what is wrong)."""
+        ctx = CaseContext(self.target, c)
         try:
             ctx.ready()
         except Exception:

@@ -1,0 +1,39 @@
+"""The pytest plugin: the catalogue's cases as pytest items, -k by case id, verdicts as outcomes."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+from conformance_tests.launch import REPO, ServerProcess
+
+
+def _pytest(tmp_path: Path, port: int, *args: str) -> subprocess.CompletedProcess[str]:
+    (tmp_path / "pytest.ini").write_text("[pytest]\n")
+    env = dict(os.environ, PYTHONPATH=str(REPO))
+    cmd = [sys.executable, "-m", "pytest", "-p", "conformance_tests.pytest_plugin", "-p", "no:cacheprovider",
+           "--pltf-target", f"127.0.0.1:{port}", "--pltf-time-scale", "10", "--pltf-simulator", "-q", *args]
+    return subprocess.run(cmd, cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120, check=False)
+
+
+def test_plugin_runs_selected_cases_and_maps_verdicts(reference: ServerProcess, tmp_path: Path) -> None:
+    ok = _pytest(tmp_path, reference.ports[0], "-k", "6.3/CMD_SET_MODE/in- or optional-modes or digout/sets")
+    assert ok.returncode == 0, ok.stdout + ok.stderr
+    assert "6 passed, 1 skipped" in ok.stdout  # N/A (no IO board) is a skip
+    with ServerProcess(time_scale=10.0, mutant="set_mode_anywhere") as broken:
+        bad = _pytest(tmp_path, broken.ports[0], "-k", "6.3/CMD_SET_MODE/in-running or 6.3/CMD_SET_MODE/in-ready")
+    assert bad.returncode == 1
+    assert "pltf-conformance::6.3/CMD_SET_MODE/in-running" in bad.stdout and "FAILED" in bad.stdout
+    assert "requirement: guide 6.3 CMD_SET_MODE" in bad.stdout and "1 passed" in bad.stdout
+
+
+def test_plugin_exits_2_when_the_target_is_unreachable(tmp_path: Path) -> None:
+    import socket
+
+    probe = socket.socket()
+    probe.bind(("127.0.0.1", 0))
+    port = probe.getsockname()[1]
+    probe.close()
+    assert _pytest(tmp_path, port).returncode == 2
