@@ -13,6 +13,7 @@ Rules:
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -33,7 +34,7 @@ class Delivery:
             n = min(self.pieces, len(data))
             pause = min(self.pause, MAX_PAUSE_TOTAL / n)
             cuts = [len(data) * k // n for k in range(n + 1)]
-            return [(data[a:b], pause if k else 0.0) for k, (a, b) in enumerate(zip(cuts, cuts[1:], strict=False))]
+            return [(data[a:b], pause if k else 0.0) for k, (a, b) in enumerate(itertools.pairwise(cuts))]
         return [(data, 0.0)]
 
 

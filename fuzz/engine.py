@@ -30,14 +30,15 @@ from fuzz.corpus import Corpus
 from fuzz.findings import FindingWriter
 from fuzz.knowledge import Knowledge
 from fuzz.launch import Launcher
-from fuzz.schedule import HARVEST, StatePlan, Scheduler
+from fuzz.schedule import DOCUMENT_RESET, HARVEST, Prefetcher, Scheduler, StatePlan
 from fuzz.target import Conn, Outcome, Prober, Session, play, play_on
 from fuzz.wire import KEEP
 
 WINDOW = 256  # cases drawn at a time, then run batch-first
 BATCH_CASES = 128
 BATCH_BYTES = 1 << 18
-UNITS_PER_STATE = 200
+WINDOWS_PER_STATE = 4  # windows fuzzed in one (state, mode) before the plan moves on
+BIG_CASE = 1 << 20  # bytes
 HISTORY = 64  # sessions kept for a finding that needs more than its last unit
 
 
@@ -60,6 +61,7 @@ class Options:
     max_findings: int | None = None
     deadline: float = 2.0
     minimize_seconds: float = 60.0
+    probe_every: int = 4  # units between liveness probes (1: after every unit)
     command: str = "pltf fuzz"
 
 
@@ -80,6 +82,7 @@ class Stats:
     states: set[tuple[str, int | None]] = field(default_factory=set)
     state_targets: int = 0
     findings: list[dict[str, Any]] = field(default_factory=list)
+    unconfirmed: list[dict[str, Any]] = field(default_factory=list)
 
     @property
     def elapsed(self) -> float:
@@ -108,12 +111,15 @@ class Campaign:
         self.prober: Prober | None = None
         self.history: collections.deque[Session] = collections.deque(maxlen=HISTORY)
         self.prev_unit: list[Session] = []
+        self.unprobed: list[Session] = []
+        self.units_since_probe = 0
         self.need_prelude = True
         self.prelude_tries = 0
         self.units_here = 0
         self.stop = False
         self.coverage: set[tuple[Any, ...]] = set()
         self.writer = FindingWriter(self, self.corpus.known_findings())
+        self.prefetch: Prefetcher | None = None
 
     # ------------------------------------------------------------------ lifecycle
     def start_target(self) -> None:
@@ -126,6 +132,9 @@ class Campaign:
         self._learn_status()
 
     def close(self) -> None:
+        if self.prefetch is not None:
+            self.prefetch.close()
+            self.prefetch = None
         self.drop_keeper()
         if self.prober is not None:
             self.prober.close()
@@ -160,13 +169,16 @@ class Campaign:
             self.run_prelude()
             if self.stop:
                 return
-        n = WINDOW
+        if self.prefetch is None:
+            self.prefetch = Prefetcher(self.sched, self.index, WINDOW)
+        first, cases = self.prefetch.get()
         if self.o.max_cases is not None:
-            n = max(1, min(n, self.o.max_cases - self.stats.cases))
-        cases = [self.sched.case(self.index + k) for k in range(n)]
-        self.index += n
+            cases = cases[: max(1, self.o.max_cases - self.stats.cases)]
+        self.index = first + len(cases)
         batchable = [c for c in cases if c.expect == KEEP and c.delivery.mode == "whole" and c.size < BATCH_BYTES // 4]
-        singles = [c for c in cases if not (c.expect == KEEP and c.delivery.mode == "whole" and c.size < BATCH_BYTES // 4)]
+        singles = [
+            c for c in cases if not (c.expect == KEEP and c.delivery.mode == "whole" and c.size < BATCH_BYTES // 4)
+        ]
         batch: list[Case] = []
         size = 0
         for c in batchable:
@@ -184,30 +196,33 @@ class Campaign:
                 return
             self.run_single(c)
         self.units_here += 1
-        if self.units_here >= UNITS_PER_STATE // 16:
+        if any(c.size > BIG_CASE for c in cases):
+            self.need_prelude = True  # its document reset keeps a huge saved document from slowing every LOAD_*
+        if self.units_here >= WINDOWS_PER_STATE:
             self.units_here = 0
             self.plan.advance()
             self.need_prelude = True
 
     def run_prelude(self) -> None:
         target = self.plan.current
-        frames = self.plan.prelude(target)
-        if self.stats.units % 50 == 0:
-            frames = frames + HARVEST
+        frames = DOCUMENT_RESET + self.plan.prelude(target) + HARVEST
         session = Session(frames, sync=True)
         out = self._on_keeper(session)
         if out is None:
             return
         self.need_prelude = False
         status = out.replies[-1] if out.replies else None
-        if status is not None and status.NAME == "CMD_GET_STATUS":
-            if self.plan.matches(target, status.operation_state, status.motion_mode):  # type: ignore[attr-defined]
-                self.plan.reached.add(target)
-                self.stats.states.add(target)
-                self.prelude_tries = 0
-                self.history.clear()
-                self.history.append(session)
-                return
+        if (
+            status is not None
+            and status.NAME == "CMD_GET_STATUS"
+            and self.plan.matches(target, status.operation_state, status.motion_mode)  # type: ignore[attr-defined]
+        ):
+            self.plan.reached.add(target)
+            self.stats.states.add(target)
+            self.prelude_tries = 0
+            self.history.clear()
+            self.history.append(session)
+            return
         self.prelude_tries += 1
         if self.prelude_tries >= 3:
             self.plan.unreachable.add(target)
@@ -226,7 +241,7 @@ class Campaign:
             except ConnectionRefusedError:
                 self.failure("dead", "connection refused on the fuzzed port", [session], [])
                 return None
-            except OSError as exc:
+            except OSError:
                 out.closed = True
                 self.stats.unexpected_closes += 1
                 return out if self._probe_ok([session], []) else None
@@ -285,28 +300,36 @@ class Campaign:
 
     # ------------------------------------------------------------------ oracle
     def _probe_ok(self, sessions: list[Session], cases: list[Case]) -> bool:
-        """Collect the probe sent after the previous unit, then send the probe of this one (pipelined: its
-        round trip overlaps the next unit). A failed probe covers the previous unit and this one."""
+        """The liveness probe, pipelined: collect the answer to the probe sent before, send the next one (its
+        round trip overlaps the next unit). It runs after every ``probe_every`` units; in between, each unit's
+        own outcome is the oracle (a refused connect is a death, a missing close or reply a hang). A failed
+        probe covers every unit since the probe before it."""
         assert self.prober is not None
-        verdict = self.prober.collect()
-        covered, self.prev_unit = self.prev_unit + sessions, list(sessions)
-        if verdict is None:
+        self.unprobed.extend(sessions)
+        self.units_since_probe += 1
+        if self.prober.pending:  # sent one unit ago
+            verdict = self.prober.collect()
+            if verdict is not None:
+                kind, _, detail = verdict.partition(": ")
+                reasons = {
+                    "dead": "the liveness probe on the other port was refused: the target died",
+                    "hang": "the liveness probe on the other port got no answer within the deadline",
+                    "deaf": "the other port closes every connection without answering GET_STATUS",
+                }
+                self.failure(kind, reasons.get(kind, f"probe: {detail}"), self.prev_unit + self.unprobed, cases)
+                return False
             self._learn_status()
             self.stats.probes += 1
+        if self.units_since_probe >= self.o.probe_every:
+            self.prev_unit, self.unprobed, self.units_since_probe = self.unprobed, [], 0
             self.prober.send()
-            return True
-        kind, _, detail = verdict.partition(": ")
-        reasons = {
-            "dead": "the liveness probe on the other port was refused: the target died",
-            "hang": "the liveness probe on the other port got no answer within the deadline",
-            "deaf": "the other port closes every connection without answering GET_STATUS",
-        }
-        self.failure(kind, reasons.get(kind, f"probe: {detail}"), covered, cases)
-        return False
+        return True
 
     def final_probe(self) -> None:
-        if self.prober is not None and self.prober.pending and not self.stop:
-            self._probe_ok([], [])
+        if self.prober is not None and not self.stop:
+            self.units_since_probe = self.o.probe_every
+            if self._probe_ok([], []) and self.prober.pending:
+                self._probe_ok([], [])
 
     def _timed_out(self, sessions: list[Session], cases: list[Case], what: str) -> None:
         assert self.prober is not None
@@ -336,10 +359,12 @@ class Campaign:
     def failure(self, kind: str, reason: str, sessions: list[Session], cases: list[Case]) -> None:
         self.drop_keeper_quietly()
         prelude = Session(self.plan.prelude(self.plan.current), sync=True)
-        self.prev_unit = []
+        self.prev_unit, self.unprobed, self.units_since_probe = [], [], 0
         finding = self.writer.handle(kind, reason, prelude, sessions, list(self.history), cases)
-        if finding is not None:
+        if finding is not None and (finding["confirmed"] or self.launcher is None):
             self.stats.findings.append(finding)
+        elif finding is not None:
+            self.stats.unconfirmed.append(finding)
         else:
             self.stats.duplicates += 1
         if self.o.max_findings is not None and len(self.stats.findings) >= self.o.max_findings:

@@ -6,6 +6,8 @@ Rules:
 - Candidates, smallest first: the failed unit after the state prelude; then everything since the prelude.
   ddmin (``fuzz.minimize``) removes frames across sessions; a session left without frames is dropped.
 - Without ``--launch`` nothing can be replayed: the finding is written as found (marked not minimized).
+  With it, a failure that does not happen again on a fresh target (a load spike, state built up over a long
+  run) is written under ``unconfirmed/`` and is not a finding (exit status 0).
 - The signature (kind and the ids of the minimal frames) deduplicates findings within a run and, through
   the corpus, across resumed runs.
 """
@@ -122,7 +124,7 @@ class FindingWriter:
             "minimize_tests": tests,
             "target_output_tail": tail,
         }  # fmt: skip
-        directory = write_finding(
-            c.o.out / name, kind, reason, sessions, description, outcomes, c.ports[0], c.o.deadline
-        )
+        # with a launcher a finding must reproduce on a fresh target; one that does not is kept for inspection
+        where = c.o.out if confirmed or c.launcher is None else c.o.out / "unconfirmed"
+        directory = write_finding(where / name, kind, reason, sessions, description, outcomes, c.ports[0], c.o.deadline)
         return {"kind": kind, "reason": reason, "dir": str(directory), "confirmed": confirmed, "signature": signature}

@@ -76,6 +76,26 @@ def request_defs(forbidden: frozenset[int] = frozenset()) -> tuple[TelegramDef, 
     return tuple(t for t in load_telegrams() if t.layout_known and t.request is not None and t.id not in forbidden)
 
 
+# Telegrams whose handling costs a server milliseconds (documents: parse, validate, file I/O; big replies).
+# They get ``HEAVY_WEIGHT`` of a plain telegram's share, so a campaign's cases/s is not set by them alone (the
+# usual fuzzing trade: favour fast inputs). Static, so the case stream stays a function of the seed.
+HEAVY = frozenset({
+    "CMD_SET_MAP", "CMD_SET_ROADMAP", "CMD_SET_PROGRAM", "CMD_LOAD_MAP", "CMD_LOAD_ROADMAP", "CMD_LOAD_PROGRAM",
+    "CMD_SAVE_MAP", "CMD_SAVE_ROADMAP", "CMD_SAVE_PROGRAM", "CMD_GET_MAP", "CMD_GET_ROADMAP", "CMD_GET_PROGRAM",
+    "CMD_GET_PLTF_PARAM_VEC", "CMD_GET_DEBUG_DATA", "CMD_GET_STATUS",
+})  # fmt: skip
+HEAVY_WEIGHT = 0.1
+
+
+@functools.cache
+def _weights(forbidden: frozenset[int]) -> tuple[float, ...]:
+    return tuple(HEAVY_WEIGHT if t.name in HEAVY else 1.0 for t in request_defs(forbidden))
+
+
+def pick_telegram(rng: random.Random, forbidden: frozenset[int]) -> TelegramDef:
+    return rng.choices(request_defs(forbidden), _weights(forbidden))[0]
+
+
 @functools.cache
 def _free_ids(forbidden: frozenset[int]) -> tuple[int, ...]:
     return tuple(i for i in range(256) if i not in forbidden)
@@ -119,19 +139,17 @@ def _string(rng: random.Random, kb: Knowledge, f: FieldDef, telegram: str) -> by
             return xml_attacks.attack(kind, rng)[1]
         doc = kb.documents.get(telegram.replace("SET", "GET"))
         return doc if doc is not None else xml_attacks.ABSURD[kind](kind, rng)
-    if telegram in ("CMD_SET_PLTF_PARAM", "CMD_GET_PLTF_PARAM") and f.name == "key" and kb.param_keys:
-        if rng.random() < 0.8:
-            return rng.choice(kb.param_keys).encode("latin-1")
+    is_key = telegram in ("CMD_SET_PLTF_PARAM", "CMD_GET_PLTF_PARAM") and f.name == "key"
+    if is_key and kb.param_keys and rng.random() < 0.8:
+        return rng.choice(kb.param_keys).encode("latin-1")
     if telegram == "CMD_MOVE_TO_STATION" and kb.stations and rng.random() < 0.7:
         return rng.choice(kb.stations).encode("latin-1")
-    if rng.random() < 0.03:
+    if rng.random() < 0.01:
         return b"B" * rng.choice(BIG_STRING_SIZES)
     return rng.choice(STRINGS)
 
 
-def field_values(
-    tdef: TelegramDef, rng: random.Random, kb: Knowledge, hostility: float
-) -> tuple[list[Any], list[str]]:
+def field_values(tdef: TelegramDef, rng: random.Random, kb: Knowledge, hostility: float) -> tuple[list[Any], list[str]]:
     """Values for each user field of ``tdef``'s request and notes on the hostile ones."""
     values: list[Any] = []
     notes: list[str] = []
@@ -194,7 +212,7 @@ def gen_unknown_id(rng: random.Random, kb: Knowledge, forbidden: frozenset[int])
 
 def gen_length_field(rng: random.Random, kb: Knowledge, forbidden: frozenset[int]) -> Case:
     """A frame whose own length field lies (0, one short, one long, huge, over 2^31)."""
-    tdef = rng.choice(request_defs(forbidden))
+    tdef = pick_telegram(rng, forbidden)
     values, _ = field_values(tdef, rng, kb, 0.0)
     data = pack_fields(tdef.id, tdef.request or (), values)
     declared = rng.choice((0, len(data) - 1, len(data) + 1, 0x00FFFFFF, 0x7FFFFFFF, 0x80000000, 0xFFFFFFFF))
@@ -206,7 +224,7 @@ Generator = Callable[[random.Random, Knowledge, frozenset[int]], Case]
 
 def make_spec_generator(hostility: float, origin: str) -> Generator:
     def generate(rng: random.Random, kb: Knowledge, forbidden: frozenset[int]) -> Case:
-        tdef = rng.choice(request_defs(forbidden))
+        tdef = pick_telegram(rng, forbidden)
         return gen_telegram(tdef, rng, kb, hostility, origin)
 
     return generate
@@ -226,9 +244,9 @@ def gen_xml(rng: random.Random, kb: Knowledge, forbidden: frozenset[int]) -> Cas
 
 GENERATORS: dict[str, tuple[float, Generator]] = {
     # name: (weight, generator)
-    "gen.boundary": (3.0, make_spec_generator(0.0, "gen.boundary")),
-    "gen.hostile": (4.0, make_spec_generator(0.35, "gen.hostile")),
+    "gen.boundary": (5.0, make_spec_generator(0.0, "gen.boundary")),
+    "gen.hostile": (3.0, make_spec_generator(0.35, "gen.hostile")),
     "gen.any_id": (1.0, gen_unknown_id),
-    "gen.length_field": (1.0, gen_length_field),
-    "gen.xml": (0.4, gen_xml),
+    "gen.length_field": (0.7, gen_length_field),
+    "gen.xml": (0.15, gen_xml),
 }

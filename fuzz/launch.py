@@ -48,7 +48,7 @@ class Launcher:
         self.cleanup()
         self._log = tempfile.NamedTemporaryFile(prefix="pltf-fuzz-target-", suffix=".log", delete=False)  # noqa: SIM115
         try:
-            self.proc = subprocess.Popen(  # noqa: S603 - the user's own command
+            self.proc = subprocess.Popen(
                 self.command(), stdout=self._log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL
             )
         except OSError as exc:

@@ -14,7 +14,9 @@ from typing import TypeVar
 T = TypeVar("T", bound=Hashable)
 
 
-def ddmin(items: Sequence[T], test: Callable[[list[T]], bool], max_tests: int = 200, max_seconds: float = 60.0) -> list[T]:
+def ddmin(
+    items: Sequence[T], test: Callable[[list[T]], bool], max_tests: int = 200, max_seconds: float = 60.0
+) -> list[T]:
     current = list(items)
     cache: dict[tuple[T, ...], bool] = {}
     deadline = time.monotonic() + max_seconds

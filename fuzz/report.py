@@ -37,6 +37,22 @@ KIND = {kind!r}
 SESSIONS = {sessions}
 GET_STATUS = bytes.fromhex("ff01fe020000000112")
 HEADER = bytes.fromhex("ff01fe02")
+try:  # strict reply checks when the pltf toolkit is importable; framing checks only otherwise
+    from spec.codec import REPLIES
+    from spec.errors import RemoteProtocolError
+except ImportError:
+    REPLIES = None
+
+
+def strict(data):
+    """Why a reply's data (identifier first) does not decode strictly, or None."""
+    if REPLIES is None:
+        return None
+    try:
+        REPLIES.decode_data(data)
+    except RemoteProtocolError as exc:
+        return "reply does not decode: %s: %s" % (type(exc).__name__, exc)
+    return None
 
 
 def chunks(data, delivery):
@@ -61,6 +77,9 @@ def read_frames(sock, want, deadline):
             n = int.from_bytes(buf[4:8], "big")
             if len(buf) < 8 + n:
                 break
+            problem = strict(buf[8:8 + n])
+            if problem:
+                return frames, problem, False
             frames.append(buf[8:8 + n])
             buf = buf[8 + n:]
             if want is not None and len(frames) >= want:
@@ -180,7 +199,11 @@ def describe_frames(data: bytes) -> list[str]:
             t = REQUESTS.decode_data(f[8:]) if len(f) > 8 and f[:4] == b"\xff\x01\xfe\x02" else None
             out.append(repr(t) if t is not None else f"raw {f[:24].hex()}{'...' if len(f) > 24 else ''}")
         except errors.RemoteProtocolError as exc:
-            name = REQUESTS.by_id.get(f[8]).NAME if len(f) > 8 and f[8] in REQUESTS.by_id else f"id {f[8] if len(f) > 8 else '?'}"
+            name = (
+                REQUESTS.by_id.get(f[8]).NAME
+                if len(f) > 8 and f[8] in REQUESTS.by_id
+                else f"id {f[8] if len(f) > 8 else '?'}"
+            )
             out.append(f"{name} malformed ({type(exc).__name__}: {str(exc)[:120]}), {len(f)} bytes")
     return out
 
@@ -232,7 +255,9 @@ def write_finding(
         reason=reason,
         frames=len(frames),
         telegrams=[d for s in sessions for d in describe_frames(s.data)][:200],
-        sessions=[s.to_json() for s in sessions] if sum(len(s.data) for s in sessions) < 1 << 20 else "see sequence.hex",
+        sessions=[s.to_json() for s in sessions]
+        if sum(len(s.data) for s in sessions) < 1 << 20
+        else "see sequence.hex",
         replay="python repro.py --target HOST:PORT [--second-port PORT]",
     )
     (directory / "finding.json").write_text(json.dumps(desc, indent=2, default=str) + "\n")

@@ -22,9 +22,15 @@ MOTION: dict[int, str] = {
     REQUESTS.CMD_SET_BRAKE.ID: "releases the drive brakes",
     **{
         REQUESTS[name].ID: "a motion command: a server that ignores the state chart would move"
-        for name in ("CMD_MOVE_PATH", "CMD_MOVE_TO_STATION", "CMD_MOVE_ABS", "CMD_MOVE_REL",
-                     "CMD_MOVE_VEL_WHEEL", "CMD_MOVE_VEL")
-    },  # fmt: skip
+        for name in (
+            "CMD_MOVE_PATH",
+            "CMD_MOVE_TO_STATION",
+            "CMD_MOVE_ABS",
+            "CMD_MOVE_REL",
+            "CMD_MOVE_VEL_WHEEL",
+            "CMD_MOVE_VEL",
+        )
+    },
     REQUESTS.CMD_SEND_CAN_MESSAGE.ID: "raw CAN frames can command the motor controllers",
     REQUESTS.CMD_SET_POS_HEAD_DRIVE.ID: "moves the head drive",
     REQUESTS.CMD_SET_VEL_HEAD_DRIVE.ID: "moves the head drive",

@@ -12,7 +12,9 @@ Rules:
 
 from __future__ import annotations
 
+import queue
 import random
+import threading
 from dataclasses import replace
 
 from fuzz import generate, mutate
@@ -43,6 +45,27 @@ STATES: dict[str, tuple[int, list[bytes], bool]] = {
     "running": (OP.ST_OP_RUNNING, _READY, True),
     "breaked": (OP.ST_OP_BREAKED, _READY, True),
 }
+# Tiny valid documents made active and saved at every state switch: a huge (or merely real) document saved
+# by an earlier case would otherwise make every later LOAD_* cost the target milliseconds for the rest of the run.
+TINY = {
+    "map": '<?xml version="1.0"?><map Version="1.0"><layer index="0"/></map>',
+    "roadmap": '<?xml version="1.0"?><roadmap Version="1.0"><stations><station id="a" name="A"><point x="0" y="0"/>'
+    '</station><station id="b" name="B"><point x="1000" y="0"/></station></stations>'
+    '<edges><edge startstation="a" endstation="b"/></edges></roadmap>',
+    "program": '<?xml version="1.0"?><program version="1.0"><task name="t"><log type="info" message="m"/></task>'
+    "</program>",
+}
+
+
+def _document_reset() -> list[bytes]:
+    return [
+        encode(REQUESTS.CMD_SET_MAP(name="fuzz.map", xml=TINY["map"])), _enc("CMD_SAVE_MAP"),
+        encode(REQUESTS.CMD_SET_ROADMAP(name="fuzz.rm", xml=TINY["roadmap"])), _enc("CMD_SAVE_ROADMAP"),
+        encode(REQUESTS.CMD_SET_PROGRAM(xml=TINY["program"])), _enc("CMD_SAVE_PROGRAM"),
+    ]  # fmt: skip
+
+
+DOCUMENT_RESET = _document_reset()
 HARVEST = [
     _enc(n)
     for n in ("CMD_GET_PLTF_PARAM_VEC", "CMD_GET_ROADMAP", "CMD_GET_MAP", "CMD_GET_PROGRAM", "CMD_GET_POSITION",
@@ -54,14 +77,11 @@ class StatePlan:
     """Targets (state, mode) visited in turn; mode None where no mode applies."""
 
     def __init__(self, allow_motion: bool) -> None:
-        self.targets: list[tuple[str, int | None]] = []
-        for name, (_, _, motion) in STATES.items():
-            if motion and not allow_motion:
-                continue
-            if name in ("not_connected", "connected"):
-                self.targets.append((name, None))
-            else:
-                self.targets.extend((name, m) for m in MODES)
+        self.targets: list[tuple[str, int | None]] = [("not_connected", None), ("connected", None)]
+        for mode in MODES:  # mode-major, so that every state is visited early in a run
+            for name, (_, _, motion) in STATES.items():
+                if name not in ("not_connected", "connected") and (allow_motion or not motion):
+                    self.targets.append((name, mode))
         self.index = 0
         self.reached: set[tuple[str, int | None]] = set()
         self.unreachable: set[tuple[str, int | None]] = set()
@@ -132,3 +152,35 @@ class Scheduler:
             extra = boundary(rng, self.kb, self.forbidden)
             case = replace(case, frames=case.frames + extra.frames)
         return case
+
+
+class Prefetcher:
+    """Draws windows of cases ahead in a thread: drawing overlaps the time we wait on the target (socket
+    waits release the GIL). Windows come out in index order, so the stream is the one ``Scheduler`` defines."""
+
+    def __init__(self, sched: Scheduler, start: int, window: int, ahead: int = 3) -> None:
+        self.sched, self.next_index, self.window = sched, start, window
+        self.queue: queue.Queue[tuple[int, list[Case]]] = queue.Queue(maxsize=ahead)
+        self.stopped = threading.Event()
+        self.thread = threading.Thread(target=self._run, name="fuzz-prefetch", daemon=True)
+        self.thread.start()
+
+    def _run(self) -> None:
+        i = self.next_index
+        while not self.stopped.is_set():
+            cases = [self.sched.case(i + k) for k in range(self.window)]
+            while not self.stopped.is_set():
+                try:
+                    self.queue.put((i, cases), timeout=0.1)
+                    break
+                except queue.Full:
+                    continue
+            i += self.window
+
+    def get(self) -> tuple[int, list[Case]]:
+        """(index of the first case, the cases) of the next window."""
+        return self.queue.get(timeout=30)
+
+    def close(self) -> None:
+        self.stopped.set()
+        self.thread.join(timeout=5)

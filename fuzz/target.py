@@ -12,6 +12,7 @@ Rules:
 
 from __future__ import annotations
 
+import contextlib
 import select
 import socket
 import time
@@ -97,10 +98,8 @@ class Conn:
         self.eof = False
 
     def close(self) -> None:
-        try:
+        with contextlib.suppress(OSError):
             self.sock.close()
-        except OSError:
-            pass
 
     def send(self, data: bytes, delivery: Delivery = WHOLE) -> None:
         for chunk, pause in delivery.chunks(data):
@@ -134,10 +133,8 @@ class Conn:
                 pos += self.sock.send(view[pos : pos + BIG_SEND])
 
     def shut_write(self) -> None:
-        try:
+        with contextlib.suppress(OSError):
             self.sock.shutdown(socket.SHUT_WR)
-        except OSError:
-            pass
 
     def read_replies(self, want: int | None, deadline: float) -> tuple[list[Telegram], str | None, bool]:
         """Replies until ``want`` of them (None: until EOF); (replies, bad reply reason, timed out)."""

@@ -20,7 +20,8 @@ def render(stats: Any, title: str) -> Table:
     ids = sum(1 for t in stats.telegrams if t.startswith("id "))
     table.add_row("elapsed", f"{stats.elapsed:,.1f} s")
     table.add_row("cases", f"{stats.cases:,}  ({stats.rate:,.0f}/s)")
-    table.add_row("units", f"{stats.units:,} ({getattr(stats, 'batches', 0):,} batches, {getattr(stats, 'singles', 0):,} "
+    batches, singles = getattr(stats, "batches", 0), getattr(stats, "singles", 0)
+    table.add_row("units", f"{stats.units:,} ({batches:,} batches, {singles:,} "
                   f"single, {getattr(stats, 'probes', 0):,} probes)")  # fmt: skip
     table.add_row("telegrams", f"{min(covered, n_tel)}/{n_tel} request telegrams, {ids} other ids")
     if hasattr(stats, "state_targets"):

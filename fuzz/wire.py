@@ -77,7 +77,11 @@ def pack_value(f: FieldDef, value: Any) -> bytes:
         body = b"".join(pack_value(g, v) for item in group.items for g, v in zip(sub, item, strict=False))
         return pack_length(n) + body
     if f.type in ("STRING", "XML"):
-        s = value if isinstance(value, Str) else Str(value if isinstance(value, bytes) else str(value).encode("latin-1"))
+        s = (
+            value
+            if isinstance(value, Str)
+            else Str(value if isinstance(value, bytes) else str(value).encode("latin-1"))
+        )
         n = len(s.data) if s.declared is None else s.declared
         return pack_length(n) + s.data
     if f.repeat:

@@ -19,13 +19,18 @@ def _target(text: str) -> tuple[str, int]:
 def add_fuzz_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--target", type=_target, metavar="HOST:PORT", help="the port to fuzz (port 0 with --launch: "
                    "ephemeral ports read from the target's 'server started at port N' lines)")  # fmt: skip
-    p.add_argument("--second-port", type=int, help="port of the liveness probe (default: PORT+2, guide 6.1 10000/10002)")
+    p.add_argument(
+        "--second-port", type=int, help="port of the liveness probe (default: PORT+2, guide 6.1 10000/10002)"
+    )
     p.add_argument("--duration", type=float, default=60.0, metavar="SECONDS")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--out", type=Path, default=Path("fuzz-findings"), metavar="DIR", help="findings are written here")
     p.add_argument("--corpus", type=Path, metavar="DIR", help="resume from / save progress and interesting inputs")
-    p.add_argument("--allow-motion", action="store_true",
-                   help="also send the telegrams that make a platform move, and fuzz in Running/Breaked")
+    p.add_argument(
+        "--allow-motion",
+        action="store_true",
+        help="also send the telegrams that make a platform move, and fuzz in Running/Breaked",
+    )
     p.add_argument("--in-process", action="store_true", help="fuzz spec.codec and the XML validation directly")
     p.add_argument("--launch", metavar="CMD", help="start (and restart) the target with CMD; {port} {second_port} "
                    "{ports} {tmpdir} are replaced. Needed to minimize deaths and hangs.")  # fmt: skip

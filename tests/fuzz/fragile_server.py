@@ -23,10 +23,10 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 
-from spec import errors  # noqa: E402
-from spec.codec import HEADER, REPLIES, REQUESTS, TelegramDecoder, encode  # noqa: E402
-from spec.compiler import allowed_values, value_range  # noqa: E402
-from spec.model import FieldDef  # noqa: E402
+from spec import errors
+from spec.codec import HEADER, REPLIES, REQUESTS, TelegramDecoder, encode
+from spec.compiler import allowed_values, value_range
+from spec.model import FieldDef
 
 HANG_ID, STALL_ID = 66, 77
 HANG_SECONDS = 60.0  # bounded: the tests kill the process long before
@@ -60,9 +60,9 @@ def check_bug(bug: str, frame: bytes) -> None:
         crash("a frame length over 2^31")
     if not data:
         return
-    if bug == "negative-repeat" and data[0] == REQUESTS.CMD_MOVE_PATH.ID and len(data) >= 5:
-        if struct.unpack(">i", data[1:5])[0] < 0:
-            crash("a negative repeat count")
+    is_path = data[0] == REQUESTS.CMD_MOVE_PATH.ID and len(data) >= 5
+    if bug == "negative-repeat" and is_path and struct.unpack(">i", data[1:5])[0] < 0:
+        crash("a negative repeat count")
     if bug == "doctype" and data[0] in (25, 32, 40) and b"<!DOCTYPE" in data:
         crash("a DOCTYPE")
     if bug == "hang-id" and data[0] == HANG_ID:

@@ -1,0 +1,116 @@
+"""The fuzzer must find each deliberate bug of tests/fuzz/fragile_server.py within a small budget, and the
+reproducer it writes must kill (or hang) a fresh instance."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from fuzz.engine import Campaign, Options
+from fuzz.launch import Launcher
+
+SERVER = Path(__file__).with_name("fragile_server.py")
+LAUNCH = f"{sys.executable} {SERVER} --ports {{ports}} --bug {{bug}}"
+BUDGET = 30.0  # seconds of fuzzing at most; each bug is found in a few
+
+
+def campaign(tmp_path: Path, bug: str, **changes: object) -> Campaign:
+    opts = Options(
+        host="127.0.0.1", port=0, second_port=0, duration=BUDGET, seed=1, out=tmp_path / "out",
+        allow_motion=True, launch=LAUNCH.replace("{bug}", bug), max_findings=1, deadline=0.5, minimize_seconds=20,
+    )  # fmt: skip
+    for k, v in changes.items():
+        setattr(opts, k, v)
+    return Campaign(opts)
+
+
+def fresh(bug: str) -> Launcher:
+    launcher = Launcher(LAUNCH.replace("{bug}", bug), "127.0.0.1", 0, 0)
+    launcher.start()
+    return launcher
+
+
+@pytest.mark.parametrize(
+    ("bug", "kind", "telegram"),
+    [
+        ("negative-repeat", "dead", "CMD_MOVE_PATH"),
+        ("doctype", "dead", None),
+        ("huge-length", "dead", None),
+        ("hang-id", "hang", "id 66"),
+        ("stall-id", "stall", "id 77"),
+        ("bad-reply", "bad-reply", "CMD_GET_CAMERA"),
+    ],
+)
+def test_fuzzer_finds_the_bug_and_the_reproducer_replays_it(
+    tmp_path: Path, bug: str, kind: str, telegram: str | None
+) -> None:
+    c = campaign(tmp_path, bug)
+    t0 = time.monotonic()
+    assert c.run() == 1
+    assert time.monotonic() - t0 < BUDGET + 60
+    [finding] = c.stats.findings
+    assert finding["kind"] == kind and finding["confirmed"]
+    d = Path(finding["dir"])
+    desc = json.loads((d / "finding.json").read_text())
+    assert desc["minimized"] and desc["frames"] <= 3, desc["telegrams"]
+    if telegram is not None:
+        assert any(telegram in t for t in desc["telegrams"]), desc["telegrams"]
+    assert (d / "exchange.pcapng").read_bytes()[:4] == b"\x0a\x0d\x0d\x0a"
+    assert (d / "sequence.hex").read_text().strip()
+    target = fresh(bug)
+    try:
+        port, second = target.ports
+        run = subprocess.run(
+            [sys.executable, str(d / "repro.py"), "--target", f"127.0.0.1:{port}", "--second-port", str(second),
+             "--deadline", "0.5"],
+            check=False,
+            capture_output=True, text=True, timeout=60,
+        )  # fmt: skip
+        assert run.returncode == 1, run.stdout + run.stderr
+        assert f"reproduced: {kind}" in run.stdout
+        if kind == "dead":
+            assert target.proc is not None and target.proc.wait(5) == 134  # the fresh instance died
+    finally:
+        target.cleanup()
+
+
+def test_reproducer_leaves_a_healthy_server_alive(tmp_path: Path) -> None:
+    c = campaign(tmp_path, "doctype")
+    assert c.run() == 1
+    d = Path(c.stats.findings[0]["dir"])
+    healthy = fresh("none")
+    try:
+        port, second = healthy.ports
+        run = subprocess.run([sys.executable, str(d / "repro.py"), "--target", f"127.0.0.1:{port}", "--second-port",
+                              str(second)], check=False,
+            capture_output=True, text=True, timeout=60)  # fmt: skip
+        assert run.returncode == 0, run.stdout
+        assert healthy.alive()
+    finally:
+        healthy.cleanup()
+
+
+def test_no_false_positive_on_a_well_behaved_server(tmp_path: Path) -> None:
+    c = campaign(tmp_path, "none", duration=4.0, max_findings=None)
+    assert c.run() == 0
+    assert not c.stats.findings and not c.stats.unconfirmed
+    assert c.stats.cases > 1000
+    assert c.stats.batches and c.stats.singles and c.stats.probes
+    assert c.stats.states  # the fragile server always reports Ready, mode 0: one (state, mode) verified
+
+
+def test_without_motion_no_motion_telegram_is_sent(tmp_path: Path) -> None:
+    from fuzz.safety import MOTION
+
+    c = campaign(tmp_path, "none", duration=2.0, max_findings=None, allow_motion=False)
+    assert c.run() == 0
+    names = set(c.stats.telegrams)
+    from spec.codec import REQUESTS
+
+    assert not names & {REQUESTS.by_id[i].NAME for i in MOTION}
+    assert all(s not in ("running", "breaked") for s, _ in c.stats.states)

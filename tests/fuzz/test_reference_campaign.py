@@ -1,0 +1,44 @@
+"""The fuzzer against the reference server: a short default-tier run and the 1,000,000-case campaign (slow).
+
+The campaign is also a command (fuzz/README.md):
+``pltf fuzz --target 127.0.0.1:0 --launch "python -m reference_server --ports {ports} --data-dir {tmpdir}"
+--allow-motion --duration 3600 --max-cases 1000000 --seed 1 --out fuzz-findings``
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from pathlib import Path
+
+import pytest
+
+from fuzz.engine import Campaign, Options
+
+LAUNCH = f"{sys.executable} -m reference_server --ports {{ports}} --data-dir {{tmpdir}} --seed 1 --log-level INFO"
+
+
+def options(tmp_path: Path, **changes: object) -> Options:
+    opts = Options(host="127.0.0.1", port=0, second_port=0, duration=6.0, seed=1, out=tmp_path / "out",
+                   allow_motion=True, launch=LAUNCH, deadline=5.0)  # fmt: skip
+    for k, v in changes.items():
+        setattr(opts, k, v)
+    return opts
+
+
+def test_short_campaign_reaches_every_state_and_finds_nothing(tmp_path: Path) -> None:
+    c = Campaign(options(tmp_path, duration=8.0))
+    code = c.run()
+    assert code == 0, c.stats.findings
+    names = {s for s, _ in c.stats.states}
+    assert names >= {"not_connected", "connected", "ready", "running", "breaked"}, c.stats.states
+    assert c.stats.cases > 2000
+
+
+@pytest.mark.slow
+def test_million_case_campaign_finds_nothing(tmp_path: Path) -> None:
+    cases = int(os.environ.get("PLTF_FUZZ_CASES", "1000000"))
+    c = Campaign(options(tmp_path, duration=3 * 3600.0, max_cases=cases, corpus=tmp_path / "corpus"))
+    code = c.run()
+    assert c.stats.cases >= cases
+    assert code == 0, c.stats.findings
