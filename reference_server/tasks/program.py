@@ -2,7 +2,7 @@
 
 Rules:
 - Validation against spec/schemas is spec.documents' job (``validate_document``); this module compiles a valid
-  tree and adds the checks an XSD cannot make (E-TASK-003): every goto label and timeoutlabel names a label of
+  tree and adds the checks an XSD cannot make (E-TASK-016): every goto label and timeoutlabel names a label of
   the same task, label names are unique in their task, every onErrorTask names a task, random's min <= max.
   Any failure is a ``ProgramError`` (a ``DocumentError``) naming the line, so a caller refuses it exactly like
   a schema violation and the active program stays.
