@@ -19,31 +19,31 @@ PORT_LINE = re.compile(r"server started at port (\d+)")
 REPORT = Path("demo-report.html")
 
 
-def start_server(data_dir: str, time_scale: float) -> tuple[subprocess.Popen[str], list[int]]:
-    cmd = [sys.executable, "-m", "reference_server", "--ports", "0,0", "--data-dir", data_dir,
+def start_server(data_dir: str, time_scale: float) -> tuple[subprocess.Popen[bytes], list[int], Path]:
+    """Start the server with its log in a file (a pipe nobody drains would block it once full)."""
+    log = Path(data_dir) / "server.log"
+    cmd = [sys.executable, "-m", "reference_server", "--ports", "0,0", "--data-dir", str(Path(data_dir) / "disk"),
            "--time-scale", str(time_scale), "--seed", "1"]
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    ports: list[int] = []
+    with log.open("wb") as sink:
+        proc = subprocess.Popen(cmd, stdout=sink, stderr=subprocess.STDOUT)
     deadline = time.monotonic() + 30
-    assert proc.stdout is not None
-    while len(ports) < 2 and time.monotonic() < deadline:
-        line = proc.stdout.readline()
-        if not line:
-            break
-        print(f"  server | {line.rstrip()}")
-        if m := PORT_LINE.search(line):
-            ports.append(int(m.group(1)))
+    ports: list[int] = []
+    while len(ports) < 2 and time.monotonic() < deadline and proc.poll() is None:
+        time.sleep(0.1)
+        ports = [int(p) for p in PORT_LINE.findall(log.read_text(errors="replace"))]
+    for line in log.read_text(errors="replace").splitlines():
+        print(f"  server | {line}")
     if len(ports) < 2:
         proc.kill()
         raise SystemExit("demo: the reference server did not start")
-    return proc, ports
+    return proc, ports, log
 
 
 def main() -> int:
     time_scale = 10.0
     with tempfile.TemporaryDirectory(prefix="pltf-demo-") as data_dir:
         print(f"Starting the reference server (data dir {data_dir}, time scale {time_scale:g}) ...")
-        proc, (port_a, port_b) = start_server(data_dir, time_scale)
+        proc, (port_a, port_b), log = start_server(data_dir, time_scale)
         try:
             print(f"\nRunning the conformance suite (standard tier) against 127.0.0.1:{port_a} / {port_b} ...\n")
             status = pltf([
@@ -57,6 +57,9 @@ def main() -> int:
                 proc.wait(timeout=10)
             except subprocess.TimeoutExpired:
                 proc.kill()
+            print(f"\nServer log: {sum(1 for _ in log.open(errors='replace'))} lines, last ones:")
+            for line in log.read_text(errors="replace").splitlines()[-5:]:
+                print(f"  server | {line}")
     print(f"\nReport: {REPORT.resolve()} (open it in a browser); JSON: demo-report.json")
     return status
 
