@@ -9,7 +9,7 @@ from __future__ import annotations
 from functools import partial
 
 from conformance_tests import docdata
-from conformance_tests.cases._common import STATES
+from conformance_tests.cases._common import STATES, no_unsolicited
 from conformance_tests.catalogue import Level, Tier, add, case
 from conformance_tests.context import CaseContext
 from conformance_tests.outcome import Fail
@@ -118,6 +118,7 @@ def _every_state(ctx: CaseContext, kind: str, command: str) -> None:
             raise Fail(f"{command} in {state.value} changed the platform: {before.describe()} -> {after.describe()}")
         if active.strip():
             _expect_active(ctx, kind, docdata.wire_bytes(active), f"{command} in {state.value}")
+    no_unsolicited(ctx, command)
     ctx.ready()
 
 

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from conformance_tests.cases._common import param_table
+from conformance_tests.cases._common import no_unsolicited, param_table
 from conformance_tests.catalogue import Level, Tier, case
 from conformance_tests.context import CaseContext
 from conformance_tests.outcome import Fail, NotApplicable
@@ -218,7 +218,7 @@ def out_of_range(ctx: CaseContext) -> None:
 @case("6.3/CMD_SET_PLTF_PARAM/malformed-refused", errata=("E-PAR-006",),
       requirement="errata E-PAR-006/007: INTEGER is [+-]digits, DOUBLE a decimal number with '.' - any other text "
                   "is refused and the old value stays",
-      telegrams=("CMD_SET_PLTF_PARAM",))
+      telegrams=("CMD_SET_PLTF_PARAM", "CMD_GET_PLTF_PARAM"))
 def malformed(ctx: CaseContext) -> None:
     table = param_table(ctx)
     safe = _safe(list(table))
@@ -231,12 +231,13 @@ def malformed(ctx: CaseContext) -> None:
         old = _value(ctx, p.name)
         for text in ("12abc", "", "0x10"):
             _refused(ctx, p, text, "not an integer", erratum="E-PAR-006")
-        frac = f"{_number(old, p.type):.0f}.7"
-        _refused(ctx, p, frac, "a fraction", erratum="E-PAR-006", readings={frac.split(".", maxsplit=1)[0]: 2})
+        other = _other_value(p, old)  # a fraction of another value: truncation must not look like a refusal
+        frac = f"{other}.7"
+        _refused(ctx, p, frac, "a fraction", erratum="E-PAR-006", readings={other: 2})
     for p in doubles[:1]:
         ctx.preserve_param(p.name)
         old = _value(ctx, p.name)
-        comma = repr(_number(old, p.type)).replace(".", ",")
+        comma = _other_value(p, old).replace(".", ",")
         _refused(ctx, p, comma, "decimal comma", erratum="E-PAR-006", readings={comma.replace(",", "."): 1})
         for text in ("nan", "abc", "1e999"):
             _refused(ctx, p, text, "not a finite number", erratum="E-PAR-006")
@@ -269,12 +270,13 @@ def boolean_spellings(ctx: CaseContext) -> None:
 
 @case("6.3/CMD_SET_PLTF_PARAM/unknown-key", errata=("E-PAR-007",),
       requirement="erratum E-PAR-007: a CMD_SET_PLTF_PARAM with an unknown key is refused - no parameter appears or "
-                  "changes",
-      telegrams=("CMD_SET_PLTF_PARAM",))
+                  "changes, and nothing is answered",
+      telegrams=("CMD_SET_PLTF_PARAM", "CMD_GET_PLTF_PARAM_VEC"))
 def unknown_key(ctx: CaseContext) -> None:
     before = param_table(ctx)
     ctx.send("CMD_SET_PLTF_PARAM", key="NoSuchParameterConformance", value="1")
     after = param_table(ctx)
+    no_unsolicited(ctx, "CMD_SET_PLTF_PARAM")
     if set(after) != set(before):
         raise Fail(f"the parameter list changed: new keys {sorted(set(after) - set(before))}")
     changed = [k for k in before if tuple(after[k]) != tuple(before[k])]
@@ -298,7 +300,7 @@ def exact_keys(ctx: CaseContext) -> None:
 @case("6.3/CMD_SET_PLTF_PARAM/read-only-refused", errata=("E-PAR-024",),
       requirement="erratum E-PAR-024: the parameter-file values the project added (VelWatchdogTime, MaxTransVel, "
                   "...) are read-only over the socket: a SET is refused and the value stays",
-      telegrams=("CMD_SET_PLTF_PARAM",))
+      telegrams=("CMD_SET_PLTF_PARAM", "CMD_GET_PLTF_PARAM"))
 def read_only(ctx: CaseContext) -> None:
     table = param_table(ctx)
     ro = [p for p in SPEC.values() if not p.writable and p.name in table]

@@ -37,6 +37,9 @@ class WireMutant:
     def server_frame(self, proxy: FrameProxy, conn: Conn, data: bytes) -> None:
         conn.to_client(data)
 
+    def on_client_eof(self, proxy: FrameProxy, conn: Conn, pending: bytes) -> bool:
+        return False
+
 
 def _ident(data: bytes) -> int:
     return data[8] if len(data) > 8 else -1
@@ -148,8 +151,7 @@ class KeepSecondClient(WireMutant):
     def on_accept(self, proxy: FrameProxy, index: int, client: socket.socket) -> bool:
         if proxy.open_on(index) == 0:
             return False
-        held = proxy.shared.setdefault("held", [])
-        held.append(client)
+        proxy.held.append(client)
         return True
 
 
@@ -200,6 +202,92 @@ def _mode_zero(data: bytes) -> bytes:
 def _move_abs_off(data: bytes) -> bytes:
     x, y, a = struct.unpack_from(">iii", data, 1)
     return data[:1] + struct.pack(">iii", x, y + 300, a)
+
+
+class AnswerCommand(WireMutant):
+    """Command ``name`` (one without a reply table) is answered with an echo frame."""
+
+    wants_client_frames = True
+
+    def __init__(self, name: str) -> None:
+        self.id = _ID[name]
+
+    def client_frame(self, proxy: FrameProxy, conn: Conn, data: bytes) -> None:
+        conn.to_server(data)
+        if _ident(data) == self.id:
+            conn.to_client(frame(bytes([self.id])))
+
+
+class IgnoreUndecodable(WireMutant):
+    """A frame that does not decode as a request is dropped and the connection kept (E-WIRE-006 alternative)."""
+
+    wants_client_frames = True
+
+    def client_frame(self, proxy: FrameProxy, conn: Conn, data: bytes) -> None:
+        from spec.errors import RemoteProtocolError
+
+        try:
+            REQUESTS.decode_data(data[8:])
+        except RemoteProtocolError:
+            return
+        conn.to_server(data)
+
+
+class IgnoreHalfClose(WireMutant):
+    """The client's half-close is not passed on: the connection stays open with its partial frame."""
+
+    def on_client_eof(self, proxy: FrameProxy, conn: Conn, pending: bytes) -> bool:
+        return True
+
+
+class CloseOnHalfClose(WireMutant):
+    """The client's half-close drops the connection at once, pending replies included."""
+
+    def on_client_eof(self, proxy: FrameProxy, conn: Conn, pending: bytes) -> bool:
+        conn.close()
+        return True
+
+
+class ClosePort(WireMutant):
+    """Every client of port ``index`` is closed at once."""
+
+    def __init__(self, index: int) -> None:
+        self.index = index
+
+    def on_accept(self, proxy: FrameProxy, index: int, client: socket.socket) -> bool:
+        if index != self.index:
+            return False
+        client.close()
+        return True
+
+
+class RefuseReconnect(WireMutant):
+    """A port takes one client in its life; later ones are closed at once."""
+
+    def on_accept(self, proxy: FrameProxy, index: int, client: socket.socket) -> bool:
+        seen = proxy.shared.setdefault("accepted", set())
+        if index in seen:
+            client.close()
+            return True
+        seen.add(index)
+        return False
+
+
+class CloseAllOnMalformed(SkipMalformed):
+    """Malformed input on one connection drops every connection (the other port's included)."""
+
+    def malformed(self, proxy: FrameProxy, conn: Conn, data: bytes) -> bool:
+        proxy.close_all()
+        return True
+
+
+def _truncate(data: bytes) -> bytes:
+    return data[:-1]
+
+
+def corrupt_reply(name: str) -> ReplyRewrite:
+    """The reply to ``name`` loses its last byte (shorter than its layout)."""
+    return ReplyRewrite(name, _truncate)
 
 
 @dataclass(frozen=True)

@@ -119,5 +119,31 @@ def die_on_malformed() -> None:
     network.TelegramDecoder = Dying  # type: ignore[misc]
 
 
+def allow_in_state(command: str, state: str) -> None:
+    """``command`` is also accepted in ``state`` (a state chart cell flipped); its rule's target stays."""
+    from reference_server import state_chart as sc
+
+    rule = sc.RULES[command]
+    extra = next(s for s in sc.State if s.name.lower().replace("_", "-") == state)
+    sc.RULES[command] = sc.Rule(rule.allowed | {extra}, rule.target, rule.blocked_by_emergency)
+
+
+def parameter_text_lenient() -> None:
+    """Any number text is taken (fractions truncated, commas as points) and any word but true is false."""
+    from spec import parameters
+
+    def integer(text: str) -> int:
+        return int(float(text.replace(",", ".") or 0))
+
+    def double(text: str) -> float:
+        return float(text.replace(",", ".") or 0)
+
+    def boolean(text: str) -> bool:
+        return text.strip().lower() == "true"
+
+    parameters._PARSERS = {parameters.DataType.BOOLEAN: boolean, parameters.DataType.INTEGER: integer,  # type: ignore[attr-defined]
+                           parameters.DataType.DOUBLE: double}
+
+
 PATCHES = {name: fn for name, fn in globals().items() if callable(fn) and not name.startswith("_")
            and fn.__module__ == __name__}

@@ -75,6 +75,7 @@ class FrameProxy:
         self.shared: dict[str, Any] = {}
         self._listeners: list[socket.socket] = []
         self._conns: list[Conn] = []
+        self.held: list[socket.socket] = []  # client sockets a mutant took over
         self._lock = threading.Lock()
         self._stop = threading.Event()
 
@@ -93,6 +94,9 @@ class FrameProxy:
         """Swap the mutant; open connections are closed so that every case starts on the new behaviour."""
         self.mutant = mutant
         self.shared.clear()
+        while self.held:
+            with contextlib.suppress(OSError):
+                self.held.pop().close()
         with self._lock:
             conns, self._conns = self._conns, []
         for c in conns:
@@ -110,6 +114,12 @@ class FrameProxy:
 
     def __exit__(self, *exc: object) -> None:
         self.stop()
+
+    def close_all(self) -> None:
+        with self._lock:
+            conns = list(self._conns)
+        for c in conns:
+            c.close()
 
     def open_on(self, index: int) -> int:
         with self._lock:
@@ -148,6 +158,8 @@ class FrameProxy:
             except OSError:
                 data = b""
             if not data:
+                if m is not None and m.on_client_eof(self, conn, bytes(buf)):
+                    return
                 if buf:
                     conn.to_server(bytes(buf))
                 if conn.upstream is not None:

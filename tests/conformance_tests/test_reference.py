@@ -14,19 +14,13 @@ import pytest
 from conformance_tests.catalogue import Tier, Verdict, load_all, select
 from conformance_tests.context import Config
 from conformance_tests.launch import ServerProcess
+from conformance_tests.mutants.matrix import NOT_ON_REFERENCE
 from conformance_tests.reports.files import write_json, write_junit
 from conformance_tests.reports.html import write_html
 from conformance_tests.runner import Runner, RunResult
 
 TIME_SCALE = 10.0
-# Cases that need what the reference server does not simulate yet (CAN traffic, IO outputs, ultrasonic board, head
-# drive, task interpreter): N/A there, never FAIL. The set only shrinks as the simulator grows.
-MAY_BE_NA = {
-    "6.3/CMD_GET_CAN_MESSAGES/keep-and-delete", "6.3/CMD_REMOVE_CAN_LISTENING_ID/stops-buffering",
-    "6.3/CMD_GET_CAN_MESSAGES/listened-ids-only", "6.4/CMD_GET_CAN_MESSAGES/timestamps",
-    "6.3/CMD_SET_DIGOUT/sets-output", "6.3/CMD_START_ULTRASONIC/measures", "6.3/CMD_SET_POS_HEAD_DRIVE/turns-head",
-    "4.5/program/runs-on-start", "4.5/program/stop-aborts", "4.5/program/break-pauses",
-}  # fmt: skip
+MAY_BE_NA = NOT_ON_REFERENCE  # N/A there (hardware it does not simulate), never FAIL; the set only shrinks
 
 
 def standard_run(**kw: object) -> RunResult:
