@@ -125,6 +125,10 @@ class Interpreter:
     def running(self) -> bool:
         return self.started and not self.stopped and not self.paused and not self.finished
 
+    def waiting_for(self, event_id: str) -> int:
+        """How many tasks wait for user event ``event_id`` now (E-TASK-012)."""
+        return sum(1 for r in self.runs if r.pending is not None and r.pending.wait.event == m.UserEvent(event_id))
+
     @property
     def finished(self) -> bool:
         return self.started and not any(run.state in ACTIVE for run in self.runs)
