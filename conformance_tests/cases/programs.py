@@ -63,7 +63,8 @@ def runs_on_start(ctx: CaseContext) -> None:
     ctx.send("CMD_START")
     if not _until(ctx, new, 3.0):
         raise NotApplicable("CMD_START in MODE_MOTION_PROGRAM did not run the program (no parameter changed)")
-    if _until(ctx, old.strip().lower(), 0.8):
+    ctx.sleep(0.8)  # exactly 0.8 simulated s: a poll's wall-time floor would outlast the delay at a high time scale
+    if _value(ctx).strip().lower() != new:
         raise Fail("the program's <delay amount=\"1500\"/> did not delay the next step")
     if not _until(ctx, old.strip().lower(), 5.0):
         raise Fail("the program did not go on after its delay")

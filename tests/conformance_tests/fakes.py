@@ -2,7 +2,8 @@
 
 ``ScriptedServer`` runs a handler per connection on 127.0.0.1:0; ``TinyTarget`` is a minimal PlatformCtrl: the
 state chart of conformance_tests.chart, CMD_SET_MODE, CMD_GET_STATUS and CMD_GET_POSITION, one client per
-port, malformed input closes the connection; every other command is accepted silently.
+port, malformed input closes the connection; every other command is accepted silently. ``HardwareTarget`` adds
+the hardware the reference server does not simulate yet, with switchable faults.
 """
 
 from __future__ import annotations
@@ -10,6 +11,8 @@ from __future__ import annotations
 import contextlib
 import socket
 import threading
+import time
+import xml.etree.ElementTree as ET
 from collections.abc import Callable
 from typing import Any
 
@@ -18,6 +21,7 @@ from conformance_tests.chart import St
 from conformance_tests.readings import canonical
 from spec.codec import REPLIES, TelegramDecoder, encode
 from spec.errors import RemoteProtocolError
+from spec.parameters import ParameterError, ParameterStore
 
 Handler = Callable[[socket.socket], None]
 
@@ -114,3 +118,137 @@ class TinyTarget(ScriptedServer):
                     self.mode = t.mode
                 self.state = chart.target(self.state, t.NAME)
             return None
+
+
+class HardwareTarget(TinyTarget):
+    """TinyTarget plus what the reference server does not simulate yet: a CAN bus with traffic, IO outputs, an
+    ultrasonic board, a head drive, parameters, documents and a minimal task interpreter (parameter/set and
+    wait/delay). ``broken`` names faults, so the cases that need this hardware can be shown to pass and to fail."""
+
+    BUS_IDS = (0x100, 0x181, 0x205)
+
+    def __init__(self, broken: frozenset[str] = frozenset(), time_scale: float = 10.0) -> None:
+        super().__init__()
+        self.broken = broken
+        self.scale = time_scale
+        self.t0 = time.monotonic()
+        self.params = ParameterStore()
+        self.listening: set[int] = set()
+        self.buffer: list[tuple[float, int, tuple[int, ...]]] = []
+        self.dout = 0
+        self.us = [0] * 16
+        self.head = 0
+        self.docs: dict[str, tuple[str, str]] = {"map": ("", ""), "roadmap": ("", ""), "program": ("", "")}
+        self._going = threading.Event()
+        self._aborted = threading.Event()
+
+    def __enter__(self) -> HardwareTarget:
+        super().__enter__()
+        threading.Thread(target=self._bus, daemon=True).start()
+        return self
+
+    def now(self) -> float:
+        return (time.monotonic() - self.t0) * self.scale
+
+    def _bus(self) -> None:
+        n = 0
+        while not self._stop.is_set():
+            time.sleep(0.005)
+            n += 1
+            with self.lock:
+                for cid in self.BUS_IDS:
+                    if cid in self.listening or "can-all-ids" in self.broken:
+                        stamp = -self.now() if "can-time-backwards" in self.broken else self.now()
+                        self.buffer.append((stamp, cid, (n % 256,) + (0,) * 7))
+                del self.buffer[:-2000]
+
+    def handle(self, t: Any) -> Any:
+        name = t.NAME
+        if name in chart.CHART_COMMANDS or name in ("CMD_GET_POSITION",):
+            if name == "CMD_START" and self.mode == 5 and chart.allowed(self.state, name):
+                self._start_program()
+            if name == "CMD_BREAK" and "program-ignores-break" not in self.broken:
+                self._going.clear()
+            if name == "CMD_CONTINUE":
+                self._going.set()
+            if name in ("CMD_STOP", "CMD_SHUTDOWN_PLTF") and "program-ignores-stop" not in self.broken:
+                self._aborted.set()
+                self._going.set()
+            return super().handle(t)
+        with self.lock:
+            return self._extra(t)
+
+    def _extra(self, t: Any) -> Any:
+        name = t.NAME
+        if name == "CMD_GET_STATUS":
+            return self.status.replace(operation_state=chart.REPORTED[self.state], motion_mode=self.mode,
+                                       initialized=chart.INITIALIZED[self.state], io_digital_out=self.dout,
+                                       us_distance=tuple(self.us), head_position=self.head)
+        if name == "CMD_ADD_CAN_LISTENING_ID":
+            self.listening.add(t.can_id)
+        elif name == "CMD_REMOVE_CAN_LISTENING_ID" and "can-ignores-remove" not in self.broken:
+            self.listening.discard(t.can_id)
+            self.buffer = [m for m in self.buffer if m[1] != t.can_id]
+        elif name == "CMD_GET_CAN_MESSAGES":
+            msgs = tuple(self.buffer)
+            if t.delete or "can-keep-deletes" in self.broken:
+                self.buffer.clear()
+            return REPLIES.CMD_GET_CAN_MESSAGES(messages=msgs)
+        elif name == "CMD_SET_DIGOUT" and t.board == 0:
+            bit = 1 << (t.channel + (1 if "digout-off-by-one" in self.broken else 0))
+            self.dout = self.dout | bit if t.value else self.dout & ~bit
+        elif name == "CMD_START_ULTRASONIC" and "us-none" not in self.broken:
+            self.us = [1500 if t.active_channels >> i & 1 else 0 for i in range(16)]
+        elif name == "CMD_STOP_ULTRASONIC":
+            self.us = [0] * 16
+        elif name == "CMD_SET_POS_HEAD_DRIVE":
+            self.head = t.angle + (10 if "head-off" in self.broken else 0)
+        elif name == "CMD_SET_PLTF_PARAM":
+            with contextlib.suppress(ParameterError):
+                self.params.set_text(t.key, t.value)
+        elif name == "CMD_GET_PLTF_PARAM":
+            row = self.params.parameter(t.key)
+            lo, hi = row.wire_bounds()
+            return REPLIES.CMD_GET_PLTF_PARAM(key=t.key, value=self.params.get_text(t.key), category=row.category,
+                                              data_type=row.type, minimum=lo, maximum=hi)
+        elif name == "CMD_GET_PLTF_PARAM_VEC":
+            return REPLIES.CMD_GET_PLTF_PARAM_VEC(parameters=tuple(
+                (row.name, self.params.get_text(row.name), row.category, row.type, *row.wire_bounds())
+                for row, _ in self.params.items()))
+        elif name in ("CMD_SET_MAP", "CMD_SET_ROADMAP", "CMD_SET_PROGRAM"):
+            kind = name.split("_", 2)[2].lower()
+            self.docs[kind] = (t.xml, getattr(t, "name", ""))
+        elif name in ("CMD_GET_MAP", "CMD_GET_ROADMAP"):
+            xml, doc_name = self.docs[name.split("_", 2)[2].lower()]
+            return REPLIES[name](xml=xml, name=doc_name)
+        elif name == "CMD_GET_PROGRAM":
+            return REPLIES.CMD_GET_PROGRAM(xml=self.docs["program"][0])
+        return None
+
+    # ---- the task interpreter (MODE_MOTION_PROGRAM)
+    def _start_program(self) -> None:
+        self._aborted.clear()
+        self._going.set()
+        root = ET.fromstring(self.docs["program"][0].encode("latin-1"))
+        threading.Thread(target=self._program, args=(list(root.iter("task"))[:1],), daemon=True).start()
+
+    def _program(self, tasks: list[ET.Element]) -> None:
+        for step in (s for task in tasks for s in task):
+            if not self._gate():
+                return
+            if step.tag == "parameter":
+                for s in step.iter("set"):
+                    with self.lock, contextlib.suppress(ParameterError):
+                        self.params.set_text(s.get("key", ""), s.get("value", ""))
+            elif step.tag == "wait" and "program-ignores-delay" not in self.broken:
+                for d in step.iter("delay"):
+                    end = self.now() + float(d.get("amount", "0")) / 1000.0
+                    while self.now() < end:
+                        if not self._gate():
+                            return
+                        time.sleep(0.002)
+
+    def _gate(self) -> bool:
+        """Wait while paused (Breaked); False once aborted."""
+        self._going.wait()
+        return not self._aborted.is_set()
