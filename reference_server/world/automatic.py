@@ -1,0 +1,312 @@
+"""Motion mode Automatic (guide 4.3): one move command as a job that plans, drives, avoids and settles.
+
+Rules (errata E-MOT-006, E-MOT-007, E-MOT-009):
+- Phases: ``plan`` (the first control step after the command: the planner state is PLANNING until then),
+  ``drive`` (the interpolator runs the legs), ``settle`` (position stabilisation and the final turn), ``done``.
+- CMD_MOVE_ABS/REL ("goto"): PlanningEnabled -> the planner's shortest path; a failure (no path, collision at
+  start or target) ends the job at once with no motion and the planner state says why. Planning disabled ->
+  the direct Bezier path (paths.direct).
+- CMD_MOVE_PATH / MOVE_TO_STATION ("path"): reach the first frame (planned when PlanningEnabled, else a
+  straight line), follow the frames' points, turn to the last frame's angle.
+- Obstacles: scan points inside the corridor ahead of the reference (half the platform's width plus
+  ``CORRIDOR`` mm) stop the reference so the front edge stays CollLaserMinDist + 100 mm away. Then: goto with
+  planning -> replan around the seen obstacle (circles clustered from the points), at most every
+  ``REPLAN_EVERY`` s; goto without planning -> wait until the obstacle goes; path -> wait
+  PathObstacleWaitTime, then plan a detour to the next free point of the path behind the obstacle and rejoin.
+- Settle: with PositionStabilizationEnabled the platform is driven onto the target within
+  TargetReachedTolPos; then it turns to the target angle within TargetReachedTolAngle (also without
+  EndTurnEnabled, after the curve, when the angle is still off). Target reached = both within tolerance.
+  ``SETTLE_TIMEOUT`` s without success ends the job, not reached.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+import numpy as np
+
+from reference_server.world.geometry import BOOL, F64, circles
+from reference_server.world.ipo import Interpolator, Ref, stabilize, track
+from reference_server.world.paths import Drive, Leg, Turn, direct, end_curve, polyline, wrap
+from reference_server.world.planner import Plan, PlannerState
+
+Params = Callable[[str], Any]
+Pose = tuple[float, float, float]
+
+CORRIDOR = 100.0  # mm beyond half the platform's width
+REPLAN_EVERY = 0.5  # s
+RETRY_EVERY = 1.0  # s
+OBSTACLE_MEMORY = 3.0  # s an unseen obstacle is remembered
+CLUSTER_GAP = 300.0  # mm
+SETTLE_TIMEOUT = 15.0  # s
+SETTLE_TURN_GAIN = 2.0  # 1/s
+
+
+class Navigator(Protocol):
+    """What a job needs from the world: planning with the footprint, and free-space tests."""
+
+    @property
+    def half_width(self) -> float: ...
+
+    @property
+    def front(self) -> float: ...
+
+    @property
+    def sweep(self) -> float: ...
+
+    def plan(self, start: Pose, goal: Pose, obstacles: F64) -> Plan: ...
+
+    def free(self, points: F64, obstacles: F64) -> BOOL: ...
+
+
+@dataclass(frozen=True)
+class Perception:
+    """The latest scan's points (world frame through the estimate, and platform frame)."""
+
+    world: F64 = field(default_factory=lambda: np.zeros((0, 2)))
+    platform: F64 = field(default_factory=lambda: np.zeros((0, 2)))
+    seq: int = 0  # one number per scan
+
+
+@dataclass
+class AutoJob:
+    kind: str  # "goto" | "path"
+    goal: Pose
+    frames: list[Pose]
+    planning: bool
+    phase: str = "plan"
+    ipo: Interpolator | None = None
+    planner_state: PlannerState = PlannerState.STANDBY
+    reached: bool = False
+    events: list[str] = field(default_factory=list)
+    blocked_since: float | None = None
+    next_try: float = 0.0
+    obstacles: list[tuple[float, float, float, float]] = field(default_factory=list)  # x, y, r, last seen
+    settle_since: float | None = None
+    stabilizing: bool = False
+    _seen: Perception | None = None
+    _block_leg: Leg | None = None
+    _block: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.planning or self.kind == "goto":
+            self.planner_state = PlannerState.PLANNING if self.planning else PlannerState.STANDBY
+
+    @property
+    def done(self) -> bool:
+        return self.phase == "done"
+
+    def reference(self, pose: Pose) -> Ref:
+        if self.ipo is None or self.ipo.done:
+            goal = self.goal if self.phase in ("settle", "done") and self.reached else pose
+            return Ref(*goal, 0.0, 0.0)
+        return self.ipo.reference(pose)
+
+    def path_points(self) -> list[tuple[float, float]]:
+        return [] if self.ipo is None else self.ipo.path_points()
+
+    # ---- the control step
+    def step(
+        self, now: float, dt: float, pose: Pose, seen: Perception, p: Params, nav: Navigator
+    ) -> tuple[float, float]:
+        if self.phase == "plan":
+            self._start(now, pose, p, nav)
+        if self.phase == "drive":
+            assert self.ipo is not None
+            stop_at = self._obstacle(now, pose, seen, p, nav)
+            ex = _along(pose, self.ipo.reference(pose))
+            self.ipo.step(dt, p, hold=ex > 300.0, stop_at=stop_at)
+            if self.ipo.done:
+                self.phase, self.settle_since = "settle", now
+            else:
+                ref = self.ipo.reference(pose)
+                return track(pose, ref, isinstance(self.ipo.leg, Turn), p)
+        if self.phase == "settle":
+            return self._settle(now, pose, p)
+        return 0.0, 0.0
+
+    def _legs(self, points: list[tuple[float, float]], pose: Pose, p: Params, nav: Navigator) -> list[Leg]:
+        tol = math.radians(float(p("TargetReachedTolAngle")))
+        legs = polyline(points, pose[2], tol)
+        return self._ending(legs, p, nav)
+
+    def _ending(self, legs: list[Leg], p: Params, nav: Navigator) -> list[Leg]:
+        tol = math.radians(float(p("TargetReachedTolAngle")))
+        if not bool(p("EndTurnEnabled")):
+            curve = end_curve(legs, self.goal[2])
+            if curve is not None and bool(np.all(nav.free(np.column_stack([curve.x, curve.y]), self._circles()))):
+                legs = [*legs[:-1], curve]
+        last = next((lg for lg in reversed(legs) if isinstance(lg, Drive)), None)
+        heading = float(last.theta[-1]) if last is not None else None
+        if heading is not None and abs(wrap(self.goal[2] - heading)) > tol:
+            legs.append(Turn(self.goal[0], self.goal[1], heading, heading + wrap(self.goal[2] - heading)))
+        return legs
+
+    def _start(self, now: float, pose: Pose, p: Params, nav: Navigator) -> None:
+        first = self.frames[0] if self.kind == "path" else self.goal
+        if self.planning:
+            plan = nav.plan(pose, first, self._circles())
+            self.planner_state = plan.state
+            if plan.state != PlannerState.PATH_FOUND:
+                self.phase = "done"
+                self.events.append(f"planner: {plan.state.name.lower()}, the platform does not move")
+                return
+            points = list(plan.points)
+        elif self.kind == "goto":
+            tol = math.radians(float(p("TargetReachedTolAngle")))
+            legs = direct(pose, self.goal[:2], bool(p("StartTurnEnabled")), tol)
+            self.ipo, self.phase = Interpolator(self._ending(legs, p, nav)), "drive"
+            return
+        else:
+            points = [pose[:2], first[:2]]
+        if self.kind == "path":
+            points += [f[:2] for f in self.frames[1:]]
+        self.ipo, self.phase = Interpolator(self._legs(points, pose, p, nav)), "drive"
+
+    # ---- obstacles
+    def _circles(self) -> F64:
+        return circles([o[:3] for o in self.obstacles])
+
+    def _obstacle(self, now: float, pose: Pose, seen: Perception, p: Params, nav: Navigator) -> float | None:
+        """The arc length on the current Drive leg to stop at (None: free); starts replanning and detours."""
+        assert self.ipo is not None
+        leg = self.ipo.leg
+        if seen is not self._seen or leg is not self._block_leg:  # a new scan, or a new leg: look again
+            self._seen, self._block_leg = seen, leg
+            self._block = self._blocked_at(now, pose, seen, p, nav)
+        if self._block is None:
+            self.blocked_since = None
+            return None
+        if self.blocked_since is None:
+            self.blocked_since = now
+            self.events.append("obstacle on the path: stopping in front of it")
+        self._react(now, pose, p, nav)
+        if self.ipo.leg is not leg or self.blocked_since is None:
+            return None  # replanned or detoured
+        gap = nav.front + float(p("CollLaserMinDist")) + 100.0
+        return max(self.ipo.s, self._block - gap)
+
+    def _blocked_at(self, now: float, pose: Pose, seen: Perception, p: Params, nav: Navigator) -> float | None:
+        """Arc length on the current Drive leg of the first scan point in the corridor ahead (None: free)."""
+        self.obstacles = [o for o in self.obstacles if now - o[3] <= OBSTACLE_MEMORY]
+        assert self.ipo is not None
+        leg = self.ipo.leg
+        if not isinstance(leg, Drive) or len(seen.world) == 0:
+            return None
+        gap = nav.front + float(p("CollLaserMinDist")) + 100.0
+        look = self.ipo.v**2 / (2.0 * float(p("MaxTransAcc"))) + gap + 800.0
+        i0 = int(np.searchsorted(leg.s, self.ipo.s))
+        i1 = int(np.searchsorted(leg.s, self.ipo.s + look))
+        xs, ys = leg.x[i0 : i1 + 1 : 2], leg.y[i0 : i1 + 1 : 2]
+        if len(xs) == 0:
+            return None
+        pts = seen.world
+        reach = nav.half_width + CORRIDOR
+        box = ((pts[:, 0] >= xs.min() - reach) & (pts[:, 0] <= xs.max() + reach)
+               & (pts[:, 1] >= ys.min() - reach) & (pts[:, 1] <= ys.max() + reach))  # fmt: skip
+        pts = pts[box]
+        if len(pts) == 0:
+            return None
+        d = np.hypot(pts[:, 0, None] - xs[None, :], pts[:, 1, None] - ys[None, :])
+        hit = d.min(axis=1) <= reach
+        if not hit.any():
+            return None
+        first = int(d[hit].argmin(axis=1).min())
+        self._remember(now, pts[hit])
+        return float(leg.s[min(i0 + 2 * first, len(leg.s) - 1)])
+
+    def _remember(self, now: float, pts: F64) -> None:
+        for cx, cy, r in _clusters(pts):
+            self.obstacles = [o for o in self.obstacles if math.hypot(o[0] - cx, o[1] - cy) > o[2] + r]
+            self.obstacles.append((cx, cy, r, now))
+
+    def _react(self, now: float, pose: Pose, p: Params, nav: Navigator) -> None:
+        if now < self.next_try or self.blocked_since is None:
+            return
+        if self.kind == "goto" and self.planning:
+            self.next_try = now + REPLAN_EVERY
+            plan = nav.plan(pose, self.goal, self._circles())
+            self.planner_state = plan.state
+            if plan.state == PlannerState.PATH_FOUND:
+                self.ipo, self.blocked_since = Interpolator(self._legs(list(plan.points), pose, p, nav)), None
+                self.events.append("replanned around an obstacle")
+            else:
+                self.next_try = now + RETRY_EVERY
+        elif self.kind == "path" and now - self.blocked_since >= float(p("PathObstacleWaitTime")) / 1000.0:
+            self.next_try = now + RETRY_EVERY
+            self._detour(pose, p, nav)
+
+    def _detour(self, pose: Pose, p: Params, nav: Navigator) -> None:
+        """guide 4.3: "drive around the obstacle and the target path will be entered again at the next reachable
+        place"."""
+        assert self.ipo is not None
+        ahead = self.ipo.path_points(step=50.0)
+        if len(ahead) < 2:
+            return
+        pts = np.asarray(ahead)
+        obs = self._circles()
+        blocked = np.zeros(len(pts), dtype=bool)
+        for cx, cy, r in obs:
+            blocked |= np.hypot(pts[:, 0] - cx, pts[:, 1] - cy) <= r + nav.half_width + CORRIDOR
+        if not blocked.any():
+            return
+        behind = np.flatnonzero(blocked)[-1] + 1
+        ok = np.flatnonzero(nav.free(pts[behind:], obs))
+        if len(ok) == 0:
+            self.events.append("obstacle on the path: no place to rejoin the path behind it, waiting")
+            return
+        k = int(behind + ok[0])
+        rejoin = (float(pts[k, 0]), float(pts[k, 1]), self.goal[2])
+        plan = nav.plan(pose, rejoin, obs)
+        self.planner_state = plan.state
+        if plan.state != PlannerState.PATH_FOUND:
+            self.events.append("obstacle on the path: no way around it yet, waiting")
+            return
+        points = list(plan.points) + [(float(q[0]), float(q[1])) for q in pts[k + 1 :]]
+        self.ipo, self.blocked_since = Interpolator(self._legs(points, pose, p, nav)), None
+        self.events.append("obstacle on the path: driving around it")
+
+    # ---- the end
+    def _settle(self, now: float, pose: Pose, p: Params) -> tuple[float, float]:
+        """Position stabilisation (to half the tolerance once started), then the turn, then the verdict."""
+        tol_pos = float(p("TargetReachedTolPos"))
+        tol_ang = math.radians(float(p("TargetReachedTolAngle")))
+        dist = math.hypot(self.goal[0] - pose[0], self.goal[1] - pose[1])
+        err = wrap(self.goal[2] - pose[2])
+        stab = bool(p("PositionStabilizationEnabled"))
+        timeout = self.settle_since is not None and now - self.settle_since > SETTLE_TIMEOUT
+        if not timeout:
+            if stab and (dist > tol_pos or (self.stabilizing and dist > 0.5 * tol_pos)):
+                self.stabilizing = True
+                v, w, _ = stabilize(pose, self.goal[:2])
+                return v, w
+            self.stabilizing = False
+            if abs(err) > 0.5 * tol_ang:
+                w_max = float(p("IpoRotVel"))
+                return 0.0, max(-w_max, min(w_max, SETTLE_TURN_GAIN * err + math.copysign(0.01, err)))
+        self.reached = dist <= tol_pos and abs(err) <= tol_ang
+        self.phase = "done"
+        self.planner_state = PlannerState.STANDBY
+        what = "target reached" if self.reached else "target not reached"
+        self.events.append(f"{what}: x {pose[0]:.0f} mm, y {pose[1]:.0f} mm, a {pose[2]:.3f} rad")
+        return 0.0, 0.0
+
+
+def _along(pose: Pose, ref: Ref) -> float:
+    return math.cos(pose[2]) * (ref.x - pose[0]) + math.sin(pose[2]) * (ref.y - pose[1])
+
+
+def _clusters(pts: F64) -> list[tuple[float, float, float]]:
+    """Round obstacles from points: split where neighbours are more than CLUSTER_GAP apart (in scan order)."""
+    if len(pts) == 0:
+        return []
+    gaps = np.hypot(np.diff(pts[:, 0]), np.diff(pts[:, 1])) > CLUSTER_GAP
+    out = []
+    for part in np.split(pts, np.flatnonzero(gaps) + 1):
+        c = part.mean(axis=0)
+        r = float(np.hypot(part[:, 0] - c[0], part[:, 1] - c[1]).max()) + 150.0
+        out.append((float(c[0]), float(c[1]), r))
+    return out

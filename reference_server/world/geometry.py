@@ -1,0 +1,232 @@
+"""The active map as arrays (guide 6.5 Map), and the vectorised distance functions everything else uses.
+
+Rules:
+- ``MapGeometry.from_tree`` reads a VALIDATED map tree (spec.documents.validate_document); it never raises on
+  a valid map. Units: mm. Segments are rows ``(x0, y0, x1, y1)`` of float64 arrays, circles ``(x, y, r)``.
+- What each element is (erratum E-MOT-001): <line>/<linemapped> are walls (physical, seen by the laser, used
+  by localization); <auxline>/<auxlinemapped> are physical obstacles the laser sees but localization does not
+  use; <circle> is a physical pillar; <reflmark> is a reflective mark on a wall (seen, not physical);
+  <workarea> and <prohibit> are planning constraints only; hidden* elements are ignored.
+- An area of two points is the axis-aligned rectangle they span (erratum E-MOT-001).
+- Corners are the points where two walls meet at 30..150 degrees (seen from anywhere), or where a wall ends on
+  another one (a T junction, seen from the side of the wall that ends there).
+- No I/O, no clock: pure functions of the tree and of arrays.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+F64 = npt.NDArray[np.float64]
+BOOL = npt.NDArray[np.bool_]
+
+_WALLS = ("line", "linemapped")
+_AUX = ("auxline", "auxlinemapped")
+_CORNER_MIN = math.radians(30.0)
+_JOIN_TOL = 1.0  # mm: endpoints closer than this meet
+
+
+def segments(rows: list[tuple[float, float, float, float]] | F64) -> F64:
+    """An (N, 4) float64 array of segments, also for N = 0."""
+    return np.asarray(rows, dtype=np.float64).reshape(-1, 4)
+
+
+def circles(rows: list[tuple[float, float, float]] | F64) -> F64:
+    return np.asarray(rows, dtype=np.float64).reshape(-1, 3)
+
+
+def polygon_edges(polygon: F64) -> F64:
+    """The closed polygon's edges as segments."""
+    return segments(np.hstack([polygon, np.roll(polygon, -1, axis=0)]))
+
+
+@dataclass(frozen=True)
+class MapGeometry:
+    walls: F64 = field(default_factory=lambda: segments([]))
+    aux: F64 = field(default_factory=lambda: segments([]))
+    circles: F64 = field(default_factory=lambda: circles([]))
+    reflectors: F64 = field(default_factory=lambda: segments([]))  # a point reflector has equal endpoints
+    workareas: tuple[F64, ...] = ()
+    prohibited: tuple[F64, ...] = ()
+
+    @classmethod
+    def from_tree(cls, tree: Any) -> MapGeometry:
+        root = tree.getroot() if hasattr(tree, "getroot") else tree
+
+        def pts(el: Any, tag: str = "point") -> list[tuple[float, float]]:
+            return [(float(p.get("x")), float(p.get("y"))) for p in el.findall(tag)]
+
+        def seg_rows(tags: tuple[str, ...]) -> F64:
+            rows = [(*a, *b) for tag in tags for el in root.iterfind(f"layer/{tag}") for a, b in [pts(el)]]
+            return segments(rows)
+
+        refl = []
+        for el in root.iterfind("layer/reflmark"):
+            p = pts(el)
+            refl.append((*p[0], *p[-1]))
+        circ = [(*pts(el, "center")[0], float(el.find("radius").get("r"))) for el in root.iterfind("layer/circle")]
+        return cls(
+            walls=seg_rows(_WALLS),
+            aux=seg_rows(_AUX),
+            circles=circles(circ),
+            reflectors=segments(refl),
+            workareas=tuple(_area(pts(el)) for el in root.iterfind("layer/workarea")),
+            prohibited=tuple(_area(pts(el)) for el in root.iterfind("layer/prohibit")),
+        )
+
+    @property
+    def obstacles(self) -> F64:
+        """Every physical segment: walls, then auxiliary lines."""
+        return np.vstack([self.walls, self.aux])
+
+    def constraint_edges(self) -> F64:
+        """Edges of the workareas and prohibited areas: walls for the planner only."""
+        edges = [polygon_edges(p) for p in (*self.workareas, *self.prohibited)]
+        return np.vstack(edges) if edges else segments([])
+
+    def allowed(self, x: F64, y: F64) -> BOOL:
+        """Points inside some workarea (or anywhere when there is none) and outside every prohibited area."""
+        ok = np.ones(np.shape(x), dtype=bool)
+        if self.workareas:
+            ok &= np.any([inside_polygon(x, y, w) for w in self.workareas], axis=0)
+        for p in self.prohibited:
+            ok &= ~inside_polygon(x, y, p)
+        return ok
+
+    def corners(self) -> F64:
+        """Wall corners, (M, 4): x, y and the side they show to (see ``_corners``)."""
+        return _corners(self.walls)
+
+    def bounds(self) -> tuple[float, float, float, float]:
+        parts = [self.walls[:, 0::2], self.walls[:, 1::2], self.aux[:, 0::2], self.aux[:, 1::2]]
+        xs = np.concatenate([parts[0].ravel(), parts[2].ravel(), self.circles[:, 0]])
+        ys = np.concatenate([parts[1].ravel(), parts[3].ravel(), self.circles[:, 1]])
+        if xs.size == 0:
+            return (0.0, 0.0, 0.0, 0.0)
+        return float(xs.min()), float(ys.min()), float(xs.max()), float(ys.max())
+
+
+def _area(points: list[tuple[float, float]]) -> F64:
+    if len(points) == 2:
+        (x0, y0), (x1, y1) = points
+        points = [(x0, y0), (x1, y0), (x1, y1), (x0, y1)]
+    return np.asarray(points, dtype=np.float64)
+
+
+def _corners(walls: F64) -> F64:
+    """(M, 4): x, y and the side it shows to: (0, 0) for two walls meeting at their ends (seen from anywhere),
+    the stem's direction for a wall ending on another one (a T, seen from the stem's side only)."""
+    ends = np.vstack([walls[:, :2], walls[:, 2:]])
+    if ends.size == 0:
+        return np.zeros((0, 4))
+    dirs = walls[:, 2:] - walls[:, :2]
+    dirs = np.vstack([dirs, -dirs])  # pointing away from the endpoint into the wall
+    out: list[tuple[float, float, float, float]] = []
+    n = len(walls)
+    for i, (px, py) in enumerate(ends):
+        d = np.hypot(ends[:, 0] - px, ends[:, 1] - py)
+        others = np.nonzero((d < _JOIN_TOL) & (np.arange(2 * n) % n != i % n))[0]
+        side = None
+        for j in others:
+            a, b = dirs[i], dirs[j]
+            cos = float(np.dot(a, b) / (np.linalg.norm(a) * np.linalg.norm(b) + 1e-12))
+            if abs(cos) < math.cos(_CORNER_MIN):
+                side = (0.0, 0.0)
+        if side is None and len(others) == 0:  # a wall ending on the inside of another: a T junction
+            dist = point_segment_distance(np.array([px]), np.array([py]), walls)[0]
+            dist[i % n] = np.inf
+            if bool(np.any(dist < _JOIN_TOL)):
+                u = dirs[i] / (np.linalg.norm(dirs[i]) + 1e-12)
+                side = (float(u[0]), float(u[1]))
+        if side is not None and not any(math.hypot(px - x, py - y) < _JOIN_TOL for x, y, *_ in out):
+            out.append((float(px), float(py), *side))
+    return np.asarray(out, dtype=np.float64).reshape(-1, 4)
+
+
+# ---------------------------------------------------------------------------------------------- vector maths
+
+
+def inside_polygon(x: F64, y: F64, polygon: F64) -> BOOL:
+    """Even-odd rule for many points against one polygon."""
+    x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
+    inside = np.zeros(x.shape, dtype=bool)
+    px, py = polygon[:, 0], polygon[:, 1]
+    qx, qy = np.roll(px, -1), np.roll(py, -1)
+    for x0, y0, x1, y1 in zip(px, py, qx, qy, strict=True):
+        crosses = (y0 > y) != (y1 > y)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            xc = x0 + (y - y0) * (x1 - x0) / (y1 - y0)
+        inside ^= crosses & (x < xc)
+    return inside
+
+
+def point_segment_distance(px: F64, py: F64, segs: F64) -> F64:
+    """(P, S) distances of P points to S segments."""
+    x0, y0, x1, y1 = (segs[:, k][None, :] for k in range(4))
+    ex, ey = x1 - x0, y1 - y0
+    ll = ex * ex + ey * ey
+    wx, wy = px[:, None] - x0, py[:, None] - y0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.clip(np.where(ll > 0, (wx * ex + wy * ey) / ll, 0.0), 0.0, 1.0)
+    dx, dy = wx - t * ex, wy - t * ey
+    return np.asarray(np.sqrt(dx * dx + dy * dy))
+
+
+def clearance(px: F64, py: F64, segs: F64, circ: F64) -> F64:
+    """Distance of each point to the nearest segment or circle surface (negative inside a circle, inf: none)."""
+    best = np.full(np.shape(px), np.inf)
+    if len(segs):
+        best = np.minimum(best, point_segment_distance(px, py, segs).min(axis=1))
+    if len(circ):
+        d = np.hypot(px[:, None] - circ[:, 0], py[:, None] - circ[:, 1]) - circ[:, 2]
+        best = np.minimum(best, d.min(axis=1))
+    return best
+
+
+def _point_seg_d2(px: F64, py: F64, x0: F64, y0: F64, ex: F64, ey: F64, ll: F64) -> F64:
+    wx, wy = px - x0, py - y0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.clip(np.where(ll > 0, (wx * ex + wy * ey) / ll, 0.0), 0.0, 1.0)
+    dx, dy = wx - t * ex, wy - t * ey
+    return np.asarray(dx * dx + dy * dy)
+
+
+def segments_clear(q: F64, segs: F64, circ: F64, radius: float | F64) -> BOOL:
+    """For each query segment (Q, 4): does it keep at least ``radius`` from every segment and circle?
+
+    ``radius`` may be one value or one per query. Segment-segment distance: 0 when they cross, else the least
+    of the four endpoint-to-segment distances.
+    """
+    q = segments(q)
+    rad = np.broadcast_to(np.asarray(radius, dtype=np.float64), (len(q),))
+    ok = np.ones(len(q), dtype=bool)
+    if len(q) == 0:
+        return ok
+    ax, ay, bx, by = (q[:, k][:, None] for k in range(4))
+    r2 = (rad * rad)[:, None]
+    if len(segs):
+        cx, cy, dx, dy = (segs[:, k][None, :] for k in range(4))
+        ux, uy, vx, vy = bx - ax, by - ay, dx - cx, dy - cy
+        d2 = np.minimum(
+            np.minimum(_point_seg_d2(ax, ay, cx, cy, vx, vy, vx * vx + vy * vy),
+                       _point_seg_d2(bx, by, cx, cy, vx, vy, vx * vx + vy * vy)),
+            np.minimum(_point_seg_d2(cx, cy, ax, ay, ux, uy, ux * ux + uy * uy),
+                       _point_seg_d2(dx, dy, ax, ay, ux, uy, ux * ux + uy * uy)),
+        )  # fmt: skip
+        o1 = ux * (cy - ay) - uy * (cx - ax)
+        o2 = ux * (dy - ay) - uy * (dx - ax)
+        o3 = vx * (ay - cy) - vy * (ax - cx)
+        o4 = vx * (by - cy) - vy * (bx - cx)
+        crossing = (o1 * o2 < 0) & (o3 * o4 < 0)
+        ok &= ~np.any(crossing | (d2 < r2), axis=1)
+    if len(circ):
+        ux, uy = bx - ax, by - ay
+        d2 = _point_seg_d2(circ[:, 0][None, :], circ[:, 1][None, :], ax, ay, ux, uy, ux * ux + uy * uy)
+        rr = rad[:, None] + circ[:, 2][None, :]
+        ok &= ~np.any(d2 < rr * rr, axis=1)
+    return ok

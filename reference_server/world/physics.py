@@ -1,0 +1,128 @@
+"""The physical world in pymunk: the map's static shapes, obstacles, and the platform's body that cannot pass them.
+
+Rules:
+- ``Physics`` owns one ``pymunk.Space``: static segments for walls and auxiliary lines, static circles for
+  pillars and obstacles (the CMD_MOUSE_MOVE obstacle among them), and one kinematic body carrying the
+  platform's footprint (a box from the Geometry parameters, erratum E-MOT-002).
+- ``move(pose, v, w, dt)`` integrates the differential drive exactly (an arc) and asks pymunk whether the
+  footprint overlaps anything there. If it does, the platform advances only the free fraction of the step
+  (bisection on the arc) and reports contact: driving into a wall is a collision, never a tunnel (a step is
+  at most a few cm, far less than the footprint). A pose that already overlaps (an obstacle dropped onto the
+  platform, a kidnap) may move only where the overlap does not grow.
+- pymunk does the contact tests and holds the spatial index; the poses are ours (exact arc integration).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import pymunk
+
+from reference_server.world.geometry import F64
+
+_BISECT = 8  # 1/256 of a step: well under a millimetre
+WIDTH_OVER_TRACK = 110.0  # mm: body width = DistWheels + this (E-PAR-013: 430 mm track, 540 mm body)
+
+
+@dataclass(frozen=True)
+class Footprint:
+    """The body as a box in the platform frame (origin at the wheel axis' midpoint, x forward)."""
+
+    front: float  # mm, x of the front edge
+    rear: float  # mm, x of the rear edge (negative)
+    half_width: float
+
+    @classmethod
+    def from_params(cls, length: float, center_to_axis: float, track: float) -> Footprint:
+        # E-PAR-013: the footprint's centre lies at x = -DistPltfCenterToWheelAxis
+        return cls(length / 2.0 - center_to_axis, -length / 2.0 - center_to_axis, (track + WIDTH_OVER_TRACK) / 2.0)
+
+    @property
+    def corners(self) -> list[tuple[float, float]]:
+        f, r, h = self.front, self.rear, self.half_width
+        return [(f, -h), (f, h), (r, h), (r, -h)]
+
+    @property
+    def radius(self) -> float:
+        """The circumscribed radius about the wheel axis: what a turn on the spot sweeps."""
+        return max(math.hypot(x, y) for x, y in self.corners)
+
+
+def arc(x: float, y: float, a: float, v: float, w: float, dt: float) -> tuple[float, float, float]:
+    """The unicycle's pose after ``dt`` at constant v, w (exact)."""
+    da = w * dt
+    if abs(da) < 1e-9:
+        return x + v * dt * math.cos(a), y + v * dt * math.sin(a), a + da
+    r = v / w
+    return x + r * (math.sin(a + da) - math.sin(a)), y - r * (math.cos(a + da) - math.cos(a)), a + da
+
+
+class Physics:
+    def __init__(self, footprint: Footprint) -> None:
+        self.space = pymunk.Space()
+        self.body = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
+        self.space.add(self.body)
+        self.shape: pymunk.Poly | None = None
+        self._static: list[pymunk.Shape] = []
+        self._obstacles: dict[object, pymunk.Shape] = {}
+        self.footprint = footprint
+        self.set_footprint(footprint)
+
+    # ---- building
+    def set_footprint(self, footprint: Footprint) -> None:
+        if self.shape is not None:
+            self.space.remove(self.shape)
+        self.footprint = footprint
+        self.shape = pymunk.Poly(self.body, footprint.corners)
+        self.space.add(self.shape)
+
+    def set_map(self, segs: F64, circs: F64) -> None:
+        """Replace the map's static shapes (walls, auxiliary lines, pillars)."""
+        if self._static:
+            self.space.remove(*self._static)
+        sb = self.space.static_body
+        self._static = [pymunk.Segment(sb, (s[0], s[1]), (s[2], s[3]), 0.0) for s in segs]
+        self._static += [pymunk.Circle(sb, float(c[2]), (float(c[0]), float(c[1]))) for c in circs]
+        if self._static:
+            self.space.add(*self._static)
+
+    def set_obstacle(self, key: object, circle: tuple[float, float, float] | None) -> None:
+        """Place, move (same key) or remove (None) a round obstacle."""
+        old = self._obstacles.pop(key, None)
+        if old is not None:
+            self.space.remove(old)
+        if circle is not None:
+            x, y, r = circle
+            shape = pymunk.Circle(self.space.static_body, r, (x, y))
+            self._obstacles[key] = shape
+            self.space.add(shape)
+
+    # ---- queries
+    def overlap(self, x: float, y: float, a: float) -> float:
+        """How deep the footprint at (x, y, a) overlaps anything (0: free)."""
+        self.body.position = (x, y)
+        self.body.angle = a
+        self.space.reindex_shapes_for_body(self.body)
+        assert self.shape is not None
+        depth = 0.0
+        for info in self.space.shape_query(self.shape):
+            for p in info.contact_point_set.points:
+                depth = max(depth, abs(p.distance), 1e-6)
+        return depth
+
+    def move(self, x: float, y: float, a: float, v: float, w: float, dt: float) -> tuple[float, float, float, bool]:
+        """The pose after driving (v, w) for ``dt`` as far as the world lets it, and whether it hit something."""
+        target = arc(x, y, a, v, w, dt)
+        start_depth = self.overlap(x, y, a)
+        depth = self.overlap(*target)
+        if depth <= start_depth + 1e-6 and (depth == 0.0 or start_depth > 0.0):
+            return (*target, depth > 0.0)
+        lo, hi = 0.0, 1.0  # lo: a free (or no deeper) fraction of the step
+        for _ in range(_BISECT):
+            mid = 0.5 * (lo + hi)
+            if self.overlap(*arc(x, y, a, v, w, dt * mid)) <= start_depth + 1e-6:
+                lo = mid
+            else:
+                hi = mid
+        return (*arc(x, y, a, v, w, dt * lo), True)

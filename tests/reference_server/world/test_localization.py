@@ -1,0 +1,82 @@
+"""Odometry drift, correction against the map, covariance, "localization lost" after a kidnap, SET_FRM_PLTF."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from reference_server.world import MapGeometry
+from reference_server.world.localization import Localization
+from tests.reference_server.world.conftest import CORRIDOR_WEST, Sim, make_sim
+
+
+def _error(sim: Sim) -> float:
+    (x, y, _), (ex, ey, _) = sim.world.truth, sim.world.estimate
+    return math.hypot(x - ex, y - ey)
+
+
+def _drive_corridor(sim: Sim, seconds: float = 20.0) -> float:
+    """Drive east along the corridor in MODE_MOTION_VEL; the largest position error seen."""
+    worst = 0.0
+    for k in range(int(seconds)):
+        sim.world.command_velocity(800.0, 0.0, sim.now)
+        sim.run(1.0)
+        worst = max(worst, _error(sim))
+        assert k < 60
+    return worst
+
+
+def test_localization_keeps_odometry_drift_bounded(office: MapGeometry) -> None:
+    on = _drive_corridor(make_sim(office, CORRIDOR_WEST, seed=3, CollCheckEnabled=False))
+    off = _drive_corridor(make_sim(office, CORRIDOR_WEST, seed=3, CollCheckEnabled=False, LocalLocalization=False))
+    assert on < 40.0
+    assert off > 3 * on  # seeded wheel scale errors: the odometry alone drifts
+
+
+def test_covariance_grows_with_odometry_and_shrinks_with_scans() -> None:
+    loc = Localization()
+    before = loc.deviations()
+    for _ in range(100):
+        loc.predict(20.0, 20.0, 430.0)
+    grown = loc.deviations()
+    assert grown[0] > before[0] and grown[2] >= before[2]
+    import random
+
+    for k in range(20):
+        loc.correct(1.0, (loc.x, loc.y, loc.angle), 0.1 * k, random.Random(k), False)
+    assert loc.deviations()[0] < grown[0]
+    major, minor, angle, axis = loc.deviations()
+    assert major >= minor >= 0 and angle > 0 and -math.pi / 2 < axis <= math.pi / 2
+
+
+def test_kidnapped_the_platform_is_lost_until_set_frm_pltf(office: MapGeometry) -> None:
+    sim = make_sim(office, CORRIDOR_WEST)
+    sim.run(1.0)
+    assert not sim.world.loc.lost
+    sim.world.kidnap((19000.0, 15000.0, 1.0))  # into an office room
+    sim.run(1.0)
+    assert sim.world.loc.lost
+    assert _error(sim) > 10000  # and nothing pulled the estimate over
+    sim.world.set_estimate((19100.0, 14950.0, 1.02))  # CMD_SET_FRM_PLTF close to the truth
+    sim.run(0.5)
+    assert not sim.world.loc.lost and _error(sim) < 50.0
+
+
+def test_global_localization_finds_a_lost_platform(office: MapGeometry) -> None:
+    sim = make_sim(office, CORRIDOR_WEST, GlobalLocalization=True)
+    sim.run(0.5)
+    sim.world.kidnap((19000.0, 15000.0, 1.0))
+    assert sim.run(5.0, lambda w: w.loc.lost)
+    assert sim.run(5.0, lambda w: not w.loc.lost)
+    assert _error(sim) < 60.0
+
+
+def test_without_a_map_nothing_is_corrected_and_nothing_is_lost() -> None:
+    sim = make_sim(None, (0.0, 0.0, 0.0))
+    sim.world.command_velocity(500.0, 0.2, 0.0)
+    sim.run(0.4)
+    sim.world.kidnap((5000.0, 0.0, 0.0))
+    sim.run(1.0)
+    assert not sim.world.loc.lost
+    assert np.isfinite(sim.world.loc.deviations()).all()
