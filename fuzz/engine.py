@@ -31,7 +31,7 @@ from fuzz.findings import FindingWriter
 from fuzz.knowledge import Knowledge
 from fuzz.launch import Launcher
 from fuzz.schedule import DOCUMENT_RESET, HARVEST, Prefetcher, Scheduler, StatePlan
-from fuzz.target import Conn, Outcome, Prober, Session, play, play_on
+from fuzz.target import Conn, Outcome, Prober, Session, expected_reply_ids, play, play_on
 from fuzz.wire import KEEP
 
 WINDOW = 256  # cases drawn at a time, then run batch-first
@@ -39,7 +39,14 @@ BATCH_CASES = 128
 BATCH_BYTES = 1 << 18
 WINDOWS_PER_STATE = 4  # windows fuzzed in one (state, mode) before the plan moves on
 BIG_CASE = 1 << 20  # bytes
+SAVE_EVERY = 30.0  # s between saves of the corpus progress (a killed run resumes from there)
 HISTORY = 64  # sessions kept for a finding that needs more than its last unit
+
+
+DROPPED = (
+    "the target closed the connection before answering, after frames the strict codec accepts "
+    "(erratum E-WIRE-006: only malformed input closes a connection): an internal error?"
+)
 
 
 class HarnessError(RuntimeError):
@@ -144,13 +151,16 @@ class Campaign:
     def run(self) -> int:
         self.start_target()
         end = time.monotonic() + self.o.duration
-        last_tick = 0.0
+        last_tick = last_save = time.monotonic()
         try:
             while not self.stop and time.monotonic() < end:
                 if self.o.max_cases is not None and self.stats.cases >= self.o.max_cases:
                     break
                 self.step()
                 now = time.monotonic()
+                if now - last_save > SAVE_EVERY:
+                    last_save = now
+                    self.corpus.save(self.o.seed, self.index, self.writer.signatures)
                 if self.on_tick is not None and now - last_tick > 0.25:
                     last_tick = now
                     self.on_tick(self.stats)
@@ -261,6 +271,8 @@ class Campaign:
         if out.closed:
             self.stats.unexpected_closes += 1
             self.drop_keeper()
+            self._dropped([session], [])
+            return None
         return out if self._probe_ok([session], []) else None
 
     def run_batch(self, cases: list[Case]) -> None:
@@ -286,6 +298,8 @@ class Campaign:
             self.failure("bad-reply", out.bad_reply, [session], [case])
         elif out.timed_out:
             self._timed_out([session], [case], "the connection neither answered nor closed after our end-of-stream")
+        elif case.expect == KEEP and len(out.replies) < len(expected_reply_ids(session.data)) + 1:
+            self._dropped([session], [case])
         else:
             self._probe_ok([session], [case])
 
@@ -330,6 +344,18 @@ class Campaign:
             self.units_since_probe = self.o.probe_every
             if self._probe_ok([], []) and self.prober.pending:
                 self._probe_ok([], [])
+
+    def _dropped(self, sessions: list[Session], cases: list[Case]) -> None:
+        """A connection closed early on valid input: a death, unless the other port answers right now."""
+        assert self.prober is not None
+        verdict = self.prober.probe()
+        if verdict is None:
+            self.failure("dropped", DROPPED, self.prev_unit + self.unprobed + sessions, cases)
+        else:
+            kind = verdict.partition(":")[0]
+            self.failure(
+                kind, f"{DROPPED}; then the liveness probe: {verdict}", self.prev_unit + self.unprobed + sessions, cases
+            )
 
     def _timed_out(self, sessions: list[Session], cases: list[Case], what: str) -> None:
         assert self.prober is not None

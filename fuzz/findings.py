@@ -2,7 +2,7 @@
 
 Rules:
 - ``reproduce(sessions)`` starts a fresh target, replays, and names the failure it sees (``dead``, ``hang``,
-  ``deaf``, ``stall``, ``bad-reply``) or None. A candidate "still fails" when it fails the same way.
+  ``deaf``, ``stall``, ``bad-reply``, ``dropped``) or None. A candidate "still fails" when it fails the same way.
 - Candidates, smallest first: the failed unit after the state prelude; then everything since the prelude.
   ddmin (``fuzz.minimize``) removes frames across sessions; a session left without frames is dropped.
 - Without ``--launch`` nothing can be replayed: the finding is written as found (marked not minimized).
@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any
 from fuzz.case import WHOLE, Case
 from fuzz.minimize import ddmin
 from fuzz.report import slug, write_finding
-from fuzz.target import Outcome, Prober, Session, play
+from fuzz.target import Outcome, Prober, Session, expected_reply_ids, play
 
 if TYPE_CHECKING:
     from fuzz.engine import Campaign
@@ -50,6 +50,9 @@ class FindingWriter:
                     return "dead", outcomes
                 if out.bad_reply is not None:
                     return "bad-reply", outcomes
+                if s.sync and out.closed and len(out.replies) < len(expected_reply_ids(s.data)) + 1:
+                    verdict = prober.probe()
+                    return (verdict.partition(":")[0] if verdict else "dropped"), outcomes
                 if out.timed_out:
                     verdict = prober.probe()
                     return (verdict.partition(":")[0] if verdict else "stall"), outcomes

@@ -101,7 +101,7 @@ def read_frames(sock, want, deadline):
 
 
 def play(host, port, session, deadline_s):
-    """'refused', 'stall', 'bad-reply: ...' or None."""
+    """'refused', 'stall', 'dropped', 'bad-reply: ...' or None."""
     try:
         sock = socket.create_connection((host, port), timeout=deadline_s)
     except ConnectionRefusedError:
@@ -126,7 +126,11 @@ def play(host, port, session, deadline_s):
         frames, problem, timed_out = read_frames(sock, want, time.monotonic() + deadline_s)
         if problem:
             return "bad-reply: " + problem
-        return "stall" if timed_out else None
+        if timed_out:
+            return "stall"
+        if session["sync"] and len(frames) < session["replies"]:
+            return "dropped"
+        return None
     finally:
         sock.close()
 
