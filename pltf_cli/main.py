@@ -17,7 +17,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "decode": ("pltf_cli.codec_cmds", "decode frames (hex) into JSON, one object per telegram"),
     "encode": ("pltf_cli.codec_cmds", "encode a telegram from its name and fields JSON into hex"),
     "serve": ("pltf_cli.serve_cmd", "run the reference server (PlatformCtrl stand-in) on two TCP ports"),
-    "fuzz": ("pltf_cli.fuzz_cmd", "fuzz a PlatformCtrl implementation (or, --in-process, the codec) for crashes and hangs"),
+    "fuzz": ("pltf_cli.fuzz_cmd", "fuzz an implementation (or, --in-process, the codec) for crashes and hangs"),
     "run-program": ("pltf_cli.run_program_cmd", "run a task program (guide 6.5) here, driving a platform: remote mode"),
     "stubs": ("pltf_cli.stubs_cmd", "generate the client stubs of one language (or --check a generated copy)"),
 }
