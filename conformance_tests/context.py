@@ -15,7 +15,7 @@ Rules:
 
 from __future__ import annotations
 
-import contextlib
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -25,9 +25,9 @@ from conformance_tests import chart
 from conformance_tests.catalogue import Case, Tier
 from conformance_tests.chart import St
 from conformance_tests.coverage import Coverage
-from conformance_tests.outcome import ConnectionClosed, Deviation, Fail, ReplyTimeout, TargetFailure, Unreachable
+from conformance_tests.outcome import ConnectionClosed, Deviation, Fail, TargetFailure, Unreachable
 from conformance_tests.wire import Session, WireLog
-from spec.codec import REQUESTS, build
+from spec.codec import build
 from spec.model import enum_classes
 from spec.telegram import Telegram
 
@@ -308,7 +308,7 @@ class CaseContext:
         pos = self.position()
 
         def restore() -> None:
-            self.send("CMD_SET_FRM_PLTF", x=pos.x, y=pos.y, angle=round(_deg(pos.angle) * 1000))  # type: ignore[attr-defined]
+            self.send("CMD_SET_FRM_PLTF", x=pos.x, y=pos.y, angle=round(math.degrees(pos.angle) * 1000))  # type: ignore[attr-defined]
 
         self.on_exit("restore the estimated pose", restore)
         return pos
@@ -335,18 +335,3 @@ class CaseContext:
         self.on_exit(f"restore the active {kind}", restore)
         return xml, name
 
-
-def _deg(rad: float) -> float:
-    import math
-
-    return math.degrees(rad)
-
-
-def request_names() -> list[str]:
-    return [cls.NAME for cls in REQUESTS]
-
-
-@contextlib.contextmanager
-def suppress_target_failure() -> Any:
-    with contextlib.suppress(TargetFailure, ReplyTimeout):
-        yield

@@ -9,7 +9,7 @@ from typing import Any
 from conformance_tests.cases._common import STATES, no_unsolicited
 from conformance_tests.catalogue import Level, Tier, add, case
 from conformance_tests.context import CaseContext
-from conformance_tests.outcome import Fail, ReplyTimeout
+from conformance_tests.outcome import Fail, Inconclusive, ReplyTimeout
 from spec.codec import REPLIES, build
 from spec.errata import errata_for
 
@@ -103,6 +103,8 @@ def timestamp_advances(ctx: CaseContext) -> None:
     if abs((t2 - t1) - elapsed) <= 0.25 * elapsed + 1:
         ctx.deviate("E-REP-010", 0, f"the time stamp advanced by {t2 - t1} in {elapsed:.2f} s (seconds)")
         return
+    if abs((t2 - t1) - elapsed * 1000) <= 0.5 * elapsed * 1000 + 100:  # a loaded machine, or a slow clock?
+        raise Inconclusive(f"the time stamp advanced by {t2 - t1} ms in {elapsed:.2f} simulated s")
     raise Fail(f"the time stamp advanced by {t2 - t1} in {elapsed:.2f} simulated s (expected about "
                f"{elapsed * 1000:.0f} ms)")
 

@@ -78,6 +78,7 @@ def test_reports(run: RunResult, tmp_path: Path) -> None:
 
 
 @pytest.mark.slow
+@pytest.mark.timeout(1800)
 def test_twenty_standard_runs_in_a_row_have_no_flake() -> None:
     first = None
     for i in range(20):
