@@ -28,10 +28,11 @@ from fuzz import safety
 from fuzz.case import Case
 from fuzz.corpus import Corpus
 from fuzz.findings import FindingWriter
+from fuzz.flight import Flight, fly
 from fuzz.knowledge import Knowledge
 from fuzz.launch import Launcher
 from fuzz.schedule import DOCUMENT_RESET, HARVEST, Prefetcher, Scheduler, StatePlan
-from fuzz.target import Conn, Outcome, Prober, Session, expected_reply_ids, play, play_on
+from fuzz.target import GET_STATUS, Conn, Outcome, Prober, Session, expected_reply_ids, play, play_on
 from fuzz.wire import KEEP
 
 WINDOW = 256  # cases drawn at a time, then run batch-first
@@ -69,6 +70,7 @@ class Options:
     deadline: float = 2.0
     minimize_seconds: float = 60.0
     probe_every: int = 4  # units between liveness probes (1: after every unit)
+    lanes: int = 2  # 2: refused cases run in pairs, one per port (fuzz.flight); 1: one at a time
     command: str = "pltf fuzz"
 
 
@@ -120,6 +122,7 @@ class Campaign:
         self.prev_unit: list[Session] = []
         self.unprobed: list[Session] = []
         self.units_since_probe = 0
+        self.pair_units = 0
         self.need_prelude = True
         self.prelude_tries = 0
         self.units_here = 0
@@ -201,7 +204,14 @@ class Campaign:
                     return
         if batch:
             self.run_batch(batch)
-        for c in singles:
+        paired = self.o.lanes > 1
+        whole = [c for c in singles if c.delivery.mode == "whole" and paired]
+        others = [c for c in singles if c.delivery.mode != "whole" or not paired]
+        for k in range(0, len(whole) - 1, 2):
+            if self.stop or self.need_prelude:
+                return
+            self.run_pair(whole[k], whole[k + 1])
+        for c in others + whole[len(whole) - len(whole) % 2 :]:
             if self.stop or self.need_prelude:
                 return
             self.run_single(c)
@@ -302,6 +312,58 @@ class Campaign:
             self._dropped([session], [case])
         else:
             self._probe_ok([session], [case])
+
+    def run_pair(self, a: Case, b: Case) -> None:
+        """Two cases in flight at once, one per port (``fuzz.flight``). Every ``probe_every`` units both
+        sessions open with a GET_STATUS: each one's reply is the liveness probe, on the other port, of the case
+        sent on the other port before it."""
+        self.drop_keeper()
+        assert self.prober is not None
+        verdict = self.prober.release()
+        if verdict is not None:
+            self.failure(verdict.partition(":")[0], f"liveness probe: {verdict}", self.prev_unit + self.unprobed, [])
+            return
+        self.pair_units += 2
+        probe = self.pair_units >= self.o.probe_every
+        lead = [GET_STATUS] if probe else []
+        cases = (a, b)
+        sessions = [Session(lead + list(c.frames), half_close=True, sync=c.expect == KEEP) for c in cases]
+        flights = [Flight(self.o.host, port, s, self.o.deadline) for port, s in zip(self.ports, sessions, strict=True)]
+        fly(flights)
+        self.history.extend(sessions)
+        self.unprobed.extend(sessions)
+        self.stats.units += 2
+        self.stats.singles += 2
+        for c, f in zip(cases, flights, strict=True):
+            self._count([c], "closed" if f.out.closed else "open")
+            for r in f.out.replies:
+                self.kb.learn(r)
+        covered = self.prev_unit + self.unprobed
+        for c, f, s in zip(cases, flights, sessions, strict=True):
+            out = f.out
+            if out.refused:
+                verdict = self.prober.probe()
+                self.failure(
+                    (verdict or "dead:").partition(":")[0], "connection refused on a fuzzed port", covered, [c]
+                )
+                return
+            if out.bad_reply is not None:
+                self.failure("bad-reply", out.bad_reply, covered, [c])
+                return
+            if out.timed_out:
+                self._timed_out(covered, [c], "the connection neither answered nor closed after our end-of-stream")
+                return
+            owed = len(expected_reply_ids(s.data)) + (1 if s.sync else 0)
+            # the lead GET_STATUS is owed even before a malformed frame; past 16 KiB a close with unread input
+            # may reset the connection and lose replies in flight (TCP), so only small cases are held to it
+            must = owed if c.expect == KEEP else (1 if probe and c.size < 1 << 14 else 0)
+            if len(out.replies) < must:
+                self._dropped(covered, [c])
+                return
+        if probe:
+            self.pair_units = 0
+            self.stats.probes += 2
+            self.prev_unit, self.unprobed = self.unprobed, []
 
     def drop_keeper(self) -> None:
         """Release the kept connection in order: shut our side, wait for the peer's close (frees its slot)."""

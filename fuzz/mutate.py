@@ -132,9 +132,9 @@ def bytewise(case: Case, rng: random.Random) -> Case:
 
 
 def slow(case: Case, rng: random.Random) -> Case:
-    pieces = rng.choice((2, 3, 5))
-    return replace(case, frames=(*case.frames, GET_STATUS), delivery=Delivery("slow", pieces, 0.002),
-                   origin="mut.slow", note=f"{pieces} writes 2 ms apart", expect="")  # fmt: skip
+    pieces = rng.choice((2, 3, 4))
+    return replace(case, frames=(*case.frames, GET_STATUS), delivery=Delivery("slow", pieces, 0.001),
+                   origin="mut.slow", note=f"{pieces} writes 1 ms apart", expect="")  # fmt: skip
 
 
 def half_close(case: Case, rng: random.Random) -> Case:
@@ -144,7 +144,7 @@ def half_close(case: Case, rng: random.Random) -> Case:
 
 
 def flood(case: Case, rng: random.Random) -> Case:
-    n = max(1, min(rng.choice((100, 500, 2_000)), FLOOD_BYTES // max(1, case.size)))
+    n = max(1, min(rng.choice((100, 300, 1_000)), FLOOD_BYTES // max(1, case.size)))
     return replace(case, frames=case.frames * n, origin="mut.flood", note=f"{n} copies", expect="")
 
 
@@ -162,5 +162,5 @@ MUTATORS: dict[str, tuple[float, Mutator]] = {
     "mut.bytewise": (0.05, bytewise),
     "mut.slow": (0.05, slow),
     "mut.half_close": (0.3, half_close),
-    "mut.flood": (0.01, flood),
+    "mut.flood": (0.003, flood),
 }

@@ -29,6 +29,20 @@ def campaign(tmp_path: Path, bug: str, **changes: object) -> Campaign:
     return Campaign(opts)
 
 
+_FOUND: dict[str, Campaign] = {}
+
+
+def found(tmp_path_factory: pytest.TempPathFactory, bug: str) -> Campaign:
+    """The campaign that found ``bug``, run once per test session."""
+    if bug not in _FOUND:
+        c = campaign(tmp_path_factory.mktemp(bug), bug)
+        t0 = time.monotonic()
+        assert c.run() == 1
+        assert time.monotonic() - t0 < BUDGET + 60
+        _FOUND[bug] = c
+    return _FOUND[bug]
+
+
 def fresh(bug: str) -> Launcher:
     launcher = Launcher(LAUNCH.replace("{bug}", bug), "127.0.0.1", 0, 0)
     launcher.start()
@@ -79,9 +93,8 @@ def test_fuzzer_finds_the_bug_and_the_reproducer_replays_it(
         target.cleanup()
 
 
-def test_reproducer_leaves_a_healthy_server_alive(tmp_path: Path) -> None:
-    c = campaign(tmp_path, "doctype")
-    assert c.run() == 1
+def test_reproducer_leaves_a_healthy_server_alive(tmp_path_factory: pytest.TempPathFactory) -> None:
+    c = found(tmp_path_factory, "doctype")
     d = Path(c.stats.findings[0]["dir"])
     healthy = fresh("none")
     try:

@@ -1,0 +1,138 @@
+"""Sessions in flight side by side: one non-blocking connection per port, driven by one ``select`` loop.
+
+Rules:
+- PlatformCtrl serves one client per port (guide 6.1) and both ports take every command, so two cases - one
+  per port - can be in flight at once. The target works on one while we prepare or read the other; a
+  sequential fuzzer leaves both sides idle half of the time.
+- A ``Flight`` is a ``fuzz.target.Session`` on its own connection (whole delivery only: slow and bytewise
+  cases keep the blocking path), with the same outcome and the same reply checks as ``fuzz.target.play``.
+- ``fly`` runs flights to completion or to their deadlines; it never raises for anything the peer does.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import select
+import socket
+import time
+
+from fuzz.target import GET_STATUS, RECV, Outcome, Session, check_order, expected_reply_ids, session_deadline
+from spec import errors
+from spec.codec import REQUESTS, TelegramDecoder
+
+CHUNK = 1 << 16
+
+
+class Flight:
+    def __init__(self, host: str, port: int, session: Session, deadline_s: float) -> None:
+        self.session = session
+        self.out = Outcome()
+        data = session.data
+        self.expected = expected_reply_ids(data)
+        if session.sync:
+            data += GET_STATUS
+            self.expected.append(REQUESTS.CMD_GET_STATUS.ID)
+        self.data, self.pos = data, 0
+        self.want = len(self.expected) if session.sync and not session.half_close else None
+        self.deadline = time.monotonic() + session_deadline(deadline_s, len(session.frames), len(data))
+        self.decoder = TelegramDecoder("reply")
+        self.done = False
+        self.sending = True
+        self.sock = socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET, socket.SOCK_STREAM)
+        self.sock.setblocking(False)
+        self.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self.connected = False
+        code = self.sock.connect_ex((host, port))
+        if code not in (0, errno.EINPROGRESS):
+            self._finish(refused=code == errno.ECONNREFUSED, closed=code != errno.ECONNREFUSED)
+
+    def fileno(self) -> int:
+        return self.sock.fileno()
+
+    def _finish(self, refused: bool = False, closed: bool = False, timed_out: bool = False) -> None:
+        if self.done:
+            return
+        self.done = True
+        self.out.refused, self.out.timed_out = refused, timed_out
+        self.out.closed = closed or (self.want is not None and len(self.out.replies) < self.want)
+        if self.out.bad_reply is None and not refused:
+            self.out.bad_reply = check_order(self.out.replies, self.expected)
+        self.sock.close()
+
+    def writable(self) -> None:
+        if not self.connected:
+            code = self.sock.getsockopt(socket.SOL_SOCKET, socket.SO_ERROR)
+            if code:
+                self._finish(refused=code == errno.ECONNREFUSED, closed=code != errno.ECONNREFUSED)
+                return
+            self.connected = True
+        try:
+            self.pos += self.sock.send(self.data[self.pos : self.pos + CHUNK])
+        except BlockingIOError:
+            return
+        except OSError:
+            self.sending = False  # the peer is gone; read what it said before it went
+            return
+        if self.pos >= len(self.data):
+            self.sending = False
+            if self.session.half_close:
+                with contextlib.suppress(OSError):
+                    self.sock.shutdown(socket.SHUT_WR)
+
+    def readable(self) -> None:
+        try:
+            data = self.sock.recv(RECV)
+        except BlockingIOError:
+            return
+        except ConnectionRefusedError:
+            self._finish(refused=True)
+            return
+        except OSError:
+            data = b""
+        if not self.connected and not data:
+            code = self.sock.getsockopt(socket.SOL_SOCKET, socket.SO_ERROR)
+            if code == errno.ECONNREFUSED:
+                self._finish(refused=True)
+                return
+        self.connected = True
+        if not data:
+            self.decoder.receive_data(b"")
+        else:
+            self.decoder.receive_data(data)
+        try:
+            while (t := self.decoder.next_telegram()) is not None:
+                self.out.replies.append(t)
+        except errors.RemoteProtocolError as exc:
+            cut = "reply cut off by the close" if not data else "reply does not decode"
+            self.out.bad_reply = f"{cut}: {type(exc).__name__}: {exc}"
+            self._finish(closed=True)
+            return
+        if not data:
+            self._finish(closed=True)
+        elif self.want is not None and len(self.out.replies) >= self.want:
+            self._finish()
+
+
+def fly(flights: list[Flight]) -> None:
+    """Drive ``flights`` until each is done or past its deadline."""
+    while True:
+        live = [f for f in flights if not f.done]
+        if not live:
+            return
+        now = time.monotonic()
+        for f in live:
+            if now >= f.deadline:
+                f._finish(timed_out=True)
+        live = [f for f in live if not f.done]
+        if not live:
+            return
+        wait = max(0.0, min(f.deadline for f in live) - now)
+        writers = [f for f in live if f.sending or not f.connected]
+        readable, writable, _ = select.select(live, writers, [], wait)
+        for f in writable:
+            if not f.done:
+                f.writable()
+        for f in readable:
+            if not f.done:
+                f.readable()
