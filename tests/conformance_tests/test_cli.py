@@ -65,3 +65,13 @@ def test_list(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["conform", "--target", "h:1", "--list", "--tier", "smoke"]) == 0
     out = capsys.readouterr().out
     assert "6.2/framing/header-and-length" in out and "cases" in out
+
+
+def test_differential_and_stateful_from_the_command_line(reference: ServerProcess, tmp_path: Path,
+                                                         capsys: pytest.CaptureFixture[str]) -> None:
+    code = main(_args(reference, "-k", "6.1/ports/reconnect", "--differential", "--stateful", "5",
+                      "--stateful-out", str(tmp_path / "st")))
+    out = capsys.readouterr().out
+    assert code == 0, out
+    assert "differential: the target answered like the reference server" in out
+    assert "stateful test: 5 examples" in out
