@@ -32,7 +32,7 @@ from fuzz.flight import Flight, fly
 from fuzz.knowledge import Knowledge
 from fuzz.launch import Launcher
 from fuzz.schedule import DOCUMENT_RESET, HARVEST, Prefetcher, Scheduler, StatePlan
-from fuzz.target import GET_STATUS, Conn, Outcome, Prober, Session, expected_reply_ids, play, play_on
+from fuzz.target import CUT, GET_STATUS, Conn, Outcome, Prober, Session, expected_reply_ids, play, play_on
 from fuzz.wire import KEEP
 
 WINDOW = 256  # cases drawn at a time, then run batch-first
@@ -84,6 +84,7 @@ class Stats:
     probes: int = 0
     restarts: int = 0
     unexpected_closes: int = 0
+    cut_replies: int = 0
     dropped_unsafe: int = 0
     duplicates: int = 0
     origins: collections.Counter[str] = field(default_factory=collections.Counter)
@@ -304,7 +305,7 @@ class Campaign:
             self.kb.learn(r)
         if out.refused:
             self.failure("dead", "connection refused on the fuzzed port", [session], [case])
-        elif out.bad_reply is not None:
+        elif out.bad_reply is not None and not self._cut_by_refusal(case, out):
             self.failure("bad-reply", out.bad_reply, [session], [case])
         elif out.timed_out:
             self._timed_out([session], [case], "the connection neither answered nor closed after our end-of-stream")
@@ -339,7 +340,7 @@ class Campaign:
             for r in f.out.replies:
                 self.kb.learn(r)
         covered = self.prev_unit + self.unprobed
-        for c, f, s in zip(cases, flights, sessions, strict=True):
+        for c, f in zip(cases, flights, strict=True):
             out = f.out
             if out.refused:
                 verdict = self.prober.probe()
@@ -347,13 +348,13 @@ class Campaign:
                     (verdict or "dead:").partition(":")[0], "connection refused on a fuzzed port", covered, [c]
                 )
                 return
-            if out.bad_reply is not None:
+            if out.bad_reply is not None and not self._cut_by_refusal(c, out):
                 self.failure("bad-reply", out.bad_reply, covered, [c])
                 return
             if out.timed_out:
                 self._timed_out(covered, [c], "the connection neither answered nor closed after our end-of-stream")
                 return
-            owed = len(expected_reply_ids(s.data)) + (1 if s.sync else 0)
+            owed = len(f.expected)
             # the lead GET_STATUS is owed even before a malformed frame; past 16 KiB a close with unread input
             # may reset the connection and lose replies in flight (TCP), so only small cases are held to it
             must = owed if c.expect == KEEP else (1 if probe and c.size < 1 << 14 else 0)
@@ -364,6 +365,14 @@ class Campaign:
             self.pair_units = 0
             self.stats.probes += 2
             self.prev_unit, self.unprobed = self.unprobed, []
+
+    def _cut_by_refusal(self, case: Case, out: Outcome) -> bool:
+        """A reply cut short when the target closed on a malformed case with our input still unread: TCP resets
+        such a connection and drops what was in flight. Counted, not a finding (the close itself is right)."""
+        if case.expect != KEEP and (out.bad_reply or "").startswith(CUT):
+            self.stats.cut_replies += 1
+            return True
+        return False
 
     def drop_keeper(self) -> None:
         """Release the kept connection in order: shut our side, wait for the peer's close (frees its slot)."""

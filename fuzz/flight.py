@@ -17,7 +17,7 @@ import select
 import socket
 import time
 
-from fuzz.target import GET_STATUS, RECV, Outcome, Session, check_order, expected_reply_ids, session_deadline
+from fuzz.target import CUT, GET_STATUS, RECV, Outcome, Session, check_order, expected_reply_ids, session_deadline
 from spec import errors
 from spec.codec import REQUESTS, TelegramDecoder
 
@@ -104,7 +104,7 @@ class Flight:
             while (t := self.decoder.next_telegram()) is not None:
                 self.out.replies.append(t)
         except errors.RemoteProtocolError as exc:
-            cut = "reply cut off by the close" if not data else "reply does not decode"
+            cut = CUT if not data else "reply does not decode"
             self.out.bad_reply = f"{cut}: {type(exc).__name__}: {exc}"
             self._finish(closed=True)
             return

@@ -29,6 +29,7 @@ from spec.telegram import Telegram
 GET_STATUS = encode(REQUESTS.CMD_GET_STATUS())
 ANSWERED = frozenset(t.id for t in load_telegrams() if t.answered)
 RECV = 1 << 16
+CUT = "reply cut off by the close"
 BIG_SEND = 1 << 16  # bytes; bigger writes interleave reading (see Conn._send_reading)
 PER_FRAME = 0.002  # s of deadline added per frame of a session (floods of slow commands are not hangs)
 PER_MIB = 1.0  # s of deadline added per MiB sent (documents take time to validate)
@@ -164,7 +165,7 @@ class Conn:
                     self.decoder.receive_data(b"")
                     self.decoder.next_telegram()
                 except errors.RemoteProtocolError as exc:
-                    return replies, f"reply cut off by the close: {exc}", False
+                    return replies, f"{CUT}: {exc}", False
                 return replies, None, False
             left = deadline - time.monotonic()
             if left <= 0:

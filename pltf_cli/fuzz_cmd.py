@@ -96,5 +96,10 @@ def _summary(out: Path, stats: object) -> None:
         "telegrams": sorted(s.telegrams),  # type: ignore[attr-defined]
         "states": sorted(str(x) for x in getattr(s, "states", ())),
         "findings": s.findings,  # type: ignore[attr-defined]
+        "unconfirmed": getattr(s, "unconfirmed", []),
+        "units": {k: getattr(s, k, None) for k in ("batches", "singles", "probes", "restarts", "duplicates")},
+        "connections_closed_on_valid_input": getattr(s, "unexpected_closes", None),
+        "replies_cut_by_a_refusal": getattr(s, "cut_replies", None),
+        "dropped_unsafe": getattr(s, "dropped_unsafe", None),
     }
     (out / "summary.json").write_text(json.dumps(doc, indent=2) + "\n")
