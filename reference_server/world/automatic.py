@@ -36,11 +36,16 @@ from reference_server.world.planner import Plan, PlannerState
 Params = Callable[[str], Any]
 Pose = tuple[float, float, float]
 
-CORRIDOR = 100.0  # mm beyond half the platform's width
+CORRIDOR = 50.0  # mm beyond half the platform's width (less than the planner keeps from a sensed obstacle)
+LAG = 300.0  # mm: the reference waits while the platform is farther from it, and the platform drives back
+RECOVER_VEL = 300.0  # mm/s
+BRAKE_FIRST = 20.0  # mm/s: a new job plans once the platform is slower than this
 REPLAN_EVERY = 0.5  # s
 RETRY_EVERY = 1.0  # s
 OBSTACLE_MEMORY = 3.0  # s an unseen obstacle is remembered
 CLUSTER_GAP = 300.0  # mm
+CLUSTER_PAD = 50.0  # mm added to a cluster's radius
+CLUSTER_REACH = 600.0  # mm around the points in the corridor that belong to the same obstacle
 SETTLE_TIMEOUT = 15.0  # s
 SETTLE_TURN_GAIN = 2.0  # 1/s
 
@@ -53,6 +58,9 @@ class Navigator(Protocol):
 
     @property
     def front(self) -> float: ...
+
+    @property
+    def rear(self) -> float: ...
 
     @property
     def sweep(self) -> float: ...
@@ -69,6 +77,7 @@ class Perception:
     world: F64 = field(default_factory=lambda: np.zeros((0, 2)))
     platform: F64 = field(default_factory=lambda: np.zeros((0, 2)))
     seq: int = 0  # one number per scan
+    origin: tuple[float, float] = (0.0, 0.0)  # the laser in the world frame (through the estimate)
 
 
 @dataclass
@@ -87,6 +96,7 @@ class AutoJob:
     obstacles: list[tuple[float, float, float, float]] = field(default_factory=list)  # x, y, r, last seen
     settle_since: float | None = None
     stabilizing: bool = False
+    recovering: bool = False
     _seen: Perception | None = None
     _block_leg: Leg | None = None
     _block: float | None = None
@@ -101,7 +111,7 @@ class AutoJob:
 
     def reference(self, pose: Pose) -> Ref:
         if self.ipo is None or self.ipo.done:
-            goal = self.goal if self.phase in ("settle", "done") and self.reached else pose
+            goal = self.goal if self.phase in ("settle", "done") else pose
             return Ref(*goal, 0.0, 0.0)
         return self.ipo.reference(pose)
 
@@ -110,17 +120,25 @@ class AutoJob:
 
     # ---- the control step
     def step(
-        self, now: float, dt: float, pose: Pose, seen: Perception, p: Params, nav: Navigator
+        self, now: float, dt: float, pose: Pose, seen: Perception, p: Params, nav: Navigator, speed: float = 0.0
     ) -> tuple[float, float]:
+        """(v, w) for this period; ``speed``: the platform's commanded speed (a preempted move brakes first)."""
         if self.phase == "plan":
+            if abs(speed) > BRAKE_FIRST:
+                return 0.0, 0.0  # plan from where the platform stands
             self._start(now, pose, p, nav)
         if self.phase == "drive":
             assert self.ipo is not None
             stop_at = self._obstacle(now, pose, seen, p, nav)
-            ex = _along(pose, self.ipo.reference(pose))
-            self.ipo.step(dt, p, hold=ex > 300.0, stop_at=stop_at)
+            ref = self.ipo.reference(pose)
+            off = math.hypot(ref.x - pose[0], ref.y - pose[1])
+            self.recovering = off > LAG or (self.recovering and off > 0.5 * LAG)
+            self.ipo.step(dt, p, hold=self.recovering, stop_at=stop_at)
             if self.ipo.done:
                 self.phase, self.settle_since = "settle", now
+            elif self.recovering:  # far off the reference (blocked, pushed, a sharp preemption): back onto it
+                v, w, _ = stabilize(pose, (ref.x, ref.y), RECOVER_VEL)
+                return v, w
             else:
                 ref = self.ipo.reference(pose)
                 return track(pose, ref, isinstance(self.ipo.leg, Turn), p)
@@ -215,13 +233,27 @@ class AutoJob:
         if not hit.any():
             return None
         first = int(d[hit].argmin(axis=1).min())
-        self._remember(now, pts[hit])
+        self._remember(now, seen, pts[hit])
         return float(leg.s[min(i0 + 2 * first, len(leg.s) - 1)])
 
-    def _remember(self, now: float, pts: F64) -> None:
-        for cx, cy, r in _clusters(pts):
-            self.obstacles = [o for o in self.obstacles if math.hypot(o[0] - cx, o[1] - cy) > o[2] + r]
-            self.obstacles.append((cx, cy, r, now))
+    def _remember(self, now: float, seen: Perception, hits: F64) -> None:
+        """Round obstacles from the scan points around ``hits`` (the whole object, not only its part in the
+        corridor); one that overlaps remembered ones is merged with them into the circle enclosing all (each
+        view sees only the near side of an object: together they see more of it)."""
+        pts = seen.world
+        lo, hi = hits.min(axis=0) - CLUSTER_REACH, hits.max(axis=0) + CLUSTER_REACH
+        box = np.all((pts >= lo) & (pts <= hi), axis=1)
+        near = pts[box]
+        d = np.hypot(near[:, 0, None] - hits[None, :, 0], near[:, 1, None] - hits[None, :, 1]).min(axis=1)
+        near = near[d <= CLUSTER_REACH]
+        for cx, cy, r in _clusters(near, seen.origin):
+            keep = []
+            for o in self.obstacles:
+                if math.hypot(o[0] - cx, o[1] - cy) > o[2] + r:
+                    keep.append(o)
+                else:
+                    cx, cy, r = _enclosing((cx, cy, r), o[:3])
+            self.obstacles = [*keep, (cx, cy, r, now)]
 
     def _react(self, now: float, pose: Pose, p: Params, nav: Navigator) -> None:
         if now < self.next_try or self.blocked_since is None:
@@ -254,12 +286,17 @@ class AutoJob:
         if not blocked.any():
             return
         behind = np.flatnonzero(blocked)[-1] + 1
-        ok = np.flatnonzero(nav.free(pts[behind:], obs))
+        clear = np.ones(len(pts) - behind, dtype=bool)  # the whole footprint, any heading, clear of them
+        for cx, cy, r in obs:
+            clear &= np.hypot(pts[behind:, 0] - cx, pts[behind:, 1] - cy) >= r + nav.sweep + CORRIDOR
+        ok = np.flatnonzero(nav.free(pts[behind:], obs) & clear)
         if len(ok) == 0:
             self.events.append("obstacle on the path: no place to rejoin the path behind it, waiting")
             return
         k = int(behind + ok[0])
-        rejoin = (float(pts[k, 0]), float(pts[k, 1]), self.goal[2])
+        nxt = pts[min(k + 1, len(pts) - 1)] if k + 1 < len(pts) else pts[k] + (pts[k] - pts[k - 1])
+        along = math.atan2(float(nxt[1] - pts[k, 1]), float(nxt[0] - pts[k, 0]))  # the path's direction there
+        rejoin = (float(pts[k, 0]), float(pts[k, 1]), along)
         plan = nav.plan(pose, rejoin, obs)
         self.planner_state = plan.state
         if plan.state != PlannerState.PATH_FOUND:
@@ -295,18 +332,32 @@ class AutoJob:
         return 0.0, 0.0
 
 
-def _along(pose: Pose, ref: Ref) -> float:
-    return math.cos(pose[2]) * (ref.x - pose[0]) + math.sin(pose[2]) * (ref.y - pose[1])
+def _enclosing(a: tuple[float, float, float], b: tuple[float, float, float]) -> tuple[float, float, float]:
+    """The smallest circle holding circles a and b."""
+    d = math.hypot(b[0] - a[0], b[1] - a[1])
+    if d + b[2] <= a[2]:
+        return a
+    if d + a[2] <= b[2]:
+        return b
+    r = 0.5 * (d + a[2] + b[2])
+    f = (r - a[2]) / d
+    return a[0] + f * (b[0] - a[0]), a[1] + f * (b[1] - a[1]), r
 
 
-def _clusters(pts: F64) -> list[tuple[float, float, float]]:
-    """Round obstacles from points: split where neighbours are more than CLUSTER_GAP apart (in scan order)."""
+def _clusters(pts: F64, origin: tuple[float, float]) -> list[tuple[float, float, float]]:
+    """Round obstacles from points in scan order, split where neighbours are more than CLUSTER_GAP apart.
+
+    Only the near side of an object is seen: for a round one of radius r (half the cluster's width) the
+    points' mean lies 2r/pi in front of its centre, seen from ``origin`` (the laser)."""
     if len(pts) == 0:
         return []
     gaps = np.hypot(np.diff(pts[:, 0]), np.diff(pts[:, 1])) > CLUSTER_GAP
     out = []
     for part in np.split(pts, np.flatnonzero(gaps) + 1):
-        c = part.mean(axis=0)
-        r = float(np.hypot(part[:, 0] - c[0], part[:, 1] - c[1]).max()) + 150.0
+        m = part.mean(axis=0)
+        r = max(0.5 * float(np.hypot(*(part[-1] - part[0]))), 50.0)
+        view = np.hypot(m[0] - origin[0], m[1] - origin[1])
+        c = m + (m - np.asarray(origin)) / max(float(view), 1.0) * (2.0 * r / math.pi)
+        r = max(r, float(np.hypot(part[:, 0] - c[0], part[:, 1] - c[1]).max())) + CLUSTER_PAD
         out.append((float(c[0]), float(c[1]), r))
     return out

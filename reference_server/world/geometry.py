@@ -227,6 +227,6 @@ def segments_clear(q: F64, segs: F64, circ: F64, radius: float | F64) -> BOOL:
     if len(circ):
         ux, uy = bx - ax, by - ay
         d2 = _point_seg_d2(circ[:, 0][None, :], circ[:, 1][None, :], ax, ay, ux, uy, ux * ux + uy * uy)
-        rr = rad[:, None] + circ[:, 2][None, :]
+        rr = np.maximum(rad[:, None] + circ[:, 2][None, :], 0.0)  # a radius may shrink a circle away entirely
         ok &= ~np.any(d2 < rr * rr, axis=1)
     return ok

@@ -7,7 +7,7 @@ Rules (erratum E-MOT-008):
   IpoRotVel with MaxRotAcc. It waits while the platform lags more than ``LAG`` mm behind, and stops in
   front of a point the caller names (an obstacle).
 - The controller makes the platform follow the reference: Kanayama's tracking law on Drive legs, with gains
-  from PathFollowParam1 (lateral, 1e-5 / mm^2 per unit) and PathFollowParam2 (heading, 4e-3 / mm per unit);
+  from PathFollowParam1 (lateral, 1e-5 / mm^2 per unit) and PathFollowParam2 (heading, 1.2e-2 / mm per unit);
   a proportional heading law on Turn legs; at the end, PositionStabilizationEnabled drives the last
   millimetres onto the target (forwards or backwards) before the end turn.
 - Commanded frame (status): the reference frame; interpolated path (status): the remaining legs' points.
@@ -30,8 +30,9 @@ Params = Callable[[str], Any]
 LAG = 300.0  # mm
 K_ALONG = 1.5  # 1/s: along-track gain
 K_LAT = 1e-5  # 1/mm^2 per unit of PathFollowParam1
-K_HEAD = 4e-3  # 1/mm per unit of PathFollowParam2
+K_HEAD = 1.2e-2  # 1/mm per unit of PathFollowParam2: damping ~0.95 with the defaults (K_HEAD / 2 sqrt(K_LAT))
 K_TURN = 3.0  # 1/s on Turn legs
+BRAKE = 0.75  # the reference brakes at this share of MaxTransAcc: the platform, catching up, still can
 STAB_GAIN = 1.0  # 1/s
 STAB_VEL = 150.0  # mm/s at most while stabilising
 
@@ -53,7 +54,7 @@ def _profile(leg: Drive, v_max: float, w_max: float, acc: float) -> F64:
     ds = np.diff(leg.s)
     out = lim.copy()
     for i in range(len(out) - 2, -1, -1):  # backward pass (samples are few: 50 per metre)
-        out[i] = min(out[i], math.sqrt(out[i + 1] ** 2 + 2.0 * acc * ds[i]))
+        out[i] = min(out[i], math.sqrt(out[i + 1] ** 2 + 2.0 * BRAKE * acc * ds[i]))
     return out
 
 
@@ -170,7 +171,9 @@ def track(pose: tuple[float, float, float], ref: Ref, turning: bool, params: Par
     return v, w
 
 
-def stabilize(pose: tuple[float, float, float], target: tuple[float, float]) -> tuple[float, float, float]:
+def stabilize(
+    pose: tuple[float, float, float], target: tuple[float, float], v_max: float = STAB_VEL
+) -> tuple[float, float, float]:
     """Posture stabilisation onto a point: (v, w, distance); drives backwards to a point behind."""
     x, y, a = pose
     dx, dy = target[0] - x, target[1] - y
@@ -179,5 +182,5 @@ def stabilize(pose: tuple[float, float, float], target: tuple[float, float]) -> 
     bearing = wrap(math.atan2(dy, dx) - a)
     if along < 0:
         bearing = wrap(bearing + math.pi)
-    v = math.copysign(min(STAB_VEL, STAB_GAIN * dist), along) * max(0.0, math.cos(bearing))
+    v = math.copysign(min(v_max, STAB_GAIN * dist), along) * max(0.0, math.cos(bearing))
     return v, K_TURN * bearing * min(1.0, dist / 50.0), dist

@@ -10,9 +10,9 @@ Rules (errata E-MOT-005, E-MOT-009; E-SRV-005 and E-SRV-016 stay as they are):
   MaxTransAcc / MaxRotAcc; ``halt`` (emergency stop, shutdown, exit) ends it and stops at once.
 - Every period: the command's desired (v, w), then the collision check (CollCheckEnabled: laser points in
   the field ahead of the front edge up to CollLaserMinDist stop forward motion, ultrasonic echoes of the
-  rear sensors closer than CollLaserMinDist stop backward motion, points inside the circle a turn sweeps stop
-  the turn: all at once, and the status' collision flag says so), then MaxTransVel / MaxRotVel and the
-  acceleration limits.
+  rear sensors closer than CollLaserMinDist stop backward motion, a turn on the spot that would bring a laser
+  point within ``TURN_MARGIN`` of the footprint within ``TURN_LOOK`` stops in that direction: all at once,
+  and the status' collision flag says so), then MaxTransVel / MaxRotVel and the acceleration limits.
 - Sans-IO: ``step`` takes ``now``, ``dt``, the estimated pose and what the sensors saw, and returns log lines.
 """
 
@@ -32,7 +32,9 @@ from reference_server.world.replay import Recorder, ReplayJob
 Params = Callable[[str], Any]
 Pose = tuple[float, float, float]
 REAR_SENSORS = (8, 9, 10, 11)  # USSensor09..12 face backwards (E-PAR-017)
-TURN_SWEEP_MARGIN = 20.0  # mm
+TURN_MARGIN = 20.0  # mm
+TURN_LOOK = np.radians([5.0, 10.0, 15.0])  # rotations checked ahead of a turn on the spot
+TURN_ON_SPOT = 50.0  # mm/s: below this a rotation is a turn on the spot
 
 
 def _approach(current: float, desired: float, max_delta: float) -> float:
@@ -55,7 +57,7 @@ class Motion:
     _last_cmd: float = 0.0
     _coll_key: tuple[float, ...] = ()
     _coll_ahead: bool = False
-    _coll_sweep: bool = False
+    _coll_turn: tuple[bool, bool] = (False, False)  # a turn left / right would hit something
 
     # ---- commands
     def command_velocity(self, v: float, w: float, now: float, kind: str, params: Params) -> None:
@@ -152,7 +154,7 @@ class Motion:
         job = self.job
         if job is None or self.held:  # a held job's clock stands still: it is not stepped
             return 0.0, 0.0
-        v, w = job.step(now, dt, pose, seen, params, nav)
+        v, w = job.step(now, dt, pose, seen, params, nav, self.v)
         events += job.events
         job.events = []
         self.planner_state = job.planner_state
@@ -173,9 +175,8 @@ class Motion:
             self._coll_key = key
             pts, hw = seen.platform, nav.half_width
             ahead = (pts[:, 0] >= nav.front - 1.0) & (pts[:, 0] <= nav.front + limit) & (np.abs(pts[:, 1]) <= hw + 50.0)
-            inside = (pts[:, 0] <= nav.front) & (np.abs(pts[:, 1]) <= hw)
-            sweep = (np.hypot(pts[:, 0], pts[:, 1]) <= nav.sweep + TURN_SWEEP_MARGIN) & ~inside
-            self._coll_ahead, self._coll_sweep = bool(ahead.any()), bool(sweep.any())
+            self._coll_ahead = bool(ahead.any())
+            self._coll_turn = (_turn_hits(pts, nav, 1.0), _turn_hits(pts, nav, -1.0))
         if v > 0.0 and self._coll_ahead:
             v, self.collision = 0.0, True
         if v < 0.0:
@@ -183,6 +184,24 @@ class Motion:
             rear = [dist[i] for i in REAR_SENSORS if i < len(dist)]
             if rear and min(rear) < limit:
                 v, self.collision = 0.0, True
-        if w != 0.0 and self._coll_sweep:
+        if w != 0.0 and abs(v) < TURN_ON_SPOT and self._coll_turn[0 if w > 0 else 1]:
             w, self.collision = 0.0, True
         return v, w
+
+
+def _turn_hits(pts: np.ndarray, nav: Navigator, sign: float) -> bool:
+    """Would turning on the spot by TURN_LOOK (left: sign 1) bring a point within TURN_MARGIN of the footprint?"""
+    if len(pts) == 0:
+        return False
+    near = pts[np.hypot(pts[:, 0], pts[:, 1]) <= nav.sweep + TURN_MARGIN]
+    if len(near) == 0:
+        return False
+    for a in TURN_LOOK:
+        c, s = np.cos(-sign * a), np.sin(-sign * a)  # the platform turns by +a: the points by -a
+        x = c * near[:, 0] - s * near[:, 1]
+        y = s * near[:, 0] + c * near[:, 1]
+        m = TURN_MARGIN
+        hit = (x <= nav.front + m) & (x >= nav.rear - m) & (np.abs(y) <= nav.half_width + m)
+        if hit.any():
+            return True
+    return False

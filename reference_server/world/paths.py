@@ -24,10 +24,12 @@ import numpy as np
 from reference_server.world.geometry import F64
 
 DS = 20.0  # mm between samples
+SMOOTH = 7  # samples over which the curvature is averaged
 CUT = 30.0  # mm: how far a fillet may cut into a corner
 MIN_RADIUS = 120.0  # mm
 STRAIGHT = math.radians(1.0)  # bends below this are ignored
 TURN_FIRST = math.radians(10.0)  # heading error above which a path starts with a turn on the spot
+CURVE_MAX = math.radians(90.0)  # the largest change of direction an end curve makes (EndTurnEnabled false)
 
 Point = tuple[float, float]
 
@@ -83,6 +85,10 @@ def _sampled(xs: F64, ys: F64) -> Drive | None:
     th = np.concatenate([th, th[-1:]])
     dth = np.diff(np.unwrap(th))
     kappa = np.concatenate([dth / np.maximum(d, 1e-9), [0.0]])
+    # the curvature feeds the reference's rotation: averaged over SMOOTH samples, so the rotation changes no
+    # faster than a platform can follow at the speed a fillet allows (a jump would need infinite acceleration)
+    if len(kappa) >= SMOOTH:
+        kappa = np.convolve(kappa, np.full(SMOOTH, 1.0 / SMOOTH), mode="same")
     return Drive(xs, ys, th, s, kappa)
 
 
@@ -180,9 +186,11 @@ def direct(pose: tuple[float, float, float], target: Point, start_turn: bool, to
 
 
 def end_curve(legs: list[Leg], end_angle: float) -> Drive | None:
-    """The last Drive leg's final straight piece replaced by a Bezier arriving at ``end_angle`` (or None)."""
+    """The last Drive leg's final piece replaced by a Bezier arriving at ``end_angle`` (or None: no curve).
+
+    Only for a change of direction up to ``CURVE_MAX``: reversing in a curve would be a loop."""
     last = legs[-1] if legs else None
-    if not isinstance(last, Drive) or last.length < 2 * DS:
+    if not isinstance(last, Drive) or last.length < 2 * DS or abs(wrap(end_angle - last.theta[-1])) > CURVE_MAX:
         return None
     keep = max(0, len(last.s) - 1 - int(min(last.length, 3000.0) / DS))
     p0 = (float(last.x[keep]), float(last.y[keep]))

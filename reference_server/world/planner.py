@@ -85,6 +85,18 @@ def _tangent(v: F64, prev: F64, nxt: F64, w: F64) -> np.ndarray:
     return np.asarray(s1 * s2 >= -1e-6)
 
 
+def _inward(v: F64, prev: F64, nxt: F64, w: F64) -> np.ndarray:
+    """w lies in the interior angle of the (counter-clockwise) octagon at v: the line v-w enters the octagon.
+
+    The octagon over-approximates the inflated obstacle, so a start or goal may lie inside it yet be free;
+    such a line is then no reason to prune (unlike a line that only touches v on its way past)."""
+    a = (v[..., 0] - prev[..., 0]) * (w[..., 1] - prev[..., 1]) - (v[..., 1] - prev[..., 1]) * (
+        w[..., 0] - prev[..., 0]
+    )
+    b = (nxt[..., 0] - v[..., 0]) * (w[..., 1] - v[..., 1]) - (nxt[..., 1] - v[..., 1]) * (w[..., 0] - v[..., 0])
+    return np.asarray((a > 0) & (b > 0))
+
+
 class Planner:
     def __init__(self, geometry: MapGeometry, radius: float) -> None:
         self.geometry = geometry
@@ -151,7 +163,7 @@ class Planner:
             if n == 0:
                 break
             pt = np.broadcast_to(np.asarray(p, dtype=np.float64), (n, 2))
-            ok = _tangent(nodes, prev, nxt, pt)
+            ok = _tangent(nodes, prev, nxt, pt) | _inward(nodes, prev, nxt, pt)
             j = np.flatnonzero(ok)
             q = np.column_stack([pt[j], nodes[j]])
             j = j[segments_clear(q, self.walls, circs, r)]

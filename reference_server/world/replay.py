@@ -96,10 +96,10 @@ class ReplayJob:
         return [(float(r[1]), float(r[2])) for r in rest[::5]]
 
     def step(
-        self, now: float, dt: float, pose: Pose, seen: Perception, p: Params, nav: Navigator
+        self, now: float, dt: float, pose: Pose, seen: Perception, p: Params, nav: Navigator, speed: float = 0.0
     ) -> tuple[float, float]:
         if self.phase == "approach":
-            v, w = self.approach.step(now, dt, pose, seen, p, nav)
+            v, w = self.approach.step(now, dt, pose, seen, p, nav, speed)
             self.events += self.approach.events
             self.approach.events = []
             if not self.approach.done:

@@ -52,6 +52,7 @@ Pose = tuple[float, float, float]
 
 SCAN_PERIOD = 0.1  # s: laser and ultrasonic at 10 Hz
 PLAN_MARGIN = 60.0  # mm added to the footprint's circumscribed radius for planning (E-MOT-006)
+OBSTACLE_MARGIN = 100.0  # mm added to half the platform's width around sensed obstacles (E-MOT-006)
 MOUSE_RADIUS = 200.0  # mm: the CMD_MOUSE_MOVE obstacle (E-MOT-003)
 ODO_SCALE_SIGMA = 0.002  # per-run wheel scale error (drift)
 ODO_NOISE = 0.01  # mm^2 per mm of wheel travel: 3 mm per wheel and metre
@@ -191,7 +192,8 @@ class World:
         pts = sensors.points_platform(s, mount)
         c, sn = math.cos(est[2]), math.sin(est[2])
         world = np.column_stack([est[0] + c * pts[:, 0] - sn * pts[:, 1], est[1] + sn * pts[:, 0] + c * pts[:, 1]])
-        self.perception = Perception(world, pts, self.perception.seq + 1)
+        origin = (est[0] + c * mount, est[1] + sn * mount)
+        self.perception = Perception(world, pts, self.perception.seq + 1, origin)
         self._us_pose = self.truth
         if self.geometry is not None and bool(self.params("LocalLocalization")):
             score = sensors.match_score(s.ranges, sensors.expected_ranges(est, mount, self.map_scene))
@@ -337,10 +339,14 @@ class World:
         return 0.0, v * w / 1000.0, GRAVITY, w
 
     def scan_ranges(self, now: float) -> list[float | None]:
-        return self.scan()
+        """The serial scanner's source: the latest laser scan of ``sense`` (10 Hz), whatever its own period."""
+        if self.last_scan is None:
+            return self.scan()
+        return [float(r) if math.isfinite(r) else None for r in self.last_scan.ranges]
 
     def us_ranges(self, now: float) -> list[float | None]:
-        return [r if math.isfinite(r) else None for r in self.ultrasonic()]
+        """The ultrasonic board's source: the distances of the latest sensing period."""
+        return [r if math.isfinite(r) else None for r in self.us_distances()]
 
     # ---- Navigator (automatic.Navigator): planning with the footprint
     @property
@@ -350,6 +356,10 @@ class World:
     @property
     def front(self) -> float:
         return self.footprint.front
+
+    @property
+    def rear(self) -> float:
+        return self.footprint.rear
 
     @property
     def sweep(self) -> float:
@@ -363,20 +373,28 @@ class World:
     def plan(self, start: Pose, goal: Pose, obstacles: F64) -> Plan:
         pl = self.planner()
         g = pl.geometry
-        circs = np.vstack([g.circles, circles(obstacles)])
-        if self._footprint_hits(start, g.obstacles, circs):
+        if self._footprint_hits(start, g.obstacles, g.circles):  # sensed obstacles are estimates: not here
             return Plan(PlannerState.COLLISION_START)
-        if self._footprint_hits(goal, g.obstacles, circs):
+        if self._footprint_hits(goal, g.obstacles, np.vstack([g.circles, circles(obstacles)])):
             return Plan(PlannerState.COLLISION_TARGET)
+        obs = self._as_planned(obstacles)
         pts = np.array([start[:2], goal[:2]])
-        clear = clearance(pts[:, 0], pts[:, 1], pl.walls, circs) * 0.999
-        return pl.plan(start[:2], goal[:2], float(clear[0]), float(clear[1]), circles(obstacles))
+        clear = np.maximum(clearance(pts[:, 0], pts[:, 1], pl.walls, np.vstack([pl.circs, obs])) * 0.999, 0.0)
+        return pl.plan(start[:2], goal[:2], float(clear[0]), float(clear[1]), obs)
 
     def free(self, points: F64, obstacles: F64) -> BOOL:
         pl = self.planner()
-        circs = np.vstack([pl.circs, circles(obstacles)])
+        circs = np.vstack([pl.circs, self._as_planned(obstacles)])
         ok = np.asarray(pl.geometry.allowed(points[:, 0], points[:, 1]))
         return ok & (clearance(points[:, 0], points[:, 1], pl.walls, circs) >= pl.radius)
+
+    def _as_planned(self, obstacles: F64) -> F64:
+        """Sensed obstacles are passed at half the platform's width plus the margin, not at the turning radius
+        the map's walls get (E-MOT-006): the planner inflates everything by its radius, so their radii shrink by
+        the difference (and may go negative; only radius + planner radius is ever used)."""
+        obs = circles(obstacles).copy()
+        obs[:, 2] -= self.planner().radius - (self.footprint.half_width + OBSTACLE_MARGIN)
+        return obs
 
     def _footprint_hits(self, pose: Pose, segs: F64, circs: F64) -> bool:
         x, y, a = pose

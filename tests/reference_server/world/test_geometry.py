@@ -70,7 +70,7 @@ def test_office_map(office: MapGeometry) -> None:
 def _brute_segment_distance(q: list[float], s: list[float]) -> float:
     ts = np.linspace(0, 1, 401)
     a = np.array(q[:2])[None, :] + ts[:, None] * (np.array(q[2:]) - np.array(q[:2]))
-    d = point_segment_distance(a[:, 0], a[:, 1], segments([s]))
+    d = point_segment_distance(a[:, 0], a[:, 1], segments(np.array([s])))
     return float(d.min())
 
 
@@ -83,7 +83,7 @@ def test_segments_clear_against_sampling() -> None:
         brute = _brute_segment_distance(q, s)
         if abs(brute - r) < 3.0:
             continue  # the sampling is only good to about a millimetre
-        assert bool(segments_clear(np.array([q]), segments([s]), circles([]), r)[0]) == (brute >= r)
+        assert bool(segments_clear(np.array([q]), segments(np.array([s])), circles([]), r)[0]) == (brute >= r)
 
 
 def test_segments_clear_with_circles_and_per_query_radius() -> None:

@@ -28,7 +28,7 @@ def test_fan_equals_dense_casting_everywhere() -> None:
         scene = _random_scene(rng)
         x, y, h = rng.uniform(0, 20000), rng.uniform(0, 20000), rng.uniform(-7, 7)
         r1, h1 = cast_fan(x, y, h, scene, fan)
-        angles = h + fan.start + fan.step * np.arange(fan.count)
+        angles = np.asarray(h + fan.start + fan.step * np.arange(fan.count), dtype=np.float64)
         r2, h2 = cast_rays(np.full(fan.count, x), np.full(fan.count, y), angles, scene, fan.max_range)
         np.testing.assert_allclose(np.nan_to_num(r1, posinf=-1.0), np.nan_to_num(r2, posinf=-1.0), atol=1e-6)
         same = np.isfinite(r1)

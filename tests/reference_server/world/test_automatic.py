@@ -1,0 +1,248 @@
+"""Motion mode Automatic (guide 4.3) as scenarios in simulated time: every move command reaches its target within
+tolerance, planning goes around walls and never through them, obstacles stop, are driven around or waited for,
+no path means no motion, stations are reached over the roadmap, a new command preempts the running one."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from reference_server.kinematics import Frame, Roadmap, relative_to_world
+from reference_server.world import MapGeometry, PlannerState
+from reference_server.world.geometry import circles, segments
+from spec.documents import DocumentKind, validate_document
+from tests.reference_server.world.conftest import (
+    CORRIDOR_WEST,
+    OFFICE_ROADMAP,
+    Sim,
+    assert_clear_of,
+    geometry_of,
+    make_sim,
+    room,
+    within,
+)
+
+TOL = 20.0  # TargetReachedTolPos (the estimate); the truth is allowed the localization's error on top
+TRUE_TOL = 60.0
+STORAGE = (27500.0, 7800.0, -math.pi / 2)
+KITCHEN = (5000.0, 12200.0, math.pi / 2)
+OPEN = geometry_of(room(20000, 20000))
+
+
+def _reached(sim: Sim, goal: tuple[float, float, float]) -> None:
+    assert sim.world.target_reached, sim.events[-5:]
+    assert within(sim.world, goal, TOL, 2.0, truth=False)
+    assert within(sim.world, goal, TRUE_TOL, 3.0)
+    assert sim.contacts == 0
+
+
+def test_move_abs_plans_through_the_office_and_never_touches_a_wall(office: MapGeometry) -> None:
+    sim = make_sim(office, CORRIDOR_WEST)
+    sim.world.move_to(STORAGE)
+    assert sim.world.motion.planner_state is PlannerState.PLANNING  # until the next control period
+    sim.run(0.02)
+    assert sim.world.motion.planner_state is PlannerState.PATH_FOUND  # type: ignore[comparison-overlap]
+    path = sim.world.remaining_path()
+    assert math.dist(path[-1], STORAGE[:2]) < 1.0
+    assert sim.until_idle()
+    _reached(sim, STORAGE)
+    assert sim.world.motion.planner_state is PlannerState.STANDBY
+    assert any(e.startswith("target reached") for e in sim.events)
+    assert_clear_of(sim.trace, office.obstacles, sim.world.footprint.half_width, office.circles)
+    assert not any(11000 < x < 14500 and 1000 < y < 5500 for x, y, _ in sim.trace)  # the prohibited area
+
+
+def test_move_abs_from_room_to_room(office: MapGeometry) -> None:
+    sim = make_sim(office, (19000.0, 12200.0, math.pi / 2))  # Office_N1
+    sim.world.move_to(KITCHEN)
+    assert sim.until_idle()
+    _reached(sim, KITCHEN)
+    assert_clear_of(sim.trace, office.obstacles, sim.world.footprint.half_width, office.circles)
+
+
+def test_the_commanded_frame_leads_the_platform_along_the_path(office: MapGeometry) -> None:
+    sim = make_sim(office, CORRIDOR_WEST)
+    sim.world.move_to(STORAGE)
+    for _ in range(10):
+        sim.run(1.0)
+        cmd, est = sim.world.commanded_frame(), sim.world.estimate
+        assert math.dist(cmd[:2], est[:2]) < 400.0
+    sim.until_idle()
+    assert sim.world.commanded_frame() == sim.world.estimate and sim.world.remaining_path() == []
+
+
+def test_move_rel_reaches_a_frame_given_in_platform_coordinates() -> None:
+    sim = make_sim(OPEN, (10000.0, 10000.0, math.pi / 2))
+    x, y, a = relative_to_world(Frame(*sim.world.estimate), Frame(2000.0, -1000.0, math.radians(-90)))
+    goal = (x, y, a)
+    sim.world.move_to(goal)
+    assert sim.until_idle(60.0)
+    _reached(sim, goal)
+
+
+def test_without_planning_a_bezier_curve_or_a_turn_first() -> None:
+    goal = (14000.0, 12000.0, math.pi / 2)
+    sim = make_sim(OPEN, (10000.0, 10000.0, 0.0), PlanningEnabled=False)
+    sim.world.move_to(goal)
+    assert sim.world.motion.planner_state is PlannerState.STANDBY
+    assert sim.until_idle(60.0)
+    _reached(sim, goal)
+    ys = [y for _, y, _ in sim.trace]
+    assert min(ys) > 9950 and sim.trace[10][1] < 10030  # left along its heading: a curve, no turn on the spot
+    turn = make_sim(OPEN, (10000.0, 10000.0, 0.0), PlanningEnabled=False, StartTurnEnabled=True)
+    turn.world.move_to(goal)
+    turn.run(1.0)
+    assert math.dist(turn.world.truth[:2], (10000.0, 10000.0)) < 15 and turn.world.truth[2] > 0.2  # turned first
+    assert turn.until_idle(60.0)
+    _reached(turn, goal)
+
+
+def test_without_planning_the_platform_waits_in_front_of_an_obstacle() -> None:
+    sim = make_sim(OPEN, (3000.0, 10000.0, 0.0), PlanningEnabled=False)
+    sim.world.set_mouse_obstacle((9000.0, 10000.0))
+    sim.world.move_to((15000.0, 10000.0, 0.0))
+    sim.run(15.0)
+    assert sim.world.active and "obstacle on the path: stopping in front of it" in sim.events
+    front = sim.world.truth[0] + sim.world.footprint.front
+    assert 9000 - 200 - front >= 300  # CollLaserMinDist (and more) before the obstacle's surface
+    waiting = sim.world.truth
+    sim.run(5.0)
+    assert math.dist(sim.world.truth[:2], waiting[:2]) < 1.0
+    sim.world.set_mouse_obstacle(None)  # the obstacle goes: the platform drives on
+    assert sim.until_idle(60.0)
+    _reached(sim, (15000.0, 10000.0, 0.0))
+
+
+def test_with_planning_the_platform_drives_around_an_obstacle() -> None:
+    walls = room(20000, 20000)
+    sim = make_sim(geometry_of(walls), (3000.0, 10000.0, 0.0))
+    sim.world.set_mouse_obstacle((9000.0, 10000.0))  # not in the map: only the laser sees it
+    sim.world.move_to((15000.0, 10000.0, 0.0))
+    assert sim.until_idle(90.0)
+    _reached(sim, (15000.0, 10000.0, 0.0))
+    assert "replanned around an obstacle" in sim.events
+    obstacle = circles([(9000.0, 10000.0, 200.0)])
+    assert_clear_of(sim.trace, segments(walls), sim.world.footprint.half_width, obstacle)
+
+
+def test_no_path_means_no_motion_and_the_planner_says_why() -> None:
+    box = [(s[0] + 12000, s[1] + 8000, s[2] + 12000, s[3] + 8000) for s in room(4000, 4000)]
+    sim = make_sim(geometry_of([*room(20000, 20000), *box]), (3000.0, 10000.0, 0.0))
+    for goal, state in [
+        ((14000.0, 10000.0, 0.0), PlannerState.NO_PATH),  # inside the closed box
+        ((12000.0, 10000.0, 0.0), PlannerState.COLLISION_TARGET),  # on its wall
+    ]:
+        sim.world.move_to(goal)
+        sim.run(2.0)
+        assert sim.world.motion.planner_state is state
+        assert not sim.world.active and not sim.world.target_reached
+        assert math.dist(sim.trace[0][:2], sim.world.truth[:2]) < 1e-9
+
+
+def test_a_new_move_preempts_the_running_one(office: MapGeometry) -> None:
+    sim = make_sim(office, CORRIDOR_WEST)
+    sim.world.move_to(STORAGE)
+    sim.run(5.0)
+    sim.world.move_to(KITCHEN)
+    assert sim.until_idle()
+    _reached(sim, KITCHEN)
+
+
+def test_move_path_follows_the_frames_and_turns_to_the_end_angle(office: MapGeometry) -> None:
+    frames = [(3000.0, 10000.0, 0.0), (8500.0, 10000.0, 0.0), (8500.0, 11200.0, 0.0), (8500.0, 13000.0, math.pi)]
+    sim = make_sim(office, (1500.0, 9500.0, 0.0))
+    sim.world.follow_path(frames)
+    assert sim.until_idle()
+    _reached(sim, frames[-1])
+    for fx, fy, _ in frames[1:3]:  # the path's corners are passed closely (fillets cut them by <= 30 mm)
+        assert min(math.hypot(x - fx, y - fy) for x, y, _ in sim.trace) < 80.0
+    assert_clear_of(sim.trace, office.obstacles, sim.world.footprint.half_width, office.circles)
+
+
+def test_move_path_waits_then_drives_around_an_obstacle_and_rejoins() -> None:
+    walls = room(20000, 20000)
+    frames = [(3000.0, 10000.0, 0.0), (17000.0, 10000.0, 0.0)]
+    sim = make_sim(geometry_of(walls), (3000.0, 10000.0, 0.0), PlanningEnabled=False)
+    sim.world.set_mouse_obstacle((9000.0, 10000.0))
+    sim.world.follow_path(frames)
+    assert sim.run(30.0, lambda w: "obstacle on the path: stopping in front of it" in sim.events)
+    stopped_at = sim.now
+    assert sim.run(10.0, lambda w: "obstacle on the path: driving around it" in sim.events)
+    assert sim.now - stopped_at >= 3.0  # PathObstacleWaitTime
+    assert sim.until_idle(90.0)
+    _reached(sim, frames[-1])
+    behind = [y for x, y, _ in sim.trace if x > 12000]
+    assert max(abs(y - 10000) for y in behind[-50:]) < 50  # back on the path
+    assert_clear_of(sim.trace, segments(walls), sim.world.footprint.half_width, circles([(9000.0, 10000.0, 200.0)]))
+
+
+def test_move_to_station_over_the_roadmap(office: MapGeometry) -> None:
+    roadmap = Roadmap(validate_document(DocumentKind.ROADMAP, OFFICE_ROADMAP.read_bytes()))
+    sim = make_sim(office, (1200.0, 9900.0, 0.0))
+    start = roadmap.nearest(*sim.world.estimate[:2])
+    goal = roadmap.find("Office_S1")
+    assert start is not None and goal is not None
+    frames = roadmap.route(start.id, goal.id)
+    assert frames is not None
+    sim.world.follow_path([tuple(f) for f in frames])  # type: ignore[misc]
+    assert sim.until_idle()
+    _reached(sim, tuple(goal.frame))  # type: ignore[arg-type]
+    for via in ("Corridor_04", "Corridor_06"):
+        f = roadmap.find(via)
+        assert f is not None
+        assert min(math.hypot(x - f.frame.x, y - f.frame.y) for x, y, _ in sim.trace) < 80.0
+
+
+def test_end_turn_and_position_stabilization_off(office: MapGeometry) -> None:
+    sim = make_sim(office, CORRIDOR_WEST, EndTurnEnabled=False)
+    sim.world.move_to((8500.0, 10000.0, math.pi / 2))
+    assert sim.until_idle()
+    _reached(sim, (8500.0, 10000.0, math.pi / 2))
+    assert sim.trace[-60][2] > 0.5  # arrived turning along a curve, not on the spot at the end
+    loose = make_sim(OPEN, (2000.0, 10000.0, 0.0), PositionStabilizationEnabled=False)
+    loose.world.move_to((8000.0, 10000.0, 0.0))
+    assert loose.until_idle(60.0)
+    assert within(loose.world, (8000.0, 10000.0, 0.0), 100.0, 3.0)
+
+
+def test_replay_reproduces_a_recorded_trajectory() -> None:
+    sim = make_sim(OPEN, (5000.0, 10000.0, 0.0))
+    assert sim.world.event(1, sim.now) == "post-process recording started"
+    for k in range(40):  # a wiggly joystick drive, 8 s
+        sim.world.command_velocity(400.0, 0.5 * math.sin(k / 5), sim.now, kind="joy")
+        sim.run(0.2)
+    sim.world.event(2, sim.now)
+    recorded = np.array(sim.world.motion.recorder.samples)
+    truth = sim.trace[-len(recorded) :]
+    sim.run(2.0)
+    sim.world.move_to((3000.0, 12000.0, 1.0))  # somewhere else
+    assert sim.until_idle(60.0)
+    assert sim.world.event(3, sim.now).startswith("post-process replay started")
+    sim.trace.clear()
+    assert sim.until_idle(90.0) and "replay finished" in sim.events
+    replayed = np.array(sim.trace)[:, :2]
+    err = [float(np.min(np.hypot(replayed[:, 0] - x, replayed[:, 1] - y))) for x, y, _ in truth[::10]]
+    assert max(err) < 60.0
+    assert math.dist(sim.world.truth[:2], truth[-1][:2]) < 60.0
+
+
+def test_replay_break_and_continue() -> None:
+    sim = make_sim(OPEN, (5000.0, 10000.0, 0.0))
+    sim.world.event(1, 0.0)
+    for _ in range(10):
+        sim.world.command_velocity(400.0, 0.0, sim.now, kind="joy")
+        sim.run(0.2)
+    sim.world.event(2, sim.now)
+    assert sim.world.event(5, sim.now) == "post-process replay: no replay running"
+    sim.world.move_to((5000.0, 10000.0, 0.0))
+    assert sim.until_idle(60.0)
+    sim.world.event(3, sim.now)
+    sim.run(1.0)
+    assert sim.world.event(5, sim.now) == "post-process replay paused"
+    held = sim.world.truth
+    sim.run(1.0)
+    assert sim.world.truth == held
+    sim.world.event(6, sim.now)
+    assert sim.until_idle(30.0)
+    assert sim.world.truth[0] > 5000 + 500
