@@ -32,6 +32,11 @@ from reference_server.world.replay import Recorder, ReplayJob
 Params = Callable[[str], Any]
 Pose = tuple[float, float, float]
 REAR_SENSORS = (8, 9, 10, 11)  # USSensor09..12 face backwards (E-PAR-017)
+# a turn on the spot swings the rear out to one side, where the laser cannot see: the ultrasonic sensors on the
+# rear half of that side (and the rear sensors on that side) guard it; indices of USSensor01..16 (E-PAR-017)
+SWING_GUARD = {1.0: ((12, 13), (10, 11)), -1.0: ((7, 6), (8, 9))}  # turning left: the right side; right: the left
+SWING_SIDE = 250.0  # mm: how far the rear corner swings out beyond the side (sweep - half width, default 233)
+SWING_REAR = 100.0  # mm: beyond the rear edge
 TURN_MARGIN = 20.0  # mm
 TURN_LOOK = np.radians([5.0, 10.0, 15.0])  # rotations checked ahead of a turn on the spot
 TURN_ON_SPOT = 50.0  # mm/s: below this a rotation is a turn on the spot
@@ -184,7 +189,7 @@ class Motion:
             rear = [dist[i] for i in REAR_SENSORS if i < len(dist)]
             if rear and min(rear) < limit:
                 v, self.collision = 0.0, True
-        if w != 0.0 and abs(v) < TURN_ON_SPOT and self._coll_turn[0 if w > 0 else 1]:
+        if w != 0.0 and abs(v) < TURN_ON_SPOT and (self._coll_turn[0 if w > 0 else 1] or _swing_hits(us(), w)):
             w, self.collision = 0.0, True
         return v, w
 
@@ -205,3 +210,11 @@ def _turn_hits(pts: np.ndarray, nav: Navigator, sign: float) -> bool:
         if hit.any():
             return True
     return False
+
+
+def _swing_hits(dist: list[float], w: float) -> bool:
+    """Would the rear's swing in a turn on the spot (left: w > 0) hit what the ultrasonic sensors see?"""
+    side, rear = SWING_GUARD[1.0 if w > 0 else -1.0]
+    return any(i < len(dist) and dist[i] < SWING_SIDE for i in side) or any(
+        i < len(dist) and dist[i] < SWING_REAR for i in rear
+    )

@@ -128,3 +128,18 @@ def test_the_same_seed_and_commands_give_the_same_trajectory(office: MapGeometry
     first = run(5)
     assert run(5) == first
     assert run(6) != first
+
+
+def test_a_turn_on_the_spot_does_not_swing_the_rear_into_what_only_the_ultrasonic_sees() -> None:
+    # a post beside the rear, behind the laser's field of view: turning right swings the rear into it
+    sim = make_sim(OPEN, (10000.0, 10000.0, 0.0))
+    sim.world.set_obstacle("post", (10000.0 - 250.0, 10000.0 + 270.0 + 150.0, 60.0))
+    sim.world.sense(0.0, force=True)
+    for _ in range(10):
+        sim.world.command_velocity(0.0, -0.5, sim.now)
+        sim.run(0.2)
+    assert sim.contacts == 0 and sim.world.collision and abs(sim.world.truth[2]) < 0.05
+    for _ in range(10):  # the other way round is free
+        sim.world.command_velocity(0.0, 0.5, sim.now)
+        sim.run(0.2)
+    assert sim.world.truth[2] > 0.5 and sim.contacts == 0
