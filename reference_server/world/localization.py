@@ -25,7 +25,7 @@ import numpy as np
 
 from reference_server.world.geometry import F64
 
-ODO_VAR = 0.02  # mm^2 per mm of wheel travel (a little more than the simulated encoders' noise)
+ODO_VAR = 0.005  # mm^2 per mm of wheel travel (more than the simulated encoders' noise: the scale error too)
 MEAS_POS = 10.0  # mm: standard deviation of a matched scan's position
 MEAS_ANGLE = math.radians(0.3)
 CAPTURE_POS = 400.0  # mm

@@ -55,7 +55,7 @@ PLAN_MARGIN = 60.0  # mm added to the footprint's circumscribed radius for plann
 OBSTACLE_MARGIN = 100.0  # mm added to half the platform's width around sensed obstacles (E-MOT-006)
 MOUSE_RADIUS = 200.0  # mm: the CMD_MOUSE_MOVE obstacle (E-MOT-003)
 ODO_SCALE_SIGMA = 0.002  # per-run wheel scale error (drift)
-ODO_NOISE = 0.01  # mm^2 per mm of wheel travel: 3 mm per wheel and metre
+ODO_NOISE = 0.001  # mm^2 per mm of wheel travel: 1 mm per wheel and metre
 GRAVITY = 9.81  # m/s^2
 
 
