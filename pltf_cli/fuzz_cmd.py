@@ -38,6 +38,10 @@ def add_fuzz_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--max-cases", type=int, help="stop after this many cases")
     p.add_argument("--max-findings", type=int, help="stop after this many findings")
     p.add_argument("--minimize-seconds", type=float, default=60.0, help="time budget of one delta debugging")
+    p.add_argument("--probe-every", type=int, default=4, metavar="UNITS",
+                   help="units between GET_STATUS liveness probes on the other port (1: after every unit)")  # fmt: skip
+    p.add_argument("--lanes", type=int, choices=(1, 2), default=2,
+                   help="2: refused cases run in pairs, one per port; 1: one at a time on --target's port")  # fmt: skip
     p.add_argument("--quiet", action="store_true", help="no live view")
 
 
@@ -70,7 +74,7 @@ def run_fuzz(args: argparse.Namespace) -> int:
         host=host, port=port, second_port=second, duration=args.duration, seed=args.seed, out=args.out,
         corpus=args.corpus, allow_motion=args.allow_motion, launch=args.launch, max_cases=args.max_cases,
         max_findings=args.max_findings, deadline=args.deadline, minimize_seconds=args.minimize_seconds,
-        command=command,
+        command=command, probe_every=max(1, args.probe_every), lanes=args.lanes,
     )  # fmt: skip
     campaign = Campaign(opts)
     try:
