@@ -3,11 +3,13 @@
 The campaign is also a command (fuzz/README.md):
 ``pltf fuzz --target 127.0.0.1:0 --launch "python -m reference_server --ports {ports} --data-dir {tmpdir}"
 --allow-motion --duration 3600 --max-cases 1000000 --seed 1 --out fuzz-findings``
+(``PLTF_FUZZ_CASES=N`` makes the slow test shorter.)
 """
 
 from __future__ import annotations
 
 import os
+import socket
 import sys
 from pathlib import Path
 
@@ -35,10 +37,24 @@ def test_short_campaign_reaches_every_state_and_finds_nothing(tmp_path: Path) ->
     assert c.stats.cases > 2000
 
 
+def free_ports() -> tuple[int, int]:
+    socks = [socket.socket() for _ in range(2)]
+    for s in socks:
+        s.bind(("127.0.0.1", 0))
+    ports = (socks[0].getsockname()[1], socks[1].getsockname()[1])
+    for s in socks:
+        s.close()
+    return ports
+
+
 @pytest.mark.slow
 def test_million_case_campaign_finds_nothing(tmp_path: Path) -> None:
     cases = int(os.environ.get("PLTF_FUZZ_CASES", "1000000"))
-    c = Campaign(options(tmp_path, duration=3 * 3600.0, max_cases=cases, corpus=tmp_path / "corpus"))
+    a, b = free_ports()  # fixed ports let the server log at ERROR only (port 0 needs its INFO start-up line)
+    quiet = LAUNCH.replace("--log-level INFO", "--log-level ERROR")
+    opts = options(tmp_path, port=a, second_port=b, launch=quiet, duration=3 * 3600.0, max_cases=cases,
+                   corpus=tmp_path / "corpus")  # fmt: skip
+    c = Campaign(opts)
     code = c.run()
     assert c.stats.cases >= cases
     assert code == 0, c.stats.findings
