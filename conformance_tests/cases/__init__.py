@@ -12,6 +12,7 @@ from conformance_tests.cases import (  # noqa: F401 - imported for registration
     final,
     framing,
     motion,
+    motion_ignored,
     parameters,
     ports,
     programs,

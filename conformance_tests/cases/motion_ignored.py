@@ -1,0 +1,89 @@
+"""Guide 4.2 / 4.3: moves where they must have no effect - outside Running (every other state) and in the
+motion modes that do not take them. Gated like every motion case: a broken target would move."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from functools import partial
+from typing import Any
+
+from conformance_tests.cases._common import MotionMode
+from conformance_tests.cases.motion import (
+    _GATE,
+    AUTO,
+    JOYHARD,
+    NO,
+    VEL,
+    Pose,
+    _local_roadmap,
+    _milli,
+    pose,
+    rest,
+    still,
+)
+from conformance_tests.catalogue import Level, add
+from conformance_tests.chart import St
+from conformance_tests.context import CaseContext
+
+_MOVES: dict[str, tuple[int, Callable[[Pose], dict[str, Any]]]] = {
+    "CMD_MOVE_VEL": (VEL, lambda p: {"vel_trans": 300, "vel_rot": 0}),
+    "CMD_MOVE_VEL_WHEEL": (VEL, lambda p: {"vel_right": 300, "vel_left": 300}),
+    "CMD_MOVE_ABS": (AUTO, lambda p: {"x": round(p.ahead(400).x), "y": round(p.ahead(400).y), "angle": _milli(p.th)}),
+    "CMD_MOVE_REL": (AUTO, lambda p: {"x": 400, "y": 0, "angle": 0}),
+    "CMD_MOVE_PATH": (AUTO, lambda p: {"frames": ((round(p.ahead(400).x), round(p.ahead(400).y), _milli(p.th)),)}),
+    "CMD_MOVE_TO_STATION": (AUTO, lambda p: {"station": "ConfB"}),
+}
+
+
+def _only_in_running(ctx: CaseContext, name: str) -> None:
+    mode, fields = _MOVES[name]
+    if name == "CMD_MOVE_TO_STATION":
+        ctx.preserve_document("roadmap")
+        p = pose(ctx)
+        ctx.send("CMD_SET_ROADMAP", name="conformance_local", xml=_local_roadmap(p).decode())
+    for state in (St.NOT_CONNECTED, St.CONNECTED, St.READY, St.BREAKED):
+        ctx.ensure(state, mode)
+        here = pose(ctx)
+        ctx.send(name, **fields(here))
+        still(ctx, here, f"{name} in {state.value}")
+        if state is St.BREAKED:
+            ctx.send("CMD_CONTINUE")
+            still(ctx, here, f"CMD_CONTINUE after a {name} sent in breaked")
+    ctx.ready()
+
+
+def _mode_ignores(ctx: CaseContext, mode: int, names: tuple[str, ...]) -> None:
+    ctx.ensure(St.RUNNING, mode)
+    here = rest(ctx)
+    for name in names:
+        ctx.send(name, **_MOVES[name][1](here))
+    still(ctx, here, f"{', '.join(names)} in {MotionMode(mode).name}")
+    ctx.ready()
+
+
+for _name in _MOVES:
+    add(f"6.3/{_name}/only-in-running", partial(_only_in_running, name=_name), **_GATE,
+        requirement=f"guide 4.2: \"A movement of the platform is only possible in the state 'Running'\" - {_name} "
+                    "(in its motion mode) moves nothing in Not connected, Connected, Ready or Breaked, nor after "
+                    "a CMD_CONTINUE",
+        telegrams=(_name,))
+
+add("4.3/MODE_MOTION_NO/moves-ignored", partial(_mode_ignores, mode=NO, names=tuple(_MOVES)), **_GATE,
+    requirement="guide 4.3 Mode No Motion: \"All move commands have no effects.\"", telegrams=tuple(_MOVES))
+add("4.3/MODE_MOTION_AUTOMATIC/velocity-commands-ignored",
+    partial(_mode_ignores, mode=AUTO, names=("CMD_MOVE_VEL", "CMD_MOVE_VEL_WHEEL")), **_GATE, level=Level.SHOULD,
+    requirement="guide 4.3: velocities are set with CMD_MOVE_VEL_WHEEL / CMD_MOVE_VEL in the modes Velocity and "
+                "Joystick (Software); in Automatic \"several move commands are executed\" - not these",
+    telegrams=("CMD_MOVE_VEL", "CMD_MOVE_VEL_WHEEL"))
+add("4.3/MODE_MOTION_VEL/path-commands-ignored",
+    partial(_mode_ignores, mode=VEL, names=("CMD_MOVE_ABS", "CMD_MOVE_REL", "CMD_MOVE_PATH")), **_GATE,
+    level=Level.SHOULD,
+    requirement="guide 4.3 Mode Velocity: \"The desired velocities are set to the platform using the commands "
+                "CMD_MOVE_VEL_WHEEL or CMD_MOVE_VEL\" - path commands belong to mode Automatic",
+    telegrams=("CMD_MOVE_ABS", "CMD_MOVE_REL", "CMD_MOVE_PATH"))
+add("4.3/MODE_MOTION_JOYHARD/socket-moves-ignored",
+    partial(_mode_ignores, mode=JOYHARD, names=("CMD_MOVE_VEL", "CMD_MOVE_VEL_WHEEL", "CMD_MOVE_REL")), **_GATE,
+    level=Level.SHOULD,
+    requirement="guide 4.3 Mode Joystick (Hardware): \"The platform is controlled with a wireless remote "
+                "controller\" - not by socket move commands",
+    telegrams=("CMD_MOVE_VEL", "CMD_MOVE_VEL_WHEEL", "CMD_MOVE_REL"))
