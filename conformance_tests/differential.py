@@ -2,8 +2,10 @@
 replies diffed field by field.
 
 Rules:
-- Both sides start from the same known state: Ready in MODE_MOTION_NO, the same estimated pose, the suite's own
-  map, roadmap and program (the target's active documents and pose are restored afterwards).
+- Both sides start from a known state: Ready in MODE_MOTION_NO. Poses are compared relative to each side's pose
+  at the start of the session (``relative``), so targets standing in different places compare by what they
+  did. With motion allowed the moves come first, on each side's own active map (the world a simulator moves
+  in); then both sides get the suite's own map, roadmap and program (their documents are restored afterwards).
 - The script is data (``script``): the chart walk with every GET_* request in every state, every motion mode,
   parameter reads and writes, documents; with motion allowed, relative moves in Automatic, each followed by a
   wait until the platform is at rest. Only the replies are compared; volatile fields (clocks, noise, sensor
@@ -67,6 +69,13 @@ GETS = ("CMD_GET_STATUS", "CMD_GET_POSITION", "CMD_GET_MAP", "CMD_GET_ROADMAP", 
 
 def script(motion: bool) -> list[Step]:
     steps: list[Step] = []
+    if motion:  # first, on each side's own map: the world a simulator moves in is its active map
+        steps += [Step("state", St.RUNNING.value, (("mode", MotionMode.MODE_MOTION_AUTOMATIC),))]
+        for x, y, a in ((400, 0, 0), (0, 0, 90000), (300, -200, -45000)):
+            steps += [_send("CMD_MOVE_REL", x=x, y=y, angle=a), Step("rest"), _get("CMD_GET_POSITION"),
+                      _get("CMD_GET_STATUS")]
+        steps += [_send("CMD_STOP"), _get("CMD_GET_STATUS")]
+    steps.append(Step("documents"))  # from here on both sides hold the suite's documents
     for state in (St.NOT_CONNECTED, St.CONNECTED, St.READY, St.RUNNING, St.BREAKED):
         steps.append(Step("state", state.value))
         steps += [_get(g) for g in GETS]
@@ -90,13 +99,32 @@ def script(motion: bool) -> list[Step]:
                   _send(f"CMD_SET_{up}", name="diff", xml=docdata.invalid(kind)[3][1].decode("latin-1")),
                   _get(f"CMD_GET_{up}")]
     steps += [_send("CMD_SET_PROGRAM", xml=docdata.variant("program").decode()), _get("CMD_GET_PROGRAM")]
-    if motion:
-        steps += [Step("state", St.RUNNING.value, (("mode", MotionMode.MODE_MOTION_AUTOMATIC),))]
-        for x, y, a in ((400, 0, 0), (0, 0, 90000), (300, -200, -45000)):
-            steps += [_send("CMD_MOVE_REL", x=x, y=y, angle=a), Step("rest"), _get("CMD_GET_POSITION"),
-                      _get("CMD_GET_STATUS")]
-        steps += [_send("CMD_STOP"), _get("CMD_GET_STATUS")]
     return steps
+
+
+def relative(reply: Telegram, origin: tuple[float, float, float]) -> Telegram:
+    """Pose fields of ``reply`` in the frame of the session's start pose (x0, y0 mm, a0 rad), so that two
+    targets that stand in different places are compared by what they did, not where they stood."""
+    x0, y0, a0 = origin
+    c, s = math.cos(-a0), math.sin(-a0)
+
+    def xy(x: float, y: float) -> tuple[float, float]:
+        return c * (x - x0) - s * (y - y0), s * (x - x0) + c * (y - y0)
+
+    def wrap(a: float, full: float) -> float:
+        return (a + full / 2) % full - full / 2
+
+    if reply.NAME == "CMD_GET_POSITION":
+        x, y = xy(reply.x, reply.y)  # type: ignore[attr-defined]
+        return reply.replace(x=round(x), y=round(y), angle=wrap(reply.angle - a0, 2 * math.pi))  # type: ignore[attr-defined]
+    if reply.NAME == "CMD_GET_STATUS":
+        out = reply
+        for p in ("est", "cmd"):
+            x, y = xy(getattr(reply, f"{p}_x"), getattr(reply, f"{p}_y"))
+            a = wrap(getattr(reply, f"{p}_angle") - math.degrees(a0) * 1000, 360000)
+            out = out.replace(**{f"{p}_x": round(x), f"{p}_y": round(y), f"{p}_angle": round(a)})
+        return out
+    return reply
 
 
 @dataclass(frozen=True)
@@ -163,16 +191,18 @@ def play(config: Config, steps: list[Step]) -> list[Telegram | None]:
         ctx.ready()
         for kind in ("map", "roadmap", "program"):
             ctx.preserve_document(kind)
-        ctx.preserve_pose()
-        ctx.send("CMD_SET_FRM_PLTF", x=2000, y=10000, angle=0)
-        for kind in ("map", "roadmap"):
-            ctx.send(f"CMD_SET_{kind.upper()}", name="diff", xml=docdata.valid(kind).decode())
-        ctx.send("CMD_SET_PROGRAM", xml=docdata.valid("program").decode())
         for key in ("IpoTransVel", "IpoRotVel", "EndTurnEnabled"):
             ctx.preserve_param(key)
+        p0 = ctx.position()
+        origin = (p0.x, p0.y, p0.angle)  # type: ignore[attr-defined]
         for step in steps:
             fields = dict(step.fields)
-            if step.kind == "state":
+            if step.kind == "documents":
+                for kind in ("map", "roadmap"):
+                    ctx.send(f"CMD_SET_{kind.upper()}", name="diff", xml=docdata.valid(kind).decode())
+                ctx.send("CMD_SET_PROGRAM", xml=docdata.valid("program").decode())
+                replies.append(None)
+            elif step.kind == "state":
                 ctx.ensure(St(step.name) if step.name else St.READY, fields.get("mode", 0))
                 replies.append(None)
             elif step.kind == "rest":
@@ -183,7 +213,7 @@ def play(config: Config, steps: list[Step]) -> list[Telegram | None]:
                 ctx.send(step.name, **fields)
                 replies.append(None)
             else:
-                replies.append(ctx.get(step.name, **fields))
+                replies.append(relative(ctx.get(step.name, **fields), origin))
         ctx.ready()
     finally:
         ctx.finish()

@@ -5,7 +5,8 @@ Rules of this module:
   (MOVE_ABS in mode Automatic) in a finalizer; the estimated pose is never reset after a real motion.
 - Tolerances are generous (errata E-PAR-021: the suite's bounds, not the platform's): position 100 mm, angle
   5 degrees, velocity 15 % + 30 mm/s; time limits allow for a slow platform (100 mm/s) plus 10 s.
-- "No motion" means less than 5 mm and 0.5 degrees in 1 simulated second, with velocities 0.
+- "No motion" means less than 20 mm and 1 degree in 1 simulated second (localization noise, E-MOT-004), with
+  velocities under 5 mm/s and 0.02 rad/s; a move that was executed goes 300 mm or more.
 """
 
 from __future__ import annotations
@@ -25,7 +26,8 @@ from conformance_tests.outcome import Fail, Inconclusive
 NO, VEL, JOYSOFT = MotionMode.MODE_MOTION_NO, MotionMode.MODE_MOTION_VEL, MotionMode.MODE_MOTION_JOYSOFT
 AUTO, JOYHARD = MotionMode.MODE_MOTION_AUTOMATIC, MotionMode.MODE_MOTION_JOYHARD
 POS_TOL, ANG_TOL = 100.0, math.radians(5.0)
-STILL_POS, STILL_ANG = 5.0, math.radians(0.5)
+# "still": what a standing platform's estimate may do under localization noise (E-MOT-004), far below any move
+STILL_POS, STILL_ANG, STILL_V, STILL_W = 20.0, math.radians(1.0), 5.0, 0.02
 
 
 @dataclass(frozen=True)
@@ -73,8 +75,8 @@ def begin(ctx: CaseContext, mode: int) -> Pose:
 
 
 def rest(ctx: CaseContext, within: float = 10.0) -> Pose:
-    p = ctx.poll(lambda: pose(ctx), lambda q: abs(q.v) < 3.0 and abs(q.w) < 0.01, within=within)
-    if abs(p.v) >= 3.0 or abs(p.w) >= 0.01:
+    p = ctx.poll(lambda: pose(ctx), lambda q: abs(q.v) < STILL_V and abs(q.w) < STILL_W, within=within)
+    if abs(p.v) >= STILL_V or abs(p.w) >= STILL_W:
         raise Fail(f"the platform did not come to rest within {within:g} s: {p.describe()}")
     return p
 
@@ -97,7 +99,8 @@ def at_pose(ctx: CaseContext, target: Pose, how: str, *, check_angle: bool = Tru
 def still(ctx: CaseContext, start: Pose, how: str, seconds: float = 1.0) -> None:
     ctx.sleep(seconds)
     p = pose(ctx)
-    if p.dist(start) > STILL_POS or abs(angle_diff(p.th, start.th)) > STILL_ANG or abs(p.v) > 1 or abs(p.w) > 0.01:
+    if (p.dist(start) > STILL_POS or abs(angle_diff(p.th, start.th)) > STILL_ANG or abs(p.v) > STILL_V
+            or abs(p.w) > STILL_W):
         raise Fail(f"{how} must not move the platform: it went from {start.describe()} to {p.describe()}")
 
 

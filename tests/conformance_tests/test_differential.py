@@ -30,3 +30,17 @@ def test_the_reference_agrees_with_itself_and_a_mutant_does_not() -> None:
             diffs = compare(rc, Config("127.0.0.1", proxy.ports[0], time_scale=10.0), motion=False)
     assert diffs and {d.path for d in diffs} == {"motion_mode"}
     assert all(d.target == 0 and d.reference != 0 for d in diffs)
+
+
+def test_poses_are_compared_relative_to_the_start_of_the_session() -> None:
+    import math
+
+    from conformance_tests.differential import relative
+    from spec.codec import REPLIES
+
+    origin = (2000.0, 10000.0, math.pi / 2)  # standing at (2000, 10000), facing +y
+    pos = REPLIES.CMD_GET_POSITION(x=2000, y=11000, angle=math.pi, vel_trans=0.0, vel_rot=0.0)
+    rel = relative(pos, origin)
+    assert (rel.x, rel.y) == (1000, 0) and abs(rel.angle - math.pi / 2) < 1e-9
+    st = relative(canonical("CMD_GET_STATUS", {}).replace(est_x=2000, est_y=9500, est_angle=90000), origin)
+    assert (st.est_x, st.est_y, st.est_angle) == (-500, 0, 0)
