@@ -19,7 +19,7 @@ from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
 from fuzz.case import WHOLE, Case
-from fuzz.minimize import ddmin
+from fuzz.minimize import ddmin, shortest_failing_prefix
 from fuzz.report import slug, write_finding
 from fuzz.target import Outcome, Prober, Session, expected_reply_ids, play
 
@@ -79,7 +79,10 @@ class FindingWriter:
             tests += 1
             return self.reproduce(rebuild(items))[0] == kind
 
-        best = ddmin(flat, test, max_tests=120, max_seconds=self.c.o.minimize_seconds)
+        best = shortest_failing_prefix(flat, test)
+        if len(best) > 1 and test(best[-1:]):  # the frame that tipped it over, alone
+            best = best[-1:]
+        best = ddmin(best, test, max_tests=120, max_seconds=self.c.o.minimize_seconds)
         result = rebuild(best)
         simpler = [replace(s, delivery=WHOLE) for s in result]
         if any(s.delivery != WHOLE for s in result) and self.reproduce(simpler)[0] == kind:

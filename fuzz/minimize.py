@@ -2,7 +2,8 @@
 
 Rules: ``test(candidate)`` is True when the failure still happens. ``ddmin`` returns a 1-minimal subsequence
 when the budget allows (removing any single item makes the failure go away), else the smallest failing
-sequence found so far. Results of identical candidates are cached.
+sequence found so far. Results of identical candidates are cached. ``shortest_failing_prefix`` bisects first:
+frames are processed in order, so the culprit usually ends the shortest failing prefix.
 """
 
 from __future__ import annotations
@@ -54,3 +55,17 @@ def ddmin(
         if tests >= max_tests or time.monotonic() > deadline:
             break
     return current
+
+
+def shortest_failing_prefix(items: Sequence[T], test: Callable[[list[T]], bool]) -> list[T]:
+    """The shortest prefix that still fails, by bisection (log2 n tests). A target processes a connection's
+    frames in order, so the frame that kills it ends the shortest failing prefix; ddmin then has little left
+    to do. Assumes ``items`` fails; a property that is not monotone in the prefix only costs tests."""
+    lo, hi = 0, len(items)  # prefix of length hi fails; of length lo is assumed not to
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if test(list(items[:mid])):
+            hi = mid
+        else:
+            lo = mid
+    return list(items[:hi])

@@ -229,3 +229,16 @@ def test_cli_exit_codes(tmp_path: Path) -> None:
     assert main([*base, "--duration", "2", "--out", str(tmp_path / "b"), "--launch", launch + "none"]) == 0
     assert main(["fuzz", "--target", "127.0.0.1:1", "--second-port", "1", "--duration", "1", "--quiet", "--out",
                  str(tmp_path / "c")]) == 2  # fmt: skip
+
+
+def test_shortest_failing_prefix_bisects() -> None:
+    from fuzz.minimize import shortest_failing_prefix
+
+    calls = []
+
+    def fails(xs: list[int]) -> bool:
+        calls.append(1)
+        return 77 in xs
+
+    assert shortest_failing_prefix(list(range(130)), fails)[-1] == 77
+    assert len(calls) <= 8
