@@ -114,7 +114,7 @@ def pytest_sessionstart(session: pytest.Session) -> None:
         return
     runner = Runner(cfg, [])
     try:
-        runner.target.connect("A", WireLog(), _Quiet()).close()
+        runner.target.connect("A", WireLog(), _Quiet(), probe=False).close()
     except Unreachable as exc:
         pytest.exit(f"pltf conformance: {exc}", returncode=2)
     session.config.stash[_RUNNER] = runner

@@ -261,7 +261,9 @@ def _combinations(name: str) -> list[tuple[Reading, ...]]:
     combos: list[tuple[Reading, ...]] = []
     for size in range(1, len(layout_readings) + 1):
         combos.extend(itertools.combinations(layout_readings, size))
-    # the most permissive reading (trailing fields) last: it would otherwise explain a shorter layout's leftovers
+    # The trailing-fields reading stands alone and comes last: combined with a shorter layout it would explain
+    # any reply that is merely cut short ("head drive as BYTE, plus two bytes of further fields").
+    combos = [c for c in combos if len(c) == 1 or not any(r.trailing for r in c)]
     return sorted(combos, key=lambda c: (any(r.trailing for r in c), len(c)))
 
 

@@ -25,7 +25,7 @@ KILLED = (Verdict.FAIL, Verdict.NON_STRICT)
 
 
 def config_for(ports: list[int], time_scale: float) -> Config:
-    return Config("127.0.0.1", ports[0], ports[1], time_scale=time_scale, simulator=True, reruns=0,
+    return Config("127.0.0.1", ports[0], ports[1], time_scale=time_scale, simulator=True, allow_shutdown=True, reruns=0,
                   reply_timeout=1.5, connect_window=1.5)
 
 

@@ -9,8 +9,7 @@ from conformance_tests.catalogue import Case, Tier, load_all, select
 from conformance_tests.mutants.matrix import NOT_ON_REFERENCE, candidates, find_killer
 from conformance_tests.mutants.run import Bench
 
-RUNNABLE = [c for c in select(load_all().values(), tier=Tier.STANDARD)
-            if not c.destructive and c.id not in NOT_ON_REFERENCE]
+RUNNABLE = [c for c in select(load_all().values(), tier=Tier.STANDARD) if c.id not in NOT_ON_REFERENCE]
 # one case of every group, and the cases whose killer is not a generic fault
 SAMPLE_IDS = list(dict.fromkeys(
     [next(c.id for c in RUNNABLE if c.group == g) for g in dict.fromkeys(c.group for c in RUNNABLE)]

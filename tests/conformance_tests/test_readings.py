@@ -111,3 +111,9 @@ def test_a_reply_no_reading_explains_is_a_bad_reply(data: bytes) -> None:
     name = "CMD_GET_STATUS" if data[0] == 18 else "CMD_GET_POSITION"
     with pytest.raises(BadReply, match="does not decode"):
         readings.decode_reply(data, name)
+
+
+def test_a_reply_cut_short_is_not_explained_by_trailing_fields() -> None:
+    data = REPLIES.encode_data(readings.canonical("CMD_GET_STATUS", {}))
+    with pytest.raises(BadReply):
+        readings.decode_reply(data[:-1], "CMD_GET_STATUS")
