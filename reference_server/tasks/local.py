@@ -204,17 +204,17 @@ class ProgramHook:
         self.p = platform
         self.machine = LocalMachine(platform)
         self.interpreter: Interpreter | None = None
+        self._starting = False
 
     def start(self, now: float) -> None:
         doc = self.p.documents.get(DocumentKind.PROGRAM)
         if doc is None:
             self.p.log(logging.WARNING, "no active program: MODE_MOTION_PROGRAM runs nothing")
             return
-        program = compile_program(doc.tree)  # compiled when it was set or loaded already (E-TASK-016)
+        program = compile_program(doc.tree)  # checked when it was set or loaded already (E-TASK-016)
         self.machine.events.clear()
-        self.machine.begin_tick(now)
         self.interpreter = Interpreter(program, self.machine, self.p.seed)
-        self._log(self.interpreter.start(now))
+        self._starting = True  # CMD_START is handled before the state is Running: run from the next tick
 
     def pause(self, now: float) -> None:
         if self.interpreter is not None:
@@ -227,12 +227,19 @@ class ProgramHook:
             self._log(self.interpreter.tick(now))
 
     def stop(self, now: float) -> None:
+        self._starting = False
         if self.interpreter is not None:
             self._log(self.interpreter.stop(now))
             self.interpreter = None
 
     def tick(self, now: float) -> None:
-        if self.interpreter is not None and self.interpreter.running:
+        if self.interpreter is None:
+            return
+        if self._starting:
+            self._starting = False
+            self.machine.begin_tick(now)
+            self._log(self.interpreter.start(now))
+        elif self.interpreter.running:
             self._log(self.interpreter.tick(now))
 
     def raise_event(self, event_id: str) -> int:
