@@ -355,10 +355,10 @@ class Campaign:
             for r in f.out.replies:
                 self.kb.learn(r)
         covered = self.prev_unit + self.unprobed
-        for c, f in zip(cases, flights, strict=True):
+        for c, f, port in zip(cases, flights, self.ports, strict=True):
             out = f.out
             if out.refused:
-                verdict = self.prober.probe()
+                verdict = self._probe_other(port)
                 self.failure(
                     (verdict or "dead:").partition(":")[0], "connection refused on a fuzzed port", covered, [c]
                 )
@@ -367,14 +367,15 @@ class Campaign:
                 self.failure("bad-reply", out.bad_reply, covered, [c])
                 return
             if out.timed_out:
-                self._timed_out(covered, [c], "the connection neither answered nor closed after our end-of-stream")
+                what = "the connection neither answered nor closed after our end-of-stream"
+                self._timed_out(covered, [c], what, port)
                 return
             owed = len(f.expected)
             # the lead GET_STATUS is owed even before a malformed frame; past 16 KiB a close with unread input
             # may reset the connection and lose replies in flight (TCP), so only small cases are held to it
             must = owed if c.expect == KEEP else (1 if probe and c.size < 1 << 14 else 0)
             if len(out.replies) < must:
-                self._dropped(covered, [c])
+                self._dropped(covered, [c], port)
                 return
         if probe:
             self.pair_units = 0
@@ -431,10 +432,20 @@ class Campaign:
             if self._probe_ok([], []) and self.prober.pending:
                 self._probe_ok([], [])
 
-    def _dropped(self, sessions: list[Session], cases: list[Case]) -> None:
-        """A connection closed early on valid input: a death, unless the other port answers right now."""
+    def _probe_other(self, port: int | None) -> str | None:
+        """A liveness probe right now on the port other than ``port`` (the fuzzed port when None)."""
         assert self.prober is not None
-        verdict = self.prober.probe()
+        if port is None or port == self.ports[0]:
+            return self.prober.probe()
+        one_off = Prober(self.o.host, self.ports[0], self.o.deadline)
+        try:
+            return one_off.probe()
+        finally:
+            one_off.close()
+
+    def _dropped(self, sessions: list[Session], cases: list[Case], port: int | None = None) -> None:
+        """A connection closed early on valid input: a death, unless the other port answers right now."""
+        verdict = self._probe_other(port)
         if verdict is None:
             self.failure("dropped", DROPPED, self.prev_unit + self.unprobed + sessions, cases)
         else:
@@ -443,9 +454,8 @@ class Campaign:
                 kind, f"{DROPPED}; then the liveness probe: {verdict}", self.prev_unit + self.unprobed + sessions, cases
             )
 
-    def _timed_out(self, sessions: list[Session], cases: list[Case], what: str) -> None:
-        assert self.prober is not None
-        verdict = self.prober.probe()
+    def _timed_out(self, sessions: list[Session], cases: list[Case], what: str, port: int | None = None) -> None:
+        verdict = self._probe_other(port)
         if verdict is None:
             self.failure("stall", f"{what} within {self.o.deadline} s; the other port still answers", sessions, cases)
         else:
