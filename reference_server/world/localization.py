@@ -13,6 +13,8 @@ Rules (erratum E-MOT-004):
 - GlobalLocalization on and lost: after ``GLOBAL_DELAY`` s of scans the platform finds itself on the whole
   map (estimate = truth + noise).
 - ``set_estimate`` (CMD_SET_FRM_PLTF) replaces the estimate and resets the covariance.
+- Standing still (less than 1 mm of odometry since the last correction) with a position deviation below
+  ``STILL_SIGMA``, a fitting scan corrects nothing: the estimate of a platform at rest does not jitter.
 """
 
 from __future__ import annotations
@@ -34,6 +36,7 @@ MATCH = 0.5  # share of agreeing beams for a scan to fit
 LOST_AFTER = 5  # scans
 GLOBAL_DELAY = 2.0  # s
 INITIAL_SIGMA = (30.0, 30.0, math.radians(1.0))
+STILL_SIGMA = 15.0  # mm: standing still, a scan corrects only an estimate less certain than this
 
 
 def _wrap(a: float) -> float:
@@ -54,11 +57,13 @@ class Localization:
     misfits: int = 0
     lost_since: float | None = None
     last_score: float = 1.0
+    moved: float = 0.0  # mm and rad of odometry since the last correction
 
-    def set_estimate(self, x: float, y: float, angle: float) -> None:
+    def set_estimate(self, x: float, y: float, angle: float, exact: bool = False) -> None:
+        """A new estimate: a frame someone gives (INITIAL_SIGMA), or ``exact`` (the start pose at boot)."""
         self.x, self.y, self.angle = x, y, _wrap(angle)
-        self.cov = _initial()
-        self.lost, self.misfits, self.lost_since = False, 0, None
+        self.cov = _initial() / (100.0 if exact else 1.0)
+        self.lost, self.misfits, self.lost_since, self.moved = False, 0, None, 0.0
 
     def predict(self, dr: float, dl: float, track: float) -> None:
         """Odometry: the pose moves by the measured wheel travel; P = F P F' + G Q G' (plain floats: 50 Hz)."""
@@ -68,6 +73,7 @@ class Localization:
         self.x += d * c
         self.y += d * s
         self.angle = _wrap(self.angle + da)
+        self.moved += abs(d) + 500.0 * abs(da)
         (p00, p01, p02), (_, p11, p12), (_, _, p22) = self.cov.tolist()
         a, b = -d * s, d * c  # F = [[1, 0, a], [0, 1, b], [0, 0, 1]]
         r00, r01, r02 = p00 + a * p02, p01 + a * p12, p02 + a * p22
@@ -97,6 +103,9 @@ class Localization:
                                   truth[2] + rng.gauss(0, MEAS_ANGLE))  # fmt: skip
             return
         self.misfits, self.lost, self.lost_since = 0, False, None
+        if self.moved < 1.0 and math.sqrt(max(self.cov[0, 0], self.cov[1, 1])) < STILL_SIGMA:
+            return  # standing still and sure: the estimate stands still too
+        self.moved = 0.0
         ex, ey, ea = truth[0] - self.x, truth[1] - self.y, _wrap(truth[2] - self.angle)
         if math.hypot(ex, ey) > CAPTURE_POS or abs(ea) > CAPTURE_ANGLE:
             return  # locked onto a local optimum near the estimate: fits, corrects nothing

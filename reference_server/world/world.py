@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 import random
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
@@ -59,6 +59,12 @@ ODO_NOISE = 0.001  # mm^2 per mm of wheel travel: 1 mm per wheel and metre
 GRAVITY = 9.81  # m/s^2
 
 
+def _initial_exact() -> F64:
+    loc = Localization()
+    loc.set_estimate(0.0, 0.0, 0.0, exact=True)
+    return loc.cov
+
+
 class World:
     def __init__(self, params: Params, rng: random.Random, pose: Pose = (0.0, 0.0, 0.0)) -> None:
         self.params = params
@@ -77,7 +83,7 @@ class World:
         self.scene = Scene.make()
         self._planner: Planner | None = None
         self.truth: Pose = pose
-        self.loc = Localization(*pose)
+        self.loc = Localization(*pose, cov=_initial_exact())
         self.motion = Motion()
         self.contact = False
         self.last_scan: sensors.Scan | None = None
@@ -256,11 +262,11 @@ class World:
         """CMD_MOVE_ABS / CMD_MOVE_REL: plan (PlanningEnabled) or the direct Bezier path."""
         self.motion.command_job(AutoJob("goto", goal, [goal], bool(self.params("PlanningEnabled"))))
 
-    def follow_path(self, frames: list[Pose]) -> None:
+    def follow_path(self, frames: Sequence[Pose]) -> None:
         """CMD_MOVE_PATH (and CMD_MOVE_TO_STATION with the roadmap's frames)."""
         self.motion.command_job(AutoJob("path", frames[-1], list(frames), bool(self.params("PlanningEnabled"))))
 
-    def command_path(self, frames: list[Pose]) -> None:
+    def command_path(self, frames: Sequence[Pose]) -> None:
         """One frame: ``move_to``; more: ``follow_path``."""
         if len(frames) == 1:
             self.move_to(frames[0])
@@ -277,8 +283,11 @@ class World:
         self.motion.stop()
 
     def halt(self) -> None:
+        """Emergency stop, drive fault, shutdown: the setpoints (and the measured velocities, until the next
+        odometry says otherwise) are zero at once; the command ends."""
         self.motion.halt()
         self.setpoints = (0.0, 0.0)
+        self.measured = (0.0, 0.0)
 
     def set_estimate(self, pose: Pose) -> None:
         """CMD_SET_FRM_PLTF: the estimate only; the body does not move."""
@@ -287,7 +296,7 @@ class World:
     def place(self, pose: Pose) -> None:
         """The body and the estimate at ``pose`` (the start pose at boot)."""
         self.truth = pose
-        self.loc.set_estimate(*pose)
+        self.loc.set_estimate(*pose, exact=True)
 
     def event(self, event: int, now: float) -> str:
         """guide 6.3 CMD_SET_EVENT (1..6): post-process recording and replay; returns a log line."""

@@ -80,3 +80,15 @@ def test_without_a_map_nothing_is_corrected_and_nothing_is_lost() -> None:
     sim.run(1.0)
     assert not sim.world.loc.lost
     assert np.isfinite(sim.world.loc.deviations()).all()
+
+
+def test_the_estimate_of_a_platform_at_rest_does_not_jitter(office: MapGeometry) -> None:
+    sim = make_sim(office, CORRIDOR_WEST)
+    sim.run(2.0)
+    assert sim.world.estimate == CORRIDOR_WEST  # placed exactly at boot, never moved
+    sim.world.set_estimate((1020.0, 10015.0, 0.01))  # CMD_SET_FRM_PLTF a little off: corrected although at rest
+    sim.run(1.0)
+    settled = sim.world.estimate
+    assert _error(sim) < 15.0
+    sim.run(2.0)
+    assert sim.world.estimate == settled
