@@ -167,6 +167,7 @@ class Campaign:
 
     def _run(self) -> int:
         self.start_target()
+        self.stats.started = time.monotonic()  # the rate counts fuzzing, not the target's start-up
         end = time.monotonic() + self.o.duration
         last_tick = last_save = time.monotonic()
         try:
