@@ -25,6 +25,7 @@ from spec.codec import REQUESTS, encode
 from spec.model import enum_classes
 
 MAX_DRAWS = 20
+GEN_SHARE = 0.55  # of cases drawn by a generator; the rest mutate a valid seed
 MODES = sorted(int(v) for v in enum_classes()["MotionMode"])
 OP = enum_classes()["OperationState"]
 
@@ -136,7 +137,7 @@ class Scheduler:
         return Case((_enc("CMD_GET_STATUS"),), "gen.fallback", "CMD_GET_STATUS", expect=KEEP)
 
     def _draw(self, rng: random.Random) -> Case:
-        if rng.random() < 0.55:
+        if rng.random() < GEN_SHARE:
             name = rng.choices(self._gen_names, self._gen_weights)[0]
             return generate.GENERATORS[name][1](rng, self.kb, self.forbidden)
         seed = self._seed_case(rng)
