@@ -159,11 +159,14 @@ class Planner:
             nodes, prev, nxt, edges = self._with_obstacles(obs, circs)
         n = len(nodes)
         rows = [edges]
-        for idx, (p, r) in enumerate(((start, r_s), (goal, r_g))):
+        inside = self.radius / _COS * _PUSH  # a point with less clearance may lie inside an octagon
+        for idx, (p, r, c) in enumerate(((start, r_s, start_clear), (goal, r_g, goal_clear))):
             if n == 0:
                 break
             pt = np.broadcast_to(np.asarray(p, dtype=np.float64), (n, 2))
-            ok = _tangent(nodes, prev, nxt, pt) | _inward(nodes, prev, nxt, pt)
+            ok = _tangent(nodes, prev, nxt, pt)
+            if c is not None and c < inside:
+                ok |= _inward(nodes, prev, nxt, pt)
             j = np.flatnonzero(ok)
             q = np.column_stack([pt[j], nodes[j]])
             j = j[segments_clear(q, self.walls, circs, r)]
