@@ -15,6 +15,7 @@ from collections.abc import Sequence
 from reference_server import network
 from reference_server.platform import Platform
 from reference_server.storage import Storage
+from reference_server.tasks.local import factory as program_factory
 
 LOG_FORMAT = "%(asctime)s.%(msecs)03d %(levelname)-7s %(message)s"
 LOG_DATE = "%Y-%m-%d %H:%M:%S"
@@ -77,7 +78,7 @@ def run(args: argparse.Namespace) -> int:
     seeded = storage.seed_from_fixtures()
     if seeded:
         log.info("data dir %s was empty: seeded %d files from fixtures", storage.root, len(seeded))
-    platform = Platform(storage, seed=args.seed)
+    platform = Platform(storage, seed=args.seed, program=program_factory)
     try:
         return network.run(platform, args.host, args.ports, args.time_scale)
     except OSError as exc:

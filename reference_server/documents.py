@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from reference_server.storage import Storage, StorageError
+from reference_server.tasks.program import compile_program
 from spec.documents import DocumentKind, validate_document
 
 
@@ -47,7 +48,10 @@ class Documents:
 
     def set(self, kind: DocumentKind, name: str, data: bytes) -> Document:
         """Validate and activate; DocumentError leaves the active document unchanged."""
-        doc = Document(kind, name, data, validate_document(kind, data))
+        tree = validate_document(kind, data)
+        if kind is DocumentKind.PROGRAM:
+            compile_program(tree)  # erratum E-TASK-016: a program that cannot run is refused like an invalid one
+        doc = Document(kind, name, data, tree)
         self._active[kind] = doc
         return doc
 

@@ -1,16 +1,19 @@
-"""A small ideal differential drive and roadmap router (guide 4.3), until the motion issue replaces it.
+"""A small ideal differential drive (the reference ``motion_api.MotionModel``) and the roadmap router (guide 4.3).
 
 Rules:
-- Sans-IO: ``Drive.step(now, dt)`` advances the pose by one control period; the network shell calls it at
-  50 Hz simulated. Units inside: mm, mm/s, rad, rad/s. Parameters are read on every step through ``params``
-  (a ``ParameterStore.get``), so a CMD_SET_PLTF_PARAM takes effect at once.
-- The actual velocities follow the desired ones within MaxTransAcc / MaxRotAcc and are limited to
+- Sans-IO: one control period is ``step`` (control), ``move`` (physics) and ``odometry`` (estimation), see
+  reference_server/motion_api.py; ``motion_api.advance_ideal`` runs all three without hardware. Units inside:
+  mm, mm/s, rad, rad/s. Parameters are read on every step through ``params`` (a ``ParameterStore.get``), so a
+  CMD_SET_PLTF_PARAM takes effect at once; the body's true track is DistWheels at construction (hardware).
+- The setpoint velocities follow the desired ones within MaxTransAcc / MaxRotAcc and are limited to
   MaxTransVel / MaxRotVel (errata E-PAR-020, E-PAR-023); ``halt`` (emergency stop, shutdown) zeroes them.
+  ``v`` and ``w`` are the velocities measured by the odometry.
 - One command at a time (guide 4.3 Automatic: "the execution of the old command will be stopped immediately
   and the new command will be started"). ``hold`` (CMD_BREAK) brakes to zero and keeps the command,
   ``resume`` (CMD_CONTINUE) drives it on, ``stop`` (CMD_STOP) ends it.
-- A path command is turn - drive - turn per waypoint, steered from the current pose on every step (so a
-  CMD_SET_FRM_PLTF during a move simply re-aims), then a turn to the end angle; no planning, no obstacles.
+- A path command is turn - drive - turn per waypoint, steered from the estimated pose on every step (so a
+  CMD_SET_FRM_PLTF during a move simply re-aims), then a turn to the end angle; no planning, no obstacles:
+  the true body goes wherever its wheels take it.
 - ``step`` returns one-line event messages (watchdog expired, target reached); the platform logs them.
 """
 
@@ -20,43 +23,20 @@ import heapq
 import itertools
 import math
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
-Params = Callable[[str], Any]
+from reference_server.motion_api import Frame, Params, Pose, normalize
+
+__all__ = ["Drive", "Frame", "Pose", "Roadmap", "Station", "normalize", "relative_to_world"]
 
 _DRIVE_TOL = 0.02  # rad: heading error below which a turn on the spot ends and the drive starts
 _TURN_AGAIN = 0.35  # rad: heading error above which the drive stops and turns on the spot again
 _HEADING_GAIN = 2.0  # 1/s: proportional heading correction while driving
 _MIN_SPEED = 20.0  # mm/s: floor of the braking profile, so a target is reached in finite time
 _MIN_TURN = 0.02  # rad/s: the same for turns
-
-
-class Frame(NamedTuple):
-    x: float  # mm
-    y: float  # mm
-    angle: float  # rad
-
-
-@dataclass
-class Pose:
-    x: float = 0.0
-    y: float = 0.0
-    angle: float = 0.0
-
-    def frame(self) -> Frame:
-        return Frame(self.x, self.y, self.angle)
-
-
-def normalize(angle: float) -> float:
-    """The same angle in (-pi, pi]."""
-    a = math.fmod(angle, 2 * math.pi)
-    if a <= -math.pi:
-        a += 2 * math.pi
-    elif a > math.pi:
-        a -= 2 * math.pi
-    return a
+_G = 9.81  # m/s^2
 
 
 def relative_to_world(pose: Frame, rel: Frame) -> Frame:
@@ -74,6 +54,14 @@ def _brake_profile(distance: float, v_max: float, acc: float, floor: float) -> f
     return max(floor, min(v_max, math.sqrt(2.0 * acc * distance)))
 
 
+def _integrate(p: Pose, ds: float, dth: float) -> None:
+    """Second-order (midpoint) integration of the unicycle over one period."""
+    mid = p.angle + 0.5 * dth
+    p.x += ds * math.cos(mid)
+    p.y += ds * math.sin(mid)
+    p.angle = normalize(p.angle + dth)
+
+
 @dataclass
 class _Path:
     waypoints: deque[Frame]
@@ -84,16 +72,26 @@ class _Path:
 @dataclass
 class Drive:
     params: Params
-    pose: Pose = field(default_factory=Pose)
-    v: float = 0.0  # actual translational velocity, mm/s
-    w: float = 0.0  # actual rotational velocity, rad/s
+    pose: Pose = field(default_factory=Pose)  # the estimate (odometry)
+    true_pose: Pose = field(default_factory=Pose)  # the ground truth
+    v: float = 0.0  # measured translational velocity, mm/s
+    w: float = 0.0  # measured rotational velocity, rad/s
     target_reached: bool = False
     held: bool = False
     _kind: str = "idle"  # idle | vel | joy | path
     _v_cmd: float = 0.0
     _w_cmd: float = 0.0
+    _v_set: float = 0.0  # setpoint velocities after the acceleration limits
+    _w_set: float = 0.0
     _last_cmd: float = 0.0
     _path: _Path | None = None
+    _true_track: float = 0.0  # mm: the body's wheel distance (DistWheels when built)
+    _true_v: float = 0.0  # true velocities of the last ``move``
+    _true_w: float = 0.0
+    _true_acc: float = 0.0  # mm/s^2
+
+    def __post_init__(self) -> None:
+        self._true_track = float(self.params("DistWheels"))
 
     # ---- commands
     def command_velocity(self, v: float, w: float, now: float, kind: str = "vel") -> None:
@@ -103,7 +101,7 @@ class Drive:
 
     def command_wheels(self, right: float, left: float, now: float) -> None:
         """CMD_MOVE_VEL_WHEEL: wheel speeds (mm/s) -> v, w through DistWheels (guide 5.9 Geometry)."""
-        self.command_velocity((right + left) / 2.0, (right - left) / float(self.params("DistWheels")), now)
+        self.command_velocity((right + left) / 2.0, (right - left) / self._track(), now)
 
     def command_path(self, frames: list[Frame]) -> None:
         """Drive through the frames' points, then turn to the last frame's angle."""
@@ -123,12 +121,18 @@ class Drive:
         self._kind, self._path, self.held = "idle", None, False
 
     def halt(self) -> None:
-        """Stop at once (emergency stop, CAN shutdown)."""
+        """Stop at once (emergency stop, drive fault, CAN shutdown): the setpoints are zero from now on (the
+        measured velocities too, until the next odometry says otherwise)."""
         self.stop()
-        self.v = self.w = 0.0
+        self._v_set = self._w_set = self.v = self.w = 0.0
 
     def set_pose(self, frame: Frame) -> None:
+        """CMD_SET_FRM_PLTF: the estimate only."""
         self.pose = Pose(frame.x, frame.y, normalize(frame.angle))
+
+    def place(self, frame: Frame) -> None:
+        self.set_pose(frame)
+        self.true_pose = Pose(frame.x, frame.y, normalize(frame.angle))
 
     # ---- observation
     @property
@@ -147,16 +151,47 @@ class Drive:
             return Frame(wp.x, wp.y, self._path.end_angle if len(self._path.waypoints) == 1 else wp.angle)
         return Frame(self.pose.x, self.pose.y, self._path.end_angle)
 
+    def wheel_setpoints(self) -> tuple[float, float]:
+        half = 0.5 * self._w_set * self._track()
+        return self._v_set + half, self._v_set - half
+
     # ---- the control period
     def step(self, now: float, dt: float) -> list[str]:
         events: list[str] = []
         v_d, w_d = self._desired(now, dt, events)
         if self.held:
             v_d = w_d = 0.0
-        self.v = _approach(self.v, v_d, float(self.params("MaxTransAcc")) * dt)
-        self.w = _approach(self.w, w_d, float(self.params("MaxRotAcc")) * dt)
-        self._integrate(dt)
+        self._v_set = _approach(self._v_set, v_d, float(self.params("MaxTransAcc")) * dt)
+        self._w_set = _approach(self._w_set, w_d, float(self.params("MaxRotAcc")) * dt)
         return events
+
+    def move(self, right: float, left: float, dt: float) -> tuple[float, float]:
+        """No obstacles: the wheels roll as driven and carry the body along."""
+        dr, dl = right * dt, left * dt
+        v = 0.5 * (right + left)
+        self._true_acc = 0.0 if dt <= 0.0 else (v - self._true_v) / dt
+        self._true_v, self._true_w = v, (right - left) / self._true_track
+        _integrate(self.true_pose, 0.5 * (dr + dl), (dr - dl) / self._true_track)
+        return dr, dl
+
+    def odometry(self, right: float, left: float, dt: float) -> None:
+        ds, dth = 0.5 * (right + left), (right - left) / self._track()
+        _integrate(self.pose, ds, dth)
+        if dt > 0.0:
+            self.v, self.w = ds / dt, dth / dt
+
+    # ---- sensor sources: no world, so no echo; the IMU feels the true motion
+    def scan_ranges(self, now: float) -> Sequence[float | None] | None:
+        return None
+
+    def us_ranges(self, now: float) -> Sequence[float | None] | None:
+        return None
+
+    def imu(self, now: float) -> tuple[float, float, float, float]:
+        return self._true_acc / 1000.0, self._true_v * self._true_w / 1000.0, _G, self._true_w
+
+    def _track(self) -> float:
+        return float(self.params("DistWheels"))
 
     def _limit(self, v: float, w: float) -> tuple[float, float]:
         v_max, w_max = float(self.params("MaxTransVel")), float(self.params("MaxRotVel"))
@@ -175,7 +210,7 @@ class Drive:
             # guide 6.3 CMD_MOVE_VEL: "If no velocity commands are received, the platform will decelerate to
             # zero after few seconds" (JoySoftVelTimeout, erratum E-PAR-019)
             if now - self._last_cmd > float(self.params("JoySoftVelTimeout")) / 1000.0:
-                if self.v == 0.0 and self.w == 0.0:
+                if self._v_set == 0.0 and self._w_set == 0.0:
                     self.stop()
                 return 0.0, 0.0
             return self._v_cmd, self._w_cmd
@@ -218,13 +253,6 @@ class Drive:
     def _turn_speed(error: float, w_max: float, alpha: float, dt: float) -> float:
         w = min(_brake_profile(abs(error), w_max, alpha, _MIN_TURN), abs(error) / dt)
         return math.copysign(w, error)
-
-    def _integrate(self, dt: float) -> None:
-        p = self.pose
-        mid = p.angle + 0.5 * self.w * dt  # second-order (midpoint) integration of the unicycle
-        p.x += self.v * dt * math.cos(mid)
-        p.y += self.v * dt * math.sin(mid)
-        p.angle = normalize(p.angle + self.w * dt)
 
 
 # ---------------------------------------------------------------------------------------------- roadmap

@@ -45,8 +45,8 @@ def _milli_deg(rad: float) -> int:
 
 
 def status_reply(p: Platform, now: float) -> Telegram:
-    cmd = p.drive.commanded_frame()
-    pose = p.drive.pose
+    cmd = p.motion.commanded_frame()
+    pose = p.motion.pose
     flag = int
     return reply(
         "CMD_GET_STATUS",
@@ -55,9 +55,9 @@ def status_reply(p: Platform, now: float) -> Telegram:
         # no localization yet: the estimate is exact, its deviations 0
         cov_major=0, cov_minor=0, cov_angle=0, cov_axis_angle=0,
         scan=(), reflectors=(), lines=(), circles=(), corners=(),  # no laser scanner
-        path=tuple((_i32(f.x), _i32(f.y)) for f in p.drive.remaining_path()),
+        path=tuple((_i32(f.x), _i32(f.y)) for f in p.motion.remaining_path()),
         joystick_buttons=(),  # no joystick
-        vel_trans=_i32(p.drive.v), vel_rot=_i32(p.drive.w * 1000.0),
+        vel_trans=_i32(p.motion.v), vel_rot=_i32(p.motion.w * 1000.0),
         relay_digital_in=0, relay_status=ABSENT, relay_analog_in=(0,) * 8, relay_opto_distance=(0,) * 4,
         io_battery_voltage=0, io_digital_in=0, io_digital_out=0, io_status=ABSENT, io_analog_in=(0,) * 8,
         motor_right_status=ABSENT, motor_left_status=ABSENT, motor_right_temp=0, motor_left_temp=0,
@@ -66,7 +66,7 @@ def status_reply(p: Platform, now: float) -> Telegram:
         gps_latitude=0.0, gps_longitude=0.0,  # no GPS receiver (the section has no status field)
         gyro_accel=(0,) * 3, gyro_angle=0, gyro_temp=0, gyro_status=ABSENT,
         initialized=flag(p.chart.initialized),
-        target_reached=flag(p.drive.target_reached),
+        target_reached=flag(p.motion.target_reached),
         motion_mode=p.motion_mode,
         operation_state=p.chart.operation_state,
         emergency_state=p.chart.emergency,
@@ -78,19 +78,19 @@ def status_reply(p: Platform, now: float) -> Telegram:
         ir_active=(0,) * 4,  # no IR sensors
         siren=flag(bool(p.params.get("SirenEnabled"))),
         flashlight=flag(bool(p.params.get("FlashlightEnabled"))),
-        head_position=0,  # no head drive
+        head_position=p.head_position,  # erratum E-TASK-017
     )  # fmt: skip
 
 
 def position_reply(p: Platform) -> Telegram:
-    pose = p.drive.pose
+    pose = p.motion.pose
     return reply(
         "CMD_GET_POSITION",
         x=_i32(pose.x),
         y=_i32(pose.y),
         angle=pose.angle,
-        vel_trans=float(p.drive.v),
-        vel_rot=float(p.drive.w),
+        vel_trans=float(p.motion.v),
+        vel_rot=float(p.motion.w),
     )
 
 

@@ -205,6 +205,7 @@ class ProgramHook:
         self.machine = LocalMachine(platform)
         self.interpreter: Interpreter | None = None
         self._starting = False
+        self._held = False  # CMD_BREAK came between CMD_START and the program's first tick
 
     def start(self, now: float) -> None:
         doc = self.p.documents.get(DocumentKind.PROGRAM)
@@ -214,15 +215,19 @@ class ProgramHook:
         program = compile_program(doc.tree)  # checked when it was set or loaded already (E-TASK-016)
         self.machine.events.clear()
         self.interpreter = Interpreter(program, self.machine, self.p.seed)
-        self._starting = True  # CMD_START is handled before the state is Running: run from the next tick
+        self._starting, self._held = True, False  # CMD_START is handled before the state is Running: next tick
 
     def pause(self, now: float) -> None:
-        if self.interpreter is not None:
+        if self._starting:
+            self._held = True  # the program starts at CMD_CONTINUE
+        elif self.interpreter is not None:
             self.interpreter.pause(now)
             self._log(self.interpreter.tick(now))
 
     def resume(self, now: float) -> None:
-        if self.interpreter is not None:
+        if self._starting:
+            self._held = False
+        elif self.interpreter is not None:
             self.interpreter.resume(now)
             self._log(self.interpreter.tick(now))
 
@@ -235,7 +240,7 @@ class ProgramHook:
     def tick(self, now: float) -> None:
         if self.interpreter is None:
             return
-        if self._starting:
+        if self._starting and not self._held:
             self._starting = False
             self.machine.begin_tick(now)
             self._log(self.interpreter.start(now))

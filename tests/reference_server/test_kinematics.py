@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 
 from reference_server.kinematics import Drive, Frame, Roadmap, normalize, relative_to_world
+from reference_server.motion_api import advance_ideal
 from spec.documents import DocumentKind, validate_document
 from spec.parameters import ParameterStore
 
@@ -19,7 +20,7 @@ def run(drive: Drive, seconds: float, start: float = 0.0) -> float:
     now = start
     for _ in range(round(seconds / DT)):
         now += DT
-        drive.step(now, DT)
+        advance_ideal(drive, now, DT)
     return now
 
 
@@ -44,7 +45,7 @@ def test_wheel_velocities_drive_straight_and_turn(params: ParameterStore) -> Non
     drive.command_wheels(300, 300, 0.0)
     for k in range(50):  # resend within the watchdog, 1 s
         drive.command_wheels(300, 300, k * DT)
-        drive.step((k + 1) * DT, DT)
+        advance_ideal(drive, (k + 1) * DT, DT)
     assert drive.v == pytest.approx(300)
     assert drive.w == 0
     assert 200 < drive.pose.x < 300

@@ -321,12 +321,12 @@ def test_emergency_stop_is_seen_over_tcp(server: ServerThread) -> None:
 
 
 def test_an_internal_error_closes_only_that_connection(server: ServerThread, monkeypatch: pytest.MonkeyPatch) -> None:
-    from reference_server import platform
+    from reference_server import commands
 
     def broken(*args: object) -> None:
         raise RuntimeError("bug")
 
-    monkeypatch.setitem(platform._HANDLERS, "CMD_SPEAK_TEXT", broken)
+    monkeypatch.setitem(commands.HANDLERS, "CMD_SPEAK_TEXT", broken)
     with Client(server.ports[1]) as bystander:
         bystander.status()
         with Client(server.ports[0]) as c:

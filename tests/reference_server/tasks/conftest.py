@@ -12,6 +12,8 @@ import pytest
 
 from clients.pltf_client import MotionMode, OperationState, PlatformClient, Status
 from pltf_cli.run_program_cmd import RunResult, prepare, run_remote
+from reference_server.platform import Platform
+from reference_server.tasks.local import factory
 from reference_server.tasks.program import load_program
 from reference_server.tasks.remote import RemoteMachine
 from tests.reference_server.conftest import ServerThread
@@ -39,7 +41,7 @@ class Session:
 
     def log(self) -> list[str]:
         """Every protocol queue line so far, in order (polled; call it often enough)."""
-        queue = [e.text for e in self.client.get_debug_data().protocol_queue]
+        queue = [e.entry for e in self.client.get_debug_data().protocol_queue]
         overlap = 0
         for k in range(min(len(queue), len(self.lines)), 0, -1):
             if self.lines[-k:] == queue[:k]:
@@ -94,9 +96,16 @@ class Session:
         self.close()
 
 
+def program_server(data_dir: Path) -> ServerThread:
+    """A started ServerThread whose platform runs the task interpreter (as ``pltf serve`` builds it)."""
+    srv = ServerThread(data_dir, time_scale=SCALE)
+    srv.platform = Platform(srv.platform.storage, seed=1, program=factory)
+    return srv.start()
+
+
 @pytest.fixture
 def server(tmp_path: Path) -> Iterator[ServerThread]:
-    srv = ServerThread(tmp_path / "data", time_scale=SCALE).start()
+    srv = program_server(tmp_path / "data")
     yield srv
     srv.stop()
 

@@ -1,0 +1,48 @@
+"""Debug Commands (guide 6.3, 6.4) and the identifiers known only from field code (layouts unknown)."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+from reference_server import status
+from reference_server.commands.registry import ACCEPTED, Outcome, handles
+from reference_server.enums import Event, MouseButton
+
+if TYPE_CHECKING:
+    from reference_server.platform import Platform
+
+
+@handles("CMD_GET_DEBUG_DATA")
+def get_debug_data(p: Platform, t: Any, now: float) -> Outcome:
+    return Outcome(reply=status.debug_reply(p))
+
+
+@handles("CMD_GET_CAMERA")
+def get_camera(p: Platform, t: Any, now: float) -> Outcome:
+    return Outcome(reply=status.camera_reply())
+
+
+@handles("CMD_MOUSE_MOVE")
+def mouse_move(p: Platform, t: Any, now: float) -> Outcome:
+    # guide 6.3: "Set the mouse obstacle": right button down places it, up removes it
+    p.mouse_obstacle = (t.x, t.y) if t.button == MouseButton.EV_MOUSE_RBUTTON_DOWN else None
+    return ACCEPTED
+
+
+@handles("CMD_SET_LOG_ENABLED", "CMD_SET_POST_PROCESS_FILENAME")
+def unused(p: Platform, t: Any, now: float) -> Outcome:
+    return p._ignore(f"{t.NAME}: not used at the moment (guide 6.3)")
+
+
+@handles("CMD_SET_EVENT")
+def set_event(p: Platform, t: Any, now: float) -> Outcome:
+    return p._ignore(f"{t.NAME} {Event(t.event).name}: post-process recording is not simulated")
+
+
+@handles(
+    "CMD_DEBUG1", "CMD_DEBUG2", "CMD_DEBUG3", "CMD_DEBUG4", "CMD_GET_MAPIMAGE", "CMD_ENABLE_EXT_MAPPING",
+    "CMD_DISABLE_EXT_MAPPING", "CMD_EXT_WRITE_MAPPING", "CMD_EXT_READ_MAPPING", "CMD_WRITE_LCD",
+    "CMD_STOP_MOTIONTHREAD", "CMD_RESTART_MOTIONTHREAD", "CMD_SHUTDOWN_HOST",
+)  # fmt: skip
+def layout_unknown(p: Platform, t: Any, now: float) -> Outcome:
+    return p._ignore(f"{t.NAME}: layout unknown, command not supported")

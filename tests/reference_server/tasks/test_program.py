@@ -1,0 +1,146 @@
+"""Programs on the platform (MODE_MOTION_PROGRAM) over the socket API: refusal of invalid programs, CMD_START /
+CMD_BREAK / CMD_CONTINUE / CMD_STOP, priorities, user events, and local versus remote mode."""
+
+from __future__ import annotations
+
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+from clients.pltf_client import OperationState, Status
+from reference_server.tasks.program import load_program
+from spec.documents import DocumentError
+from tests.reference_server.tasks.conftest import SCALE, Session, program, program_server, task
+from tests.reference_server.tasks.test_waits import at
+
+PATROL = program(task(
+    "<parameter><set key='IpoTransVel' value='900'/></parameter>"
+    "<motion><settarget><station name='Kitchen'/></settarget></motion><wait timeout='90000'><target/></wait>"
+    "<wait><random min='500' max='1500'/></wait>"
+    "<motion><settarget><coord x='7000' y='10000' angle='-90'/></settarget></motion>"
+    "<wait timeout='90000'><target/></wait><wait><delay amount='800'/></wait>"
+    "<motion><settarget><station name='Server'/></settarget></motion><wait timeout='90000'><target/></wait>"
+    "<wait><delay amount='800'/></wait>"
+    "<motion><settarget><station name='Corridor_01'/></settarget></motion><wait timeout='90000'><target/></wait>"
+    "<wait><delay amount='800'/></wait>"
+))  # fmt: skip
+
+
+@pytest.mark.parametrize(
+    ("body", "expected"),
+    [
+        ("<ioevent><digitalout D1='2'/></ioevent>", None),  # the schema's message
+        ("<goto label='nowhere'/>", "no label 'nowhere' in this task"),
+    ],
+)
+def test_an_invalid_program_is_refused_and_the_active_one_stays(session: Session, body: str, expected: str) -> None:
+    before = session.client.get_program().xml
+    bad = program(task(body))
+    if expected is None:
+        with pytest.raises(DocumentError) as info:
+            load_program(bad.encode())
+        expected = info.value.reason
+    session.client.set_program(bad)
+    session.wait_log("refused")
+    assert any(expected in line for line in session.log()), session.lines[-4:]
+    assert session.client.get_program().xml == before
+    lines = session.run_local(program(task("<log message='still the good one'/>")))
+    assert any("still the good one" in line for line in lines)
+
+
+def test_break_freezes_the_program_and_continue_resumes_it(session: Session) -> None:
+    session.run_local(program(task(
+        "<log message='A'/><wait><delay amount='3000'/></wait><log message='B'/>"
+    )), wait_finished=False)  # fmt: skip
+    session.wait_log("] A")
+    session.client.break_()
+    session.client.wait_state(OperationState.ST_OP_BREAKED)
+    paused = session.status().timestamp_ms
+    time.sleep(4.0 / SCALE)
+    session.client.continue_()
+    resumed = session.status().timestamp_ms
+    lines = session.wait_log("program finished")
+    pause = (resumed - paused) / 1000.0
+    assert pause > 2.0
+    assert at(lines, "B") - at(lines, "A") == pytest.approx(3.0 + pause, abs=0.2)
+
+
+def test_stop_aborts_the_program(session: Session) -> None:
+    session.run_local(program(task(
+        "<motion><settarget><coord x='20000' y='10000'/></settarget></motion>"
+        "<wait><delay amount='5000'/></wait><log message='never'/>"
+    )), wait_finished=False)  # fmt: skip
+    time.sleep(1.0 / SCALE)
+    session.client.stop()
+    session.wait_log("program stopped")
+    st = session.client.wait_state(OperationState.ST_OP_READY)
+    x = st.est_x_mm
+    time.sleep(6.0 / SCALE)
+    assert not session.saw("never") and session.status().vel_trans_mm_s == 0 and session.status().est_x_mm - x < 600
+
+
+def test_priorities_order_the_tasks_and_handlers_wait_for_their_call(session: Session) -> None:
+    lines = session.run_local(program(
+        task("<log message='low'/>", "low", 1),
+        task("<log message='high'/>", "high", 7),
+        task("<log message='handler'/>", "handler", 9),
+        task("<motion><moveto onErrorTask='handler'><trackedball/></moveto></motion>", "caller", 0),
+    ))  # fmt: skip
+    order = [line.rsplit("] ", 1)[1] for line in lines if "task log [info]" in line and "] task " not in line]
+    assert order == ["high", "low", "handler"]
+
+
+def test_a_user_event_releases_the_waiting_task(session: Session) -> None:
+    session.run_local(program(task(
+        "<log message='A'/><wait timeout='60000' timeoutlabel='late'><userevent id='door_open'/></wait>"
+        "<log message='B'/><label name='late'/>"
+    )), wait_finished=False)  # fmt: skip
+    session.wait_log("] A")
+    released = session.server.call(session.server.platform.program.raise_event, "door_open")
+    lines = session.wait_log("program finished")
+    assert released == 1
+    assert at(lines, "B") - at(lines, "A") < 10.0
+
+
+def _targets(session: Session, stop: threading.Event, out: list[tuple[int, int]]) -> None:
+    """Sample the status; every place the platform reports its target reached, once each."""
+    with Session(session.server, port_index=1) as watcher:
+        while not stop.is_set():
+            st: Status = watcher.status()
+            here = (st.est_x_mm, st.est_y_mm)
+            if st.target_reached and (not out or abs(out[-1][0] - here[0]) + abs(out[-1][1] - here[1]) > 300):
+                out.append(here)
+            time.sleep(0.002)
+
+
+def _watched(session: Session, run: object) -> list[tuple[int, int]]:
+    stop, seen = threading.Event(), []  # type: ignore[var-annotated]
+    watcher = threading.Thread(target=_targets, args=(session, stop, seen))
+    watcher.start()
+    try:
+        run()  # type: ignore[operator]
+    finally:
+        stop.set()
+        watcher.join(10)
+    return seen
+
+
+def test_the_same_program_locally_and_remotely_reaches_the_same_targets_in_order(tmp_path: Path) -> None:
+    runs = {}
+    for mode in ("local", "remote"):
+        srv = program_server(tmp_path / mode)
+        try:
+            with Session(srv) as s:
+                if mode == "local":
+                    runs[mode] = _watched(s, lambda s=s: s.run_local(PATROL, timeout=60))
+                else:
+                    runs[mode] = _watched(s, lambda s=s: s.run_remote(PATROL, tmp_path, seed=1))
+        finally:
+            srv.stop()
+    local, remote = runs["local"], runs["remote"]
+    assert len(local) == 4, local
+    assert len(remote) == len(local), (local, remote)
+    for (lx, ly), (rx, ry) in zip(local, remote, strict=True):
+        assert abs(lx - rx) <= 60 and abs(ly - ry) <= 60, (local, remote)
