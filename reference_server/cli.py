@@ -10,18 +10,28 @@ from __future__ import annotations
 import argparse
 import logging
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 from reference_server import network
+from reference_server.kinematics import Drive
+from reference_server.motion_api import MotionFactory
 from reference_server.platform import Platform
 from reference_server.storage import Storage
 from reference_server.tasks.local import factory as program_factory
+from reference_server.world.model import factory as world_factory
 
 LOG_FORMAT = "%(asctime)s.%(msecs)03d %(levelname)-7s %(message)s"
 LOG_DATE = "%Y-%m-%d %H:%M:%S"
 DEFAULT_PORTS = (10000, 10002)  # guide 6.1: "listens for clients on the socket ports 10000 and 10002"
 
 log = logging.getLogger("pltf.server")
+
+
+def _ideal(seed: int) -> MotionFactory:
+    return Drive
+
+
+MOTION: dict[str, Callable[[int], MotionFactory]] = {"world": world_factory, "ideal": _ideal}
 
 
 def parse_ports(text: str) -> list[int]:
@@ -59,6 +69,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         default=1.0,
         help="simulated seconds per wall second (default 1)",
     )
+    p.add_argument(
+        "--motion",
+        choices=sorted(MOTION),
+        default="world",
+        help="motion model: world (pymunk body, laser, localization, planner; default) or ideal (wheels only)",
+    )
     p.add_argument("--seed", type=int, default=0, help="seed of the simulation's random numbers (default 0)")
     p.add_argument(
         "--log-level",
@@ -78,7 +94,7 @@ def run(args: argparse.Namespace) -> int:
     seeded = storage.seed_from_fixtures()
     if seeded:
         log.info("data dir %s was empty: seeded %d files from fixtures", storage.root, len(seeded))
-    platform = Platform(storage, seed=args.seed, program=program_factory)
+    platform = Platform(storage, seed=args.seed, motion=MOTION[args.motion](args.seed), program=program_factory)
     try:
         return network.run(platform, args.host, args.ports, args.time_scale)
     except OSError as exc:

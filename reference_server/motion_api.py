@@ -29,7 +29,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any, NamedTuple, Protocol
+from typing import Any, NamedTuple, Protocol, runtime_checkable
 
 Params = Callable[[str], Any]  # ParameterStore.get: parameters are read live, a change takes effect at once
 
@@ -145,6 +145,28 @@ class MotionModel(Protocol):
 
     def imu(self, now: float) -> tuple[float, float, float, float]:
         """(ax, ay, az in m/s^2, yaw rate in rad/s) of the body, for the gyro board."""
+
+
+@runtime_checkable
+class WorldFeatures(Protocol):
+    """What a world adds to a ``MotionModel`` (reference_server/world/model.py ``WorldModel``); the platform looks
+    for it with ``isinstance`` and does without it (``kinematics.Drive`` has none of it)."""
+
+    @property
+    def planner_state(self) -> int:
+        """The planner's state of the last move (guide 6.2 PlannerState)."""
+
+    def set_map_tree(self, tree: Any | None) -> None:
+        """The active, validated map (None: no map): walls for the body, the sensors and the planner."""
+
+    def set_mouse_obstacle(self, xy: tuple[float, float] | None) -> None:
+        """CMD_MOUSE_MOVE: the mouse obstacle at (x, y) mm, or none."""
+
+    def event(self, event: int, now: float) -> str:
+        """CMD_SET_EVENT: post-process recording and replay; a log line."""
+
+    def status_fields(self) -> dict[str, Any]:
+        """The CMD_GET_STATUS fields the world fills (covariance, observations, collision, localization)."""
 
 
 MotionFactory = Callable[[Params], MotionModel]

@@ -29,7 +29,7 @@ from reference_server.commands.registry import ACCEPTED
 from reference_server.documents import Documents
 from reference_server.enums import MotionMode, PlannerState
 from reference_server.kinematics import Drive, Frame, Roadmap
-from reference_server.motion_api import MotionFactory, MotionModel, advance_ideal
+from reference_server.motion_api import MotionFactory, MotionModel, WorldFeatures, advance_ideal
 from reference_server.program_api import Program, ProgramFactory, no_program
 from reference_server.state_chart import State, StateChart
 from reference_server.storage import Storage, StorageError
@@ -70,6 +70,8 @@ class Platform:
         self.now = 0.0
         self._last_tick: float | None = None
         self.motion: MotionModel = (motion or Drive)(self.params.get)
+        self.world: WorldFeatures | None = self.motion if isinstance(self.motion, WorldFeatures) else None
+        self._world_planner = PlannerState.PLANNER_STANDBY
         self.program: Program = (program or no_program)(self)
 
     @property
@@ -129,6 +131,8 @@ class Platform:
         if dt > 0.0:
             for event in advance_ideal(self.motion, now, dt):
                 self.log(logging.INFO, "%s", event)
+        if self.world is not None and self.world.planner_state != self._world_planner:
+            self.planner_state = self._world_planner = self.world.planner_state  # the planner's latest word
 
     def fire(self, name: str) -> None:
         """The state chart's transition for an accepted command (now, or when its hardware part is done)."""
@@ -183,9 +187,11 @@ class Platform:
         return self._ignore(f"{name} has no effect in motion mode {self._mode_name()}")
 
     def _activated(self, kind: DocumentKind) -> None:
+        doc = self.documents.get(kind)
         if kind is DocumentKind.ROADMAP:
-            doc = self.documents.get(kind)
             self.roadmap = None if doc is None else Roadmap(doc.tree)
+        elif kind is DocumentKind.MAP and self.world is not None:
+            self.world.set_map_tree(None if doc is None else doc.tree)  # the walls the body and sensors meet
 
     def _load(self, kind: DocumentKind, startup: bool = False) -> Outcome:
         try:

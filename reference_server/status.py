@@ -48,13 +48,12 @@ def status_reply(p: Platform, now: float) -> Telegram:
     cmd = p.motion.commanded_frame()
     pose = p.motion.pose
     flag = int
-    return reply(
-        "CMD_GET_STATUS",
+    fields: dict[str, Any] = dict(  # noqa: C408 - the telegram's field names, as keywords
         cmd_x=_i32(cmd.x), cmd_y=_i32(cmd.y), cmd_angle=_milli_deg(cmd.angle),
         est_x=_i32(pose.x), est_y=_i32(pose.y), est_angle=_milli_deg(pose.angle),
-        # no localization yet: the estimate is exact, its deviations 0
+        # without a world (kinematics.Drive): no localization, the estimate is exact, its deviations 0
         cov_major=0, cov_minor=0, cov_angle=0, cov_axis_angle=0,
-        scan=(), reflectors=(), lines=(), circles=(), corners=(),  # no laser scanner
+        scan=(), reflectors=(), lines=(), circles=(), corners=(),  # without a world: no laser scanner
         path=tuple((_i32(f.x), _i32(f.y)) for f in p.motion.remaining_path()),
         joystick_buttons=(),  # no joystick
         vel_trans=_i32(p.motion.v), vel_rot=_i32(p.motion.w * 1000.0),
@@ -80,6 +79,9 @@ def status_reply(p: Platform, now: float) -> Telegram:
         flashlight=flag(bool(p.params.get("FlashlightEnabled"))),
         head_position=p.head_position,  # erratum E-TASK-017
     )  # fmt: skip
+    if p.world is not None:  # localization, observations, collision (errata E-MOT-003, E-MOT-004, E-MOT-006)
+        fields.update(p.world.status_fields())
+    return reply("CMD_GET_STATUS", **fields)
 
 
 def position_reply(p: Platform) -> Telegram:

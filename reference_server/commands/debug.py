@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 from typing import TYPE_CHECKING, Any
 
 from reference_server import status
@@ -26,6 +27,8 @@ def get_camera(p: Platform, t: Any, now: float) -> Outcome:
 def mouse_move(p: Platform, t: Any, now: float) -> Outcome:
     # guide 6.3: "Set the mouse obstacle": right button down places it, up removes it
     p.mouse_obstacle = (t.x, t.y) if t.button == MouseButton.EV_MOUSE_RBUTTON_DOWN else None
+    if p.world is not None:
+        p.world.set_mouse_obstacle(p.mouse_obstacle)
     return ACCEPTED
 
 
@@ -36,6 +39,9 @@ def unused(p: Platform, t: Any, now: float) -> Outcome:
 
 @handles("CMD_SET_EVENT")
 def set_event(p: Platform, t: Any, now: float) -> Outcome:
+    if p.world is not None:  # guide 6.3: post-process recording and replay (erratum E-MOT-006)
+        p.log(logging.INFO, f"{t.NAME} {Event(t.event).name}: {p.world.event(t.event, now)}")
+        return ACCEPTED
     return p._ignore(f"{t.NAME} {Event(t.event).name}: post-process recording is not simulated")
 
 

@@ -78,7 +78,7 @@ class World:
         self.physics = Physics(self.footprint)
         self.geometry: MapGeometry | None = None
         self._obstacles: dict[object, tuple[float, float, float] | F64] = {}
-        self._corners = np.zeros((0, 2))
+        self._corners: F64 | None = np.zeros((0, 2))  # None: not computed yet for the active map
         self.map_scene = Scene.make()
         self.scene = Scene.make()
         self._planner: Planner | None = None
@@ -101,9 +101,16 @@ class World:
     def set_map(self, geometry: MapGeometry | None) -> None:
         """The active map (None: no map); the physical world and the planner's lookup data are rebuilt."""
         self.geometry = geometry
-        self._corners = geometry.corners() if geometry is not None else np.zeros((0, 2))
+        self._corners = None if geometry is not None else np.zeros((0, 2))  # computed when first observed
         self._planner = None
         self._rebuild()
+
+    def _wall_corners(self) -> F64:
+        """The active map's wall corners (seen by the observations), computed once per map, when first needed:
+        a big map is set at once, its corners cost a moment only when the laser first looks."""
+        if self._corners is None:
+            self._corners = self.geometry.corners() if self.geometry is not None else np.zeros((0, 2))
+        return self._corners
 
     def set_obstacle(self, key: object, shape: tuple[float, float, float] | F64 | None) -> None:
         """Place, move or remove (None) an obstacle: a circle (x, y, r) or an (N, 4) array of wall segments."""
@@ -237,8 +244,9 @@ class World:
             g = self.geometry or MapGeometry()
             min_line = float(self.params("MinLineLenAux"))
             self._observation = sensors.observe(
-                self.last_scan, self._scan_pose, self.footprint.front, self.scene, g.reflectors, self._corners, min_line
-            )
+                self.last_scan, self._scan_pose, self.footprint.front, self.scene, g.reflectors,
+                self._wall_corners(), min_line,
+            )  # fmt: skip
         return self._observation
 
     @property
