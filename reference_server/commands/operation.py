@@ -20,36 +20,24 @@ def _program_mode(p: Platform) -> bool:
     return bool(p.motion_mode == MotionMode.MODE_MOTION_PROGRAM)
 
 
-@handles("CMD_START")
-def start(p: Platform, t: Any, now: float) -> Outcome:
-    p.motion.stop()
-    p.log(logging.INFO, f"start motion mode {p._mode_name()}")
+# guide 4.3 Mode Program / 6.3: what each operation command does to the motion, then to the program in
+# MODE_MOTION_PROGRAM (reference_server/program_api.py)
+_OPERATIONS = {
+    "CMD_START": ("stop", "start"),
+    "CMD_BREAK": ("hold", "pause"),
+    "CMD_CONTINUE": ("resume", "resume"),
+    "CMD_STOP": ("stop", "stop"),
+}
+
+
+@handles(*_OPERATIONS)
+def operate(p: Platform, t: Any, now: float) -> Outcome:
+    motion_op, program_op = _OPERATIONS[t.NAME]
+    getattr(p.motion, motion_op)()
+    if t.NAME == "CMD_START":
+        p.log(logging.INFO, f"start motion mode {p._mode_name()}")
     if _program_mode(p):
-        p.program.start(now)
-    return ACCEPTED
-
-
-@handles("CMD_BREAK")
-def break_(p: Platform, t: Any, now: float) -> Outcome:
-    p.motion.hold()
-    if _program_mode(p):
-        p.program.pause(now)
-    return ACCEPTED
-
-
-@handles("CMD_CONTINUE")
-def continue_(p: Platform, t: Any, now: float) -> Outcome:
-    p.motion.resume()
-    if _program_mode(p):
-        p.program.resume(now)
-    return ACCEPTED
-
-
-@handles("CMD_STOP")
-def stop(p: Platform, t: Any, now: float) -> Outcome:
-    p.motion.stop()
-    if _program_mode(p):
-        p.program.stop(now)
+        getattr(p.program, program_op)(now)
     return ACCEPTED
 
 
