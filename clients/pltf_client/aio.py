@@ -19,15 +19,15 @@ from types import TracebackType
 from clients.pltf_client._commands import AsyncCommands
 from clients.pltf_client._enums import MotionMode, OperationState
 from clients.pltf_client._replies import Status
-from clients.pltf_client.core import ClientCore, PendingReply
+from clients.pltf_client.base import DEFAULT_PORT, DEFAULT_TIMEOUT, ClientBase, WireLog
+from clients.pltf_client.core import PendingReply
 from clients.pltf_client.errors import ConnectionClosed, InvalidArgument, ProtocolError, Timeout
-from clients.pltf_client.sync import DEFAULT_PORT, DEFAULT_TIMEOUT, WireLog
 from clients.pltf_client.waits import ConditionWait, Judge, ModeWait, StateWait, TargetWait
 from spec.codec import DEFAULT_MAX_LENGTH, build
 from spec.telegram import Telegram
 
 
-class AsyncPlatformClient(AsyncCommands):
+class AsyncPlatformClient(ClientBase, AsyncCommands):
     """An asyncio connection to PlatformCtrl: one coroutine method per command, typed replies, waits.
 
     Connect with ``await AsyncPlatformClient.connect(host, port)`` or ``async with AsyncPlatformClient(host,
@@ -37,31 +37,10 @@ class AsyncPlatformClient(AsyncCommands):
             await pltf.bring_up()
             status = await pltf.get_status()
 
-    Args:
-        host: the platform PC's address.
-        port: its PlatformCtrl port (guide 4.2: 10000 or 10002; one client per port).
-        timeout: default seconds to wait for a reply (each GET_* method takes its own ``timeout`` too).
-        connect_timeout: seconds to wait for the TCP connection.
-        wire_log: optional callback ``(direction, data)`` seeing every frame sent and every chunk received.
-        max_length: largest reply frame accepted, in data bytes (erratum E-WIRE-004).
+    Args: those of ``ClientBase`` (host, port, timeout, connect_timeout, wire_log, max_length).
     """
 
-    def __init__(
-        self,
-        host: str = "127.0.0.1",
-        port: int = DEFAULT_PORT,
-        *,
-        timeout: float = DEFAULT_TIMEOUT,
-        connect_timeout: float = DEFAULT_TIMEOUT,
-        wire_log: WireLog | None = None,
-        max_length: int = DEFAULT_MAX_LENGTH,
-    ) -> None:
-        self.host = host
-        self.port = port
-        self.timeout = timeout
-        self.connect_timeout = connect_timeout
-        self.wire_log = wire_log
-        self.core = ClientCore(max_length)
+    def _setup(self) -> None:
         self._writer: asyncio.StreamWriter | None = None
         self._reader_task: asyncio.Task[None] | None = None
         self._changed = asyncio.Condition()  # notified whenever a pending request may have completed
@@ -115,14 +94,6 @@ class AsyncPlatformClient(AsyncCommands):
         self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
     ) -> None:
         await self.close()
-
-    def __repr__(self) -> str:
-        return f"<AsyncPlatformClient {self.host}:{self.port}{' closed' if self.closed else ''}>"
-
-    @property
-    def closed(self) -> bool:
-        """True once the connection is closed (by ``close``, by the peer or after a protocol error)."""
-        return self.core.closed
 
     async def close(self) -> None:
         """Close the connection (idempotent). Requests still waiting fail with ConnectionClosed."""

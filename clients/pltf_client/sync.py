@@ -20,20 +20,17 @@ from types import TracebackType
 from clients.pltf_client._commands import Commands
 from clients.pltf_client._enums import MotionMode, OperationState
 from clients.pltf_client._replies import Status
-from clients.pltf_client.core import ClientCore, PendingReply
+from clients.pltf_client.base import DEFAULT_PORT, DEFAULT_TIMEOUT, ClientBase, WireLog
+from clients.pltf_client.core import PendingReply
 from clients.pltf_client.errors import ConnectionClosed, InvalidArgument, ProtocolError, Timeout
 from clients.pltf_client.waits import ConditionWait, Judge, ModeWait, StateWait, TargetWait
-from spec.codec import DEFAULT_MAX_LENGTH, build
+from spec.codec import build
 from spec.telegram import Telegram
 
-DEFAULT_PORT = 10002  # guide 4.2: PlatformCtrl listens on 10000 and 10002; the field client's default
-DEFAULT_TIMEOUT = 5.0
-
-WireLog = Callable[[str, bytes], None]
-"""``wire_log(direction, data)``: ``"send"`` with each whole frame, ``"recv"`` with each chunk read."""
+__all__ = ["DEFAULT_PORT", "DEFAULT_TIMEOUT", "PlatformClient", "WireLog"]
 
 
-class PlatformClient(Commands):
+class PlatformClient(ClientBase, Commands):
     """A blocking connection to PlatformCtrl: one method per command, typed replies, waits.
 
     Connects in the constructor; use it as a context manager (or call ``close``) to close the socket::
@@ -43,36 +40,17 @@ class PlatformClient(Commands):
             pltf.init_pltf()
             pltf.wait_state(OperationState.ST_OP_READY, timeout=10)
 
-    Args:
-        host: the platform PC's address.
-        port: its PlatformCtrl port (guide 4.2: 10000 or 10002; one client per port).
-        timeout: default seconds to wait for a reply (each GET_* method takes its own ``timeout`` too).
-        connect_timeout: seconds to wait for the TCP connection.
-        wire_log: optional callback ``(direction, data)`` seeing every frame sent and every chunk received.
-        max_length: largest reply frame accepted, in data bytes (erratum E-WIRE-004).
+    Args: those of ``ClientBase`` (host, port, timeout, connect_timeout, wire_log, max_length).
 
     Raises:
         ConnectionClosed: the TCP connection could not be made (the OSError is the cause).
     """
 
-    def __init__(
-        self,
-        host: str = "127.0.0.1",
-        port: int = DEFAULT_PORT,
-        *,
-        timeout: float = DEFAULT_TIMEOUT,
-        connect_timeout: float = DEFAULT_TIMEOUT,
-        wire_log: WireLog | None = None,
-        max_length: int = DEFAULT_MAX_LENGTH,
-    ) -> None:
-        self.host = host
-        self.port = port
-        self.timeout = timeout
-        self.wire_log = wire_log
-        self.core = ClientCore(max_length)
+    def _setup(self) -> None:
         self._lock = threading.RLock()
+        host, port = self.host, self.port
         try:
-            self._sock: socket.socket = socket.create_connection((host, port), timeout=connect_timeout)
+            self._sock: socket.socket = socket.create_connection((host, port), timeout=self.connect_timeout)
         except OSError as exc:
             self.core.connection_lost(f"cannot connect to {host}:{port}: {exc}")
             raise ConnectionClosed(f"cannot connect to {host}:{port}: {exc}") from exc
@@ -86,14 +64,6 @@ class PlatformClient(Commands):
         self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
     ) -> None:
         self.close()
-
-    def __repr__(self) -> str:
-        return f"<PlatformClient {self.host}:{self.port}{' closed' if self.closed else ''}>"
-
-    @property
-    def closed(self) -> bool:
-        """True once the connection is closed (by ``close``, by the peer or after a protocol error)."""
-        return self.core.closed
 
     def close(self) -> None:
         """Close the socket (idempotent). Requests still waiting fail with ConnectionClosed."""

@@ -1,0 +1,61 @@
+"""What the blocking and the asyncio client share: the connection settings around one sans-IO ``ClientCore``.
+
+Rules:
+- No I/O here: each transport (``sync``, ``aio``) overrides ``_setup``, its one hook, to prepare its own state
+  (the blocking client connects there; the asyncio one connects later, in ``open``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from clients.pltf_client.core import ClientCore
+from spec.codec import DEFAULT_MAX_LENGTH
+
+DEFAULT_PORT = 10002  # guide 4.2: PlatformCtrl listens on 10000 and 10002; the field client's default
+DEFAULT_TIMEOUT = 5.0
+
+WireLog = Callable[[str, bytes], None]
+"""``wire_log(direction, data)``: ``"send"`` with each whole frame, ``"recv"`` with each chunk read."""
+
+
+class ClientBase:
+    """The settings of one connection to PlatformCtrl and its protocol core.
+
+    Args:
+        host: the platform PC's address.
+        port: its PlatformCtrl port (guide 4.2: 10000 or 10002; one client per port).
+        timeout: default seconds to wait for a reply (each GET_* method takes its own ``timeout`` too).
+        connect_timeout: seconds to wait for the TCP connection.
+        wire_log: optional callback ``(direction, data)`` seeing every frame sent and every chunk received.
+        max_length: largest reply frame accepted, in data bytes (erratum E-WIRE-004).
+    """
+
+    def __init__(
+        self,
+        host: str = "127.0.0.1",
+        port: int = DEFAULT_PORT,
+        *,
+        timeout: float = DEFAULT_TIMEOUT,
+        connect_timeout: float = DEFAULT_TIMEOUT,
+        wire_log: WireLog | None = None,
+        max_length: int = DEFAULT_MAX_LENGTH,
+    ) -> None:
+        self.host = host
+        self.port = port
+        self.timeout = timeout
+        self.connect_timeout = connect_timeout
+        self.wire_log = wire_log
+        self.core = ClientCore(max_length)
+        self._setup()
+
+    def _setup(self) -> None:
+        """The transport's hook, run at the end of the constructor."""
+
+    def __repr__(self) -> str:
+        return f"<{type(self).__name__} {self.host}:{self.port}{' closed' if self.closed else ''}>"
+
+    @property
+    def closed(self) -> bool:
+        """True once the connection is closed (by ``close``, by the peer or after a protocol error)."""
+        return self.core.closed
