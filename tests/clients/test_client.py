@@ -638,14 +638,8 @@ class LiveServer:
         self._log.close()
 
 
-def reference_server_available() -> bool:
-    return (REPO / "reference_server" / "__main__.py").exists()
-
-
 @pytest.fixture
 def live(tmp_path: Path) -> Iterator[LiveServer]:
-    if not reference_server_available():
-        pytest.skip("reference_server is not there yet")
     server = LiveServer(tmp_path / "data", tmp_path / "server.log")
     try:
         yield server

@@ -34,10 +34,9 @@ if __package__:  # tests/clients may become a package; the fake lives beside thi
         RUNNING,
         FakePlatform,
         LiveServer,
-        reference_server_available,
     )
 else:
-    from test_client import AUTOMATIC, CAPTURED, READY, RUNNING, FakePlatform, LiveServer, reference_server_available
+    from test_client import AUTOMATIC, CAPTURED, READY, RUNNING, FakePlatform, LiveServer
 
 
 @pytest.fixture
@@ -190,8 +189,6 @@ def test_connect_refused() -> None:
 
 
 def test_live_async(tmp_path: Path) -> None:
-    if not reference_server_available():
-        pytest.skip("reference_server is not there yet")
     server = LiveServer(tmp_path / "data", tmp_path / "server.log")
 
     async def body(pltf: AsyncPlatformClient) -> float:
