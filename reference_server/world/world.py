@@ -133,6 +133,8 @@ class World:
         circs = np.vstack([g.circles, circles(extra_c)])
         self.scene = Scene.make(segs, circs)
         self.physics.set_map(segs, circs)
+        # the last scan's hits index the old scene: its observations are gone until the next scan
+        self.last_scan, self._observation = None, None
 
     # ---- geometry parameters
     def _geometry_key(self) -> tuple[float, float, float]:
