@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 from rich.console import Console
@@ -15,6 +16,7 @@ from rich.console import Console
 from conformance_tests.baseline import Baseline, BaselineError
 from conformance_tests.catalogue import Tier, load_all, select
 from conformance_tests.context import Config
+from conformance_tests.outcome import Outcome, Unreachable
 
 
 def _target(text: str) -> tuple[str, int]:
@@ -126,10 +128,23 @@ def run_conform(args: argparse.Namespace) -> int:
 def _differential(config: Config, console: Console) -> int:
     from conformance_tests.differential import run_differential
 
-    return run_differential(config, console)
+    return _guarded("differential run", console, lambda: run_differential(config, console))
 
 
 def _stateful(config: Config, examples: int, out: str, console: Console) -> int:
     from conformance_tests.stateful import run_stateful
 
-    return run_stateful(config, examples, Path(out), console)
+    return _guarded("stateful run", console, lambda: run_stateful(config, examples, Path(out), console))
+
+
+def _guarded(what: str, console: Console, run: Callable[[], int]) -> int:
+    """A target that closes, stalls or garbles mid-run fails the run (exit 1) with its reason, not a traceback;
+    a target that cannot be reached is a usage problem (exit 2)."""
+    try:
+        return run()
+    except Unreachable as exc:
+        console.print(f"[bold red]{what}: target unreachable:[/] {exc}")
+        return 2
+    except (Outcome, OSError) as exc:
+        console.print(f"[bold red]{what} aborted: FAIL[/] {exc}")
+        return 1

@@ -10,6 +10,7 @@ import pytest
 
 from conformance_tests.launch import ServerProcess
 from pltf_cli.main import main
+from tests.conformance_tests.fakes import ScriptedServer
 
 
 def _args(server: ServerProcess, *extra: str) -> list[str]:
@@ -75,3 +76,14 @@ def test_differential_and_stateful_from_the_command_line(reference: ServerProces
     assert code == 0, out
     assert "differential: the target answered like the reference server" in out
     assert "stateful test: 5 examples" in out
+
+
+def test_a_target_that_hangs_up_during_the_differential_run_fails_it_without_a_traceback(
+        capsys: pytest.CaptureFixture[str]) -> None:
+    with ScriptedServer(lambda conn: None, ports=2) as target:  # accepts, then closes every connection
+        code = main(["conform", "--target", f"127.0.0.1:{target.ports[0]}", "--second-port", str(target.ports[1]),
+                     "--time-scale", "10", "-k", "6.1/ports/reconnect", "--differential"])
+    out = capsys.readouterr()
+    assert code == 1
+    assert "differential run aborted: FAIL" in out.out
+    assert "Traceback" not in out.out + out.err
