@@ -37,7 +37,7 @@ _GUIDE_TEXT = {
     "CMD_SET_MODE": "guide 6.3 CMD_SET_MODE: \"The operation state has to be in 'Ready' before changing to another "
                     "motion mode.\"",
 }
-_DECISION = ("; the project's state chart (figure 2 is lost in the text guide): {what}")
+_DECISION = "; the project's state chart (figure 2 is lost in the text guide, erratum {erratum}): {what}"
 
 
 def _fields(command: str) -> dict[str, int]:
@@ -70,7 +70,7 @@ def _requirement(state: St, command: str) -> str:
         what = f"not allowed in {state.value}: changes nothing"
     if (state, command) in chart.GUIDE:
         return f"{base} ({what})"
-    return base + _DECISION.format(what=what)
+    return base + _DECISION.format(erratum=chart.DECIDED_BY[state, command], what=what)
 
 
 for _command in chart.CHART_COMMANDS:
@@ -79,7 +79,8 @@ for _command in chart.CHART_COMMANDS:
             f"6.3/{_command}/in-{_state.value}",
             partial(_cell, state=_state, command=_command),
             requirement=_requirement(_state, _command),
-            level=Level.MUST if (_state, _command) in chart.GUIDE else Level.SHOULD,
+            level=Level.MUST if (_state, _command) in chart.GUIDE else None,  # None: the erratum's level
+            errata=() if (_state, _command) in chart.GUIDE else (chart.DECIDED_BY[_state, _command],),
             tier=Tier.STANDARD,
             group="state",
             telegrams=(_command, "CMD_GET_STATUS"),

@@ -39,9 +39,22 @@ def test_the_catalogue_covers_every_telegram_and_every_chart_cell() -> None:
         assert f"6.3/{command}/in-{state.value}" in CASES
 
 
-def test_cells_the_guide_states_are_must_and_decisions_should() -> None:
+def test_cells_the_guide_states_are_must_and_decisions_take_their_errata_level() -> None:
     assert CASES["6.3/CMD_SET_MODE/in-running"].level is Level.MUST
+    assert CASES["6.3/CMD_SET_MODE/in-running"].errata == ()
     assert CASES["6.3/CMD_START/in-breaked"].level is Level.SHOULD
+    assert CASES["6.3/CMD_START/in-breaked"].errata == ("E-SRV-018",)
+    assert CASES["6.3/CMD_STOP/in-ready"].level is Level.MAY  # E-SRV-004 is a MAY
+
+
+def test_every_chart_cell_is_stated_by_the_guide_or_decided_by_one_erratum() -> None:
+    errata = load_errata()
+    for state, command, _ in chart.every_transition():
+        cell = (state, command)
+        assert (cell in chart.GUIDE) != (cell in chart.DECIDED_BY), cell
+        if cell in chart.DECIDED_BY:
+            erratum = errata[chart.DECIDED_BY[cell]]
+            assert command in erratum.applies_to, (cell, erratum.id)
 
 
 def test_every_mutant_names_a_case_of_the_catalogue() -> None:
