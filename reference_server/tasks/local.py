@@ -20,11 +20,11 @@ from typing import Any, Protocol
 
 from reference_server import status
 from reference_server.tasks import entities, grab
-from reference_server.tasks.facade import Pose, Target, TaskError
+from reference_server.tasks.entities import StatusFields, StatusSensors
+from reference_server.tasks.facade import Target, TaskError
 from reference_server.tasks.interpreter import Interpreter
-from reference_server.tasks.model import Detection, Direction, Entity
 from reference_server.tasks.program import compile_program
-from reference_server.tasks.remote import RADAR_MIN_SPEED, battery_percent, find_document
+from reference_server.tasks.remote import find_document
 from spec.codec import build
 from spec.documents import DocumentError, DocumentKind, validate_document
 from spec.parameters import DataType, ParameterError
@@ -50,7 +50,10 @@ EPOCH = datetime.datetime(2030, 1, 1)  # E-TASK-010: the platform's local time a
 _LEVELS = {"error": logging.ERROR, "warning": logging.WARNING, "warn": logging.WARNING}
 
 
-class LocalMachine:
+class LocalMachine(StatusSensors):
+    FIELDS = StatusFields(x="est_x", y="est_y", angle="est_angle", radar_velocity="radar_velocity",
+                          battery="io_battery_voltage")  # fmt: skip
+
     def __init__(self, platform: Platform, epoch: datetime.datetime = EPOCH) -> None:
         self.p = platform
         self._model: Any = platform  # the reply builders take the concrete Platform
@@ -100,9 +103,8 @@ class LocalMachine:
         self.p.log(_LEVELS.get(type.lower(), logging.INFO), f"task log [{type}] {message}")
 
     def grab(self, filename: str, scan: bool, image: bool, auto_observation: bool) -> list[str]:
-        st = self.status()
-        points = [(float(x), float(y)) for x, y in st.scan]
-        pose = (float(st.est_x), float(st.est_y), st.est_angle / 1000.0)
+        points = [(float(x), float(y)) for x, y in self.status().scan]
+        pose = self.pose()
         if auto_observation:  # E-TASK-013
             self._act("CMD_SET_PLTF_PARAM", key="SurveillanceModeEnabled", value="true")
         try:
@@ -134,48 +136,10 @@ class LocalMachine:
             self._status = status.status_reply(self._model, self.now)
         return self._status
 
-    def _clusters(self, what: Detection | Entity) -> list[tuple[int, int, int]]:
+    def debug_data(self) -> Any:
         if self._debug is None:
             self._debug = status.debug_reply(self._model)
-        d = self._debug
-        group = {"movingobject": d.moving_clusters, "person": d.person_clusters, "ball": d.ball_clusters}
-        return [tuple(c) for c in group[what.value.removeprefix("tracked")]]
-
-    def pose(self) -> Pose:
-        st = self.status()
-        return Pose(float(st.est_x), float(st.est_y), st.est_angle / 1000.0)
-
-    def target_reached(self) -> bool:
-        return bool(self.status().target_reached)
-
-    def collision(self) -> bool:
-        return bool(self.status().collision)
-
-    def detected(self, what: Detection) -> bool:
-        return bool(self._clusters(what))
-
-    def localization_lost(self) -> bool:
-        return bool(self.status().localization_lost)
-
-    def infrared(self, direction: Direction | None) -> bool:
-        ir = self.status().ir_active
-        return any(ir) if direction is None else bool(ir[direction])
-
-    def radar(self, direction: Direction | None) -> bool:
-        st = self.status()
-        if st.radar_status == status.ABSENT:
-            return False
-        moving = [abs(v) >= RADAR_MIN_SPEED for v in st.radar_velocity]
-        return any(moving) if direction is None else moving[direction]
-
-    def battery_percent(self) -> float:
-        return battery_percent(self.status().io_battery_voltage)
-
-    def digital_input(self, n: int) -> int:
-        return int(self.status().io_digital_in >> (n - 1)) & 1
-
-    def digital_output(self, n: int) -> int:
-        return int(self.status().io_digital_out >> (n - 1)) & 1
+        return self._debug
 
     def parameter(self, key: str) -> tuple[DataType, str]:
         try:
@@ -183,18 +147,13 @@ class LocalMachine:
         except ParameterError:
             raise TaskError(f"unknown parameter {key!r}") from None
 
-    def entity(self, what: Entity) -> Target | None:
-        if what is Entity.CHARGING_STATION:
-            doc = self.p.documents.get(DocumentKind.ROADMAP)
-            return None if doc is None else entities.charging_station(doc.tree)
-        return entities.nearest_cluster(self._clusters(what), self.pose())
+    def charging_station(self) -> Target | None:
+        doc = self.p.documents.get(DocumentKind.ROADMAP)
+        return None if doc is None else entities.charging_station(doc.tree)
 
     def take_user_events(self) -> frozenset[str]:
         out, self.events = frozenset(self.events), set()
         return out
-
-    def local_time(self, now: float) -> datetime.datetime:
-        return self.epoch + datetime.timedelta(seconds=now)
 
 
 class ProgramHook:

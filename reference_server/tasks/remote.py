@@ -24,21 +24,14 @@ from pathlib import Path
 
 from clients.pltf_client import BoardType, DebugData, OutputLevel, PlatformClient, Status
 from reference_server.tasks import entities, grab
-from reference_server.tasks.facade import Pose, Target, TaskError
-from reference_server.tasks.model import Detection, Direction, Entity
+from reference_server.tasks.entities import StatusFields, StatusSensors
+from reference_server.tasks.facade import Target, TaskError
 from spec.documents import DocumentError, DocumentKind, validate_document
 from spec.parameters import DataType
 
 log = logging.getLogger("pltf.tasks.remote")
 
-NOMINAL_MV, EMPTY_MV = 25_600.0, 23_000.0  # E-TASK-015: 100 % and 0 % of the battery charge
-RADAR_MIN_SPEED = 50.0  # mm/s: a radar reading above this is "something detected" (E-TASK-011)
 _FOLDERS = {DocumentKind.MAP: "Map", DocumentKind.ROADMAP: "Roadmap"}
-
-
-def battery_percent(millivolts: float) -> float:
-    """E-TASK-015: linear between 23000 mV (0 %, the IO board's low-battery level) and 25600 mV (100 %)."""
-    return max(0.0, min(100.0, (millivolts - EMPTY_MV) / (NOMINAL_MV - EMPTY_MV) * 100.0))
 
 
 def find_document(data_dir: Path, kind: DocumentKind, name: str) -> Path:
@@ -49,7 +42,10 @@ def find_document(data_dir: Path, kind: DocumentKind, name: str) -> Path:
     raise TaskError(f"no {kind.value} file {name!r} in {data_dir / _FOLDERS[kind]} or {data_dir}")
 
 
-class RemoteMachine:
+class RemoteMachine(StatusSensors):
+    FIELDS = StatusFields(x="est_x_mm", y="est_y_mm", angle="est_angle_mdeg", radar_velocity="radar_velocity_mm_s",
+                          battery="io_battery_voltage_mv")  # fmt: skip
+
     def __init__(self, client: PlatformClient, data_dir: Path, epoch: datetime.datetime,
                  on_log: Callable[[str, str], None] | None = None) -> None:  # fmt: skip
         self.client = client
@@ -137,9 +133,8 @@ class RemoteMachine:
             self.on_log(type, message)
 
     def grab(self, filename: str, scan: bool, image: bool, auto_observation: bool) -> list[str]:
-        st = self.status()
-        points = [(float(p.x_mm), float(p.y_mm)) for p in st.scan]
-        pose = (float(st.est_x_mm), float(st.est_y_mm), st.est_angle_mdeg / 1000.0)
+        points = [(float(x), float(y)) for x, y in self.status().scan]
+        pose = self.pose()
         if image:
             self.client.grab_image(filename)
         if auto_observation:  # E-TASK-013
@@ -166,43 +161,7 @@ class RemoteMachine:
         self.client.set_pos_head_drive(round(angle))  # CMD_SET_POS_HEAD_DRIVE takes whole degrees
         self._sent()
 
-    # ---- sensors
-    def pose(self) -> Pose:
-        st = self.status()
-        return Pose(float(st.est_x_mm), float(st.est_y_mm), st.est_angle_mdeg / 1000.0)
-
-    def target_reached(self) -> bool:
-        return bool(self.status().target_reached)
-
-    def collision(self) -> bool:
-        return bool(self.status().collision)
-
-    def detected(self, what: Detection) -> bool:
-        return bool(self._clusters(what))
-
-    def localization_lost(self) -> bool:
-        return bool(self.status().localization_lost)
-
-    def infrared(self, direction: Direction | None) -> bool:
-        ir = self.status().ir_active
-        return any(ir) if direction is None else bool(ir[direction])
-
-    def radar(self, direction: Direction | None) -> bool:
-        st = self.status()
-        if st.radar_status == -1:  # absent board (E-SRV-008)
-            return False
-        moving = [abs(v) >= RADAR_MIN_SPEED for v in st.radar_velocity_mm_s]
-        return any(moving) if direction is None else moving[direction]
-
-    def battery_percent(self) -> float:
-        return battery_percent(self.status().io_battery_voltage_mv)
-
-    def digital_input(self, n: int) -> int:
-        return (self.status().io_digital_in >> (n - 1)) & 1
-
-    def digital_output(self, n: int) -> int:
-        return (self.status().io_digital_out >> (n - 1)) & 1
-
+    # ---- sensors (the rest: StatusSensors)
     def parameter(self, key: str) -> tuple[DataType, str]:
         if key not in self._params:
             reply = self.client.get_pltf_param(key)
@@ -211,25 +170,16 @@ class RemoteMachine:
             self._params[key] = (DataType(int(reply.data_type)), reply.value)
         return self._params[key]
 
-    def _clusters(self, what: Detection | Entity) -> list[tuple[int, int, int]]:
+    def debug_data(self) -> DebugData:
         if self._debug is None:
             self._debug = self.client.get_debug_data()
-        d = self._debug
-        groups = {"movingobject": d.moving_clusters, "person": d.person_clusters, "ball": d.ball_clusters,
-                  "trackedmovingobject": d.moving_clusters, "trackedperson": d.person_clusters,
-                  "trackedball": d.ball_clusters}  # fmt: skip
-        return [tuple(c) for c in groups[what.value]]  # type: ignore[misc]
+        return self._debug
 
-    def entity(self, what: Entity) -> Target | None:
-        if what is Entity.CHARGING_STATION:
-            if self._roadmap is False:
-                xml = self.client.get_roadmap().xml
-                try:
-                    self._roadmap = entities.charging_station(validate_document(DocumentKind.ROADMAP, xml))
-                except DocumentError:
-                    self._roadmap = None
-            return self._roadmap if isinstance(self._roadmap, Target) else None
-        return entities.nearest_cluster(self._clusters(what), self.pose())
-
-    def local_time(self, now: float) -> datetime.datetime:
-        return self.epoch + datetime.timedelta(seconds=now)
+    def charging_station(self) -> Target | None:
+        if self._roadmap is False:
+            xml = self.client.get_roadmap().xml
+            try:
+                self._roadmap = entities.charging_station(validate_document(DocumentKind.ROADMAP, xml))
+            except DocumentError:
+                self._roadmap = None
+        return self._roadmap if isinstance(self._roadmap, Target) else None
