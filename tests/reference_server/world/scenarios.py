@@ -138,6 +138,13 @@ def running(c: Client, mode: int, *setup: Any) -> None:
     assert (s.operation_state, s.motion_mode) == (OperationState.ST_OP_RUNNING, mode), s
 
 
+def command(c: Client, *telegrams: Any) -> None:
+    """Send ``telegrams`` and wait until the server has handled them (a GET_POSITION behind them is answered):
+    with a ``SteppedServer`` they then land before the next ``advance``."""
+    c.send(*telegrams, R.CMD_GET_POSITION())
+    assert c.receive().NAME == "CMD_GET_POSITION"
+
+
 def param(name: str, value: object) -> Any:
     text = str(value).lower() if isinstance(value, bool) else str(value)
     return R.CMD_SET_PLTF_PARAM(key=name, value=text)
