@@ -7,12 +7,17 @@ Rules:
   commands to the node, 0x20-0x2F data from the node; 0x700-0x7FF is left to applications.
 - Status words are shared by every board (erratum E-HW-006): the low byte comes from the board, the second byte
   is added by the controller, ``ABSENT`` (-1) stands for a node that is not connected.
+- ``build``/``decode`` run ~400 times per simulated second, so each message gets a precompiled ``FrameCodec``:
+  every signal of the database is an Intel integer field, packed with shifts on one int, scaled by the
+  signal's own cantools conversion. The bytes and values equal cantools' ``encode``/``decode`` (a test checks
+  every message), at a fraction of the cost.
 """
 
 from __future__ import annotations
 
 import enum
 import functools
+import math
 from collections.abc import Mapping
 from typing import Any
 
@@ -103,30 +108,57 @@ def cycle_time(msg: Message) -> float | None:
     return None if not msg.cycle_time else msg.cycle_time / 1000.0
 
 
+class FrameCodec:
+    """One message's signals as (name, start bit, mask, sign bit, conversion, min, max), Intel byte order."""
+
+    __slots__ = ("fields", "frame_id", "length")
+
+    def __init__(self, msg: Message) -> None:
+        if any(s.byte_order != "little_endian" or s.is_float for s in msg.signals) or msg.is_multiplexed():
+            raise ValueError(f"{msg.name}: only Intel integer signals are precompiled")
+        self.frame_id = msg.frame_id
+        self.length = msg.length
+        self.fields = tuple(
+            (s.name, s.start, (1 << s.length) - 1, (1 << (s.length - 1)) if s.is_signed else 0, s.conversion,
+             float(s.minimum) if s.minimum is not None else -math.inf,
+             float(s.maximum) if s.maximum is not None else math.inf)
+            for s in msg.signals
+        )  # fmt: skip
+
+    def encode(self, signals: Signals) -> bytes:
+        """Physical values (clamped to each signal's range) -> the frame's bytes; every signal must be given."""
+        word = 0
+        for name, start, mask, _, conversion, lo, hi in self.fields:
+            value = signals[name]
+            value = lo if value < lo else hi if value > hi else value
+            word |= (int(conversion.numeric_scaled_to_raw(value)) & mask) << start
+        return word.to_bytes(self.length, "little")
+
+    def decode(self, data: bytes | bytearray) -> dict[str, Any]:
+        word = int.from_bytes(data[: self.length], "little")
+        out: dict[str, Any] = {}
+        for name, start, mask, sign, conversion, _, _ in self.fields:
+            raw = (word >> start) & mask
+            if sign and raw & sign:
+                raw -= mask + 1
+            out[name] = conversion.raw_to_scaled(raw, False)
+        return out
+
+
 @functools.cache
-def _bounds(msg: Message) -> dict[str, tuple[float, float]]:
-    return {
-        s.name: (float(s.minimum), float(s.maximum))
-        for s in msg.signals
-        if s.minimum is not None and s.maximum is not None
-    }
+def codec(msg: Message) -> FrameCodec:
+    return FrameCodec(msg)
 
 
 def build(msg: Message, signals: Signals, now: float) -> can.Message:
     """A frame of ``msg`` stamped with simulated time ``now``; values are clamped to the signals' ranges."""
-    bounds = _bounds(msg)
-    values = {}
-    for name, value in signals.items():
-        lo, hi = bounds[name]
-        values[name] = lo if value < lo else hi if value > hi else value
-    data = msg.encode(values, scaling=True, strict=False)
-    return can.Message(arbitration_id=msg.frame_id, data=data, is_extended_id=False, timestamp=now)
+    return can.Message(arbitration_id=msg.frame_id, data=codec(msg).encode(signals), is_extended_id=False,
+                       timestamp=now)  # fmt: skip
 
 
 def decode(msg: Message, frame: can.Message) -> dict[str, Any] | None:
     """The signals of a frame, or None when it is too short for ``msg`` (longer frames are accepted)."""
-    if len(frame.data) < msg.length:
+    c = codec(msg)
+    if len(frame.data) < c.length:
         return None
-    out = msg.decode(bytes(frame.data[: msg.length]), decode_choices=False)
-    assert isinstance(out, dict)
-    return out
+    return c.decode(frame.data)

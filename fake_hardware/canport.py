@@ -7,7 +7,11 @@ Rules:
   (``recv(timeout=0)``). A frame's timestamp is the simulated time it went on the bus.
 - ``interface="virtual"`` opens ``SimVirtualBus``: python-can's virtual bus (same channel registry, so a plain
   virtual bus on the channel - a test's sniffer - sees and sends the same traffic) with a cheaper delivery:
-  one shared copy of a frame for all receivers and a ``SimpleQueue`` inbox. Receivers must not mutate frames.
+  the sent frame itself is shared by all receivers (no copy; neither they nor the sender may mutate it after
+  sending), a ``SimpleQueue`` inbox, and acceptance filtering at delivery (``CanPort.accept``: a board's
+  inbox gets only the ids it handles, like a CAN controller's hardware filter; other interfaces deliver
+  everything and the board ignores what it does not handle: python-can's software filters would end a
+  ``recv(timeout=0)`` drain at the first frame they reject).
 - Faults are plain attributes: ``connected`` (unplugged: nothing in, nothing out), ``bus_off`` (the same, and
   the port says so), ``loss`` / ``delay`` (this sender only) on top of the channel-wide ``BusConditions``.
   Delayed frames wait in the port and go out at the first ``send``/``poll`` at or after their due time.
@@ -34,33 +38,35 @@ class BusConditions:
     delay: float = 0.0
 
 
+class _Inbox(queue.SimpleQueue):  # type: ignore[type-arg]
+    """A receiver's queue with its acceptance filter (None: every frame)."""
+
+    accept: frozenset[int] | None = None
+
+
 class SimVirtualBus(virtual.VirtualBus):
     """The virtual bus with simulated timestamps kept and a cheap fan-out (see the module rules)."""
 
     def __init__(self, channel: str, **kwargs: Any) -> None:
         super().__init__(channel=channel, preserve_timestamps=True, **kwargs)
-        inbox: queue.SimpleQueue[can.Message] = queue.SimpleQueue()
+        inbox = _Inbox()
         with virtual.channels_lock:
             self.channel[self.channel.index(self.queue)] = inbox  # type: ignore[call-overload]
             self.queue = inbox  # type: ignore[assignment]
 
+    def accept(self, ids: frozenset[int] | None) -> None:
+        """Deliver to this bus only frames with these identifiers (None: all)."""
+        self.queue.accept = ids  # type: ignore[attr-defined]
+
     def send(self, msg: can.Message, timeout: float | None = None) -> None:
         self._check_if_open()
-        shared = can.Message(
-            timestamp=msg.timestamp,
-            arbitration_id=msg.arbitration_id,
-            is_extended_id=msg.is_extended_id,
-            is_remote_frame=msg.is_remote_frame,
-            is_error_frame=msg.is_error_frame,
-            channel=self.channel_id,
-            dlc=msg.dlc,
-            data=bytes(msg.data),
-            is_rx=True,
-        )
-        own = self.queue
+        msg.channel, msg.is_rx = self.channel_id, True  # shared by every receiver, not copied
+        own, can_id = self.queue, msg.arbitration_id
         for inbox in self.channel:
             if inbox is not own:
-                inbox.put(shared)
+                ids = getattr(inbox, "accept", None)
+                if ids is None or can_id in ids:
+                    inbox.put(msg)
 
     def drain(self) -> list[can.Message]:
         """Everything in the inbox, without blocking (the fast path of ``CanPort.poll``)."""
@@ -138,6 +144,11 @@ class CanPort:
             return []
         self.stats.received += len(out)
         return out
+
+    def accept(self, ids: set[int] | frozenset[int]) -> None:
+        """Receive only frames with these standard identifiers (a hardware acceptance filter)."""
+        if isinstance(self.bus, SimVirtualBus):
+            self.bus.accept(frozenset(ids))
 
     def close(self) -> None:
         self.bus.shutdown()

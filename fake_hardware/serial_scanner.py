@@ -29,6 +29,7 @@ from collections.abc import Callable, Iterator, Sequence
 from dataclasses import dataclass
 from typing import NamedTuple, Protocol
 
+import numpy as np
 import serial  # type: ignore[import-untyped]  # no stubs; types-pyserial is not a dependency
 
 if "fake_hardware" not in serial.protocol_handler_packages:
@@ -47,6 +48,9 @@ TELEGRAM_BYTES = _HEAD.size + len(_BLOCK) + 2 * POINTS + 2  # 1108: the longest 
 MIN_TELEGRAM = _HEAD.size + 2
 
 RangeSource = Callable[[float], Sequence[float | None]]
+
+
+_NO_ECHO = struct.pack(f"<{POINTS}H", *([MAX_CM] * POINTS))
 
 
 def crc16(data: bytes) -> int:
@@ -74,14 +78,23 @@ def encode_telegram(
     ranges_mm: Sequence[float | None], scan_number: int, telegram_number: int, address: int = ADDRESS
 ) -> bytes:
     """One distance telegram; a range of None, inf or beyond the 13-bit maximum reads as the maximum."""
-    values = []
-    for r in list(ranges_mm)[:POINTS] + [None] * (POINTS - len(ranges_mm)):
-        cm = MAX_CM if r is None or not math.isfinite(r) else max(0, min(MAX_CM, round(r / 10.0)))
-        values.append(cm)
     size = (TELEGRAM_BYTES - 4) // 2
     head = _HEAD.pack(0, size, 0xFF, address, 2, 1, 0, scan_number & 0xFFFFFFFF, telegram_number & 0xFFFF)
-    body = head[4:] + _BLOCK + struct.pack(f"<{POINTS}H", *values)
+    body = head[4:] + _BLOCK + _distances(ranges_mm)
     return head[:4] + body + struct.pack("<H", crc16(body))
+
+
+def _distances(ranges_mm: Sequence[float | None]) -> bytes:
+    """The 541 distance words (cm, little-endian), vectorised: None and NaN become the maximum."""
+    n = len(ranges_mm)
+    if n == 0 or (ranges_mm[0] is None and all(r is None for r in ranges_mm)):
+        return _NO_ECHO
+    a = np.full(POINTS, np.inf)
+    a[: min(n, POINTS)] = np.asarray(ranges_mm[:POINTS], dtype=float)  # None -> NaN
+    cm = np.rint(a / 10.0)
+    np.clip(cm, 0, MAX_CM, out=cm)
+    cm[~np.isfinite(a)] = MAX_CM
+    return cm.astype("<u2").tobytes()
 
 
 class ScanDecoder:
@@ -136,12 +149,13 @@ class ScanDecoder:
     def _accept(self, telegram: bytes, scan: int, number: int) -> None:
         if telegram[_HEAD.size : _HEAD.size + 4] != _BLOCK:
             return  # an I/O or reflector telegram: not a distance scan
-        raw = struct.unpack_from(f"<{POINTS}H", telegram, _HEAD.size + 4)
+        raw = np.frombuffer(telegram, "<u2", POINTS, _HEAD.size + 4)
         if self._last_number is not None:
             self.lost += (number - self._last_number - 1) & 0xFFFF
         self._last_number = number
         self.telegrams += 1
-        self._scans.append(Scan(0.0, scan, number, tuple((v & MAX_CM) * 10 for v in raw), tuple(v >> 13 for v in raw)))
+        ranges = ((raw & MAX_CM).astype(np.int64) * 10).tolist()
+        self._scans.append(Scan(0.0, scan, number, tuple(ranges), tuple((raw >> 13).tolist())))
 
 
 class Writable(Protocol):

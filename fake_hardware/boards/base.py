@@ -81,6 +81,7 @@ class Board:
         }.items():
             msg = candb.message_for(node, function)
             self._handlers[msg.frame_id] = (msg, handler)
+        port.accept(set(self._handlers))  # the board's acceptance filter: only the frames it handles
         self._cyclic: list[_Cyclic] = []
         for function, builder in self.cyclic().items():
             msg = candb.message_for(node, function)

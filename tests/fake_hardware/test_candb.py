@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import random
+
 import pytest
 
 from fake_hardware import candb
@@ -66,3 +68,24 @@ def test_build_clamps_to_the_signal_range_and_decode_accepts_long_frames() -> No
 def test_node_of() -> None:
     assert candb.node_of(0x120) == Node.MOTOR_RIGHT
     assert candb.node_of(0x701) is None
+
+
+def test_the_precompiled_codec_equals_cantools_on_every_message() -> None:
+    rng = random.Random(5)
+    for msg in DB.messages:
+        codec = candb.codec(msg)
+        for _ in range(50):
+            values = {}
+            for s in msg.signals:
+                lo, hi = float(s.minimum), float(s.maximum)
+                value = rng.uniform(lo - 0.1 * (hi - lo), hi + 0.1 * (hi - lo))
+                values[s.name] = round(value) if s.scale == 1 and rng.random() < 0.5 else value
+            clamped = {
+                k: min(max(v, float(msg.get_signal_by_name(k).minimum)), float(msg.get_signal_by_name(k).maximum))
+                for k, v in values.items()
+            }
+            data = codec.encode(values)
+            assert data == msg.encode(clamped, scaling=True, strict=False), msg.name
+            assert codec.decode(data) == msg.decode(data, decode_choices=False), msg.name
+        frame = candb.build(msg, {s.name: s.maximum for s in msg.signals}, 1.5)
+        assert frame.timestamp == 1.5 and frame.arbitration_id == msg.frame_id and len(frame.data) == msg.length
