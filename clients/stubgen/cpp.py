@@ -2,19 +2,9 @@
 
 from __future__ import annotations
 
-from clients.stubgen import banner, fill, readme, template
-from clients.stubgen.model import (
-    ERRORS,
-    Field,
-    Message,
-    commands,
-    doc_line,
-    enums,
-    field_doc,
-    item_types,
-    messages,
-    snake,
-)
+from clients.stubgen import banner, fill, model, readme, template
+from clients.stubgen.model import ERRORS, Command, Field, Message, doc_line, field_doc, snake
+from clients.stubgen.renderer import Spelling, arguments, enum_doc, methods, scripts, static, telegram_doc
 
 KEYWORDS = frozenset((
     "alignas", "alignof", "and", "and_eq", "asm", "auto", "bitand", "bitor", "bool", "break", "case", "catch",
@@ -29,9 +19,15 @@ KEYWORDS = frozenset((
 CLIENT_NAMES = frozenset(("send", "receive", "request"))
 CPP_TYPE = {"BYTE": "uint8_t", "BOOL": "bool", "INT16": "int16_t", "INT": "int32_t", "DOUBLE": "double",
             "STRING": "std::string", "XML": "std::string"}
-TYPE_MEMBER = {"BYTE": "Byte", "BOOL": "Bool", "INT16": "Int16", "INT": "Int", "DOUBLE": "Double",
-               "STRING": "String", "XML": "Xml", "GROUP": "Group"}
 HEAD = banner("// ")
+SPELLING = Spelling(
+    scalars=CPP_TYPE, group="std::vector<{item}>", array="std::array<{base}, {repeat}>",
+    head='Field("{f.name}", FieldType::{type})', type_name=model.pascal, sep="",
+    attrs={"repeat": ".repeated({f.repeat})", "const": ".fixed({f.const})", "min": ".at_least({f.min})",
+           "max": ".at_most({f.max})", "allowed": ".one_of({{{allowed}}})", "group": ".group({item_snake}_fields(), "
+           "{f.item_min})", "run": ".run_of({f.run})"},
+    empty="{}", open="{", close="\n{indent}}}", step="  ", trailing=False,
+)
 
 
 def member(name: str) -> str:
@@ -48,46 +44,14 @@ def _errors() -> str:
     return "\n".join(out).rstrip("\n")
 
 
-def _type(f: Field) -> str:
-    if f.is_group:
-        return f"std::vector<{f.item}>"
-    base = f.enum or CPP_TYPE[f.type]
-    return f"std::array<{base}, {f.repeat}>" if f.repeat else base
-
-
 def _default(f: Field) -> str:
     if f.enum and not f.repeat:
-        return f" = {f.enum}::{next(iter(enums()[f.enum].values))}"
+        return f" = {f.enum}::{next(iter(model.enums()[f.enum].values))}"
     return "{}"
 
 
 def _members(fields: tuple[Field, ...]) -> list[str]:
-    return [f"  /// {field_doc(f)}\n  {_type(f)} {member(f.name)}{_default(f)};" for f in fields if f.user]
-
-
-def _desc(f: Field) -> str:
-    out = f'Field("{f.name}", FieldType::{TYPE_MEMBER[f.type]})'
-    if f.repeat:
-        out += f".repeated({f.repeat})"
-    if f.const is not None:
-        out += f".fixed({f.const})"
-    if f.min is not None:
-        out += f".at_least({f.min})"
-    if f.max is not None:
-        out += f".at_most({f.max})"
-    if f.allowed is not None:
-        out += f".one_of({{{', '.join(map(str, f.allowed))}}})"
-    if f.is_group:
-        out += f".group({snake(f.item or '')}_fields(), {f.item_min})"
-    if f.run:
-        out += f".run_of({f.run})"
-    return out
-
-
-def _table(fields: tuple[Field, ...], indent: str) -> str:
-    if not fields:
-        return "{}"
-    return "{\n" + ",\n".join(f"{indent}  {_desc(f)}" for f in fields) + f"\n{indent}}}"
+    return [f"  /// {field_doc(f)}\n  {SPELLING.type(f)} {member(f.name)}{_default(f)};" for f in fields if f.user]
 
 
 def _header_telegram(m: Message) -> str:
@@ -96,7 +60,7 @@ def _header_telegram(m: Message) -> str:
         else _members(m.fields)
     direction = "Request" if m.direction == "request" else "Reply"
     return "\n".join([
-        f"/// {m.name} ({m.direction}, id {m.id}): {doc_line(m.summary)} [guide {doc_line(m.section)}]",
+        f"/// {telegram_doc(m)}",
         f"struct {t} final : Telegram {{",
         f"  static constexpr uint8_t ID = {m.id};", f'  static constexpr const char* NAME = "{m.name}";',
         "  static const Layout& layout();", "  static " + t + " from_values(const Values& v);", *body,
@@ -116,27 +80,22 @@ def _conversions(prefix: str, fields: tuple[Field, ...], obj: str) -> tuple[str,
 
 def _header() -> str:
     enum_text = []
-    for name, e in enums().items():
+    for name, e in model.enums().items():
         values = "\n".join(f"  {k} = {v}," for k, v in e.values.items())
-        enum_text.append(f"/// {doc_line(e.description)} [guide {doc_line(e.section)}]\n"
+        enum_text.append(f"/// {enum_doc(name)}\n"
                          f"enum class {name} : int32_t {{\n{values}\n}};\n")
     items = []
-    for name, fields in item_types().items():
+    for name, fields in model.item_types().items():
         body = "\n".join(_members(fields))
         items.append(f"/// One item of a repeated group.\nstruct {name} {{\n{body}\n}};\n")
     items.append("namespace detail {")
-    for name in item_types():
+    for name in model.item_types():
         items.append(f"Value to_value(const {name}& item);\nvoid from_value(const Value& v, {name}& item);")
     items.append("}  // namespace detail")
-    telegrams = [_header_telegram(m) for d in ("request", "reply") for m in messages(d)]
-    methods = []
-    for c in commands():
-        ret = c.reply.type_name if c.reply else "void"
-        methods.append(f"  /// {c.request.name} (id {c.request.id}): {doc_line(c.request.summary)}\n"
-                       f"  {ret} {method_name(c.request)}({', '.join(_params(c.request))});")
+    telegrams = [_header_telegram(m) for d in ("request", "reply") for m in model.messages(d)]
     return HEAD + fill(template("cpp", "platformctrl.hpp.tmpl"), ERRORS=_errors(),
                        ENUMS="\n".join(enum_text).rstrip("\n"), ITEMS="\n".join(items),
-                       TELEGRAMS="\n".join(telegrams).rstrip("\n"), METHODS="\n" + "\n".join(methods))
+                       TELEGRAMS="\n".join(telegrams).rstrip("\n"), METHODS=methods(_declaration))
 
 
 def method_name(m: Message) -> str:
@@ -144,36 +103,50 @@ def method_name(m: Message) -> str:
     return name + "_" if name in KEYWORDS or name in CLIENT_NAMES else name
 
 
-def _params(m: Message) -> list[str]:
-    if m.opaque:
-        return ["const std::string& payload = {}"]
-    out = []
-    for f in m.user_fields:
-        t = _type(f)
+def _arguments(m: Message) -> tuple[list[str], list[str]]:
+    def field(f: Field) -> tuple[str, str]:
+        t, name = SPELLING.type(f), member(f.name)
         by_ref = f.is_group or f.is_text or f.repeat
-        out.append(f"const {t}& {member(f.name)}" if by_ref else f"{t} {member(f.name)}")
-    return out
+        return (f"const {t}& {name}" if by_ref else f"{t} {name}"), name
+
+    return arguments(m, ("const std::string& payload = {}", "payload"), field)
+
+
+def _declaration(c: Command) -> str:
+    ret = c.reply.type_name if c.reply else "void"
+    return (f"  /// {c.request.name} (id {c.request.id}): {doc_line(c.request.summary)}\n"
+            f"  {ret} {method_name(c.request)}({', '.join(_arguments(c.request)[0])});")
+
+
+def _definition(c: Command) -> str:
+    m = c.request
+    params, args = _arguments(m)
+    ret = c.reply.type_name if c.reply else "void"
+    sets = "".join(f"  r.{a} = {a};\n" for a in args)
+    action = f"return request<{c.reply.type_name}>(r)" if c.reply else "send(r)"
+    return (f"{ret} Client::{method_name(m)}({', '.join(p.split(' = ')[0] for p in params)}) {{\n"
+            f"  {m.type_name} r;\n{sets}  {action};\n}}\n")
 
 
 def _protocol() -> str:
     out = [HEAD, "// Field tables, value conversions, the telegram registry and the client's command methods.\n",
            '#include "platformctrl.hpp"\n', "namespace platformctrl {\n", "namespace {\n"]
-    for name, fields in item_types().items():
-        out.append(f"std::vector<Field> {snake(name)}_fields() {{\n  return {_table(fields, '  ')};\n}}\n")
+    for name, fields in model.item_types().items():
+        out.append(f"std::vector<Field> {snake(name)}_fields() {{\n  return {SPELLING.table(fields, '  ')};\n}}\n")
     out.append("template <class T>\nstd::unique_ptr<Telegram> make(const Values& v) {\n"
                "  return std::make_unique<T>(T::from_values(v));\n}\n\n}  // namespace\n\nnamespace detail {\n")
-    for name, fields in item_types().items():
+    for name, fields in model.item_types().items():
         to, sets = _conversions("item.", fields, "item")
         out.append(f"Value to_value(const {name}& item) {{\n  return Value::of_list({{{to}}});\n}}\n\n"
                    f"void from_value(const Value& value, {name}& item) {{\n  const Values& v = value.list;\n{sets}}}\n")
     out.append("}  // namespace detail\n")
     for direction in ("request", "reply"):
-        for m in messages(direction):
+        for m in model.messages(direction):
             t = m.type_name
             if m.opaque:
                 layout, to, sets = "Layout{true, {}}", "Value::of_bytes(payload)", "  t.payload = v.at(0).bytes;\n"
             else:
-                layout = f"Layout{{false, {_table(m.fields, '    ')}}}"
+                layout = f"Layout{{false, {SPELLING.table(m.fields, '    ')}}}"
                 to, sets = _conversions("", m.fields, "t")
             unused = "" if sets else "  (void)v;\n"
             out.append(f"const Layout& {t}::layout() {{\n  static const Layout kLayout = {layout};\n"
@@ -188,64 +161,12 @@ def _protocol() -> str:
             if direction == "reply":
                 lines += ["    }", "    return nullptr;", "  }", "  switch (id) {"]
             pad = "    " if direction == "request" else "  "
-            lines += [f"{pad}  case {m.id}: return {call.format(t=m.type_name)};" for m in messages(direction)]
+            lines += [f"{pad}  case {m.id}: return {call.format(t=m.type_name)};" for m in model.messages(direction)]
         lines += ["  }", "  return nullptr;", "}\n"]
         out.append("\n".join(lines))
-    for c in commands():
-        m = c.request
-        ret = c.reply.type_name if c.reply else "void"
-        sets = "".join(f"  r.{member(f.name)} = {member(f.name)};\n" for f in m.user_fields)
-        if m.opaque:
-            sets = "  r.payload = payload;\n"
-        action = f"return request<{c.reply.type_name}>(r)" if c.reply else "send(r)"
-        out.append(f"{ret} Client::{method_name(m)}({', '.join(p.split(' = ')[0] for p in _params(m))}) {{\n"
-                   f"  {m.type_name} r;\n{sets}  {action};\n}}\n")
+    out += map(_definition, model.commands())
     out.append("}  // namespace platformctrl")
     return "\n".join(out) + "\n"
-
-
-CMAKE = """{banner}cmake_minimum_required(VERSION 3.13)
-project(platformctrl CXX)
-set(CMAKE_CXX_STANDARD 17)
-set(CMAKE_CXX_STANDARD_REQUIRED ON)
-add_library(platformctrl src/runtime.cpp src/protocol.cpp)
-target_include_directories(platformctrl PUBLIC include)
-add_executable(smoke examples/smoke.cpp)
-target_link_libraries(smoke platformctrl)
-add_executable(vectors examples/vectors.cpp)
-target_link_libraries(vectors platformctrl)
-"""
-BUILD_SH = """#!/bin/sh
-{banner}# sh build.sh: compile with plain g++ (C++17) into build/ (or: cmake -S . -B build && cmake --build build).
-set -e
-cd "$(dirname "$0")"
-CXX="${{CXX:-g++}}"
-FLAGS="-std=c++17 -O1 -Wall -Wextra -Iinclude"
-mkdir -p build
-if [ ! -f build/.stamp ] || [ -n "$(find include src examples -newer build/.stamp)" ]; then
-  $CXX $FLAGS -c src/runtime.cpp -o build/runtime.o &
-  $CXX $FLAGS -c src/protocol.cpp -o build/protocol.o
-  wait $!
-  $CXX $FLAGS examples/smoke.cpp build/runtime.o build/protocol.o -o build/smoke
-  $CXX $FLAGS examples/vectors.cpp build/runtime.o build/protocol.o -o build/vectors
-  touch build/.stamp
-fi
-"""
-SMOKE_SH = """#!/bin/sh
-{banner}# sh smoke.sh HOST PORT: build, then connect, init and print the position as one JSON line.
-set -e
-cd "$(dirname "$0")"
-sh build.sh
-exec ./build/smoke "$1" "$2"
-"""
-VECTORS_SH = """#!/bin/sh
-{banner}# sh vectors.sh FILE: build, then check every vector of FILE (python -m clients.stubgen.vectors writes it).
-set -e
-FILE="$(cd "$(dirname "$1")" && pwd)/$(basename "$1")"
-cd "$(dirname "$0")"
-sh build.sh
-exec ./build/vectors "$FILE"
-"""
 
 
 README = readme(
@@ -268,17 +189,13 @@ platformctrl::GetPositionReply pos = client.get_position();
 
 
 def render() -> dict[str, str]:
-    sh = HEAD.replace("// ", "# ")
     return {
         "README.md": README,
         "include/platformctrl.hpp": _header(),
-        "src/runtime.cpp": HEAD + template("cpp", "runtime.cpp.tmpl"),
         "src/protocol.cpp": _protocol(),
-        "examples/smoke.cpp": HEAD + template("cpp", "smoke.cpp.tmpl"),
-        "examples/vectors.cpp": HEAD + template("cpp", "vectors.cpp.tmpl"),
-        "CMakeLists.txt": CMAKE.format(banner=sh),
-        "build.sh": BUILD_SH.format(banner=sh),
-        "smoke.sh": SMOKE_SH.format(banner=sh),
-        "vectors.sh": VECTORS_SH.format(banner=sh),
-        ".gitignore": sh + "build/\n",
+        **static("cpp", HEAD, {"src/runtime.cpp": "runtime.cpp.tmpl", "examples/smoke.cpp": "smoke.cpp.tmpl",
+                               "examples/vectors.cpp": "vectors.cpp.tmpl"}),
+        **static("cpp", banner("# "), {"CMakeLists.txt": "CMakeLists.txt.tmpl"}),
+        **scripts("cpp", "compile with plain g++ (C++17) into build/ (or: cmake -S . -B build && cmake --build build).",
+                  "./build/smoke", "./build/vectors", "build/\n"),
     }

@@ -2,19 +2,18 @@
 
 from __future__ import annotations
 
-from clients.stubgen import banner, fill, readme, template
-from clients.stubgen.model import (
-    ERRORS,
-    Field,
-    Message,
-    commands,
-    doc_line,
-    enums,
-    field_doc,
-    item_types,
-    messages,
-    pascal,
-    words,
+from clients.stubgen import banner, fill, model, readme, template
+from clients.stubgen.model import ERRORS, Command, Field, Message, doc_line, field_doc, pascal, words
+from clients.stubgen.renderer import (
+    Spelling,
+    arguments,
+    convert,
+    enum_doc,
+    methods,
+    protocol,
+    scripts,
+    static,
+    telegram_doc,
 )
 
 KEYWORDS = frozenset((
@@ -32,12 +31,27 @@ RUNTIME_NAMES = frozenset((
     "Dial",
 ))
 HEAD = banner("// ")
-TYPE_CONST = {"BYTE": "FieldByte", "BOOL": "FieldBool", "INT16": "FieldInt16", "INT": "FieldInt",
-              "DOUBLE": "FieldDouble", "STRING": "FieldString", "XML": "FieldXML", "GROUP": "FieldGroup"}
+# Values cross the runtime as any: int64, float64, string, []byte, []any (arrays, group items).
+TO_VALUE = {"group": "groupToValues({x})", "array": "intsToValues({x}[:])", "BOOL": "b2i({x})", "DOUBLE": "{x}",
+            "text": "{x}", "int": "int64({x})"}
+FROM_VALUE = {"group": "{x} = valuesToGroup[{item}]({v})", "array": "valuesToInts({v}, {x}[:])",
+              "BOOL": "{x} = {v}.(int64) != 0", "DOUBLE": "{x} = {v}.(float64)", "text": "{x} = {v}.(string)",
+              "int": "{x} = {base}({v}.(int64))"}
 
 
 def go_name(name: str) -> str:
     return "".join(INITIALISMS.get(w.lower(), w[:1].upper() + w[1:].lower()) for w in words(name))
+
+
+SPELLING = Spelling(
+    scalars=GO_TYPE, group="[]{item}", array="[{repeat}]{base}",
+    head='Name: "{f.name}", Type: {type}', type_name=lambda t: "Field" + go_name(t), wrap=("{", "}"),
+    attrs={"repeat": "Repeat: {f.repeat}", "const": "HasConst: true, Const: {f.const}",
+           "min": "HasMin: true, Min: {f.min}", "max": "HasMax: true, Max: {f.max}",
+           "allowed": "Allowed: []int64{{{allowed}}}", "group": "Fields: fields{item}, ItemMin: {f.item_min}",
+           "run": "Run: {f.run}"},
+    empty="nil", open="[]Field{", close="}}", step="\t",
+)
 
 
 def param(name: str) -> str:
@@ -48,12 +62,12 @@ def param(name: str) -> str:
 
 def _enum_consts() -> dict[tuple[str, str], str]:
     plain: dict[str, list[str]] = {}
-    for name, e in enums().items():
+    for name, e in model.enums().items():
         for value in e.values:
             plain.setdefault(pascal(value), []).append(name)
-    taken = RUNTIME_NAMES | set(item_types()) | set(enums())
+    taken = RUNTIME_NAMES | set(model.item_types()) | set(model.enums())
     out = {}
-    for name, e in enums().items():
+    for name, e in model.enums().items():
         for value in e.values:
             p = pascal(value)
             out[(name, value)] = name + p if len(plain[p]) > 1 or p in taken else p
@@ -70,73 +84,16 @@ def _errors() -> str:
     return "\n".join(lines) + "\n)"
 
 
-def _type(f: Field) -> str:
-    if f.is_group:
-        return f"[]{f.item}"
-    base = f.enum or GO_TYPE[f.type]
-    return f"[{f.repeat}]{base}" if f.repeat else base
-
-
-def _to_value(f: Field, expr: str) -> str:
-    if f.is_group:
-        return f"groupToValues({expr})"
-    if f.repeat:
-        return f"intsToValues({expr}[:])"
-    if f.type == "BOOL":
-        return f"b2i({expr})"
-    if f.type in ("DOUBLE", "STRING", "XML"):
-        return expr
-    return f"int64({expr})"
-
-
-def _from_value(f: Field, target: str, v: str) -> str:
-    if f.is_group:
-        return f"{target} = valuesToGroup[{f.item}]({v})"
-    if f.repeat:
-        return f"valuesToInts({v}, {target}[:])"
-    if f.type == "BOOL":
-        return f"{target} = {v}.(int64) != 0"
-    if f.type == "DOUBLE":
-        return f"{target} = {v}.(float64)"
-    if f.is_text:
-        return f"{target} = {v}.(string)"
-    return f"{target} = {f.enum or GO_TYPE[f.type]}({v}.(int64))"
-
-
-def _desc(f: Field) -> str:
-    parts = [f'Name: "{f.name}"', f"Type: {TYPE_CONST[f.type]}"]
-    if f.repeat:
-        parts.append(f"Repeat: {f.repeat}")
-    if f.const is not None:
-        parts.append(f"HasConst: true, Const: {f.const}")
-    if f.min is not None:
-        parts.append(f"HasMin: true, Min: {f.min}")
-    if f.max is not None:
-        parts.append(f"HasMax: true, Max: {f.max}")
-    if f.allowed is not None:
-        parts.append(f"Allowed: []int64{{{', '.join(map(str, f.allowed))}}}")
-    if f.is_group:
-        parts.append(f"Fields: fields{f.item}, ItemMin: {f.item_min}")
-    if f.run:
-        parts.append(f"Run: {f.run}")
-    return "{" + ", ".join(parts) + "}"
-
-
-def _table(fields: tuple[Field, ...]) -> str:
-    if not fields:
-        return "nil"
-    return "[]Field{\n" + "".join(f"\t{_desc(f)},\n" for f in fields) + "}"
-
-
 def _struct_fields(fields: tuple[Field, ...]) -> list[str]:
     # Doc comments above each field: gofmt then aligns nothing, so the output is gofmt-clean as written.
-    return [f"\t// {field_doc(f)}\n\t{go_name(f.name)} {_type(f)}" for f in fields if f.user]
+    return [f"\t// {field_doc(f)}\n\t{go_name(f.name)} {SPELLING.type(f)}" for f in fields if f.user]
 
 
 def _conversions(recv: str, fields: tuple[Field, ...]) -> tuple[str, str]:
     user = [f for f in fields if f.user]
-    values = ", ".join(_to_value(f, f"{recv}.{go_name(f.name)}") for f in user)
-    sets = "".join(f"\t{_from_value(f, f'{recv}.{go_name(f.name)}', f'v[{i}]')}\n" for i, f in enumerate(user))
+    values = ", ".join(convert(TO_VALUE, f, x=f"{recv}.{go_name(f.name)}") for f in user)
+    sets = "".join(f"\t{convert(FROM_VALUE, f, x=f'{recv}.{go_name(f.name)}', v=f'v[{i}]', base=SPELLING.type(f))}\n"
+                   for i, f in enumerate(user))
     return values, sets
 
 
@@ -147,7 +104,7 @@ def _func(signature: str, body: str) -> str:
 
 def _telegram(m: Message) -> str:
     t = m.type_name
-    out = [f"// {t} is {m.name} ({m.direction}, id {m.id}): {doc_line(m.summary)} [guide {doc_line(m.section)}]"]
+    out = [f"// {t} is {telegram_doc(m)}"]
     if m.opaque:
         out += [f"type {t} struct {{\n\t// Payload is the bytes after the identifier (layout unknown).\n"
                 f"\tPayload []byte\n}}\n",
@@ -157,7 +114,7 @@ def _telegram(m: Message) -> str:
     else:
         body = _struct_fields(m.fields)
         out.append(f"type {t} struct {{\n" + "\n".join(body) + "\n}\n" if body else f"type {t} struct{{}}\n")
-        out.append(f"var layout{t} = Layout{{Fields: {_table(m.fields)}}}\n")
+        out.append(f"var layout{t} = Layout{{Fields: {SPELLING.table(m.fields)}}}\n")
         values, sets = _conversions("t", m.fields)
         out.append(_func(f"(t *{t}) Values() []any", f"\treturn []any{{{values}}}\n"))
         out.append(_func(f"(t *{t}) setValues(v []any)", sets))
@@ -169,30 +126,31 @@ def _telegram(m: Message) -> str:
     return "\n".join(out)
 
 
+def _enum(name: str) -> str:
+    consts = _enum_consts()
+    values = [f"\t// {consts[(name, k)]} is {k}.\n\t{consts[(name, k)]} {name} = {v}"
+              for k, v in model.enums()[name].values.items()]
+    return "\n".join([f"// {name}: {enum_doc(name)}\ntype {name} int32\n", f"// The values of {name}.\nconst (",
+                      *values, ")\n"])
+
+
+def _item(name: str, fields: tuple[Field, ...]) -> str:
+    values, sets = _conversions("p", fields)
+    return "\n".join([f"// {name} is one item of a repeated group.\ntype {name} struct {{", *_struct_fields(fields),
+                      "}\n", f"var fields{name} = {SPELLING.table(fields)}\n",
+                      _func(f"(p *{name}) values() []any", f"\treturn []any{{{values}}}\n"),
+                      _func(f"(p *{name}) setValues(v []any)", sets)])
+
+
+def _registry(direction: str, telegrams: tuple[Message, ...]) -> str:
+    cases = [f"\tcase {m.id}:\n\t\treturn &{m.type_name}{{}}" for m in telegrams]
+    func = "newRequest" if direction == "request" else "newReply"
+    return "\n".join([f"func {func}(id uint8) Telegram {{\n\tswitch id {{", *cases, "\t}\n\treturn nil\n}\n"])
+
+
 def _protocol() -> str:
     out = [HEAD, "// Enums, group items and telegram types of the PlatformCtrl protocol (guide 6.3, 6.4).\n",
-           "package platformctrl\n"]
-    consts = _enum_consts()
-    for name, e in enums().items():
-        out.append(f"// {name}: {doc_line(e.description)} [guide {doc_line(e.section)}]\ntype {name} int32\n")
-        out.append(f"// The values of {name}.\nconst (")
-        out += [f"\t// {consts[(name, k)]} is {k}.\n\t{consts[(name, k)]} {name} = {v}" for k, v in e.values.items()]
-        out.append(")\n")
-    for name, fields in item_types().items():
-        out.append(f"// {name} is one item of a repeated group.\ntype {name} struct {{")
-        out += _struct_fields(fields)
-        out.append("}\n")
-        out.append(f"var fields{name} = {_table(fields)}\n")
-        values, sets = _conversions("p", fields)
-        out.append(_func(f"(p *{name}) values() []any", f"\treturn []any{{{values}}}\n"))
-        out.append(_func(f"(p *{name}) setValues(v []any)", sets))
-    for direction in ("request", "reply"):
-        for m in messages(direction):
-            out.append(_telegram(m))
-    for direction, func in (("request", "newRequest"), ("reply", "newReply")):
-        out.append(f"func {func}(id uint8) Telegram {{\n\tswitch id {{")
-        out += [f"\tcase {m.id}:\n\t\treturn &{m.type_name}{{}}" for m in messages(direction)]
-        out.append("\t}\n\treturn nil\n}\n")
+           "package platformctrl\n", *protocol(_enum, _item, _telegram, _registry)]
     return "\n".join(out).rstrip("\n") + "\n"
 
 
@@ -200,53 +158,18 @@ def method_name(m: Message) -> str:
     return go_name(m.base)
 
 
-def _methods() -> str:
-    out = []
-    for c in commands():
-        m = c.request
-        params, inits = [], []
-        if m.opaque:
-            params.append("payload []byte")
-            inits.append("Payload: payload")
-        for f in m.user_fields:
-            params.append(f"{param(f.name)} {_type(f)}")
-            inits.append(f"{go_name(f.name)}: {param(f.name)}")
-        req = f"&{m.type_name}{{{', '.join(inits)}}}"
-        doc = f"// {method_name(m)} sends {m.name} (id {m.id}): {doc_line(m.summary)}"
-        if c.reply is None:
-            out.append(f"{doc}\nfunc (c *Client) {method_name(m)}({', '.join(params)}) error {{\n"
-                       f"\treturn c.Send({req})\n}}\n")
-        else:
-            r = c.reply.type_name
-            out.append(f"{doc}\nfunc (c *Client) {method_name(m)}({', '.join(params)}) (*{r}, error) {{\n"
-                       f"\tt, err := c.Request({req}, {m.id})\n\tif err != nil {{\n\t\treturn nil, err\n\t}}\n"
-                       f"\treturn t.(*{r}), nil\n}}\n")
-    return "\n".join(out).rstrip("\n")
-
-
-BUILD_SH = """#!/bin/sh
-{banner}# sh build.sh: build the package and the programs into build/ (Go 1.19+, no dependencies).
-set -e
-cd "$(dirname "$0")"
-export GOTOOLCHAIN="${{GOTOOLCHAIN:-local}}"
-[ -n "$GOCACHE" ] || [ -n "$HOME" ] || export GOCACHE="${{TMPDIR:-/tmp}}/go-build-cache"
-go build -o build/ ./cmd/smoke ./cmd/vectors
-"""
-SMOKE_SH = """#!/bin/sh
-{banner}# sh smoke.sh HOST PORT: build, then connect, init and print the position as one JSON line.
-set -e
-cd "$(dirname "$0")"
-sh build.sh
-exec ./build/smoke "$1" "$2"
-"""
-VECTORS_SH = """#!/bin/sh
-{banner}# sh vectors.sh FILE: build, then check every vector of FILE (python -m clients.stubgen.vectors writes it).
-set -e
-FILE="$(cd "$(dirname "$1")" && pwd)/$(basename "$1")"
-cd "$(dirname "$0")"
-sh build.sh
-exec ./build/vectors "$FILE"
-"""
+def _method(c: Command) -> str:
+    m = c.request
+    params, inits = arguments(m, ("payload []byte", "Payload: payload"),
+                              lambda f: (f"{param(f.name)} {SPELLING.type(f)}", f"{go_name(f.name)}: {param(f.name)}"))
+    req = f"&{m.type_name}{{{', '.join(inits)}}}"
+    doc = f"// {method_name(m)} sends {m.name} (id {m.id}): {doc_line(m.summary)}"
+    if c.reply is None:
+        return f"{doc}\nfunc (c *Client) {method_name(m)}({', '.join(params)}) error {{\n\treturn c.Send({req})\n}}\n"
+    r = c.reply.type_name
+    return (f"{doc}\nfunc (c *Client) {method_name(m)}({', '.join(params)}) (*{r}, error) {{\n"
+            f"\tt, err := c.Request({req}, {m.id})\n\tif err != nil {{\n\t\treturn nil, err\n\t}}\n"
+            f"\treturn t.(*{r}), nil\n}}\n")
 
 
 README = readme(
@@ -278,11 +201,8 @@ def render() -> dict[str, str]:
         "go.mod": HEAD + "module platformctrl\n\ngo 1.19\n",
         "wire.go": HEAD + fill(template("go", "wire.go.tmpl"), ERRORS=_errors()),
         "protocol.go": _protocol(),
-        "client.go": HEAD + fill(template("go", "client.go.tmpl"), METHODS=_methods()),
-        "cmd/smoke/main.go": HEAD + template("go", "smoke.go.tmpl"),
-        "cmd/vectors/main.go": HEAD + template("go", "vectors.go.tmpl"),
-        "build.sh": BUILD_SH.format(banner=HEAD.replace("// ", "# ")),
-        "smoke.sh": SMOKE_SH.format(banner=HEAD.replace("// ", "# ")),
-        "vectors.sh": VECTORS_SH.format(banner=HEAD.replace("// ", "# ")),
-        ".gitignore": HEAD.replace("// ", "# ") + "build/\n",
+        "client.go": HEAD + fill(template("go", "client.go.tmpl"), METHODS=methods(_method, lead="")),
+        **static("go", HEAD, {"cmd/smoke/main.go": "smoke.go.tmpl", "cmd/vectors/main.go": "vectors.go.tmpl"}),
+        **scripts("go", "build the package and the programs into build/ (Go 1.19+, no dependencies).",
+                  "./build/smoke", "./build/vectors", "build/\n"),
     }

@@ -2,18 +2,19 @@
 
 from __future__ import annotations
 
-from clients.stubgen import banner, fill, readme, template
-from clients.stubgen.model import (
-    ERRORS,
-    Field,
-    Message,
-    camel,
-    commands,
-    doc_line,
-    enums,
-    field_doc,
-    item_types,
-    messages,
+from clients.stubgen import banner, fill, model, readme, template
+from clients.stubgen.model import ERRORS, Command, Field, Message, camel, doc_line, field_doc
+from clients.stubgen.renderer import (
+    BUILDER,
+    Spelling,
+    arguments,
+    convert,
+    enum_doc,
+    methods,
+    protocol,
+    scripts,
+    static,
+    telegram_doc,
 )
 
 KEYWORDS = frozenset((
@@ -28,6 +29,21 @@ JAVA_TYPE = {"BYTE": "int", "BOOL": "boolean", "INT16": "short", "INT": "int", "
              "STRING": "String", "XML": "String"}
 HEAD = banner("// ")
 SRC = "src/main/java/platformctrl/"
+SPELLING = Spelling(
+    scalars=JAVA_TYPE, group="List<{item}>", array="{base}[]",
+    head='Field.of("{f.name}", FieldType.{f.type})', sep="",
+    attrs={**BUILDER, "allowed": ".allowed({allowed})", "group": ".group({item}.FIELDS, {f.item_min})"},
+    empty="List.of()", open="List.of(", close=")", step="    ", trailing=False,
+)
+# Values cross the runtime as Object: Long, Double, String, byte[], List<Object> (arrays, group items).
+TO_VALUE = {"group": "Wire.group({n}, {item}::toValues)", "enum_array": "Wire.enums({n}, e -> e.value)",
+            "array": "Wire.list({n})", "enum": "(long) {n}.value", "BOOL": "Wire.bool({n})", "DOUBLE": "{n}",
+            "text": "{n}", "int": "(long) {n}"}
+FROM_VALUE = {"group": "Wire.items({v}, {item}::fromValues)",
+              "enum_array": "Wire.enumArray({v}, {enum}::of, {enum}[]::new)",
+              "array_INT16": "Wire.shorts({v})", "array": "Wire.ints({v})", "enum": "{enum}.of(Wire.num({v}))",
+              "BYTE": "Wire.u8({v})", "BOOL": "Wire.bool({v})", "INT16": "Wire.i16({v})", "INT": "Wire.i32({v})",
+              "DOUBLE": "(Double) {v}", "text": "(String) {v}"}
 
 
 def name(field: str) -> str:
@@ -53,74 +69,14 @@ def _errors() -> str:
     return "\n".join([*out, "}"]) + "\n"
 
 
-def _type(f: Field) -> str:
-    if f.is_group:
-        return f"List<{f.item}>"
-    base = f.enum or JAVA_TYPE[f.type]
-    return f"{base}[]" if f.repeat else base
-
-
-def _to_value(f: Field) -> str:
-    n = name(f.name)
-    if f.is_group:
-        return f"Wire.group({n}, {f.item}::toValues)"
-    if f.repeat:
-        return f"Wire.enums({n}, e -> e.value)" if f.enum else f"Wire.list({n})"
-    if f.enum:
-        return f"(long) {n}.value"
-    if f.type == "BOOL":
-        return f"Wire.bool({n})"
-    if f.type in ("DOUBLE", "STRING", "XML"):
-        return n
-    return f"(long) {n}"
-
-
-def _from_value(f: Field, v: str) -> str:
-    if f.is_group:
-        return f"Wire.items({v}, {f.item}::fromValues)"
-    if f.repeat:
-        if f.enum:
-            return f"Wire.enumArray({v}, {f.enum}::of, {f.enum}[]::new)"
-        return f"Wire.shorts({v})" if f.type == "INT16" else f"Wire.ints({v})"
-    if f.enum:
-        return f"{f.enum}.of(Wire.num({v}))"
-    return {"BYTE": "Wire.u8({})", "BOOL": "Wire.bool({})", "INT16": "Wire.i16({})", "INT": "Wire.i32({})",
-            "DOUBLE": "(Double) {}", "STRING": "(String) {}", "XML": "(String) {}"}[f.type].format(v)
-
-
-def _desc(f: Field) -> str:
-    out = f'Field.of("{f.name}", FieldType.{f.type})'
-    if f.repeat:
-        out += f".repeat({f.repeat})"
-    if f.const is not None:
-        out += f".constant({f.const})"
-    if f.min is not None:
-        out += f".min({f.min})"
-    if f.max is not None:
-        out += f".max({f.max})"
-    if f.allowed is not None:
-        out += f".allowed({', '.join(map(str, f.allowed))})"
-    if f.is_group:
-        out += f".group({f.item}.FIELDS, {f.item_min})"
-    if f.run:
-        out += f".run({f.run})"
-    return out
-
-
-def _table(fields: tuple[Field, ...], indent: str) -> str:
-    if not fields:
-        return "List.of()"
-    return "List.of(\n" + ",\n".join(f"{indent}    {_desc(f)}" for f in fields) + ")"
-
-
 def _record(kind: str, rname: str, doc: str, fields: tuple[Field, ...], implements: str, body: list[str]) -> str:
     user = [f for f in fields if f.user]
-    comps = ", ".join(f"{_type(f)} {name(f.name)}" for f in user)
+    comps = ", ".join(f"{SPELLING.type(f)} {name(f.name)}" for f in user)
     params = "".join(f"\n     * @param {name(f.name)} {field_doc(f)}" for f in user)
     lines = [f"    /**\n     * {doc}{params}\n     */", f"    public record {rname}({comps}){implements} {{"]
     lines += body
-    to = ", ".join(_to_value(f) for f in user)
-    frm = ", ".join(_from_value(f, f"v.get({i})") for i, f in enumerate(user))
+    to = ", ".join(convert(TO_VALUE, f, n=name(f.name)) for f in user)
+    frm = ", ".join(convert(FROM_VALUE, f, v=f"v.get({i})") for i, f in enumerate(user))
     lines += [f"        {kind} List<Object> toValues() {{", f"            return Arrays.asList({to});", "        }", "",
               f"        static {rname} fromValues(List<Object> v) {{", f"            return new {rname}({frm});",
               "        }", "    }\n"]
@@ -129,10 +85,10 @@ def _record(kind: str, rname: str, doc: str, fields: tuple[Field, ...], implemen
 
 def _telegram(m: Message) -> str:
     t = m.type_name
-    doc = f"{m.name} ({m.direction}, id {m.id}): {doc_line(m.summary)} [guide {doc_line(m.section)}]"
+    doc = telegram_doc(m)
     head = [f"        public static final int ID = {m.id};",
             f"        public static final Layout LAYOUT = new Layout({str(m.opaque).lower()}, "
-            f"{_table(m.fields, '            ')});", "",
+            f"{SPELLING.table(m.fields, '            ')});", "",
             "        @Override public int telegramId() { return ID; }",
             f'        @Override public String telegramName() {{ return "{m.name}"; }}',
             "        @Override public Layout telegramLayout() { return LAYOUT; }", ""]
@@ -146,33 +102,38 @@ def _telegram(m: Message) -> str:
     return _record("@Override public", t, doc, m.fields, " implements Telegram", head)
 
 
+def _enum(ename: str) -> str:
+    values = ",\n".join(f"        /** {k} = {v} */\n        {k}({v})" for k, v in model.enums()[ename].values.items())
+    return (f"    /** {enum_doc(ename)} */\n"
+            f"    public enum {ename} {{\n{values};\n\n        public final int value;\n\n"
+            f"        {ename}(int value) {{\n            this.value = value;\n        }}\n\n"
+            f"        /** The constant with this value (the decoder checked that there is one). */\n"
+            f"        public static {ename} of(long value) {{\n"
+            f"            for ({ename} e : values()) {{\n                if (e.value == value) {{\n"
+            f"                    return e;\n                }}\n            }}\n"
+            f'            throw new IllegalArgumentException("no {ename} " + value);\n        }}\n    }}\n')
+
+
+def _item(iname: str, fields: tuple[Field, ...]) -> str:
+    body = [f"        static final List<Field> FIELDS = {SPELLING.table(fields, '            ')};", ""]
+    return _record("public", iname, "One item of a repeated group.", fields, "", body)
+
+
+def _registry(direction: str, telegrams: tuple[Message, ...]) -> str:
+    entries = ",\n".join(f"        Map.entry({m.id}, new Entry({m.type_name}.LAYOUT, {m.type_name}::fromValues))"
+                         for m in telegrams)
+    const = "REQUESTS" if direction == "request" else "REPLIES"
+    return (f"    /** Every {direction} telegram, by identifier. */\n"
+            f"    static final Map<Integer, Entry> {const} = Map.ofEntries(\n{entries});\n")
+
+
 def _protocol() -> str:
     out = [HEAD, "package platformctrl;\n", "import java.util.Arrays;", "import java.util.List;",
            "import java.util.Map;\n", "import platformctrl.Wire.Entry;", "import platformctrl.Wire.Field;",
            "import platformctrl.Wire.FieldType;", "import platformctrl.Wire.Layout;\n",
            "/** Enums, group items and telegram records of the PlatformCtrl protocol (guide 6.3, 6.4). */",
-           "public final class Protocol {", "    private Protocol() {}\n"]
-    for ename, e in enums().items():
-        values = ",\n".join(f"        /** {k} = {v} */\n        {k}({v})" for k, v in e.values.items())
-        out.append(f"    /** {doc_line(e.description)} [guide {doc_line(e.section)}] */\n"
-                   f"    public enum {ename} {{\n{values};\n\n        public final int value;\n\n"
-                   f"        {ename}(int value) {{\n            this.value = value;\n        }}\n\n"
-                   f"        /** The constant with this value (the decoder checked that there is one). */\n"
-                   f"        public static {ename} of(long value) {{\n"
-                   f"            for ({ename} e : values()) {{\n                if (e.value == value) {{\n"
-                   f"                    return e;\n                }}\n            }}\n"
-                   f'            throw new IllegalArgumentException("no {ename} " + value);\n        }}\n    }}\n')
-    for iname, fields in item_types().items():
-        body = [f"        static final List<Field> FIELDS = {_table(fields, '            ')};", ""]
-        out.append(_record("public", iname, "One item of a repeated group.", fields, "", body))
-    for direction in ("request", "reply"):
-        for m in messages(direction):
-            out.append(_telegram(m))
-    for direction, const in (("request", "REQUESTS"), ("reply", "REPLIES")):
-        entries = ",\n".join(f"        Map.entry({m.id}, new Entry({m.type_name}.LAYOUT, {m.type_name}::fromValues))"
-                             for m in messages(direction))
-        out.append(f"    /** Every {direction} telegram, by identifier. */\n"
-                   f"    static final Map<Integer, Entry> {const} = Map.ofEntries(\n{entries});\n")
+           "public final class Protocol {", "    private Protocol() {}\n",
+           *protocol(_enum, _item, _telegram, _registry)]
     return "\n".join(out).rstrip("\n") + "\n}\n"
 
 
@@ -181,79 +142,17 @@ def method_name(m: Message) -> str:
     return n + "_" if n in KEYWORDS or n in CLIENT_NAMES else n
 
 
-def _methods() -> str:
-    out = []
-    for c in commands():
-        m = c.request
-        params, args = [], []
-        if m.opaque:
-            params.append("byte[] payload")
-            args.append("payload")
-        for f in m.user_fields:
-            params.append(f"{_type(f)} {name(f.name)}")
-            args.append(name(f.name))
-        req = f"new {m.type_name}({', '.join(args)})"
-        doc = f"    /** {m.name} (id {m.id}): {doc_line(m.summary)} */"
-        sig = f"{method_name(m)}({', '.join(params)}) throws IOException"
-        if c.reply is None:
-            out.append(f"{doc}\n    public void {sig} {{\n        send({req});\n    }}\n")
-        else:
-            r = c.reply.type_name
-            out.append(f"{doc}\n    public {r} {sig} {{\n        return request({req}, {r}.class);\n    }}\n")
-    return "\n" + "\n".join(out).rstrip("\n")
-
-
-POM = """<?xml version="1.0" encoding="UTF-8"?>
-<!-- {text} -->
-<project xmlns="http://maven.apache.org/POM/4.0.0" xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance"
-         xsi:schemaLocation="http://maven.apache.org/POM/4.0.0 https://maven.apache.org/xsd/maven-4.0.0.xsd">
-  <modelVersion>4.0.0</modelVersion>
-  <groupId>platformctrl</groupId>
-  <artifactId>platformctrl</artifactId>
-  <version>0.1.0</version>
-  <packaging>jar</packaging>
-  <description>PlatformCtrl socket protocol client (generated, standard library only)</description>
-  <properties>
-    <maven.compiler.release>17</maven.compiler.release>
-    <project.build.sourceEncoding>UTF-8</project.build.sourceEncoding>
-  </properties>
-  <build>
-    <plugins>
-      <plugin>
-        <groupId>org.apache.maven.plugins</groupId>
-        <artifactId>maven-compiler-plugin</artifactId>
-        <version>3.13.0</version>
-      </plugin>
-    </plugins>
-  </build>
-</project>
-"""
-BUILD_SH = """#!/bin/sh
-{banner}# sh build.sh: compile with plain javac into build/classes (Java 17; `mvn package` works too).
-set -e
-cd "$(dirname "$0")"
-if [ ! -f build/classes/.stamp ] || [ -n "$(find src -newer build/classes/.stamp -name '*.java')" ]; then
-  rm -rf build/classes
-  mkdir -p build/classes
-  javac --release 17 -encoding UTF-8 -d build/classes $(find src/main/java -name '*.java')
-  touch build/classes/.stamp
-fi
-"""
-SMOKE_SH = """#!/bin/sh
-{banner}# sh smoke.sh HOST PORT: build, then connect, init and print the position as one JSON line.
-set -e
-cd "$(dirname "$0")"
-sh build.sh
-exec java -cp build/classes platformctrl.Smoke "$1" "$2"
-"""
-VECTORS_SH = """#!/bin/sh
-{banner}# sh vectors.sh FILE: build, then check every vector of FILE (python -m clients.stubgen.vectors writes it).
-set -e
-FILE="$(cd "$(dirname "$1")" && pwd)/$(basename "$1")"
-cd "$(dirname "$0")"
-sh build.sh
-exec java -cp build/classes platformctrl.VectorRunner "$FILE"
-"""
+def _method(c: Command) -> str:
+    m = c.request
+    params, args = arguments(m, ("byte[] payload", "payload"),
+                             lambda f: (f"{SPELLING.type(f)} {name(f.name)}", name(f.name)))
+    req = f"new {m.type_name}({', '.join(args)})"
+    doc = f"    /** {m.name} (id {m.id}): {doc_line(m.summary)} */"
+    sig = f"{method_name(m)}({', '.join(params)}) throws IOException"
+    if c.reply is None:
+        return f"{doc}\n    public void {sig} {{\n        send({req});\n    }}\n"
+    r = c.reply.type_name
+    return f"{doc}\n    public {r} {sig} {{\n        return request({req}, {r}.class);\n    }}\n"
 
 
 README = readme(
@@ -277,19 +176,15 @@ try (Client client = new Client("192.168.0.10", 10002, 10000)) {
 
 
 def render() -> dict[str, str]:
-    sh = HEAD.replace("// ", "# ")
-    files = {
+    statics = ("Wire", "Telegram", "TelegramDecoder", "Smoke", "VectorRunner")
+    return {
         "README.md": README,
-        "pom.xml": POM.format(text=banner("").strip()),
+        "pom.xml": fill(template("java", "pom.xml.tmpl"), TEXT=banner("").strip()),
         SRC + "ProtocolException.java": _errors(),
         SRC + "Protocol.java": _protocol(),
-        SRC + "Client.java": HEAD + fill(template("java", "Client.java.tmpl"), METHODS=_methods()),
-        "build.sh": BUILD_SH.format(banner=sh),
-        "smoke.sh": SMOKE_SH.format(banner=sh),
-        "vectors.sh": VECTORS_SH.format(banner=sh),
-        ".gitignore": sh + "build/\ntarget/\n",
+        SRC + "Client.java": HEAD + fill(template("java", "Client.java.tmpl"), METHODS=methods(_method)),
+        **static("java", HEAD, {f"{SRC}{name}.java": f"{name}.java.tmpl" for name in statics}),
+        **scripts("java", "compile with plain javac into build/classes (Java 17; `mvn package` works too).",
+                  "java -cp build/classes platformctrl.Smoke", "java -cp build/classes platformctrl.VectorRunner",
+                  "build/\ntarget/\n"),
     }
-    for static in ("Wire", "Telegram", "TelegramDecoder", "Smoke", "VectorRunner"):
-        files[SRC + f"{static}.java"] = HEAD + template("java", f"{static}.java.tmpl")
-    return files
-
