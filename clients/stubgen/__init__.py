@@ -98,8 +98,9 @@ def banner(prefix: str, suffix: str = "") -> str:
     return f"{prefix}{text}{suffix}\n"
 
 
-def readme(title: str, build: str, snippet_lang: str, snippet: str, notes: str) -> str:
-    """The README.md every output directory carries: how to build, run and use the client."""
+def readme(lang: str, title: str, build: str) -> str:
+    """The README.md every output directory carries: how to build, run and use the client (the language's
+    example and notes: its ``README.md.tmpl``)."""
     return (
         f"<!-- {banner('').strip()} -->\n\n# platformctrl: {title} client for the PlatformCtrl socket protocol\n\n"
         "Generated from the toolkit's spec (`spec/telegrams.yaml`, `spec/enums.yaml`) by `pltf stubs`; standard "
@@ -112,5 +113,5 @@ def readme(title: str, build: str, snippet_lang: str, snippet: str, notes: str) 
         '`{"x": ..., "y": ..., "angle": ...}`\n'
         "- vectors: `python -m clients.stubgen.vectors fixtures/vectors vectors.txt` in the toolkit, then "
         "`sh vectors.sh vectors.txt` (prints `N passed, M failed`)\n\n"
-        f"```{snippet_lang}\n{snippet.strip()}\n```\n\n{notes.strip()}\n"
+        + template(lang, "README.md.tmpl")
     )

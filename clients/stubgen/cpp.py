@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from clients.stubgen import banner, fill, model, readme, template
 from clients.stubgen.model import ERRORS, Command, Field, Message, doc_line, field_doc, snake
-from clients.stubgen.renderer import Spelling, arguments, enum_doc, methods, scripts, static, telegram_doc
+from clients.stubgen.renderer import Spelling, arguments, methods, scripts, static
 
 KEYWORDS = frozenset((
     "alignas", "alignof", "and", "and_eq", "asm", "auto", "bitand", "bitor", "bool", "break", "case", "catch",
@@ -60,7 +60,7 @@ def _header_telegram(m: Message) -> str:
         else _members(m.fields)
     direction = "Request" if m.direction == "request" else "Reply"
     return "\n".join([
-        f"/// {telegram_doc(m)}",
+        f"/// {m.doc}",
         f"struct {t} final : Telegram {{",
         f"  static constexpr uint8_t ID = {m.id};", f'  static constexpr const char* NAME = "{m.name}";',
         "  static const Layout& layout();", "  static " + t + " from_values(const Values& v);", *body,
@@ -82,7 +82,7 @@ def _header() -> str:
     enum_text = []
     for name, e in model.enums().items():
         values = "\n".join(f"  {k} = {v}," for k, v in e.values.items())
-        enum_text.append(f"/// {enum_doc(name)}\n"
+        enum_text.append(f"/// {model.enum_doc(name)}\n"
                          f"enum class {name} : int32_t {{\n{values}\n}};\n")
     items = []
     for name, fields in model.item_types().items():
@@ -99,8 +99,7 @@ def _header() -> str:
 
 
 def method_name(m: Message) -> str:
-    name = snake(m.base)
-    return name + "_" if name in KEYWORDS or name in CLIENT_NAMES else name
+    return model.safe(snake(m.base), KEYWORDS | CLIENT_NAMES)
 
 
 def _arguments(m: Message) -> tuple[list[str], list[str]]:
@@ -169,23 +168,7 @@ def _protocol() -> str:
     return "\n".join(out) + "\n"
 
 
-README = readme(
-    title="C++17",
-    build=(
-        "plain `g++ -std=c++17`, or CMake"
-    ),
-    snippet_lang="cpp",
-    snippet="""
-platformctrl::Client client("192.168.0.10", 10002);
-client.connect_to_pltf();
-client.set_mode(platformctrl::MotionMode::MODE_MOTION_VEL);
-platformctrl::GetPositionReply pos = client.get_position();
-""",
-    notes=(
-        "Sockets are POSIX (Linux, macOS). Errors are exception classes deriving from "
-        "`platformctrl::ProtocolError` (`kind()` names the class)."
-    ),
-)
+README = readme("cpp", "C++17", "plain `g++ -std=c++17`, or CMake")
 
 
 def render() -> dict[str, str]:

@@ -4,17 +4,7 @@ from __future__ import annotations
 
 from clients.stubgen import banner, fill, model, readme, template
 from clients.stubgen.model import ERRORS, Command, Field, Message, doc_line, field_doc, pascal, words
-from clients.stubgen.renderer import (
-    Spelling,
-    arguments,
-    convert,
-    enum_doc,
-    methods,
-    protocol,
-    scripts,
-    static,
-    telegram_doc,
-)
+from clients.stubgen.renderer import Spelling, arguments, convert, methods, protocol, scripts, static
 
 KEYWORDS = frozenset((
     "break", "case", "chan", "const", "continue", "default", "defer", "else", "fallthrough", "for", "func", "go",
@@ -104,7 +94,7 @@ def _func(signature: str, body: str) -> str:
 
 def _telegram(m: Message) -> str:
     t = m.type_name
-    out = [f"// {t} is {telegram_doc(m)}"]
+    out = [f"// {t} is {m.doc}"]
     if m.opaque:
         out += [f"type {t} struct {{\n\t// Payload is the bytes after the identifier (layout unknown).\n"
                 f"\tPayload []byte\n}}\n",
@@ -130,7 +120,7 @@ def _enum(name: str) -> str:
     consts = _enum_consts()
     values = [f"\t// {consts[(name, k)]} is {k}.\n\t{consts[(name, k)]} {name} = {v}"
               for k, v in model.enums()[name].values.items()]
-    return "\n".join([f"// {name}: {enum_doc(name)}\ntype {name} int32\n", f"// The values of {name}.\nconst (",
+    return "\n".join([f"// {name}: {model.enum_doc(name)}\ntype {name} int32\n", f"// The values of {name}.\nconst (",
                       *values, ")\n"])
 
 
@@ -149,9 +139,9 @@ def _registry(direction: str, telegrams: tuple[Message, ...]) -> str:
 
 
 def _protocol() -> str:
-    out = [HEAD, "// Enums, group items and telegram types of the PlatformCtrl protocol (guide 6.3, 6.4).\n",
-           "package platformctrl\n", *protocol(_enum, _item, _telegram, _registry)]
-    return "\n".join(out).rstrip("\n") + "\n"
+    head = [HEAD, "// Enums, group items and telegram types of the PlatformCtrl protocol (guide 6.3, 6.4).\n",
+            "package platformctrl\n"]
+    return protocol(head, _enum, _item, _telegram, _registry)
 
 
 def method_name(m: Message) -> str:
@@ -172,27 +162,7 @@ def _method(c: Command) -> str:
             f"\treturn t.(*{r}), nil\n}}\n")
 
 
-README = readme(
-    title="Go",
-    build=(
-        "`go build ./cmd/...`, Go 1.19+"
-    ),
-    snippet_lang="go",
-    snippet="""
-c, err := platformctrl.Dial("192.168.0.10:10002", 10*time.Second)
-if err != nil {
-	return err
-}
-defer c.Close()
-_ = c.ConnectToPltf()
-_ = c.SetMode(platformctrl.ModeMotionVel)
-pos, err := c.GetPosition() // *GetPositionReply
-""",
-    notes=(
-        "Match errors with `errors.Is(err, platformctrl.ErrTruncated)` (or `ErrRemoteProtocolError`). The "
-        "code is gofmt-clean."
-    ),
-)
+README = readme("go", "Go", "`go build ./cmd/...`, Go 1.19+")
 
 
 def render() -> dict[str, str]:

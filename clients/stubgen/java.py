@@ -4,18 +4,7 @@ from __future__ import annotations
 
 from clients.stubgen import banner, fill, model, readme, template
 from clients.stubgen.model import ERRORS, Command, Field, Message, camel, doc_line, field_doc
-from clients.stubgen.renderer import (
-    BUILDER,
-    Spelling,
-    arguments,
-    convert,
-    enum_doc,
-    methods,
-    protocol,
-    scripts,
-    static,
-    telegram_doc,
-)
+from clients.stubgen.renderer import BUILDER, Spelling, arguments, convert, methods, protocol, scripts, static
 
 KEYWORDS = frozenset((
     "abstract", "assert", "boolean", "break", "byte", "case", "catch", "char", "class", "const", "continue",
@@ -85,33 +74,33 @@ def _record(kind: str, rname: str, doc: str, fields: tuple[Field, ...], implemen
 
 def _telegram(m: Message) -> str:
     t = m.type_name
-    doc = telegram_doc(m)
+    doc = m.doc
     head = [f"        public static final int ID = {m.id};",
-            f"        public static final Layout LAYOUT = new Layout({str(m.opaque).lower()}, "
-            f"{SPELLING.table(m.fields, '            ')});", "",
-            "        @Override public int telegramId() { return ID; }",
-            f'        @Override public String telegramName() {{ return "{m.name}"; }}',
-            "        @Override public Layout telegramLayout() { return LAYOUT; }", ""]
+             f"        public static final Layout LAYOUT = new Layout({str(m.opaque).lower()}, "
+             f"{SPELLING.table(m.fields, '            ')});", "",
+             "        @Override public int telegramId() { return ID; }",
+             f'        @Override public String telegramName() {{ return "{m.name}"; }}',
+             "        @Override public Layout telegramLayout() { return LAYOUT; }", ""]
     if m.opaque:
         return "\n".join([f"    /**\n     * {doc}\n"
-                          "     * @param payload the bytes after the identifier (layout unknown)\n     */",
-                          f"    public record {t}(byte[] payload) implements Telegram {{", *head,
-                          "        @Override public List<Object> toValues() { return List.of(payload); }", "",
-                          f"        static {t} fromValues(List<Object> v) {{ return new {t}((byte[]) v.get(0)); }}",
-                          "    }\n"])
+                           "     * @param payload the bytes after the identifier (layout unknown)\n     */",
+                           f"    public record {t}(byte[] payload) implements Telegram {{", *head,
+                           "        @Override public List<Object> toValues() { return List.of(payload); }", "",
+                           f"        static {t} fromValues(List<Object> v) {{ return new {t}((byte[]) v.get(0)); }}",
+                           "    }\n"])
     return _record("@Override public", t, doc, m.fields, " implements Telegram", head)
 
 
 def _enum(ename: str) -> str:
     values = ",\n".join(f"        /** {k} = {v} */\n        {k}({v})" for k, v in model.enums()[ename].values.items())
-    return (f"    /** {enum_doc(ename)} */\n"
-            f"    public enum {ename} {{\n{values};\n\n        public final int value;\n\n"
-            f"        {ename}(int value) {{\n            this.value = value;\n        }}\n\n"
-            f"        /** The constant with this value (the decoder checked that there is one). */\n"
-            f"        public static {ename} of(long value) {{\n"
-            f"            for ({ename} e : values()) {{\n                if (e.value == value) {{\n"
-            f"                    return e;\n                }}\n            }}\n"
-            f'            throw new IllegalArgumentException("no {ename} " + value);\n        }}\n    }}\n')
+    return (f"    /** {model.enum_doc(ename)} */\n"
+             f"    public enum {ename} {{\n{values};\n\n        public final int value;\n\n"
+             f"        {ename}(int value) {{\n            this.value = value;\n        }}\n\n"
+             f"        /** The constant with this value (the decoder checked that there is one). */\n"
+             f"        public static {ename} of(long value) {{\n"
+             f"            for ({ename} e : values()) {{\n                if (e.value == value) {{\n"
+             f"                    return e;\n                }}\n            }}\n"
+             f'            throw new IllegalArgumentException("no {ename} " + value);\n        }}\n    }}\n')
 
 
 def _item(iname: str, fields: tuple[Field, ...]) -> str:
@@ -121,25 +110,23 @@ def _item(iname: str, fields: tuple[Field, ...]) -> str:
 
 def _registry(direction: str, telegrams: tuple[Message, ...]) -> str:
     entries = ",\n".join(f"        Map.entry({m.id}, new Entry({m.type_name}.LAYOUT, {m.type_name}::fromValues))"
-                         for m in telegrams)
+                          for m in telegrams)
     const = "REQUESTS" if direction == "request" else "REPLIES"
     return (f"    /** Every {direction} telegram, by identifier. */\n"
-            f"    static final Map<Integer, Entry> {const} = Map.ofEntries(\n{entries});\n")
+             f"    static final Map<Integer, Entry> {const} = Map.ofEntries(\n{entries});\n")
 
 
 def _protocol() -> str:
-    out = [HEAD, "package platformctrl;\n", "import java.util.Arrays;", "import java.util.List;",
-           "import java.util.Map;\n", "import platformctrl.Wire.Entry;", "import platformctrl.Wire.Field;",
-           "import platformctrl.Wire.FieldType;", "import platformctrl.Wire.Layout;\n",
-           "/** Enums, group items and telegram records of the PlatformCtrl protocol (guide 6.3, 6.4). */",
-           "public final class Protocol {", "    private Protocol() {}\n",
-           *protocol(_enum, _item, _telegram, _registry)]
-    return "\n".join(out).rstrip("\n") + "\n}\n"
+    head = [HEAD, "package platformctrl;\n", "import java.util.Arrays;", "import java.util.List;",
+            "import java.util.Map;\n", "import platformctrl.Wire.Entry;", "import platformctrl.Wire.Field;",
+            "import platformctrl.Wire.FieldType;", "import platformctrl.Wire.Layout;\n",
+            "/** Enums, group items and telegram records of the PlatformCtrl protocol (guide 6.3, 6.4). */",
+            "public final class Protocol {", "    private Protocol() {}\n"]
+    return protocol(head, _enum, _item, _telegram, _registry, end="\n}\n")
 
 
 def method_name(m: Message) -> str:
-    n = camel(m.base)
-    return n + "_" if n in KEYWORDS or n in CLIENT_NAMES else n
+    return model.safe(camel(m.base), KEYWORDS | CLIENT_NAMES)
 
 
 def _method(c: Command) -> str:
@@ -155,24 +142,7 @@ def _method(c: Command) -> str:
     return f"{doc}\n    public {r} {sig} {{\n        return request({req}, {r}.class);\n    }}\n"
 
 
-README = readme(
-    title="Java 17",
-    build=(
-        "plain `javac`; `mvn package` works too"
-    ),
-    snippet_lang="java",
-    snippet="""
-try (Client client = new Client("192.168.0.10", 10002, 10000)) {
-    client.connectToPltf();
-    client.setMode(Protocol.MotionMode.MODE_MOTION_VEL);
-    Protocol.GetPositionReply pos = client.getPosition();
-}
-""",
-    notes=(
-        "Telegrams and group items are records nested in `Protocol`; errors are `ProtocolException` "
-        "subclasses (`ProtocolException.Truncated`, ...), checked as they extend IOException."
-    ),
-)
+README = readme("java", "Java 17", "plain `javac`; `mvn package` works too")
 
 
 def render() -> dict[str, str]:

@@ -106,6 +106,12 @@ class Message:
     def type_name(self) -> str:
         return pascal(self.base) + ("Request" if self.direction == "request" else "Reply")
 
+    @property
+    def doc(self) -> str:
+        """The one-line description every language's doc comment of the telegram type carries."""
+        summary, section = doc_line(self.summary), doc_line(self.section)
+        return f"{self.name} ({self.direction}, id {self.id}): {summary} [guide {section}]"
+
 
 @dataclass(frozen=True)
 class Command:
@@ -191,6 +197,12 @@ def item_types() -> dict[str, tuple[Field, ...]]:
 
 def enums() -> dict[str, EnumDef]:
     return load_enums()
+
+
+def enum_doc(name: str) -> str:
+    """The one-line description of an enum type, for its doc comment."""
+    e = load_enums()[name]
+    return f"{doc_line(e.description)} [guide {doc_line(e.section)}]"
 
 
 # ---------------------------------------------------------------------------------------------- names

@@ -5,8 +5,8 @@ from __future__ import annotations
 import keyword
 
 from clients.stubgen import banner, fill, readme, template
-from clients.stubgen.model import ERRORS, Command, Field, Message, doc_line, enums, field_doc, snake
-from clients.stubgen.renderer import Spelling, arguments, enum_doc, methods, protocol, scripts, static
+from clients.stubgen.model import ERRORS, Command, Field, Message, doc_line, enum_doc, enums, field_doc, safe, snake
+from clients.stubgen.renderer import Spelling, arguments, methods, protocol, scripts, static
 
 KEYWORDS = frozenset(keyword.kwlist) | frozenset(("send", "receive", "request", "close"))
 PY_TYPE = {"BYTE": "int", "BOOL": "bool", "INT16": "int", "INT": "int", "DOUBLE": "float", "STRING": "str",
@@ -69,15 +69,15 @@ def _registry(direction: str, telegrams: tuple[Message, ...]) -> str:
 
 
 def _telegrams() -> str:
-    out = [HEAD, '"""Enums, group items and telegram classes of the PlatformCtrl protocol (guide 6.3, 6.4)."""\n',
-           "from __future__ import annotations\n", "import enum", "from dataclasses import dataclass",
-           "from typing import ClassVar, NamedTuple\n",
-           "from .wire import BOOL, BYTE, DOUBLE, GROUP, INT, INT16, STRING, XML, F, Telegram  # noqa: F401\n\n"]
-    return "\n".join(out + protocol(_enum, _item, lambda m: _telegram(m) + "\n", _registry))
+    head = [HEAD, '"""Enums, group items and telegram classes of the PlatformCtrl protocol (guide 6.3, 6.4)."""\n',
+            "from __future__ import annotations\n", "import enum", "from dataclasses import dataclass",
+            "from typing import ClassVar, NamedTuple\n",
+            "from .wire import BOOL, BYTE, DOUBLE, GROUP, INT, INT16, STRING, XML, F, Telegram  # noqa: F401\n\n"]
+    return protocol(head, _enum, _item, lambda m: _telegram(m) + "\n", _registry)
 
 
 def method_name(m: Message) -> str:
-    return snake(m.base) + ("_" if snake(m.base) in KEYWORDS else "")
+    return safe(snake(m.base), KEYWORDS)
 
 
 def _method(c: Command) -> str:
@@ -96,26 +96,7 @@ def _method(c: Command) -> str:
     return f'    def {signature}:\n        """{docs}"""\n        {body}\n'
 
 
-README = readme(
-    title="Python 3.10+",
-    build=(
-        "byte-compiles with `python3 -m compileall`"
-    ),
-    snippet_lang="python",
-    snippet="""
-from platformctrl import Client, MotionMode
-
-with Client("192.168.0.10", 10002) as client:
-    client.connect_to_pltf()
-    client.init_pltf()
-    client.set_mode(MotionMode.MODE_MOTION_VEL)
-    pos = client.get_position()  # GetPositionReply(x=..., y=..., angle=..., ...)
-""",
-    notes=(
-        "Methods are the commands in snake_case; GET_* methods return the typed reply. `platformctrl.codec` "
-        "is sans-IO: `encode`, `decode_frame`, `TelegramDecoder`."
-    ),
-)
+README = readme("python", "Python 3.10+", "byte-compiles with `python3 -m compileall`")
 
 
 def render() -> dict[str, str]:

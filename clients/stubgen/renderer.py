@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from clients.stubgen import banner, fill, template
-from clients.stubgen.model import Command, Field, Message, camel, commands, doc_line, enums, item_types, messages, snake
+from clients.stubgen.model import Command, Field, Message, camel, commands, enums, item_types, messages, snake
 
 DIRECTIONS = ("request", "reply")
 
@@ -109,33 +109,29 @@ def convert(table: Mapping[str, str], f: Field, **values: str) -> str:
     return table[key].format(f=f, enum=f.enum, item=f.item, **values)
 
 
-# ---------------------------------------------------------------------------------------------- documents
-
-
-def telegram_doc(m: Message) -> str:
-    return f"{m.name} ({m.direction}, id {m.id}): {doc_line(m.summary)} [guide {doc_line(m.section)}]"
-
-
-def enum_doc(name: str) -> str:
-    e = enums()[name]
-    return f"{doc_line(e.description)} [guide {doc_line(e.section)}]"
+# ---------------------------------------------------------------------------------------------- modules
 
 
 def protocol(
+    head: Sequence[str],
     enum: Callable[[str], str],
     item: Callable[[str, tuple[Field, ...]], str],
     telegram: Callable[[Message], str],
     registry: Callable[[str, tuple[Message, ...]], str],
     after_enums: Iterable[str] = (),
-) -> list[str]:
-    """The sections of a protocol module, in order: enums, group items, telegrams, then one registry a direction."""
-    return [
+    end: str = "\n",
+) -> str:
+    """A protocol module: ``head``, then enums, group items, telegrams and one registry a direction, one
+    section a line apart, and ``end`` after the last."""
+    sections = [
+        *head,
         *map(enum, enums()),
         *after_enums,
         *(item(name, fields) for name, fields in item_types().items()),
         *(telegram(m) for direction in DIRECTIONS for m in messages(direction)),
         *(registry(direction, messages(direction)) for direction in DIRECTIONS),
     ]
+    return "\n".join(sections).rstrip("\n") + end
 
 
 def arguments(m: Message, payload: tuple[str, str], field: Callable[[Field], tuple[str, str]]) -> tuple[

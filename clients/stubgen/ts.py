@@ -2,20 +2,9 @@
 
 from __future__ import annotations
 
-from clients.stubgen import banner, fill, readme, template
-from clients.stubgen.model import (
-    ERRORS,
-    Field,
-    Message,
-    camel,
-    commands,
-    doc_line,
-    enums,
-    field_doc,
-    item_types,
-    messages,
-    snake,
-)
+from clients.stubgen import banner, fill, model, readme, template
+from clients.stubgen.model import ERRORS, Command, Field, Message, camel, doc_line, field_doc, pascal, snake
+from clients.stubgen.renderer import Spelling, arguments, methods, protocol, scripts, static
 
 RESERVED = frozenset((
     "break", "case", "catch", "class", "const", "continue", "debugger", "default", "delete", "do", "else", "enum",
@@ -26,9 +15,15 @@ RESERVED = frozenset((
 CLIENT_NAMES = frozenset(("connect", "close", "send", "receive", "request"))
 TS_TYPE = {"BYTE": "number", "BOOL": "boolean", "INT16": "number", "INT": "number", "DOUBLE": "number",
            "STRING": "string", "XML": "string"}
-TYPE_MEMBER = {"BYTE": "Byte", "BOOL": "Bool", "INT16": "Int16", "INT": "Int", "DOUBLE": "Double",
-               "STRING": "String", "XML": "Xml", "GROUP": "Group"}
 HEAD = banner("// ")
+SPELLING = Spelling(
+    scalars=TS_TYPE, group="{item}[]", array="{base}[]",
+    head='name: "{f.name}", prop: "{prop}", type: FieldType.{type}', type_name=pascal, wrap=("{ ", " }"),
+    attrs={"repeat": "repeat: {f.repeat}", "const": "const: {f.const}", "min": "min: {f.min}", "max": "max: {f.max}",
+           "allowed": "allowed: [{allowed}]", "group": "fields: {ITEM}_FIELDS, itemMin: {f.item_min}",
+           "run": "run: {f.run}"},
+    empty="[]", open="[", close="{indent}]", step="  ",
+)
 # TypeScript versions pinned for reproducible builds (typescript has no dependencies of its own).
 DEV_DEPENDENCIES = {"@types/node": "20.19.0", "typescript": "5.9.3"}
 
@@ -47,52 +42,20 @@ def _errors() -> str:
     return "\n".join(out).rstrip("\n")
 
 
-def _type(f: Field) -> str:
-    if f.is_group:
-        return f"{f.item}[]"
-    base = f.enum or TS_TYPE[f.type]
-    return f"{base}[]" if f.repeat else base
-
-
 def _default(f: Field) -> str:
     if f.is_group:
         return "[]"
     if f.enum:
-        single = f"{f.enum}.{next(iter(enums()[f.enum].values))}"
+        single = f"{f.enum}.{next(iter(model.enums()[f.enum].values))}"
     else:
         single = {"boolean": "false", "string": '""'}.get(TS_TYPE[f.type], "0")
     return "[" + ", ".join([single] * f.repeat) + "]" if f.repeat else single
 
 
-def _desc(f: Field) -> str:
-    parts = [f'name: "{f.name}"', f'prop: "{camel(f.name)}"', f"type: FieldType.{TYPE_MEMBER[f.type]}"]
-    if f.repeat:
-        parts.append(f"repeat: {f.repeat}")
-    if f.const is not None:
-        parts.append(f"const: {f.const}")
-    if f.min is not None:
-        parts.append(f"min: {f.min}")
-    if f.max is not None:
-        parts.append(f"max: {f.max}")
-    if f.allowed is not None:
-        parts.append(f"allowed: [{', '.join(map(str, f.allowed))}]")
-    if f.is_group:
-        parts.append(f"fields: {snake(f.item or '').upper()}_FIELDS, itemMin: {f.item_min}")
-    if f.run:
-        parts.append(f"run: {f.run}")
-    return "{ " + ", ".join(parts) + " }"
-
-
-def _table(fields: tuple[Field, ...], indent: str) -> str:
-    if not fields:
-        return "[]"
-    return "[\n" + "".join(f"{indent}  {_desc(f)},\n" for f in fields) + f"{indent}]"
-
-
 def _telegram(m: Message) -> str:
     t = m.type_name
     direction = m.direction
-    lines = [f"/** {m.name} ({direction}, id {m.id}): {doc_line(m.summary)} [guide {doc_line(m.section)}] */",
+    lines = [f"/** {m.doc} */",
              f"export class {t} extends Telegram {{",
              f"  static readonly ID = {m.id};", f'  static readonly NAME = "{m.name}";',
              f'  static readonly DIRECTION: Direction = "{direction}";']
@@ -101,117 +64,61 @@ def _telegram(m: Message) -> str:
                   "  /** The bytes after the identifier (layout unknown). */",
                   "  payload: Uint8Array = new Uint8Array(0);"]
     else:
-        lines.append(f"  static readonly LAYOUT: Layout = {{ opaque: false, fields: {_table(m.fields, '  ')} }};")
+        table = SPELLING.table(m.fields, "  ")
+        lines.append(f"  static readonly LAYOUT: Layout = {{ opaque: false, fields: {table} }};")
         for f in m.user_fields:
-            lines += [f"  /** {field_doc(f)} */", f"  {camel(f.name)}: {_type(f)} = {_default(f)};"]
+            lines += [f"  /** {field_doc(f)} */", f"  {camel(f.name)}: {SPELLING.type(f)} = {_default(f)};"]
     lines += ["", f"  constructor(init: Partial<{t}> = {{}}) {{", "    super();", "    Object.assign(this, init);",
               "  }", "}\n"]
     return "\n".join(lines)
 
 
+def _enum(name: str) -> str:
+    values = [f"  {k} = {v}," for k, v in model.enums()[name].values.items()]
+    return "\n".join([f"/** {model.enum_doc(name)} */\nexport enum {name} {{", *values, "}\n"])
+
+
+def _item(name: str, fields: tuple[Field, ...]) -> str:
+    out = [f"/** One item of a repeated group. */\nexport interface {name} {{"]
+    for f in fields:
+        if f.user:
+            out += [f"  /** {field_doc(f)} */", f"  {camel(f.name)}: {SPELLING.type(f)};"]
+    return "\n".join([*out, "}\n", f"const {snake(name).upper()}_FIELDS: Field[] = {SPELLING.table(fields)};\n"])
+
+
+def _registry(direction: str, telegrams: tuple[Message, ...]) -> str:
+    const = "REQUESTS" if direction == "request" else "REPLIES"
+    return "\n".join([f"/** Every {direction} class, by identifier. */",
+                      f"export const {const}: ReadonlyMap<number, TelegramClass> = new Map<number, TelegramClass>([",
+                      *(f"  [{m.id}, {m.type_name}]," for m in telegrams), "]);\n"])
+
+
 def _protocol() -> str:
-    out = [HEAD, "/** Enums, group items and telegram classes of the PlatformCtrl protocol (guide 6.3, 6.4). */\n",
-           'import { Direction, Field, FieldType, Layout, Telegram, TelegramClass } from "./wire";\n']
-    for name, e in enums().items():
-        out.append(f"/** {doc_line(e.description)} [guide {doc_line(e.section)}] */\nexport enum {name} {{")
-        out += [f"  {k} = {v}," for k, v in e.values.items()]
-        out.append("}\n")
-    for name, fields in item_types().items():
-        out.append(f"/** One item of a repeated group. */\nexport interface {name} {{")
-        for f in fields:
-            if f.user:
-                out += [f"  /** {field_doc(f)} */", f"  {camel(f.name)}: {_type(f)};"]
-        out.append("}\n")
-        out.append(f"const {snake(name).upper()}_FIELDS: Field[] = {_table(fields, '')};\n")
-    for direction in ("request", "reply"):
-        for m in messages(direction):
-            out.append(_telegram(m))
-    for direction, const in (("request", "REQUESTS"), ("reply", "REPLIES")):
-        out.append(f"/** Every {direction} class, by identifier. */")
-        out.append(f"export const {const}: ReadonlyMap<number, TelegramClass> = new Map<number, TelegramClass>([")
-        out += [f"  [{m.id}, {m.type_name}]," for m in messages(direction)]
-        out.append("]);\n")
-    return "\n".join(out).rstrip("\n") + "\n"
+    head = [HEAD, "/** Enums, group items and telegram classes of the PlatformCtrl protocol (guide 6.3, 6.4). */\n",
+            'import { Direction, Field, FieldType, Layout, Telegram, TelegramClass } from "./wire";\n']
+    return protocol(head, _enum, _item, _telegram, _registry)
 
 
 def method_name(m: Message) -> str:
-    name = camel(m.base)
-    return name + "_" if name in CLIENT_NAMES else name
+    return model.safe(camel(m.base), CLIENT_NAMES)
 
 
-def _methods() -> str:
-    out = []
-    for c in commands():
-        m = c.request
-        params, inits = [], []
-        if m.opaque:
-            params.append("payload: Uint8Array = new Uint8Array(0)")
-            inits.append("payload")
-        for f in m.user_fields:
-            prop, arg = camel(f.name), param(f.name)
-            named = f.item if f.is_group else f.enum
-            ptype = _type(f).replace(named, f"p.{named}") if named else _type(f)
-            params.append(f"{arg}: {ptype}")
-            inits.append(prop if prop == arg else f"{prop}: {arg}")
-        req = f"new p.{m.type_name}({{ {', '.join(inits)} }})" if inits else f"new p.{m.type_name}()"
-        doc = f"  /** {m.name} (id {m.id}): {doc_line(m.summary)} */"
-        if c.reply is None:
-            out.append(f"{doc}\n  {method_name(m)}({', '.join(params)}): Promise<void> {{\n"
-                       f"    return this.send({req});\n  }}\n")
-        else:
-            r = c.reply.type_name
-            out.append(f"{doc}\n  {method_name(m)}({', '.join(params)}): Promise<p.{r}> {{\n"
-                       f"    return this.request({req}, p.{r});\n  }}\n")
-    return "\n" + "\n".join(out).rstrip("\n")
+def _argument(f: Field) -> tuple[str, str]:
+    prop, arg = camel(f.name), param(f.name)
+    return f"{arg}: {SPELLING.type(f, 'p.')}", (prop if prop == arg else f"{prop}: {arg}")
 
 
-INDEX = """{banner}/** PlatformCtrl socket protocol client (generated): `import {{ Client }} from "platformctrl"`. */
-
-export * from "./wire";
-export * from "./protocol";
-export * from "./codec";
-export {{ Client }} from "./client";
-"""
-TSCONFIG = """{banner}{{
-  "compilerOptions": {{
-    "target": "ES2022",
-    "module": "commonjs",
-    "lib": ["ES2022"],
-    "types": ["node"],
-    "strict": true,
-    "declaration": true,
-    "outDir": "dist",
-    "rootDir": "src",
-    "skipLibCheck": true
-  }},
-  "include": ["src"]
-}}
-"""
-BUILD_SH = """#!/bin/sh
-{banner}# sh build.sh: npm install (typescript, @types/node; from the npm registry when not cached), then tsc.
-set -e
-cd "$(dirname "$0")"
-[ -x node_modules/.bin/tsc ] || npm install --no-audit --no-fund --prefer-offline --loglevel=error >/dev/null
-if [ ! -f dist/.stamp ] || [ -n "$(find src tsconfig.json -newer dist/.stamp)" ]; then
-  node_modules/.bin/tsc -p .
-  touch dist/.stamp
-fi
-"""
-SMOKE_SH = """#!/bin/sh
-{banner}# sh smoke.sh HOST PORT: build, then connect, init and print the position as one JSON line.
-set -e
-cd "$(dirname "$0")"
-sh build.sh
-exec node dist/smoke.js "$1" "$2"
-"""
-VECTORS_SH = """#!/bin/sh
-{banner}# sh vectors.sh FILE: build, then check every vector of FILE (python -m clients.stubgen.vectors writes it).
-set -e
-FILE="$(cd "$(dirname "$1")" && pwd)/$(basename "$1")"
-cd "$(dirname "$0")"
-sh build.sh
-exec node dist/vectors.js "$FILE"
-"""
+def _method(c: Command) -> str:
+    m = c.request
+    params, inits = arguments(m, ("payload: Uint8Array = new Uint8Array(0)", "payload"), _argument)
+    req = f"new p.{m.type_name}({{ {', '.join(inits)} }})" if inits else f"new p.{m.type_name}()"
+    doc = f"  /** {m.name} (id {m.id}): {doc_line(m.summary)} */"
+    if c.reply is None:
+        return (f"{doc}\n  {method_name(m)}({', '.join(params)}): Promise<void> {{\n"
+                f"    return this.send({req});\n  }}\n")
+    r = c.reply.type_name
+    return (f"{doc}\n  {method_name(m)}({', '.join(params)}): Promise<p.{r}> {{\n"
+            f"    return this.request({req}, p.{r});\n  }}\n")
 
 
 def _package() -> str:
@@ -225,43 +132,21 @@ def _package() -> str:
             f'  "devDependencies": {{\n{deps}\n  }}\n}}\n')
 
 
-README = readme(
-    title="TypeScript (Node)",
-    build=(
-        "`npm install` then `tsc`; typescript and @types/node are the only (dev) dependencies"
-    ),
-    snippet_lang="ts",
-    snippet="""
-import { Client, MotionMode } from "platformctrl";
-
-const client = await Client.connect("192.168.0.10", 10002);
-await client.connectToPltf();
-await client.setMode(MotionMode.MODE_MOTION_VEL);
-const pos = await client.getPosition(); // GetPositionReply
-client.close();
-""",
-    notes=(
-        "Methods return promises; errors are classes (`instanceof Truncated`). `decodeFrame`, `encode` and "
-        "`TelegramDecoder` are sans-IO."
-    ),
-)
+README = readme("typescript", "TypeScript (Node)",
+                "`npm install` then `tsc`; typescript and @types/node are the only (dev) dependencies")
 
 
 def render() -> dict[str, str]:
-    sh = HEAD.replace("// ", "# ")
     return {
         "README.md": README,
         "package.json": _package(),
-        "tsconfig.json": TSCONFIG.format(banner=HEAD),
-        "src/index.ts": INDEX.format(banner=HEAD),
         "src/wire.ts": HEAD + fill(template("typescript", "wire.ts.tmpl"), ERRORS=_errors()),
         "src/protocol.ts": _protocol(),
-        "src/codec.ts": HEAD + template("typescript", "codec.ts.tmpl"),
-        "src/client.ts": HEAD + fill(template("typescript", "client.ts.tmpl"), METHODS=_methods()),
-        "src/smoke.ts": HEAD + template("typescript", "smoke.ts.tmpl"),
-        "src/vectors.ts": HEAD + template("typescript", "vectors.ts.tmpl"),
-        "build.sh": BUILD_SH.format(banner=sh),
-        "smoke.sh": SMOKE_SH.format(banner=sh),
-        "vectors.sh": VECTORS_SH.format(banner=sh),
-        ".gitignore": sh + "node_modules/\ndist/\npackage-lock.json\n",
+        "src/client.ts": HEAD + fill(template("typescript", "client.ts.tmpl"), METHODS=methods(_method)),
+        **static("typescript", HEAD, {"tsconfig.json": "tsconfig.json.tmpl", "src/index.ts": "index.ts.tmpl",
+                                      "src/codec.ts": "codec.ts.tmpl", "src/smoke.ts": "smoke.ts.tmpl",
+                                      "src/vectors.ts": "vectors.ts.tmpl"}),
+        **scripts("typescript",
+                  "npm install (typescript, @types/node; from the npm registry when not cached), then tsc.",
+                  "node dist/smoke.js", "node dist/vectors.js", "node_modules/\ndist/\npackage-lock.json\n"),
     }
