@@ -15,15 +15,16 @@ import asyncio
 import contextlib
 from collections.abc import Callable
 from types import TracebackType
+from typing import Unpack
 
 from clients.pltf_client._commands import AsyncCommands
 from clients.pltf_client._enums import MotionMode, OperationState
 from clients.pltf_client._replies import Status
-from clients.pltf_client.base import DEFAULT_PORT, DEFAULT_TIMEOUT, ClientBase, WireLog
+from clients.pltf_client.base import DEFAULT_PORT, ClientBase, ClientOptions
 from clients.pltf_client.core import PendingReply
 from clients.pltf_client.errors import ConnectionClosed, InvalidArgument, ProtocolError, Timeout
 from clients.pltf_client.waits import ConditionWait, Judge, ModeWait, StateWait, TargetWait
-from spec.codec import DEFAULT_MAX_LENGTH, build
+from spec.codec import build
 from spec.telegram import Telegram
 
 
@@ -48,23 +49,14 @@ class AsyncPlatformClient(ClientBase, AsyncCommands):
 
     @classmethod
     async def connect(
-        cls,
-        host: str = "127.0.0.1",
-        port: int = DEFAULT_PORT,
-        *,
-        timeout: float = DEFAULT_TIMEOUT,
-        connect_timeout: float = DEFAULT_TIMEOUT,
-        wire_log: WireLog | None = None,
-        max_length: int = DEFAULT_MAX_LENGTH,
+        cls, host: str = "127.0.0.1", port: int = DEFAULT_PORT, **options: Unpack[ClientOptions]
     ) -> AsyncPlatformClient:
         """Create a client and open its connection (arguments as for the constructor).
 
         Raises:
             ConnectionClosed: the TCP connection could not be made (the OSError is the cause).
         """
-        client = cls(
-            host, port, timeout=timeout, connect_timeout=connect_timeout, wire_log=wire_log, max_length=max_length
-        )
+        client = cls(host, port, **options)
         await client.open()
         return client
 
@@ -210,16 +202,7 @@ class AsyncPlatformClient(ClientBase, AsyncCommands):
     async def wait_state(self, state: OperationState, timeout: float = 10.0, poll: float = 0.05) -> Status:
         """Poll the status until the operation state is ``state``; returns that status.
 
-        Args:
-            state: the operation state to wait for (guide 4.2 figure 2).
-            timeout: seconds to wait.
-            poll: seconds between two status requests.
-
-        Raises:
-            CommandRejected: the last state command sent (CMD_INIT_PLTF, CMD_START, CMD_BREAK, CMD_CONTINUE,
-                CMD_STOP, CMD_SHUTDOWN_PLTF) leads to ``state`` and the state never came: the message says what
-                the guide requires.
-            Timeout: the state did not come (and no command sent here explains it).
+        Args and Raises: as ``PlatformClient.wait_state``.
         """
         judge = StateWait(state, self.core.last_sent, asyncio.get_running_loop().time(), timeout)
         return await self._poll(judge, poll)
@@ -237,12 +220,7 @@ class AsyncPlatformClient(ClientBase, AsyncCommands):
     async def wait_target_reached(self, timeout: float = 60.0, poll: float = 0.05) -> Status:
         """Poll the status until the platform reports its target reached; returns that status.
 
-        Only statuses requested after the last move command (CMD_MOVE_ABS, _REL, _PATH, _TO_STATION) count.
-
-        Raises:
-            CommandRejected: the status shows the move cannot run: the state is not Running/Breaked, the
-                mode is not MODE_MOTION_AUTOMATIC (guide 4.3), or the planner failed.
-            Timeout: the target was not reached in time (the message gives the pose and planner state).
+        Which statuses count, and Raises: as ``PlatformClient.wait_target_reached``.
         """
         judge = TargetWait(self.core.last_sent, asyncio.get_running_loop().time(), timeout)
         return await self._poll(judge, poll)

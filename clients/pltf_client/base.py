@@ -8,6 +8,7 @@ Rules:
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import TypedDict
 
 from clients.pltf_client.core import ClientCore
 from spec.codec import DEFAULT_MAX_LENGTH
@@ -17,6 +18,15 @@ DEFAULT_TIMEOUT = 5.0
 
 WireLog = Callable[[str, bytes], None]
 """``wire_log(direction, data)``: ``"send"`` with each whole frame, ``"recv"`` with each chunk read."""
+
+
+class ClientOptions(TypedDict, total=False):
+    """The keyword arguments of ``ClientBase`` (for a factory that passes them on, typed)."""
+
+    timeout: float
+    connect_timeout: float
+    wire_log: WireLog | None
+    max_length: int
 
 
 class ClientBase:
