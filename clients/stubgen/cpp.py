@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from clients.stubgen import banner, fill, model, readme, template
-from clients.stubgen.model import ERRORS, Command, Field, Message, doc_line, field_doc, snake
+from clients.stubgen.model import ERRORS, Field, Message, doc_line, field_doc, snake
 from clients.stubgen.renderer import Spelling, arguments, methods, scripts, static
 
 KEYWORDS = frozenset((
@@ -20,6 +20,10 @@ CLIENT_NAMES = frozenset(("send", "receive", "request"))
 CPP_TYPE = {"BYTE": "uint8_t", "BOOL": "bool", "INT16": "int16_t", "INT": "int32_t", "DOUBLE": "double",
             "STRING": "std::string", "XML": "std::string"}
 HEAD = banner("// ")
+DECLARATION = ("  /// {m.name} (id {m.id}): {summary}\n  void {name}({params});",
+               "  /// {m.name} (id {m.id}): {summary}\n  {reply} {name}({params});")
+DEFINITION = ("void Client::{name}({names}) {{\n  {m.type_name} r;\n{sets}  send(r);\n}}\n",
+              "{reply} Client::{name}({names}) {{\n  {m.type_name} r;\n{sets}  return request<{reply}>(r);\n}}\n")
 SPELLING = Spelling(
     scalars=CPP_TYPE, group="std::vector<{item}>", array="std::array<{base}, {repeat}>",
     head='Field("{f.name}", FieldType::{type})', type_name=model.pascal, sep="",
@@ -95,7 +99,7 @@ def _header() -> str:
     telegrams = [_header_telegram(m) for d in ("request", "reply") for m in model.messages(d)]
     return HEAD + fill(template("cpp", "platformctrl.hpp.tmpl"), ERRORS=_errors(),
                        ENUMS="\n".join(enum_text).rstrip("\n"), ITEMS="\n".join(items),
-                       TELEGRAMS="\n".join(telegrams).rstrip("\n"), METHODS=methods(_declaration))
+                       TELEGRAMS="\n".join(telegrams).rstrip("\n"), METHODS=methods(_method, DECLARATION))
 
 
 def method_name(m: Message) -> str:
@@ -111,20 +115,10 @@ def _arguments(m: Message) -> tuple[list[str], list[str]]:
     return arguments(m, ("const std::string& payload = {}", "payload"), field)
 
 
-def _declaration(c: Command) -> str:
-    ret = c.reply.type_name if c.reply else "void"
-    return (f"  /// {c.request.name} (id {c.request.id}): {doc_line(c.request.summary)}\n"
-            f"  {ret} {method_name(c.request)}({', '.join(_arguments(c.request)[0])});")
-
-
-def _definition(c: Command) -> str:
-    m = c.request
+def _method(m: Message) -> dict[str, str]:
     params, args = _arguments(m)
-    ret = c.reply.type_name if c.reply else "void"
-    sets = "".join(f"  r.{a} = {a};\n" for a in args)
-    action = f"return request<{c.reply.type_name}>(r)" if c.reply else "send(r)"
-    return (f"{ret} Client::{method_name(m)}({', '.join(p.split(' = ')[0] for p in params)}) {{\n"
-            f"  {m.type_name} r;\n{sets}  {action};\n}}\n")
+    return {"name": method_name(m), "params": ", ".join(params), "summary": doc_line(m.summary),
+            "names": ", ".join(p.split(" = ")[0] for p in params), "sets": "".join(f"  r.{a} = {a};\n" for a in args)}
 
 
 def _protocol() -> str:
@@ -163,7 +157,7 @@ def _protocol() -> str:
             lines += [f"{pad}  case {m.id}: return {call.format(t=m.type_name)};" for m in model.messages(direction)]
         lines += ["  }", "  return nullptr;", "}\n"]
         out.append("\n".join(lines))
-    out += map(_definition, model.commands())
+    out.append(methods(_method, DEFINITION, lead="", end="\n"))
     out.append("}  // namespace platformctrl")
     return "\n".join(out) + "\n"
 

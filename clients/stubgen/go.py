@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from clients.stubgen import banner, fill, model, readme, template
-from clients.stubgen.model import ERRORS, Command, Field, Message, doc_line, field_doc, pascal, words
+from clients.stubgen.model import ERRORS, Field, Message, doc_line, field_doc, pascal, words
 from clients.stubgen.renderer import Spelling, arguments, convert, methods, protocol, scripts, static
 
 KEYWORDS = frozenset((
@@ -24,6 +24,13 @@ HEAD = banner("// ")
 # Values cross the runtime as any: int64, float64, string, []byte, []any (arrays, group items).
 TO_VALUE = {"group": "groupToValues({x})", "array": "intsToValues({x}[:])", "BOOL": "b2i({x})", "DOUBLE": "{x}",
             "text": "{x}", "int": "int64({x})"}
+METHOD = (
+    "// {name} sends {m.name} (id {m.id}): {summary}\nfunc (c *Client) {name}({params}) error {{\n"
+    "\treturn c.Send({req})\n}}\n",
+    "// {name} sends {m.name} (id {m.id}): {summary}\nfunc (c *Client) {name}({params}) (*{reply}, error) {{\n"
+    "\tt, err := c.Request({req}, {m.id})\n\tif err != nil {{\n\t\treturn nil, err\n\t}}\n"
+    "\treturn t.(*{reply}), nil\n}}\n",
+)
 FROM_VALUE = {"group": "{x} = valuesToGroup[{item}]({v})", "array": "valuesToInts({v}, {x}[:])",
               "BOOL": "{x} = {v}.(int64) != 0", "DOUBLE": "{x} = {v}.(float64)", "text": "{x} = {v}.(string)",
               "int": "{x} = {base}({v}.(int64))"}
@@ -148,18 +155,11 @@ def method_name(m: Message) -> str:
     return go_name(m.base)
 
 
-def _method(c: Command) -> str:
-    m = c.request
+def _method(m: Message) -> dict[str, str]:
     params, inits = arguments(m, ("payload []byte", "Payload: payload"),
                               lambda f: (f"{param(f.name)} {SPELLING.type(f)}", f"{go_name(f.name)}: {param(f.name)}"))
-    req = f"&{m.type_name}{{{', '.join(inits)}}}"
-    doc = f"// {method_name(m)} sends {m.name} (id {m.id}): {doc_line(m.summary)}"
-    if c.reply is None:
-        return f"{doc}\nfunc (c *Client) {method_name(m)}({', '.join(params)}) error {{\n\treturn c.Send({req})\n}}\n"
-    r = c.reply.type_name
-    return (f"{doc}\nfunc (c *Client) {method_name(m)}({', '.join(params)}) (*{r}, error) {{\n"
-            f"\tt, err := c.Request({req}, {m.id})\n\tif err != nil {{\n\t\treturn nil, err\n\t}}\n"
-            f"\treturn t.(*{r}), nil\n}}\n")
+    return {"name": method_name(m), "params": ", ".join(params), "req": f"&{m.type_name}{{{', '.join(inits)}}}",
+            "summary": doc_line(m.summary)}
 
 
 README = readme("go", "Go", "`go build ./cmd/...`, Go 1.19+")
@@ -171,7 +171,7 @@ def render() -> dict[str, str]:
         "go.mod": HEAD + "module platformctrl\n\ngo 1.19\n",
         "wire.go": HEAD + fill(template("go", "wire.go.tmpl"), ERRORS=_errors()),
         "protocol.go": _protocol(),
-        "client.go": HEAD + fill(template("go", "client.go.tmpl"), METHODS=methods(_method, lead="")),
+        "client.go": HEAD + fill(template("go", "client.go.tmpl"), METHODS=methods(_method, METHOD, lead="")),
         **static("go", HEAD, {"cmd/smoke/main.go": "smoke.go.tmpl", "cmd/vectors/main.go": "vectors.go.tmpl"}),
         **scripts("go", "build the package and the programs into build/ (Go 1.19+, no dependencies).",
                   "./build/smoke", "./build/vectors", "build/\n"),

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from clients.stubgen import banner, fill, model, readme, template
-from clients.stubgen.model import ERRORS, Command, Field, Message, camel, doc_line, field_doc
+from clients.stubgen.model import ERRORS, Field, Message, camel, doc_line, field_doc
 from clients.stubgen.renderer import BUILDER, Spelling, arguments, convert, methods, protocol, scripts, static
 
 KEYWORDS = frozenset((
@@ -23,6 +23,12 @@ SPELLING = Spelling(
     head='Field.of("{f.name}", FieldType.{f.type})', sep="",
     attrs={**BUILDER, "allowed": ".allowed({allowed})", "group": ".group({item}.FIELDS, {f.item_min})"},
     empty="List.of()", open="List.of(", close=")", step="    ", trailing=False,
+)
+METHOD = (
+    "    /** {m.name} (id {m.id}): {summary} */\n    public void {name}({params}) throws IOException {{\n"
+    "        send({req});\n    }}\n",
+    "    /** {m.name} (id {m.id}): {summary} */\n    public {reply} {name}({params}) throws IOException {{\n"
+    "        return request({req}, {reply}.class);\n    }}\n",
 )
 # Values cross the runtime as Object: Long, Double, String, byte[], List<Object> (arrays, group items).
 TO_VALUE = {"group": "Wire.group({n}, {item}::toValues)", "enum_array": "Wire.enums({n}, e -> e.value)",
@@ -129,17 +135,11 @@ def method_name(m: Message) -> str:
     return model.safe(camel(m.base), KEYWORDS | CLIENT_NAMES)
 
 
-def _method(c: Command) -> str:
-    m = c.request
+def _method(m: Message) -> dict[str, str]:
     params, args = arguments(m, ("byte[] payload", "payload"),
                              lambda f: (f"{SPELLING.type(f)} {name(f.name)}", name(f.name)))
-    req = f"new {m.type_name}({', '.join(args)})"
-    doc = f"    /** {m.name} (id {m.id}): {doc_line(m.summary)} */"
-    sig = f"{method_name(m)}({', '.join(params)}) throws IOException"
-    if c.reply is None:
-        return f"{doc}\n    public void {sig} {{\n        send({req});\n    }}\n"
-    r = c.reply.type_name
-    return f"{doc}\n    public {r} {sig} {{\n        return request({req}, {r}.class);\n    }}\n"
+    return {"name": method_name(m), "params": ", ".join(params), "req": f"new {m.type_name}({', '.join(args)})",
+            "summary": doc_line(m.summary)}
 
 
 README = readme("java", "Java 17", "plain `javac`; `mvn package` works too")
@@ -152,7 +152,7 @@ def render() -> dict[str, str]:
         "pom.xml": fill(template("java", "pom.xml.tmpl"), TEXT=banner("").strip()),
         SRC + "ProtocolException.java": _errors(),
         SRC + "Protocol.java": _protocol(),
-        SRC + "Client.java": HEAD + fill(template("java", "Client.java.tmpl"), METHODS=methods(_method)),
+        SRC + "Client.java": HEAD + fill(template("java", "Client.java.tmpl"), METHODS=methods(_method, METHOD)),
         **static("java", HEAD, {f"{SRC}{name}.java": f"{name}.java.tmpl" for name in statics}),
         **scripts("java", "compile with plain javac into build/classes (Java 17; `mvn package` works too).",
                   "java -cp build/classes platformctrl.Smoke", "java -cp build/classes platformctrl.VectorRunner",

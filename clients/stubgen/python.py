@@ -5,13 +5,17 @@ from __future__ import annotations
 import keyword
 
 from clients.stubgen import banner, fill, readme, template
-from clients.stubgen.model import ERRORS, Command, Field, Message, doc_line, enum_doc, enums, field_doc, safe, snake
+from clients.stubgen.model import ERRORS, Field, Message, doc_line, enum_doc, enums, field_doc, safe, snake
 from clients.stubgen.renderer import Spelling, arguments, methods, protocol, scripts, static
 
 KEYWORDS = frozenset(keyword.kwlist) | frozenset(("send", "receive", "request", "close"))
 PY_TYPE = {"BYTE": "int", "BOOL": "bool", "INT16": "int", "INT": "int", "DOUBLE": "float", "STRING": "str",
            "XML": "str"}
 HEAD = banner("# ")
+METHOD = (
+    '    def {name}({params}) -> None:\n        """{docs}"""\n        self.send({call})\n',
+    '    def {name}({params}) -> tg.{reply}:\n        """{docs}"""\n        return self.request({call}, tg.{reply})\n',
+)
 SPELLING = Spelling(
     scalars=PY_TYPE, group="tuple[{item}, ...]", array="tuple[{base}, ...]",
     head="{f.name!r}, {f.type}", wrap=("F(", ")"),
@@ -80,20 +84,14 @@ def method_name(m: Message) -> str:
     return safe(snake(m.base), KEYWORDS)
 
 
-def _method(c: Command) -> str:
-    m = c.request
+def _method(m: Message) -> dict[str, str]:
     params, args = arguments(m, ('payload: bytes = b""', "payload"),
                              lambda f: (f"{f.name}: {SPELLING.type(f, 'tg.')}", f.name))
     doc = [f"{m.name} (id {m.id}): {doc_line(m.summary)} [guide {doc_line(m.section)}]"]
     doc += [f"{f.name}: {field_doc(f)}" for f in m.user_fields]
-    call = f"tg.{m.type_name}({', '.join(args)})"
-    if c.reply is not None:
-        ret, body = f"tg.{c.reply.type_name}", f"return self.request({call}, tg.{c.reply.type_name})"
-    else:
-        ret, body = "None", f"self.send({call})"
     docs = doc[0] if len(doc) == 1 else doc[0] + "\n\n" + "".join(f"        {d}\n" for d in doc[1:]) + "        "
-    signature = f"{method_name(m)}({', '.join(['self', *params])}) -> {ret}"
-    return f'    def {signature}:\n        """{docs}"""\n        {body}\n'
+    return {"name": method_name(m), "params": ", ".join(["self", *params]), "docs": docs,
+            "call": f"tg.{m.type_name}({', '.join(args)})"}
 
 
 README = readme("python", "Python 3.10+", "byte-compiles with `python3 -m compileall`")
@@ -105,7 +103,7 @@ def render() -> dict[str, str]:
         "platformctrl/wire.py": HEAD + fill(template("python", "wire.py.tmpl"), ERRORS=_errors()),
         "platformctrl/telegrams.py": _telegrams(),
         "platformctrl/client.py": HEAD + fill(template("python", "client.py.tmpl"),
-                                              METHODS=methods(_method, lead="", end="\n")),
+                                              METHODS=methods(_method, METHOD, lead="", end="\n")),
         **static("python", HEAD, {"platformctrl/__init__.py": "__init__.py.tmpl",
                                   "platformctrl/codec.py": "codec.py.tmpl", "smoke.py": "smoke.py.tmpl",
                                   "run_vectors.py": "run_vectors.py.tmpl", "pyproject.toml": "pyproject.toml.tmpl"}),

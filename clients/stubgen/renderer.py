@@ -142,9 +142,18 @@ def arguments(m: Message, payload: tuple[str, str], field: Callable[[Field], tup
     return [p for p, _ in pairs], [a for _, a in pairs]
 
 
-def methods(method: Callable[[Command], str], lead: str = "\n", end: str = "") -> str:
-    """The client's methods, one per command, as one block between ``lead`` and ``end``."""
-    return lead + "\n".join(method(c) for c in commands()).rstrip("\n") + end
+def methods(parts: Callable[[Message], dict[str, str]], spelled: tuple[str, str], lead: str = "\n",
+            end: str = "") -> str:
+    """The client's methods, one per command, as one block between ``lead`` and ``end``.
+
+    ``spelled``: the templates of a method without reply and with one, formatted with ``m`` (the request),
+    ``reply`` (the reply type's name) and ``parts(m)`` (the language's name, parameters, request, doc ...).
+    """
+    def method(c: Command) -> str:
+        reply = "" if c.reply is None else c.reply.type_name
+        return spelled[c.reply is not None].format(m=c.request, reply=reply, **parts(c.request))
+
+    return lead + "\n".join(map(method, commands())).rstrip("\n") + end
 
 
 # ---------------------------------------------------------------------------------------------- files

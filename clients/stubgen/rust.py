@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from clients.stubgen import banner, fill, model, readme, template
-from clients.stubgen.model import ERRORS, LEAF_ERRORS, Command, Field, Message, doc_line, field_doc, pascal, snake
+from clients.stubgen.model import ERRORS, LEAF_ERRORS, Field, Message, doc_line, field_doc, pascal, snake
 from clients.stubgen.renderer import BUILDER, Spelling, arguments, convert, methods, protocol, scripts, static
 
 KEYWORDS = frozenset((
@@ -21,6 +21,14 @@ SPELLING = Spelling(
     head='field("{f.name}", FieldType::{type})', type_name=pascal, sep="",
     attrs={**BUILDER, "allowed": ".allowed(&[{allowed}])", "group": ".group({ITEM}_FIELDS, {f.item_min})"},
     empty="&[]", open="&[", close="{indent}]", step="    ",
+)
+METHOD = (
+    "    /// {m.name} (id {m.id}): {summary}\n    pub fn {name}({params}) -> Result<(), Error> {{\n"
+    "        self.send({req})\n    }}\n",
+    "    /// {m.name} (id {m.id}): {summary}\n    pub fn {name}({params}) -> Result<{reply}, Error> {{\n"
+    "        match self.request({req})? {{\n            Reply::{variant}(r) => Ok(r),\n"
+    '            other => Err(Error::new(ErrorKind::UnknownTelegram, format!("got {{:?}}", other))),\n'
+    "        }}\n    }}\n",
 )
 # A client method's parameter and the request field it sets: slices and &str in, owned values in the request.
 PARAM = {"group": "{n}: &[{item}]", "text": "{n}: &str", "array": "{n}: {t}", "int": "{n}: {t}", "BOOL": "{n}: {t}",
@@ -134,23 +142,12 @@ def method_name(m: Message) -> str:
     return model.safe(snake(m.base), KEYWORDS | CLIENT_NAMES)
 
 
-def _method(c: Command) -> str:
-    m = c.request
+def _method(m: Message) -> dict[str, str]:
     params, inits = arguments(m, ("payload: &[u8]", "payload: payload.to_vec()"), lambda f: (
         convert(PARAM, f, n=ident(f.name), t=SPELLING.type(f)), convert(INIT, f, n=ident(f.name))))
-    params.insert(0, "&mut self")
-    req = f"&{m.type_name} {{ {', '.join(inits)} }}" if inits else f"&{m.type_name} {{}}"
-    doc = f"    /// {m.name} (id {m.id}): {doc_line(m.summary)}"
-    if c.reply is None:
-        return (f"{doc}\n    pub fn {method_name(m)}({', '.join(params)}) -> Result<(), Error> {{\n"
-                f"        self.send({req})\n    }}\n")
-    r = c.reply.type_name
-    return (f"{doc}\n    pub fn {method_name(m)}({', '.join(params)}) -> Result<{r}, Error> {{\n"
-            f"        match self.request({req})? {{\n"
-            f"            Reply::{pascal(c.reply.base)}(r) => Ok(r),\n"
-            "            other => Err(Error::new(ErrorKind::UnknownTelegram, "
-            'format!("got {:?}", other))),\n'
-            "        }\n    }\n")
+    return {"name": method_name(m), "params": ", ".join(["&mut self", *params]), "variant": pascal(m.base),
+            "req": f"&{m.type_name} {{ {', '.join(inits)} }}" if inits else f"&{m.type_name} {{}}",
+            "summary": doc_line(m.summary)}
 
 
 README = readme("rust", "Rust", "`cargo build`, no dependencies")
@@ -161,7 +158,7 @@ def render() -> dict[str, str]:
         "README.md": README,
         "src/wire.rs": HEAD + fill(template("rust", "wire.rs.tmpl"), ERRORS=_errors()),
         "src/protocol.rs": _protocol(),
-        "src/client.rs": HEAD + fill(template("rust", "client.rs.tmpl"), METHODS=methods(_method)),
+        "src/client.rs": HEAD + fill(template("rust", "client.rs.tmpl"), METHODS=methods(_method, METHOD)),
         **static("rust", HEAD, {"src/lib.rs": "lib.rs.tmpl", "src/bin/smoke.rs": "smoke.rs.tmpl",
                                 "src/bin/vectors.rs": "vectors.rs.tmpl"}),
         **static("rust", banner("# "), {"Cargo.toml": "Cargo.toml.tmpl"}),

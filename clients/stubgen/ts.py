@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from clients.stubgen import banner, fill, model, readme, template
-from clients.stubgen.model import ERRORS, Command, Field, Message, camel, doc_line, field_doc, pascal, snake
+from clients.stubgen.model import ERRORS, Field, Message, camel, doc_line, field_doc, pascal, snake
 from clients.stubgen.renderer import Spelling, arguments, methods, protocol, scripts, static
 
 RESERVED = frozenset((
@@ -23,6 +23,12 @@ SPELLING = Spelling(
            "allowed": "allowed: [{allowed}]", "group": "fields: {ITEM}_FIELDS, itemMin: {f.item_min}",
            "run": "run: {f.run}"},
     empty="[]", open="[", close="{indent}]", step="  ",
+)
+METHOD = (
+    "  /** {m.name} (id {m.id}): {summary} */\n  {name}({params}): Promise<void> {{\n"
+    "    return this.send({req});\n  }}\n",
+    "  /** {m.name} (id {m.id}): {summary} */\n  {name}({params}): Promise<p.{reply}> {{\n"
+    "    return this.request({req}, p.{reply});\n  }}\n",
 )
 # TypeScript versions pinned for reproducible builds (typescript has no dependencies of its own).
 DEV_DEPENDENCIES = {"@types/node": "20.19.0", "typescript": "5.9.3"}
@@ -108,17 +114,10 @@ def _argument(f: Field) -> tuple[str, str]:
     return f"{arg}: {SPELLING.type(f, 'p.')}", (prop if prop == arg else f"{prop}: {arg}")
 
 
-def _method(c: Command) -> str:
-    m = c.request
+def _method(m: Message) -> dict[str, str]:
     params, inits = arguments(m, ("payload: Uint8Array = new Uint8Array(0)", "payload"), _argument)
-    req = f"new p.{m.type_name}({{ {', '.join(inits)} }})" if inits else f"new p.{m.type_name}()"
-    doc = f"  /** {m.name} (id {m.id}): {doc_line(m.summary)} */"
-    if c.reply is None:
-        return (f"{doc}\n  {method_name(m)}({', '.join(params)}): Promise<void> {{\n"
-                f"    return this.send({req});\n  }}\n")
-    r = c.reply.type_name
-    return (f"{doc}\n  {method_name(m)}({', '.join(params)}): Promise<p.{r}> {{\n"
-            f"    return this.request({req}, p.{r});\n  }}\n")
+    return {"name": method_name(m), "params": ", ".join(params), "summary": doc_line(m.summary),
+            "req": f"new p.{m.type_name}({{ {', '.join(inits)} }})" if inits else f"new p.{m.type_name}()"}
 
 
 def _package() -> str:
@@ -142,7 +141,7 @@ def render() -> dict[str, str]:
         "package.json": _package(),
         "src/wire.ts": HEAD + fill(template("typescript", "wire.ts.tmpl"), ERRORS=_errors()),
         "src/protocol.ts": _protocol(),
-        "src/client.ts": HEAD + fill(template("typescript", "client.ts.tmpl"), METHODS=methods(_method)),
+        "src/client.ts": HEAD + fill(template("typescript", "client.ts.tmpl"), METHODS=methods(_method, METHOD)),
         **static("typescript", HEAD, {"tsconfig.json": "tsconfig.json.tmpl", "src/index.ts": "index.ts.tmpl",
                                       "src/codec.ts": "codec.ts.tmpl", "src/smoke.ts": "smoke.ts.tmpl",
                                       "src/vectors.ts": "vectors.ts.tmpl"}),
