@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 from clients.stubgen import banner, fill, model, readme, template
-from clients.stubgen.model import ERRORS, Field, Message, doc_line, field_doc, snake
-from clients.stubgen.renderer import Spelling, arguments, methods, scripts, static
+from clients.stubgen.model import Field, Message, doc_line, snake
+from clients.stubgen.renderer import Spelling, arguments, error_classes, methods, scripts, static
 
 KEYWORDS = frozenset((
     "alignas", "alignof", "and", "and_eq", "asm", "auto", "bitand", "bitor", "bool", "break", "case", "catch",
@@ -24,6 +24,12 @@ DECLARATION = ("  /// {m.name} (id {m.id}): {summary}\n  void {name}({params});"
                "  /// {m.name} (id {m.id}): {summary}\n  {reply} {name}({params});")
 DEFINITION = ("void Client::{name}({names}) {{\n  {m.type_name} r;\n{sets}  send(r);\n}}\n",
               "{reply} Client::{name}({names}) {{\n  {m.type_name} r;\n{sets}  return request<{reply}>(r);\n}}\n")
+
+
+def member(name: str) -> str:
+    return name + "_" if name in KEYWORDS else name
+
+
 SPELLING = Spelling(
     scalars=CPP_TYPE, group="std::vector<{item}>", array="std::array<{base}, {repeat}>",
     head='Field("{f.name}", FieldType::{type})', type_name=model.pascal, sep="",
@@ -31,21 +37,14 @@ SPELLING = Spelling(
            "max": ".at_most({f.max})", "allowed": ".one_of({{{allowed}}})", "group": ".group({item_snake}_fields(), "
            "{f.item_min})", "run": ".run_of({f.run})"},
     empty="{}", open="{", close="\n{indent}}}", step="  ", trailing=False,
+    member="  /// {doc}\n  {type} {name}{default};", field_name=member,
 )
 
 
-def member(name: str) -> str:
-    return name + "_" if name in KEYWORDS else name
-
-
 def _errors() -> str:
-    out = []
-    for name, parent, doc in ERRORS:
-        base = parent or "std::runtime_error"
-        out.append(f"/// {doc}\nclass {name} : public {base} {{\n public:\n  using {base}::{base.split('::')[-1]};\n"
-                   f'  {"virtual " if parent is None else ""}const char* kind() const noexcept'
-                   f'{"" if parent is None else " override"} {{ return "{name}"; }}\n}};\n')
-    return "\n".join(out).rstrip("\n")
+    return error_classes("/// {doc}\nclass {name} : public {base} {{\n public:\n  using {base}::{base_name};\n"
+                         '  {virtual}const char* kind() const noexcept{override} {{ return "{name}"; }}\n}};\n',
+                         "std::runtime_error", virtual=("virtual ", ""), override=("", " override"))
 
 
 def _default(f: Field) -> str:
@@ -54,14 +53,10 @@ def _default(f: Field) -> str:
     return "{}"
 
 
-def _members(fields: tuple[Field, ...]) -> list[str]:
-    return [f"  /// {field_doc(f)}\n  {SPELLING.type(f)} {member(f.name)}{_default(f)};" for f in fields if f.user]
-
-
 def _header_telegram(m: Message) -> str:
     t = m.type_name
     body = ["  /// The bytes after the identifier (layout unknown).\n  std::string payload;"] if m.opaque \
-        else _members(m.fields)
+        else SPELLING.members(m.fields, default=_default)
     direction = "Request" if m.direction == "request" else "Reply"
     return "\n".join([
         f"/// {m.doc}",
@@ -90,7 +85,7 @@ def _header() -> str:
                          f"enum class {name} : int32_t {{\n{values}\n}};\n")
     items = []
     for name, fields in model.item_types().items():
-        body = "\n".join(_members(fields))
+        body = "\n".join(SPELLING.members(fields, default=_default))
         items.append(f"/// One item of a repeated group.\nstruct {name} {{\n{body}\n}};\n")
     items.append("namespace detail {")
     for name in model.item_types():

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from clients.stubgen import banner, fill, model, readme, template
-from clients.stubgen.model import ERRORS, Field, Message, doc_line, field_doc, pascal, words
+from clients.stubgen.model import ERRORS, Field, Message, doc_line, pascal, words
 from clients.stubgen.renderer import Spelling, arguments, convert, methods, protocol, scripts, static
 
 KEYWORDS = frozenset((
@@ -48,6 +48,8 @@ SPELLING = Spelling(
            "allowed": "Allowed: []int64{{{allowed}}}", "group": "Fields: fields{item}, ItemMin: {f.item_min}",
            "run": "Run: {f.run}"},
     empty="nil", open="[]Field{", close="}}", step="\t",
+    # Doc comments above each field: gofmt then aligns nothing, so the output is gofmt-clean as written.
+    member="\t// {doc}\n\t{name} {type}", field_name=go_name,
 )
 
 
@@ -81,11 +83,6 @@ def _errors() -> str:
     return "\n".join(lines) + "\n)"
 
 
-def _struct_fields(fields: tuple[Field, ...]) -> list[str]:
-    # Doc comments above each field: gofmt then aligns nothing, so the output is gofmt-clean as written.
-    return [f"\t// {field_doc(f)}\n\t{go_name(f.name)} {SPELLING.type(f)}" for f in fields if f.user]
-
-
 def _conversions(recv: str, fields: tuple[Field, ...]) -> tuple[str, str]:
     user = [f for f in fields if f.user]
     values = ", ".join(convert(TO_VALUE, f, x=f"{recv}.{go_name(f.name)}") for f in user)
@@ -109,7 +106,7 @@ def _telegram(m: Message) -> str:
                 _func(f"(t *{t}) Values() []any", "\treturn []any{t.Payload}\n"),
                 _func(f"(t *{t}) setValues(v []any)", "\tt.Payload = v[0].([]byte)\n")]
     else:
-        body = _struct_fields(m.fields)
+        body = SPELLING.members(m.fields)
         out.append(f"type {t} struct {{\n" + "\n".join(body) + "\n}\n" if body else f"type {t} struct{{}}\n")
         out.append(f"var layout{t} = Layout{{Fields: {SPELLING.table(m.fields)}}}\n")
         values, sets = _conversions("t", m.fields)
@@ -133,7 +130,7 @@ def _enum(name: str) -> str:
 
 def _item(name: str, fields: tuple[Field, ...]) -> str:
     values, sets = _conversions("p", fields)
-    return "\n".join([f"// {name} is one item of a repeated group.\ntype {name} struct {{", *_struct_fields(fields),
+    return "\n".join([f"// {name} is one item of a repeated group.\ntype {name} struct {{", *SPELLING.members(fields),
                       "}\n", f"var fields{name} = {SPELLING.table(fields)}\n",
                       _func(f"(p *{name}) values() []any", f"\treturn []any{{{values}}}\n"),
                       _func(f"(p *{name}) setValues(v []any)", sets)])

@@ -5,8 +5,8 @@ from __future__ import annotations
 import keyword
 
 from clients.stubgen import banner, fill, readme, template
-from clients.stubgen.model import ERRORS, Field, Message, doc_line, enum_doc, enums, field_doc, safe, snake
-from clients.stubgen.renderer import Spelling, arguments, methods, protocol, scripts, static
+from clients.stubgen.model import Field, Message, doc_line, enum_doc, enums, field_doc, safe, snake
+from clients.stubgen.renderer import Spelling, arguments, error_classes, methods, protocol, scripts, static
 
 KEYWORDS = frozenset(keyword.kwlist) | frozenset(("send", "receive", "request", "close"))
 PY_TYPE = {"BYTE": "int", "BOOL": "bool", "INT16": "int", "INT": "int", "DOUBLE": "float", "STRING": "str",
@@ -22,15 +22,12 @@ SPELLING = Spelling(
     attrs={"repeat": "repeat={f.repeat}", "const": "const={f.const}", "min": "min={f.min}", "max": "max={f.max}",
            "allowed": "allowed=frozenset({allowed_repr})", "group": "fields=_{item}_FIELDS, item_min={f.item_min}, "
            "convert={item}", "convert": "convert={convert}", "run": "run={f.run}"},
-    empty="()", open="(", close="{indent})", step="    ",
+    empty="()", open="(", close="{indent})", step="    ", member='    {name}: {type}\n    """{doc}"""',
 )
 
 
 def _errors() -> str:
-    out = []
-    for name, parent, doc in ERRORS:
-        out.append(f"class {name}({parent or 'Exception'}):\n    \"\"\"{doc}\"\"\"\n\n")
-    return "\n".join(out)
+    return error_classes('class {name}({base}):\n    """{doc}"""\n\n', "Exception", end="\n\n")
 
 
 def _telegram(m: Message) -> str:
@@ -48,9 +45,8 @@ def _telegram(m: Message) -> str:
                   '    """The telegram\'s bytes after the identifier (layout unknown)."""']
     else:
         lines.append(f"    FIELDS: ClassVar[tuple[F, ...]] = {SPELLING.table(m.fields, '    ')}")
-        for f in m.user_fields:
-            assert f.name not in KEYWORDS, f"{m.name}.{f.name}: a Python keyword"
-            lines += [f"    {f.name}: {SPELLING.type(f)}", f'    """{field_doc(f)}"""']
+        assert not KEYWORDS & {f.name for f in m.user_fields}, f"{m.name}: a field named as a Python keyword"
+        lines += SPELLING.members(m.fields)
     return "\n".join(lines) + "\n"
 
 
@@ -60,11 +56,8 @@ def _enum(name: str) -> str:
 
 
 def _item(name: str, fields: tuple[Field, ...]) -> str:
-    lines = [f"class {name}(NamedTuple):\n    \"\"\"One item of a repeated group.\"\"\"\n"]
-    for f in fields:
-        if f.user:
-            lines += [f"    {f.name}: {SPELLING.type(f)}", f'    """{field_doc(f)}"""']
-    return "\n".join([*lines, f"\n\n_{name}_FIELDS = {SPELLING.table(fields)}\n\n"])
+    head = f'class {name}(NamedTuple):\n    """One item of a repeated group."""\n'
+    return "\n".join([head, *SPELLING.members(fields), f"\n\n_{name}_FIELDS = {SPELLING.table(fields)}\n\n"])
 
 
 def _registry(direction: str, telegrams: tuple[Message, ...]) -> str:

@@ -14,7 +14,19 @@ from dataclasses import dataclass
 from typing import Any
 
 from clients.stubgen import banner, fill, template
-from clients.stubgen.model import Command, Field, Message, camel, commands, enums, item_types, messages, snake
+from clients.stubgen.model import (
+    ERRORS,
+    Command,
+    Field,
+    Message,
+    camel,
+    commands,
+    enums,
+    field_doc,
+    item_types,
+    messages,
+    snake,
+)
 
 DIRECTIONS = ("request", "reply")
 
@@ -57,6 +69,8 @@ class Spelling:
     sep: str = ", "  # between the head and the attributes
     wrap: tuple[str, str] = ("", "")  # around the descriptor
     type_name: Callable[[str], str] = str
+    member: str = ""  # a field's declaration in a type, from {name}, {type}, {doc} and {default}
+    field_name: Callable[[str], str] = str  # a field's name in the language
 
     def type(self, f: Field, prefix: str = "") -> str:
         """The field's type; ``prefix`` qualifies the names the spec defines (an enum, a group item)."""
@@ -64,6 +78,13 @@ class Spelling:
             return self.group.format(item=f"{prefix}{f.item}")
         base = f"{prefix}{f.enum}" if f.enum else self.scalars[f.type]
         return self.array.format(base=base, repeat=f.repeat) if f.repeat else base
+
+    def members(self, fields: Sequence[Field], member: str | None = None,
+                default: Callable[[Field], str] = lambda f: "") -> list[str]:
+        """The declarations of the user fields (``member``: this spelling's by default)."""
+        spelled = self.member if member is None else member
+        return [spelled.format(name=self.field_name(f.name), type=self.type(f), doc=field_doc(f), default=default(f))
+                for f in fields if f.user]
 
     def descriptor(self, f: Field) -> str:
         values = _values(f, self.type_name)
@@ -132,6 +153,18 @@ def protocol(
         *(registry(direction, messages(direction)) for direction in DIRECTIONS),
     ]
     return "\n".join(sections).rstrip("\n") + end
+
+
+def error_classes(spelled: str, root: str, end: str = "", **roots: tuple[str, str]) -> str:
+    """One class per error of ``ERRORS``, a blank line apart, then ``end``: ``spelled`` formatted with ``name``,
+    ``doc``, ``base`` (the parent; ``root`` for the family's root), ``base_name`` (its last ``::`` part) and each of
+    ``roots`` (its first value for the root class, its second for the others)."""
+    classes = []
+    for name, parent, doc in ERRORS:
+        base = parent or root
+        extra = {key: values[parent is not None] for key, values in roots.items()}
+        classes.append(spelled.format(name=name, doc=doc, base=base, base_name=base.rsplit("::")[-1], **extra))
+    return "\n".join(classes).rstrip("\n") + end
 
 
 def arguments(m: Message, payload: tuple[str, str], field: Callable[[Field], tuple[str, str]]) -> tuple[

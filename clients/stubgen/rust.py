@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from clients.stubgen import banner, fill, model, readme, template
-from clients.stubgen.model import ERRORS, LEAF_ERRORS, Field, Message, doc_line, field_doc, pascal, snake
+from clients.stubgen.model import ERRORS, LEAF_ERRORS, Field, Message, doc_line, pascal, snake
 from clients.stubgen.renderer import BUILDER, Spelling, arguments, convert, methods, protocol, scripts, static
 
 KEYWORDS = frozenset((
@@ -16,11 +16,18 @@ CLIENT_NAMES = frozenset(("connect", "send", "receive", "request"))
 RUST_TYPE = {"BYTE": "u8", "BOOL": "bool", "INT16": "i16", "INT": "i32", "DOUBLE": "f64", "STRING": "String",
              "XML": "String"}
 HEAD = banner("// ")
+
+
+def ident(name: str) -> str:
+    return f"r#{name}" if name in KEYWORDS else name
+
+
 SPELLING = Spelling(
     scalars=RUST_TYPE, group="Vec<{item}>", array="[{base}; {repeat}]",
     head='field("{f.name}", FieldType::{type})', type_name=pascal, sep="",
     attrs={**BUILDER, "allowed": ".allowed(&[{allowed}])", "group": ".group({ITEM}_FIELDS, {f.item_min})"},
-    empty="&[]", open="&[", close="{indent}]", step="    ",
+    empty="&[]", open="&[", close="{indent}]", step="    ", member="    /// {doc}\n    pub {name}: {type},",
+    field_name=ident,
 )
 METHOD = (
     "    /// {m.name} (id {m.id}): {summary}\n    pub fn {name}({params}) -> Result<(), Error> {{\n"
@@ -35,10 +42,6 @@ PARAM = {"group": "{n}: &[{item}]", "text": "{n}: &str", "array": "{n}: {t}", "i
          "DOUBLE": "{n}: {t}"}
 INIT = {"group": "{n}: {n}.to_vec()", "text": "{n}: {n}.to_string()", "array": "{n}", "int": "{n}", "BOOL": "{n}",
         "DOUBLE": "{n}"}
-
-
-def ident(name: str) -> str:
-    return f"r#{name}" if name in KEYWORDS else name
 
 
 def _errors() -> str:
@@ -68,9 +71,7 @@ def _struct(name: str, doc: str, fields: tuple[Field, ...], derive: str) -> str:
     if not user:
         return "\n".join([*out, f"pub struct {name} {{}}\n"])
     out.append(f"pub struct {name} {{")
-    for f in user:
-        out += [f"    /// {field_doc(f)}", f"    pub {ident(f.name)}: {SPELLING.type(f)},"]
-    return "\n".join([*out, "}\n"])
+    return "\n".join([*out, *SPELLING.members(fields), "}\n"])
 
 
 def _conversions(fields: tuple[Field, ...]) -> tuple[str, str]:

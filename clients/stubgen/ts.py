@@ -3,8 +3,8 @@
 from __future__ import annotations
 
 from clients.stubgen import banner, fill, model, readme, template
-from clients.stubgen.model import ERRORS, Field, Message, camel, doc_line, field_doc, pascal, snake
-from clients.stubgen.renderer import Spelling, arguments, methods, protocol, scripts, static
+from clients.stubgen.model import Field, Message, camel, doc_line, pascal, snake
+from clients.stubgen.renderer import Spelling, arguments, error_classes, methods, protocol, scripts, static
 
 RESERVED = frozenset((
     "break", "case", "catch", "class", "const", "continue", "debugger", "default", "delete", "do", "else", "enum",
@@ -22,7 +22,7 @@ SPELLING = Spelling(
     attrs={"repeat": "repeat: {f.repeat}", "const": "const: {f.const}", "min": "min: {f.min}", "max": "max: {f.max}",
            "allowed": "allowed: [{allowed}]", "group": "fields: {ITEM}_FIELDS, itemMin: {f.item_min}",
            "run": "run: {f.run}"},
-    empty="[]", open="[", close="{indent}]", step="  ",
+    empty="[]", open="[", close="{indent}]", step="  ", member="  /** {doc} */\n  {name}: {type};", field_name=camel,
 )
 METHOD = (
     "  /** {m.name} (id {m.id}): {summary} */\n  {name}({params}): Promise<void> {{\n"
@@ -40,12 +40,8 @@ def param(name: str) -> str:
 
 
 def _errors() -> str:
-    out = []
-    for name, parent, doc in ERRORS:
-        base = parent or "Error"
-        out.append(f"/** {doc} */\nexport class {name} extends {base} {{\n  constructor(message: string) {{\n"
-                   f'    super(message);\n    this.name = "{name}";\n  }}\n}}\n')
-    return "\n".join(out).rstrip("\n")
+    return error_classes("/** {doc} */\nexport class {name} extends {base} {{\n  constructor(message: string) {{\n"
+                         '    super(message);\n    this.name = "{name}";\n  }}\n}}\n', "Error")
 
 
 def _default(f: Field) -> str:
@@ -72,8 +68,7 @@ def _telegram(m: Message) -> str:
     else:
         table = SPELLING.table(m.fields, "  ")
         lines.append(f"  static readonly LAYOUT: Layout = {{ opaque: false, fields: {table} }};")
-        for f in m.user_fields:
-            lines += [f"  /** {field_doc(f)} */", f"  {camel(f.name)}: {SPELLING.type(f)} = {_default(f)};"]
+        lines += SPELLING.members(m.fields, "  /** {doc} */\n  {name}: {type} = {default};", _default)
     lines += ["", f"  constructor(init: Partial<{t}> = {{}}) {{", "    super();", "    Object.assign(this, init);",
               "  }", "}\n"]
     return "\n".join(lines)
@@ -85,11 +80,8 @@ def _enum(name: str) -> str:
 
 
 def _item(name: str, fields: tuple[Field, ...]) -> str:
-    out = [f"/** One item of a repeated group. */\nexport interface {name} {{"]
-    for f in fields:
-        if f.user:
-            out += [f"  /** {field_doc(f)} */", f"  {camel(f.name)}: {SPELLING.type(f)};"]
-    return "\n".join([*out, "}\n", f"const {snake(name).upper()}_FIELDS: Field[] = {SPELLING.table(fields)};\n"])
+    return "\n".join([f"/** One item of a repeated group. */\nexport interface {name} {{", *SPELLING.members(fields),
+                      "}\n", f"const {snake(name).upper()}_FIELDS: Field[] = {SPELLING.table(fields)};\n"])
 
 
 def _registry(direction: str, telegrams: tuple[Message, ...]) -> str:
