@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+
 from clients.stubgen import banner, fill, model, readme, template
 from clients.stubgen.model import ERRORS, Field, Message, doc_line, pascal, words
 from clients.stubgen.renderer import Spelling, arguments, convert, methods, protocol, scripts, static
@@ -24,6 +26,9 @@ HEAD = banner("// ")
 # Values cross the runtime as any: int64, float64, string, []byte, []any (arrays, group items).
 TO_VALUE = {"group": "groupToValues({x})", "array": "intsToValues({x}[:])", "BOOL": "b2i({x})", "DOUBLE": "{x}",
             "text": "{x}", "int": "int64({x})"}
+FROM_VALUE = {"group": "{x} = valuesToGroup[{item}]({v})", "array": "valuesToInts({v}, {x}[:])",
+              "BOOL": "{x} = {v}.(int64) != 0", "DOUBLE": "{x} = {v}.(float64)", "text": "{x} = {v}.(string)",
+              "int": "{x} = {base}({v}.(int64))"}
 METHOD = (
     "// {name} sends {m.name} (id {m.id}): {summary}\nfunc (c *Client) {name}({params}) error {{\n"
     "\treturn c.Send({req})\n}}\n",
@@ -31,9 +36,6 @@ METHOD = (
     "\tt, err := c.Request({req}, {m.id})\n\tif err != nil {{\n\t\treturn nil, err\n\t}}\n"
     "\treturn t.(*{reply}), nil\n}}\n",
 )
-FROM_VALUE = {"group": "{x} = valuesToGroup[{item}]({v})", "array": "valuesToInts({v}, {x}[:])",
-              "BOOL": "{x} = {v}.(int64) != 0", "DOUBLE": "{x} = {v}.(float64)", "text": "{x} = {v}.(string)",
-              "int": "{x} = {base}({v}.(int64))"}
 
 
 def go_name(name: str) -> str:
@@ -59,6 +61,7 @@ def param(name: str) -> str:
     return p + "_" if p in KEYWORDS else p
 
 
+@functools.cache
 def _enum_consts() -> dict[tuple[str, str], str]:
     plain: dict[str, list[str]] = {}
     for name, e in model.enums().items():

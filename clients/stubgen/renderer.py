@@ -167,8 +167,9 @@ def error_classes(spelled: str, root: str, end: str = "", **roots: tuple[str, st
     return "\n".join(classes).rstrip("\n") + end
 
 
-def arguments(m: Message, payload: tuple[str, str], field: Callable[[Field], tuple[str, str]]) -> tuple[
-        list[str], list[str]]:  # fmt: skip
+def arguments(
+    m: Message, payload: tuple[str, str], field: Callable[[Field], tuple[str, str]]
+) -> tuple[list[str], list[str]]:
     """A client method's parameters and the request's arguments: ``payload`` for an opaque telegram, else one
     ``field(f)`` pair per user field."""
     pairs = [payload] if m.opaque else [field(f) for f in m.user_fields]
