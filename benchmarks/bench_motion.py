@@ -16,6 +16,7 @@ Benchmarks:
 
 from __future__ import annotations
 
+import gc
 import heapq
 import itertools
 import math
@@ -47,6 +48,7 @@ PLAN_RADIUS = 503.0 + 60.0  # the default footprint's circumscribed radius + the
 
 WORLD = "world (ideal wheels)"
 WORLD_CAN = "world + CAN boards"
+HARDWARE = "CAN boards alone"
 VISIBILITY = "visibility graph"
 GRID = "grid A* 5 cm"
 LOOKUP = "visibility graph lookup data"
@@ -71,63 +73,127 @@ def _tour_world(seed: int = 1) -> World:
     return world
 
 
-def run_world(seconds: float) -> float:
-    """Drive the tour with ideal wheels for ``seconds`` of simulated time; the distance driven (mm)."""
+Run = Callable[[], float]  # one timed run: the distance driven (mm)
+
+
+def world_run(seconds: float) -> Run:
+    """The tour with ideal wheels for ``seconds`` of simulated time, built (world, map, parameters) untimed."""
     world = _tour_world()
-    driven, goal = 0.0, 0
-    for k in range(1, round(seconds / DT) + 1):
-        if not world.active:
-            world.move_to(TOUR[goal % len(TOUR)])
-            goal += 1
-        world.advance(k * DT, DT)
-        driven += abs(world.measured[0]) * DT
-    return driven
 
-
-def run_world_can(seconds: float) -> float:
-    """The same tour with the fake CAN boards and the S300 in the loop (the platform's wiring of issue 5)."""
-    from fake_hardware.hardware import build_platform_hardware
-
-    world = _tour_world()
-    store = ParameterStore()
-    hw = build_platform_hardware(
-        params=store.get, rng=random.Random(1), scan_source=world.scan_ranges, us_source=world.us_ranges
-    )
-    try:
-        assert hw.connect(0.0).ok and hw.init(0.0).ok
-        if hw.scanner is not None:
-            hw.scanner.period = 0.1  # the laser at 10 Hz
-        hw.controller.start_ultrasonic(0xFFFF, 0.0)
-        right, left = hw.motors
-        assert right is not None and left is not None
+    def run() -> float:
         driven, goal = 0.0, 0
         for k in range(1, round(seconds / DT) + 1):
-            now = k * DT
             if not world.active:
                 world.move_to(TOUR[goal % len(TOUR)])
                 goal += 1
-            world.step(now, DT)
-            hw.controller.set_wheel_velocities(*world.setpoints)
-            hw.step(now)
-            dr, dl = world.move(right.wheel_velocity, left.wheel_velocity, DT)
-            right.report_wheel_travel(dr)
-            left.report_wheel_travel(dl)
-            world.odometry(*hw.controller.take_wheel_travel(), DT)
+            world.advance(k * DT, DT)
             driven += abs(world.measured[0]) * DT
         return driven
-    finally:
-        hw.close()
+
+    return run
+
+
+def world_can_run(seconds: float) -> Run:
+    """The same tour with the fake CAN boards and the S300 in the loop, composed per control period as
+    reference_server/motion_api.py describes (the platform's own hardware plug-in had not landed when this was
+    written): ``step``, the setpoints to the controller, ``hw.step``, ``move`` with the motor boards' wheel
+    velocities, their travel reported back, odometry from the encoder frames. Connect and init are untimed."""
+    from fake_hardware.hardware import build_platform_hardware
+
+    world = _tour_world()
+    hw = build_platform_hardware(
+        params=ParameterStore().get, rng=random.Random(1), scan_source=world.scan_ranges, us_source=world.us_ranges
+    )
+    assert hw.connect(0.0).ok and hw.init(0.0).ok
+    if hw.scanner is not None:
+        hw.scanner.period = 0.1  # the laser at 10 Hz
+    hw.controller.start_ultrasonic(0xFFFF, 0.0)
+    right, left = hw.motors
+    assert right is not None and left is not None
+
+    def run() -> float:
+        try:
+            driven, goal = 0.0, 0
+            for k in range(1, round(seconds / DT) + 1):
+                now = k * DT
+                if not world.active:
+                    world.move_to(TOUR[goal % len(TOUR)])
+                    goal += 1
+                world.step(now, DT)
+                hw.controller.set_wheel_velocities(*world.setpoints)
+                hw.step(now)
+                dr, dl = world.move(right.wheel_velocity, left.wheel_velocity, DT)
+                right.report_wheel_travel(dr)
+                left.report_wheel_travel(dl)
+                world.odometry(*hw.controller.take_wheel_travel(), DT)
+                driven += abs(world.measured[0]) * DT
+            return driven
+        finally:
+            hw.close()
+
+    return run
+
+
+def hardware_run(seconds: float) -> Run:
+    """The CAN boards and the S300 alone, as ``world_can_run`` drives them but fed by fixed sources (a constant
+    scan and ultrasonic echo, wheels rolling as driven): the share of a period the hardware takes by itself."""
+    from fake_hardware.hardware import build_platform_hardware
+
+    scan = [5000.0] * LASER_FAN.count
+    echoes: list[float | None] = [2000.0] * 16
+    hw = build_platform_hardware(params=ParameterStore().get, rng=random.Random(1), scan_source=lambda now: scan,
+                                 us_source=lambda now: echoes)  # fmt: skip
+    assert hw.connect(0.0).ok and hw.init(0.0).ok
+    if hw.scanner is not None:
+        hw.scanner.period = 0.1
+    hw.controller.start_ultrasonic(0xFFFF, 0.0)
+    right, left = hw.motors
+    assert right is not None and left is not None
+
+    def run() -> float:
+        try:
+            driven = 0.0
+            for k in range(1, round(seconds / DT) + 1):
+                hw.controller.set_wheel_velocities(300.0, 300.0)
+                hw.step(k * DT)
+                right.report_wheel_travel(right.wheel_velocity * DT)
+                left.report_wheel_travel(left.wheel_velocity * DT)
+                driven += sum(hw.controller.take_wheel_travel()) / 2.0
+            return driven
+        finally:
+            hw.close()
+
+    return run
+
+
+def run_world(seconds: float) -> float:
+    return world_run(seconds)()
+
+
+def run_world_can(seconds: float) -> float:
+    return world_can_run(seconds)()
+
+
+def timed_runs(builders: dict[str, Callable[[], Run]], repeats: int) -> dict[str, float]:
+    """Median wall seconds of each subject's run, the subjects interleaved, each built afresh and untimed."""
+    samples: dict[str, list[float]] = {name: [] for name in builders}
+    for _ in range(repeats):
+        for name, build in builders.items():
+            run = build()
+            gc.collect()
+            t = time.perf_counter()
+            run()
+            samples[name].append(time.perf_counter() - t)
+    return {name: statistics.median(times) for name, times in samples.items()}
 
 
 @benchmark()
 def realtime_factor(config: Config) -> list[Row]:
     """Simulated seconds per wall second: the world alone, and with the CAN boards and the S300 in the loop."""
     seconds = 5.0 if config.quick else 60.0
-    subjects: dict[str, Callable[[], object]] = {
-        WORLD: lambda: run_world(seconds),
-        WORLD_CAN: lambda: run_world_can(seconds),
-    }
-    times = median_times(subjects, Config(config.quick, min(config.repeats, 3), 0.0), number=1)
+    builders = {WORLD: lambda: world_run(seconds), WORLD_CAN: lambda: world_can_run(seconds),
+                HARDWARE: lambda: hardware_run(seconds)}  # fmt: skip
+    times = timed_runs(builders, min(config.repeats, 5))
     rtf = {name: seconds / t for name, t in times.items()}
     target = Target("value", ">=", RTF_TARGET)
     return [
@@ -135,6 +201,8 @@ def realtime_factor(config: Config) -> list[Row]:
                  target=target),
         make_row("motion.realtime_factor", WORLD_CAN, "realtime_factor", rtf[WORLD_CAN], "sim-s/s",
                  higher_is_better=True, baseline_subject=WORLD, baseline_value=rtf[WORLD], target=target),
+        make_row("motion.realtime_factor", HARDWARE, "realtime_factor", rtf[HARDWARE], "sim-s/s",
+                 higher_is_better=True, baseline_subject=WORLD_CAN, baseline_value=rtf[WORLD_CAN]),
     ]  # fmt: skip
 
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 import numpy.typing as npt
@@ -74,49 +75,56 @@ def _pairs(lo: F64, span: F64, fan: Fan) -> tuple[I64, I64]:
     return owners, beams
 
 
-def cast_fan(x: float, y: float, heading: float, scene: Scene, fan: Fan) -> tuple[F64, I64]:
-    """Ranges (mm, inf = no echo) and hit ids of the fan's beams from (x, y) facing ``heading``."""
+@lru_cache(maxsize=8)
+def _beam_offsets(fan: Fan) -> tuple[F64, F64]:
+    """cos and sin of each beam's angle relative to the heading (a fan's beams are fixed; only the heading turns)."""
+    b = fan.start + fan.step * np.arange(fan.count)
+    return np.cos(b), np.sin(b)
+
+
+def cast_fan(x: float, y: float, heading: float, scene: Scene, fan: Fan, want_hits: bool = True) -> tuple[F64, I64]:
+    """Ranges (mm, inf = no echo) and hit ids of the fan's beams from (x, y) facing ``heading`` (without
+    ``want_hits`` the ids are all -1: the ranges alone cost less)."""
     a0 = heading + fan.start
     ranges = np.full(fan.count, np.inf)
     hits = np.full(fan.count, -1, dtype=np.int64)
-    angles = a0 + fan.step * np.arange(fan.count)
-    dx, dy = np.cos(angles), np.sin(angles)
-    seg_ids, seg_beams = _segment_pairs(x, y, a0, scene.segs, fan)
-    circ_ids, circ_beams = _circle_pairs(x, y, a0, scene.circs, fan)
-    parts_t, parts_b, parts_id = [], [], []
-    if len(seg_ids):
-        ex, ey = scene.ex[seg_ids], scene.ey[seg_ids]
-        cross = (scene.segs[:, 0] - x) * scene.ey - (scene.segs[:, 1] - y) * scene.ex  # w x e per segment
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t = cross[seg_ids] / (dx[seg_beams] * ey - dy[seg_beams] * ex)
-        parts_t.append(t)
-        parts_b.append(seg_beams)
-        parts_id.append(seg_ids)
-    if len(circ_ids):
-        c = scene.circs
-        wx, wy, r = c[circ_ids, 0] - x, c[circ_ids, 1] - y, c[circ_ids, 2]
-        proj = wx * dx[circ_beams] + wy * dy[circ_beams]
-        perp2 = wx * wx + wy * wy - proj * proj
-        t = proj - np.sqrt(np.maximum(r * r - perp2, 0.0))
-        parts_t.append(np.where(perp2 <= r * r, t, np.inf))
-        parts_b.append(circ_beams)
-        parts_id.append(circ_ids + len(scene.segs))
-    if not parts_t:
+    ns, nc = len(scene.segs), len(scene.circs)
+    if ns + nc == 0:
         return ranges, hits
-    t = np.concatenate(parts_t)
-    beams = np.concatenate(parts_b)
-    ids = np.concatenate(parts_id)
+    lo, span = _intervals(x, y, a0, scene)
+    owners, beams = _pairs(lo, span, fan)
+    if len(owners) == 0:
+        return ranges, hits
+    cb, sb = _beam_offsets(fan)
+    ch, sh = math.cos(heading), math.sin(heading)
+    bdx, bdy = cb[beams] * ch - sb[beams] * sh, sb[beams] * ch + cb[beams] * sh  # the pairs' beam directions
+    t = np.empty(len(owners))
+    is_seg = owners < ns
+    if ns:
+        ids = owners[is_seg]
+        ex, ey = scene.ex[ids], scene.ey[ids]
+        cross = (scene.segs[ids, 0] - x) * ey - (scene.segs[ids, 1] - y) * ex  # w x e per pair
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t[is_seg] = cross / (bdx[is_seg] * ey - bdy[is_seg] * ex)
+    if nc:
+        is_circ = ~is_seg
+        c = scene.circs[owners[is_circ] - ns]
+        wx, wy, r = c[:, 0] - x, c[:, 1] - y, c[:, 2]
+        proj = wx * bdx[is_circ] + wy * bdy[is_circ]
+        perp2 = wx * wx + wy * wy - proj * proj
+        tc = proj - np.sqrt(np.maximum(r * r - perp2, 0.0))
+        t[is_circ] = np.where(perp2 <= r * r, tc, np.inf)
     t = np.where((t > 0) & (t <= fan.max_range), t, np.inf)
     np.minimum.at(ranges, beams, t)
-    won = (t == ranges[beams]) & np.isfinite(t)
-    hits[beams[won]] = ids[won]
+    if want_hits:
+        won = (t == ranges[beams]) & np.isfinite(t)
+        hits[beams[won]] = owners[won]
     return ranges, hits
 
 
-def _segment_pairs(x: float, y: float, a0: float, segs: F64, fan: Fan) -> tuple[I64, I64]:
-    n = len(segs)
-    if n == 0:
-        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+def _intervals(x: float, y: float, a0: float, scene: Scene) -> tuple[F64, F64]:
+    """Per segment, then per circle: the interval of angles above the first beam it covers (lo in [0, 2pi))."""
+    segs, circs = scene.segs, scene.circs
     ends = segs.reshape(-1, 2)  # rows: start 0, end 0, start 1, ...
     ang = np.arctan2(ends[:, 1] - y, ends[:, 0] - x)
     ang -= a0
@@ -124,18 +132,15 @@ def _segment_pairs(x: float, y: float, a0: float, segs: F64, fan: Fan) -> tuple[
     p, q = ang[0::2], ang[1::2]
     d = (q - p) % _TWO_PI
     forward = d <= math.pi
-    return _pairs(np.where(forward, p, q), np.where(forward, d, _TWO_PI - d), fan)
-
-
-def _circle_pairs(x: float, y: float, a0: float, circs: F64, fan: Fan) -> tuple[I64, I64]:
+    lo, span = np.where(forward, p, q), np.where(forward, d, _TWO_PI - d)
     if len(circs) == 0:
-        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+        return lo, span
     wx, wy, r = circs[:, 0] - x, circs[:, 1] - y, circs[:, 2]
     dist = np.hypot(wx, wy)
     # an origin inside a circle sees nothing of it (span < 0: no beams)
     half = np.where(dist > r, np.arcsin(np.clip(r / np.maximum(dist, 1e-9), 0.0, 1.0)), -1.0)
-    lo = (np.arctan2(wy, wx) - a0 - np.maximum(half, 0.0)) % _TWO_PI
-    return _pairs(lo, 2.0 * half, fan)
+    lo_c = (np.arctan2(wy, wx) - a0 - np.maximum(half, 0.0)) % _TWO_PI
+    return np.concatenate([lo, lo_c]), np.concatenate([span, 2.0 * half])
 
 
 def cast_rays(ox: F64, oy: F64, angles: F64, scene: Scene, max_range: float) -> tuple[F64, I64]:

@@ -80,7 +80,7 @@ def scan(pose: tuple[float, float, float], mount_x: float, scene: Scene, noise: 
 def expected_ranges(pose: tuple[float, float, float], mount_x: float, scene: Scene) -> F64:
     """The ranges a scan from ``pose`` would show on ``scene`` (no noise): for the scan matcher."""
     lx, ly, la = laser_pose(*pose, mount_x)
-    return cast_fan(lx, ly, la, scene, LASER_FAN)[0]
+    return cast_fan(lx, ly, la, scene, LASER_FAN, want_hits=False)[0]
 
 
 def match_score(measured: F64, expected: F64) -> float:

@@ -87,6 +87,7 @@ class World:
         self.motion = Motion()
         self.contact = False
         self.last_scan: sensors.Scan | None = None
+        self._scan_list: tuple[sensors.Scan | None, list[float | None]] = (None, [])
         self._scan_pose: Pose = pose
         self._observation: sensors.Observation | None = None
         self.perception = Perception()
@@ -361,11 +362,13 @@ class World:
         """The serial scanner's source: the latest laser scan of ``sense`` (10 Hz), whatever its own period."""
         if self.last_scan is None:
             return self.scan()
-        return [float(r) if math.isfinite(r) else None for r in self.last_scan.ranges]
+        if self._scan_list[0] is not self.last_scan:  # converted once per scan, however often it is read
+            self._scan_list = (self.last_scan, [None if r == math.inf else r for r in self.last_scan.ranges.tolist()])
+        return list(self._scan_list[1])
 
     def us_ranges(self, now: float) -> list[float | None]:
-        """The ultrasonic board's source: the distances of the latest sensing period."""
-        return [r if math.isfinite(r) else None for r in self.us_distances()]
+        """The ultrasonic board's source: the distances of the latest sensing period (read every period)."""
+        return [None if r == math.inf else r for r in self.us_distances()]
 
     # ---- Navigator (automatic.Navigator): planning with the footprint
     @property
