@@ -9,6 +9,13 @@ Rules:
 - Replies are framed like requests (erratum E-WIRE-001). Malformed input - any RemoteProtocolError of the
   decoder, or a partial frame that stalls for ``stall_timeout`` wall seconds - is logged with the peer and
   the reason and closes only that connection.
+- Connections are plain non-blocking sockets on the loop's selector (``add_reader``), not asyncio streams:
+  a connection costs an accept, a read and a close, with no task, transport or stream objects (a client that
+  opens a connection per request - a fuzzer, a test harness - is served at several thousand connections per
+  second). The data that came with the connection is read at once; the replies of one read go out in one
+  write; the rest of the replies waits for the client to read (reading pauses above ``HIGH_WATER`` buffered
+  bytes, as ``StreamWriter.drain`` would), and a closing connection sends what it owes before it closes.
+  Per-connection log lines are formatted only when their level is enabled.
 - The control loop ticks the platform at 50 Hz simulated time: ``dt`` = 0.02 s simulated, i.e. every
   0.02 / time_scale wall seconds; when the loop falls behind it catches up, within limits.
 - ``serve`` returns 0 after CMD_EXIT, SIGINT or SIGTERM, having closed every listener and connection.
@@ -18,11 +25,13 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import functools
+import errno
 import logging
 import math
 import signal
+import socket
 from collections.abc import Callable, Sequence
+from typing import Any
 
 from reference_server.platform import Platform
 from spec.codec import DEFAULT_MAX_LENGTH, TelegramDecoder, encode
@@ -34,6 +43,11 @@ CONTROL_PERIOD = 0.02  # simulated s (50 Hz)
 STALL_TIMEOUT = 5.0  # wall s a partial frame may wait for its rest
 MAX_CATCH_UP = 500  # periods (10 s simulated) caught up at once; beyond that they are skipped
 READ_SIZE = 65536
+BACKLOG = 100  # listen backlog, and connections accepted per wake-up (asyncio's defaults)
+HIGH_WATER = 1 << 16  # bytes of unsent replies above which reading pauses (asyncio's default high-water mark)
+LOW_WATER = 1 << 14  # ... and below which it resumes
+ACCEPT_RETRY = 1.0  # s before accepting again when out of file descriptors
+_ACCEPT_ERRORS = (errno.EMFILE, errno.ENFILE, errno.ENOBUFS, errno.ENOMEM)
 
 
 class SimClock:
@@ -54,6 +68,21 @@ class SimClock:
         return self._t0 + sim / self.time_scale
 
 
+class _Peer:
+    """A peer address, formatted only when a log line is emitted."""
+
+    __slots__ = ("addr",)
+
+    def __init__(self, addr: Any) -> None:
+        self.addr = addr
+
+    def __str__(self) -> str:
+        info = self.addr
+        if isinstance(info, tuple) and len(info) >= 2:
+            return f"{info[0]}:{info[1]}"
+        return str(info)
+
+
 class Server:
     def __init__(
         self,
@@ -72,10 +101,12 @@ class Server:
         self.stall_timeout = stall_timeout
         self.max_length = max_length
         self.ports: list[int] = []
-        self._listeners: list[asyncio.Server] = []
-        self._busy: dict[int, asyncio.StreamWriter] = {}
+        self._listeners: list[tuple[int, socket.socket]] = []  # (port index, listening socket)
+        self._busy: dict[int, _Connection] = {}  # port index -> its client
+        self._open: set[_Connection] = set()  # every connection not yet closed (a closing one flushes its replies)
         self._stopped = asyncio.Event()
         self._clock: SimClock | None = None
+        self._loop: asyncio.AbstractEventLoop | None = None
         self.exit_code = 0
 
     @property
@@ -84,20 +115,48 @@ class Server:
         return self._clock
 
     async def start(self) -> list[int]:
-        self._clock = SimClock(asyncio.get_running_loop(), self.time_scale)
+        loop = self._loop = asyncio.get_running_loop()
+        self._clock = SimClock(loop, self.time_scale)
         try:
             for index, port in enumerate(self.requested_ports):
-                listener = await asyncio.start_server(
-                    functools.partial(self._client, index=index), self.host, port, reuse_address=True
-                )
-                self._listeners.append(listener)
-                self.ports.append(listener.sockets[0].getsockname()[1])
+                socks = await self._listen(loop, port)
+                for sock in socks:
+                    self._listeners.append((index, sock))
+                    loop.add_reader(sock.fileno(), self._accept, index, sock)
+                self.ports.append(socks[0].getsockname()[1])
                 log.info("server started at port %d", self.ports[-1])
         except OSError:
-            for listener in self._listeners:
-                listener.close()
+            self._close_listeners()
             raise
         return self.ports
+
+    async def _listen(self, loop: asyncio.AbstractEventLoop, port: int) -> list[socket.socket]:
+        """Listening sockets on every address of ``host`` (as ``asyncio.start_server`` binds them)."""
+        infos = await loop.getaddrinfo(self.host or None, port, type=socket.SOCK_STREAM, flags=socket.AI_PASSIVE)
+        socks: list[socket.socket] = []
+        try:
+            for family, kind, proto, _, addr in dict.fromkeys(infos):
+                sock = socket.socket(family, kind, proto)
+                socks.append(sock)
+                sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+                if family == socket.AF_INET6:
+                    sock.setsockopt(socket.IPPROTO_IPV6, socket.IPV6_V6ONLY, 1)
+                sock.bind(addr)
+                sock.listen(BACKLOG)
+                sock.setblocking(False)
+        except OSError:
+            for sock in socks:
+                sock.close()
+            raise
+        return socks
+
+    def _close_listeners(self) -> None:
+        loop = self._loop
+        for _, sock in self._listeners:
+            if loop is not None:
+                loop.remove_reader(sock.fileno())
+            sock.close()
+        self._listeners.clear()
 
     def stop(self) -> None:
         self._stopped.set()
@@ -110,13 +169,9 @@ class Server:
             await self._stopped.wait()
         finally:
             sim.cancel()
-            for listener in self._listeners:
-                listener.close()
-            for writer in list(self._busy.values()):
-                writer.close()
-            for listener in self._listeners:
-                with contextlib.suppress(Exception):
-                    await listener.wait_closed()
+            self._close_listeners()
+            for conn in list(self._open):
+                conn.abort()
             with contextlib.suppress(asyncio.CancelledError):
                 await sim
             log.info("server stopped")
@@ -140,68 +195,236 @@ class Server:
                 self.platform.tick(ticks * CONTROL_PERIOD)
             await asyncio.sleep(max(0.0, clock.wall_at((ticks + 1) * CONTROL_PERIOD) - loop.time()))
 
-    # ---- one connection
-    async def _client(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter, index: int) -> None:
-        port = self.ports[index]
-        peer = _peer(writer)
-        if index in self._busy or self._stopped.is_set():
-            log.warning("port %d busy: second client %s turned away", port, peer)
-            writer.close()
-            with contextlib.suppress(Exception):
-                await writer.wait_closed()
-            return
-        self._busy[index] = writer
-        log.info("client %s connected at port %d", peer, port)
-        try:
-            reason = await self._serve_client(reader, writer)
-            log.info("client %s at port %d: %s", peer, port, reason)
-        except RemoteProtocolError as exc:
-            log.warning("client %s at port %d: %s: %s; connection closed", peer, port, type(exc).__name__, exc)
-        except (ConnectionError, OSError) as exc:
-            log.warning("client %s at port %d: %s; connection closed", peer, port, exc)
-        except Exception:  # a bug of the platform model must not take the server down
-            log.exception("client %s at port %d: internal error; connection closed", peer, port)
-        finally:
-            del self._busy[index]
-            writer.close()
-            with contextlib.suppress(Exception):
-                await writer.wait_closed()
+    # ---- connections
+    def _accept(self, index: int, listener: socket.socket) -> None:
+        """The listening socket is readable: take every pending connection (up to ``BACKLOG``)."""
+        for _ in range(BACKLOG):
+            try:
+                sock, addr = listener.accept()
+            except (BlockingIOError, InterruptedError, ConnectionAbortedError):
+                return
+            except OSError as exc:
+                if exc.errno not in _ACCEPT_ERRORS:
+                    raise
+                log.error("port %d: cannot accept a connection: %s; retrying in %g s", self.ports[index], exc,
+                          ACCEPT_RETRY)  # fmt: skip
+                self._pause_accepting(listener, index)
+                return
+            sock.setblocking(False)
+            busy = self._busy.get(index)
+            if busy is not None and busy.reading:  # its client may have left already (an EOF not yet read)
+                busy._readable()
+            if index in self._busy or self._stopped.is_set():
+                log.warning("port %d busy: second client %s turned away", self.ports[index], _Peer(addr))
+                sock.close()
+                continue
+            with contextlib.suppress(OSError):  # replies go out at once (asyncio sets it on every TCP transport)
+                sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            conn = _Connection(self, sock, _Peer(addr), index)
+            self._busy[index] = conn
+            self._open.add(conn)
+            log.info("client %s connected at port %d", conn.peer, conn.port)
+            conn.start()
 
-    async def _serve_client(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> str:
-        decoder = TelegramDecoder("request", self.max_length)
-        platform, clock = self.platform, self.clock
-        while True:
-            if decoder.pending:
-                try:
-                    data = await asyncio.wait_for(reader.read(READ_SIZE), self.stall_timeout)
-                except TimeoutError:
-                    return (
-                        f"partial frame stalled for {self.stall_timeout:g} s ({decoder.pending} bytes); "
-                        "connection closed"
-                    )
-            else:
-                data = await reader.read(READ_SIZE)
-            decoder.receive_data(data)
+    def _pause_accepting(self, listener: socket.socket, index: int) -> None:
+        loop = self._loop
+        assert loop is not None
+        loop.remove_reader(listener.fileno())
+
+        def resume() -> None:
+            if any(sock is listener for _, sock in self._listeners):
+                loop.add_reader(listener.fileno(), self._accept, index, listener)
+
+        loop.call_later(ACCEPT_RETRY, resume)
+
+    def _released(self, conn: _Connection) -> None:
+        """``conn`` no longer takes input: its port is free for the next client."""
+        if self._busy.get(conn.index) is conn:
+            del self._busy[conn.index]
+
+    def _closed(self, conn: _Connection) -> None:
+        self._released(conn)
+        self._open.discard(conn)
+
+
+class _Connection:
+    """One client: read, decode, let the platform handle each telegram, write the replies back."""
+
+    __slots__ = ("closing", "decoder", "fd", "index", "loop", "out", "peer", "port", "reading", "server", "sock",
+                 "stall_at", "stall_timer", "writing")  # fmt: skip
+
+    def __init__(self, server: Server, sock: socket.socket, peer: _Peer, index: int) -> None:
+        self.server, self.sock, self.peer, self.index = server, sock, peer, index
+        self.fd = sock.fileno()
+        self.port = server.ports[index]
+        assert server._loop is not None
+        self.loop = server._loop
+        self.decoder = TelegramDecoder("request", server.max_length)
+        self.out = bytearray()  # replies not yet taken by the socket
+        self.reading = self.writing = self.closing = False
+        self.stall_at: float | None = None  # loop time at which a pending partial frame is given up
+        self.stall_timer: asyncio.TimerHandle | None = None
+
+    def start(self) -> None:
+        self._readable()  # what came with the connection (a request usually has): no selector round trip
+        if not self.closing and not self.reading and len(self.out) <= HIGH_WATER:
+            self._resume_reading()
+
+    # ---- reading
+    def _resume_reading(self) -> None:
+        if not self.reading:
+            self.reading = True
+            self.loop.add_reader(self.fd, self._readable)
+
+    def _pause_reading(self) -> None:
+        if self.reading:
+            self.reading = False
+            self.loop.remove_reader(self.fd)
+
+    def _readable(self) -> None:
+        try:
+            data = self.sock.recv(READ_SIZE)
+        except (BlockingIOError, InterruptedError):
+            return
+        except OSError as exc:
+            self._end(logging.WARNING, "%s; connection closed", exc)
+            return
+        self._received(data)
+
+    def _received(self, data: bytes) -> None:
+        decoder, platform, clock = self.decoder, self.server.platform, self.server.clock
+        decoder.receive_data(data)
+        replies: list[bytes] = []
+        try:
             while (telegram := decoder.next_telegram()) is not None:
                 outcome = platform.handle(telegram, clock.now())
                 if outcome.reply is not None:
-                    writer.write(encode(outcome.reply))
+                    replies.append(encode(outcome.reply))
                 if outcome.exit_server:
-                    self.stop()
-                    return "CMD_EXIT: server exits"
+                    self.server.stop()
+                    self._write(replies)
+                    self._end(logging.INFO, "%s", "CMD_EXIT: server exits")
+                    return
                 if outcome.close_connection:
-                    await writer.drain()
-                    return "CMD_CLOSE_SOCKET: connection closed"
-            if not data:
-                return "disconnected"
-            await writer.drain()
+                    self._write(replies)
+                    self._end(logging.INFO, "%s", "CMD_CLOSE_SOCKET: connection closed")
+                    return
+        except RemoteProtocolError as exc:
+            self._write(replies)
+            self._end(logging.WARNING, "%s: %s; connection closed", type(exc).__name__, exc)
+            return
+        except Exception:  # a bug of the platform model must not take the server down
+            log.exception("client %s at port %d: internal error; connection closed", self.peer, self.port)
+            self._write(replies)
+            self._end(None)
+            return
+        self._write(replies)
+        if self.closing:  # the write failed
+            return
+        if not data:
+            self._end(logging.INFO, "%s", "disconnected")
+            return
+        if decoder.pending:
+            self._arm_stall()
+        else:
+            self.stall_at = None
+        if len(self.out) > HIGH_WATER:
+            self._pause_reading()
 
+    # ---- the stall timeout of a partial frame
+    def _arm_stall(self) -> None:
+        """(Re)start the partial frame's timeout; one timer per connection, moved only when it fires early."""
+        self.stall_at = self.loop.time() + self.server.stall_timeout
+        if self.stall_timer is None:
+            self.stall_timer = self.loop.call_at(self.stall_at, self._stall_check)
 
-def _peer(writer: asyncio.StreamWriter) -> str:
-    info = writer.get_extra_info("peername")
-    if isinstance(info, tuple) and len(info) >= 2:
-        return f"{info[0]}:{info[1]}"
-    return str(info)
+    def _stall_check(self) -> None:
+        self.stall_timer = None
+        if self.closing or self.stall_at is None:
+            return
+        if self.loop.time() < self.stall_at:  # data came since: wait for the new deadline
+            self.stall_timer = self.loop.call_at(self.stall_at, self._stall_check)
+            return
+        timeout = self.server.stall_timeout
+        self._end(logging.INFO, "partial frame stalled for %g s (%d bytes); connection closed", timeout,
+                  self.decoder.pending)  # fmt: skip
+
+    # ---- writing
+    def _write(self, replies: list[bytes]) -> None:
+        if not replies:
+            return
+        if self.out:
+            self.out += b"".join(replies)
+            return
+        data = replies[0] if len(replies) == 1 else b"".join(replies)
+        try:
+            sent = self.sock.send(data)
+        except (BlockingIOError, InterruptedError):
+            sent = 0
+        except OSError as exc:
+            self._end(logging.WARNING, "%s; connection closed", exc)
+            return
+        if sent < len(data):
+            self.out += data[sent:]
+            self.writing = True
+            self.loop.add_writer(self.fd, self._writable)
+
+    def _writable(self) -> None:
+        try:
+            sent = self.sock.send(self.out)
+        except (BlockingIOError, InterruptedError):
+            return
+        except OSError as exc:
+            self.out.clear()
+            self._end(logging.WARNING, "%s; connection closed", exc)
+            return
+        del self.out[:sent]
+        if self.out:
+            if not self.closing and not self.reading and len(self.out) <= LOW_WATER:
+                self._resume_reading()
+            return
+        self.writing = False
+        self.loop.remove_writer(self.fd)
+        if self.closing:
+            self._close()
+        elif not self.reading:
+            self._resume_reading()
+
+    # ---- the end
+    def _end(self, level: int | None, msg: str = "", *args: object) -> None:
+        """No more input: log why, free the port, close once the replies owed are sent."""
+        if self.closing:
+            return
+        if level is not None and log.isEnabledFor(level):
+            log.log(level, "client %s at port %d: " + msg, self.peer, self.port, *args)
+        self.closing = True
+        self.stall_at = None
+        if self.stall_timer is not None:
+            self.stall_timer.cancel()
+            self.stall_timer = None
+        self._pause_reading()
+        self.server._released(self)
+        if not self.writing:
+            self._close()
+
+    def _close(self) -> None:
+        if self.writing:
+            self.writing = False
+            self.loop.remove_writer(self.fd)
+        self.server._closed(self)
+        self.sock.close()
+
+    def abort(self) -> None:
+        """The server stops: send what the socket takes at once, then close."""
+        if self.out:
+            with contextlib.suppress(OSError):
+                self.sock.send(self.out)
+        self.closing = True
+        if self.stall_timer is not None:
+            self.stall_timer.cancel()
+            self.stall_timer = None
+        self._pause_reading()
+        self._close()
 
 
 async def serve(
