@@ -166,6 +166,8 @@ class Campaign:
             sys.setswitchinterval(switch)
 
     def _run(self) -> int:
+        if self.prefetch is None:  # forked before any connection of ours is open
+            self.prefetch = Prefetcher(self.sched, self.index, WINDOW)
         self.start_target()
         self.stats.started = time.monotonic()  # the rate counts fuzzing, not the target's start-up
         end = time.monotonic() + self.o.duration

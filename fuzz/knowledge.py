@@ -8,10 +8,13 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field
+from typing import Any
 
 from spec.telegram import Telegram
 
 MAX_ITEMS = 256
+_LEARNT = frozenset(("CMD_GET_STATUS", "CMD_GET_PLTF_PARAM_VEC", "CMD_GET_PLTF_PARAM", "CMD_GET_ROADMAP", "CMD_GET_MAP",
+                     "CMD_GET_PROGRAM"))  # fmt: skip
 _STATION = re.compile(rb'<station\b[^>]*\bname="([^"]{1,64})"')
 _STATION_ID = re.compile(rb'<station\b[^>]*\bid="([^"]{1,64})"')
 
@@ -25,9 +28,24 @@ class Knowledge:
     operation_state: int | None = None
     motion_mode: int | None = None
     documents: dict[str, bytes] = field(default_factory=dict)  # reply name -> last XML seen
+    version: int = 0  # counts the replies learnt from (a copy elsewhere is stale when it differs)
+
+    def light(self) -> tuple[list[str], dict[str, str], list[str], tuple[int, int, int], int | None, int | None]:
+        """Everything but the documents (``update`` takes it back)."""
+        return (list(self.param_keys), dict(self.param_values), list(self.stations), self.pose,
+                self.operation_state, self.motion_mode)  # fmt: skip
+
+    def update(self, light: tuple[Any, ...], documents: dict[str, bytes]) -> None:
+        """Take over what another copy learnt: ``light()`` of it and the documents that changed."""
+        (self.param_keys, self.param_values, self.stations, self.pose, self.operation_state,
+         self.motion_mode) = light  # fmt: skip
+        self.documents.update(documents)
+        self.version += 1
 
     def learn(self, reply: Telegram) -> None:
         name = reply.NAME
+        if name in _LEARNT:
+            self.version += 1
         if name == "CMD_GET_STATUS":
             self.pose = (reply.est_x, reply.est_y, reply.est_angle)  # type: ignore[attr-defined]
             self.operation_state = reply.operation_state  # type: ignore[attr-defined]

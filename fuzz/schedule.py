@@ -12,10 +12,16 @@ Rules:
 
 from __future__ import annotations
 
+import contextlib
+import multiprocessing
+import os
 import queue
 import random
+import stat
 import threading
+import traceback
 from dataclasses import replace
+from typing import Any
 
 from fuzz import generate, mutate
 from fuzz.case import Case
@@ -156,32 +162,110 @@ class Scheduler:
 
 
 class Prefetcher:
-    """Draws windows of cases ahead in a thread: drawing overlaps the time we wait on the target (socket
-    waits release the GIL). Windows come out in index order, so the stream is the one ``Scheduler`` defines."""
+    """Draws windows of cases ahead in a child process: drawing runs beside the campaign instead of taking
+    the campaign's interpreter lock between its socket calls (with a drawing thread, every return from a
+    socket wait could queue behind it). Windows come out in index order, so the stream is the one
+    ``Scheduler`` defines; what the target told us (``Knowledge``) goes to the child with each ``get``, and
+    takes effect a few windows later (as it did with a thread).
+
+    The child is forked before the campaign opens its connections (``start``); it closes every socket it
+    inherited anyway, so that a connection the campaign closes is closed. Where fork is not available the
+    windows are drawn in a thread."""
 
     def __init__(self, sched: Scheduler, start: int, window: int, ahead: int = 3) -> None:
-        self.sched, self.next_index, self.window = sched, start, window
-        self.queue: queue.Queue[tuple[int, list[Case]]] = queue.Queue(maxsize=ahead)
+        self.sched, self.next_index, self.window, self.ahead = sched, start, window, ahead
+        self.sent_version = -1
+        self.sent_documents: dict[str, bytes] = {}
+        self.proc: Any = None
+        self.thread: threading.Thread | None = None
         self.stopped = threading.Event()
-        self.thread = threading.Thread(target=self._run, name="fuzz-prefetch", daemon=True)
-        self.thread.start()
+        if "fork" in multiprocessing.get_all_start_methods():
+            ctx = multiprocessing.get_context("fork")
+            self.out: Any = ctx.Queue(maxsize=ahead)
+            self.kb_recv, self.kb_send = ctx.Pipe(duplex=False)
+            self.proc = ctx.Process(target=_draw_windows, args=(sched, start, window, self.out, self.kb_recv),
+                                    name="fuzz-prefetch", daemon=True)  # fmt: skip
+            self.proc.start()
+        else:
+            self.out = queue.Queue(maxsize=ahead)
+            self.thread = threading.Thread(target=self._run_thread, name="fuzz-prefetch", daemon=True)
+            self.thread.start()
 
-    def _run(self) -> None:
+    def _run_thread(self) -> None:
         i = self.next_index
         while not self.stopped.is_set():
             cases = [self.sched.case(i + k) for k in range(self.window)]
             while not self.stopped.is_set():
                 try:
-                    self.queue.put((i, cases), timeout=0.1)
+                    self.out.put((i, cases, self.sched.dropped), timeout=0.1)
                     break
                 except queue.Full:
                     continue
             i += self.window
 
+    def _send_knowledge(self) -> None:
+        kb = self.sched.kb
+        if self.proc is None or kb.version == self.sent_version:
+            return
+        documents = {k: v for k, v in kb.documents.items() if self.sent_documents.get(k) is not v}
+        self.kb_send.send((kb.light(), documents))
+        self.sent_version, self.sent_documents = kb.version, dict(kb.documents)
+
     def get(self) -> tuple[int, list[Case]]:
         """(index of the first case, the cases) of the next window."""
-        return self.queue.get(timeout=30)
+        self._send_knowledge()
+        try:
+            first, cases, dropped = self.out.get(timeout=30)
+        except queue.Empty:
+            raise RuntimeError("the case generator produced nothing for 30 s") from None
+        if isinstance(cases, str):
+            raise RuntimeError(f"the case generator failed:\n{cases}")
+        self.sched.dropped = dropped
+        return first, cases
 
     def close(self) -> None:
         self.stopped.set()
-        self.thread.join(timeout=5)
+        if self.thread is not None:
+            self.thread.join(timeout=5)
+        if self.proc is not None:
+            self.proc.terminate()
+            self.proc.join(timeout=5)
+            self.out.close()
+            self.out.join_thread()
+            self.kb_send.close()
+            self.kb_recv.close()
+            self.proc = None
+
+
+def _draw_windows(sched: Scheduler, i: int, window: int, out: Any, kb_in: Any) -> None:
+    """The prefetch child: windows of cases into ``out`` for ever (the parent terminates it)."""
+    _close_inherited_sockets()
+    try:
+        while True:
+            while kb_in.poll():
+                sched.kb.update(*kb_in.recv())
+            cases = [sched.case(i + k) for k in range(window)]
+            while True:
+                try:
+                    out.put((i, cases, sched.dropped), timeout=0.05)
+                    break
+                except queue.Full:
+                    while kb_in.poll():  # the parent may be sending while we wait for it to take a window
+                        sched.kb.update(*kb_in.recv())
+            i += window
+    except (EOFError, OSError):  # the parent is gone
+        return
+    except Exception:
+        out.put((i, traceback.format_exc(), sched.dropped))
+
+
+def _close_inherited_sockets() -> None:
+    """Close the sockets the fork gave us (ours are pipes): a connection the parent closes must close."""
+    try:
+        fds = [int(fd) for fd in os.listdir("/proc/self/fd")]
+    except OSError:
+        return
+    for fd in fds:
+        with contextlib.suppress(OSError):
+            if stat.S_ISSOCK(os.fstat(fd).st_mode):
+                os.close(fd)
