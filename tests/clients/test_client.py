@@ -9,20 +9,27 @@ capture (field-evidence.md) are the independent oracle for what the methods put 
 
 from __future__ import annotations
 
-import contextlib
 import inspect
 import math
-import re
 import socket
-import subprocess
-import sys
-import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import pytest
+from client_fakes import (
+    AUTOMATIC,
+    BREAKED,
+    CAPTURED,
+    NOT_INIT,
+    READY,
+    RUNNING,
+    VEL,
+    FakePlatform,
+    LiveServer,
+    status_telegram,
+)
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -50,179 +57,13 @@ from clients.pltf_client import (
 )
 from clients.pltf_client.waits import StateWait, TargetWait
 from spec import errors as codec_errors
-from spec.codec import REPLIES, REQUESTS, TelegramDecoder, build, encode
+from spec.codec import REPLIES, REQUESTS, build, encode
 from spec.model import load_telegrams
 from spec.strategies import telegram_strategy
-from spec.telegram import Telegram, user_fields
-
-REPO = Path(__file__).resolve().parents[2]
-READY, RUNNING, BREAKED, NOT_INIT = (
-    OperationState.ST_OP_READY,
-    OperationState.ST_OP_RUNNING,
-    OperationState.ST_OP_BREAKED,
-    OperationState.ST_OP_NOT_INITIALIZED,
-)
-AUTOMATIC, VEL = MotionMode.MODE_MOTION_AUTOMATIC, MotionMode.MODE_MOTION_VEL
+from spec.telegram import user_fields
 
 
-# ---------------------------------------------------------------------------------------------- the fake
-def status_telegram(**values: Any) -> Telegram:
-    """A CMD_GET_STATUS reply: zeros and empty groups, then ``values``."""
-    fields: dict[str, Any] = {}
-    for f in user_fields(REPLIES.CMD_GET_STATUS.DEF.reply):
-        if f.is_group:
-            fields[f.name] = ()
-        else:
-            zero: Any = 0.0 if f.type == "DOUBLE" else 0
-            fields[f.name] = (zero,) * f.repeat if f.repeat else zero
-    fields.update(values)
-    return build("reply", "CMD_GET_STATUS", **fields)
-
-
-# (accepted in, leads to): the main transitions of guide 4.2 figure 2
-TRANSITIONS = {
-    "CMD_INIT_PLTF": ({"connected"}, READY),
-    "CMD_START": ({READY}, RUNNING),
-    "CMD_BREAK": ({RUNNING}, BREAKED),
-    "CMD_CONTINUE": ({BREAKED}, RUNNING),
-    "CMD_STOP": ({RUNNING, BREAKED}, READY),
-}
-
-
-class FakePlatform:
-    """A stand-in PlatformCtrl on 127.0.0.1: one client at a time, served by a thread.
-
-    A move in state Running and mode Automatic arrives after ``arrive_after`` status requests.
-    """
-
-    def __init__(self) -> None:
-        self.state: Any = NOT_INIT  # an OperationState, or "connected" (CAN up, not initialized)
-        self.mode = MotionMode.MODE_MOTION_NO
-        self.pose = (0, 0, 0)  # mm, mm, 1000*deg
-        self.target: tuple[int, int, int] | None = None
-        self.target_reached = False
-        self.planner = PlannerState.PLANNER_STANDBY
-        self.emergency = EmergencyState.ST_EM_NOT_ACTIVE
-        self.arrive_after = 3
-        self.received: list[Telegram] = []
-        self.reply_delay = 0.0  # seconds before each reply
-        self.reverse = False  # hold a reply back until the next one, then send both in reverse order
-        self.garbage: bytes | None = None  # sent instead of the next reply
-        self.hang_up_on: str | None = None  # close the connection on receiving this telegram
-        self.disconnects = 0
-        self._held: list[bytes] = []
-        self._listener = socket.create_server(("127.0.0.1", 0))
-        self.port: int = self._listener.getsockname()[1]
-        self._conns: list[socket.socket] = []
-        self._threads: list[threading.Thread] = []
-        self._stop = threading.Event()
-        self._accepter = threading.Thread(target=self._accept, daemon=True)
-        self._accepter.start()
-
-    def close(self) -> None:
-        self._stop.set()
-        for conn in list(self._conns):
-            with contextlib.suppress(OSError):
-                conn.shutdown(socket.SHUT_RDWR)
-        for t in [self._accepter, *self._threads]:
-            t.join(5)
-        self._listener.close()
-
-    def _accept(self) -> None:
-        self._listener.settimeout(0.05)  # closing a listener does not wake accept(): poll the stop flag
-        while not self._stop.is_set():
-            try:
-                conn, _ = self._listener.accept()
-            except TimeoutError:
-                continue
-            except OSError:
-                return
-            conn.settimeout(None)
-            self._conns.append(conn)
-            t = threading.Thread(target=self._serve, args=(conn,), daemon=True)
-            self._threads.append(t)
-            t.start()
-
-    def _serve(self, conn: socket.socket) -> None:
-        decoder = TelegramDecoder("request")
-        with conn:
-            while True:
-                try:
-                    data = conn.recv(65536)
-                except OSError:
-                    data = b""
-                if not data:
-                    break
-                decoder.receive_data(data)
-                if not self._handle_all(conn, decoder):
-                    break
-        self.disconnects += 1
-
-    def _handle_all(self, conn: socket.socket, decoder: TelegramDecoder) -> bool:
-        for t in decoder:
-            self.received.append(t)
-            if self.hang_up_on == t.NAME:
-                return False
-            reply = self.handle(t)
-            if reply is None:
-                continue
-            time.sleep(self.reply_delay)
-            frame = encode(reply)
-            if self.garbage is not None:
-                frame, self.garbage = self.garbage, None
-            if self.reverse:
-                self._held.append(frame)
-                if len(self._held) < 2:
-                    continue
-                frame, self._held = b"".join(reversed(self._held)), []
-            conn.sendall(frame)
-        return True
-
-    def handle(self, t: Telegram) -> Telegram | None:
-        name = t.NAME
-        if name == "CMD_CONNECT_TO_PLTF" and self.state == NOT_INIT:
-            self.state = "connected"
-        elif name in TRANSITIONS and self.state in TRANSITIONS[name][0]:
-            self.state = TRANSITIONS[name][1]
-        elif name == "CMD_SET_MODE" and self.state == READY:
-            self.mode = MotionMode(t.mode)
-        elif name in ("CMD_MOVE_ABS", "CMD_MOVE_REL") and self.state == RUNNING and self.mode == AUTOMATIC:
-            x, y, a = t.x, t.y, t.angle
-            if name == "CMD_MOVE_REL":
-                x, y, a = self.pose[0] + x, self.pose[1] + y, self.pose[2] + a
-            self.target, self.target_reached, self.countdown = (x, y, a), False, self.arrive_after
-        elif name == "CMD_GET_POSITION":
-            x, y, a = self.pose
-            return build("reply", "CMD_GET_POSITION", x=x, y=y, angle=math.radians(a / 1000), vel_trans=0.0,
-                         vel_rot=0.0)  # fmt: skip
-        elif name == "CMD_GET_STATUS":
-            if self.target is not None:
-                self.countdown -= 1
-                if self.countdown <= 0:
-                    self.pose, self.target, self.target_reached = self.target, None, True
-            reported = NOT_INIT if self.state == "connected" else self.state
-            x, y, a = self.pose
-            return status_telegram(
-                est_x=x, est_y=y, est_angle=a, cmd_x=x, cmd_y=y, cmd_angle=a, operation_state=int(reported),
-                motion_mode=int(self.mode), target_reached=int(self.target_reached), planner_state=int(self.planner),
-                emergency_state=int(self.emergency), initialized=int(reported != NOT_INIT), scan=((10, -20), (30, 40)),
-                ir_active=(0, 1, 0, 1),
-            )  # fmt: skip
-        return None
-
-    def names(self) -> list[str]:
-        return [t.NAME for t in self.received]
-
-
-@pytest.fixture
-def fake() -> Iterator[FakePlatform]:
-    platform = FakePlatform()
-    try:
-        yield platform
-    finally:
-        platform.close()
-
-
+# ---------------------------------------------------------------------------------------------- fixtures
 @pytest.fixture
 def client(fake: FakePlatform) -> Iterator[PlatformClient]:
     with PlatformClient("127.0.0.1", fake.port, timeout=2.0) as c:
@@ -297,18 +138,6 @@ def test_typed_reply_refuses_other_telegrams() -> None:
 
 
 # ---------------------------------------------------------------------------------------------- wire
-# field-evidence.md: frames captured from a 2017 C++ client (hex)
-CAPTURED = [
-    ("connect_to_pltf", (), "ff01fe02 00000001 00"),
-    ("stop", (), "ff01fe02 00000001 0e"),
-    ("continue_", (), "ff01fe02 00000001 0d"),
-    ("set_mode", (VEL,), "ff01fe02 00000005 0f 00000003"),
-    ("move_vel_wheel", (300, 300), "ff01fe02 00000009 17 0000012c 0000012c"),
-    ("move_vel_wheel", (-300, -300), "ff01fe02 00000009 17 fffffed4 fffffed4"),
-    ("move_rel", (1000, 0, 0), "ff01fe02 0000000d 16 000003e8 00000000 00000000"),
-]
-
-
 def test_methods_send_the_captured_frames(fake: FakePlatform) -> None:
     log: list[tuple[str, bytes]] = []
     with PlatformClient("127.0.0.1", fake.port, wire_log=lambda d, b: log.append((d, b))) as c:
@@ -604,49 +433,6 @@ def test_wait_judges_ignore_statuses_from_before_the_command() -> None:
 
 
 # ---------------------------------------------------------------------------------------------- live server
-STARTED = re.compile(r"server started at port (\d+)")
-
-
-class LiveServer:
-    """``python -m reference_server`` on two free ports (skips when the server is not there)."""
-
-    def __init__(self, data_dir: Path, log_path: Path) -> None:
-        self.log_path = log_path
-        self._log = log_path.open("wb")
-        cmd = [sys.executable, "-m", "reference_server", "--ports", "0,0", "--data-dir", str(data_dir),
-               "--time-scale", "20", "--seed", "1"]  # fmt: skip
-        self.proc = subprocess.Popen(cmd, cwd=REPO, stdout=self._log, stderr=subprocess.STDOUT)
-        deadline = time.monotonic() + 20
-        while len(ports := STARTED.findall(self.log())) < 2:
-            if self.proc.poll() is not None or time.monotonic() > deadline:
-                self.close()
-                raise AssertionError(f"reference server did not start:\n{self.log()}")
-            time.sleep(0.05)
-        self.ports = [int(p) for p in ports]
-
-    def log(self) -> str:
-        return self.log_path.read_text(encoding="utf-8", errors="replace")
-
-    def close(self) -> None:
-        if self.proc.poll() is None:
-            self.proc.terminate()
-            try:
-                self.proc.wait(10)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait()
-        self._log.close()
-
-
-@pytest.fixture
-def live(tmp_path: Path) -> Iterator[LiveServer]:
-    server = LiveServer(tmp_path / "data", tmp_path / "server.log")
-    try:
-        yield server
-    finally:
-        server.close()
-
-
 def test_live_bring_up_move_and_read_back(live: LiveServer) -> None:
     with PlatformClient("127.0.0.1", live.ports[1], timeout=5) as pltf:
         assert pltf.bring_up(timeout=10).is_ready

@@ -1,5 +1,5 @@
-"""The asyncio client (clients/pltf_client/aio.py) against the FakePlatform of test_client.py and, when it is
-there, the reference server. Each test runs its own event loop with ``asyncio.run`` (no plugin needed).
+"""The asyncio client (clients/pltf_client/aio.py) against the FakePlatform of client_fakes.py and the
+reference server. Each test runs its own event loop with ``asyncio.run`` (no plugin needed).
 """
 
 from __future__ import annotations
@@ -7,11 +7,11 @@ from __future__ import annotations
 import asyncio
 import math
 import time
-from collections.abc import Awaitable, Callable, Iterator
-from pathlib import Path
+from collections.abc import Awaitable, Callable
 from typing import Any
 
 import pytest
+from client_fakes import AUTOMATIC, CAPTURED, READY, RUNNING, FakePlatform, LiveServer
 
 from clients.pltf_client import (
     AsyncPlatformClient,
@@ -25,27 +25,6 @@ from clients.pltf_client import (
     Timeout,
 )
 from spec.codec import REQUESTS
-
-if __package__:  # tests/clients may become a package; the fake lives beside this file either way
-    from .test_client import (
-        AUTOMATIC,
-        CAPTURED,
-        READY,
-        RUNNING,
-        FakePlatform,
-        LiveServer,
-    )
-else:
-    from test_client import AUTOMATIC, CAPTURED, READY, RUNNING, FakePlatform, LiveServer
-
-
-@pytest.fixture
-def fake() -> Iterator[FakePlatform]:
-    platform = FakePlatform()
-    try:
-        yield platform
-    finally:
-        platform.close()
 
 
 def run_with_client(port: int, body: Callable[[AsyncPlatformClient], Awaitable[Any]], **options: Any) -> Any:
@@ -188,9 +167,7 @@ def test_connect_refused() -> None:
     asyncio.run(main())
 
 
-def test_live_async(tmp_path: Path) -> None:
-    server = LiveServer(tmp_path / "data", tmp_path / "server.log")
-
+def test_live_async(live: LiveServer) -> None:
     async def body(pltf: AsyncPlatformClient) -> float:
         await pltf.bring_up(timeout=10)
         await pltf.set_mode(MotionMode.MODE_MOTION_AUTOMATIC)
@@ -202,7 +179,4 @@ def test_live_async(tmp_path: Path) -> None:
         end, _ = await asyncio.gather(pltf.get_position(), pltf.get_status())
         return math.hypot(end.x_mm - start.x_mm, end.y_mm - start.y_mm)
 
-    try:
-        assert run_with_client(server.ports[0], body, timeout=5) == pytest.approx(300, abs=30)
-    finally:
-        server.close()
+    assert run_with_client(live.ports[0], body, timeout=5) == pytest.approx(300, abs=30)
