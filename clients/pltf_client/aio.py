@@ -22,7 +22,7 @@ from clients.pltf_client._enums import MotionMode, OperationState
 from clients.pltf_client._replies import Status
 from clients.pltf_client.base import DEFAULT_PORT, ClientBase, ClientOptions
 from clients.pltf_client.core import PendingReply
-from clients.pltf_client.errors import ConnectionClosed, InvalidArgument, ProtocolError, Timeout
+from clients.pltf_client.errors import ConnectionClosed, ProtocolError, Timeout
 from clients.pltf_client.waits import ConditionWait, Judge, ModeWait, StateWait, TargetWait
 from spec.codec import build
 from spec.telegram import Telegram
@@ -112,10 +112,8 @@ class AsyncPlatformClient(ClientBase, AsyncCommands):
         """
         if self._writer is None and not self.core.closed:
             raise ConnectionClosed("not connected: call open() or use `async with`")
-        frame, pending = self.core.send(telegram)
+        frame, pending = self._frame(telegram)
         assert self._writer is not None  # core.send raised if the connection was closed
-        if self.wire_log is not None:
-            self.wire_log("send", frame)
         try:
             self._writer.write(frame)
             async with self._drain_lock:
@@ -152,8 +150,7 @@ class AsyncPlatformClient(ClientBase, AsyncCommands):
             InvalidArgument: the telegram is not answered, or a field value cannot be encoded.
             Timeout, ConnectionClosed, ProtocolError: as ``wait_reply``.
         """
-        if not telegram.DEF.answered:
-            raise InvalidArgument(f"{telegram.NAME} is not answered (guide 6.1): use send()")
+        self._check_answered(telegram)
         pending = await self.send(telegram)
         assert pending is not None  # an answered request always gets one
         return await self.wait_reply(pending, timeout)
@@ -166,10 +163,8 @@ class AsyncPlatformClient(ClientBase, AsyncCommands):
                 except OSError as exc:
                     self.core.connection_lost(f"receiving failed: {exc!r}")
                     break
-                if self.wire_log is not None and data:
-                    self.wire_log("recv", data)
                 try:
-                    self.core.receive_data(data)
+                    self._received(data)
                 except ProtocolError:
                     break
                 finally:

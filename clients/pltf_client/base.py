@@ -10,8 +10,10 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TypedDict
 
-from clients.pltf_client.core import ClientCore
+from clients.pltf_client.core import ClientCore, PendingReply
+from clients.pltf_client.errors import InvalidArgument
 from spec.codec import DEFAULT_MAX_LENGTH
+from spec.telegram import Telegram
 
 DEFAULT_PORT = 10002  # guide 4.2: PlatformCtrl listens on 10000 and 10002; the field client's default
 DEFAULT_TIMEOUT = 5.0
@@ -61,6 +63,27 @@ class ClientBase:
 
     def _setup(self) -> None:
         """The transport's hook, run at the end of the constructor."""
+
+    def _frame(self, telegram: Telegram) -> tuple[bytes, PendingReply | None]:
+        """The core numbers and frames a request (InvalidArgument, ConnectionClosed); the wire log sees it."""
+        frame, pending = self.core.send(telegram)
+        if self.wire_log is not None:
+            self.wire_log("send", frame)
+        return frame, pending
+
+    def _received(self, data: bytes) -> None:
+        """A chunk read from the socket (``b""``: the peer closed) goes to the wire log, then the core.
+
+        Raises:
+            ProtocolError: the bytes break the protocol (the core is closed then).
+        """
+        if self.wire_log is not None and data:
+            self.wire_log("recv", data)
+        self.core.receive_data(data)
+
+    def _check_answered(self, telegram: Telegram) -> None:
+        if not telegram.DEF.answered:
+            raise InvalidArgument(f"{telegram.NAME} is not answered (guide 6.1): use send()")
 
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.host}:{self.port}{' closed' if self.closed else ''}>"

@@ -22,7 +22,7 @@ from clients.pltf_client._enums import MotionMode, OperationState
 from clients.pltf_client._replies import Status
 from clients.pltf_client.base import DEFAULT_PORT, DEFAULT_TIMEOUT, ClientBase, WireLog
 from clients.pltf_client.core import PendingReply
-from clients.pltf_client.errors import ConnectionClosed, InvalidArgument, ProtocolError, Timeout
+from clients.pltf_client.errors import ConnectionClosed, ProtocolError, Timeout
 from clients.pltf_client.waits import ConditionWait, Judge, ModeWait, StateWait, TargetWait
 from spec.codec import build
 from spec.telegram import Telegram
@@ -82,9 +82,7 @@ class PlatformClient(ClientBase, Commands):
             ConnectionClosed: the connection is closed or sending failed.
         """
         with self._lock:
-            frame, pending = self.core.send(telegram)
-            if self.wire_log is not None:
-                self.wire_log("send", frame)
+            frame, pending = self._frame(telegram)
             try:
                 self._sock.settimeout(self.timeout)
                 self._sock.sendall(frame)
@@ -118,8 +116,7 @@ class PlatformClient(ClientBase, Commands):
             InvalidArgument: the telegram is not answered, or a field value cannot be encoded.
             Timeout, ConnectionClosed, ProtocolError: as ``wait_reply``.
         """
-        if not telegram.DEF.answered:
-            raise InvalidArgument(f"{telegram.NAME} is not answered (guide 6.1): use send()")
+        self._check_answered(telegram)
         pending = self.send(telegram)
         assert pending is not None  # an answered request always gets one
         return self.wait_reply(pending, timeout)
@@ -133,10 +130,8 @@ class PlatformClient(ClientBase, Commands):
         except OSError as exc:
             self._lost(f"receiving failed: {exc}")
             return
-        if self.wire_log is not None and data:
-            self.wire_log("recv", data)
         try:
-            self.core.receive_data(data)
+            self._received(data)
         except ProtocolError:
             self.close()
             raise
