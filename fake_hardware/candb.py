@@ -111,7 +111,8 @@ def cycle_time(msg: Message) -> float | None:
 class FrameCodec:
     """One message's signals as (name, start bit, mask, sign bit, conversion, min, max), Intel byte order."""
 
-    __slots__ = ("fields", "frame_id", "length")
+    __slots__ = ("_decoded", "_encoded", "fields", "frame_id", "length", "names")
+    CACHE = 256  # frames remembered per message each way: status and analogue frames repeat, counters do not
 
     def __init__(self, msg: Message) -> None:
         if any(s.byte_order != "little_endian" or s.is_float for s in msg.signals) or msg.is_multiplexed():
@@ -124,9 +125,31 @@ class FrameCodec:
              float(s.maximum) if s.maximum is not None else math.inf)
             for s in msg.signals
         )  # fmt: skip
+        self.names = tuple(f[0] for f in self.fields)
+        self._encoded: dict[tuple[Any, ...], bytes] = {}
+        self._decoded: dict[bytes, dict[str, Any]] = {}
 
     def encode(self, signals: Signals) -> bytes:
         """Physical values (clamped to each signal's range) -> the frame's bytes; every signal must be given."""
+        key = tuple([signals[n] for n in self.names])
+        data = self._encoded.get(key)
+        if data is None:
+            if len(self._encoded) >= self.CACHE:
+                self._encoded.clear()
+            data = self._encoded[key] = self._encode(signals)
+        return data
+
+    def decode(self, data: bytes | bytearray) -> dict[str, Any]:
+        """The physical values of a frame (a fresh dict: callers may keep or change it)."""
+        key = bytes(data[: self.length])
+        out = self._decoded.get(key)
+        if out is None:
+            if len(self._decoded) >= self.CACHE:
+                self._decoded.clear()
+            out = self._decoded[key] = self._decode(key)
+        return dict(out)
+
+    def _encode(self, signals: Signals) -> bytes:
         word = 0
         for name, start, mask, _, conversion, lo, hi in self.fields:
             value = signals[name]
@@ -134,8 +157,8 @@ class FrameCodec:
             word |= (int(conversion.numeric_scaled_to_raw(value)) & mask) << start
         return word.to_bytes(self.length, "little")
 
-    def decode(self, data: bytes | bytearray) -> dict[str, Any]:
-        word = int.from_bytes(data[: self.length], "little")
+    def _decode(self, data: bytes) -> dict[str, Any]:
+        word = int.from_bytes(data, "little")
         out: dict[str, Any] = {}
         for name, start, mask, sign, conversion, _, _ in self.fields:
             raw = (word >> start) & mask

@@ -12,7 +12,7 @@ Rules:
 from __future__ import annotations
 
 import json
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
 
@@ -185,6 +185,7 @@ COMMANDS: dict[str, tuple[Callable[[list[str]], Action], str]] = {
     "nodes": (_query("nodes"), "nodes"),
     "faults": (_query("faults"), "faults"),
     "status": (_query("status"), "status"),
+    "pose": (_query("pose"), "pose"),
     "unplug": (_unplug, "unplug NODE"),
     "replug": (_replug, "replug NODE"),
     "estop": (_estop, "estop press|release"),
@@ -228,9 +229,15 @@ def parse(line: str, now: float) -> tuple[Action, float | None, float | None]:
     return action, when, duration
 
 
+Query = Callable[[float], dict[str, Any]]
+
+
 class ControlChannel:
-    def __init__(self, hw: Hardware) -> None:
+    """``extra``: queries the owner answers (the server's ``pose``: true and estimated pose)."""
+
+    def __init__(self, hw: Hardware, extra: Mapping[str, Query] | None = None) -> None:
         self.hw = hw
+        self.extra = dict(extra or {})
 
     def handle_line(self, line: str, now: float) -> dict[str, Any]:
         try:
@@ -242,6 +249,10 @@ class ControlChannel:
     def _dispatch(self, action: Action, when: float | None, duration: float | None, now: float) -> dict[str, Any]:
         faults = self.hw.faults
         if action.verb == "query":
+            if action.query in self.extra:
+                return self.extra[action.query](now)
+            if action.query not in QUERIES:
+                raise CommandError(f"{action.query}: not available on this channel")
             return QUERIES[action.query](self.hw, now)
         if action.verb == "clear-all":
             if when is not None:

@@ -87,7 +87,7 @@ def encode_telegram(
 def _distances(ranges_mm: Sequence[float | None]) -> bytes:
     """The 541 distance words (cm, little-endian), vectorised: None and NaN become the maximum."""
     n = len(ranges_mm)
-    if n == 0 or (ranges_mm[0] is None and all(r is None for r in ranges_mm)):
+    if n == 0 or (ranges_mm[0] is None and list(ranges_mm).count(None) == n):
         return _NO_ECHO
     a = np.full(POINTS, np.inf)
     a[: min(n, POINTS)] = np.asarray(ranges_mm[:POINTS], dtype=float)  # None -> NaN
@@ -154,8 +154,8 @@ class ScanDecoder:
             self.lost += (number - self._last_number - 1) & 0xFFFF
         self._last_number = number
         self.telegrams += 1
-        ranges = ((raw & MAX_CM).astype(np.int64) * 10).tolist()
-        self._scans.append(Scan(0.0, scan, number, tuple(ranges), tuple((raw >> 13).tolist())))
+        ranges = tuple(((raw & MAX_CM).astype(np.int32) * 10).tolist())
+        self._scans.append(Scan(0.0, scan, number, ranges, tuple((raw >> 13).tolist())))
 
 
 class Writable(Protocol):

@@ -2,7 +2,9 @@
 
 Rules: options are parsed here, the data dir is opened (and seeded from the repository's fixtures when it is
 empty), then reference_server.network runs until CMD_EXIT or a signal. User errors print one line on stderr
-and exit 2.
+and exit 2. The fake hardware (reference_server/hardware_link.py) is on unless ``--no-hardware``; the fault-control
+channel (reference_server/control.py) listens on 127.0.0.1 only when ``--control-port`` is given, started through
+network's ``ready`` callback.
 """
 
 from __future__ import annotations
@@ -12,7 +14,8 @@ import logging
 import sys
 from collections.abc import Callable, Sequence
 
-from reference_server import network
+from reference_server import hardware_link, network
+from reference_server.control import start_control
 from reference_server.kinematics import Drive
 from reference_server.motion_api import MotionFactory
 from reference_server.platform import Platform
@@ -42,6 +45,13 @@ def parse_ports(text: str) -> list[int]:
     if not ports or any(not 0 <= p <= 65535 for p in ports):
         raise argparse.ArgumentTypeError(f"ports must be 0..65535 (0: any free port), got {text!r}")
     return ports
+
+
+def parse_port(text: str) -> int:
+    ports = parse_ports(text)
+    if len(ports) != 1:
+        raise argparse.ArgumentTypeError(f"expected one port number, got {text!r}")
+    return ports[0]
 
 
 def positive_float(text: str) -> float:
@@ -75,6 +85,27 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         default="world",
         help="motion model: world (pymunk body, laser, localization, planner; default) or ideal (wheels only)",
     )
+    p.add_argument(
+        "--no-hardware",
+        action="store_true",
+        help="no fake hardware: ideal wheels, no CAN boards (every board ABSENT), no laser scanner",
+    )
+    p.add_argument(
+        "--can-interface",
+        default="virtual",
+        help="python-can interface of the fake boards (default virtual: in-process; socketcan for vcan0)",
+    )
+    p.add_argument(
+        "--can-channel",
+        default=None,
+        help="CAN channel (default: a virtual channel of this server's own; e.g. vcan0 with socketcan)",
+    )
+    p.add_argument(
+        "--control-port",
+        type=parse_port,
+        default=None,
+        help="TCP port of the fault-control channel on 127.0.0.1 (0 = any free port; default: off)",
+    )
     p.add_argument("--seed", type=int, default=0, help="seed of the simulation's random numbers (default 0)")
     p.add_argument(
         "--log-level",
@@ -94,14 +125,28 @@ def run(args: argparse.Namespace) -> int:
     seeded = storage.seed_from_fixtures()
     if seeded:
         log.info("data dir %s was empty: seeded %d files from fixtures", storage.root, len(seeded))
-    platform = Platform(storage, seed=args.seed, motion=MOTION[args.motion](args.seed), program=program_factory)
+    if args.no_hardware and args.control_port is not None:
+        print("pltf: error: --control-port needs the fake hardware (drop --no-hardware)", file=sys.stderr)
+        return 2
+    hardware = None if args.no_hardware else hardware_link.factory(args.can_interface, args.can_channel)
     try:
-        return network.run(platform, args.host, args.ports, args.time_scale)
+        platform = Platform(storage, seed=args.seed, motion=MOTION[args.motion](args.seed), program=program_factory,
+                            hardware=hardware)  # fmt: skip
+    except (OSError, ValueError, ImportError) as exc:  # python-can: an unknown interface, a missing channel
+        print(f"pltf: error: CAN interface {args.can_interface} {args.can_channel or ''}: {exc}", file=sys.stderr)
+        return 2
+    options: dict[str, object] = {}
+    if args.control_port is not None:
+        options["ready"] = start_control(platform, args.control_port)
+    try:
+        return network.run(platform, args.host, args.ports, args.time_scale, **options)
     except OSError as exc:
         print(f"pltf: error: cannot listen on {args.host} {args.ports}: {exc.strerror or exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:  # a signal before the handlers were installed
         return 0
+    finally:
+        platform.close()
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -10,10 +10,15 @@ Rules:
 - ``tick(now)`` advances time-based behaviour once per control period: the emergency reset, the program, the
   motion (reference_server/motion_api.py: control, physics, odometry); ``now`` is simulated seconds and comes
   from the caller, like every source of time and randomness here.
-- The platform owns two plug-ins built by factories: ``motion`` (a ``motion_api.MotionModel``, default
-  ``kinematics.Drive``) and ``program`` (a ``program_api.Program``, default ``NoProgram``).
-- Hardware that does not exist (camera, head drive, audio) is reported absent, never invented: the commands
-  for it are accepted where the state chart allows them and logged as without effect.
+- The platform owns three plug-ins built by factories: ``motion`` (a ``motion_api.MotionModel``, default
+  ``kinematics.Drive``), ``program`` (a ``program_api.Program``, default ``NoProgram``) and ``hardware`` (a
+  ``hardware_link.HardwareLink``: the CAN boards and the laser scanner of fake_hardware/; default none).
+- With hardware, ``tick`` runs the control period through the boards (hardware_link.py) and maps their
+  events to the state chart: emergency stop, drive fault, the end of a self test. A command whose hardware
+  part is not done on return answers ``pending`` and its transition fires later (``awaiting``).
+- Hardware that does not exist (camera, head drive, audio; the CAN boards without a hardware plug-in) is
+  reported absent, never invented: the commands for it are accepted where the state chart allows them and
+  logged as without effect.
 - Log lines go to the "pltf.server" logger and to the protocol queue of CMD_GET_DEBUG_DATA (``log``).
 """
 
@@ -28,10 +33,11 @@ from reference_server.commands.data import DOCUMENT_OF
 from reference_server.commands.registry import ACCEPTED
 from reference_server.documents import Documents
 from reference_server.enums import MotionMode, PlannerState
+from reference_server.hardware_link import HardwareFactory, HardwareLink, react
 from reference_server.kinematics import Drive, Frame, Roadmap
 from reference_server.motion_api import MotionFactory, MotionModel, WorldFeatures, advance_ideal
 from reference_server.program_api import Program, ProgramFactory, no_program
-from reference_server.state_chart import State, StateChart
+from reference_server.state_chart import EmergencyState, State, StateChart
 from reference_server.storage import Storage, StorageError
 from spec.documents import DocumentError, DocumentKind
 from spec.parameters import ParameterStore
@@ -52,6 +58,7 @@ class Platform:
         *,
         motion: MotionFactory | None = None,
         program: ProgramFactory | None = None,
+        hardware: HardwareFactory | None = None,
     ) -> None:
         self.storage = data_dir
         self.seed = seed
@@ -73,6 +80,9 @@ class Platform:
         self.world: WorldFeatures | None = self.motion if isinstance(self.motion, WorldFeatures) else None
         self._world_planner = PlannerState.PLANNER_STANDBY
         self.program: Program = (program or no_program)(self)
+        self.awaiting: str | None = None  # the command whose transition waits for the hardware
+        self.drive_fault: str | None = None  # erratum E-HW-025
+        self.hardware: HardwareLink | None = None if hardware is None else hardware(self)
 
     @property
     def drive(self) -> MotionModel:
@@ -105,7 +115,7 @@ class Platform:
         if handler is None:  # pragma: no cover - a test checks every telegram has a handler
             return self._ignore(f"command {name} not implemented")
         outcome = handler(self, telegram, now)
-        if outcome.refused is None and outcome.pending is None:
+        if outcome.refused is None and outcome.pending is None and outcome.failed is None:
             self.fire(name)
         return outcome
 
@@ -128,7 +138,12 @@ class Platform:
         if self.chart.tick(now):
             self.log(logging.INFO, "emergency stop reset complete")
         self.program.tick(now)
-        if dt > 0.0:
+        if self.hardware is not None:
+            lines, events = self.hardware.advance(now, dt)
+            for line in lines:
+                self.log(logging.INFO, "%s", line)
+            react(self, self.hardware, events, now)
+        elif dt > 0.0:
             for event in advance_ideal(self.motion, now, dt):
                 self.log(logging.INFO, "%s", event)
         if self.world is not None and self.world.planner_state != self._world_planner:
@@ -150,6 +165,27 @@ class Platform:
         elif self.chart.release_emergency(now):
             self.log(logging.INFO, "emergency stop released: safety system reset")
 
+    @property
+    def emergency_pressed(self) -> bool:
+        return bool(self.chart.emergency == EmergencyState.ST_EM_ACTIVE)
+
+    def set_drive_fault(self, reason: str | None, now: float) -> None:
+        """A drive fault starts, changes its reason or ends (erratum E-HW-025: the secure state, no motion until
+        the cause is gone and a new CMD_START)."""
+        old, self.drive_fault = self.drive_fault, reason
+        if reason == old:
+            return
+        if reason is None:
+            self.chart.clear_drive_fault()
+            self.log(logging.INFO, "drive fault cleared (was: %s)", old)
+            return
+        if old is None:
+            self.leave_operation("drive fault", now)
+            _, new = self.chart.enter_drive_fault()
+            self.log(logging.WARNING, "drive fault: %s: motion halted, system state: %s", reason, new.value)
+        else:
+            self.log(logging.WARNING, "drive fault: %s", reason)
+
     def leave_operation(self, why: str, now: float) -> None:
         """Halt the motion at once; a running program ends (the platform leaves Running/Breaked)."""
         self.motion.halt()
@@ -159,9 +195,14 @@ class Platform:
 
     def shutdown_hardware(self, now: float) -> None:
         """CMD_SHUTDOWN_PLTF / CMD_EXIT: the CAN bus goes down."""
+        self.awaiting = None
+        if self.hardware is not None:
+            self.hardware.shutdown(now)
 
     def close(self) -> None:
-        """Release what the platform holds outside Python objects."""
+        """Release what the platform holds outside Python objects (the CAN buses, the serial link)."""
+        if self.hardware is not None:
+            self.hardware.close()
 
     # ---- helpers for the command modules (reference_server/commands/) and the plug-ins
     def log(self, level: int, msg: str, *args: object) -> None:

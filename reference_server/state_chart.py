@@ -9,6 +9,10 @@ Rules:
   ACTIVE the commands marked ``blocked_by_emergency`` are refused. Pressing it brings Running/Breaked back
   to Ready (the platform model halts the motion); releasing it (= the safety system has been reset) reports
   ST_EM_RESET for ``EMERGENCY_RESET_TIME`` simulated seconds, then ST_EM_NOT_ACTIVE.
+- A drive fault (the fake hardware's motors lost, absent or over-temperature, the CAN interface bus-off;
+  erratum E-HW-025) is a second orthogonal flag with the same effect as the emergency stop: Running/Breaked
+  fall back to Ready and the ``blocked_by_emergency`` commands are refused while it lasts; when its cause is
+  gone the platform stays in Ready until a new CMD_START.
 - Sans-IO: time comes in as ``now`` (simulated seconds).
 """
 
@@ -146,6 +150,7 @@ class StateChart:
         self.state = State.NOT_CONNECTED
         self.emergency: int = EmergencyState.ST_EM_NOT_ACTIVE
         self._reset_until: float | None = None
+        self.drive_fault = False
 
     @property
     def operation_state(self) -> int:
@@ -164,6 +169,8 @@ class StateChart:
             return f"command {name} not allowed in state {self.state.value}"
         if rule.blocked_by_emergency and self.emergency == EmergencyState.ST_EM_ACTIVE:
             return f"command {name} not allowed while the emergency stop is active"
+        if rule.blocked_by_emergency and self.drive_fault:
+            return f"command {name} not allowed during a drive fault"
         return None
 
     def fire(self, name: str) -> tuple[State, State]:
@@ -187,6 +194,17 @@ class StateChart:
         if self.state in (State.RUNNING, State.BREAKED):
             self.state = State.READY
         return old, self.state
+
+    def enter_drive_fault(self) -> tuple[State, State]:
+        """A drive fault (erratum E-HW-025): the secure state, as for the emergency stop."""
+        old = self.state
+        self.drive_fault = True
+        if self.state in (State.RUNNING, State.BREAKED):
+            self.state = State.READY
+        return old, self.state
+
+    def clear_drive_fault(self) -> None:
+        self.drive_fault = False
 
     def release_emergency(self, now: float) -> bool:
         """The safety system has been reset; False when the emergency stop was not active."""

@@ -1,9 +1,12 @@
 """The reply telegrams of guide 6.4, filled from the live platform model.
 
 Rules:
-- Every value comes from the model; a board or sensor that does not exist yet reports ``ABSENT`` in its
-  status field and 0 in all its readings, and empty "n times" groups (no scan, no reflectors, ...). The
-  board issues replace these sections, nothing else.
+- Every value comes from the model; a board or sensor that does not exist reports ``ABSENT`` in its
+  status field and 0 in all its readings, and empty "n times" groups (no scan, no reflectors, ...).
+- With the hardware plug-in (reference_server/hardware_link.py) the board sections come from the CAN
+  controller's ``BoardStatus`` (fake_hardware/board_status.py; a board not connected stays ABSENT), and the
+  observed scan from the serial laser scanner: while it is silent the scan and the features seen in it are
+  empty (erratum E-HW-026).
 - Units on the wire are the guide's: mm and [1000*deg] as INT in GET_STATUS, rad and rad/s as DOUBLE in
   GET_POSITION (erratum E-REP-012), 1/1000 rad/s for the status' rotation velocity (erratum E-REP-005).
 """
@@ -81,6 +84,13 @@ def status_reply(p: Platform, now: float) -> Telegram:
     )  # fmt: skip
     if p.world is not None:  # localization, observations, collision (errata E-MOT-003, E-MOT-004, E-MOT-006)
         fields.update(p.world.status_fields())
+    if p.hardware is not None:
+        fields.update(p.hardware.board_fields())
+        scan = p.hardware.scan_points(float(getattr(p.motion, "front", 0.0)))
+        if scan == ():  # the scanner is silent: nothing the laser sees is reported (erratum E-HW-026)
+            fields.update(scan=(), reflectors=(), lines=(), circles=(), corners=())
+        elif scan is not None and p.world is not None:
+            fields["scan"] = scan
     return reply("CMD_GET_STATUS", **fields)
 
 

@@ -1,56 +1,160 @@
-"""CAN Communication Commands (guide 6.3): connect, shutdown, init, the boards' commands, raw CAN."""
+"""CAN Communication Commands (guide 6.3): connect, shutdown, init, the boards' commands, raw CAN.
+
+Rules: with a hardware plug-in (reference_server/hardware_link.py) every command goes over the CAN bus to the
+boards of fake_hardware/ (errata E-HW-003 ff.); without one the platform has no CAN nodes: the board commands
+are accepted, logged and without effect, CMD_GET_CAN_MESSAGES answers an empty list. A command for a board
+that is not connected sends nothing and is logged (erratum E-HW-024).
+"""
 
 from __future__ import annotations
 
 import logging
 from typing import TYPE_CHECKING, Any
 
+from fake_hardware import ControllerError, Node
 from reference_server import status
 from reference_server.commands.registry import ACCEPTED, Outcome, handles
 
 if TYPE_CHECKING:
+    from reference_server.hardware_link import HardwareLink
     from reference_server.platform import Platform
+
+
+def _absent(p: Platform, t: Any, node: Node) -> Outcome:
+    return p._ignore(f"{t.NAME}: {node.name} is not connected, nothing sent")
 
 
 @handles("CMD_CONNECT_TO_PLTF")
 def connect(p: Platform, t: Any, now: float) -> Outcome:
-    p.log(logging.INFO, "CAN bus connected (simulated platform: no CAN nodes answer)")
+    # guide 6.3: "causes an initialization of the CAN-field bus and a test of the CAN communication to the
+    # several CAN nodes" - the bus is up at once; the probe's result is logged when it is done (E-HW-003)
+    if p.hardware is None:
+        p.log(logging.INFO, "CAN bus connected (simulated platform: no CAN nodes answer)")
+        return ACCEPTED
+    txn = p.hardware.connect(now)
+    p.log(logging.INFO, f"CAN bus connected: probing {len(txn.pending) + len(txn.answers)} CAN nodes")
     return ACCEPTED
 
 
 @handles("CMD_SHUTDOWN_PLTF")
 def shutdown(p: Platform, t: Any, now: float) -> Outcome:
+    # guide 6.3: "Used to shutdown the CAN communication"
     p.leave_operation("CAN shutdown", now)
+    p.shutdown_hardware(now)
     p.log(logging.INFO, "CAN bus shut down, motion stopped")
     return ACCEPTED
 
 
 @handles("CMD_INIT_PLTF")
 def init(p: Platform, t: Any, now: float) -> Outcome:
-    p.log(logging.INFO, "platform initialized, self test passed")
+    # guide 6.3: "The command initializes all CAN-hardware components and executes a platform self test."
+    if p.hardware is None:
+        p.log(logging.INFO, "platform initialized, self test passed")
+        return ACCEPTED
+    txn = p.hardware.init(now)
+    if txn is None or not txn.done:  # erratum E-HW-024: the transition fires when the self test is done
+        p.awaiting = t.NAME
+        what = "waits for the CAN probe" if txn is None else "waits for the boards' answers"
+        p.log(logging.INFO, f"self test {what}")
+        return Outcome(pending=f"self test {what}")
+    if not txn.ok:  # erratum E-HW-005: the platform stays not initialized
+        failed = ", ".join(f"{r.node.name} 0x{r.errors:X}" for r in txn.results.values() if not r.passed)
+        p.log(logging.WARNING, f"platform not initialized: the self test failed ({failed})")
+        return Outcome(failed=f"self test failed: {failed}")
+    return ACCEPTED
+
+
+def _hardware_command(p: Platform, t: Any, node: Node, send: Any, text: str) -> Outcome:
+    """Send a board command over the bus; refused when the controller rejects its arguments."""
+    hw: HardwareLink | None = p.hardware
+    if hw is None:
+        return p._ignore(f"{t.NAME}: the board is not present on the CAN bus")
+    if not hw.connected(node):
+        return _absent(p, t, node)
+    try:
+        send()
+    except ControllerError as exc:
+        return p._refuse(f"{t.NAME} refused: {exc}")
+    p.log(logging.INFO, text)
     return ACCEPTED
 
 
 @handles("CMD_SET_BRAKE")
 def set_brake(p: Platform, t: Any, now: float) -> Outcome:
-    return p._ignore(f"brake {t.state} set for motor {t.motor}: no motor board on the CAN bus")
+    # guide 6.3 CMD_SET_BRAKE: "0: Brake enabled 1: Brake disabled" (erratum E-CMD-015)
+    if p.hardware is None:
+        return p._ignore(f"brake {t.state} set for motor {t.motor}: no motor board on the CAN bus")
+    if t.motor not in (Node.MOTOR_RIGHT, Node.MOTOR_LEFT):
+        return p._refuse(f"{t.NAME} refused: no motor {t.motor}")
+    c = p.hardware.controller
+    word = "released" if t.state == 1 else "engaged"
+    return _hardware_command(p, t, Node(t.motor), lambda: c.set_brake(t.motor, t.state == 1, now),
+                             f"brake of motor {t.motor} {word}")  # fmt: skip
 
 
-@handles("CMD_SET_DIGOUT", "CMD_START_ULTRASONIC", "CMD_STOP_ULTRASONIC", "CMD_SEND_CAN_MESSAGE")
-def absent_board(p: Platform, t: Any, now: float) -> Outcome:
-    return p._ignore(f"{t.NAME}: the board is not present on the CAN bus")
+@handles("CMD_SET_DIGOUT")
+def set_digout(p: Platform, t: Any, now: float) -> Outcome:
+    # guide 6.3 CMD_SET_DIGOUT: "Board Type: TYPE_IOBOARD = 0, TYPE_RELAYBOARD = 1" (errata E-CMD-004, E-HW-010)
+    node = Node.IOBOARD if t.board == 0 else Node.RELAYBOARD
+    c = p.hardware.controller if p.hardware is not None else None
+    if c is not None and t.board not in (0, 1):
+        return p._refuse(f"{t.NAME} refused: no board type {t.board}")
+    return _hardware_command(
+        p, t, node, lambda: c.set_digout(t.board, t.channel, bool(t.value), now) if c else None,
+        f"digital out: {node.name} channel {t.channel} = {t.value}",
+    )  # fmt: skip
+
+
+@handles("CMD_START_ULTRASONIC")
+def start_ultrasonic(p: Platform, t: Any, now: float) -> Outcome:
+    # guide 6.3: "Start the ultrasonic sensor measurement" - a bit mask of the active sensors (E-CMD-005)
+    c = p.hardware.controller if p.hardware is not None else None
+    return _hardware_command(p, t, Node.USBOARD, lambda: c.start_ultrasonic(t.active_channels, now) if c else None,
+                             f"ultrasonic measurement started, sensors 0x{t.active_channels:04X}")  # fmt: skip
+
+
+@handles("CMD_STOP_ULTRASONIC")
+def stop_ultrasonic(p: Platform, t: Any, now: float) -> Outcome:
+    c = p.hardware.controller if p.hardware is not None else None
+    return _hardware_command(p, t, Node.USBOARD, lambda: c.stop_ultrasonic(now) if c else None,
+                             "ultrasonic measurement stopped")  # fmt: skip
+
+
+@handles("CMD_SEND_CAN_MESSAGE")
+def send_can_message(p: Platform, t: Any, now: float) -> Outcome:
+    # guide 6.3: "Send a CAN-Message" - a standard frame with 8 data bytes (erratum E-HW-013)
+    if p.hardware is None:
+        return p._ignore(f"{t.NAME}: the board is not present on the CAN bus")
+    data = bytes(t.data)
+    try:
+        sent = p.hardware.controller.send_can_message(t.can_id, data, now)
+    except ControllerError as exc:
+        return p._refuse(f"{t.NAME} refused: {exc}")
+    p.log(logging.INFO, f"CAN message 0x{t.can_id:03X} [{data.hex(' ')}] {'sent' if sent else 'lost'}")
+    return ACCEPTED
 
 
 @handles("CMD_ADD_CAN_LISTENING_ID", "CMD_REMOVE_CAN_LISTENING_ID")
 def can_listen(p: Platform, t: Any, now: float) -> Outcome:
-    if t.NAME == "CMD_ADD_CAN_LISTENING_ID":
+    # guide 6.3: "Add a CAN-ID to the receive list. All messages with CAN-IDs of the list will be buffered"
+    add = t.NAME == "CMD_ADD_CAN_LISTENING_ID"
+    if add:
         p.can_listening.add(t.can_id)
     else:
         p.can_listening.discard(t.can_id)
-    p.log(logging.INFO, f"CAN listening ids: {sorted(p.can_listening)}")
+    if p.hardware is not None:
+        c = p.hardware.controller
+        (c.add_listening_id if add else c.remove_listening_id)(t.can_id)
+    p.log(logging.INFO, f"CAN listening id 0x{t.can_id:03X} {'added' if add else 'removed'} "
+                        f"({len(p.can_listening)} ids)")  # fmt: skip
     return ACCEPTED
 
 
 @handles("CMD_GET_CAN_MESSAGES")
 def get_can_messages(p: Platform, t: Any, now: float) -> Outcome:
-    return Outcome(reply=status.reply("CMD_GET_CAN_MESSAGES", messages=()))  # no CAN node sends anything yet
+    # guide 6.3: "0: The message is kept, 1: The received message will be deleted" (errata E-REP-001, E-HW-013)
+    if p.hardware is None:
+        return Outcome(reply=status.reply("CMD_GET_CAN_MESSAGES", messages=()))  # no CAN node sends anything
+    records = p.hardware.controller.get_can_messages(delete=t.delete == 1)
+    messages = tuple((r.timestamp, r.can_id, tuple(r.data)) for r in records)
+    return Outcome(reply=status.reply("CMD_GET_CAN_MESSAGES", messages=messages))

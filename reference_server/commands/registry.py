@@ -5,8 +5,8 @@ Rules:
   reference_server/commands/ registers its handlers with ``@handles(...)`` at import; a name registered twice
   is a bug (``handles`` raises), so a replacement must say so with ``replace=True``.
 - ``Platform.handle`` calls a handler only after the state chart allowed the command, and fires the chart's
-  transition after it unless the outcome is ``refused`` or ``pending`` (the transition then follows when the
-  hardware finished, e.g. the CAN probe of CMD_CONNECT_TO_PLTF).
+  transition after it unless the outcome is ``refused``, ``failed`` or ``pending`` (the transition then follows
+  when the hardware finished, e.g. the self test of CMD_INIT_PLTF; ``Platform.awaiting`` names the command).
 """
 
 from __future__ import annotations
@@ -31,6 +31,7 @@ class Outcome:
     refused: str | None = None  # not allowed now, or invalid: nothing changed
     ignored: str | None = None  # allowed, but without effect (motion mode, absent hardware, unused command)
     pending: str | None = None  # accepted; the state transition follows when the hardware is done
+    failed: str | None = None  # carried out, but the hardware reported a failure: no state transition
 
 
 ACCEPTED = Outcome()

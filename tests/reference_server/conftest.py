@@ -3,24 +3,36 @@
 The end-to-end tests talk to a real server over real TCP on ephemeral ports. ``ServerThread`` runs the
 asyncio shell (reference_server.network.serve) in its own thread and event loop; the tests that need a
 separate process (exit status, signals, SIGKILL) start ``python -m reference_server`` instead.
+``ServerThread(..., hardware=factory)`` gives the platform the fake hardware (reference_server.hardware_link);
+``control=True`` starts the fault-control channel on 127.0.0.1 too (``control_port``).
 """
 
 from __future__ import annotations
 
 import asyncio
+import json
 import re
 import socket
 import subprocess
 import sys
 import threading
-from collections.abc import Iterator
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
+import can
 import pytest
 
+from fake_hardware import candb
+from reference_server import hardware_link
+from reference_server.control import ControlServer, start_control
+from reference_server.hardware_link import HardwareFactory
+from reference_server.motion_api import MotionFactory
 from reference_server.network import Server, serve
 from reference_server.platform import Platform
+from reference_server.program_api import ProgramFactory
 from reference_server.storage import Storage
 from spec.codec import REQUESTS, TelegramDecoder, encode
 from spec.telegram import Telegram
@@ -32,12 +44,24 @@ TIME_SCALE = 20.0
 class ServerThread:
     """The real network shell with its own event loop in a daemon thread."""
 
-    def __init__(self, data_dir: Path, time_scale: float = TIME_SCALE, **options: Any) -> None:
+    def __init__(
+        self,
+        data_dir: Path,
+        time_scale: float = TIME_SCALE,
+        *,
+        hardware: HardwareFactory | None = None,
+        motion: MotionFactory | None = None,
+        program: ProgramFactory | None = None,
+        control: bool = False,
+        **options: Any,
+    ) -> None:
         storage = Storage(data_dir)
         storage.seed_from_fixtures()
-        self.platform = Platform(storage, seed=1)
+        self.platform = Platform(storage, seed=1, motion=motion, program=program, hardware=hardware)
         self.time_scale = time_scale
         self.options = options
+        self.control = control
+        self.control_server: ControlServer | None = None
         self.server: Server | None = None
         self.loop: asyncio.AbstractEventLoop | None = None
         self.exit_code: int | None = None
@@ -47,6 +71,8 @@ class ServerThread:
     def _main(self) -> None:
         def ready(server: Server) -> None:
             self.server, self.loop = server, asyncio.get_running_loop()
+            if self.control:
+                start_control(self.platform, 0, self._control_started)(server)
             self._ready.set()
 
         self.exit_code = asyncio.run(
@@ -54,6 +80,14 @@ class ServerThread:
                   **self.options)
         )  # fmt: skip
         self._ready.set()
+
+    def _control_started(self, control: ControlServer) -> None:
+        self.control_server = control
+
+    @property
+    def control_port(self) -> int:
+        assert self.control_server is not None, "ServerThread(control=True) starts the control channel"
+        return self.control_server.port
 
     def start(self) -> ServerThread:
         self._thread.start()
@@ -79,6 +113,7 @@ class ServerThread:
             self.loop.call_soon_threadsafe(self.server.stop)  # type: ignore[union-attr]
         self._thread.join(10)
         assert not self._thread.is_alive(), "server thread did not stop"
+        self.platform.close()
 
     @property
     def alive(self) -> bool:
@@ -198,3 +233,167 @@ class ServerProcess:
         if self.proc.poll() is None:
             self.proc.kill()
         self.wait()
+
+
+# ---- the fake hardware from outside (test_hw_*.py): bytes on the socket (spec.codec), frames on the virtual CAN
+# bus decoded with spec/can/pltf.dbc, JSON lines of the control channel's TCP port; no platform object is read.
+
+STATUS_BOARDS = ("relay_status", "io_status", "motor_right_status", "motor_left_status", "us_status",
+                 "radar_status", "gyro_status")  # fmt: skip
+MODE_VEL = 3  # MotionMode.MODE_MOTION_VEL
+EM_NOT_ACTIVE, EM_ACTIVE, EM_RESET = 0, 1, 2
+OP_READY, OP_RUNNING, OP_BREAKED, OP_NOT_INIT = 0, 1, 2, 3
+
+
+class Sniffer:
+    """A plain python-can virtual bus on the server's channel; every frame it hears must be in the database."""
+
+    def __init__(self, channel: str) -> None:
+        self.bus = can.Bus(interface="virtual", channel=channel, preserve_timestamps=True)
+        self.heard: list[tuple[str, dict[str, Any], can.Message]] = []
+        self._mark = 0
+
+    def collect(self) -> list[tuple[str, dict[str, Any], can.Message]]:
+        """The frames heard since the last call, decoded with the database (application ids as 'APP')."""
+        out = []
+        while (frame := self.bus.recv(timeout=0)) is not None:
+            msg = candb.message_by_id(frame.arbitration_id)
+            if msg is None:
+                assert frame.arbitration_id in candb.APPLICATION_IDS, f"unknown CAN id 0x{frame.arbitration_id:03X}"
+                out.append(("APP", {"data": bytes(frame.data)}, frame))
+                continue
+            assert len(frame.data) == msg.length, msg.name
+            out.append((msg.name, dict(msg.decode(bytes(frame.data), decode_choices=False)), frame))
+        self.heard += out
+        return out
+
+    def mark(self) -> None:
+        """From now on: ``wait`` looks only at frames heard after this call."""
+        self.collect()
+        self._mark = len(self.heard)
+
+    def wait(self, name: str, pred: Callable[[dict[str, Any]], bool] = lambda s: True, timeout: float = 5.0
+             ) -> dict[str, Any]:  # fmt: skip
+        """The signals of the first frame ``name`` since the last ``mark`` for which ``pred`` holds."""
+        deadline = time.monotonic() + timeout
+        seen = self._mark
+        while True:
+            self.collect()
+            for n, signals, _ in self.heard[seen:]:
+                if n == name and pred(signals):
+                    return signals
+            seen = len(self.heard)
+            assert time.monotonic() < deadline, f"no {name} frame matching on the bus"
+            time.sleep(0.005)
+
+    def names(self, seconds: float) -> set[str]:
+        """The message names heard during ``seconds`` of wall time from now."""
+        self.collect()
+        time.sleep(seconds)
+        return {n for n, _, _ in self.collect()}
+
+    def close(self) -> None:
+        self.bus.shutdown()
+
+
+class Control:
+    """A client of the fault-control channel: one line out, one JSON object back."""
+
+    def __init__(self, port: int) -> None:
+        self.sock = socket.create_connection(("127.0.0.1", port), timeout=5.0)
+        self.file = self.sock.makefile("rwb")
+
+    def __call__(self, line: str) -> dict[str, Any]:
+        self.file.write(line.encode() + b"\n")
+        self.file.flush()
+        reply: dict[str, Any] = json.loads(self.file.readline())
+        assert reply["ok"], f"{line}: {reply}"
+        return reply
+
+    def close(self) -> None:
+        self.file.close()
+        self.sock.close()
+
+
+class Rig:
+    """A started server with hardware, a raw client, the sniffer and the control channel."""
+
+    def __init__(self, srv: ServerThread) -> None:
+        self.srv = srv
+        self.client = Client(srv.ports[0])
+        assert srv.platform.hardware is not None
+        self.sniffer = Sniffer(srv.platform.hardware.hw.channel)  # only the channel's name is read
+        self.control = Control(srv.control_port)
+
+    def send(self, name: str, **fields: Any) -> None:
+        self.client.send(getattr(REQUESTS, name)(**fields))
+
+    def get(self, name: str, **fields: Any) -> Any:
+        return self.client.request(getattr(REQUESTS, name)(**fields))
+
+    def status(self) -> Any:
+        return self.client.status()
+
+    def wait(self, pred: Callable[[Any], bool], what: str, timeout: float = 10.0, *, keep: Any = None) -> Any:
+        """Poll GET_STATUS until ``pred``; ``keep``: a (name, fields) command re-sent at every poll (a velocity
+        command lives only VelWatchdogTime)."""
+        deadline = time.monotonic() + timeout
+        while True:
+            if keep is not None:
+                self.send(keep[0], **keep[1])
+            st = self.status()
+            if pred(st):
+                return st
+            assert time.monotonic() < deadline, f"timed out waiting for {what}; log: {self.log()[-12:]}"
+            time.sleep(0.005)
+
+    def wait_messages(self, pred: Callable[[Any], bool], delete: int = 0, timeout: float = 10.0) -> Any:
+        """CMD_GET_CAN_MESSAGES until ``pred(messages)`` holds (with ``delete``); those messages."""
+        deadline = time.monotonic() + timeout
+        while True:
+            msgs = self.get("CMD_GET_CAN_MESSAGES", delete=delete).messages
+            if pred(msgs):
+                return msgs
+            assert time.monotonic() < deadline, f"timed out waiting for CAN messages: {msgs[-3:]}"
+            time.sleep(0.01)
+
+    def log(self) -> list[str]:
+        return [e[0] for e in self.get("CMD_GET_DEBUG_DATA").protocol_queue]
+
+    def wait_log(self, text: str, timeout: float = 10.0) -> str:
+        deadline = time.monotonic() + timeout
+        while True:
+            for line in self.log():
+                if text in line:
+                    return line
+            assert time.monotonic() < deadline, f"no log line with {text!r}: {self.log()[-8:]}"
+            time.sleep(0.01)
+
+    def bring_up(self) -> Any:
+        self.send("CMD_CONNECT_TO_PLTF")
+        self.send("CMD_INIT_PLTF")
+        return self.wait(lambda s: s.operation_state == OP_READY, "state Ready")
+
+    def run_vel(self) -> Any:
+        """Ready -> MODE_MOTION_VEL -> Running."""
+        self.send("CMD_SET_MODE", mode=MODE_VEL)
+        self.send("CMD_START")
+        return self.wait(lambda s: s.operation_state == OP_RUNNING, "state Running")
+
+    def close(self) -> None:
+        self.control.close()
+        self.sniffer.close()
+        self.client.close()
+
+
+@contextmanager
+def rig(data_dir: Path, motion: MotionFactory | None = None, up: bool = True, **hw: Any) -> Iterator[Rig]:
+    srv = ServerThread(data_dir, hardware=hardware_link.factory(**hw), motion=motion, control=True).start()
+    r = Rig(srv)
+    try:
+        if up:
+            r.bring_up()
+        yield r
+    finally:
+        r.close()
+        srv.stop()

@@ -12,7 +12,7 @@ import pytest
 
 from clients.pltf_client import MotionMode, OperationState, PlatformClient, Status
 from pltf_cli.run_program_cmd import RunResult, prepare, run_remote
-from reference_server.platform import Platform
+from reference_server import hardware_link
 from reference_server.tasks.local import factory
 from reference_server.tasks.program import load_program
 from reference_server.tasks.remote import RemoteMachine
@@ -97,10 +97,9 @@ class Session:
 
 
 def program_server(data_dir: Path) -> ServerThread:
-    """A started ServerThread whose platform runs the task interpreter (as ``pltf serve`` builds it)."""
-    srv = ServerThread(data_dir, time_scale=SCALE)
-    srv.platform = Platform(srv.platform.storage, seed=1, program=factory)
-    return srv.start()
+    """A started ServerThread whose platform runs the task interpreter on the fake hardware (as ``pltf serve``
+    builds it, with the ideal motion model)."""
+    return ServerThread(data_dir, time_scale=SCALE, program=factory, hardware=hardware_link.factory()).start()
 
 
 @pytest.fixture
@@ -112,6 +111,8 @@ def server(tmp_path: Path) -> Iterator[ServerThread]:
 
 @pytest.fixture
 def session(server: ServerThread) -> Iterator[Session]:
+    """A client of a platform brought up (CAN connected, boards initialized: their sections are reported)."""
     s = Session(server)
+    s.client.bring_up()
     yield s
     s.close()
