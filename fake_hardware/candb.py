@@ -140,14 +140,15 @@ class FrameCodec:
         return data
 
     def decode(self, data: bytes | bytearray) -> dict[str, Any]:
-        """The physical values of a frame (a fresh dict: callers may keep or change it)."""
+        """The physical values of a frame: a dict shared by every equal frame, so callers keep it but never
+        change it."""
         key = bytes(data[: self.length])
         out = self._decoded.get(key)
         if out is None:
             if len(self._decoded) >= self.CACHE:
                 self._decoded.clear()
             out = self._decoded[key] = self._decode(key)
-        return dict(out)
+        return out
 
     def _encode(self, signals: Signals) -> bytes:
         word = 0

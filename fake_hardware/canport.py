@@ -47,26 +47,35 @@ class _Inbox(queue.SimpleQueue):  # type: ignore[type-arg]
 class SimVirtualBus(virtual.VirtualBus):
     """The virtual bus with simulated timestamps kept and a cheap fan-out (see the module rules)."""
 
+    _filters_changed = 0  # a generation count of the acceptance filters of every SimVirtualBus
+
     def __init__(self, channel: str, **kwargs: Any) -> None:
         super().__init__(channel=channel, preserve_timestamps=True, **kwargs)
         inbox = _Inbox()
         with virtual.channels_lock:
             self.channel[self.channel.index(self.queue)] = inbox  # type: ignore[call-overload]
             self.queue = inbox  # type: ignore[assignment]
+        self._members: list[Any] = []  # the channel's inboxes when ``_targets`` was computed
+        self._generation = -1
+        self._targets: tuple[tuple[Any, frozenset[int] | None], ...] = ()
 
     def accept(self, ids: frozenset[int] | None) -> None:
         """Deliver to this bus only frames with these identifiers (None: all)."""
         self.queue.accept = ids  # type: ignore[attr-defined]
+        SimVirtualBus._filters_changed += 1  # every sender recomputes its targets
 
     def send(self, msg: can.Message, timeout: float | None = None) -> None:
         self._check_if_open()
         msg.channel, msg.is_rx = self.channel_id, True  # shared by every receiver, not copied
-        own, can_id = self.queue, msg.arbitration_id
-        for inbox in self.channel:
-            if inbox is not own:
-                ids = getattr(inbox, "accept", None)
-                if ids is None or can_id in ids:
-                    inbox.put(msg)
+        if self._members != self.channel or self._generation != SimVirtualBus._filters_changed:
+            self._members = list(self.channel)  # a bus joined or left (a sniffer, a closed platform), or a filter
+            self._generation = SimVirtualBus._filters_changed
+            own = self.queue
+            self._targets = tuple((q, getattr(q, "accept", None)) for q in self._members if q is not own)
+        can_id = msg.arbitration_id
+        for inbox, ids in self._targets:
+            if ids is None or can_id in ids:
+                inbox.put(msg)
 
     def drain(self) -> list[can.Message]:
         """Everything in the inbox, without blocking (the fast path of ``CanPort.poll``)."""
