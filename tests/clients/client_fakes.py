@@ -196,7 +196,7 @@ STARTED = re.compile(r"server started at port (\d+)")
 
 
 class LiveServer:
-    """``python -m reference_server`` on two free ports."""
+    """``python -m reference_server`` on two free ports, ready once both listen and the start-up is logged."""
 
     def __init__(self, data_dir: Path, log_path: Path) -> None:
         self.log_path = log_path
@@ -204,8 +204,8 @@ class LiveServer:
         cmd = [sys.executable, "-m", "reference_server", "--ports", "0,0", "--data-dir", str(data_dir),
                "--time-scale", "20", "--seed", "1"]  # fmt: skip
         self.proc = subprocess.Popen(cmd, cwd=REPO, stdout=self._log, stderr=subprocess.STDOUT)
-        deadline = time.monotonic() + 20
-        while len(ports := STARTED.findall(self.log())) < 2:
+        deadline = time.monotonic() + 30
+        while len(ports := STARTED.findall(self.log())) < 2 or "system state" not in self.log():
             if self.proc.poll() is not None or time.monotonic() > deadline:
                 self.close()
                 raise AssertionError(f"reference server did not start:\n{self.log()}")

@@ -13,18 +13,17 @@ from __future__ import annotations
 import asyncio
 import json
 import os
-import re
 import shutil
 import socket
 import subprocess
 import sys
 import threading
-import time
 from collections.abc import Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
 from pathlib import Path
 
 import pytest
+from client_fakes import LiveServer
 
 from clients.stubgen import LANGS, check, generate, render
 from clients.stubgen import vectors as stub_vectors
@@ -228,7 +227,6 @@ def test_smoke_against_fake_server(lang: str, stub_builds: dict[str, Future[Path
 # The reference server (python -m reference_server) in a subprocess; PLTF_LIVE_SERVER=host:port points the
 # live smoke runs at a server that is already running instead.
 LIVE_SERVER_ENV = "PLTF_LIVE_SERVER"
-STARTED = re.compile(r"server started at port (\d+)")
 
 
 @pytest.fixture(scope="module")
@@ -239,28 +237,11 @@ def live_server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str,
         yield host, int(port)
         return
     root = tmp_path_factory.mktemp("reference-server")
-    log_path = root / "server.log"
-    with log_path.open("wb") as log:
-        proc = subprocess.Popen(
-            [sys.executable, "-m", "reference_server", "--ports", "0,0", "--data-dir", str(root / "data"),
-             "--time-scale", "20"], cwd=REPO, stdout=log, stderr=subprocess.STDOUT)
-        try:
-            deadline = time.monotonic() + 30
-            while True:
-                text = log_path.read_text(encoding="utf-8", errors="replace")
-                ports = STARTED.findall(text)
-                if len(ports) == 2 and "system state" in text:
-                    break
-                assert proc.poll() is None and time.monotonic() < deadline, f"reference server did not start:\n{text}"
-                time.sleep(0.1)
-            yield "127.0.0.1", int(ports[0])
-        finally:
-            proc.terminate()
-            try:
-                proc.wait(10)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
+    server = LiveServer(root / "data", root / "server.log")
+    try:
+        yield "127.0.0.1", server.ports[0]
+    finally:
+        server.close()
 
 
 def _position_by_python_codec(host: str, port: int) -> dict[str, object]:
