@@ -7,7 +7,8 @@ from typing import TYPE_CHECKING, Any
 
 from reference_server import status
 from reference_server.commands.registry import ACCEPTED, Outcome, handles
-from reference_server.enums import Event, MouseButton
+from reference_server.enums import Event, MotionMode, MouseButton
+from reference_server.state_chart import State
 
 if TYPE_CHECKING:
     from reference_server.platform import Platform
@@ -37,9 +38,22 @@ def unused(p: Platform, t: Any, now: float) -> Outcome:
     return p._ignore(f"{t.NAME}: not used at the moment (guide 6.3)")
 
 
+# guide 6.3 CMD_SET_EVENT: the replay's events; erratum E-MOT-010: they act in motion mode POST_PROCESS_REPLAY
+# and state Running only (recording works in every mode)
+_REPLAY_EVENTS = frozenset(
+    Event[name] for name in ("EV_START_POST_PROCESS_REPLAY", "EV_STOP_POST_PROCESS_REPLAY",
+                             "EV_BREAK_POST_PROCESS_REPLAY", "EV_CONTINUE_POST_PROCESS_REPLAY")
+)  # fmt: skip
+
+
 @handles("CMD_SET_EVENT")
 def set_event(p: Platform, t: Any, now: float) -> Outcome:
-    if p.world is not None:  # guide 6.3: post-process recording and replay (erratum E-MOT-006)
+    replaying = p.motion_mode == MotionMode.MODE_MOTION_POST_PROCESS_REPLAY and p.chart.state is State.RUNNING
+    if t.event in _REPLAY_EVENTS and not replaying:
+        return p._ignore(f"{t.NAME} {Event(t.event).name}: a replay runs in motion mode "
+                         f"MODE_MOTION_POST_PROCESS_REPLAY and state Running only, not {p._mode_name()} in "
+                         f"{p.chart.state.value} (erratum E-MOT-010)")  # fmt: skip
+    if p.world is not None:  # guide 6.3: post-process recording and replay (errata E-MOT-006, E-MOT-010)
         p.log(logging.INFO, f"{t.NAME} {Event(t.event).name}: {p.world.event(t.event, now)}")
         return ACCEPTED
     return p._ignore(f"{t.NAME} {Event(t.event).name}: post-process recording is not simulated")

@@ -9,7 +9,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import pytest
 
 from tests.reference_server.conftest import Client
 from tests.reference_server.world.scenarios import (
@@ -111,11 +110,6 @@ def test_same_seed_same_commands_identical_trajectories(tmp_path: Path) -> None:
     assert other != first
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="known failure: commands/debug.py starts a replay in any state and motion mode (E-MOT-010: "
-    "POST_PROCESS_REPLAY and Running only); strict, so the fix turns this into a failure to remove the mark",
-)
 def test_replay_outside_its_mode_and_running_moves_nothing(tmp_path: Path) -> None:
     srv = SteppedServer(tmp_path / "data")
     srv.start()
