@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Iterator
+from contextlib import closing
 from pathlib import Path
 
 import pytest
@@ -11,17 +12,11 @@ from client_fakes import FakePlatform, LiveServer
 
 @pytest.fixture
 def fake() -> Iterator[FakePlatform]:
-    platform = FakePlatform()
-    try:
+    with closing(FakePlatform()) as platform:
         yield platform
-    finally:
-        platform.close()
 
 
 @pytest.fixture
 def live(tmp_path: Path) -> Iterator[LiveServer]:
-    server = LiveServer(tmp_path / "data", tmp_path / "server.log")
-    try:
+    with closing(LiveServer(tmp_path / "data", tmp_path / "server.log")) as server:
         yield server
-    finally:
-        server.close()
