@@ -6,8 +6,11 @@ descriptor table driving a small generic codec), a streaming decoder, the error 
 a client class with one method per command, ``smoke.sh`` and a vector runner. ``check(lang, out_dir)``
 lists the files that differ from what ``generate`` would write.
 
-Each language is one module with ``render() -> {relative path: text}``; the runtime code that is the same
-for every telegram lives in ``templates/<lang>/`` and is filled in with ``@@NAME@@`` placeholders.
+Each language is one module with ``render() -> {relative path: text}`` that holds only that language's tables
+(a ``renderer.Spelling`` for types and field descriptors, conversion and method templates); ``renderer`` runs
+the loops over fields, telegrams and commands once for all of them. Text that is the same for every telegram
+lives in ``templates/<lang>/`` (``templates/shell/``: the scripts every language has) and is filled in with
+``@@NAME@@`` placeholders.
 """
 
 from __future__ import annotations
