@@ -76,7 +76,7 @@ def _pairs(lo: F64, span: F64, fan: Fan) -> tuple[I64, I64]:
 
 
 @lru_cache(maxsize=8)
-def _beam_offsets(fan: Fan) -> tuple[F64, F64]:
+def beam_offsets(fan: Fan) -> tuple[F64, F64]:
     """cos and sin of each beam's angle relative to the heading (a fan's beams are fixed; only the heading turns)."""
     b = fan.start + fan.step * np.arange(fan.count)
     return np.cos(b), np.sin(b)
@@ -95,7 +95,7 @@ def cast_fan(x: float, y: float, heading: float, scene: Scene, fan: Fan, want_hi
     owners, beams = _pairs(lo, span, fan)
     if len(owners) == 0:
         return ranges, hits
-    cb, sb = _beam_offsets(fan)
+    cb, sb = beam_offsets(fan)
     ch, sh = math.cos(heading), math.sin(heading)
     bdx, bdy = cb[beams] * ch - sb[beams] * sh, sb[beams] * ch + cb[beams] * sh  # the pairs' beam directions
     t = np.empty(len(owners))

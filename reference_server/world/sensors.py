@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from reference_server.world.geometry import F64
-from reference_server.world.raycast import I64, Fan, Scene, cast_fan, cast_rays
+from reference_server.world.raycast import I64, Fan, Scene, beam_offsets, cast_fan, cast_rays
 
 LASER_FAN = Fan(541, math.radians(-135.0), math.radians(0.5), 30000.0)
 LASER_SIGMA = 10.0  # mm
@@ -96,10 +96,10 @@ def match_score(measured: F64, expected: F64) -> float:
 
 def points_platform(s: Scan, mount_x: float) -> F64:
     """(N, 2) scan points with an echo, in the platform frame."""
-    beta = LASER_FAN.start + LASER_FAN.step * np.arange(LASER_FAN.count)
+    cos_b, sin_b = beam_offsets(LASER_FAN)  # the beams' angles are fixed: their cos and sin computed once
     ok = np.isfinite(s.ranges)
     r = s.ranges[ok]
-    return np.column_stack([mount_x + r * np.cos(beta[ok]), r * np.sin(beta[ok])])
+    return np.column_stack([mount_x + r * cos_b[ok], r * sin_b[ok]])
 
 
 def _to_platform(px: F64, py: F64, pose: tuple[float, float, float]) -> tuple[F64, F64]:
