@@ -5,9 +5,8 @@ Benchmarks:
   of MOVE_ABS targets with planning: laser at 10 Hz, control at 50 Hz. Subjects: the world alone (ideal wheels),
   the world with the CAN boards on (fake_hardware: the motor boards drive the wheels, their encoder frames feed
   the odometry, the S300 streams over ``sim://`` at 10 Hz, the ultrasonic board measures), and the CAN boards
-  alone on fixed sources (what the hardware costs by itself). The platform's own hardware plug-in had not landed
-  when this was written: ``world_can_run`` composes World and ``build_platform_hardware`` per control period as
-  reference_server/motion_api.py describes. Building the world and connecting the boards are not timed.
+  alone on fixed sources (what the hardware costs by itself). The world with the boards is the server's own
+  ``Platform`` with ``hardware_link`` ticking (``world_can_run``). Building, booting and connecting are not timed.
   Target >= 50x.
 - ``motion.planning``: time per query on a 50 x 50 m maze of 340 walls (36 rooms, doors, stubs: ``maze``): the
   visibility-graph planner (``reference_server.world.planner``; its lookup data built once per map, reported as
@@ -31,6 +30,7 @@ import random
 import statistics
 import time
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 import pymunk
@@ -54,7 +54,7 @@ GRID_CELL = 50.0  # mm
 PLAN_RADIUS = 503.0 + 60.0  # the default footprint's circumscribed radius + the planning margin (E-MOT-006)
 
 WORLD = "world (ideal wheels)"
-WORLD_CAN = "world + CAN boards"
+WORLD_CAN = "platform: world + CAN boards"
 HARDWARE = "CAN boards alone"
 VISIBILITY = "visibility graph"
 GRID = "grid A* 5 cm"
@@ -79,6 +79,7 @@ def office() -> MapGeometry:
 def _tour_world(seed: int = 1) -> World:
     world = World(ParameterStore().get, random.Random(seed), (1000.0, 10000.0, 0.0))
     world.set_map(office())
+    world.planner()  # the map's lookup data, built once per map (motion.planning times it), not per period
     return world
 
 
@@ -103,42 +104,58 @@ def world_run(seconds: float) -> Run:
 
 
 def world_can_run(seconds: float) -> Run:
-    """The same tour with the fake CAN boards and the S300 in the loop, composed per control period as
-    reference_server/motion_api.py describes (the platform's own hardware plug-in had not landed when this was
-    written): ``step``, the setpoints to the controller, ``hw.step``, ``move`` with the motor boards' wheel
-    velocities, their travel reported back, odometry from the encoder frames. Connect and init are untimed."""
-    from fake_hardware.hardware import build_platform_hardware
+    """The same tour driven through the platform as ``pltf serve`` runs it: a ``Platform`` with the world
+    (``world.model.factory``) and the fake hardware (``hardware_link.factory``: seven CAN boards on a virtual bus,
+    the S300 on ``sim://``), its control period ``Platform.tick`` (world step, setpoints to the motor boards over
+    CAN, the boards' step, the body moved by the motors' wheel velocities, odometry from the encoder frames);
+    MOVE_ABS telegrams through ``Platform.handle``. Untimed: the data dir, boot, CONNECT/INIT (the self test),
+    START_ULTRASONIC on all 16 channels, the serial laser at 10 Hz, mode AUTOMATIC, START."""
+    import tempfile
+    from pathlib import Path
 
-    world = _tour_world()
-    hw = build_platform_hardware(
-        params=ParameterStore().get, rng=random.Random(1), scan_source=world.scan_ranges, us_source=world.us_ranges
-    )
-    assert hw.connect(0.0).ok and hw.init(0.0).ok
-    if hw.scanner is not None:
-        hw.scanner.period = 0.1  # the laser at 10 Hz
-    hw.controller.start_ultrasonic(0xFFFF, 0.0)
-    right, left = hw.motors
-    assert right is not None and left is not None
+    from reference_server import hardware_link
+    from reference_server.enums import MotionMode
+    from reference_server.platform import Platform
+    from reference_server.storage import Storage
+    from reference_server.world.model import factory
+    from spec.codec import REQUESTS
+
+    r: Any = REQUESTS
+    tmp = tempfile.TemporaryDirectory()
+    storage = Storage(Path(tmp.name))
+    storage.seed_from_fixtures()
+    p = Platform(storage, seed=1, motion=factory(1), hardware=hardware_link.factory())
+    p.boot(0.0)
+    for t in (r.CMD_CONNECT_TO_PLTF(), r.CMD_INIT_PLTF(), r.CMD_START_ULTRASONIC(active_channels=0xFFFF)):
+        assert p.handle(t, 0.0).refused is None, t
+    k = 0
+    while p.chart.state.name != "READY" and k < 100:  # the self test ends after a few periods
+        k += 1
+        p.tick(k * DT)
+    assert p.hardware is not None and p.hardware.hw.scanner is not None
+    p.hardware.hw.scanner.period = 0.1  # the laser at 10 Hz
+    for t in (r.CMD_SET_MODE(mode=MotionMode.MODE_MOTION_AUTOMATIC), r.CMD_START()):
+        p.handle(t, k * DT)
+    assert p.chart.state.name == "RUNNING", p.chart.state
+    assert isinstance(p.motion, World)
+    p.motion.planner()  # as in ``_tour_world``
+    first = k
 
     def run() -> float:
         try:
             driven, goal = 0.0, 0
-            for k in range(1, round(seconds / DT) + 1):
+            for k in range(first + 1, first + round(seconds / DT) + 1):
                 now = k * DT
-                if not world.active:
-                    world.move_to(TOUR[goal % len(TOUR)])
+                if not p.motion.active:
+                    x, y, a = TOUR[goal % len(TOUR)]
+                    p.handle(r.CMD_MOVE_ABS(x=round(x), y=round(y), angle=round(math.degrees(a) * 1000)), now)
                     goal += 1
-                world.step(now, DT)
-                hw.controller.set_wheel_velocities(*world.setpoints)
-                hw.step(now)
-                dr, dl = world.move(right.wheel_velocity, left.wheel_velocity, DT)
-                right.report_wheel_travel(dr)
-                left.report_wheel_travel(dl)
-                world.odometry(*hw.controller.take_wheel_travel(), DT)
-                driven += abs(world.measured[0]) * DT
+                p.tick(now)
+                driven += abs(p.motion.v) * DT
             return driven
         finally:
-            hw.close()
+            p.close()
+            tmp.cleanup()
 
     return run
 
