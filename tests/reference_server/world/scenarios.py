@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from reference_server import hardware_link
 from reference_server.network import CONTROL_PERIOD, Server, SimClock
 from reference_server.platform import Platform
 from reference_server.world import MapGeometry
@@ -43,17 +44,18 @@ OFFICE_MAP = Path(__file__).resolve().parents[3] / "fixtures" / "maps" / "office
 START = (2000.0, 10000.0, 0.0)  # fixtures/start_pose.dat: the west end of the office corridor, facing east
 
 
-def world_platform(server: ServerThread, seed: int) -> Platform:
-    """The platform of ``pltf serve --motion world --seed <seed>`` on the server's (seeded) data dir."""
-    return Platform(server.platform.storage, seed=seed, motion=factory(seed))
+def world_platform(server: ServerThread, seed: int, hardware: bool = False) -> Platform:
+    """The platform of ``pltf serve --motion world --seed <seed> [--no-hardware]`` on the server's data dir."""
+    return Platform(server.platform.storage, seed=seed, motion=factory(seed),
+                    hardware=hardware_link.factory() if hardware else None)  # fmt: skip
 
 
 class WorldServer(ServerThread):
     """The free-running server (accelerated time scale) with the world as its motion model."""
 
-    def __init__(self, data_dir: Path, time_scale: float = TIME_SCALE, seed: int = 1) -> None:
+    def __init__(self, data_dir: Path, time_scale: float = TIME_SCALE, seed: int = 1, hardware: bool = False) -> None:
         super().__init__(data_dir, time_scale)
-        self.platform = world_platform(self, seed)
+        self.platform = world_platform(self, seed, hardware)
 
     @property
     def world(self) -> WorldModel:
@@ -134,6 +136,15 @@ class SteppedServer(WorldServer):
 def running(c: Client, mode: int, *setup: Any) -> None:
     """Connect, init, ``setup`` telegrams (in Ready), the motion mode, start: the platform is Running."""
     c.send(R.CMD_CONNECT_TO_PLTF(), R.CMD_INIT_PLTF(), *setup, R.CMD_SET_MODE(mode=mode), R.CMD_START())
+    s = c.status()
+    assert (s.operation_state, s.motion_mode) == (OperationState.ST_OP_RUNNING, mode), s
+
+
+def running_stepped(srv: SteppedServer, c: Client, mode: int) -> None:
+    """``running`` on a stepped server with the CAN boards: the self test of CMD_INIT_PLTF takes a few periods."""
+    command(c, R.CMD_CONNECT_TO_PLTF(), R.CMD_INIT_PLTF())
+    srv.advance(0.6)
+    c.send(R.CMD_SET_MODE(mode=mode), R.CMD_START())
     s = c.status()
     assert (s.operation_state, s.motion_mode) == (OperationState.ST_OP_RUNNING, mode), s
 
