@@ -16,8 +16,10 @@ Rules (erratum E-MOT-007):
 
 from __future__ import annotations
 
+import bisect
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -50,16 +52,21 @@ class Drive:
     def length(self) -> float:
         return float(self.s[-1])
 
+    @cached_property
+    def _lists(self) -> tuple[list[float], list[float], list[float], list[float], list[float]]:
+        """The samples as Python lists: ``at`` runs twice per control period, numpy scalars would cost more."""
+        return self.s.tolist(), self.x.tolist(), self.y.tolist(), self.theta.tolist(), self.kappa.tolist()
+
     def at(self, s: float) -> tuple[float, float, float, float]:
         """x, y, theta, kappa at arc length ``s`` (linear between samples)."""
-        s = min(max(s, 0.0), self.length)
-        i = int(np.searchsorted(self.s, s, side="right")) - 1
-        i = min(max(i, 0), len(self.s) - 2)
-        seg = self.s[i + 1] - self.s[i]
-        f = 0.0 if seg <= 0 else (s - self.s[i]) / seg
-        th = self.theta[i] + f * wrap(float(self.theta[i + 1] - self.theta[i]))
-        return (float(self.x[i] + f * (self.x[i + 1] - self.x[i])), float(self.y[i] + f * (self.y[i + 1] - self.y[i])),
-                wrap(float(th)), float(self.kappa[i]))  # fmt: skip
+        ss, xs, ys, th, ka = self._lists
+        s = min(max(s, 0.0), ss[-1])
+        i = bisect.bisect_right(ss, s) - 1
+        i = min(max(i, 0), len(ss) - 2)
+        seg = ss[i + 1] - ss[i]
+        f = 0.0 if seg <= 0 else (s - ss[i]) / seg
+        t = th[i] + f * wrap(th[i + 1] - th[i])
+        return xs[i] + f * (xs[i + 1] - xs[i]), ys[i] + f * (ys[i + 1] - ys[i]), wrap(t), ka[i]
 
 
 @dataclass(frozen=True)

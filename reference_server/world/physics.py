@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import pymunk
 
@@ -43,7 +44,7 @@ class Footprint:
         f, r, h = self.front, self.rear, self.half_width
         return [(f, -h), (f, h), (r, h), (r, -h)]
 
-    @property
+    @cached_property
     def radius(self) -> float:
         """The circumscribed radius about the wheel axis: what a turn on the spot sweeps."""
         return max(math.hypot(x, y) for x, y in self.corners)
