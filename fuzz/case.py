@@ -51,6 +51,7 @@ class Case:
     half_close: bool = False
     expect: str = ""  # fuzz.wire.KEEP / CLOSE / PARTIAL, filled by the scheduler
     tags: tuple[str, ...] = field(default=())
+    answered: tuple[int, ...] | None = None  # ids of the answered requests in the frames (fuzz.wire.survey)
 
     @property
     def data(self) -> bytes:
@@ -61,7 +62,7 @@ class Case:
         return sum(len(f) for f in self.frames)
 
     def with_frames(self, frames: tuple[bytes, ...]) -> Case:
-        return replace(self, frames=frames)
+        return replace(self, frames=frames, answered=None)
 
     def to_json(self) -> dict[str, Any]:
         return {

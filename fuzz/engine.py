@@ -29,12 +29,13 @@ from fuzz import safety
 from fuzz.case import Case
 from fuzz.corpus import Corpus
 from fuzz.findings import FindingWriter
-from fuzz.flight import Flight, fly
+from fuzz.flight import Flight, fly, step_flights
 from fuzz.knowledge import Knowledge
 from fuzz.launch import Launcher
 from fuzz.schedule import DOCUMENT_RESET, HARVEST, Prefetcher, Scheduler, StatePlan
-from fuzz.target import CUT, GET_STATUS, Conn, Outcome, Prober, Session, expected_reply_ids, play, play_on
+from fuzz.target import CUT, GET_STATUS, Conn, Outcome, Prober, Session, play, play_on, session_reply_ids
 from fuzz.wire import KEEP
+from spec.codec import REQUESTS
 
 WINDOW = 256  # cases drawn at a time, then run batch-first
 BATCH_CASES = 128
@@ -46,6 +47,7 @@ BIG_CASE = 1 << 20  # bytes
 SWITCH_INTERVAL = 0.0002  # s
 SAVE_EVERY = 30.0  # s between saves of the corpus progress (a killed run resumes from there)
 HISTORY = 64  # sessions kept for a finding that needs more than its last unit
+LEAD_IDS = {False: (), True: (REQUESTS.CMD_GET_STATUS.ID,)}  # the answered ids of a session's lead
 
 
 DROPPED = (
@@ -127,7 +129,8 @@ class Campaign:
         self.prev_unit: list[Session] = []
         self.unprobed: list[Session] = []
         self.units_since_probe = 0
-        self.pair_units = 0
+        self.lane_units = 0  # sessions started by run_lanes
+        self.lane_probed_at = [0, 0]  # lane_units when each port's last probe-led session started
         self.preludes = 0
         self.need_prelude = True
         self.prelude_tries = 0
@@ -224,11 +227,12 @@ class Campaign:
         paired = self.o.lanes > 1
         whole = [c for c in singles if c.delivery.mode == "whole" and paired]
         others = [c for c in singles if c.delivery.mode != "whole" or not paired]
-        for k in range(0, len(whole) - 1, 2):
+        if len(whole) > 1:
+            self.run_lanes(whole)
+            whole = []
             if self.stop or self.need_prelude:
                 return
-            self.run_pair(whole[k], whole[k + 1])
-        for c in others + whole[len(whole) - len(whole) % 2 :]:
+        for c in others + whole:
             if self.stop or self.need_prelude:
                 return
             self.run_single(c)
@@ -305,7 +309,9 @@ class Campaign:
         return out if self._probe_ok([session], []) else None
 
     def run_batch(self, cases: list[Case]) -> None:
-        session = Session([f for c in cases for f in c.frames], sync=True)
+        known = all(c.answered is not None for c in cases)  # batched cases decode whole: their ids concatenate
+        answered = [i for c in cases for i in c.answered or ()] if known else None
+        session = Session([f for c in cases for f in c.frames], sync=True, answered=answered)
         self.history.append(session)
         out = self._on_keeper(session)
         self.stats.batches += 1
@@ -313,7 +319,10 @@ class Campaign:
 
     def run_single(self, case: Case) -> None:
         self.drop_keeper()
-        session = Session(list(case.frames), case.delivery, half_close=True, sync=case.expect == KEEP)
+        answered = list(case.answered) if case.answered is not None else None
+        session = Session(
+            list(case.frames), case.delivery, half_close=True, sync=case.expect == KEEP, answered=answered
+        )
         self.history.append(session)
         out = play(self.o.host, self.ports[0], session, self.o.deadline)
         self.stats.units += 1
@@ -327,63 +336,99 @@ class Campaign:
             self.failure("bad-reply", out.bad_reply, [session], [case])
         elif out.timed_out:
             self._timed_out([session], [case], "the connection neither answered nor closed after our end-of-stream")
-        elif case.expect == KEEP and len(out.replies) < len(expected_reply_ids(session.data)) + 1:
+        elif case.expect == KEEP and len(out.replies) < len(session_reply_ids(session)) + 1:
             self._dropped([session], [case])
         else:
             self._probe_ok([session], [case])
 
-    def run_pair(self, a: Case, b: Case) -> None:
-        """Two cases in flight at once, one per port (``fuzz.flight``). Every ``probe_every`` units both
-        sessions open with a GET_STATUS: each one's reply is the liveness probe, on the other port, of the case
-        sent on the other port before it."""
+    def run_lanes(self, cases: list[Case]) -> None:
+        """Cases in flight on both ports at once (``fuzz.flight``), each port taking its next case as soon as
+        the target closed its last one: the target always has the next connection waiting. Every
+        ``probe_every`` units a port's next session opens with a GET_STATUS: its reply is the liveness probe, on
+        that port, of the cases the other port carried before it."""
         self.drop_keeper()
         assert self.prober is not None
         verdict = self.prober.release()
         if verdict is not None:
             self.failure(verdict.partition(":")[0], f"liveness probe: {verdict}", self.prev_unit + self.unprobed, [])
             return
-        self.pair_units += 2
-        probe = self.pair_units >= self.o.probe_every
-        lead = [GET_STATUS] if probe else []
-        cases = (a, b)
-        sessions = [Session(lead + list(c.frames), half_close=True, sync=c.expect == KEEP) for c in cases]
-        flights = [Flight(self.o.host, port, s, self.o.deadline) for port, s in zip(self.ports, sessions, strict=True)]
-        fly(flights)
-        self.history.extend(sessions)
-        self.unprobed.extend(sessions)
-        self.stats.units += 2
-        self.stats.singles += 2
-        for c, f in zip(cases, flights, strict=True):
-            self._count([c], "closed" if f.out.closed else "open")
-            for r in f.out.replies:
-                self.kb.learn(r)
-        covered = self.prev_unit + self.unprobed
-        for c, f, port in zip(cases, flights, self.ports, strict=True):
-            out = f.out
-            if out.refused:
-                verdict = self._probe_other(port)
-                self.failure(
-                    (verdict or "dead:").partition(":")[0], "connection refused on a fuzzed port", covered, [c]
-                )
+        host, deadline, ports = self.o.host, self.o.deadline, self.ports
+        todo = collections.deque(cases)
+        lanes: list[tuple[Flight, Case, bool] | None] = [None, None]
+        probed = [False, False]  # a probe-led session answered on this port since the last rotation
+        while True:
+            for k in (0, 1):
+                if lanes[k] is None and todo and not (self.stop or self.need_prelude):
+                    c = todo.popleft()
+                    self.lane_units += 1
+                    probe = self.lane_units - self.lane_probed_at[k] >= self.o.probe_every
+                    if probe:
+                        self.lane_probed_at[k] = self.lane_units
+                    answered = None if c.answered is None else [*LEAD_IDS[probe], *c.answered]
+                    session = Session([GET_STATUS, *c.frames] if probe else list(c.frames), half_close=True,
+                                      sync=c.expect == KEEP, answered=answered)  # fmt: skip
+                    lanes[k] = (Flight(host, ports[k], session, deadline), c, probe)
+                    self.history.append(session)
+                    self.unprobed.append(session)
+            live = [lane[0] for lane in lanes if lane is not None]
+            if not live:
                 return
-            if out.bad_reply is not None and not self._cut_by_refusal(c, out):
-                self.failure("bad-reply", out.bad_reply, covered, [c])
-                return
-            if out.timed_out:
-                what = "the connection neither answered nor closed after our end-of-stream"
-                self._timed_out(covered, [c], what, port)
-                return
-            owed = len(f.expected)
+            for f in step_flights(live):
+                k = next(i for i, lane in enumerate(lanes) if lane is not None and lane[0] is f)
+                _, c, probe = lanes[k]  # type: ignore[misc]
+                lanes[k] = None
+                if not self._judge_flight(f, c, probe, k, lanes):
+                    return
+                if probe:
+                    probed[k] = True
+                    if all(probed):
+                        probed = [False, False]
+                        self.stats.probes += 2
+                        self.prev_unit, self.unprobed = self.unprobed, []
+
+    def _judge_flight(self, f: Flight, c: Case, probe: bool, k: int, lanes: list[Any]) -> bool:
+        """The oracle of one finished flight; False when it failed (the other lane is run out first)."""
+        self.stats.units += 1
+        self.stats.singles += 1
+        out = f.out
+        self._count([c], "closed" if out.closed else "open")
+        for r in out.replies:
+            self.kb.learn(r)
+        kind = None
+        if out.refused:
+            kind = "refused"
+        elif out.bad_reply is not None and not self._cut_by_refusal(c, out):
+            kind = "bad-reply"
+        elif out.timed_out:
+            kind = "timed-out"
+        else:
             # the lead GET_STATUS is owed even before a malformed frame; past 16 KiB a close with unread input
             # may reset the connection and lose replies in flight (TCP), so only small cases are held to it
-            must = owed if c.expect == KEEP else (1 if probe and c.size < 1 << 14 else 0)
+            must = len(f.expected) if c.expect == KEEP else (1 if probe and c.size < 1 << 14 else 0)
             if len(out.replies) < must:
-                self._dropped(covered, [c], port)
-                return
-        if probe:
-            self.pair_units = 0
-            self.stats.probes += 2
-            self.prev_unit, self.unprobed = self.unprobed, []
+                kind = "dropped"
+        if kind is None:
+            return True
+        others = [lane[0] for lane in lanes if lane is not None]
+        if others:  # the other port's case runs out: the probe and the replay need the port free
+            fly(others)
+            for lane in lanes:
+                if lane is not None:
+                    self._count([lane[1]], "closed" if lane[0].out.closed else "open")
+            lanes[:] = [None, None]
+        covered = self.prev_unit + self.unprobed
+        port = self.ports[k]
+        if kind == "refused":
+            verdict = self._probe_other(port)
+            self.failure((verdict or "dead:").partition(":")[0], "connection refused on a fuzzed port", covered, [c])
+        elif kind == "bad-reply":
+            self.failure("bad-reply", out.bad_reply or "", covered, [c])
+        elif kind == "timed-out":
+            what = "the connection neither answered nor closed after our end-of-stream"
+            self._timed_out(covered, [c], what, port)
+        else:
+            self._dropped(covered, [c], port)
+        return False
 
     def _cut_by_refusal(self, case: Case, out: Outcome) -> bool:
         """A reply cut short when the target closed on a malformed case with our input still unread: TCP resets

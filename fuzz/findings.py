@@ -72,7 +72,7 @@ class FindingWriter:
             keep: dict[int, list[bytes]] = {}
             for k, j in items:
                 keep.setdefault(k, []).append(sessions[k].frames[j])
-            return [replace(sessions[k], frames=fr) for k, fr in sorted(keep.items())]
+            return [sessions[k].with_frames(fr) for k, fr in sorted(keep.items())]
 
         def test(items: list[tuple[int, int]]) -> bool:
             nonlocal tests

@@ -17,7 +17,7 @@ import select
 import socket
 import time
 
-from fuzz.target import CUT, GET_STATUS, RECV, Outcome, Session, check_order, expected_reply_ids, session_deadline
+from fuzz.target import CUT, GET_STATUS, RECV, Outcome, Session, check_order, session_deadline, session_reply_ids
 from spec import errors
 from spec.codec import REQUESTS, TelegramDecoder
 
@@ -29,7 +29,7 @@ class Flight:
         self.session = session
         self.out = Outcome()
         data = session.data
-        self.expected = expected_reply_ids(data)
+        self.expected = session_reply_ids(session)
         if session.sync:
             data += GET_STATUS
             self.expected.append(REQUESTS.CMD_GET_STATUS.ID)
@@ -130,6 +130,30 @@ def fly(flights: list[Flight]) -> None:
         wait = max(0.0, min(f.deadline for f in live) - now)
         writers = [f for f in live if f.sending or not f.connected]
         readable, writable, _ = select.select(live, writers, [], wait)
+        for f in writable:
+            if not f.done:
+                f.writable()
+        for f in readable:
+            if not f.done:
+                f.readable()
+
+
+def step_flights(flights: list[Flight]) -> list[Flight]:
+    """Drive ``flights`` until at least one of them is done (or past its deadline); the ones done."""
+    while True:
+        done = [f for f in flights if f.done]
+        if done:
+            return done
+        now = time.monotonic()
+        for f in flights:
+            if now >= f.deadline:
+                f._finish(timed_out=True)
+        done = [f for f in flights if f.done]
+        if done:
+            return done
+        wait = max(0.0, min(f.deadline for f in flights) - now)
+        writers = [f for f in flights if f.sending or not f.connected]
+        readable, writable, _ = select.select(flights, writers, [], wait)
         for f in writable:
             if not f.done:
                 f.writable()

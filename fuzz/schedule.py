@@ -26,7 +26,7 @@ from typing import Any
 from fuzz import generate, mutate
 from fuzz.case import Case
 from fuzz.knowledge import Knowledge
-from fuzz.wire import CLOSE, KEEP, classify, forbidden_ids
+from fuzz.wire import CLOSE, KEEP, forbidden_ids, survey
 from spec.codec import REQUESTS, encode
 from spec.model import enum_classes
 
@@ -138,8 +138,8 @@ class Scheduler:
             if forbidden_ids(case.data, self.forbidden):
                 self.dropped += 1
                 continue
-            expect = CLOSE if case.half_close else classify(case.data)
-            return replace(case, expect=expect)
+            kind, answered = survey(case.data)
+            return replace(case, expect=CLOSE if case.half_close else kind, answered=tuple(answered))
         return Case((_enc("CMD_GET_STATUS"),), "gen.fallback", "CMD_GET_STATUS", expect=KEEP)
 
     def _draw(self, rng: random.Random) -> Case:

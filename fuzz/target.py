@@ -17,17 +17,15 @@ import ipaddress
 import select
 import socket
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from fuzz.case import WHOLE, Delivery
-from fuzz.wire import split_frames
+from fuzz.wire import answered_ids, split_frames
 from spec import errors
 from spec.codec import REQUESTS, TelegramDecoder, encode
-from spec.model import load_telegrams
 from spec.telegram import Telegram
 
 GET_STATUS = encode(REQUESTS.CMD_GET_STATUS())
-ANSWERED = frozenset(t.id for t in load_telegrams() if t.answered)
 RECV = 1 << 16
 CUT = "reply cut off by the close"
 BIG_SEND = 1 << 16  # bytes; bigger writes interleave reading (see Conn._send_reading)
@@ -46,10 +44,15 @@ class Session:
     delivery: Delivery = WHOLE
     half_close: bool = False
     sync: bool = False
+    answered: list[int] | None = None  # ids of the answered requests among the frames, when known already
 
     @property
     def data(self) -> bytes:
         return b"".join(self.frames)
+
+    def with_frames(self, frames: list[bytes]) -> Session:
+        """The same session with other frames (their answered ids to be decoded again)."""
+        return replace(self, frames=frames, answered=None)
 
     def to_json(self) -> dict[str, object]:
         d = self.delivery
@@ -70,16 +73,12 @@ class Outcome:
 
 def expected_reply_ids(data: bytes) -> list[int]:
     """Ids of the answered requests among the frames of ``data``, up to the first malformed frame."""
-    dec = TelegramDecoder("request")
-    dec.receive_data(data)
-    ids = []
-    try:
-        for t in dec:
-            if t.ID in ANSWERED:
-                ids.append(t.ID)
-    except errors.RemoteProtocolError:
-        pass
-    return ids
+    return answered_ids(data)
+
+
+def session_reply_ids(session: Session) -> list[int]:
+    """``expected_reply_ids`` of the session's frames (known already, or decoded now)."""
+    return list(session.answered) if session.answered is not None else answered_ids(session.data)
 
 
 def connect(host: str, port: int, timeout: float) -> socket.socket:
@@ -215,7 +214,7 @@ def play(host: str, port: int, session: Session, deadline_s: float, record: bool
 def play_on(conn: Conn, session: Session, deadline_s: float, out: Outcome) -> None:
     """Run ``session`` on an open connection (a kept batch connection, or a fresh one)."""
     data = session.data
-    expected = expected_reply_ids(data)
+    expected = session_reply_ids(session)
     try:
         conn.send(data, session.delivery)
         if session.sync:

@@ -22,7 +22,7 @@ from typing import Any
 
 from spec import errors
 from spec.codec import HEADER, REQUESTS, TelegramDecoder, frame
-from spec.model import FieldDef
+from spec.model import FieldDef, load_telegrams
 
 KEEP, CLOSE, PARTIAL = "keep", "close", "partial"
 
@@ -31,6 +31,7 @@ _LEN = struct.Struct(">I")
 _DOUBLE = struct.Struct(">d")
 
 CLOSE_SOCKET_ID = REQUESTS.CMD_CLOSE_SOCKET.ID
+ANSWERED = frozenset(t.id for t in load_telegrams() if t.answered)  # the requests a server replies to
 
 
 @dataclass(frozen=True)
@@ -113,15 +114,30 @@ def frame_lie(data: bytes, declared: int) -> bytes:
 
 def classify(data: bytes) -> str:
     """What a strict server does with ``data`` sent on a fresh connection (see the module rules)."""
+    return survey(data)[0]
+
+
+def answered_ids(data: bytes) -> list[int]:
+    """Ids of the answered requests among the frames of ``data``, up to the first malformed frame."""
+    return survey(data)[1]
+
+
+def survey(data: bytes) -> tuple[str, list[int]]:
+    """``classify`` and ``answered_ids`` of ``data`` from one strict decoding."""
     dec = TelegramDecoder("request")
     dec.receive_data(data)
+    ids: list[int] = []
+    expect = ""
     try:
         for telegram in dec:
-            if telegram.ID == CLOSE_SOCKET_ID:
-                return CLOSE
+            ident = telegram.ID
+            if ident in ANSWERED:
+                ids.append(ident)
+            elif ident == CLOSE_SOCKET_ID:
+                expect = CLOSE
     except errors.RemoteProtocolError:
-        return CLOSE
-    return PARTIAL if dec.pending else KEEP
+        return CLOSE, ids
+    return expect or (PARTIAL if dec.pending else KEEP), ids
 
 
 def frame_ids(data: bytes) -> list[int]:
@@ -172,6 +188,7 @@ __all__ = [
     "Group",
     "Raw",
     "Str",
+    "answered_ids",
     "classify",
     "forbidden_ids",
     "frame",
@@ -181,4 +198,5 @@ __all__ = [
     "pack_length",
     "pack_value",
     "split_frames",
+    "survey",
 ]
