@@ -67,6 +67,7 @@ class Physics:
         self.shape: pymunk.Poly | None = None
         self._static: list[pymunk.Shape] = []
         self._obstacles: dict[object, pymunk.Shape] = {}
+        self._known: tuple[float, float, float] | None = None  # the last move's end pose, if free
         self.footprint = footprint
         self.set_footprint(footprint)
 
@@ -74,12 +75,14 @@ class Physics:
     def set_footprint(self, footprint: Footprint) -> None:
         if self.shape is not None:
             self.space.remove(self.shape)
+        self._known = None
         self.footprint = footprint
         self.shape = pymunk.Poly(self.body, footprint.corners)
         self.space.add(self.shape)
 
     def set_map(self, segs: F64, circs: F64) -> None:
         """Replace the map's static shapes (walls, auxiliary lines, pillars)."""
+        self._known = None
         if self._static:
             self.space.remove(*self._static)
         sb = self.space.static_body
@@ -90,6 +93,7 @@ class Physics:
 
     def set_obstacle(self, key: object, circle: tuple[float, float, float] | None) -> None:
         """Place, move (same key) or remove (None) a round obstacle."""
+        self._known = None
         old = self._obstacles.pop(key, None)
         if old is not None:
             self.space.remove(old)
@@ -115,9 +119,14 @@ class Physics:
     def move(self, x: float, y: float, a: float, v: float, w: float, dt: float) -> tuple[float, float, float, bool]:
         """The pose after driving (v, w) for ``dt`` as far as the world lets it, and whether it hit something."""
         target = arc(x, y, a, v, w, dt)
-        start_depth = self.overlap(x, y, a)
+        known = self._known
+        # the pose the last move ended at, free, nothing changed since: no second query (one per period)
+        start_depth = 0.0 if known is not None and known == (x, y, a) else self.overlap(x, y, a)
         depth = self.overlap(*target)
+        self._known = None
         if depth <= start_depth + 1e-6 and (depth == 0.0 or start_depth > 0.0):
+            if depth == 0.0:  # the caller keeps the angle in [-pi, pi): so is the key (World.move)
+                self._known = (target[0], target[1], (target[2] + math.pi) % (2 * math.pi) - math.pi)
             return (*target, depth > 0.0)
         lo, hi = 0.0, 1.0  # lo: a free (or no deeper) fraction of the step
         for _ in range(_BISECT):
