@@ -6,9 +6,9 @@ Rules:
   platform's footprint (a box from the Geometry parameters, erratum E-MOT-002).
 - ``move(pose, v, w, dt)`` integrates the differential drive exactly (an arc) and asks pymunk whether the
   footprint overlaps anything there. If it does, the platform advances only the free fraction of the step
-  (bisection on the arc) and reports contact: driving into a wall is a collision, never a tunnel (a step is
-  at most a few cm, far less than the footprint). A pose that already overlaps (an obstacle dropped onto the
-  platform, a kidnap) may move only where the overlap does not grow.
+  (bisection on the arc) and reports contact: driving into a wall is a collision, never a tunnel (a checked
+  step is at most ``MAX_STEP``, far less than the footprint; a longer one is split). A pose that already
+  overlaps (an obstacle dropped onto the platform, a kidnap) may move only where the overlap does not grow.
 - pymunk does the contact tests and holds the spatial index; the poses are ours (exact arc integration).
 """
 
@@ -23,6 +23,8 @@ import pymunk
 from reference_server.world.geometry import F64
 
 _BISECT = 8  # 1/256 of a step: well under a millimetre
+MAX_STEP = 50.0  # mm a single checked step may drive (a control period at MaxTransVel 1500 mm/s: 30 mm)
+MAX_TURN = 0.1  # rad a single checked step may turn
 WIDTH_OVER_TRACK = 110.0  # mm: body width = DistWheels + this (E-PAR-013: 430 mm track, 540 mm body)
 
 
@@ -117,7 +119,21 @@ class Physics:
         return depth
 
     def move(self, x: float, y: float, a: float, v: float, w: float, dt: float) -> tuple[float, float, float, bool]:
-        """The pose after driving (v, w) for ``dt`` as far as the world lets it, and whether it hit something."""
+        """The pose after driving (v, w) for ``dt`` as far as the world lets it, and whether it hit something.
+
+        A step longer than ``MAX_STEP`` mm or ``MAX_TURN`` rad (a control loop that fell behind hands over a long
+        ``dt``) is driven in equal parts, each checked, so a long step cannot pass through a wall either."""
+        parts = math.ceil(max(abs(v * dt) / MAX_STEP, abs(w * dt) / MAX_TURN, 1.0))
+        if parts > 1:
+            hit = False
+            for _ in range(parts):
+                x, y, a, hit = self._move(x, y, a, v, w, dt / parts)
+                if hit:
+                    break
+            return x, y, a, hit
+        return self._move(x, y, a, v, w, dt)
+
+    def _move(self, x: float, y: float, a: float, v: float, w: float, dt: float) -> tuple[float, float, float, bool]:
         target = arc(x, y, a, v, w, dt)
         known = self._known
         # the pose the last move ended at, free, nothing changed since: no second query (one per period)

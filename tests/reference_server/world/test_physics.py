@@ -64,3 +64,12 @@ def test_obstacles_come_and_go_and_a_pose_inside_one_may_only_get_out() -> None:
     ph.set_footprint(Footprint.from_params(300.0, 0.0, 200.0))
     ph.set_obstacle("post", (400.0, 0.0, 100.0))
     assert ph.overlap(0.0, 0.0, 0.0) == 0.0 and ph.overlap(200.0, 0.0, 0.0) > 0
+
+
+def test_a_long_step_is_split_and_does_not_tunnel() -> None:
+    ph = Physics(FOOTPRINT)
+    ph.set_map(segments([(1000, -2000, 1000, 2000)]), circles([]))
+    x, _, _, hit = ph.move(0.0, 0.0, 0.0, 1000.0, 0.0, 10.0)  # a control loop 10 s behind: 10 m in one call
+    assert hit and 1000 - FOOTPRINT.front - 1.0 <= x <= 1000 - FOOTPRINT.front  # touching, not through
+    _, _, a, hit = ph.move(0.0, 0.0, 0.0, 0.0, 1.0, 10.0)  # 10 rad on the spot, nothing near: all of it
+    assert not hit and a == pytest.approx(10.0)
