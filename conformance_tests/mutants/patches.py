@@ -81,8 +81,11 @@ def save_does_nothing() -> None:
 
 def stop_keeps_command() -> None:
     from reference_server import kinematics
+    from reference_server.world import world
 
+    # both motion models of the server (pltf serve --motion ideal / world)
     kinematics.Drive.stop = lambda self: None  # type: ignore[method-assign]
+    world.World.stop = lambda self: None  # type: ignore[method-assign]
 
 
 def no_watchdog() -> None:
