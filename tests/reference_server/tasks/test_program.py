@@ -3,13 +3,14 @@ CMD_BREAK / CMD_CONTINUE / CMD_STOP, priorities, user events, and local versus r
 
 from __future__ import annotations
 
+import re
 import threading
 import time
 from pathlib import Path
 
 import pytest
 
-from clients.pltf_client import OperationState, Status
+from clients.pltf_client import OperationState
 from reference_server.tasks.program import load_program
 from spec.documents import DocumentError
 from tests.reference_server.tasks.conftest import SCALE, Session, program, program_server, task
@@ -104,15 +105,17 @@ def test_a_user_event_releases_the_waiting_task(session: Session) -> None:
     assert at(lines, "B") - at(lines, "A") < 10.0
 
 
+REACHED = re.compile(r"target reached: x (-?\d+) mm, y (-?\d+) mm")
+
+
 def _targets(session: Session, stop: threading.Event, out: list[tuple[int, int]]) -> None:
-    """Sample the status; every place the platform reports its target reached, once each."""
+    """Every target the platform reports reached, in order: its "target reached" log lines, read from the
+    protocol queue of CMD_GET_DEBUG_DATA (polled well within the queue's length)."""
     with Session(session.server, port_index=1) as watcher:
         while not stop.is_set():
-            st: Status = watcher.status()
-            here = (st.est_x_mm, st.est_y_mm)
-            if st.target_reached and (not out or abs(out[-1][0] - here[0]) + abs(out[-1][1] - here[1]) > 300):
-                out.append(here)
+            watcher.log()
             time.sleep(0.002)
+        out.extend((int(m[1]), int(m[2])) for m in map(REACHED.search, watcher.log()) if m)
 
 
 def _watched(session: Session, run: object) -> list[tuple[int, int]]:
