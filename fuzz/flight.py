@@ -46,6 +46,30 @@ class Flight:
         code = self.sock.connect_ex((host, port))
         if code not in (0, errno.EINPROGRESS):
             self._finish(refused=code == errno.ECONNREFUSED, closed=code != errno.ECONNREFUSED)
+        else:
+            self._send_now()
+
+    def _send_now(self) -> None:
+        """Send at once: on loopback the handshake is done when ``connect_ex`` returns (no select round)."""
+        try:
+            sent = self.sock.send(self.data[:CHUNK])
+        except (BlockingIOError, InterruptedError):
+            return  # still connecting (or a full buffer): select says when
+        except ConnectionRefusedError:
+            self._finish(refused=True)
+            return
+        except OSError as exc:
+            if exc.errno in (errno.ENOTCONN, errno.EINPROGRESS, errno.EALREADY):
+                return
+            self.connected, self.sending = True, False  # the peer is gone; read what it said before it went
+            return
+        self.connected = True
+        self.pos = sent
+        if self.pos >= len(self.data):
+            self.sending = False
+            if self.session.half_close:
+                with contextlib.suppress(OSError):
+                    self.sock.shutdown(socket.SHUT_WR)
 
     def fileno(self) -> int:
         return self.sock.fileno()
