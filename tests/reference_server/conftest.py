@@ -203,12 +203,19 @@ STARTED = re.compile(r"server started at port (\d+)")
 
 
 class ServerProcess:
-    def __init__(self, data_dir: Path, log_path: Path, *extra: str, module: str = "reference_server") -> None:
+    """``python -m reference_server`` (or ``pltf serve``); without the fake hardware unless ``hardware=True``
+    (the process tests are about storage, signals and exit codes, and time the server's work)."""
+
+    def __init__(
+        self, data_dir: Path, log_path: Path, *extra: str, module: str = "reference_server", hardware: bool = False
+    ) -> None:
         self.log_path = log_path
         cmd = [sys.executable, "-m", module]
         if module == "pltf_cli.main":
             cmd.append("serve")
         cmd += ["--ports", "0,0", "--data-dir", str(data_dir), "--time-scale", str(TIME_SCALE), *extra]
+        if not hardware:
+            cmd.append("--no-hardware")
         log_path.parent.mkdir(parents=True, exist_ok=True)
         self.log_file = log_path.open("wb")
         self.proc = subprocess.Popen(cmd, cwd=REPO, stdout=self.log_file, stderr=subprocess.STDOUT)

@@ -3,13 +3,25 @@ bus decode with spec/can/pltf.dbc, and GET_STATUS / GET_CAN_MESSAGES report what
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import can
 
 from fake_hardware import ALL_NODES, Node, St, candb
 from reference_server.world.model import factory as world_factory
-from tests.reference_server.conftest import OP_NOT_INIT, OP_READY, STATUS_BOARDS, rig
+from spec.codec import REQUESTS
+from tests.reference_server.conftest import (
+    EM_ACTIVE,
+    OP_NOT_INIT,
+    OP_READY,
+    STATUS_BOARDS,
+    Client,
+    Control,
+    ServerProcess,
+    rig,
+)
+from tests.reference_server.helpers import wait_for
 
 PROBED = [candb.message_for(n, "Probe").name for n in ALL_NODES]
 
@@ -160,3 +172,19 @@ def test_shutdown_takes_the_bus_down(data_dir: Path) -> None:
         assert r.sniffer.names(0.2) == set()  # every board is silent again (E-HW-004)
         r.bring_up()  # and the platform comes back
         r.wait(lambda s: all(getattr(s, f) == 0 for f in STATUS_BOARDS), "every board back")
+
+
+def test_the_command_line_server_has_the_hardware_and_its_control_port(tmp_path: Path) -> None:
+    srv = ServerProcess(tmp_path / "data", tmp_path / "log", "--control-port", "0", "--motion", "ideal", hardware=True)
+    try:
+        port = int(wait_for(lambda: re.findall(r"control channel started at port (\d+)", srv.log()), timeout=10)[0])
+        control = Control(port)
+        with Client(srv.ports[0]) as client:
+            client.send(REQUESTS.CMD_CONNECT_TO_PLTF())
+            wait_for(lambda: control("status")["bus_up"] and client.status().io_status != St.ABSENT, timeout=10)
+            control("estop press")
+            assert wait_for(lambda: client.status().emergency_state == EM_ACTIVE, timeout=10)
+        control.close()
+    finally:
+        srv.kill()
+    assert "CAN nodes" in srv.log()
