@@ -242,3 +242,20 @@ def test_shortest_failing_prefix_bisects() -> None:
 
     assert shortest_failing_prefix(list(range(130)), fails)[-1] == 77
     assert len(calls) <= 8
+
+
+def test_a_cases_answered_ids_are_those_a_session_would_decode() -> None:
+    from fuzz.target import Session, expected_reply_ids, session_reply_ids
+
+    sched = Scheduler(3, safety.forbidden(True), Knowledge())
+    for i in range(400):
+        case = sched.case(i)
+        assert case.answered is not None
+        assert list(case.answered) == expected_reply_ids(case.data), case.note
+        session = Session(list(case.frames), answered=list(case.answered))
+        assert session_reply_ids(session) == expected_reply_ids(session.data)
+        assert session.with_frames(session.frames[:1]).answered is None  # fewer frames: decoded again
+    status, bad = encode(REQUESTS.CMD_GET_STATUS()), b"\xff\x01\xfe\x02\x00\x00\x00\x01\xc8"
+    assert classify(status + bad) == CLOSE and expected_reply_ids(status + bad) == [REQUESTS.CMD_GET_STATUS.ID]
+    assert classify(encode(REQUESTS.CMD_CLOSE_SOCKET()) + status) == CLOSE
+    assert classify(status[:-1]) == PARTIAL and classify(status) == KEEP

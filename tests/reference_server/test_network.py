@@ -334,3 +334,25 @@ def test_an_internal_error_closes_only_that_connection(server: ServerThread, mon
             assert c.closed_by_server()
         assert bystander.status().NAME == "CMD_GET_STATUS"
     assert server.alive
+
+
+def test_replies_the_client_does_not_read_yet_are_all_delivered_in_order(server: ServerThread) -> None:
+    """Far more reply bytes than the socket buffers hold: reading pauses, then every reply arrives, in order."""
+    with Client(server.ports[0]) as c:
+        n = 300
+        c.send_raw(b"".join(encode(R.CMD_GET_PLTF_PARAM_VEC()) if i % 2 else encode(R.CMD_GET_STATUS())
+                            for i in range(n)))  # fmt: skip
+        time.sleep(0.3)  # the server runs into its high-water mark while we do not read
+        names = [c.receive().NAME for _ in range(n)]
+        assert names == ["CMD_GET_PLTF_PARAM_VEC" if i % 2 else "CMD_GET_STATUS" for i in range(n)]
+        assert c.status().NAME == "CMD_GET_STATUS"
+
+
+def test_close_socket_after_a_reply_backlog_still_sends_the_replies(server: ServerThread) -> None:
+    with Client(server.ports[1]) as c:
+        c.send_raw(b"".join(encode(R.CMD_GET_PLTF_PARAM_VEC()) for _ in range(50)) + encode(R.CMD_CLOSE_SOCKET()))
+        time.sleep(0.2)
+        assert [c.receive().NAME for _ in range(50)] == ["CMD_GET_PLTF_PARAM_VEC"] * 50
+        assert c.closed_by_server()
+    with Client(server.ports[1]) as again:
+        assert wait_for(lambda: _served(again))
