@@ -42,8 +42,8 @@ BATCH_CASES = 128
 BATCH_BYTES = 1 << 18
 WINDOWS_PER_STATE = 4  # windows fuzzed in one (state, mode) before the plan moves on
 BIG_CASE = 1 << 20  # bytes
-# The case generator runs in a thread; with the default 5 ms GIL switch interval the main thread, back from a
-# socket wait, can queue behind it for milliseconds per unit. A short interval keeps unit latency low.
+# Where the case generator runs in a thread (no fork), the main thread, back from a socket wait, can queue
+# behind it for milliseconds per unit with the default 5 ms GIL switch interval; a short one keeps it low.
 SWITCH_INTERVAL = 0.0002  # s
 SAVE_EVERY = 30.0  # s between saves of the corpus progress (a killed run resumes from there)
 HISTORY = 64  # sessions kept for a finding that needs more than its last unit
@@ -76,7 +76,7 @@ class Options:
     deadline: float = 2.0
     minimize_seconds: float = 60.0
     probe_every: int = 4  # units between liveness probes (1: after every unit)
-    lanes: int = 2  # 2: refused cases run in pairs, one per port (fuzz.flight); 1: one at a time
+    lanes: int = 2  # 2: refused cases run in two lanes, one per port (fuzz.flight); 1: one at a time
     command: str = "pltf fuzz"
 
 
