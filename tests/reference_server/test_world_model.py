@@ -6,7 +6,10 @@ from __future__ import annotations
 from pathlib import Path
 
 from reference_server.motion_api import Frame, advance_ideal
+from reference_server.platform import Platform
+from reference_server.storage import Storage
 from reference_server.world.model import factory
+from spec.codec import REQUESTS
 from spec.documents import DocumentKind, validate_document
 from spec.parameters import ParameterStore
 from tests.reference_server.helpers import REPO
@@ -46,3 +49,19 @@ def test_the_office_map_is_seen_by_the_laser() -> None:
     advance_ideal(world, DT, DT)
     fields = world.status_fields()
     assert fields["scan"] and fields["localization_lost"] == 0
+
+
+def test_a_map_beyond_the_telegrams_range_is_refused_and_the_status_still_answers(tmp_path: Path) -> None:
+    # E-XML-025: the fuzzer's map (a 400-digit coordinate) made every later GET_STATUS fail in the world
+    storage = Storage(tmp_path / "data")
+    storage.seed_from_fixtures()
+    platform = Platform(storage, seed=1, motion=factory(1))
+    platform.boot(0.0)
+    huge = "1" + "0" * 400
+    xml = f'<map><layer index="0"><line><point x="{huge}" y="0"/><point x="1" y="1"/></line></layer></map>'
+    outcome = platform.handle(REQUESTS.CMD_SET_MAP(name="huge", xml=xml), 0.0)
+    assert outcome.refused is not None and "2147483647" in outcome.refused
+    for k in range(1, 11):
+        platform.tick(k * DT)
+    status = platform.handle(REQUESTS.CMD_GET_STATUS(), 10 * DT).reply
+    assert status is not None and status.scan  # the office map is still active and seen
