@@ -24,7 +24,9 @@ ROOT = {"map": b'<map Version="1.0">', "roadmap": b'<roadmap Version="1.0">', "p
 END = {"map": b"</map>", "roadmap": b"</roadmap>", "program": b"</program>"}
 BIG_POINTS = 300_000
 MILLION = 1_000_000
-HUGE_DIGITS = b"9" * 5000  # a schema-valid xs:decimal no float or bounded int can hold
+HUGE_DIGITS = b"9" * 5000  # an xs:decimal no float or bounded int can hold (out of range since E-XML-025)
+MAX_COORD = b"2147483647"  # the edges of the ranges documents may use (E-XML-025: what the telegrams carry)
+MAX_ANGLE = b"2147483"
 
 
 def _doc(kind: str, body: bytes, doctype: bytes = b"") -> bytes:
@@ -153,12 +155,12 @@ def _absurd_map(choice: int) -> bytes:
         body += b"</prohibit>"
     elif choice == 2:  # zero-length lines and a zero/huge radius circle
         body = b"<line>" + _polygon([(1, 1), (1, 1)]) + b'</line><circle><center x="0" y="0"/><radius r="0"/></circle>'
-        body += b'<circle><center x="0" y="0"/><radius r="' + HUGE_DIGITS + b'"/></circle>'
-    elif choice == 3:  # coordinates no machine number holds
-        big = b'<point x="' + HUGE_DIGITS + b'" y="-' + HUGE_DIGITS + b'"/>'
-        body = b"<line>" + big + big + b"</line>"
+        body += b'<circle><center x="0" y="0"/><radius r="' + MAX_COORD + b'"/></circle>'
+    elif choice == 3:  # coordinates at the edges of the range, a line across all of it
+        big = b'<point x="' + MAX_COORD + b'" y="-' + MAX_COORD + b'"/>'
+        body = b"<line>" + big + b'<point x="-' + MAX_COORD + b'" y="' + MAX_COORD + b'"/></line>'
     elif choice == 4:  # 32-bit extremes and sub-micron decimals
-        body = b"<line>" + _polygon([(2**31 - 1, -(2**31)), (-(2**31), 2**31 - 1)]) + b"</line>"
+        body = b"<line>" + _polygon([(2**31 - 1, -(2**31 - 1)), (-(2**31 - 1), 2**31 - 1)]) + b"</line>"
         body += b'<line><point x="0.' + b"0" * 3000 + b'1" y="-0.0"/><point x="1000.000" y="+1"/></line>'
     else:  # many layers with the same index, the robot far outside its work area
         body = b"".join(
@@ -190,8 +192,8 @@ def _absurd_roadmap(choice: int) -> bytes:
         edges = b"".join(b'<edge startstation="s%d" endstation="s%d"/>' % (i, j) for i in range(n) for j in range(n))
         return _doc("roadmap", b"<stations>" + stations + b"</stations><edges>" + edges + b"</edges>")
     if choice == 3:  # absurd numbers
-        stations = st % (0, 0, b"-" + HUGE_DIGITS, HUGE_DIGITS) + st % (1, 1, b"360000000000", b"0.000001")
-        edge = b'<edge startstation="s0" endstation="s1"><points>' + _polygon([(2**31, -(2**31) - 1)] * 100)
+        stations = st % (0, 0, b"-" + MAX_ANGLE, MAX_COORD) + st % (1, 1, MAX_ANGLE, b"0.000001")
+        edge = b'<edge startstation="s0" endstation="s1"><points>' + _polygon([(2**31 - 1, -(2**31 - 1))] * 100)
         return _doc("roadmap", b"<stations>" + stations + b"</stations><edges>" + edge + b"</points></edge></edges>")
     # a long edge polyline
     stations = st % (0, 0, b"0", b"0") + st % (1, 1, b"0", b"1")
@@ -210,7 +212,7 @@ def _absurd_program(choice: int) -> bytes:
     elif choice == 1:  # goto to a label that does not exist
         task = b'<task name="t"><goto label="nowhere" condition="true"/></task>'
     elif choice == 2:  # waits no clock reaches
-        task = b'<task name="t"><wait><delay amount="' + HUGE_DIGITS + b'"/></wait>'
+        task = b'<task name="t"><wait><delay amount="' + MAX_ANGLE + b'"/></wait>'
         task += b'<wait timeout="0" timeoutlabel="x"><random min="1000000" max="0"/></wait></task>'
     elif choice == 3:  # many tasks with the same name and priority
         task = b"".join(
@@ -218,10 +220,28 @@ def _absurd_program(choice: int) -> bytes:
         )
     elif choice == 4:  # load of documents that do not exist, parameters set to nonsense
         task = b'<task name="t"><load map="no_such_map" roadmap="nul"/><parameter><set key="IpoTransVel" '
-        task += b'value="-' + HUGE_DIGITS[:400] + b'"/></parameter><turnhead angle="' + HUGE_DIGITS + b'"/></task>'
+        task += b'value="-' + HUGE_DIGITS[:400] + b'"/></parameter><turnhead angle="' + MAX_ANGLE + b'"/></task>'
     else:  # a long straight program
         task = b'<task name="t">' + b'<log type="info" message="x"/>' * 40_000 + b"</task>"
     return _doc("program", task)
+
+
+def huge_number(kind: str, rng: random.Random) -> bytes:
+    """Numbers no machine number holds where the schema wants a coordinate, an angle or a duration (refused
+    since E-XML-025; a target that takes them must not fail later on them)."""
+    if kind == "roadmap":
+        st = (
+            b'<station id="s0" name="S0" angle="-'
+            + HUGE_DIGITS
+            + b'"><point x="'
+            + HUGE_DIGITS
+            + b'" y="0"/></station>'
+        )
+        return _doc("roadmap", b"<stations>" + st + b"</stations><edges/>")
+    if kind == "program":
+        return _doc("program", b'<task name="t"><wait><delay amount="' + HUGE_DIGITS + b'"/></wait></task>')
+    big = b'<point x="' + HUGE_DIGITS + b'" y="-' + HUGE_DIGITS + b'"/>'
+    return _doc("map", b'<layer index="0"><line>' + big + big + b"</line></layer>")
 
 
 Attack = Callable[[str, random.Random], bytes]
@@ -238,6 +258,7 @@ ATTACKS: dict[str, Attack] = {
     "huge_attribute": huge_attribute,
     "many_attributes": many_attributes,
     "bad_encoding": bad_encoding,
+    "huge_number": huge_number,
 }
 
 ABSURD: dict[str, Attack] = {"map": absurd_map, "roadmap": absurd_roadmap, "program": absurd_program}

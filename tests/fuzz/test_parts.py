@@ -184,6 +184,9 @@ def test_absurd_documents_are_schema_valid_and_attacks_are_refused() -> None:
     for name in ("billion_laughs", "xxe_file", "xxe_network", "xxe_parameter", "quadratic_blowup"):
         with pytest.raises(DocumentError):
             validate_document("map", xml_attacks.ATTACKS[name]("map", random.Random(0)))  # type: ignore[arg-type]
+    for kind in ("map", "roadmap", "program"):  # E-XML-025: out of the range the telegrams carry
+        with pytest.raises(DocumentError):
+            validate_document(kind, xml_attacks.huge_number(kind, random.Random(0)))  # type: ignore[arg-type]
     assert b"127.0.0.1" in xml_attacks.xxe_network("map", random.Random(0))
 
 
