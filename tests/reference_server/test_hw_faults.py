@@ -148,9 +148,9 @@ def test_serial_corruption_and_silence_of_the_laser_scanner(data_dir: Path) -> N
     with rig(data_dir, motion=world_factory(1)) as r:
         st = r.wait(lambda s: len(s.scan) > 100, "a scan from the serial scanner")
         assert all(abs(x) < 32768 and abs(y) < 32768 for x, y in st.scan)
-        r.control("serial-corrupt 0.5")
+        r.control("serial-corrupt 0.3")
         r.wait(lambda s: r.control("status")["scanner"]["crc_errors"] >= 3, "corrupt telegrams rejected")
-        assert len(r.status().scan) > 100  # the good half still arrives
+        r.wait(lambda s: len(s.scan) > 100, "the good telegrams still arrive")
         r.control("serial-corrupt 1")
         r.wait(lambda s: s.scan == () and s.lines == (), "nothing valid: the scanner counts as silent")
         r.wait_log("laser scanner silent")
