@@ -166,7 +166,8 @@ def _close_pairs(points: F64) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int
     return i[close], j[close]
 
 
-_GRID = 2000.0  # mm: cell size of the grid of wall boxes in ``_on_other_wall``
+_GRID = 2000.0  # mm: cell size of the grid of wall boxes in ``_on_other_wall`` (at the least)
+_MAX_CELLS = 1 << 21  # wall-box cells at the most: a map of huge walls gets coarser cells, not terabytes
 _ROW = 1 << 32  # cell key = column * _ROW + row (rows offset to stay positive)
 
 
@@ -176,16 +177,21 @@ def _on_other_wall(points: F64, own: npt.NDArray[np.int64], walls: F64) -> BOOL:
     out = np.zeros(len(points), dtype=bool)
     if len(points) == 0:
         return out
-    lo = np.floor((np.minimum(walls[:, :2], walls[:, 2:]) - _JOIN_TOL) / _GRID).astype(np.int64)
-    hi = np.floor((np.maximum(walls[:, :2], walls[:, 2:]) + _JOIN_TOL) / _GRID).astype(np.int64)
-    span = hi - lo + 1
-    count = span[:, 0] * span[:, 1]
+    grid = _GRID
+    while True:  # coarser cells until the boxes cover few enough (each cell's candidates are measured exactly)
+        lo = np.floor((np.minimum(walls[:, :2], walls[:, 2:]) - _JOIN_TOL) / grid).astype(np.int64)
+        hi = np.floor((np.maximum(walls[:, :2], walls[:, 2:]) + _JOIN_TOL) / grid).astype(np.int64)
+        span = hi - lo + 1
+        count = span[:, 0] * span[:, 1]
+        if int(count.sum()) <= max(_MAX_CELLS, 4 * len(walls)):
+            break
+        grid *= 2.0
     wall = np.repeat(np.arange(len(walls)), count)
     k = np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count)  # the cell within the box
     key = (lo[wall, 0] + k % span[wall, 0]) * _ROW + (lo[wall, 1] + k // span[wall, 0] + _ROW // 2)
     order = np.argsort(key, kind="stable")
     key, wall = key[order], wall[order]
-    cell = np.floor(points / _GRID).astype(np.int64)
+    cell = np.floor(points / grid).astype(np.int64)
     pkey = cell[:, 0] * _ROW + cell[:, 1] + _ROW // 2
     first, last = np.searchsorted(key, pkey, "left"), np.searchsorted(key, pkey, "right")
     m = last - first

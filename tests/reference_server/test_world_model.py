@@ -65,3 +65,18 @@ def test_a_map_beyond_the_telegrams_range_is_refused_and_the_status_still_answer
         platform.tick(k * DT)
     status = platform.handle(REQUESTS.CMD_GET_STATUS(), 10 * DT).reply
     assert status is not None and status.scan  # the office map is still active and seen
+
+
+def test_walls_as_long_as_the_telegrams_allow_are_observed_without_a_huge_grid() -> None:
+    # a fuzzer's map: a wall across the whole int32 range made the corner search ask for 33 TiB
+    big = 2147483647
+    lines = (f'<line><point x="-{big}" y="-{big}"/><point x="{big}" y="{big}"/></line>'
+             '<line><point x="0" y="0"/><point x="0" y="-5000"/></line>'  # ends on the long wall: a T
+             f'<line><point x="{big}" y="0"/><point x="-{big}" y="1"/></line>')  # fmt: skip
+    tree = validate_document(DocumentKind.MAP, f'<map><layer index="0">{lines}</layer></map>'.encode())
+    world = factory(2)(ParameterStore().get)
+    world.set_map_tree(tree)
+    world.place(Frame(3000, -1000, 0.0))
+    advance_ideal(world, DT, DT)
+    fields = world.status_fields()
+    assert fields["scan"]
