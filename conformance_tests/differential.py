@@ -46,7 +46,7 @@ def volatile() -> dict[str, dict[str, Any]]:
 
 @dataclass(frozen=True)
 class Step:
-    kind: str  # "send", "get", "rest" (wait until the platform is at rest), "state"
+    kind: str  # "send", "get", "rest" (wait until the move's target is reached and the platform at rest), "state"
     name: str = ""
     fields: tuple[tuple[str, Any], ...] = ()
 
@@ -207,6 +207,8 @@ def play(config: Config, steps: list[Step]) -> list[Telegram | None]:
                 replies.append(None)
             elif step.kind == "rest":
                 ctx.sleep(0.5)  # the move has started by now
+                # the move's end: its target reached (guide 6.4), not a pause between driving and the end turn
+                ctx.poll(ctx.status, lambda s: bool(s.telegram.target_reached), within=30.0)
                 rest(ctx, within=30.0)
                 replies.append(None)
             elif step.kind == "send":

@@ -131,7 +131,7 @@ class InProcessServer:
         import asyncio
 
         from reference_server import network
-        from reference_server.platform import Platform
+        from reference_server.cli import build_platform
         from reference_server.storage import Storage
 
         log = logging.getLogger("pltf.server")
@@ -139,7 +139,7 @@ class InProcessServer:
         log.setLevel(logging.CRITICAL)  # its log lines are not the suite's output
         storage = Storage(self.data_dir)
         storage.seed_from_fixtures()
-        platform = Platform(storage, seed=self.seed)
+        platform = build_platform(storage, self.seed)  # what ``pltf serve`` runs
         ready = threading.Event()
 
         def on_ready(server: Any) -> None:
@@ -154,6 +154,7 @@ class InProcessServer:
             except BaseException as exc:
                 self._error = exc
             finally:
+                platform.close()  # its CAN bus
                 ready.set()
 
         self._thread = threading.Thread(target=main, daemon=True, name="reference-server")

@@ -115,6 +115,21 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
 
 
+def build_platform(
+    storage: Storage,
+    seed: int,
+    *,
+    motion: str = "world",
+    hardware: bool = True,
+    can_interface: str = "virtual",
+    can_channel: str | None = None,
+) -> Platform:
+    """The platform ``pltf serve`` runs (its defaults: the world, the fake hardware, the task interpreter); the
+    conformance suite's in-process reference builds the same one."""
+    link = hardware_link.factory(can_interface, can_channel) if hardware else None
+    return Platform(storage, seed=seed, motion=MOTION[motion](seed), program=program_factory, hardware=link)
+
+
 def run(args: argparse.Namespace) -> int:
     logging.basicConfig(level=args.log_level, format=LOG_FORMAT, datefmt=LOG_DATE, stream=sys.stderr, force=True)
     try:
@@ -128,10 +143,9 @@ def run(args: argparse.Namespace) -> int:
     if args.no_hardware and args.control_port is not None:
         print("pltf: error: --control-port needs the fake hardware (drop --no-hardware)", file=sys.stderr)
         return 2
-    hardware = None if args.no_hardware else hardware_link.factory(args.can_interface, args.can_channel)
     try:
-        platform = Platform(storage, seed=args.seed, motion=MOTION[args.motion](args.seed), program=program_factory,
-                            hardware=hardware)  # fmt: skip
+        platform = build_platform(storage, args.seed, motion=args.motion, hardware=not args.no_hardware,
+                                  can_interface=args.can_interface, can_channel=args.can_channel)  # fmt: skip
     except (OSError, ValueError, ImportError) as exc:  # python-can: an unknown interface, a missing channel
         print(f"pltf: error: CAN interface {args.can_interface} {args.can_channel or ''}: {exc}", file=sys.stderr)
         return 2
