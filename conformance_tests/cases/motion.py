@@ -260,6 +260,11 @@ def joysoft(ctx: CaseContext) -> None:
 
 
 def _auto(ctx: CaseContext, target: Pose, how: str) -> Pose:
+    # guide 4.3 Mode Automatic: "If the target is reached, the platform stops and waits for a new move command";
+    # 6.4 "Platform target reached". The flag marks the move's end (a platform may pause before its final turn);
+    # a target that never sets it is judged by its pose alone, after the same time.
+    limit = target.dist(pose(ctx)) / 100.0 + 15.0
+    ctx.poll(ctx.status, lambda s: bool(s.telegram.target_reached), within=limit)
     return at_pose(ctx, target, how)
 
 
