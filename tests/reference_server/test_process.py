@@ -102,7 +102,7 @@ def _kill_during_saves(root: Path, seed: int, docs: tuple[bytes, bytes]) -> tupl
     """Start a server, stream SET_MAP/SAVE_MAP, SIGKILL it at a random instant; the map file and whether a
     temporary file of an unfinished save was found."""
     rng = random.Random(seed)
-    srv = ServerProcess(root / "data", root / "log")
+    srv = ServerProcess(root / "data", root / "log", "--motion", "ideal")  # storage, not the world, is tested
     batch = b"".join(
         encode(R.CMD_SET_MAP(name=f"m{k}", xml=doc.decode("latin-1"))) + encode(R.CMD_SAVE_MAP()) * SAVES_PER_SET
         for k, doc in enumerate(docs)
