@@ -9,6 +9,9 @@ Rules (erratum E-MOT-007):
 - The direct path of MOVE_ABS/REL without planning is a cubic Bezier curve (guide 5.9 StartTurnEnabled) from
   the pose along its heading to the target; with StartTurnEnabled (or a target behind the platform) it turns
   towards the target first and drives straight.
+- A path holds at most ``MAX_SAMPLES`` samples (erratum E-MOT-014): one longer than ``DS * MAX_SAMPLES`` (1 km)
+  is sampled more coarsely, evenly along its length, so that a target at the INT limits (2147 km away) costs
+  milliseconds, not minutes and gigabytes.
 - The end: with EndTurnEnabled a turn on the spot to the target angle; without it the last piece is a Bezier
   that arrives in the target direction (guide 5.9 "Otherwise the platform will drive a curve"), if the caller
   finds it free, else the turn.
@@ -17,6 +20,7 @@ Rules (erratum E-MOT-007):
 from __future__ import annotations
 
 import bisect
+import itertools
 import math
 from dataclasses import dataclass
 from functools import cached_property
@@ -26,6 +30,7 @@ import numpy as np
 from reference_server.world.geometry import F64
 
 DS = 20.0  # mm between samples
+MAX_SAMPLES = 50_000  # per path (E-MOT-014): beyond DS * MAX_SAMPLES the samples spread out
 SMOOTH = 7  # samples over which the curvature is averaged
 CUT = 30.0  # mm: how far a fillet may cut into a corner
 MIN_RADIUS = 120.0  # mm
@@ -100,7 +105,7 @@ def _sampled(xs: F64, ys: F64) -> Drive | None:
 
 
 def line(a: Point, b: Point) -> Drive | None:
-    n = max(2, math.ceil(math.dist(a, b) / DS) + 1)
+    n = max(2, min(MAX_SAMPLES, math.ceil(math.dist(a, b) / DS)) + 1)
     return _sampled(np.linspace(a[0], b[0], n), np.linspace(a[1], b[1], n))
 
 
@@ -109,7 +114,7 @@ def bezier(p0: Point, h0: float, p3: Point, h3: float) -> Drive | None:
     d = math.dist(p0, p3) / 3.0
     p1 = (p0[0] + d * math.cos(h0), p0[1] + d * math.sin(h0))
     p2 = (p3[0] - d * math.cos(h3), p3[1] - d * math.sin(h3))
-    n = max(8, math.ceil(3.0 * d / DS) * 2 + 1)
+    n = max(8, min(MAX_SAMPLES, math.ceil(3.0 * d / DS) * 2 + 1))
     t = np.linspace(0.0, 1.0, n)[:, None]
     pts = ((1 - t) ** 3 * np.array(p0) + 3 * (1 - t) ** 2 * t * np.array(p1) + 3 * (1 - t) * t**2 * np.array(p2)
            + t**3 * np.array(p3))  # fmt: skip
@@ -129,14 +134,15 @@ def polyline(points: list[Point], heading: float, tol_angle: float) -> list[Leg]
             pts.append(p)
     if len(pts) < 2:
         return []
+    spacing = max(DS, sum(math.dist(a, b) for a, b in itertools.pairwise(pts)) / MAX_SAMPLES)
     legs: list[Leg] = []
     first = math.atan2(pts[1][1] - pts[0][1], pts[1][0] - pts[0][0])
     legs += _turn(*pts[0], heading, first, max(tol_angle, TURN_FIRST))
-    xs: list[float] = [pts[0][0]]
-    ys: list[float] = [pts[0][1]]
+    xs: list[F64] = [np.array([pts[0][0]])]
+    ys: list[F64] = [np.array([pts[0][1]])]
 
     def flush() -> None:
-        drive = _sampled(np.asarray(xs), np.asarray(ys))
+        drive = _sampled(np.concatenate(xs), np.concatenate(ys))
         if drive is not None:
             legs.append(drive)
 
@@ -152,32 +158,36 @@ def polyline(points: list[Point], heading: float, tol_angle: float) -> list[Leg]
         tangent = min(0.5 * math.dist(a, b), 0.5 * math.dist(b, c))
         radius = min(radius, tangent / math.tan(half)) if half < math.pi / 2 - 1e-6 else 0.0
         if radius < MIN_RADIUS:
-            _append_line(xs, ys, b)
+            _append_line(xs, ys, b, spacing)
             flush()
             legs.append(Turn(b[0], b[1], h_in, h_in + phi))
-            xs[:], ys[:] = [b[0]], [b[1]]
+            xs[:], ys[:] = [np.array([b[0]])], [np.array([b[1]])]
             continue
         t = radius * math.tan(half)
         p_in = (b[0] - t * math.cos(h_in), b[1] - t * math.sin(h_in))
-        _append_line(xs, ys, p_in)
+        _append_line(xs, ys, p_in, spacing)
         side = 1.0 if phi > 0 else -1.0
         cx, cy = p_in[0] - side * radius * math.sin(h_in), p_in[1] + side * radius * math.cos(h_in)
-        n = max(2, math.ceil(radius * abs(phi) / DS))
-        for k in range(1, n + 1):
-            ang = h_in - side * math.pi / 2 + phi * k / n
-            xs.append(cx + radius * math.cos(ang))
-            ys.append(cy + radius * math.sin(ang))
-    _append_line(xs, ys, pts[-1])
+        ang = h_in - side * math.pi / 2 + phi * _steps(radius * abs(phi), spacing, 2)
+        xs.append(cx + radius * np.cos(ang))
+        ys.append(cy + radius * np.sin(ang))
+    _append_line(xs, ys, pts[-1], spacing)
     flush()
     return legs
 
 
-def _append_line(xs: list[float], ys: list[float], p: Point) -> None:
-    x0, y0 = xs[-1], ys[-1]
-    n = max(1, math.ceil(math.hypot(p[0] - x0, p[1] - y0) / DS))
-    for k in range(1, n + 1):
-        xs.append(x0 + (p[0] - x0) * k / n)
-        ys.append(y0 + (p[1] - y0) * k / n)
+def _steps(length: float, spacing: float, least: int) -> F64:
+    """The fractions k/n, k = 1..n, of ``length`` sampled every ``spacing`` mm (n >= ``least``)."""
+    n = max(least, math.ceil(length / spacing))
+    return np.arange(1, n + 1) / n
+
+
+def _append_line(xs: list[F64], ys: list[F64], p: Point, spacing: float) -> None:
+    """Samples from the last one (the end of ``xs``/``ys``' last chunk) straight to ``p``."""
+    x0, y0 = float(xs[-1][-1]), float(ys[-1][-1])
+    f = _steps(math.hypot(p[0] - x0, p[1] - y0), spacing, 1)
+    xs.append(x0 + (p[0] - x0) * f)
+    ys.append(y0 + (p[1] - y0) * f)
 
 
 def direct(pose: tuple[float, float, float], target: Point, start_turn: bool, tol_angle: float) -> list[Leg]:
@@ -199,7 +209,7 @@ def end_curve(legs: list[Leg], end_angle: float) -> Drive | None:
     last = legs[-1] if legs else None
     if not isinstance(last, Drive) or last.length < 2 * DS or abs(wrap(end_angle - last.theta[-1])) > CURVE_MAX:
         return None
-    keep = max(0, len(last.s) - 1 - int(min(last.length, 3000.0) / DS))
+    keep = int(np.searchsorted(last.s, last.length - min(last.length, 3000.0)))
     p0 = (float(last.x[keep]), float(last.y[keep]))
     p3 = (float(last.x[-1]), float(last.y[-1]))
     curve = bezier(p0, float(last.theta[keep]), p3, end_angle)
@@ -212,14 +222,17 @@ def end_curve(legs: list[Leg], end_angle: float) -> Drive | None:
 
 
 def sample_points(legs: list[Leg], step: float = 100.0) -> list[Point]:
-    """Points along the legs every ``step`` mm (the status telegram's interpolated path)."""
+    """Points along the legs every ``step`` mm (the status telegram's interpolated path), at most as many as a
+    path of ``DS * MAX_SAMPLES`` mm has (E-MOT-014)."""
     out: list[Point] = []
+    total = sum(len(leg.s) for leg in legs if isinstance(leg, Drive))
+    thin = math.ceil(total * step / (DS * MAX_SAMPLES))
     for leg in legs:
         if isinstance(leg, Turn):
             if not out:
                 out.append((leg.x, leg.y))
             continue
-        k = max(1, int(step / DS))
+        k = max(1, round(step * (len(leg.s) - 1) / max(leg.length, 1e-9)), thin)  # at the leg's own spacing
         out += [(float(px), float(py)) for px, py in zip(leg.x[::k], leg.y[::k], strict=True)]
         out.append((float(leg.x[-1]), float(leg.y[-1])))
     return out

@@ -11,6 +11,7 @@ import numpy as np
 from reference_server.kinematics import Frame, Roadmap, relative_to_world
 from reference_server.world import MapGeometry, PlannerState
 from reference_server.world.geometry import circles, segments
+from reference_server.world.paths import DS, MAX_SAMPLES
 from spec.documents import DocumentKind, validate_document
 from tests.reference_server.world.conftest import (
     CORRIDOR_WEST,
@@ -246,3 +247,19 @@ def test_replay_break_and_continue() -> None:
     sim.world.event(6, sim.now)
     assert sim.until_idle(30.0)
     assert sim.world.truth[0] > 5000 + 500
+
+
+def test_targets_at_the_int_limits_are_driven_towards_with_a_bounded_path() -> None:
+    """E-MOT-014: a target 2147 km away (MOVE_ABS/MOVE_PATH at the INT limits, what a fuzzer sends) gets a
+    path of at most MAX_SAMPLES samples; the platform heads for it and the status path stays bounded."""
+    far = (2147483647.0, -2147483648.0, 0.0)
+    sim = make_sim(OPEN, (10000.0, 10000.0, 0.0), PlanningEnabled=False)
+    sim.world.move_to(far)
+    sim.run(2.0)
+    assert sim.world.active and sim.world.truth[0] > 10500.0  # along its heading: the Bezier leaves forwards
+    assert 1000 < len(sim.world.remaining_path()) <= MAX_SAMPLES * DS / 100.0 + 2
+    path = make_sim(OPEN, (10000.0, 10000.0, 0.0), PlanningEnabled=False)
+    path.world.follow_path([(10000.0, 12000.0, 0.0), far, (-2147483648.0, 2147483647.0, 0.0), (10000.0, 8000.0, 0.0)])
+    path.run(2.0)
+    assert path.world.active and path.world.truth[1] > 10000.0  # towards the first frame
+    assert len(path.world.remaining_path()) <= MAX_SAMPLES * DS / 100.0 + 10
