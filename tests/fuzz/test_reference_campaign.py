@@ -28,11 +28,6 @@ def options(tmp_path: Path, **changes: object) -> Options:
     return opts
 
 
-@pytest.mark.xfail(
-    strict=False,
-    reason="open bug (issue 8): the campaign sometimes finds a confirmed hang after CMD_MOVE_ABS on the world "
-    "server (seed 1, within 8 s); not yet reproduced outside the campaign",
-)
 def test_short_campaign_reaches_every_state_and_finds_nothing(tmp_path: Path) -> None:
     c = Campaign(options(tmp_path, duration=8.0))
     code = c.run()
