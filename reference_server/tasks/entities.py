@@ -12,6 +12,7 @@ Rules:
 
 from __future__ import annotations
 
+import abc
 import datetime
 import math
 from collections.abc import Iterable
@@ -66,24 +67,28 @@ class StatusFields(NamedTuple):
     battery: str  # mV
 
 
-class StatusSensors:
+class StatusSensors(abc.ABC):
     """The queries of ``facade.Sensors`` that both facades answer alike, from this tick's snapshots.
 
-    A facade sets ``FIELDS`` and ``epoch`` and overrides the hooks ``status`` and ``debug_data`` (the tick's
-    GET_STATUS and GET_DEBUG_DATA replies) and ``charging_station`` (from its roadmap, E-TASK-008).
+    A facade sets ``FIELDS`` and ``epoch`` and implements the abstract hooks ``status`` and ``debug_data`` (the
+    tick's GET_STATUS and GET_DEBUG_DATA replies) and ``charging_station`` (from its roadmap, E-TASK-008); a
+    facade that leaves one out fails at construction.
     """
 
     FIELDS: ClassVar[StatusFields]
     epoch: datetime.datetime
 
+    @abc.abstractmethod
     def status(self) -> Any:
-        raise NotImplementedError
+        """This tick's GET_STATUS reply."""
 
+    @abc.abstractmethod
     def debug_data(self) -> Any:
-        raise NotImplementedError
+        """This tick's GET_DEBUG_DATA reply."""
 
+    @abc.abstractmethod
     def charging_station(self) -> Target | None:
-        raise NotImplementedError
+        """The charging station of the active roadmap, or None (E-TASK-008)."""
 
     def _field(self, name: str) -> Any:
         return getattr(self.status(), getattr(self.FIELDS, name))
