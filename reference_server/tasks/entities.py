@@ -1,4 +1,4 @@
-"""What both facades read alike from what they observe: the sensors and where <moveto> finds its entity.
+"""What both facades read alike: the sensors, where <moveto> finds its entity, the files <load> sends.
 
 Rules:
 - The tracked person, ball and moving object are the clusters of CMD_GET_DEBUG_DATA (map coordinates,
@@ -8,6 +8,8 @@ Rules:
   per tick; each facade fetches its snapshots and names their fields (``StatusFields``: the codec telegram's
   locally, pltf_client's remotely). So the local and the remote facade, given the same platform, answer alike
   and drive to the same frame.
+- <load> reads its files on the computer the program runs on (E-TASK-006, E-TASK-014): ``read_document``
+  looks in ``<data dir>/Map/`` (``Roadmap/``), then in the data dir itself, and validates what it reads.
 """
 
 from __future__ import annotations
@@ -16,10 +18,12 @@ import abc
 import datetime
 import math
 from collections.abc import Iterable
+from pathlib import Path
 from typing import Any, ClassVar, NamedTuple
 
-from reference_server.tasks.facade import Pose, Target
+from reference_server.tasks.facade import Pose, Target, TaskError
 from reference_server.tasks.model import Detection, Direction, Entity
+from spec.documents import DocumentError, DocumentKind, validate_document
 
 CHARGING_PREFIX = "charg"
 
@@ -41,6 +45,27 @@ def charging_station(roadmap_root: Any) -> Target | None:
             pt = st.find("point")
             return Target(float(pt.get("x")), float(pt.get("y")), float(st.get("angle") or 0))
     return None
+
+
+# ------------------------------------------------------------------------------------------------ <load>
+
+_FOLDERS = {DocumentKind.MAP: "Map", DocumentKind.ROADMAP: "Roadmap"}
+
+
+def read_document(data_dir: Path, kind: DocumentKind, name: str) -> bytes:
+    """<load>'s map or roadmap NAME, schema-valid; a TaskError when it is missing or invalid.
+
+    E-TASK-006: ``<data dir>/Map/NAME`` (``Roadmap/NAME``), else ``<data dir>/NAME``.
+    """
+    path = next((p for p in (data_dir / _FOLDERS[kind] / name, data_dir / name) if p.is_file()), None)
+    if path is None:
+        raise TaskError(f"no {kind.value} file {name!r} in {data_dir / _FOLDERS[kind]} or {data_dir}")
+    data = path.read_bytes()
+    try:
+        validate_document(kind, data)
+    except DocumentError as exc:
+        raise TaskError(f"{name}: {exc}") from None
+    return data
 
 
 # ---------------------------------------------------------------------------------------------- sensors

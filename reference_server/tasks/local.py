@@ -24,9 +24,8 @@ from reference_server.tasks.entities import StatusFields, StatusSensors
 from reference_server.tasks.facade import Target, TaskError
 from reference_server.tasks.interpreter import Interpreter
 from reference_server.tasks.program import compile_program
-from reference_server.tasks.remote import find_document
 from spec.codec import build
-from spec.documents import DocumentError, DocumentKind, validate_document
+from spec.documents import DocumentKind
 from spec.parameters import DataType, ParameterError
 from spec.telegram import Telegram
 
@@ -91,11 +90,7 @@ class LocalMachine(StatusSensors):
         for kind, name in ((DocumentKind.MAP, map_name), (DocumentKind.ROADMAP, roadmap_name)):
             if name is None:
                 continue
-            data = find_document(self.p.storage.root, kind, name).read_bytes()
-            try:
-                validate_document(kind, data)
-            except DocumentError as exc:
-                raise TaskError(f"{name}: {exc}") from None
+            data = entities.read_document(self.p.storage.root, kind, name)
             command = "CMD_SET_MAP" if kind is DocumentKind.MAP else "CMD_SET_ROADMAP"
             self._act(command, name=name, xml=data.decode("latin-1"))  # E-WIRE-003: bytes as Latin-1 text
 

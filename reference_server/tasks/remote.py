@@ -31,16 +31,6 @@ from spec.parameters import DataType
 
 log = logging.getLogger("pltf.tasks.remote")
 
-_FOLDERS = {DocumentKind.MAP: "Map", DocumentKind.ROADMAP: "Roadmap"}
-
-
-def find_document(data_dir: Path, kind: DocumentKind, name: str) -> Path:
-    """E-TASK-006: ``<data dir>/Map/NAME`` (``Roadmap/NAME``), else ``<data dir>/NAME``."""
-    for path in (data_dir / _FOLDERS[kind] / name, data_dir / name):
-        if path.is_file():
-            return path
-    raise TaskError(f"no {kind.value} file {name!r} in {data_dir / _FOLDERS[kind]} or {data_dir}")
-
 
 class RemoteMachine(StatusSensors):
     FIELDS = StatusFields(x="est_x_mm", y="est_y_mm", angle="est_angle_mdeg", radar_velocity="radar_velocity_mm_s",
@@ -116,11 +106,7 @@ class RemoteMachine(StatusSensors):
         for kind, name in ((DocumentKind.MAP, map_name), (DocumentKind.ROADMAP, roadmap_name)):
             if name is None:
                 continue
-            data = find_document(self.data_dir, kind, name).read_bytes()
-            try:
-                validate_document(kind, data)
-            except DocumentError as exc:
-                raise TaskError(f"{name}: {exc}") from None
+            data = entities.read_document(self.data_dir, kind, name)
             if kind is DocumentKind.MAP:
                 self.client.set_map(name, data)
             else:
