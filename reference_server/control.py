@@ -73,6 +73,7 @@ class ControlServer:
         try:
             while data := await reader.read(READ_SIZE):
                 out = session.receive_data(data, self.now())
+                self.platform.touch()  # a fault may show in the next status reply
                 if out:
                     writer.write(out)
                     await writer.drain()

@@ -20,6 +20,10 @@ Rules:
   reported absent, never invented: the commands for it are accepted where the state chart allows them and
   logged as without effect.
 - Log lines go to the "pltf.server" logger and to the protocol queue of CMD_GET_DEBUG_DATA (``log``).
+- ``epoch`` counts the changes of state: every tick, every command that is not a pure query (``QUERIES``),
+  every emergency or drive-fault event and every request of the control channel (``touch``). Between two
+  changes the status reply is built once (reference_server/status.py): a client polling GET_STATUS faster
+  than the control period gets the same picture, only its timestamp moves.
 """
 
 from __future__ import annotations
@@ -47,6 +51,8 @@ log = logging.getLogger("pltf.server")
 
 PROTOCOL_QUEUE_LENGTH = 32  # log lines kept for CMD_GET_DEBUG_DATA
 OPERATING = (State.RUNNING, State.BREAKED)
+QUERIES = frozenset({"CMD_GET_STATUS", "CMD_GET_POSITION", "CMD_GET_PLTF_PARAM", "CMD_GET_PLTF_PARAM_VEC",
+                     "CMD_GET_MAP", "CMD_GET_ROADMAP", "CMD_GET_PROGRAM", "CMD_GET_DEBUG_DATA", "CMD_GET_CAMERA"})  # fmt: skip
 
 
 class Platform:
@@ -83,6 +89,8 @@ class Platform:
         self.awaiting: str | None = None  # the command whose transition waits for the hardware
         self.drive_fault: str | None = None  # erratum E-HW-025
         self.hardware: HardwareLink | None = None if hardware is None else hardware(self)
+        self.epoch = 0  # see the module's rules
+        self.status_cache: tuple[int, dict[str, object]] | None = None  # (epoch, fields): status.status_reply
 
     @property
     def drive(self) -> MotionModel:
@@ -107,6 +115,8 @@ class Platform:
     def handle(self, telegram: Telegram, now: float) -> Outcome:
         self.now = now
         name = telegram.NAME
+        if name not in QUERIES:
+            self.touch()
         reason = self.chart.check(name)
         if reason is not None:
             self.log(logging.WARNING, "%s", reason)
@@ -131,7 +141,12 @@ class Platform:
             if self.motion_mode == MotionMode.MODE_MOTION_AUTOMATIC:
                 self.motion_mode = mode
 
+    def touch(self) -> None:
+        """Something changed: the next status reply is built afresh."""
+        self.epoch += 1
+
     def tick(self, now: float) -> None:
+        self.touch()
         dt = 0.0 if self._last_tick is None else now - self._last_tick
         self._last_tick = now
         self.now = now
@@ -158,6 +173,7 @@ class Platform:
     # ---- the emergency stop (no telegram: pressed on the platform; the board issues drive it)
     def set_emergency(self, pressed: bool, now: float) -> None:
         self.now = now
+        self.touch()
         if pressed:
             self.leave_operation("emergency stop", now)
             _, new = self.chart.press_emergency()
@@ -172,6 +188,7 @@ class Platform:
     def set_drive_fault(self, reason: str | None, now: float) -> None:
         """A drive fault starts, changes its reason or ends (erratum E-HW-025: the secure state, no motion until
         the cause is gone and a new CMD_START)."""
+        self.touch()
         old, self.drive_fault = self.drive_fault, reason
         if reason == old:
             return

@@ -48,6 +48,14 @@ def _milli_deg(rad: float) -> int:
 
 
 def status_reply(p: Platform, now: float) -> Telegram:
+    """The status at the platform's last change (``Platform.epoch``), stamped ``now``."""
+    cached = p.status_cache
+    if cached is None or cached[0] != p.epoch:
+        cached = p.status_cache = (p.epoch, _status_fields(p))
+    return reply("CMD_GET_STATUS", **cached[1], timestamp=int(now * 1000.0) % 2**31)  # erratum E-REP-010
+
+
+def _status_fields(p: Platform) -> dict[str, Any]:
     cmd = p.motion.commanded_frame()
     pose = p.motion.pose
     flag = int
@@ -74,7 +82,6 @@ def status_reply(p: Platform, now: float) -> Telegram:
         emergency_state=p.chart.emergency,
         application_mode=0,  # guide: "not used at the moment"
         planner_state=p.planner_state,
-        timestamp=int(now * 1000.0) % 2**31,  # erratum E-REP-010: simulated ms since start
         app_error=AppError.APP_ERR_NONE,
         docked=0, localization_lost=0, collision=0, lookup_percent=0,
         ir_active=(0,) * 4,  # no IR sensors
@@ -91,7 +98,7 @@ def status_reply(p: Platform, now: float) -> Telegram:
             fields.update(scan=(), reflectors=(), lines=(), circles=(), corners=())
         elif scan is not None and p.world is not None:
             fields["scan"] = scan
-    return reply("CMD_GET_STATUS", **fields)
+    return fields
 
 
 def position_reply(p: Platform) -> Telegram:

@@ -111,6 +111,24 @@ def test_state_and_motion_through_status(sim: Sim) -> None:
     assert pos.angle == pytest.approx(math.pi / 2, abs=0.04) and pos.vel_trans == 0
 
 
+def test_status_between_ticks_is_the_same_picture_and_any_command_refreshes_it(sim: Sim) -> None:
+    """Platform.epoch: GET_STATUS twice between two control periods answers the same fields (only the timestamp
+    moves); a command, a tick or a pure query changes it or not, as it changes the platform or not."""
+    sim.to_running(MotionMode.MODE_MOTION_AUTOMATIC)
+    sim(R.CMD_MOVE_REL(x=1000, y=0, angle=0))
+    sim.run(0.5)
+    first = sim.status()
+    sim(R.CMD_GET_POSITION())
+    sim.now += 0.005
+    again = sim.status()
+    assert again == first.replace(timestamp=again.timestamp) and again.timestamp == first.timestamp + 5
+    sim(R.CMD_BREAK())  # not a query: seen at once, before the next period
+    assert sim.status().operation_state == OperationState.ST_OP_BREAKED
+    sim(R.CMD_CONTINUE())
+    sim.run(DT)
+    assert sim.status().est_x > first.est_x  # a tick: the platform moved on
+
+
 def test_move_to_station_and_its_refusals(sim: Sim) -> None:
     sim.to_running(MotionMode.MODE_MOTION_AUTOMATIC)
     assert "no station" in sim(R.CMD_MOVE_TO_STATION(station="Nowhere")).refused
