@@ -51,8 +51,10 @@ log = logging.getLogger("pltf.server")
 
 PROTOCOL_QUEUE_LENGTH = 32  # log lines kept for CMD_GET_DEBUG_DATA
 OPERATING = (State.RUNNING, State.BREAKED)
-QUERIES = frozenset({"CMD_GET_STATUS", "CMD_GET_POSITION", "CMD_GET_PLTF_PARAM", "CMD_GET_PLTF_PARAM_VEC",
-                     "CMD_GET_MAP", "CMD_GET_ROADMAP", "CMD_GET_PROGRAM", "CMD_GET_DEBUG_DATA", "CMD_GET_CAMERA"})  # fmt: skip
+QUERIES = frozenset({
+    "CMD_GET_STATUS", "CMD_GET_POSITION", "CMD_GET_PLTF_PARAM", "CMD_GET_PLTF_PARAM_VEC", "CMD_GET_MAP",
+    "CMD_GET_ROADMAP", "CMD_GET_PROGRAM", "CMD_GET_DEBUG_DATA", "CMD_GET_CAMERA",
+})  # fmt: skip
 
 
 class Platform:
