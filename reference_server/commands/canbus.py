@@ -3,25 +3,24 @@
 Rules: with a hardware plug-in (reference_server/hardware_link.py) every command goes over the CAN bus to the
 boards of fake_hardware/ (errata E-HW-003 ff.); without one the platform has no CAN nodes: the board commands
 are accepted, logged and without effect, CMD_GET_CAN_MESSAGES answers an empty list. A command for a board
-that is not connected sends nothing and is logged (erratum E-HW-024).
+that is not connected sends nothing and is logged (erratum E-HW-024). The board commands (brake, digital out,
+ultrasonic) are one table, ``BOARD_COMMANDS``, and one handler, ``board_command``.
 """
 
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from fake_hardware import ControllerError, Node
+from fake_hardware import MOTORS, CanController, ControllerError, Node
 from reference_server import status
 from reference_server.commands.registry import ACCEPTED, Outcome, handles
 
 if TYPE_CHECKING:
     from reference_server.hardware_link import HardwareLink
     from reference_server.platform import Platform
-
-
-def _absent(p: Platform, t: Any, node: Node) -> Outcome:
-    return p._ignore(f"{t.NAME}: {node.name} is not connected, nothing sent")
 
 
 @handles("CMD_CONNECT_TO_PLTF")
@@ -64,60 +63,69 @@ def init(p: Platform, t: Any, now: float) -> Outcome:
     return ACCEPTED
 
 
-def _hardware_command(p: Platform, t: Any, node: Node, send: Any, text: str) -> Outcome:
-    """Send a board command over the bus; refused when the controller rejects its arguments."""
+@dataclass(frozen=True)
+class BoardCommand:
+    """What one board command has of its own; ``board_command`` does the rest for all of them."""
+
+    node: Callable[[Any], Node | None]  # the board the telegram addresses; None: it names none (refused)
+    send: Callable[[CanController, Any, float], None]  # the controller call (raises ControllerError)
+    done: Callable[[Any, Node], str]  # the log line once sent
+    invalid: Callable[[Any], str] = lambda t: ""  # why ``node`` gave None
+    no_bus: Callable[[Any], str] = lambda t: f"{t.NAME}: the board is not present on the CAN bus"
+
+
+_DIGOUT_BOARDS = {0: Node.IOBOARD, 1: Node.RELAYBOARD}
+_MOTORS = {int(m): m for m in MOTORS}
+
+BOARD_COMMANDS: dict[str, BoardCommand] = {
+    # guide 6.3 CMD_SET_BRAKE: "0: Brake enabled 1: Brake disabled" (erratum E-CMD-015)
+    "CMD_SET_BRAKE": BoardCommand(
+        node=lambda t: _MOTORS.get(t.motor),
+        send=lambda c, t, now: c.set_brake(t.motor, t.state == 1, now),
+        done=lambda t, _: f"brake of motor {t.motor} {'released' if t.state == 1 else 'engaged'}",
+        invalid=lambda t: f"no motor {t.motor}",
+        no_bus=lambda t: f"brake {t.state} set for motor {t.motor}: no motor board on the CAN bus",
+    ),
+    # guide 6.3 CMD_SET_DIGOUT: "Board Type: TYPE_IOBOARD = 0, TYPE_RELAYBOARD = 1" (errata E-CMD-004, E-HW-010)
+    "CMD_SET_DIGOUT": BoardCommand(
+        node=lambda t: _DIGOUT_BOARDS.get(t.board),
+        send=lambda c, t, now: c.set_digout(t.board, t.channel, bool(t.value), now),
+        done=lambda t, node: f"digital out: {node.name} channel {t.channel} = {t.value}",
+        invalid=lambda t: f"no board type {t.board}",
+    ),
+    # guide 6.3: "Start the ultrasonic sensor measurement" - a bit mask of the active sensors (E-CMD-005)
+    "CMD_START_ULTRASONIC": BoardCommand(
+        node=lambda t: Node.USBOARD,
+        send=lambda c, t, now: c.start_ultrasonic(t.active_channels, now),
+        done=lambda t, _: f"ultrasonic measurement started, sensors 0x{t.active_channels:04X}",
+    ),
+    "CMD_STOP_ULTRASONIC": BoardCommand(
+        node=lambda t: Node.USBOARD,
+        send=lambda c, t, now: c.stop_ultrasonic(now),
+        done=lambda t, _: "ultrasonic measurement stopped",
+    ),
+}
+
+
+@handles(*BOARD_COMMANDS)
+def board_command(p: Platform, t: Any, now: float) -> Outcome:
+    """Send a board command over the bus; refused when the telegram names no board or the controller rejects
+    its arguments, ignored without hardware or when the board is not connected (erratum E-HW-024)."""
+    command = BOARD_COMMANDS[t.NAME]
     hw: HardwareLink | None = p.hardware
     if hw is None:
-        return p._ignore(f"{t.NAME}: the board is not present on the CAN bus")
+        return p._ignore(command.no_bus(t))
+    node = command.node(t)
+    if node is None:
+        return p._refuse(f"{t.NAME} refused: {command.invalid(t)}")
     if not hw.connected(node):
-        return _absent(p, t, node)
+        return p._ignore(f"{t.NAME}: {node.name} is not connected, nothing sent")
     try:
-        send()
+        command.send(hw.controller, t, now)
     except ControllerError as exc:
         return p._refuse(f"{t.NAME} refused: {exc}")
-    p.log(logging.INFO, text)
+    p.log(logging.INFO, command.done(t, node))
     return ACCEPTED
-
-
-@handles("CMD_SET_BRAKE")
-def set_brake(p: Platform, t: Any, now: float) -> Outcome:
-    # guide 6.3 CMD_SET_BRAKE: "0: Brake enabled 1: Brake disabled" (erratum E-CMD-015)
-    if p.hardware is None:
-        return p._ignore(f"brake {t.state} set for motor {t.motor}: no motor board on the CAN bus")
-    if t.motor not in (Node.MOTOR_RIGHT, Node.MOTOR_LEFT):
-        return p._refuse(f"{t.NAME} refused: no motor {t.motor}")
-    c = p.hardware.controller
-    word = "released" if t.state == 1 else "engaged"
-    return _hardware_command(p, t, Node(t.motor), lambda: c.set_brake(t.motor, t.state == 1, now),
-                             f"brake of motor {t.motor} {word}")  # fmt: skip
-
-
-@handles("CMD_SET_DIGOUT")
-def set_digout(p: Platform, t: Any, now: float) -> Outcome:
-    # guide 6.3 CMD_SET_DIGOUT: "Board Type: TYPE_IOBOARD = 0, TYPE_RELAYBOARD = 1" (errata E-CMD-004, E-HW-010)
-    node = Node.IOBOARD if t.board == 0 else Node.RELAYBOARD
-    c = p.hardware.controller if p.hardware is not None else None
-    if c is not None and t.board not in (0, 1):
-        return p._refuse(f"{t.NAME} refused: no board type {t.board}")
-    return _hardware_command(
-        p, t, node, lambda: c.set_digout(t.board, t.channel, bool(t.value), now) if c else None,
-        f"digital out: {node.name} channel {t.channel} = {t.value}",
-    )  # fmt: skip
-
-
-@handles("CMD_START_ULTRASONIC")
-def start_ultrasonic(p: Platform, t: Any, now: float) -> Outcome:
-    # guide 6.3: "Start the ultrasonic sensor measurement" - a bit mask of the active sensors (E-CMD-005)
-    c = p.hardware.controller if p.hardware is not None else None
-    return _hardware_command(p, t, Node.USBOARD, lambda: c.start_ultrasonic(t.active_channels, now) if c else None,
-                             f"ultrasonic measurement started, sensors 0x{t.active_channels:04X}")  # fmt: skip
-
-
-@handles("CMD_STOP_ULTRASONIC")
-def stop_ultrasonic(p: Platform, t: Any, now: float) -> Outcome:
-    c = p.hardware.controller if p.hardware is not None else None
-    return _hardware_command(p, t, Node.USBOARD, lambda: c.stop_ultrasonic(now) if c else None,
-                             "ultrasonic measurement stopped")  # fmt: skip
 
 
 @handles("CMD_SEND_CAN_MESSAGE")
