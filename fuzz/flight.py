@@ -140,47 +140,32 @@ class Flight:
 
 def fly(flights: list[Flight]) -> None:
     """Drive ``flights`` until each is done or past its deadline."""
-    while True:
-        live = [f for f in flights if not f.done]
-        if not live:
-            return
-        now = time.monotonic()
-        for f in live:
-            if now >= f.deadline:
-                f._finish(timed_out=True)
-        live = [f for f in live if not f.done]
-        if not live:
-            return
-        wait = max(0.0, min(f.deadline for f in live) - now)
-        writers = [f for f in live if f.sending or not f.connected]
-        readable, writable, _ = select.select(live, writers, [], wait)
-        for f in writable:
-            if not f.done:
-                f.writable()
-        for f in readable:
-            if not f.done:
-                f.readable()
+    while live := [f for f in flights if not f.done]:
+        _step(live)
 
 
 def step_flights(flights: list[Flight]) -> list[Flight]:
     """Drive ``flights`` until at least one of them is done (or past its deadline); the ones done."""
-    while True:
-        done = [f for f in flights if f.done]
-        if done:
-            return done
-        now = time.monotonic()
-        for f in flights:
-            if now >= f.deadline:
-                f._finish(timed_out=True)
-        done = [f for f in flights if f.done]
-        if done:
-            return done
-        wait = max(0.0, min(f.deadline for f in flights) - now)
-        writers = [f for f in flights if f.sending or not f.connected]
-        readable, writable, _ = select.select(flights, writers, [], wait)
-        for f in writable:
-            if not f.done:
-                f.writable()
-        for f in readable:
-            if not f.done:
-                f.readable()
+    while not (done := [f for f in flights if f.done]):
+        _step(flights)
+    return done
+
+
+def _step(live: list[Flight]) -> None:
+    """One round over flights not done: finish those past their deadline; if none was, wait for the sockets
+    of all of them until the nearest deadline and drive the ones that are ready."""
+    now = time.monotonic()
+    overdue = [f for f in live if now >= f.deadline]
+    for f in overdue:
+        f._finish(timed_out=True)
+    if overdue:
+        return  # the caller looks at the flights again
+    wait = max(0.0, min(f.deadline for f in live) - now)
+    writers = [f for f in live if f.sending or not f.connected]
+    readable, writable, _ = select.select(live, writers, [], wait)
+    for f in writable:
+        if not f.done:
+            f.writable()
+    for f in readable:
+        if not f.done:
+            f.readable()
