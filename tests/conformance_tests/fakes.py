@@ -3,7 +3,7 @@
 ``ScriptedServer`` runs a handler per connection on 127.0.0.1:0; ``TinyTarget`` is a minimal PlatformCtrl: the
 state chart of conformance_tests.chart, CMD_SET_MODE, CMD_GET_STATUS and CMD_GET_POSITION, one client per
 port, malformed input closes the connection; every other command is accepted silently. ``HardwareTarget`` adds
-the hardware the reference server does not simulate yet, with switchable faults.
+the hardware of the hardware cases, with switchable faults.
 """
 
 from __future__ import annotations
@@ -121,7 +121,7 @@ class TinyTarget(ScriptedServer):
 
 
 class HardwareTarget(TinyTarget):
-    """TinyTarget plus what the reference server does not simulate yet: a CAN bus with traffic, IO outputs, an
+    """TinyTarget plus the hardware of the hardware cases: a CAN bus with traffic, IO outputs, an
     ultrasonic board, a head drive, parameters, documents and a minimal task interpreter (parameter/set and
     wait/delay). ``broken`` names faults, so the cases that need this hardware can be shown to pass and to fail."""
 

@@ -1,5 +1,6 @@
-"""The cases that are N/A on the reference server (CAN traffic, IO outputs, ultrasonic board, head drive, task
-interpreter) pass on a fake target that has that hardware, and fail when it is broken."""
+"""The hardware cases (CAN traffic, IO outputs, ultrasonic board, head drive, task interpreter) on a second target,
+independent of the reference server (which passes them with its fake hardware, test_reference.py): they pass on a
+small fake that has that hardware, and fail when it is broken."""
 
 from __future__ import annotations
 
@@ -9,7 +10,6 @@ import pytest
 
 from conformance_tests.catalogue import Level, Verdict, load_all
 from conformance_tests.context import Config
-from conformance_tests.mutants.matrix import NOT_ON_REFERENCE
 from conformance_tests.runner import CaseResult, Runner
 from tests.conformance_tests.fakes import HardwareTarget
 
@@ -35,7 +35,7 @@ def run(case_id: str, broken: frozenset[str] = frozenset()) -> CaseResult:
         return result
 
 
-@pytest.fixture(params=sorted(NOT_ON_REFERENCE))
+@pytest.fixture(params=sorted(FAULTS))
 def case_id(request: pytest.FixtureRequest) -> Iterator[str]:
     yield request.param
 
