@@ -318,7 +318,10 @@ class ParameterStore:
         return len(self._parameters)
 
     def get(self, name: str) -> Value:
-        return self._values[self.parameter(name).name]
+        try:  # the values are keyed by the exact table names: one lookup on the motion loop's hot path
+            return self._values[name]
+        except KeyError:
+            raise ParameterError(f"unknown parameter {_shown(name)}") from None
 
     def get_text(self, name: str) -> str:
         return self.parameter(name).format(self.get(name))
