@@ -80,6 +80,11 @@ def _schema(kind: DocumentKind) -> etree.XMLSchema:
     return etree.XMLSchema(etree.parse(str(schema_path(kind)), _safe_parser()))
 
 
+# True when some element sits deeper than MAX_DEPTH: one XPath step per level, in libxml2, instead of a Python walk
+# over every element (the walk below runs only to name the depth of a document already refused).
+_TOO_DEEP = etree.XPath("boolean(/*" + "/*" * MAX_DEPTH + ")")
+
+
 def _depth(root: etree._Element) -> int:
     deepest, depth = 0, 0
     for event, _ in etree.iterwalk(root, events=("start", "end")):
@@ -110,8 +115,8 @@ def _parse(data: bytes, kind: DocumentKind | None, max_size: int) -> etree._Elem
     dtd = tree.docinfo.internalDTD
     if dtd is not None and any(True for _ in dtd.iterentities()):
         raise DocumentError("entity declarations are not allowed", kind=kind)
-    deepest = _depth(root)
-    if deepest > MAX_DEPTH:
+    if _TOO_DEEP(root):
+        deepest = _depth(root)
         raise DocumentError(f"elements nested {deepest} deep, over the limit of {MAX_DEPTH}", kind=kind)
     return tree
 
