@@ -5,6 +5,8 @@ Rules:
   the periodic measurement; Stop ends it. The distance frames are sent only while measuring.
 - Distances come from ``range_source(now)`` (16 values in mm, e.g. the world's ray casting); ``None``, inf or
   anything beyond ``MAX_RANGE`` reads as MAX_RANGE ("no echo"); inactive sensors read 0 (erratum E-HW-012).
+- A measurement is taken when a distance frame goes out (the DBC's 100 ms cycle), not every step: the frames carry
+  exactly what measuring at each step would have put there, for a fifth of the ray casts at 50 Hz.
 - The board has 4 analogue inputs (field evidence); the status telegram's 8 are filled by the controller.
 """
 
@@ -30,6 +32,7 @@ class UltrasonicBoard(Board):
         self.measuring = False
         self.analog_in = [0] * 4
         self.distances = [0] * SENSORS
+        self._measured_at: float | None = None  # the ``now`` of ``distances`` (None: not measuring)
         super().__init__(Node.USBOARD, port)
 
     def commands(self) -> dict[str, Handler]:
@@ -47,6 +50,7 @@ class UltrasonicBoard(Board):
         def build(now: float) -> Signals | None:
             if not self.measuring:
                 return None
+            self._measure(now)
             return {f"Distance{i + 1}": self.distances[i] for i in range(4 * k, 4 * k + 4)}
 
         return build
@@ -54,6 +58,7 @@ class UltrasonicBoard(Board):
     def _on_start(self, signals: dict[str, Any], now: float) -> None:
         self.active_mask = int(signals["ActiveMask"])
         self.measuring = True
+        self._measured_at = None  # the new mask applies to the next frame
 
     def _on_stop(self, signals: dict[str, Any], now: float) -> None:
         self.measuring = False
@@ -61,7 +66,13 @@ class UltrasonicBoard(Board):
     def update(self, now: float, dt: float) -> None:
         if not self.measuring:
             self.distances = [0] * SENSORS
+            self._measured_at = None
+
+    def _measure(self, now: float) -> None:
+        """The 16 distances at ``now`` (once per ``now``: the four distance frames share one measurement)."""
+        if self._measured_at == now:
             return
+        self._measured_at = now
         ranges = list(self.range_source(now)) if self.range_source else []
         ranges += [None] * (SENSORS - len(ranges))
         out = []
