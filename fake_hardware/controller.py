@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 from typing import Any, Literal
 
 import can
@@ -44,6 +44,17 @@ DIGOUT_CHANNELS = {Node.IOBOARD: 16, Node.RELAYBOARD: 8}
 ANSWERS = {"ProbeReply": "connect", "SelfTestResult": "init"}  # answer -> transaction kind
 
 Params = Callable[[str], Any]
+
+
+# A motor board's status bits that keep its wheel from following setpoints (drive_fault), most telling first;
+# the first two are hardware faults whatever the client did (the reference server's E-HW-025 check).
+MOTOR_FAULTS: tuple[tuple[int, str], ...] = (
+    (St.NODE_TIMEOUT, "not answering"),
+    (St.OVER_TEMPERATURE, "over-temperature"),
+    (St.NOT_INITIALIZED, "not initialized"),
+    (St.BRAKE_ENGAGED, "brake engaged"),
+)
+HARDWARE_FAULTS = MOTOR_FAULTS[:2]
 
 
 class CanController:
@@ -233,16 +244,16 @@ class CanController:
             return "CAN bus-off"
         if self.emergency_active:
             return "emergency stop"
+        return self.motor_fault(MOTOR_FAULTS)
+
+    def motor_fault(self, faults: Sequence[tuple[int, str]], absent: str = "absent") -> str | None:
+        """The first motor board that is absent or shows one of ``faults`` (status bit, text), as
+        "MOTOR_RIGHT <text>"; None when neither does."""
         for m in MOTORS:
             word = self.status_word(m)
             if word == St.ABSENT:
-                return f"{m.name} absent"
-            for bit, text in (
-                (St.NODE_TIMEOUT, "not answering"),
-                (St.OVER_TEMPERATURE, "over-temperature"),
-                (St.NOT_INITIALIZED, "not initialized"),
-                (St.BRAKE_ENGAGED, "brake engaged"),
-            ):
+                return f"{m.name} {absent}"
+            for bit, text in faults:
                 if word & bit:
                     return f"{m.name} {text}"
         return None

@@ -25,7 +25,8 @@ import random
 from collections.abc import Callable, Iterable, Sequence
 from typing import TYPE_CHECKING, Any
 
-from fake_hardware import ALL_NODES, MOTORS, Hardware, HwEvent, Node, St, Transaction, build_platform_hardware
+from fake_hardware import ALL_NODES, Hardware, HwEvent, Node, St, Transaction, build_platform_hardware
+from fake_hardware.controller import HARDWARE_FAULTS
 from fake_hardware.serial_scanner import ANGLE_STEP, MAX_CM, POINTS, START_ANGLE, Scan
 from reference_server.motion_api import MotionModel, WorldFeatures
 
@@ -151,15 +152,7 @@ class HardwareLink:
             return None
         if c.bus_off:
             return "CAN bus-off"
-        for m in MOTORS:
-            word = c.status_word(m)
-            if word == St.ABSENT:
-                return f"{m.name} not connected"
-            if word & St.NODE_TIMEOUT:
-                return f"{m.name} not answering"
-            if word & St.OVER_TEMPERATURE:
-                return f"{m.name} over-temperature"
-        return None
+        return c.motor_fault(HARDWARE_FAULTS, absent="not connected")
 
     @property
     def emergency_active(self) -> bool:
