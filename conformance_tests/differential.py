@@ -9,7 +9,7 @@ Rules:
 - The script is data (``script``): the chart walk with every GET_* request in every state, every motion mode,
   parameter reads and writes, documents; with motion allowed, relative moves in Automatic, each followed by a
   wait until the platform is at rest. Only the replies are compared; volatile fields (clocks, noise, sensor
-  readings, values the guide leaves open) are ignored or compared within tolerances from ``volatile.yaml``.
+  readings, values the guide leaves open) are ignored or compared within tolerances from ``spec/volatile.yaml``.
 - A diff is (step, request, field path, reference value, target value).
 """
 
@@ -19,7 +19,6 @@ import fnmatch
 import functools
 import math
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import yaml
@@ -32,10 +31,10 @@ from conformance_tests.catalogue import Case, Level, Tier
 from conformance_tests.chart import St
 from conformance_tests.context import CaseContext, Config, Target
 from conformance_tests.launch import InProcessServer
-from spec.model import enum_classes
+from spec.model import SPEC_DIR, enum_classes
 from spec.telegram import Telegram
 
-VOLATILE_PATH = Path(__file__).resolve().parent / "volatile.yaml"
+VOLATILE_PATH = SPEC_DIR / "volatile.yaml"
 MotionMode = enum_classes()["MotionMode"]
 
 

@@ -25,8 +25,9 @@ if TYPE_CHECKING:
     from reference_server.platform import Platform
 
 ABSENT = -1  # status of a board that is not on the CAN bus (no reading of it is reported)
-NO_CAMERA_IP = "0.0.0.0"
-NO_CAMERA_ID = "none"
+# E-REP-020: a platform without a camera answers CMD_GET_CAMERA with empty strings (no invented address)
+NO_CAMERA_IP = ""
+NO_CAMERA_ID = ""
 
 _I32 = (-(2**31), 2**31 - 1)
 AppError: Any = enum_classes()["AppError"]

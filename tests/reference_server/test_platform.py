@@ -269,7 +269,8 @@ def test_set_frame_and_debug_queue(sim: Sim) -> None:
     assert (s.est_x, s.est_y, s.est_angle) == (-500, 700, -45_000)
     debug = sim(R.CMD_GET_DEBUG_DATA()).reply
     assert any("estimated frame set" in e.entry for e in debug.protocol_queue)
-    assert sim(R.CMD_GET_CAMERA()).reply.ip == "0.0.0.0"
+    camera = sim(R.CMD_GET_CAMERA()).reply
+    assert (camera.ip, camera.camera_id) == ("", "")  # no camera fitted: empty strings (E-REP-020)
 
 
 def test_exit_and_close_socket_outcomes(sim: Sim) -> None:
