@@ -14,7 +14,10 @@ Rules:
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import TYPE_CHECKING, Any, cast
+
+import numpy as np
 
 from spec.codec import REPLIES
 from spec.model import enum_classes
@@ -44,6 +47,15 @@ def _i32(value: float) -> int:
     return max(_I32[0], min(_I32[1], round(value)))
 
 
+def _i32_points(frames: Sequence[Sequence[float]]) -> tuple[tuple[int, int], ...]:
+    """The (x, y) of each frame as ``_i32`` does it (round half to even, saturated), in one numpy pass: the
+    interpolated path of the status telegram may hold thousands of points."""
+    if not frames:
+        return ()
+    xy = np.clip(np.rint(np.asarray(frames, dtype=np.float64)[:, :2]), *_I32).astype(np.int64)
+    return tuple(map(tuple, xy.tolist()))
+
+
 def _milli_deg(rad: float) -> int:
     return _i32(math.degrees(rad) * 1000.0)
 
@@ -66,7 +78,7 @@ def _status_fields(p: Platform) -> dict[str, Any]:
         # without a world (kinematics.Drive): no localization, the estimate is exact, its deviations 0
         cov_major=0, cov_minor=0, cov_angle=0, cov_axis_angle=0,
         scan=(), reflectors=(), lines=(), circles=(), corners=(),  # without a world: no laser scanner
-        path=tuple((_i32(f.x), _i32(f.y)) for f in p.motion.remaining_path()),
+        path=_i32_points(p.motion.remaining_path()),
         joystick_buttons=(),  # no joystick
         vel_trans=_i32(p.motion.v), vel_rot=_i32(p.motion.w * 1000.0),
         relay_digital_in=0, relay_status=ABSENT, relay_analog_in=(0,) * 8, relay_opto_distance=(0,) * 4,
