@@ -20,10 +20,10 @@ Rules:
   reported absent, never invented: the commands for it are accepted where the state chart allows them and
   logged as without effect.
 - Log lines go to the "pltf.server" logger and to the protocol queue of CMD_GET_DEBUG_DATA (``log``).
-- ``epoch`` counts the changes of state: every tick, every command that is not a pure query (``QUERIES``),
-  every emergency or drive-fault event and every request of the control channel (``touch``). Between two
-  changes the status reply is built once (reference_server/status.py): a client polling GET_STATUS faster
-  than the control period gets the same picture, only its timestamp moves.
+- ``epoch`` counts the changes of state: every tick, every command that is not a pure query (``QUERIES``) and
+  that the state chart lets run, every emergency or drive-fault event and every request of the control channel
+  (``touch``). Between two changes the status reply is built once (reference_server/status.py): a client
+  polling GET_STATUS faster than the control period gets the same picture, only its timestamp moves.
 """
 
 from __future__ import annotations
@@ -117,12 +117,12 @@ class Platform:
     def handle(self, telegram: Telegram, now: float) -> Outcome:
         self.now = now
         name = telegram.NAME
-        if name not in QUERIES:
-            self.touch()
         reason = self.chart.check(name)
-        if reason is not None:
+        if reason is not None:  # refused by the state chart: nothing changed, the status stays as built
             self.log(logging.WARNING, "%s", reason)
             return Outcome(refused=reason)
+        if name not in QUERIES:
+            self.touch()
         handler = HANDLERS.get(name)
         if handler is None:  # pragma: no cover - a test checks every telegram has a handler
             return self._ignore(f"command {name} not implemented")

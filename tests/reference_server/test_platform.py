@@ -122,6 +122,9 @@ def test_status_between_ticks_is_the_same_picture_and_any_command_refreshes_it(s
     sim.now += 0.005
     again = sim.status()
     assert again == first.replace(timestamp=again.timestamp) and again.timestamp == first.timestamp + 5
+    epoch = sim.p.epoch
+    assert sim(R.CMD_CONNECT_TO_PLTF()).refused  # refused by the state chart in Running: nothing changed
+    assert sim.p.epoch == epoch and sim.status() == again
     sim(R.CMD_BREAK())  # not a query: seen at once, before the next period
     assert sim.status().operation_state == OperationState.ST_OP_BREAKED
     sim(R.CMD_CONTINUE())
