@@ -8,6 +8,10 @@ Rules:
   distance per beam wins (``np.minimum.at``). Work is proportional to the beams times the segments each beam
   crosses, not beams times segments.
 - Hit ids: 0..S-1 the scene's segments, S..S+C-1 its circles, -1 nothing within ``max_range`` (range inf).
+- The inner loops run in C (``_raycast.c``, built with the package) when it is importable: the same algorithm
+  and the same floating-point steps, without numpy's per-call overhead (a 541-beam scan of a room: ~190 us in
+  numpy, ~15 us in C). The numpy functions (``cast_fan_numpy``, ``cast_rays_numpy``) stay: the fallback where
+  the extension was not built, and the oracle the tests hold the C loops to.
 """
 
 from __future__ import annotations
@@ -20,6 +24,11 @@ import numpy as np
 import numpy.typing as npt
 
 from reference_server.world.geometry import F64, circles, segments
+
+try:
+    from reference_server.world import _raycast
+except ImportError:  # not built (a source checkout without a compiler): numpy only
+    _raycast = None
 
 I64 = npt.NDArray[np.int64]
 _TWO_PI = 2.0 * math.pi
@@ -84,7 +93,21 @@ def beam_offsets(fan: Fan) -> tuple[F64, F64]:
 
 def cast_fan(x: float, y: float, heading: float, scene: Scene, fan: Fan, want_hits: bool = True) -> tuple[F64, I64]:
     """Ranges (mm, inf = no echo) and hit ids of the fan's beams from (x, y) facing ``heading`` (without
-    ``want_hits`` the ids are all -1: the ranges alone cost less)."""
+    ``want_hits`` the ids may be all -1: the ranges alone cost less in numpy)."""
+    if _raycast is None:
+        return cast_fan_numpy(x, y, heading, scene, fan, want_hits)
+    ranges = np.full(fan.count, np.inf)
+    hits = np.full(fan.count, -1, dtype=np.int64)
+    cb, sb = beam_offsets(fan)
+    _raycast.fan(x, y, heading + fan.start, heading, fan.step, fan.max_range, fan.count, scene.segs, scene.circs,
+                 cb, sb, ranges, hits)  # fmt: skip
+    return ranges, hits
+
+
+def cast_fan_numpy(
+    x: float, y: float, heading: float, scene: Scene, fan: Fan, want_hits: bool = True
+) -> tuple[F64, I64]:
+    """``cast_fan`` in numpy."""
     a0 = heading + fan.start
     ranges = np.full(fan.count, np.inf)
     hits = np.full(fan.count, -1, dtype=np.int64)
@@ -145,6 +168,19 @@ def _intervals(x: float, y: float, a0: float, scene: Scene) -> tuple[F64, F64]:
 
 def cast_rays(ox: F64, oy: F64, angles: F64, scene: Scene, max_range: float) -> tuple[F64, I64]:
     """Ranges and hit ids of R arbitrary rays (dense: R x S pairs; for a few dozen rays)."""
+    if _raycast is None:
+        return cast_rays_numpy(ox, oy, angles, scene, max_range)
+    n = len(ox)
+    ranges = np.empty(n)
+    hits = np.empty(n, dtype=np.int64)
+    f64 = np.float64
+    _raycast.rays(np.ascontiguousarray(ox, f64), np.ascontiguousarray(oy, f64), np.cos(angles), np.sin(angles),
+                  scene.segs, scene.circs, max_range, ranges, hits)  # fmt: skip
+    return ranges, hits
+
+
+def cast_rays_numpy(ox: F64, oy: F64, angles: F64, scene: Scene, max_range: float) -> tuple[F64, I64]:
+    """``cast_rays`` in numpy."""
     n = len(ox)
     ranges = np.full(n, np.inf)
     hits = np.full(n, -1, dtype=np.int64)

@@ -7,7 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from reference_server.world.raycast import Fan, Scene, cast_fan, cast_rays
+from reference_server.world import raycast
+from reference_server.world.raycast import Fan, Scene, cast_fan, cast_fan_numpy, cast_rays, cast_rays_numpy
 from reference_server.world.sensors import LASER_FAN
 
 
@@ -34,6 +35,38 @@ def test_fan_equals_dense_casting_everywhere() -> None:
         same = np.isfinite(r1)
         assert (h1[same] == h2[same]).mean() > 0.99  # ties at shared endpoints may pick either segment
         assert (h1[~same] == -1).all()
+
+
+def test_the_c_loops_are_built() -> None:
+    """``make`` builds the extension: without it the server falls back to numpy and misses its speed."""
+    assert raycast._raycast is not None
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_c_loops_equal_numpy_bit_for_bit(seed: int) -> None:
+    """The C loops take numpy's floating-point steps: the same ranges and the same hit ids, to the last bit
+    (ties included), for segments, circles, an origin inside a circle, degenerate and crossing segments."""
+    rng = np.random.default_rng(seed)
+    for _ in range(25):
+        scene = _random_scene(rng, n=int(rng.integers(0, 80)))
+        extra = np.array([[5000.0, 5000, 5000, 5000], [0, 0, 20000, 20000], [0, 20000, 20000, 0]])
+        scene = Scene.make(np.vstack([scene.segs, extra]), np.vstack([scene.circs, [[10000.0, 10000, 3000]]]))
+        x, y, h = rng.uniform(0, 20000), rng.uniform(0, 20000), rng.uniform(-7, 7)
+        fan = Fan(int(rng.integers(1, 800)), rng.uniform(-math.pi, 0), rng.uniform(0.001, 0.05), rng.uniform(1, 3e4))
+        for got, want in zip(cast_fan(x, y, h, scene, fan), cast_fan_numpy(x, y, h, scene, fan), strict=True):
+            np.testing.assert_array_equal(got, want)
+        n = int(rng.integers(1, 60))
+        ox, oy, ang = rng.uniform(0, 20000, n), rng.uniform(0, 20000, n), rng.uniform(-7, 7, n)
+        for got, want in zip(cast_rays(ox, oy, ang, scene, 8000.0), cast_rays_numpy(ox, oy, ang, scene, 8000.0),
+                             strict=True):  # fmt: skip
+            np.testing.assert_array_equal(got, want)
+
+
+def test_empty_scene_in_c() -> None:
+    ranges, hits = cast_fan(0.0, 0.0, 0.0, Scene.make(), LASER_FAN)
+    assert not np.isfinite(ranges).any() and (hits == -1).all()
+    ranges, hits = cast_rays(np.zeros(3), np.zeros(3), np.zeros(3), Scene.make(), 100.0)
+    assert not np.isfinite(ranges).any() and (hits == -1).all()
 
 
 def test_a_wall_ahead_and_the_blind_zone_behind() -> None:
