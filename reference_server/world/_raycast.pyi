@@ -1,11 +1,12 @@
-# Typing of the C extension built from _raycast.c (see raycast.py).
-from typing_extensions import Buffer
+# Typing of the C extension built from _raycast.c (see raycast.py): float64 / int64 arrays, C-contiguous.
+from typing import Any
+
+import numpy.typing as npt
+
+_A = npt.NDArray[Any]
 
 def fan(
     x: float, y: float, a0: float, heading: float, step: float, max_range: float, count: int,
-    segs: Buffer, circs: Buffer, cos_b: Buffer, sin_b: Buffer, ranges: Buffer, hits: Buffer,
+    segs: _A, circs: _A, cos_b: _A, sin_b: _A, ranges: _A, hits: _A,
 ) -> None: ...
-def rays(
-    ox: Buffer, oy: Buffer, dx: Buffer, dy: Buffer, segs: Buffer, circs: Buffer, max_range: float,
-    ranges: Buffer, hits: Buffer,
-) -> None: ...
+def rays(ox: _A, oy: _A, dx: _A, dy: _A, segs: _A, circs: _A, max_range: float, ranges: _A, hits: _A) -> None: ...

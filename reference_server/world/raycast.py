@@ -27,8 +27,10 @@ from reference_server.world.geometry import F64, circles, segments
 
 try:
     from reference_server.world import _raycast
+
+    HAVE_C = True
 except ImportError:  # not built (a source checkout without a compiler): numpy only
-    _raycast = None
+    HAVE_C = False
 
 I64 = npt.NDArray[np.int64]
 _TWO_PI = 2.0 * math.pi
@@ -94,7 +96,7 @@ def beam_offsets(fan: Fan) -> tuple[F64, F64]:
 def cast_fan(x: float, y: float, heading: float, scene: Scene, fan: Fan, want_hits: bool = True) -> tuple[F64, I64]:
     """Ranges (mm, inf = no echo) and hit ids of the fan's beams from (x, y) facing ``heading`` (without
     ``want_hits`` the ids may be all -1: the ranges alone cost less in numpy)."""
-    if _raycast is None:
+    if not HAVE_C:
         return cast_fan_numpy(x, y, heading, scene, fan, want_hits)
     ranges = np.full(fan.count, np.inf)
     hits = np.full(fan.count, -1, dtype=np.int64)
@@ -168,7 +170,7 @@ def _intervals(x: float, y: float, a0: float, scene: Scene) -> tuple[F64, F64]:
 
 def cast_rays(ox: F64, oy: F64, angles: F64, scene: Scene, max_range: float) -> tuple[F64, I64]:
     """Ranges and hit ids of R arbitrary rays (dense: R x S pairs; for a few dozen rays)."""
-    if _raycast is None:
+    if not HAVE_C:
         return cast_rays_numpy(ox, oy, angles, scene, max_range)
     n = len(ox)
     ranges = np.empty(n)
