@@ -30,6 +30,7 @@ from dataclasses import dataclass
 from typing import NamedTuple, Protocol
 
 import numpy as np
+import numpy.typing as npt
 import serial  # type: ignore[import-untyped]  # no stubs; types-pyserial is not a dependency
 
 if "fake_hardware" not in serial.protocol_handler_packages:
@@ -47,7 +48,8 @@ _BLOCK = b"\xbb\xbb\x11\x11"
 TELEGRAM_BYTES = _HEAD.size + len(_BLOCK) + 2 * POINTS + 2  # 1108: the longest telegram (270 degrees)
 MIN_TELEGRAM = _HEAD.size + 2
 
-RangeSource = Callable[[float], Sequence[float | None]]
+Ranges = Sequence[float | None] | npt.NDArray[np.float64]  # mm; None, inf or NaN: no echo
+RangeSource = Callable[[float], Ranges]
 
 
 _NO_ECHO = struct.pack(f"<{POINTS}H", *([MAX_CM] * POINTS))
@@ -75,7 +77,7 @@ class Scan(NamedTuple):
 
 
 def encode_telegram(
-    ranges_mm: Sequence[float | None], scan_number: int, telegram_number: int, address: int = ADDRESS
+    ranges_mm: Ranges, scan_number: int, telegram_number: int, address: int = ADDRESS
 ) -> bytes:
     """One distance telegram; a range of None, inf or beyond the 13-bit maximum reads as the maximum."""
     size = (TELEGRAM_BYTES - 4) // 2
@@ -84,7 +86,7 @@ def encode_telegram(
     return head[:4] + body + struct.pack("<H", crc16(body))
 
 
-def _distances(ranges_mm: Sequence[float | None]) -> bytes:
+def _distances(ranges_mm: Ranges) -> bytes:
     """The 541 distance words (cm, little-endian), vectorised: None and NaN become the maximum."""
     n = len(ranges_mm)
     if n == 0 or (ranges_mm[0] is None and list(ranges_mm).count(None) == n):

@@ -22,12 +22,12 @@ from __future__ import annotations
 import logging
 import math
 import random
-from collections.abc import Callable, Iterable, Sequence
-from typing import TYPE_CHECKING, Any
+from collections.abc import Callable, Iterable
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from fake_hardware import ALL_NODES, Hardware, HwEvent, Node, St, Transaction, build_platform_hardware
 from fake_hardware.controller import HARDWARE_FAULTS
-from fake_hardware.serial_scanner import ANGLE_STEP, MAX_CM, POINTS, START_ANGLE, Scan
+from fake_hardware.serial_scanner import ANGLE_STEP, MAX_CM, POINTS, START_ANGLE, Ranges, Scan
 from reference_server.motion_api import MotionModel, WorldFeatures
 
 if TYPE_CHECKING:
@@ -72,7 +72,10 @@ def factory(
 _NONE: dict[int, tuple[None, ...]] = {POINTS: (None,) * POINTS, 16: (None,) * 16}
 
 
-def _ranges(values: Sequence[float | None] | None, n: int) -> Sequence[float | None]:
+_R = TypeVar("_R", bound=Ranges)
+
+
+def _ranges(values: _R | None, n: int) -> _R | tuple[None, ...]:
     return _NONE[n] if values is None else values
 
 

@@ -27,6 +27,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
+from fake_hardware.serial_scanner import Ranges
 from reference_server.motion_api import Frame, Params, Pose, normalize
 
 __all__ = ["Drive", "Frame", "Pose", "Roadmap", "Station", "normalize", "relative_to_world"]
@@ -181,7 +182,7 @@ class Drive:
             self.v, self.w = ds / dt, dth / dt
 
     # ---- sensor sources: no world, so no echo; the IMU feels the true motion
-    def scan_ranges(self, now: float) -> Sequence[float | None] | None:
+    def scan_ranges(self, now: float) -> Ranges | None:
         return None
 
     def us_ranges(self, now: float) -> Sequence[float | None] | None:

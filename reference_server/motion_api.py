@@ -31,6 +31,8 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any, NamedTuple, Protocol, runtime_checkable
 
+from fake_hardware.serial_scanner import Ranges
+
 Params = Callable[[str], Any]  # ParameterStore.get: parameters are read live, a change takes effect at once
 
 
@@ -137,8 +139,8 @@ class MotionModel(Protocol):
         """Estimation: measured wheel travel (mm) over the last period."""
 
     # ---- sensor sources for the simulated hardware (from the true state)
-    def scan_ranges(self, now: float) -> Sequence[float | None] | None:
-        """541 ranges (mm) of the laser scanner, -135..+135 degrees in 0.5 degree steps; None: no echo."""
+    def scan_ranges(self, now: float) -> Ranges | None:
+        """541 ranges (mm) of the laser scanner, -135..+135 degrees in 0.5 degree steps; None or inf: no echo."""
 
     def us_ranges(self, now: float) -> Sequence[float | None] | None:
         """16 ultrasonic ranges (mm); None: no echo."""

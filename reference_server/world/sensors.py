@@ -182,13 +182,24 @@ def observe(
 # ---------------------------------------------------------------------------------------------- ultrasonic
 
 
+_US_NAMES = tuple(f"USSensor{i:02d}{k}" for i in range(1, US_SENSORS + 1) for k in ("PosX", "PosY", "Angle"))
+_US_MOUNTS: dict[tuple[Any, ...], F64] = {}  # parameter values -> mounts (a platform has one set; tests a few)
+NEAR_MIN = 64  # scene elements below which the ultrasonic rays test all of them (culling costs more)
+
+
 def ultrasonic_mounts(params: Params) -> F64:
-    """(16, 3): x, y (mm, platform frame) and angle (rad) of each sensor from the USSensorNN parameters."""
-    rows = []
-    for i in range(1, US_SENSORS + 1):
-        p = f"USSensor{i:02d}"
-        rows.append((float(params(p + "PosX")), float(params(p + "PosY")), math.radians(float(params(p + "Angle")))))
-    return np.asarray(rows, dtype=np.float64)
+    """(16, 3): x, y (mm, platform frame) and angle (rad) of each sensor from the USSensorNN parameters (read
+    every time; the array built only when a value changed)."""
+    key = tuple(map(params, _US_NAMES))
+    mounts = _US_MOUNTS.get(key)
+    if mounts is None:
+        if len(_US_MOUNTS) >= 16:
+            _US_MOUNTS.clear()
+        v = [float(x) for x in key]
+        mounts = np.asarray([(v[k], v[k + 1], math.radians(v[k + 2])) for k in range(0, len(v), 3)], dtype=np.float64)
+        mounts.flags.writeable = False  # shared
+        _US_MOUNTS[key] = mounts
+    return mounts
 
 
 def ultrasonic(pose: tuple[float, float, float], mounts: F64, scene: Scene, noise: np.random.Generator) -> list[float]:
@@ -198,7 +209,7 @@ def ultrasonic(pose: tuple[float, float, float], mounts: F64, scene: Scene, nois
     ox = x + c * mounts[:, 0] - s * mounts[:, 1]
     oy = y + s * mounts[:, 0] + c * mounts[:, 1]
     angles = (a + mounts[:, 2])[:, None] + _US_OFFSETS[None, :]
-    near = _near(scene, x, y, US_RANGE + 1000.0)
+    near = scene if scene.size < NEAR_MIN else _near(scene, x, y, US_RANGE + 1000.0)  # the same ranges either way
     ranges, _ = cast_rays(np.repeat(ox, US_RAYS), np.repeat(oy, US_RAYS), angles.ravel(), near, US_RANGE)
     best = ranges.reshape(US_SENSORS, US_RAYS).min(axis=1)
     noisy = best + noise.standard_normal(US_SENSORS) * US_SIGMA

@@ -87,7 +87,6 @@ class World:
         self.motion = Motion()
         self.contact = False
         self.last_scan: sensors.Scan | None = None
-        self._scan_list: tuple[sensors.Scan | None, list[float | None]] = (None, [])
         self._scan_pose: Pose = pose
         self._observation: sensors.Observation | None = None
         self.perception = Perception()
@@ -358,13 +357,12 @@ class World:
         v, w = self._true_vel
         return 0.0, v * w / 1000.0, GRAVITY, w
 
-    def scan_ranges(self, now: float) -> list[float | None]:
-        """The serial scanner's source: the latest laser scan of ``sense`` (10 Hz), whatever its own period."""
+    def scan_ranges(self, now: float) -> F64:
+        """The serial scanner's source: the latest laser scan of ``sense`` (10 Hz), whatever its own period; mm,
+        inf: no echo (the S300 encodes the ranges as an array: no list of floats and Nones in between)."""
         if self.last_scan is None:
-            return self.scan()
-        if self._scan_list[0] is not self.last_scan:  # converted once per scan, however often it is read
-            self._scan_list = (self.last_scan, [None if r == math.inf else r for r in self.last_scan.ranges.tolist()])
-        return list(self._scan_list[1])
+            return np.asarray([math.inf if r is None else r for r in self.scan()], dtype=np.float64)
+        return self.last_scan.ranges.copy()
 
     def us_ranges(self, now: float) -> list[float | None]:
         """The ultrasonic board's source: the distances of the latest sensing period (read every period)."""
