@@ -18,12 +18,13 @@ from __future__ import annotations
 import enum
 import functools
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import can
 import cantools
-from cantools.database.can import Database, Message
+from cantools.database.can import Database, Message, Signal
+from cantools.database.conversion import IdentityConversion
 
 from spec.model import SPEC_DIR
 
@@ -109,9 +110,13 @@ def cycle_time(msg: Message) -> float | None:
 
 
 class FrameCodec:
-    """One message's signals as (name, start bit, mask, sign bit, conversion, min, max), Intel byte order."""
+    """One message's signals as (name, start bit, mask, sign bit, to raw, to physical, min, max), Intel byte order.
 
-    __slots__ = ("_decoded", "_encoded", "fields", "frame_id", "length", "names")
+    An identity conversion (factor 1, offset 0: most signals) is ``round`` one way and nothing the other, not a
+    call into cantools per signal. Frames are remembered both ways while that pays: a message whose frames do
+    not repeat (a counter, a timestamp) stops being looked up after ``CACHE`` frames with few hits."""
+
+    __slots__ = ("_cached", "_decoded", "_encoded", "_hits", "fields", "frame_id", "length", "names")
     CACHE = 256  # frames remembered per message each way: status and analogue frames repeat, counters do not
 
     def __init__(self, msg: Message) -> None:
@@ -120,7 +125,7 @@ class FrameCodec:
         self.frame_id = msg.frame_id
         self.length = msg.length
         self.fields = tuple(
-            (s.name, s.start, (1 << s.length) - 1, (1 << (s.length - 1)) if s.is_signed else 0, s.conversion,
+            (s.name, s.start, (1 << s.length) - 1, (1 << (s.length - 1)) if s.is_signed else 0, *_converters(s),
              float(s.minimum) if s.minimum is not None else -math.inf,
              float(s.maximum) if s.maximum is not None else math.inf)
             for s in msg.signals
@@ -128,45 +133,69 @@ class FrameCodec:
         self.names = tuple(f[0] for f in self.fields)
         self._encoded: dict[tuple[Any, ...], bytes] = {}
         self._decoded: dict[bytes, dict[str, Any]] = {}
+        self._cached = [True, True]  # encode, decode: still worth a lookup
+        self._hits = [0, 0]
 
     def encode(self, signals: Signals) -> bytes:
         """Physical values (clamped to each signal's range) -> the frame's bytes; every signal must be given."""
-        key = tuple([signals[n] for n in self.names])
+        if not self._cached[0]:
+            return self._encode(signals)
+        key = tuple(map(signals.__getitem__, self.names))
         data = self._encoded.get(key)
-        if data is None:
-            if len(self._encoded) >= self.CACHE:
-                self._encoded.clear()
-            data = self._encoded[key] = self._encode(signals)
+        if data is not None:
+            self._hits[0] += 1
+            return data
+        if len(self._encoded) >= self.CACHE:
+            self._forget(0, self._encoded)
+        data = self._encoded[key] = self._encode(signals)
         return data
 
     def decode(self, data: bytes | bytearray) -> dict[str, Any]:
         """The physical values of a frame: a dict shared by every equal frame, so callers keep it but never
         change it."""
         key = bytes(data[: self.length])
+        if not self._cached[1]:
+            return self._decode(key)
         out = self._decoded.get(key)
-        if out is None:
-            if len(self._decoded) >= self.CACHE:
-                self._decoded.clear()
-            out = self._decoded[key] = self._decode(key)
+        if out is not None:
+            self._hits[1] += 1
+            return out
+        if len(self._decoded) >= self.CACHE:
+            self._forget(1, self._decoded)
+        out = self._decoded[key] = self._decode(key)
         return out
+
+    def _forget(self, way: int, cache: dict[Any, Any]) -> None:
+        """A full cache: start afresh, or stop looking up when fewer than a quarter of the lookups hit."""
+        self._cached[way] = self._hits[way] >= self.CACHE // 4
+        self._hits[way] = 0
+        cache.clear()
 
     def _encode(self, signals: Signals) -> bytes:
         word = 0
-        for name, start, mask, _, conversion, lo, hi in self.fields:
+        for name, start, mask, _, to_raw, _, lo, hi in self.fields:
             value = signals[name]
             value = lo if value < lo else hi if value > hi else value
-            word |= (int(conversion.numeric_scaled_to_raw(value)) & mask) << start
+            word |= (int(to_raw(value)) & mask) << start
         return word.to_bytes(self.length, "little")
 
     def _decode(self, data: bytes) -> dict[str, Any]:
         word = int.from_bytes(data, "little")
         out: dict[str, Any] = {}
-        for name, start, mask, sign, conversion, _, _ in self.fields:
+        for name, start, mask, sign, _, to_phys, _, _ in self.fields:
             raw = (word >> start) & mask
             if sign and raw & sign:
                 raw -= mask + 1
-            out[name] = conversion.raw_to_scaled(raw, False)
+            out[name] = raw if to_phys is None else to_phys(raw)
         return out
+
+
+def _converters(s: Signal) -> tuple[Callable[[float], float | int], Callable[[int], Any] | None]:
+    """(physical -> raw, raw -> physical or None for "the same") of an integer signal, as cantools converts."""
+    conv = s.conversion
+    if isinstance(conv, IdentityConversion):  # cantools: round(value); the raw value as it is
+        return round, None
+    return conv.numeric_scaled_to_raw, functools.partial(conv.raw_to_scaled, decode_choices=False)
 
 
 @functools.cache

@@ -80,8 +80,11 @@ class SimVirtualBus(virtual.VirtualBus):
     def drain(self) -> list[can.Message]:
         """Everything in the inbox, without blocking (the fast path of ``CanPort.poll``)."""
         self._check_if_open()
+        q = self.queue
+        if q.empty():  # most polls: found out without raising and catching queue.Empty
+            return []
         out: list[can.Message] = []
-        get = self.queue.get_nowait
+        get = q.get_nowait
         try:
             while True:
                 out.append(get())
@@ -115,6 +118,7 @@ class CanPort:
         self.delay = 0.0
         self.stats = PortStats()
         self._pending: deque[tuple[float, can.Message]] = deque()
+        self._sim = bus if isinstance(bus, SimVirtualBus) else None  # its cheap drain
 
     @property
     def attached(self) -> bool:
@@ -122,8 +126,9 @@ class CanPort:
 
     def send(self, frame: can.Message, now: float) -> bool:
         """Put a frame on the bus (or into the delay line); False when it is lost."""
-        self._flush(now)
-        if not self.attached:
+        if self._pending:
+            self._flush(now)
+        if not self.connected or self.bus_off:
             self.stats.dropped_tx += 1
             return False
         cond = self.conditions
@@ -140,15 +145,18 @@ class CanPort:
 
     def poll(self, now: float) -> list[can.Message]:
         """Every frame that arrived since the last poll (none while unplugged or bus-off)."""
-        self._flush(now)
-        if isinstance(self.bus, SimVirtualBus):
-            out = self.bus.drain()
+        if self._pending:
+            self._flush(now)
+        if self._sim is not None:
+            out = self._sim.drain()
+            if not out:
+                return out
         else:
             out = []
             recv = self.bus.recv
             while (frame := recv(timeout=0)) is not None:
                 out.append(frame)
-        if not self.attached:
+        if not self.connected or self.bus_off:
             self.stats.discarded_rx += len(out)
             return []
         self.stats.received += len(out)
@@ -156,8 +164,8 @@ class CanPort:
 
     def accept(self, ids: set[int] | frozenset[int]) -> None:
         """Receive only frames with these standard identifiers (a hardware acceptance filter)."""
-        if isinstance(self.bus, SimVirtualBus):
-            self.bus.accept(frozenset(ids))
+        if self._sim is not None:
+            self._sim.accept(frozenset(ids))
 
     def close(self) -> None:
         self.bus.shutdown()

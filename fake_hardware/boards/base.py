@@ -14,6 +14,7 @@ Rules:
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -83,6 +84,7 @@ class Board:
             self._handlers[msg.frame_id] = (msg, handler)
         port.accept(set(self._handlers))  # the board's acceptance filter: only the frames it handles
         self._cyclic: list[_Cyclic] = []
+        self._due = 0.0  # the earliest next_due of the cyclic messages
         for function, builder in self.cyclic().items():
             msg = candb.message_for(node, function)
             period = candb.cycle_time(msg)
@@ -117,7 +119,7 @@ class Board:
         for frame in self.port.poll(now):
             self._receive(frame, now)
         self.update(now, dt)
-        if self.started:
+        if self.started and now >= self._due - 1e-9:  # most steps of a board with 100 ms cycles: nothing due
             for c in self._cyclic:
                 if now >= c.next_due - 1e-9:
                     if (signals := c.build(now)) is not None:
@@ -125,6 +127,7 @@ class Board:
                     c.next_due += c.period
                     if c.next_due <= now:  # late (slow stepping): no burst, resume the period from now
                         c.next_due = now + c.period
+            self._due = min((c.next_due for c in self._cyclic), default=math.inf)
 
     def status(self) -> int:
         bits = self.status_bits()
@@ -161,6 +164,7 @@ class Board:
             self.started = True
             for c in self._cyclic:
                 c.next_due = now
+            self._due = now
         self.send(
             "ProbeReply",
             {

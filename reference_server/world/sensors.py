@@ -202,8 +202,9 @@ def ultrasonic_mounts(params: Params) -> F64:
     return mounts
 
 
-def ultrasonic(pose: tuple[float, float, float], mounts: F64, scene: Scene, noise: np.random.Generator) -> list[float]:
-    """16 distances (mm, inf: no echo within 3 m): the nearest echo within each sensor's cone."""
+def ultrasonic(pose: tuple[float, float, float], mounts: F64, scene: Scene, eps: F64) -> list[float]:
+    """16 distances (mm, inf: no echo within 3 m): the nearest echo within each sensor's cone, plus ``eps``
+    (16 standard normal draws) times US_SIGMA."""
     x, y, a = pose
     c, s = math.cos(a), math.sin(a)
     ox = x + c * mounts[:, 0] - s * mounts[:, 1]
@@ -212,7 +213,7 @@ def ultrasonic(pose: tuple[float, float, float], mounts: F64, scene: Scene, nois
     near = scene if scene.size < NEAR_MIN else _near(scene, x, y, US_RANGE + 1000.0)  # the same ranges either way
     ranges, _ = cast_rays(np.repeat(ox, US_RAYS), np.repeat(oy, US_RAYS), angles.ravel(), near, US_RANGE)
     best = ranges.reshape(US_SENSORS, US_RAYS).min(axis=1)
-    noisy = best + noise.standard_normal(US_SENSORS) * US_SIGMA
+    noisy = best + eps * US_SIGMA
     return [float(v) if math.isfinite(v) else math.inf for v in np.maximum(noisy, 1.0)]
 
 

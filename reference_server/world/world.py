@@ -70,7 +70,8 @@ class World:
         self.params = params
         self.rng = rng
         self.noise = np.random.default_rng(rng.getrandbits(64))  # laser and encoders, drawn in step order
-        self._us_seed = rng.getrandbits(64)  # ultrasonic: per scan, so reading it lazily changes nothing else
+        self._us_noise = np.random.default_rng(rng.getrandbits(64))  # ultrasonic: 16 draws every sensing period,
+        self._us_eps = np.zeros(sensors.US_SENSORS)  # read or not, so reading it lazily changes nothing else
         self._cb_noise = np.random.default_rng(rng.getrandbits(64))  # the fake hardware's range callbacks
         self.scale = (1.0 + rng.gauss(0.0, ODO_SCALE_SIGMA), 1.0 + rng.gauss(0.0, ODO_SCALE_SIGMA))
         self._geom_key = self._geometry_key()
@@ -209,7 +210,7 @@ class World:
         world = np.column_stack([est[0] + c * pts[:, 0] - sn * pts[:, 1], est[1] + sn * pts[:, 0] + c * pts[:, 1]])
         origin = (est[0] + c * mount, est[1] + sn * mount)
         self.perception = Perception(world, pts, self.perception.seq + 1, origin)
-        self._us_pose = self.truth
+        self._us_pose, self._us_eps = self.truth, self._us_noise.standard_normal(sensors.US_SENSORS)
         if self.geometry is not None and bool(self.params("LocalLocalization")):
             score = sensors.match_score(s.ranges, sensors.expected_ranges(est, mount, self.map_scene))
             self.loc.correct(score, self.truth, now, self.rng, bool(self.params("GlobalLocalization")))
@@ -218,9 +219,8 @@ class World:
         """The 16 ultrasonic distances of the last sensing period (mm, inf: no echo); computed on demand."""
         seq = self.perception.seq
         if self._us[0] != seq:
-            noise = np.random.default_rng([self._us_seed, seq])
             mounts = sensors.ultrasonic_mounts(self.params)
-            self._us = (seq, sensors.ultrasonic(self._us_pose, mounts, self.scene, noise))
+            self._us = (seq, sensors.ultrasonic(self._us_pose, mounts, self.scene, self._us_eps))
         return self._us[1]
 
     # ---- range callbacks for the fake hardware
@@ -232,7 +232,8 @@ class World:
     def ultrasonic(self, pose: Pose | None = None) -> list[float]:
         """16 distances (mm, inf: no echo) from ``pose`` (default: the true pose)."""
         mounts = sensors.ultrasonic_mounts(self.params)
-        return sensors.ultrasonic(pose or self.truth, mounts, self.scene, self._cb_noise)
+        eps = self._cb_noise.standard_normal(sensors.US_SENSORS)
+        return sensors.ultrasonic(pose or self.truth, mounts, self.scene, eps)
 
     # ---- state for the status telegram
     @property

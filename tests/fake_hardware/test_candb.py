@@ -71,10 +71,12 @@ def test_node_of() -> None:
 
 
 def test_the_precompiled_codec_equals_cantools_on_every_message() -> None:
+    """Random frames, more than its caches hold: the same bytes and values as cantools, before and after the
+    codec stops looking frames up (random values never repeat)."""
     rng = random.Random(5)
     for msg in DB.messages:
         codec = candb.codec(msg)
-        for _ in range(50):
+        for _ in range(2 * candb.FrameCodec.CACHE + 10):
             values = {}
             for s in msg.signals:
                 lo, hi = float(s.minimum), float(s.maximum)
@@ -87,5 +89,18 @@ def test_the_precompiled_codec_equals_cantools_on_every_message() -> None:
             data = codec.encode(values)
             assert data == msg.encode(clamped, scaling=True, strict=False), msg.name
             assert codec.decode(data) == msg.decode(data, decode_choices=False), msg.name
+        if sum(s.length for s in msg.signals) >= 24:  # frames that cannot repeat by chance
+            assert codec._cached == [False, False], msg.name
         frame = candb.build(msg, {s.name: s.maximum for s in msg.signals}, 1.5)
         assert frame.timestamp == 1.5 and frame.arbitration_id == msg.frame_id and len(frame.data) == msg.length
+
+
+def test_a_repeating_frame_stays_cached() -> None:
+    msg = candb.message_for(Node.IOBOARD, "Battery")
+    codec = candb.FrameCodec(msg)
+    signals = {s.name: 0 for s in msg.signals}
+    for k in range(3 * candb.FrameCodec.CACHE):
+        signals[msg.signals[0].name] = k % 8
+        data = codec.encode(signals)
+        assert codec.decode(data) == msg.decode(data, decode_choices=False)
+    assert codec._cached == [True, True] and len(codec._encoded) == 8
