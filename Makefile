@@ -6,7 +6,7 @@ STAMP := $(VENV)/.installed
 
 .PHONY: demo test test-slow lint typecheck docs docs-check bench clean install
 
-$(STAMP): pyproject.toml reference_server/world/_raycast.c
+$(STAMP): pyproject.toml setup.py $(wildcard reference_server/world/*.c)
 	@test -x $(BIN)/python || $(PY) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -e '.[dev]'

@@ -8,6 +8,7 @@ import random
 import numpy as np
 import pytest
 
+from reference_server.world import geometry
 from reference_server.world.geometry import (
     MapGeometry,
     circles,
@@ -16,6 +17,7 @@ from reference_server.world.geometry import (
     point_segment_distance,
     segments,
     segments_clear,
+    segments_clear_numpy,
 )
 from spec.documents import DocumentKind, validate_document
 
@@ -100,3 +102,24 @@ def test_clearance_and_polygons() -> None:
     square = np.array([[0, 0], [10, 0], [10, 10], [0, 10]], dtype=float)
     assert inside_polygon(np.array([5.0, 15.0]), np.array([5.0, 5.0]), square).tolist() == [True, False]
     assert math.isinf(clearance(np.array([0.0]), np.array([0.0]), segments([]), circles([]))[0])
+
+
+def test_segments_clear_runs_in_c() -> None:
+    assert geometry.HAVE_C
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_segments_clear_in_c_equals_numpy(seed: int) -> None:
+    """The C loops answer as numpy does, query by query: crossings, near misses, degenerate queries and walls,
+    circles a (negative) radius shrinks away, one radius or one per query."""
+    rng = np.random.default_rng(seed)
+    for k in range(40):
+        nq, ns, nc = (int(rng.integers(0, n)) for n in (150, 50, 6))
+        q = rng.uniform(0, 10000, (nq, 4))
+        q[: nq // 4, 2:] = q[: nq // 4, :2]  # points
+        walls = rng.uniform(0, 10000, (ns, 4))
+        walls[: ns // 5, 2:] = walls[: ns // 5, :2]
+        circs = np.column_stack([rng.uniform(0, 10000, (nc, 2)), rng.uniform(-300, 600, nc)])
+        radius = rng.uniform(0, 900) if k % 2 else rng.uniform(-200, 900, nq)
+        np.testing.assert_array_equal(segments_clear(q, walls, circs, radius),
+                                      segments_clear_numpy(q, walls, circs, radius))  # fmt: skip
