@@ -120,6 +120,7 @@ class Board:
             self._receive(frame, now)
         self.update(now, dt)
         if self.started and now >= self._due - 1e-9:  # most steps of a board with 100 ms cycles: nothing due
+            due = math.inf
             for c in self._cyclic:
                 if now >= c.next_due - 1e-9:
                     if (signals := c.build(now)) is not None:
@@ -127,7 +128,8 @@ class Board:
                     c.next_due += c.period
                     if c.next_due <= now:  # late (slow stepping): no burst, resume the period from now
                         c.next_due = now + c.period
-            self._due = min((c.next_due for c in self._cyclic), default=math.inf)
+                due = min(due, c.next_due)
+            self._due = due
 
     def status(self) -> int:
         bits = self.status_bits()

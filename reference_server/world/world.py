@@ -65,15 +65,33 @@ def _initial_exact() -> F64:
     return loc.cov
 
 
+class NormalBlock:
+    """Standard normal draws of one seeded generator, a block at a time: one numpy call per ``size`` draws
+    instead of one per control period (the same stream of values as drawing them two by two)."""
+
+    def __init__(self, gen: np.random.Generator, size: int = 1024) -> None:
+        self.gen, self.size = gen, size
+        self._buf: list[float] = []
+        self._i = 0
+
+    def pair(self) -> tuple[float, float]:
+        i = self._i
+        if i + 2 > len(self._buf):
+            self._buf, i = self.gen.standard_normal(self.size).tolist(), 0
+        self._i = i + 2
+        return self._buf[i], self._buf[i + 1]
+
+
 class World:
     def __init__(self, params: Params, rng: random.Random, pose: Pose = (0.0, 0.0, 0.0)) -> None:
         self.params = params
         self.rng = rng
-        self.noise = np.random.default_rng(rng.getrandbits(64))  # laser and encoders, drawn in step order
+        self.noise = np.random.default_rng(rng.getrandbits(64))  # the laser, drawn in sensing order
         self._us_noise = np.random.default_rng(rng.getrandbits(64))  # ultrasonic: 16 draws every sensing period,
         self._us_eps = np.zeros(sensors.US_SENSORS)  # read or not, so reading it lazily changes nothing else
         self._cb_noise = np.random.default_rng(rng.getrandbits(64))  # the fake hardware's range callbacks
         self.scale = (1.0 + rng.gauss(0.0, ODO_SCALE_SIGMA), 1.0 + rng.gauss(0.0, ODO_SCALE_SIGMA))
+        self._odo_noise = NormalBlock(np.random.default_rng(rng.getrandbits(64)))  # the encoders: 2 per period
         self._geom_key = self._geometry_key()
         self.footprint = Footprint.from_params(*self._geom_key)
         self.physics = Physics(self.footprint)
@@ -185,9 +203,9 @@ class World:
         d = (x - x0) * math.cos(mid) + (y - y0) * math.sin(mid)
         self._true_vel = (d / dt, da / dt) if dt > 0 else (0.0, 0.0)
         dr, dl = d + 0.5 * self.track * da, d - 0.5 * self.track * da
-        nr, nl = self.noise.standard_normal(2)
-        return (dr * self.scale[0] + float(nr) * math.sqrt(ODO_NOISE * abs(dr)),
-                dl * self.scale[1] + float(nl) * math.sqrt(ODO_NOISE * abs(dl)))  # fmt: skip
+        nr, nl = self._odo_noise.pair()
+        return (dr * self.scale[0] + nr * math.sqrt(ODO_NOISE * abs(dr)),
+                dl * self.scale[1] + nl * math.sqrt(ODO_NOISE * abs(dl)))  # fmt: skip
 
     def odometry(self, right: float, left: float, dt: float) -> None:
         """Estimation: the measured wheel travel (mm) of the last period."""

@@ -28,10 +28,16 @@ def _drive_corridor(sim: Sim, seconds: float = 20.0) -> float:
 
 
 def test_localization_keeps_odometry_drift_bounded(office: MapGeometry) -> None:
-    on = _drive_corridor(make_sim(office, CORRIDOR_WEST, seed=3, CollCheckEnabled=False))
-    off = _drive_corridor(make_sim(office, CORRIDOR_WEST, seed=3, CollCheckEnabled=False, LocalLocalization=False))
-    assert on < 40.0
-    assert off > 3 * on  # seeded wheel scale errors: the odometry alone drifts
+    """Over four seeds (one seed's odometry may happen to drift little: its two wheel scale errors nearly
+    equal, its noise walk short): with LocalLocalization every run stays within 40 mm; without it the
+    odometry's error is on average more than three times larger."""
+    on, off = [], []
+    for seed in range(1, 5):
+        on.append(_drive_corridor(make_sim(office, CORRIDOR_WEST, seed=seed, CollCheckEnabled=False)))
+        off.append(_drive_corridor(make_sim(office, CORRIDOR_WEST, seed=seed, CollCheckEnabled=False,
+                                            LocalLocalization=False)))  # fmt: skip
+    assert max(on) < 40.0
+    assert sum(off) > 3 * sum(on), (on, off)
 
 
 def test_covariance_grows_with_odometry_and_shrinks_with_scans() -> None:
