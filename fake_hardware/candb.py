@@ -20,7 +20,7 @@ import enum
 import functools
 import math
 from collections.abc import Callable, Mapping
-from typing import Any
+from typing import Any, TypeVar
 
 import can
 import cantools
@@ -110,6 +110,11 @@ def cycle_time(msg: Message) -> float | None:
     return None if not msg.cycle_time else msg.cycle_time / 1000.0
 
 
+_K = TypeVar("_K")
+_V = TypeVar("_V")
+_A = TypeVar("_A")
+
+
 class FrameCodec:
     """One message's signals as (name, start bit, mask, sign bit, to raw, to physical, min, max), Intel byte order.
 
@@ -142,15 +147,7 @@ class FrameCodec:
         """Physical values (clamped to each signal's range) -> the frame's bytes; every signal must be given."""
         if not self._cached[0]:
             return self._encode(signals)
-        key = tuple(map(signals.__getitem__, self.names))
-        data = self._encoded.get(key)
-        if data is not None:
-            self._hits[0] += 1
-            return data
-        if len(self._encoded) >= self.CACHE:
-            self._forget(0, self._encoded)
-        data = self._encoded[key] = self._encode(signals)
-        return data
+        return self._remembered(0, self._encoded, tuple(map(signals.__getitem__, self.names)), self._encode, signals)
 
     def decode(self, data: bytes | bytearray) -> dict[str, Any]:
         """The physical values of a frame: a dict shared by every equal frame, so callers keep it but never
@@ -158,13 +155,17 @@ class FrameCodec:
         key = bytes(data[: self.length])
         if not self._cached[1]:
             return self._decode(key)
-        out = self._decoded.get(key)
+        return self._remembered(1, self._decoded, key, self._decode, key)
+
+    def _remembered(self, way: int, cache: dict[_K, _V], key: _K, make: Callable[[_A], _V], arg: _A) -> _V:
+        """``make(arg)``, remembered under ``key`` in ``cache`` (way 0: encode, 1: decode)."""
+        out = cache.get(key)
         if out is not None:
-            self._hits[1] += 1
+            self._hits[way] += 1
             return out
-        if len(self._decoded) >= self.CACHE:
-            self._forget(1, self._decoded)
-        out = self._decoded[key] = self._decode(key)
+        if len(cache) >= self.CACHE:
+            self._forget(way, cache)
+        out = cache[key] = make(arg)
         return out
 
     def _forget(self, way: int, cache: dict[Any, Any]) -> None:
