@@ -122,7 +122,8 @@ class FrameCodec:
     call into cantools per signal. Frames are remembered both ways while that pays: a message whose frames do
     not repeat (a counter, a timestamp) stops being looked up after ``CACHE`` frames with few hits."""
 
-    __slots__ = ("_cached", "_compiled", "_decoded", "_encoded", "_hits", "fields", "frame_id", "length", "names")
+    __slots__ = ("_cached", "_decode", "_decoded", "_encode", "_encoded", "_hits", "fields", "frame_id", "length",
+                 "names")
     CACHE = 256  # frames remembered per message each way: status and analogue frames repeat, counters do not
 
     def __init__(self, msg: Message) -> None:
@@ -140,7 +141,7 @@ class FrameCodec:
         self._encoded: dict[tuple[Any, ...], bytes] = {}
         self._decoded: dict[bytes, dict[str, Any]] = {}
         self._cached = [True, True]  # encode, decode: still worth a lookup
-        self._compiled = self._compile()
+        self._encode, self._decode = self._compile()
         self._hits = [0, 0]
 
     def encode(self, signals: Signals) -> bytes:
@@ -173,12 +174,6 @@ class FrameCodec:
         self._cached[way] = self._hits[way] >= self.CACHE // 4
         self._hits[way] = 0
         cache.clear()
-
-    def _encode(self, signals: Signals) -> bytes:
-        return self._compiled[0](signals)
-
-    def _decode(self, data: bytes) -> dict[str, Any]:
-        return self._compiled[1](data)
 
     def _compile(self) -> tuple[Callable[[Signals], bytes], Callable[[bytes], dict[str, Any]]]:
         """Straight-line encode and decode functions of this message (no loop over the signal table per frame),

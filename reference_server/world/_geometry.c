@@ -2,8 +2,8 @@
  * version in geometry.py (which stays the reference, the fallback and the tests' oracle).
  *
  * Rules:
- * - Only buffers of float64 / bool come in (the buffer protocol, no numpy headers); the caller checks shapes
- *   and contiguity and pre-fills ``ok`` with true.
+ * - Only buffers of float64 / bool come in (the buffer protocol, no numpy headers); the caller passes C-contiguous
+ *   arrays of those types and pre-fills ``ok`` with true; rad or ok shorter than the queries is a ValueError.
  * - A query stops at the first wall or circle it does not keep clear of: the answer is the same as numpy's
  *   "any over all", the work is not (the planner's visibility graph asks millions of pairs, most blocked early).
  * - np.minimum propagates NaN: nmin() does too, so a degenerate input gives numpy's answer.
@@ -34,6 +34,12 @@ static PyObject *segments_clear(PyObject *self, PyObject *args) {
     Py_ssize_t nq = q.len / (Py_ssize_t)(4 * sizeof(double));
     Py_ssize_t ns = segs.len / (Py_ssize_t)(4 * sizeof(double));
     Py_ssize_t nc = circ.len / (Py_ssize_t)(3 * sizeof(double));
+    if (rad.len < nq * (Py_ssize_t)sizeof(double) || ok.len < nq) {
+        PyBuffer_Release(&q); PyBuffer_Release(&segs); PyBuffer_Release(&circ); PyBuffer_Release(&rad);
+        PyBuffer_Release(&ok);
+        PyErr_SetString(PyExc_ValueError, "segments_clear: rad and ok need one item per query");
+        return NULL;
+    }
     const double *Q = q.buf, *S = segs.buf, *C = circ.buf, *R = rad.buf;
     char *out = ok.buf;
     for (Py_ssize_t i = 0; i < nq; i++) {
@@ -55,8 +61,7 @@ static PyObject *segments_clear(PyObject *self, PyObject *args) {
         for (Py_ssize_t k = 0; k < nc && clear; k++) {
             double m = d2(C[3 * k], C[3 * k + 1], ax, ay, ux, uy, lu);
             double rr = R[i] + C[3 * k + 2];
-            if (rr != rr) rr = NAN;
-            else if (rr < 0.0) rr = 0.0;
+            if (rr < 0.0) rr = 0.0; /* np.maximum(rr, 0): a NaN stays NaN (false here) */
             if (m < rr * rr) clear = 0;
         }
         if (!clear) out[i] = 0;

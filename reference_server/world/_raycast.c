@@ -2,8 +2,9 @@
  * version in raycast.py (which stays the reference, the fallback and the tests' oracle).
  *
  * Rules:
- * - Only buffers of float64 / int64 come in (the buffer protocol, no numpy headers); the caller checks shapes
- *   and contiguity and pre-fills the outputs (ranges inf, hits -1).
+ * - Only buffers of float64 / int64 come in (the buffer protocol, no numpy headers); the caller passes C-contiguous
+ *   arrays of those types and pre-fills the outputs (ranges inf, hits -1); a buffer shorter than the call needs
+ *   is a ValueError, never a read or write past its end.
  * - fan(): angular culling as raycast._intervals/_pairs do it - each segment or circle covers a contiguous run
  *   of beams seen from the origin (plus a run wrapped past 2 pi); only those (beam, owner) pairs are tested,
  *   normal runs of every owner first, then the wrapped runs, so that a tie goes to the owner numpy's
@@ -29,6 +30,24 @@ static double pymod(double a, double b) {
     return m;
 }
 
+/* Distance along the unit direction (dx, dy) from the origin to the circle's near surface, (wx, wy) = centre -
+ * origin; inf when the line misses it. Negative or zero when the origin is inside or past it (callers test t > 0). */
+static double circle_t(double wx, double wy, double r, double dx, double dy) {
+    double proj = wx * dx + wy * dy;
+    double perp2 = wx * wx + wy * wy - proj * proj;
+    double inside = r * r - perp2;
+    return perp2 <= r * r ? proj - sqrt(inside > 0.0 ? inside : 0.0) : INFINITY;
+}
+
+/* The buffers hold what the call says (the caller's arrays are float64 / int64 of these lengths). */
+static int sized(const Py_buffer *b, Py_ssize_t items, Py_ssize_t item, const char *name) {
+    if (b->len < items * item) {
+        PyErr_Format(PyExc_ValueError, "%s: %zd bytes, %zd wanted", name, b->len, items * item);
+        return 0;
+    }
+    return 1;
+}
+
 typedef struct {
     double x, y, ch, sh, max_range;
     const double *cb, *sb, *segs, *circs;
@@ -48,11 +67,7 @@ static void test_beam(const Fan *f, Py_ssize_t owner, Py_ssize_t b) {
         t = cross / (bdx * ey - bdy * ex);
     } else {
         const double *c = f->circs + 3 * (owner - f->ns);
-        double wx = c[0] - f->x, wy = c[1] - f->y, r = c[2];
-        double proj = wx * bdx + wy * bdy;
-        double perp2 = wx * wx + wy * wy - proj * proj;
-        double inside = r * r - perp2;
-        t = perp2 <= r * r ? proj - sqrt(inside > 0.0 ? inside : 0.0) : INFINITY;
+        t = circle_t(c[0] - f->x, c[1] - f->y, c[2], bdx, bdy);
     }
     if (!(t > 0.0 && t <= f->max_range)) return;
     if (t < f->ranges[b]) {
@@ -73,6 +88,12 @@ static PyObject *fan(PyObject *self, PyObject *args) {
     Py_ssize_t ns = segs.len / (Py_ssize_t)(4 * sizeof(double));
     Py_ssize_t nc = circs.len / (Py_ssize_t)(3 * sizeof(double));
     Py_ssize_t n = ns + nc;
+    if (!(sized(&cb, count, sizeof(double), "cos_b") && sized(&sb, count, sizeof(double), "sin_b") &&
+          sized(&ranges, count, sizeof(double), "ranges") && sized(&hits, count, sizeof(int64_t), "hits"))) {
+        PyBuffer_Release(&segs); PyBuffer_Release(&circs); PyBuffer_Release(&cb); PyBuffer_Release(&sb);
+        PyBuffer_Release(&ranges); PyBuffer_Release(&hits);
+        return NULL;
+    }
     Fan f = {x, y, cos(heading), sin(heading), max_range, cb.buf, sb.buf, segs.buf, circs.buf, ns, ranges.buf,
              hits.buf};
     double inv = 1.0 / step, wrap_at = TWO_PI / step, top = (double)(count - 1);
@@ -134,6 +155,13 @@ static PyObject *rays(PyObject *self, PyObject *args) {
     Py_ssize_t n = ox.len / (Py_ssize_t)sizeof(double);
     Py_ssize_t ns = segs.len / (Py_ssize_t)(4 * sizeof(double));
     Py_ssize_t nc = circs.len / (Py_ssize_t)(3 * sizeof(double));
+    if (!(sized(&oy, n, sizeof(double), "oy") && sized(&dx, n, sizeof(double), "dx") &&
+          sized(&dy, n, sizeof(double), "dy") && sized(&ranges, n, sizeof(double), "ranges") &&
+          sized(&hits, n, sizeof(int64_t), "hits"))) {
+        PyBuffer_Release(&ox); PyBuffer_Release(&oy); PyBuffer_Release(&dx); PyBuffer_Release(&dy);
+        PyBuffer_Release(&segs); PyBuffer_Release(&circs); PyBuffer_Release(&ranges); PyBuffer_Release(&hits);
+        return NULL;
+    }
     const double *px = ox.buf, *py = oy.buf, *vx = dx.buf, *vy = dy.buf, *s = segs.buf, *c = circs.buf;
     double *out = ranges.buf;
     int64_t *ids = hits.buf;
@@ -151,12 +179,8 @@ static PyObject *rays(PyObject *self, PyObject *args) {
         }
         for (Py_ssize_t k = 0; k < nc; k++) {
             const double *g = c + 3 * k;
-            double wx = g[0] - px[i], wy = g[1] - py[i], r = g[2];
-            double proj = wx * vx[i] + wy * vy[i];
-            double perp2 = wx * wx + wy * wy - proj * proj;
-            double inside = r * r - perp2;
-            double t = proj - sqrt(inside > 0.0 ? inside : 0.0);
-            if (perp2 <= r * r && t > 0.0 && t < best) { best = t; arg = ns + k; }
+            double t = circle_t(g[0] - px[i], g[1] - py[i], g[2], vx[i], vy[i]);
+            if (t > 0.0 && t < best) { best = t; arg = ns + k; }
         }
         if (best <= max_range) { out[i] = best; ids[i] = arg; }
         else { out[i] = INFINITY; ids[i] = -1; }

@@ -379,8 +379,8 @@ class World:
     def scan_ranges(self, now: float) -> F64:
         """The serial scanner's source: the latest laser scan of ``sense`` (10 Hz), whatever its own period; mm,
         inf: no echo (the S300 encodes the ranges as an array: no list of floats and Nones in between)."""
-        if self.last_scan is None:
-            return np.asarray([math.inf if r is None else r for r in self.scan()], dtype=np.float64)
+        if self.last_scan is None:  # before the first sensing period: a scan of its own, as ``scan`` casts it
+            return sensors.scan(self.truth, self.footprint.front, self.scene, self._cb_noise).ranges
         return self.last_scan.ranges.copy()
 
     def us_ranges(self, now: float) -> list[float | None]:

@@ -123,3 +123,11 @@ def test_segments_clear_in_c_equals_numpy(seed: int) -> None:
         radius = rng.uniform(0, 900) if k % 2 else rng.uniform(-200, 900, nq)
         np.testing.assert_array_equal(segments_clear(q, walls, circs, radius),
                                       segments_clear_numpy(q, walls, circs, radius))  # fmt: skip
+
+
+def test_segments_clear_in_c_refuses_a_short_radius_buffer() -> None:
+    from reference_server.world import _geometry
+
+    q = np.zeros((4, 4))
+    with pytest.raises(ValueError, match="one item per query"):
+        _geometry.segments_clear(q, np.zeros((1, 4)), np.zeros((0, 3)), np.zeros(2), np.ones(4, dtype=bool))

@@ -62,6 +62,19 @@ def test_c_loops_equal_numpy_bit_for_bit(seed: int) -> None:
             np.testing.assert_array_equal(got, want)
 
 
+def test_the_c_loops_refuse_buffers_shorter_than_the_call() -> None:
+    """A buffer too short for the call is a ValueError, not a read or write past its end."""
+    from reference_server.world import _raycast
+
+    scene = Scene.make(np.array([[1000.0, -500, 1000, 500]]))
+    with pytest.raises(ValueError, match="oy"):
+        _raycast.rays(np.zeros(8), np.zeros(2), np.ones(8), np.zeros(8), scene.segs, scene.circs, 100.0,
+                      np.empty(8), np.empty(8, dtype=np.int64))  # fmt: skip
+    with pytest.raises(ValueError, match="ranges"):
+        _raycast.fan(0.0, 0.0, -1.0, 0.0, 0.01, 100.0, 200, scene.segs, scene.circs, np.ones(200), np.ones(200),
+                     np.empty(10), np.empty(200, dtype=np.int64))  # fmt: skip
+
+
 def test_empty_scene_in_c() -> None:
     ranges, hits = cast_fan(0.0, 0.0, 0.0, Scene.make(), LASER_FAN)
     assert not np.isfinite(ranges).any() and (hits == -1).all()
