@@ -18,6 +18,13 @@ NO = MotionMode.MODE_MOTION_NO
 
 STATES: tuple[St, ...] = (St.NOT_CONNECTED, St.CONNECTED, St.READY, St.RUNNING, St.BREAKED)
 
+# A frame a case sets with CMD_SET_FRM_PLTF and then reads back: an offset (mm, mm, 1000*deg) from the true pose
+# beyond any local scan matcher's capture range. A small offset (a few hundred mm, a few degrees) is pulled back
+# towards the truth by the next matching scan while LocalLocalization is on (erratum E-MOT-004: the reference's
+# capture range is 400 mm and 12 deg), so reading it back races the target's localization; far off, the matcher
+# cannot lock on and the estimate stays where it was put (until a global localization finds the platform).
+FAR_OFFSET = (1234, -567, 45000)
+
 
 def expect_state(ctx: CaseContext, state: St, how: str, *, mode: int | None = None, within: float = 0.0) -> Status:
     """The status shows ``state`` (op state and initialized flag), and ``mode`` when given."""

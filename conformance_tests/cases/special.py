@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from conformance_tests.cases._common import no_unsolicited
+from conformance_tests.cases._common import FAR_OFFSET, no_unsolicited
 from conformance_tests.catalogue import Level, Tier, case
 from conformance_tests.context import CaseContext
 from conformance_tests.outcome import Fail, NotApplicable
@@ -20,7 +20,7 @@ _E = enum_classes()
 def sets_estimate(ctx: CaseContext) -> None:
     ctx.ready()
     p0 = ctx.preserve_pose()
-    for dx, dy, milli_deg in ((1234, -567, 45000), (-321, 789, -135500)):
+    for dx, dy, milli_deg in (FAR_OFFSET, (-321, 789, -135500)):  # both beyond the capture range (FAR_OFFSET)
         x, y = p0.x + dx, p0.y + dy  # type: ignore[attr-defined]
         ctx.send("CMD_SET_FRM_PLTF", x=x, y=y, angle=milli_deg)
         got = ctx.poll(ctx.position, lambda p, x=x, y=y: abs(p.x - x) <= 20 and abs(p.y - y) <= 20, within=1.0)
