@@ -5,7 +5,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
+from conformance_tests.cases._common import FAR_OFFSET
 from reference_server.world import MapGeometry
 from reference_server.world.localization import Localization
 from tests.reference_server.world.conftest import CORRIDOR_WEST, Sim, make_sim
@@ -67,6 +69,23 @@ def test_kidnapped_the_platform_is_lost_until_set_frm_pltf(office: MapGeometry) 
     sim.world.set_estimate((19100.0, 14950.0, 1.02))  # CMD_SET_FRM_PLTF close to the truth
     sim.run(0.5)
     assert not sim.world.loc.lost and _error(sim) < 50.0
+
+
+def test_a_set_frame_near_the_truth_is_pulled_back_and_one_far_off_stays(office: MapGeometry) -> None:
+    """CMD_SET_FRM_PLTF 250 mm off: the next matching scan corrects it towards the truth (within the capture
+    range). FAR_OFFSET (the frame the conformance cases set and read back) is beyond it: the estimate stays
+    exactly where it was put."""
+    sim = make_sim(office, CORRIDOR_WEST)
+    sim.run(1.0)
+    x, y, a = sim.world.truth
+    sim.world.set_estimate((x + 250.0, y, a))
+    sim.run(0.3)
+    assert _error(sim) < 50.0
+    dx, dy, milli_deg = FAR_OFFSET
+    far = (x + dx, y + dy, a + math.radians(milli_deg / 1000.0))
+    sim.world.set_estimate(far)
+    sim.run(1.0)
+    assert sim.world.estimate == pytest.approx(far, abs=1e-9)
 
 
 def test_global_localization_finds_a_lost_platform(office: MapGeometry) -> None:
