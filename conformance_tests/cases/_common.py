@@ -26,6 +26,12 @@ STATES: tuple[St, ...] = (St.NOT_CONNECTED, St.CONNECTED, St.READY, St.RUNNING, 
 FAR_OFFSET = (1234, -567, 45000)
 
 
+def far_frame(pos: Any) -> dict[str, int]:
+    """The CMD_SET_FRM_PLTF fields of the frame FAR_OFFSET away from ``pos`` (a GET_POSITION reply)."""
+    dx, dy, milli_deg = FAR_OFFSET
+    return {"x": pos.x + dx, "y": pos.y + dy, "angle": milli_deg}
+
+
 def expect_state(ctx: CaseContext, state: St, how: str, *, mode: int | None = None, within: float = 0.0) -> Status:
     """The status shows ``state`` (op state and initialized flag), and ``mode`` when given."""
     op, init = chart.REPORTED[state], chart.INITIALIZED[state]

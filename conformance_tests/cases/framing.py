@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import struct
 
-from conformance_tests.cases._common import FAR_OFFSET, NO, MotionMode
+from conformance_tests.cases._common import NO, MotionMode, far_frame
 from conformance_tests.catalogue import Level, Tier, case
 from conformance_tests.context import CaseContext
 from conformance_tests.outcome import Fail
@@ -95,9 +95,9 @@ def split_long(ctx: CaseContext) -> None:
             s.send_chunks([frame[:i], frame[i:j], frame[j:]], note=f"split at {i},{j}")
             if s.read_reply("CMD_GET_PLTF_PARAM").key != key:  # type: ignore[attr-defined]
                 raise Fail(f"split at {i},{j}: the reply names another key")
-    dx, dy, milli_deg = FAR_OFFSET  # beyond the localization's capture range: the estimate stays where it is put
-    x = pos.x + dx  # type: ignore[attr-defined]
-    setf = _frame("CMD_SET_FRM_PLTF", x=x, y=pos.y + dy, angle=milli_deg)  # type: ignore[attr-defined]
+    frame = far_frame(pos)
+    x = frame["x"]
+    setf = _frame("CMD_SET_FRM_PLTF", **frame)
     for k in range(1, len(setf)):
         s.send_chunks([setf[:k], setf[k:]], note=f"split at {k}")
         got = s.request(build("request", "CMD_GET_POSITION"))

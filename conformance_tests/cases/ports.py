@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import time
 
-from conformance_tests.cases._common import FAR_OFFSET, STATES
+from conformance_tests.cases._common import STATES, far_frame
 from conformance_tests.catalogue import Level, Tier, case
 from conformance_tests.context import CaseContext
 from conformance_tests.outcome import Fail, NotApplicable, TargetFailure
@@ -32,9 +32,9 @@ def same_platform(ctx: CaseContext) -> None:
     _need_second_port(ctx)
     ctx.ready()
     pos = ctx.preserve_pose()
-    dx, dy, milli_deg = FAR_OFFSET  # beyond the localization's capture range: the estimate stays where it is put
-    x = pos.x + dx  # type: ignore[attr-defined]
-    ctx.send("CMD_SET_FRM_PLTF", label="A", x=x, y=pos.y + dy, angle=milli_deg)  # type: ignore[attr-defined]
+    frame = far_frame(pos)
+    x = frame["x"]
+    ctx.send("CMD_SET_FRM_PLTF", label="A", **frame)
     seen = ctx.poll(lambda: ctx.position("B"), lambda p: abs(p.x - x) <= 5, within=2.0)  # type: ignore[attr-defined]
     if abs(seen.x - x) > 5:  # type: ignore[attr-defined]
         raise Fail(f"CMD_SET_FRM_PLTF(x={x}) on port A: port B still reports x={seen.x}")  # type: ignore[attr-defined]
