@@ -32,7 +32,8 @@ from fuzz.findings import FindingWriter
 from fuzz.flight import Flight, fly, step_flights
 from fuzz.knowledge import Knowledge
 from fuzz.launch import Launcher
-from fuzz.schedule import DOCUMENT_RESET, HARVEST, Prefetcher, Scheduler, StatePlan
+from fuzz.prefetch import Prefetcher
+from fuzz.schedule import DOCUMENT_RESET, HARVEST, Scheduler, StatePlan
 from fuzz.target import CUT, GET_STATUS, Conn, Outcome, Prober, Session, play, play_on, session_reply_ids
 from fuzz.wire import KEEP
 from spec.codec import REQUESTS

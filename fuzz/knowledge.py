@@ -15,6 +15,7 @@ from spec.telegram import Telegram
 MAX_ITEMS = 256
 _LEARNT = frozenset(("CMD_GET_STATUS", "CMD_GET_PLTF_PARAM_VEC", "CMD_GET_PLTF_PARAM", "CMD_GET_ROADMAP", "CMD_GET_MAP",
                      "CMD_GET_PROGRAM"))  # fmt: skip
+LIGHT = ("param_keys", "param_values", "stations", "pose", "operation_state", "motion_mode")
 _STATION = re.compile(rb'<station\b[^>]*\bname="([^"]{1,64})"')
 _STATION_ID = re.compile(rb'<station\b[^>]*\bid="([^"]{1,64})"')
 
@@ -30,15 +31,15 @@ class Knowledge:
     documents: dict[str, bytes] = field(default_factory=dict)  # reply name -> last XML seen
     version: int = 0  # counts the replies learnt from (a copy elsewhere is stale when it differs)
 
-    def light(self) -> tuple[list[str], dict[str, str], list[str], tuple[int, int, int], int | None, int | None]:
-        """Everything but the documents (``update`` takes it back)."""
-        return (list(self.param_keys), dict(self.param_values), list(self.stations), self.pose,
-                self.operation_state, self.motion_mode)  # fmt: skip
+    def light(self) -> dict[str, Any]:
+        """Everything but the documents, by field name (``update`` takes it, or any part of it, back)."""
+        return {name: getattr(self, name) for name in LIGHT}
 
-    def update(self, light: tuple[Any, ...], documents: dict[str, bytes]) -> None:
-        """Take over what another copy learnt: ``light()`` of it and the documents that changed."""
-        (self.param_keys, self.param_values, self.stations, self.pose, self.operation_state,
-         self.motion_mode) = light  # fmt: skip
+    def update(self, light: dict[str, Any], documents: dict[str, bytes]) -> None:
+        """Take over what another copy learnt: the fields of ``light()`` that changed and the documents that
+        changed."""
+        for name, value in light.items():
+            setattr(self, name, value)
         self.documents.update(documents)
         self.version += 1
 

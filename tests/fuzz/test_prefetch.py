@@ -1,0 +1,93 @@
+"""The prefetch child: the stream it hands over is the scheduler's, knowledge reaches it, failures surface."""
+
+from __future__ import annotations
+
+import time
+
+import pytest
+
+from fuzz.case import Case
+from fuzz.knowledge import Knowledge
+from fuzz.prefetch import PIPE_SIZE, Prefetcher
+from fuzz.safety import forbidden
+from fuzz.schedule import Scheduler
+
+
+class PoseEcho:
+    """A scheduler whose case ``i`` carries ``i`` and the pose it knew when it drew it (and is ``size`` long)."""
+
+    def __init__(self, size: int = 8, fail_at: int | None = None) -> None:
+        self.kb, self.dropped, self.size, self.fail_at = Knowledge(), 0, size, fail_at
+
+    def case(self, i: int) -> Case:
+        if i == self.fail_at:
+            raise ValueError(f"case {i} cannot be drawn")
+        head = f"{i}:{self.kb.pose[0]}".encode()
+        return Case(frames=(head.ljust(self.size, b"."),), origin="test", telegram="-")
+
+
+def test_the_windows_are_the_schedulers_stream_in_order() -> None:
+    sched = Scheduler(7, forbidden(allow_motion=False), Knowledge())
+    expected = [Scheduler(7, forbidden(allow_motion=False), Knowledge()).case(i).data for i in range(100, 164)]
+    pre = Prefetcher(sched, 100, 16)
+    try:
+        got: list[bytes] = []
+        firsts = []
+        for _ in range(4):
+            first, cases = pre.get()
+            firsts.append(first)
+            got += [c.data for c in cases]
+        assert firsts == [100, 116, 132, 148]
+        assert got == expected
+        assert pre.proc is not None  # the forked child drew them, not a thread
+    finally:
+        pre.close()
+
+
+def test_what_the_parent_learns_reaches_later_windows() -> None:
+    sched = PoseEcho()
+    pre = Prefetcher(sched, 0, 4)  # type: ignore[arg-type]
+    try:
+        pre.get()
+        sched.kb.pose = (4321, 0, 0)
+        sched.kb.version += 1
+        deadline = time.monotonic() + 20
+        while time.monotonic() < deadline:
+            _, cases = pre.get()
+            if all(c.data.startswith(f"{int(c.data.split(b':')[0])}:4321".encode()) for c in cases):
+                break
+        else:
+            pytest.fail("the child never drew with the pose the parent learnt")
+    finally:
+        pre.close()
+
+
+def test_a_window_larger_than_the_pipe_arrives_whole() -> None:
+    sched = PoseEcho(size=PIPE_SIZE)
+    pre = Prefetcher(sched, 0, 3)  # type: ignore[arg-type]
+    try:
+        for start in (0, 3):
+            first, cases = pre.get()
+            assert first == start
+            assert [len(c.data) for c in cases] == [PIPE_SIZE] * 3
+            assert [c.data.split(b":")[0] for c in cases] == [str(start + k).encode() for k in range(3)]
+    finally:
+        pre.close()
+
+
+def test_a_failure_in_the_child_is_reported_with_its_traceback() -> None:
+    pre = Prefetcher(PoseEcho(fail_at=5), 0, 4)  # type: ignore[arg-type]
+    try:
+        pre.get()
+        with pytest.raises(RuntimeError, match="case 5 cannot be drawn"):
+            pre.get()
+    finally:
+        pre.close()
+
+
+def test_close_ends_the_child() -> None:
+    pre = Prefetcher(PoseEcho(), 0, 4)  # type: ignore[arg-type]
+    proc = pre.proc
+    pre.get()
+    pre.close()
+    assert proc is not None and not proc.is_alive()
