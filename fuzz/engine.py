@@ -33,7 +33,7 @@ from fuzz.flight import Flight, fly, step_flights
 from fuzz.knowledge import Knowledge
 from fuzz.launch import Launcher
 from fuzz.prefetch import Prefetcher
-from fuzz.schedule import DOCUMENT_RESET, HARVEST, Scheduler, StatePlan
+from fuzz.schedule import BIG_CASE, BIG_SHARE, DOCUMENT_RESET, HARVEST, Scheduler, StatePlan
 from fuzz.target import CUT, GET_STATUS, Conn, Outcome, Prober, Session, play, play_on, session_reply_ids
 from fuzz.wire import KEEP
 from spec.codec import REQUESTS
@@ -42,7 +42,6 @@ WINDOW = 256  # cases drawn at a time, then run batch-first
 BATCH_CASES = 128
 BATCH_BYTES = 1 << 18
 WINDOWS_PER_STATE = 4  # windows fuzzed in one (state, mode) before the plan moves on
-BIG_CASE = 1 << 20  # bytes
 # Where the case generator runs in a thread (no fork), the main thread, back from a socket wait, can queue
 # behind it for milliseconds per unit with the default 5 ms GIL switch interval; a short one keeps it low.
 SWITCH_INTERVAL = 0.0002  # s
@@ -78,6 +77,7 @@ class Options:
     minimize_seconds: float = 60.0
     probe_every: int = 4  # units between liveness probes (1: after every unit)
     lanes: int = 2  # 2: refused cases run in two lanes, one per port (fuzz.flight); 1: one at a time
+    big_share: float = BIG_SHARE  # of the cases over 1 MiB drawn that are kept (fuzz.schedule; 1: natural mix)
     command: str = "pltf fuzz"
 
 
@@ -120,7 +120,7 @@ class Campaign:
         self.stats.state_targets = len(self.plan.targets)
         self.corpus = Corpus(opts.corpus)
         self.forbidden = safety.forbidden(opts.allow_motion)
-        self.sched = Scheduler(opts.seed, self.forbidden, self.kb, self.corpus.load_cases())
+        self.sched = Scheduler(opts.seed, self.forbidden, self.kb, self.corpus.load_cases(), opts.big_share)
         self.index = self.corpus.next_index(opts.seed)
         self.launcher = Launcher(opts.launch, opts.host, opts.port, opts.second_port) if opts.launch else None
         self.ports = (opts.port, opts.second_port)

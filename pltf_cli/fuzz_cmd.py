@@ -42,7 +42,19 @@ def add_fuzz_arguments(p: argparse.ArgumentParser) -> None:
                    help="units between GET_STATUS liveness probes on the other port (1: after every unit)")  # fmt: skip
     p.add_argument("--lanes", type=int, choices=(1, 2), default=2,
                    help="2: refused cases run in pairs, one per port; 1: one at a time on --target's port")  # fmt: skip
+    p.add_argument("--big-share", type=_share, default=None, metavar="FRACTION",
+                   help="of the cases over 1 MiB drawn, the share kept (default 0.25; 1: the natural mix)")  # fmt: skip
     p.add_argument("--quiet", action="store_true", help="no live view")
+
+
+def _share(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number from 0 to 1, got {text!r}") from None
+    if not 0.0 <= value <= 1.0:
+        raise argparse.ArgumentTypeError(f"expected a number from 0 to 1, got {text!r}")
+    return value
 
 
 def run_fuzz(args: argparse.Namespace) -> int:
@@ -76,6 +88,8 @@ def run_fuzz(args: argparse.Namespace) -> int:
         max_findings=args.max_findings, deadline=args.deadline, minimize_seconds=args.minimize_seconds,
         command=command, probe_every=max(1, args.probe_every), lanes=args.lanes,
     )  # fmt: skip
+    if args.big_share is not None:
+        opts.big_share = args.big_share
     campaign = Campaign(opts)
     try:
         with LiveView(f"pltf fuzz {host}:{port}", args.quiet) as view:

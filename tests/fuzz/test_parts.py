@@ -19,7 +19,7 @@ from fuzz.inprocess import InProcessCampaign
 from fuzz.knowledge import Knowledge
 from fuzz.minimize import ddmin
 from fuzz.pcapng import Conversation, write_pcapng
-from fuzz.schedule import Scheduler, StatePlan
+from fuzz.schedule import BIG_CASE, Scheduler, StatePlan
 from fuzz.wire import CLOSE, KEEP, PARTIAL, Group, Str, classify, forbidden_ids, frame, frame_lie, pack_fields
 from spec.codec import REQUESTS, decode_frame, encode
 from spec.documents import validate_document
@@ -77,6 +77,21 @@ def test_the_case_stream_is_a_function_of_the_seed_and_never_unsafe() -> None:
         6
     ) != a.case(6)
     assert {"gen.boundary", "gen.hostile", "gen.any_id", "gen.length_field", "mut.bit_flip", "mut.length_lie"} <= seen
+
+
+def test_big_cases_are_kept_at_their_share() -> None:
+    """Cost-aware scheduling: the cases over 1 MiB (each costs a target up to 0.6 s) are drawn at ``big_share``
+    of their natural rate; 1 is the natural mix, 0 none at all."""
+    forbidden = safety.forbidden(allow_motion=True)
+
+    def big(share: float) -> int:
+        sched = Scheduler(1, forbidden, Knowledge(), big_share=share)
+        return sum(sched.case(i).size > BIG_CASE for i in range(20_000))
+
+    natural, quarter = big(1.0), big(0.25)
+    assert natural >= 20  # 37 with this seed
+    assert quarter <= natural / 2  # 9
+    assert big(0.0) == 0
 
 
 def test_generation_covers_every_request_telegram_and_the_hostile_values() -> None:
