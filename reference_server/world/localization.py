@@ -120,12 +120,13 @@ class Localization:
         self.cov = 0.5 * (self.cov + self.cov.T)
 
     def deviations(self) -> tuple[float, float, float, float]:
-        """Status telegram: principal and minor deviation (mm), angle deviation and principal axis (rad)."""
-        vals, vecs = np.linalg.eigh(self.cov[:2, :2])
-        major, minor = math.sqrt(max(float(vals[1]), 0.0)), math.sqrt(max(float(vals[0]), 0.0))
-        axis = math.atan2(float(vecs[1, 1]), float(vecs[0, 1]))
-        if axis > math.pi / 2:
-            axis -= math.pi
-        elif axis <= -math.pi / 2:
-            axis += math.pi
+        """Status telegram: principal and minor deviation (mm), angle deviation and principal axis (rad).
+
+        The eigen decomposition of the 2x2 position block in closed form (numpy's ``eigh`` took 50 us of each
+        status recomputation): eigenvalues m +- d, principal axis atan2(2b, a - c) / 2 in (-pi/2, pi/2]; an
+        isotropic block (no principal axis) reports pi/2, as ``eigh``'s identity eigenvectors did."""
+        a, b, c = float(self.cov[0, 0]), float(self.cov[0, 1]), float(self.cov[1, 1])
+        m, d = 0.5 * (a + c), math.hypot(0.5 * (a - c), b)
+        major, minor = math.sqrt(max(m + d, 0.0)), math.sqrt(max(m - d, 0.0))
+        axis = math.pi / 2 if b == 0.0 and a == c else 0.5 * math.atan2(2.0 * b, a - c)
         return major, minor, math.sqrt(max(float(self.cov[2, 2]), 0.0)), axis

@@ -233,6 +233,6 @@ def sample_points(legs: list[Leg], step: float = 100.0) -> list[Point]:
                 out.append((leg.x, leg.y))
             continue
         k = max(1, round(step * (len(leg.s) - 1) / max(leg.length, 1e-9)), thin)  # at the leg's own spacing
-        out += [(float(px), float(py)) for px, py in zip(leg.x[::k], leg.y[::k], strict=True)]
+        out += zip(leg.x[::k].tolist(), leg.y[::k].tolist(), strict=True)  # floats, converted in C
         out.append((float(leg.x[-1]), float(leg.y[-1])))
     return out

@@ -117,3 +117,24 @@ def test_the_estimate_of_a_platform_at_rest_does_not_jitter(office: MapGeometry)
     assert _error(sim) < 15.0
     sim.run(2.0)
     assert sim.world.estimate == settled
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_deviations_are_the_eigen_decomposition_of_the_position_covariance(seed: int) -> None:
+    """The closed form the status telegram uses, against numpy's eigh: deviations are the square roots of the
+    eigenvalues, the principal axis the major eigenvector's direction in (-pi/2, pi/2]."""
+    rng = np.random.default_rng(seed)
+    loc = Localization()
+    for _ in range(50):
+        m = rng.normal(size=(3, 3)) * rng.uniform(1, 300)
+        loc.cov = m @ m.T
+        vals, vecs = np.linalg.eigh(loc.cov[:2, :2])
+        major, minor, angle, axis = loc.deviations()
+        assert major == pytest.approx(math.sqrt(vals[1]), rel=1e-9)
+        assert minor == pytest.approx(math.sqrt(max(vals[0], 0.0)), rel=1e-6, abs=1e-6)
+        assert angle == pytest.approx(math.sqrt(loc.cov[2, 2]))
+        assert -math.pi / 2 < axis <= math.pi / 2
+        direction = np.array([math.cos(axis), math.sin(axis)])
+        assert abs(direction @ vecs[:, 1]) == pytest.approx(1.0, abs=1e-9)  # parallel to the major eigenvector
+    loc.cov = np.diag([4.0, 4.0, 1.0])  # isotropic: no principal axis, pi/2 (eigh's identity eigenvectors)
+    assert loc.deviations() == (2.0, 2.0, 1.0, math.pi / 2)
