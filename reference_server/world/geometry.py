@@ -208,7 +208,7 @@ def _close_pairs(points: F64) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int
 
 
 _GRID = 2000.0  # mm: cell size of the grid of wall boxes in ``_on_other_wall`` (at the least)
-_MAX_CELLS = 1 << 21  # wall-box cells at the most: a map of huge walls gets coarser cells, not terabytes
+_MAX_CELLS = 1 << 18  # wall-box cells at the most: a map of huge walls gets coarser cells, not terabytes
 _ROW = 1 << 32  # cell key = column * _ROW + row (rows offset to stay positive)
 
 
