@@ -299,7 +299,9 @@ class _Connection:
         try:
             while (telegram := decoder.next_telegram()) is not None:
                 outcome = platform.handle(telegram, clock.now())
-                if outcome.reply is not None:
+                if outcome.frame is not None:
+                    replies.append(outcome.frame)
+                elif outcome.reply is not None:
                     replies.append(encode(outcome.reply))
                 if outcome.exit_server:
                     self.server.stop()

@@ -31,6 +31,7 @@ from __future__ import annotations
 import logging
 import random
 from collections import deque
+from collections.abc import Callable
 
 from reference_server.commands import HANDLERS, Outcome, handler_names
 from reference_server.commands.data import DOCUMENT_OF
@@ -92,7 +93,8 @@ class Platform:
         self.drive_fault: str | None = None  # erratum E-HW-025
         self.hardware: HardwareLink | None = None if hardware is None else hardware(self)
         self.epoch = 0  # see the module's rules
-        self.status_cache: tuple[int, dict[str, object]] | None = None  # (epoch, fields): status.status_reply
+        # (epoch, the telegram at a time, its frame at timestamp 0): reference_server.status
+        self.status_cache: tuple[int, Callable[[float], Telegram], bytes] | None = None
 
     @property
     def drive(self) -> MotionModel:

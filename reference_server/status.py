@@ -14,13 +14,15 @@ Rules:
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+import struct
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
-from spec.codec import REPLIES
-from spec.model import enum_classes
+from spec.codec import REPLIES, encode
+from spec.compiler import fixed_size
+from spec.model import enum_classes, load_telegrams
 from spec.parameters import ParameterError, ParameterStore
 from spec.telegram import Telegram
 
@@ -62,10 +64,50 @@ def _milli_deg(rad: float) -> int:
 
 def status_reply(p: Platform, now: float) -> Telegram:
     """The status at the platform's last change (``Platform.epoch``), stamped ``now``."""
+    return _cached(p)[0](now)
+
+
+def status_frame(p: Platform, now: float) -> tuple[Telegram, bytes]:
+    """``status_reply`` and its frame. The frame is encoded once per epoch and only its timestamp is replaced:
+    a fuzzer's or a client's GET_STATUS between two control periods costs no encoding of the 541-beam scan.
+    The timestamp is the one variable-position field's last neighbour: every field after it has a fixed size
+    (guide 6.4), so it sits at a fixed distance from the frame's end."""
+    make, frame = _cached(p)
+    telegram = make(now)
+    at = len(frame) - _TS_FROM_END
+    return telegram, frame[:at] + _TS.pack(_timestamp(now)) + frame[at + _TS.size :]
+
+
+def _timestamp_from_end() -> int:
+    """Bytes from the status timestamp's first byte to the frame's end, from the spec's layout."""
+    (tdef,) = (t for t in load_telegrams() if t.name == "CMD_GET_STATUS")
+    layout = tdef.layout("reply")
+    assert layout is not None
+    names = [f.name for f in layout]
+    after = [fixed_size(f) for f in layout[names.index("timestamp") :]]
+    assert all(n is not None for n in after), "the fields from the status timestamp on must have fixed sizes"
+    return sum(n for n in after if n is not None)
+
+
+_TS = struct.Struct(">i")
+_TS_FROM_END = _timestamp_from_end()
+
+
+def _timestamp(now: float) -> int:
+    return int(now * 1000.0) % 2**31  # erratum E-REP-010
+
+
+def _cached(p: Platform) -> tuple[Callable[[float], Telegram], bytes]:
     cached = p.status_cache
     if cached is None or cached[0] != p.epoch:
-        cached = p.status_cache = (p.epoch, _status_fields(p))
-    return reply("CMD_GET_STATUS", **cached[1], timestamp=int(now * 1000.0) % 2**31)  # erratum E-REP-010
+        fields = _status_fields(p)
+
+        def make(now: float) -> Telegram:
+            return reply("CMD_GET_STATUS", **fields, timestamp=_timestamp(now))
+
+        zero = encode(reply("CMD_GET_STATUS", **fields, timestamp=0))
+        cached = p.status_cache = (p.epoch, make, zero)
+    return cached[1], cached[2]
 
 
 def _status_fields(p: Platform) -> dict[str, Any]:

@@ -26,6 +26,7 @@ class Outcome:
     """What the network shell must do after a telegram (``refused``/``ignored``/``pending`` explain it)."""
 
     reply: Telegram | None = None
+    frame: bytes | None = None  # ``reply`` encoded already (the status, from its per-epoch cache), or None
     close_connection: bool = False
     exit_server: bool = False
     refused: str | None = None  # not allowed now, or invalid: nothing changed

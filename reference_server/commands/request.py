@@ -13,7 +13,8 @@ if TYPE_CHECKING:
 
 @handles("CMD_GET_STATUS")
 def get_status(p: Platform, t: Any, now: float) -> Outcome:
-    return Outcome(reply=status.status_reply(p, now))
+    reply, frame = status.status_frame(p, now)
+    return Outcome(reply=reply, frame=frame)
 
 
 @handles("CMD_GET_POSITION")

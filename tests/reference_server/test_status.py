@@ -1,10 +1,14 @@
-"""status: the integer conversions of the CMD_GET_STATUS fields."""
+"""status: the integer conversions of the CMD_GET_STATUS fields, and its cached frame."""
 
 from __future__ import annotations
 
 import random
+from pathlib import Path
 
-from reference_server.status import _i32, _i32_points
+from reference_server.cli import build_platform
+from reference_server.status import _i32, _i32_points, status_frame, status_reply
+from reference_server.storage import Storage
+from spec.codec import encode
 
 
 def test_path_points_round_half_to_even_and_saturate() -> None:
@@ -20,3 +24,24 @@ def test_path_points_equal_the_scalar_conversion() -> None:
     got = _i32_points(frames)
     assert got == tuple((_i32(x), _i32(y)) for x, y, _ in frames)
     assert all(type(v) is int for pair in got for v in pair)  # the codec's INT fields take Python ints
+
+
+def test_the_cached_status_frame_is_the_codecs_encoding_at_every_time(tmp_path: Path) -> None:
+    """status_frame encodes once per epoch and replaces the timestamp: the bytes must be exactly what the codec
+    makes of the telegram, at any time (timestamps wrap at 2^31 ms, erratum E-REP-010), before and after the
+    platform changes."""
+    storage = Storage(tmp_path)
+    storage.seed_from_fixtures()
+    p = build_platform(storage, 1, hardware=True)
+    try:
+        p.boot(0.0)
+        for now in (0.0, 0.001, 1.234, 99.9, 2**31 / 1000.0 + 5.5):
+            telegram, frame = status_frame(p, now)
+            assert frame == encode(telegram) == encode(status_reply(p, now))
+            assert telegram.timestamp == int(now * 1000.0) % 2**31  # type: ignore[attr-defined]
+        for k in range(1, 30):
+            p.tick(k * 0.02)  # new epochs: a scan, a pose
+            telegram, frame = status_frame(p, k * 0.02 + 0.01)
+            assert frame == encode(telegram)
+    finally:
+        p.close()
