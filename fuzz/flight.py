@@ -17,9 +17,10 @@ import select
 import socket
 import time
 
+from fuzz.replies import reply_decoder
 from fuzz.target import CUT, GET_STATUS, RECV, Outcome, Session, check_order, session_deadline, session_reply_ids
 from spec import errors
-from spec.codec import REQUESTS, TelegramDecoder
+from spec.codec import REQUESTS
 
 CHUNK = 1 << 16
 
@@ -36,7 +37,7 @@ class Flight:
         self.data, self.pos = data, 0
         self.want = len(self.expected) if session.sync and not session.half_close else None
         self.deadline = time.monotonic() + session_deadline(deadline_s, len(session.frames), len(data))
-        self.decoder = TelegramDecoder("reply")
+        self.decoder = reply_decoder()
         self.done = False
         self.sending = True
         self.sock = socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET, socket.SOCK_STREAM)

@@ -20,9 +20,10 @@ import time
 from dataclasses import dataclass, field, replace
 
 from fuzz.case import WHOLE, Delivery
+from fuzz.replies import reply_decoder
 from fuzz.wire import answered_ids, split_frames
 from spec import errors
-from spec.codec import REQUESTS, TelegramDecoder, encode
+from spec.codec import REQUESTS, encode
 from spec.telegram import Telegram
 
 GET_STATUS = encode(REQUESTS.CMD_GET_STATUS())
@@ -103,7 +104,7 @@ class Conn:
 
     def __init__(self, host: str, port: int, timeout: float, record: bool = False) -> None:
         self.sock = connect(host, port, timeout)
-        self.decoder = TelegramDecoder("reply")
+        self.decoder = reply_decoder()
         self.record = record
         self.sent: list[tuple[float, bytes]] = []
         self.received: list[tuple[float, bytes]] = []

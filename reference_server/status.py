@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any, cast
 import numpy as np
 
 from spec.codec import REPLIES, encode
-from spec.compiler import fixed_size
+from spec.compiler import distance_from_end
 from spec.model import enum_classes, load_telegrams
 from spec.parameters import ParameterError, ParameterStore
 from spec.telegram import Telegram
@@ -81,12 +81,9 @@ def status_frame(p: Platform, now: float) -> tuple[Telegram, bytes]:
 def _timestamp_from_end() -> int:
     """Bytes from the status timestamp's first byte to the frame's end, from the spec's layout."""
     (tdef,) = (t for t in load_telegrams() if t.name == "CMD_GET_STATUS")
-    layout = tdef.layout("reply")
-    assert layout is not None
-    names = [f.name for f in layout]
-    after = [fixed_size(f) for f in layout[names.index("timestamp") :]]
-    assert all(n is not None for n in after), "the fields from the status timestamp on must have fixed sizes"
-    return sum(n for n in after if n is not None)
+    distance = distance_from_end(tdef.layout("reply") or (), "timestamp")
+    assert distance is not None, "the fields from the status timestamp on must have fixed sizes"
+    return distance
 
 
 _TS = struct.Struct(">i")

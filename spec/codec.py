@@ -13,7 +13,7 @@ Rules:
 from __future__ import annotations
 
 import struct
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from typing import Any
 
 from spec import errors
@@ -143,8 +143,13 @@ class TelegramDecoder:
     ``receive_data(b"")`` marks the end of the stream; a partial frame then raises Truncated.
     """
 
-    def __init__(self, direction: Direction, max_length: int = DEFAULT_MAX_LENGTH) -> None:
+    def __init__(
+        self, direction: Direction, max_length: int = DEFAULT_MAX_LENGTH,
+        decode_data: Callable[[bytes], Telegram] | None = None,
+    ) -> None:  # fmt: skip
         self._set = _SETS[direction]
+        # decode_data: one telegram's data (identifier first) -> the telegram; a caller may memoize it
+        self._decode_data = decode_data or self._set.decode_data
         self.direction = direction
         self.max_length = max_length
         self._buf = bytearray()
@@ -203,4 +208,4 @@ class TelegramDecoder:
             return None
         data = bytes(buf[pos + FRAME_OVERHEAD : end])
         self._pos = end
-        return self._set.decode_data(data)
+        return self._decode_data(data)

@@ -42,6 +42,15 @@ def fixed_size(f: FieldDef) -> int | None:
     return None
 
 
+def distance_from_end(fields: tuple[FieldDef, ...], name: str) -> int | None:
+    """Bytes from the first byte of field ``name`` to the end of the telegram, when that field and every one
+    after it have fixed sizes (None otherwise): the CMD_GET_STATUS timestamp sits at a fixed distance from the
+    end however long the scan before it is."""
+    names = [f.name for f in fields]
+    sizes = [fixed_size(f) for f in fields[names.index(name) :]]
+    return None if None in sizes else sum(n for n in sizes if n is not None)
+
+
 def min_size(f: FieldDef) -> int:
     """The fewest bytes a field can take (for count checks before allocation)."""
     size = fixed_size(f)

@@ -1,0 +1,69 @@
+"""Strict decoding of the target's replies, with the status reply memoized.
+
+Rules:
+- The oracle decodes every reply strictly (``spec.codec``); this module only saves repeating that work. A
+  CMD_GET_STATUS reply whose bytes equal the last one decoded everywhere but in the timestamp is that telegram
+  with the new timestamp: the timestamp is an INT without range or enum (checked here at import), at a fixed
+  distance from the end (``spec.compiler.distance_from_end``), so the rest of the bytes decide everything else.
+  Anything else goes to the codec.
+- Why: a campaign reads about 1,500 status replies a second from a target whose status changes 50 times a
+  second; each strict decode of the 541-beam scan cost the campaign ~35 us.
+"""
+
+from __future__ import annotations
+
+import struct
+
+from spec.codec import REPLIES, TelegramDecoder
+from spec.compiler import allowed_values, distance_from_end, value_range
+from spec.model import load_telegrams
+from spec.telegram import Telegram
+
+_STATUS = REPLIES.by_name["CMD_GET_STATUS"]
+_STATUS_ID = _STATUS.ID
+_TS = struct.Struct(">i")
+
+
+def _timestamp_field() -> int:
+    (tdef,) = (t for t in load_telegrams() if t.name == "CMD_GET_STATUS")
+    layout = tdef.layout("reply") or ()
+    (ts,) = (f for f in layout if f.name == "timestamp")
+    if ts.type != "INT" or allowed_values(ts) is not None or value_range(ts) is not None:
+        raise RuntimeError("the status timestamp is no longer a plain INT: the memo would skip its checks")
+    distance = distance_from_end(layout, "timestamp")
+    if distance is None:
+        raise RuntimeError("the status timestamp is no longer at a fixed distance from the end")
+    return distance
+
+
+_TS_FROM_END = _timestamp_field()
+
+
+class StatusMemo:
+    """``decode_data`` for ``TelegramDecoder``: the codec's, with the last status reply remembered."""
+
+    def __init__(self) -> None:
+        self.data = b""
+        self.telegram: Telegram | None = None
+        self.hits = 0
+
+    def decode(self, data: bytes) -> Telegram:
+        if data and data[0] == _STATUS_ID:
+            last = self.data
+            if self.telegram is not None and len(data) == len(last):
+                at = len(data) - _TS_FROM_END
+                if data[:at] == last[:at] and data[at + 4 :] == last[at + 4 :]:
+                    self.hits += 1
+                    return self.telegram._replace(timestamp=_TS.unpack_from(data, at)[0])  # type: ignore[attr-defined, no-any-return]
+            telegram = REPLIES.decode_data(data)
+            self.data, self.telegram = data, telegram
+            return telegram
+        return REPLIES.decode_data(data)
+
+
+MEMO = StatusMemo()
+
+
+def reply_decoder() -> TelegramDecoder:
+    """A streaming decoder of the target's replies (one per connection; the memo is the process's)."""
+    return TelegramDecoder("reply", decode_data=MEMO.decode)
