@@ -80,6 +80,8 @@ class CanController:
         self.frames_lost: dict[Node, int] = dict.fromkeys(MOTORS, 0)
         self._buffer: deque[CanRecord] = deque(maxlen=LISTEN_BUFFER)
         self._readings: dict[Node, dict[str, dict[str, Any]]] = {}
+        self._readings_serial = 0  # counts the changes of _readings and connected (board_status' memo key)
+        self._board_memo: tuple[tuple[int, tuple[int, ...]], BoardStatus] | None = None
         self._board_bits: dict[Node, int] = {}
         self._last_rx: dict[Node, float] = {}
         self._lost: set[Node] = set()
@@ -208,9 +210,14 @@ class CanController:
 
     # ------------------------------------------------------------------ what the server reads
     def board_status(self) -> BoardStatus:
-        words = {node: self.status_word(node) for node in ALL_NODES}
-        readings = {n: r for n, r in self._readings.items() if n in self.connected}
-        return assemble(readings, words)
+        """The snapshot; assembled again only when a reading arrived or a status word changed since the last
+        one (a server asked for its status hundreds of times a second between two CAN cycles)."""
+        words = tuple(self.status_word(node) for node in ALL_NODES)
+        key = (self._readings_serial, words)
+        if self._board_memo is None or self._board_memo[0] != key:
+            readings = {n: r for n, r in self._readings.items() if n in self.connected}
+            self._board_memo = (key, assemble(readings, dict(zip(ALL_NODES, words, strict=True))))
+        return self._board_memo[1]
 
     def status_word(self, node: Node) -> int:
         if node not in self.connected:
@@ -279,6 +286,7 @@ class CanController:
     def _reset(self) -> None:
         self.bus_up = False
         self.connected.clear()
+        self._readings_serial += 1
         self.initialized = False
         self.transaction = None
         self._readings.clear()
@@ -327,6 +335,7 @@ class CanController:
         if node not in self.connected:
             return
         self._readings.setdefault(node, {})[function] = signals
+        self._readings_serial += 1
         if "Status" in signals:
             self._board_bits[node] = int(signals["Status"])
         self._last_rx[node] = now
@@ -346,6 +355,7 @@ class CanController:
         txn.answers[node] = signals
         if txn.kind == "connect":
             self.connected.add(node)
+            self._readings_serial += 1
         elif signals["Passed"] and node in MOTORS:
             self._send(node, "Brake", {"Release": 1}, now)  # erratum E-HW-005
 

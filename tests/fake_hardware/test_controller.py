@@ -8,7 +8,7 @@ import can
 import pytest
 
 from fake_hardware import ALL_NODES, ControllerError, Hardware, Node, St
-from fake_hardware.board_status import BoardStatus
+from fake_hardware.board_status import BoardStatus, assemble
 from fake_hardware.boards import MotorBoard
 from fake_hardware.controller import CAN_ERR_BUSOFF, CAN_ERR_RESTARTED, LISTEN_BUFFER
 from spec.codec import REPLIES, decode_frame, encode
@@ -249,3 +249,32 @@ def test_the_non_virtual_path(monkeypatch: pytest.MonkeyPatch, make_hw: Any) -> 
     run(hw, 0.0, 1.0)
     assert hw.motors[0] is not None and hw.motors[0].wheel_velocity == pytest.approx(250)
     assert hw.controller.board_status().motor_right_status == 0
+
+
+def test_the_snapshot_is_assembled_again_whenever_a_reading_or_a_status_word_changed(hw: Hardware) -> None:
+    """board_status is memoized between CAN frames; it must always equal a snapshot assembled afresh."""
+    c = hw.controller
+
+    def fresh() -> BoardStatus:
+        readings = {n: r for n, r in c._readings.items() if n in c.connected}
+        return assemble(readings, {n: c.status_word(n) for n in ALL_NODES})
+
+    temps = set()
+    for k in range(25):
+        if k == 10:  # a reading changes: the right motor reports 80 degC from its next State frame on
+            motor = hw.motors[0]
+            assert motor is not None
+            motor.temperature_override = 80.0
+        run(hw, k * 0.02, (k + 1) * 0.02)
+        status = c.board_status()
+        assert status == fresh()
+        temps.add(status.motor_right_temp)
+    assert 80 in temps and len(temps) == 2
+    assert c.board_status() is c.board_status()  # nothing arrived in between: the same snapshot
+    sniffer = Sniffer(hw.channel)
+    try:  # an error frame: the status words change, no reading does
+        sniffer.bus.send(can.Message(arbitration_id=CAN_ERR_BUSOFF, is_error_frame=True, timestamp=0.5))
+        run(hw, 0.5, 0.52)
+        assert c.board_status().io_status & St.BUS_OFF and c.board_status() == fresh()
+    finally:
+        sniffer.close()
