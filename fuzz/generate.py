@@ -128,8 +128,8 @@ def _hostile_scalar(f: FieldDef, rng: random.Random) -> tuple[Any, str]:
     if rng_ is not None:
         picks += [rng_[0] - 1, rng_[1] + 1]
     picks += list(INT_EDGES[9:]) if f.type == "INT" else [0xFF, 0x80]
-    v = rng.choice(picks)
-    return v, str(v)
+    pick = rng.choice(picks)
+    return pick, str(pick)
 
 
 def _string(rng: random.Random, kb: Knowledge, f: FieldDef, telegram: str) -> bytes:

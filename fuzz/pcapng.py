@@ -35,7 +35,7 @@ def _checksum(data: bytes) -> int:
     total = sum(struct.unpack(f"!{len(data) // 2}H", data))
     while total >> 16:
         total = (total & 0xFFFF) + (total >> 16)
-    return ~total & 0xFFFF
+    return int(~total & 0xFFFF)
 
 
 def _packet(src_ip: bytes, dst_ip: bytes, sport: int, dport: int, seq: int, ack: int, flags: int, payload: bytes,

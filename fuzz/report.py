@@ -204,7 +204,7 @@ def describe_frames(data: bytes) -> list[str]:
             out.append(repr(t) if t is not None else f"raw {f[:24].hex()}{'...' if len(f) > 24 else ''}")
         except errors.RemoteProtocolError as exc:
             name = (
-                REQUESTS.by_id.get(f[8]).NAME
+                REQUESTS.by_id[f[8]].NAME
                 if len(f) > 8 and f[8] in REQUESTS.by_id
                 else f"id {f[8] if len(f) > 8 else '?'}"
             )

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import random
 from dataclasses import replace
+from typing import Any
 
 from fuzz import generate, mutate
 from fuzz.case import Case
@@ -31,11 +32,15 @@ BIG_CASE = 1 << 20  # bytes
 BIG_SHARE = 0.25  # of the drawn cases over BIG_CASE that are kept
 GEN_SHARE = 0.55  # of cases drawn by a generator; the rest mutate a valid seed
 MODES = sorted(int(v) for v in enum_classes()["MotionMode"])
-OP = enum_classes()["OperationState"]
+OP: Any = enum_classes()["OperationState"]  # built from the spec at import: untyped for mypy
 
 
 def _enc(name: str, **fields: int) -> bytes:
     return encode(REQUESTS[name](**fields))
+
+
+def _doc(telegram: str, **fields: str) -> bytes:
+    return encode(REQUESTS[telegram](**fields))
 
 
 # (state, reported operation state, frames from anywhere). Mode-dependent states get SET_MODE appended.
@@ -64,9 +69,9 @@ TINY = {
 
 def _document_reset() -> list[bytes]:
     return [
-        encode(REQUESTS.CMD_SET_MAP(name="fuzz.map", xml=TINY["map"])), _enc("CMD_SAVE_MAP"),
-        encode(REQUESTS.CMD_SET_ROADMAP(name="fuzz.rm", xml=TINY["roadmap"])), _enc("CMD_SAVE_ROADMAP"),
-        encode(REQUESTS.CMD_SET_PROGRAM(xml=TINY["program"])), _enc("CMD_SAVE_PROGRAM"),
+        _doc("CMD_SET_MAP", name="fuzz.map", xml=TINY["map"]), _enc("CMD_SAVE_MAP"),
+        _doc("CMD_SET_ROADMAP", name="fuzz.rm", xml=TINY["roadmap"]), _enc("CMD_SAVE_ROADMAP"),
+        _doc("CMD_SET_PROGRAM", xml=TINY["program"]), _enc("CMD_SAVE_PROGRAM"),
     ]  # fmt: skip
 
 
