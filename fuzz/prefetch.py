@@ -85,7 +85,7 @@ class Prefetcher:
         kb = self.sched.kb
         if self.proc is None or kb.version == self.sent_version:
             return
-        light = {k: v for k, v in kb.light().items() if self.sent_light.get(k, self) != v}
+        light = {k: v for k, v in kb.light().items() if k not in self.sent_light or self.sent_light[k] != v}
         documents = {k: v for k, v in kb.documents.items() if self.sent_documents.get(k) is not v}
         self.sent_version = kb.version
         if not light and not documents:

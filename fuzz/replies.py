@@ -16,7 +16,7 @@ import struct
 
 from spec.codec import REPLIES, TelegramDecoder
 from spec.compiler import allowed_values, distance_from_end, value_range
-from spec.model import load_telegrams
+from spec.model import telegram_def
 from spec.telegram import Telegram
 
 _STATUS = REPLIES.by_name["CMD_GET_STATUS"]
@@ -25,8 +25,7 @@ _TS = struct.Struct(">i")
 
 
 def _timestamp_field() -> int:
-    (tdef,) = (t for t in load_telegrams() if t.name == "CMD_GET_STATUS")
-    layout = tdef.layout("reply") or ()
+    layout = telegram_def("CMD_GET_STATUS").layout("reply") or ()
     (ts,) = (f for f in layout if f.name == "timestamp")
     if ts.type != "INT" or allowed_values(ts) is not None or value_range(ts) is not None:
         raise RuntimeError("the status timestamp is no longer a plain INT: the memo would skip its checks")

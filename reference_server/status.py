@@ -22,7 +22,7 @@ import numpy as np
 
 from spec.codec import REPLIES, encode
 from spec.compiler import distance_from_end
-from spec.model import enum_classes, load_telegrams
+from spec.model import enum_classes, telegram_def
 from spec.parameters import ParameterError, ParameterStore
 from spec.telegram import Telegram
 
@@ -80,8 +80,7 @@ def status_frame(p: Platform, now: float) -> tuple[Telegram, bytes]:
 
 def _timestamp_from_end() -> int:
     """Bytes from the status timestamp's first byte to the frame's end, from the spec's layout."""
-    (tdef,) = (t for t in load_telegrams() if t.name == "CMD_GET_STATUS")
-    distance = distance_from_end(tdef.layout("reply") or (), "timestamp")
+    distance = distance_from_end(telegram_def("CMD_GET_STATUS").layout("reply") or (), "timestamp")
     assert distance is not None, "the fields from the status timestamp on must have fixed sizes"
     return distance
 

@@ -176,6 +176,16 @@ def load_telegrams() -> tuple[TelegramDef, ...]:
     return tuple(sorted(out, key=lambda d: d.id))
 
 
+def telegram_def(name: str) -> TelegramDef:
+    """The definition of the telegram called ``name`` (KeyError for an unknown name)."""
+    return _telegrams_by_name()[name]
+
+
+@functools.cache
+def _telegrams_by_name() -> dict[str, TelegramDef]:
+    return {t.name: t for t in load_telegrams()}
+
+
 @functools.cache
 def enum_classes() -> dict[str, type[enum.IntEnum]]:
     """Every enum table of the spec as an ``enum.IntEnum`` (names exactly as in the guide)."""
