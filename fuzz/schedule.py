@@ -35,11 +35,7 @@ MODES = sorted(int(v) for v in enum_classes()["MotionMode"])
 OP: Any = enum_classes()["OperationState"]  # built from the spec at import: untyped for mypy
 
 
-def _enc(name: str, **fields: int) -> bytes:
-    return encode(REQUESTS[name](**fields))
-
-
-def _doc(telegram: str, **fields: str) -> bytes:
+def _enc(telegram: str, **fields: Any) -> bytes:
     return encode(REQUESTS[telegram](**fields))
 
 
@@ -69,9 +65,9 @@ TINY = {
 
 def _document_reset() -> list[bytes]:
     return [
-        _doc("CMD_SET_MAP", name="fuzz.map", xml=TINY["map"]), _enc("CMD_SAVE_MAP"),
-        _doc("CMD_SET_ROADMAP", name="fuzz.rm", xml=TINY["roadmap"]), _enc("CMD_SAVE_ROADMAP"),
-        _doc("CMD_SET_PROGRAM", xml=TINY["program"]), _enc("CMD_SAVE_PROGRAM"),
+        _enc("CMD_SET_MAP", name="fuzz.map", xml=TINY["map"]), _enc("CMD_SAVE_MAP"),
+        _enc("CMD_SET_ROADMAP", name="fuzz.rm", xml=TINY["roadmap"]), _enc("CMD_SAVE_ROADMAP"),
+        _enc("CMD_SET_PROGRAM", xml=TINY["program"]), _enc("CMD_SAVE_PROGRAM"),
     ]  # fmt: skip
 
 

@@ -70,8 +70,8 @@ def status_reply(p: Platform, now: float) -> Telegram:
 def status_frame(p: Platform, now: float) -> tuple[Telegram, bytes]:
     """``status_reply`` and its frame. The frame is encoded once per epoch and only its timestamp is replaced:
     a fuzzer's or a client's GET_STATUS between two control periods costs no encoding of the 541-beam scan.
-    The timestamp is the one variable-position field's last neighbour: every field after it has a fixed size
-    (guide 6.4), so it sits at a fixed distance from the frame's end."""
+    Only fixed-size fields follow the timestamp (guide 6.4), so it sits at a fixed distance from the frame's
+    end however long the scan and the path before it are."""
     make, frame = _cached(p)
     telegram = make(now)
     at = len(frame) - _TS_FROM_END
