@@ -143,6 +143,9 @@ class Drive:
     def remaining_path(self) -> list[Frame]:
         return list(self._path.waypoints) if self._path is not None else []
 
+    def path_xy(self) -> list[tuple[float, float]]:
+        return [(f.x, f.y) for f in self._path.waypoints] if self._path is not None else []
+
     def commanded_frame(self) -> Frame:
         """The frame the controller steers to now (the estimated pose when no path is driven)."""
         if self._path is None:

@@ -31,8 +31,13 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any, NamedTuple, Protocol, runtime_checkable
 
+import numpy as np
+from numpy.typing import NDArray
+
 from fake_hardware.serial_scanner import Ranges
 
+# (x, y) points: pairs, or an (n, 2) array where a model has one already
+Points = Sequence[Sequence[float]] | NDArray[np.float64]
 Params = Callable[[str], Any]  # ParameterStore.get: parameters are read live, a change takes effect at once
 
 
@@ -95,6 +100,10 @@ class MotionModel(Protocol):
 
     def remaining_path(self) -> list[Frame]:
         """The waypoints still ahead (GET_STATUS path)."""
+
+    def path_xy(self) -> Points:
+        """``remaining_path`` as (x, y) points, in whatever form is cheapest to make: a sequence of pairs or an
+        (n, 2) array (GET_STATUS converts it in one numpy pass; a path may hold thousands of points)."""
 
     def wheel_setpoints(self) -> tuple[float, float]:
         """The wheel surface velocities (right, left) in mm/s that ``step`` decided on."""

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 import struct
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
@@ -27,6 +27,7 @@ from spec.parameters import ParameterError, ParameterStore
 from spec.telegram import Telegram
 
 if TYPE_CHECKING:
+    from reference_server.motion_api import Points
     from reference_server.platform import Platform
 
 ABSENT = -1  # status of a board that is not on the CAN bus (no reading of it is reported)
@@ -49,10 +50,10 @@ def _i32(value: float) -> int:
     return max(_I32[0], min(_I32[1], round(value)))
 
 
-def _i32_points(frames: Sequence[Sequence[float]]) -> tuple[tuple[int, int], ...]:
+def _i32_points(frames: Points) -> tuple[tuple[int, int], ...]:
     """The (x, y) of each frame as ``_i32`` does it (round half to even, saturated), in one numpy pass: the
-    interpolated path of the status telegram may hold thousands of points."""
-    if not frames:
+    interpolated path of the status telegram may hold thousands of points. ``frames`` may be an array."""
+    if len(frames) == 0:
         return ()
     xy = np.clip(np.rint(np.asarray(frames, dtype=np.float64)[:, :2]), *_I32).astype(np.int64)
     return tuple(map(tuple, xy.tolist()))
@@ -116,7 +117,7 @@ def _status_fields(p: Platform) -> dict[str, Any]:
         # without a world (kinematics.Drive): no localization, the estimate is exact, its deviations 0
         cov_major=0, cov_minor=0, cov_angle=0, cov_axis_angle=0,
         scan=(), reflectors=(), lines=(), circles=(), corners=(),  # without a world: no laser scanner
-        path=_i32_points(p.motion.remaining_path()),
+        path=_i32_points(p.motion.path_xy()),
         joystick_buttons=(),  # no joystick
         vel_trans=_i32(p.motion.v), vel_rot=_i32(p.motion.w * 1000.0),
         relay_digital_in=0, relay_status=ABSENT, relay_analog_in=(0,) * 8, relay_opto_distance=(0,) * 4,

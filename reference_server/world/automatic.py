@@ -30,7 +30,7 @@ import numpy as np
 
 from reference_server.world.geometry import BOOL, F64, circles
 from reference_server.world.ipo import Interpolator, Ref, stabilize, track
-from reference_server.world.paths import Drive, Leg, Turn, direct, end_curve, polyline, wrap
+from reference_server.world.paths import NO_POINTS, Drive, Leg, Turn, direct, end_curve, polyline, wrap
 from reference_server.world.planner import Plan, PlannerState
 
 Params = Callable[[str], Any]
@@ -115,8 +115,8 @@ class AutoJob:
             return Ref(*goal, 0.0, 0.0)
         return self.ipo.reference(pose)
 
-    def path_points(self) -> list[tuple[float, float]]:
-        return [] if self.ipo is None else self.ipo.path_points()
+    def path_points(self) -> F64:
+        return NO_POINTS if self.ipo is None else self.ipo.path_points()
 
     # ---- the control step
     def step(

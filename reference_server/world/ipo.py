@@ -143,7 +143,7 @@ class Interpolator:
             return list(rest)
         return [leg, *rest]
 
-    def path_points(self, step: float = 100.0) -> list[tuple[float, float]]:
+    def path_points(self, step: float = 100.0) -> F64:
         return sample_points(self.remaining(), step)
 
 

@@ -25,7 +25,9 @@ from typing import Any
 import numpy as np
 
 from reference_server.world.automatic import AutoJob, Navigator, Perception
+from reference_server.world.geometry import F64
 from reference_server.world.ipo import Ref
+from reference_server.world.paths import NO_POINTS
 from reference_server.world.planner import PlannerState
 from reference_server.world.replay import Recorder, ReplayJob
 
@@ -106,8 +108,9 @@ class Motion:
             return self.job.reference(pose)
         return Ref(*pose, self.v, self.w)
 
-    def path_points(self) -> list[tuple[float, float]]:
-        return [] if self.job is None else self.job.path_points()
+    def path_points(self) -> F64:
+        """The remaining path, (n, 2) points (``paths.sample_points``)."""
+        return NO_POINTS if self.job is None else self.job.path_points()
 
     # ---- the control period
     def step(

@@ -221,18 +221,22 @@ def end_curve(legs: list[Leg], end_angle: float) -> Drive | None:
     return _sampled(np.concatenate([head.x, curve.x[1:]]), np.concatenate([head.y, curve.y[1:]]))
 
 
-def sample_points(legs: list[Leg], step: float = 100.0) -> list[Point]:
-    """Points along the legs every ``step`` mm (the status telegram's interpolated path), at most as many as a
-    path of ``DS * MAX_SAMPLES`` mm has (E-MOT-014)."""
-    out: list[Point] = []
+NO_POINTS: F64 = np.empty((0, 2))
+
+
+def sample_points(legs: list[Leg], step: float = 100.0) -> F64:
+    """Points (x, y) along the legs every ``step`` mm (the status telegram's interpolated path), at most as many
+    as a path of ``DS * MAX_SAMPLES`` mm has (E-MOT-014). An (n, 2) array: the status converts it to INTs in
+    one numpy pass, with no Python object per point."""
+    parts: list[F64] = []
     total = sum(len(leg.s) for leg in legs if isinstance(leg, Drive))
     thin = math.ceil(total * step / (DS * MAX_SAMPLES))
     for leg in legs:
         if isinstance(leg, Turn):
-            if not out:
-                out.append((leg.x, leg.y))
+            if not parts:
+                parts.append(np.array([[leg.x, leg.y]], dtype=np.float64))
             continue
         k = max(1, round(step * (len(leg.s) - 1) / max(leg.length, 1e-9)), thin)  # at the leg's own spacing
-        out += zip(leg.x[::k].tolist(), leg.y[::k].tolist(), strict=True)  # floats, converted in C
-        out.append((float(leg.x[-1]), float(leg.y[-1])))
-    return out
+        parts.append(np.column_stack((leg.x[::k], leg.y[::k])))
+        parts.append(np.array([[leg.x[-1], leg.y[-1]]], dtype=np.float64))
+    return np.concatenate(parts) if parts else NO_POINTS

@@ -89,11 +89,11 @@ class ReplayJob:
         v = ((x1 - x) * math.cos(a) + (y1 - y) * math.sin(a)) / h
         return Ref(x, y, a, v, (a1 - a) / h)
 
-    def path_points(self) -> list[tuple[float, float]]:
+    def path_points(self) -> F64:
         if self.phase == "approach":
             return self.approach.path_points()
         rest = self.table[self.table[:, 0] >= self.t]
-        return [(float(r[1]), float(r[2])) for r in rest[::5]]
+        return np.ascontiguousarray(rest[::5, 1:3])
 
     def step(
         self, now: float, dt: float, pose: Pose, seen: Perception, p: Params, nav: Navigator, speed: float = 0.0

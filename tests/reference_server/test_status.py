@@ -45,3 +45,28 @@ def test_the_cached_status_frame_is_the_codecs_encoding_at_every_time(tmp_path: 
             assert frame == encode(telegram)
     finally:
         p.close()
+
+
+def test_the_status_path_is_the_remaining_path_while_driving(tmp_path: Path) -> None:
+    """The world hands GET_STATUS its path as an array (``path_xy``); the status must carry exactly the
+    remaining path's points, converted one by one, while the platform drives a long path and after it stops."""
+    storage = Storage(tmp_path)
+    storage.seed_from_fixtures()
+    p = build_platform(storage, 1, hardware=False)
+    try:
+        p.boot(0.0)
+        start = p.motion.pose
+        p.motion.follow_path([(start.x + 8000.0, start.y, 0.0), (start.x + 8000.0, start.y + 3000.0, 0.0)])  # type: ignore[attr-defined]
+        lengths = []
+        for k in range(1, 200):
+            p.tick(k * 0.02)
+            if k % 20 == 0:
+                path = status_reply(p, k * 0.02).path  # type: ignore[attr-defined]
+                assert path == tuple((_i32(f.x), _i32(f.y)) for f in p.motion.remaining_path())
+                lengths.append(len(path))
+        assert lengths[0] > 50 and lengths == sorted(lengths, reverse=True)  # a long path, shrinking as it goes
+        p.motion.stop()
+        p.tick(200 * 0.02)
+        assert status_reply(p, 4.0).path == ()  # type: ignore[attr-defined]
+    finally:
+        p.close()
