@@ -5,7 +5,8 @@ Rules:
   simulated time as ``now``.
 - Guide 6.1: the server "listens for clients on the socket ports 10000 and 10002. For each port one client
   is able to connect": both ports take the full command set; a second client on a busy port is logged and
-  closed at once (erratum: the guide leaves this open), the first is not disturbed.
+  closed at once (erratum E-WIRE-007: the guide leaves this open), the first is not disturbed. Before it is
+  judged, what the first client sent is read: a client that has left (its EOF not yet read) is no longer there.
 - Replies are framed like requests (erratum E-WIRE-001). Malformed input - any RemoteProtocolError of the
   decoder, or a partial frame that stalls for ``stall_timeout`` wall seconds - is logged with the peer and
   the reason and closes only that connection.
@@ -47,6 +48,7 @@ BACKLOG = 100  # listen backlog, and connections accepted per wake-up (asyncio's
 HIGH_WATER = 1 << 16  # bytes of unsent replies above which reading pauses (asyncio's default high-water mark)
 LOW_WATER = 1 << 14  # ... and below which it resumes
 ACCEPT_RETRY = 1.0  # s before accepting again when out of file descriptors
+DRAIN_READS = 16  # reads of a busy port's client before a second client is turned away (1 MiB at most)
 # Non-blocking calls on an accepted socket without making it non-blocking (one system call less per connection)
 _DONTWAIT: int = getattr(socket, "MSG_DONTWAIT", 0)
 _ACCEPT_ERRORS = (errno.EMFILE, errno.ENFILE, errno.ENOBUFS, errno.ENOMEM)
@@ -215,8 +217,8 @@ class Server:
             if not _DONTWAIT:
                 sock.setblocking(False)
             busy = self._busy.get(index)
-            if busy is not None and busy.reading:  # its client may have left already (an EOF not yet read)
-                busy._readable()
+            if busy is not None:  # its client may have left already: its last bytes and EOF not yet read
+                self._drain(index, busy)
             if index in self._busy or self._stopped.is_set():
                 log.warning("port %d busy: second client %s turned away", self.ports[index], _Peer(addr))
                 sock.close()
@@ -226,6 +228,13 @@ class Server:
             self._open.add(conn)
             log.info("client %s connected at port %d", conn.peer, conn.port)
             conn.start()
+
+    def _drain(self, index: int, conn: _Connection) -> None:
+        """Read what the port's client has sent so far (up to ``DRAIN_READS`` reads) before a newcomer is judged:
+        a client that sent its last request and left (E-WIRE-007) frees the port for the one right behind it."""
+        for _ in range(DRAIN_READS):
+            if self._busy.get(index) is not conn or not conn.reading or not conn._readable():
+                return
 
     def _pause_accepting(self, listener: socket.socket, index: int) -> None:
         loop = self._loop
@@ -282,15 +291,17 @@ class _Connection:
             self.reading = False
             self.loop.remove_reader(self.fd)
 
-    def _readable(self) -> None:
+    def _readable(self) -> bool:
+        """Read once and handle what came; False when there was nothing to read (or the read failed)."""
         try:
             data = self.sock.recv(READ_SIZE, _DONTWAIT)
         except (BlockingIOError, InterruptedError):
-            return
+            return False
         except OSError as exc:
             self._end(logging.WARNING, "%s; connection closed", exc)
-            return
+            return False
         self._received(data)
+        return True
 
     def _received(self, data: bytes) -> None:
         decoder, platform, clock = self.decoder, self.server.platform, self.server.clock

@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import socket
 import struct
+import threading
 import time
 from pathlib import Path
 from typing import Any
@@ -12,7 +13,7 @@ from typing import Any
 import pytest
 
 from reference_server.state_chart import REPORTED, RULES, State
-from spec.codec import HEADER, REQUESTS, decode_frame, encode
+from spec.codec import HEADER, REQUESTS, TelegramDecoder, decode_frame, encode
 from spec.model import enum_classes
 from spec.parameters import load_parameters
 from tests.reference_server.conftest import Client, ServerThread
@@ -173,6 +174,52 @@ def test_second_client_on_a_busy_port_is_turned_away(server: ServerThread) -> No
             assert other_port.status().NAME == "CMD_GET_STATUS"
     with Client(server.ports[0]) as again:  # the port is free once the first client left
         assert wait_for(lambda: _served(again))
+
+
+def _names(data: bytes) -> list[str]:
+    decoder = TelegramDecoder("reply")
+    decoder.receive_data(data)
+    return [t.NAME for t in iter(decoder.next_telegram, None)]
+
+
+def _read_all(sock: socket.socket) -> bytes:
+    sock.settimeout(5.0)
+    data = b""
+    while chunk := sock.recv(65536):
+        data += chunk
+    return data
+
+
+def _hold(held: threading.Event, seconds: float) -> None:
+    held.set()
+    time.sleep(seconds)  # the server's loop does nothing else meanwhile
+
+
+def test_a_client_right_behind_one_that_has_left_is_served(server: ServerThread) -> None:
+    """E-WIRE-007: a client that sent its last request and its end-of-stream has left, even when the server has
+    not read them yet; the next client on that port, right behind it, is served, not turned away. The server's
+    loop is held (as a slow request would hold it) while the second client knocks before the first's last bytes
+    arrive, so the server sees the newcomer first."""
+    assert server.loop is not None
+    status = encode(R.CMD_GET_STATUS())
+    for _ in range(3):
+        first = socket.create_connection(("127.0.0.1", server.ports[0]))
+        first.sendall(status)
+        first.recv(1)  # the server has taken this client
+        held = threading.Event()
+        server.loop.call_soon_threadsafe(_hold, held, 0.3)
+        assert held.wait(2.0)
+        second = socket.create_connection(("127.0.0.1", server.ports[0]))  # in the backlog: the loop is held
+        second.sendall(status)
+        second.shutdown(socket.SHUT_WR)
+        first.sendall(status + status)  # more requests and the end-of-stream, after the newcomer
+        first.shutdown(socket.SHUT_WR)
+        try:
+            assert _names(_read_all(second)) == ["CMD_GET_STATUS"]
+            _read_all(first)
+        finally:
+            first.close()
+            second.close()
 
 
 def _served(client: Client) -> bool:
