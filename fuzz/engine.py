@@ -2,9 +2,13 @@
 
 Rules:
 - A *unit* is what one oracle verdict covers: a *batch* (the cases the strict codec accepts, pipelined on one
-  kept connection and closed by a GET_STATUS ``sync`` whose reply proves all of them were processed; the
+  connection and closed by a GET_STATUS ``sync`` whose reply proves all of them were processed; the
   server answers nothing else, erratum E-CMD-013) or a *single* (a case the server should refuse or that
   needs its own delivery: a fresh connection, our write side shut, read until the peer closes).
+- Units run in two lanes, one per port (``run_lanes``); behind a small unit already sent, up to three more
+  wait connected (pipelining), when the target takes clients back to back (checked at the start and watched
+  all along: a unit it turned away runs again alone). ``--lanes 1`` runs one unit at a time, batches on a
+  kept connection.
 - The oracle after every unit: the unit's own outcome (connect refused = dead, no reply and no close within
   the deadline = hang or stall, replies that do not decode strictly or answer the wrong request = bad reply)
   and the liveness probe, GET_STATUS on the OTHER port within the deadline.
@@ -41,6 +45,11 @@ from spec.codec import REQUESTS
 WINDOW = 256  # cases drawn at a time, then run batch-first
 BATCH_CASES = 128
 BATCH_BYTES = 1 << 18
+PIPELINE_BYTES = 1 << 14  # units up to this size may be pipelined on a port (read whole by one recv)
+GET_STATUS_ID = REQUESTS.CMD_GET_STATUS.ID
+PIPELINE_DEPTH = 4  # units in flight per port: the one the target serves and up to three waiting behind it
+BACK_TO_BACK_TRIES = 8  # pairs per port of the start-up check that a target takes clients back to back
+RETRY_FLOOR = 50  # pipelined units retried before their share is looked at
 WINDOWS_PER_STATE = 4  # windows fuzzed in one (state, mode) before the plan moves on
 # Where the case generator runs in a thread (no fork), the main thread, back from a socket wait, can queue
 # behind it for milliseconds per unit with the default 5 ms GIL switch interval; a short one keeps it low.
@@ -78,6 +87,7 @@ class Options:
     probe_every: int = 4  # units between liveness probes (1: after every unit)
     lanes: int = 2  # 2: refused cases run in two lanes, one per port (fuzz.flight); 1: one at a time
     big_share: float = BIG_SHARE  # of the cases over 1 MiB drawn that are kept (fuzz.schedule; 1: natural mix)
+    pipeline: bool = True  # a port's next small unit connects while its previous one is in flight (run_lanes)
     command: str = "pltf fuzz"
 
 
@@ -93,6 +103,9 @@ class Stats:
     unexpected_closes: int = 0
     cut_replies: int = 0
     dropped_unsafe: int = 0
+    pipelined: int = 0  # lane units connected behind their port's previous unit
+    retried: int = 0  # pipelined units run again alone (no reply: perhaps turned away)
+    turn_aways: int = 0  # retries that then passed: the target turned a newcomer away (pipelining stopped)
     duplicates: int = 0
     origins: collections.Counter[str] = field(default_factory=collections.Counter)
     telegrams: set[str] = field(default_factory=set)
@@ -132,6 +145,7 @@ class Campaign:
         self.units_since_probe = 0
         self.lane_units = 0  # sessions started by run_lanes
         self.lane_probed_at = [0, 0]  # lane_units when each port's last probe-led session started
+        self.pipelining = opts.pipeline
         self.preludes = 0
         self.need_prelude = True
         self.prelude_tries = 0
@@ -150,6 +164,24 @@ class Campaign:
         if verdict is not None:
             raise HarnessError(f"the target does not answer GET_STATUS on {self.o.host}:{self.ports[1]}: {verdict}")
         self._learn_status()
+        if self.pipelining and self.o.lanes > 1 and not self._takes_clients_back_to_back():
+            self.pipelining = False
+            self.stats.turn_aways += 1
+
+    def _takes_clients_back_to_back(self) -> bool:
+        """Before pipelining: on each port, a client right behind one that has sent GET_STATUS and left must be
+        served too (``BACK_TO_BACK_TRIES`` pairs per port); a target that turns it away is not pipelined."""
+        assert self.prober is not None
+        if self.prober.release() is not None:
+            return False
+        for _ in range(BACK_TO_BACK_TRIES):
+            for port in self.ports:
+                pair = [Flight(self.o.host, port, Session([GET_STATUS], half_close=True), self.o.deadline)
+                        for _ in range(2)]  # fmt: skip
+                fly(pair)
+                if any(len(f.out.replies) != 1 for f in pair):
+                    return False
+        return True
 
     def close(self) -> None:
         if self.prefetch is not None:
@@ -209,31 +241,31 @@ class Campaign:
         if self.o.max_cases is not None:
             cases = cases[: max(1, self.o.max_cases - self.stats.cases)]
         self.index = first + len(cases)
-        batchable = [c for c in cases if c.expect == KEEP and c.delivery.mode == "whole" and c.size < BATCH_BYTES // 4]
-        singles = [
-            c for c in cases if not (c.expect == KEEP and c.delivery.mode == "whole" and c.size < BATCH_BYTES // 4)
-        ]
-        batch: list[Case] = []
+        batches: list[list[Case]] = [[]]
         size = 0
-        for c in batchable:
-            batch.append(c)
+        singles: list[Case] = []
+        for c in cases:
+            if not (c.expect == KEEP and c.delivery.mode == "whole" and c.size < BATCH_BYTES // 4):
+                singles.append(c)
+                continue
+            if len(batches[-1]) >= BATCH_CASES or size + c.size > BATCH_BYTES:
+                batches.append([])
+                size = 0
+            batches[-1].append(c)
             size += c.size
-            if len(batch) >= BATCH_CASES or size >= BATCH_BYTES:
-                self.run_batch(batch)
-                batch, size = [], 0
-                if self.stop or self.need_prelude:
-                    return
-        if batch:
-            self.run_batch(batch)
-        paired = self.o.lanes > 1
-        whole = [c for c in singles if c.delivery.mode == "whole" and paired]
-        others = [c for c in singles if c.delivery.mode != "whole" or not paired]
-        if len(whole) > 1:
-            self.run_lanes(whole)
-            whole = []
+        batches = [b for b in batches if b]
+        if self.o.lanes > 1:
+            whole = [[c] for c in singles if c.delivery.mode == "whole"]
+            self.run_lanes(_interleave(batches, whole))
             if self.stop or self.need_prelude:
                 return
-        for c in others + whole:
+            singles = [c for c in singles if c.delivery.mode != "whole"]
+        else:
+            for batch in batches:
+                self.run_batch(batch)
+                if self.stop or self.need_prelude:
+                    return
+        for c in singles:
             if self.stop or self.need_prelude:
                 return
             self.run_single(c)
@@ -342,93 +374,134 @@ class Campaign:
         else:
             self._probe_ok([session], [case])
 
-    def run_lanes(self, cases: list[Case]) -> None:
-        """Cases in flight on both ports at once (``fuzz.flight``), each port taking its next case as soon as
-        the target closed its last one: the target always has the next connection waiting. Every
-        ``probe_every`` units a port's next session opens with a GET_STATUS: its reply is the liveness probe, on
-        that port, of the cases the other port carried before it."""
+    def run_lanes(self, units: list[list[Case]]) -> None:
+        """Units in flight on both ports at once (``fuzz.flight``). A unit is a single case or a batch (its own
+        connection, closed by a GET_STATUS ``sync``; while the target works through it the other port carries
+        on). Every ``probe_every`` units a port's next session opens with a GET_STATUS: its reply is the liveness
+        probe, on that port, of the units the other port carried before it.
+
+        Pipelining: behind a small unit that is fully sent, its write side shut and that owes no reply but a
+        status, the port's next small unit connects at once instead of after the target's close, so the
+        target has it waiting the moment it is done (it reads what the previous client sent before it judges
+        a newcomer, erratum E-WIRE-007). A target that turns such a newcomer away closes it unread (a reset)
+        or leaves a reply owed unanswered: that unit runs again alone, and when it then passes the target
+        does not take clients back to back and pipelining stops for the campaign (``turn_aways``)."""
         self.drop_keeper()
         assert self.prober is not None
         verdict = self.prober.release()
         if verdict is not None:
             self.failure(verdict.partition(":")[0], f"liveness probe: {verdict}", self.prev_unit + self.unprobed, [])
             return
-        host, deadline, ports = self.o.host, self.o.deadline, self.ports
-        todo = collections.deque(cases)
-        lanes: list[tuple[Flight, Case, bool] | None] = [None, None]
+        todo: collections.deque[tuple[list[Case], bool]] = collections.deque((u, False) for u in units)
+        lanes: list[collections.deque[_InFlight]] = [collections.deque(), collections.deque()]
         probed = [False, False]  # a probe-led session answered on this port since the last rotation
         while True:
             for k in (0, 1):
-                if lanes[k] is None and todo and not (self.stop or self.need_prelude):
-                    c = todo.popleft()
-                    self.lane_units += 1
-                    probe = self.lane_units - self.lane_probed_at[k] >= self.o.probe_every
-                    if probe:
-                        self.lane_probed_at[k] = self.lane_units
-                    answered = None if c.answered is None else [*LEAD_IDS[probe], *c.answered]
-                    session = Session([GET_STATUS, *c.frames] if probe else list(c.frames), half_close=True,
-                                      sync=c.expect == KEEP, answered=answered)  # fmt: skip
-                    lanes[k] = (Flight(host, ports[k], session, deadline), c, probe)
-                    self.history.append(session)
-                    self.unprobed.append(session)
-            live = [lane[0] for lane in lanes if lane is not None]
-            if not live:
+                while todo and not (self.stop or self.need_prelude) and self._may_start(lanes[k], *todo[0]):
+                    unit, alone = todo.popleft()
+                    lanes[k].append(self._start(k, lanes[k], unit, alone))
+            if not any(lanes):
                 return
-            for f in step_flights(live):
-                k = next(i for i, lane in enumerate(lanes) if lane is not None and lane[0] is f)
-                _, c, probe = lanes[k]  # type: ignore[misc]
-                lanes[k] = None
-                if not self._judge_flight(f, c, probe, k, lanes):
-                    return
-                if probe:
-                    probed[k] = True
-                    if all(probed):
-                        probed = [False, False]
-                        self.stats.probes += 2
-                        self.prev_unit, self.unprobed = self.unprobed, []
+            if not any(q and q[0].flight.done for q in lanes):
+                step_flights([e.flight for q in lanes for e in q if not e.flight.done])
+            for k in (0, 1):
+                q = lanes[k]
+                while q and q[0].flight.done:
+                    e = q.popleft()
+                    _restart_clocks(q)
+                    if e.behind and self._turned_away(e):
+                        self.stats.retried += 1
+                        todo.appendleft((e.unit, True))
+                        if self.stats.retried > RETRY_FLOOR and self.stats.retried * 20 > self.stats.pipelined:
+                            self.pipelining = False  # more than 5 % retried: back to back costs more than it saves
+                        continue
+                    if not self._judge_flight(e.flight, e.unit, e.probe, k, lanes):
+                        return
+                    if e.alone and self.pipelining and e.owed:
+                        self.pipelining = False  # it passed alone: the target turned the newcomer away
+                        self.stats.turn_aways += 1
+                    if e.probe:
+                        probed[k] = True
+                        if all(probed):
+                            probed = [False, False]
+                            self.stats.probes += 2
+                            self.prev_unit, self.unprobed = self.unprobed, []
 
-    def _judge_flight(self, f: Flight, c: Case, probe: bool, k: int, lanes: list[Any]) -> bool:
-        """The oracle of one finished flight; False when it failed (the other lane is run out first)."""
+    def _may_start(self, q: collections.deque[_InFlight], unit: list[Case], alone: bool) -> bool:
+        """Whether the port of ``q`` takes ``unit`` now: when it is free, or pipelined behind its one flight."""
+        if not q:
+            return True
+        if not self.pipelining or alone or len(q) >= PIPELINE_DEPTH or sum(c.size for c in unit) > PIPELINE_BYTES:
+            return False
+        f = q[-1].flight
+        return (f.connected and not f.sending and f.session.half_close and len(f.data) <= PIPELINE_BYTES
+                and all(i == GET_STATUS_ID for i in f.expected))  # fmt: skip
+
+    def _start(self, k: int, q: collections.deque[_InFlight], unit: list[Case], alone: bool) -> _InFlight:
+        """Connect and send ``unit`` on port ``k``, behind the flights of ``q``."""
+        self.lane_units += 1
+        probe = self.lane_units - self.lane_probed_at[k] >= self.o.probe_every
+        if probe:
+            self.lane_probed_at[k] = self.lane_units
+        flight = Flight(self.o.host, self.ports[k], _lane_session(unit, probe), self.o.deadline)
+        behind = bool(q)
+        if behind:
+            flight.deadline = q[-1].flight.deadline + flight.budget  # its turn comes after the one before it
+            self.stats.pipelined += 1
+        self.history.append(flight.session)
+        self.unprobed.append(flight.session)
+        return _InFlight(flight, unit, probe, behind, alone, _owed(flight, unit, probe))
+
+    def _turned_away(self, e: _InFlight) -> bool:
+        """A pipelined unit that got no reply and was reset or owed one: perhaps the target never took it."""
+        out = e.flight.out
+        return not out.refused and not out.replies and (e.flight.reset or e.owed > 0)
+
+    def _judge_flight(self, f: Flight, unit: list[Case], probe: bool, k: int,
+                      lanes: list[collections.deque[_InFlight]]) -> bool:  # fmt: skip
+        """The oracle of one finished flight; False when it failed (the port's other flights are run out
+        first)."""
         self.stats.units += 1
-        self.stats.singles += 1
+        batch = _is_batch(unit)
+        if batch:
+            self.stats.batches += 1
+        else:
+            self.stats.singles += 1
         out = f.out
-        self._count([c], "closed" if out.closed else "open")
-        for r in out.replies:
-            self.kb.learn(r)
+        c = unit[0]
         kind = None
         if out.refused:
             kind = "refused"
-        elif out.bad_reply is not None and not self._cut_by_refusal(c, out):
+        elif out.bad_reply is not None and not (not batch and self._cut_by_refusal(c, out)):
             kind = "bad-reply"
         elif out.timed_out:
             kind = "timed-out"
-        else:
-            # the lead GET_STATUS is owed even before a malformed frame; past 16 KiB a close with unread input
-            # may reset the connection and lose replies in flight (TCP), so only small cases are held to it
-            must = len(f.expected) if c.expect == KEEP else (1 if probe and c.size < 1 << 14 else 0)
-            if len(out.replies) < must:
-                kind = "dropped"
+        elif len(out.replies) < _owed(f, unit, probe):
+            kind = "dropped"
+        self._count(unit, ("kept" if kind is None else "closed") if batch else "closed" if out.closed else "open")
+        for r in out.replies:
+            self.kb.learn(r)
         if kind is None:
             return True
-        others = [lane[0] for lane in lanes if lane is not None]
-        if others:  # the other port's case runs out: the probe and the replay need the port free
-            fly(others)
-            for lane in lanes:
-                if lane is not None:
-                    self._count([lane[1]], "closed" if lane[0].out.closed else "open")
-            lanes[:] = [None, None]
+        others = [e for q in lanes for e in q]
+        if others:  # the other flights run out: the probe and the replay need the ports free
+            fly([e.flight for e in others])
+            for e in others:
+                self._count(e.unit, "closed" if e.flight.out.closed else "open")
+            for q in lanes:
+                q.clear()
         covered = self.prev_unit + self.unprobed
         port = self.ports[k]
         if kind == "refused":
             verdict = self._probe_other(port)
-            self.failure((verdict or "dead:").partition(":")[0], "connection refused on a fuzzed port", covered, [c])
+            self.failure((verdict or "dead:").partition(":")[0], "connection refused on a fuzzed port", covered, unit)
         elif kind == "bad-reply":
-            self.failure("bad-reply", out.bad_reply or "", covered, [c])
+            self.failure("bad-reply", out.bad_reply or "", covered, unit)
         elif kind == "timed-out":
             what = "the connection neither answered nor closed after our end-of-stream"
-            self._timed_out(covered, [c], what, port)
+            self._timed_out(covered, unit, what, port)
         else:
-            self._dropped(covered, [c], port)
+            self._dropped(covered, unit, port)
         return False
 
     def _cut_by_refusal(self, case: Case, out: Outcome) -> bool:
@@ -555,3 +628,59 @@ class Campaign:
         if self.keeper is not None:
             self.keeper.close()
             self.keeper = None
+
+
+@dataclass
+class _InFlight:
+    """A lane unit on its connection."""
+
+    flight: Flight
+    unit: list[Case]
+    probe: bool  # it opens with the liveness probe's GET_STATUS
+    behind: bool  # connected while the port's previous unit was still in flight (pipelined)
+    alone: bool  # a retry of a pipelined unit that may have been turned away: never pipelined
+    owed: int  # replies the target must send (E-WIRE-006)
+
+
+def _restart_clocks(q: collections.deque[_InFlight]) -> None:
+    """A port's flight is done: the deadline of each one waiting behind it runs from now, in its turn."""
+    t = time.monotonic()
+    for e in q:
+        t += e.flight.budget
+        e.flight.deadline = t
+
+
+def _owed(f: Flight, unit: list[Case], probe: bool) -> int:
+    """Replies owed by the target: all of a unit of accepted cases; otherwise only the lead GET_STATUS, even
+    before a malformed frame - and past 16 KiB not even that: a close with unread input may reset the connection
+    and lose replies in flight (TCP)."""
+    if unit[0].expect == KEEP:
+        return len(f.expected)
+    return 1 if probe and unit[0].size < 1 << 14 else 0
+
+
+def _is_batch(unit: list[Case]) -> bool:
+    return len(unit) > 1 or (unit[0].expect == KEEP and unit[0].size < BATCH_BYTES // 4)
+
+
+def _lane_session(unit: list[Case], probe: bool) -> Session:
+    """The session of a lane unit: its frames (after a lead GET_STATUS when it carries the probe), our write
+    side shut after them; a unit of accepted cases ends with the ``sync`` GET_STATUS."""
+    lead = [GET_STATUS] if probe else []
+    known = all(c.answered is not None for c in unit)
+    answered = [*LEAD_IDS[probe], *(i for c in unit for i in c.answered or ())] if known else None
+    frames = [*lead, *(f for c in unit for f in c.frames)]
+    return Session(frames, half_close=True, sync=unit[0].expect == KEEP, answered=answered)
+
+
+def _interleave(batches: list[list[Case]], singles: list[list[Case]]) -> list[list[Case]]:
+    """The batches spread evenly among the singles: while the target works through a batch on one port, the
+    other port carries singles."""
+    if not batches:
+        return singles
+    out: list[list[Case]] = []
+    step = len(singles) / len(batches)
+    for i, batch in enumerate(batches):
+        out.extend(singles[round(i * step) : round((i + 1) * step)])
+        out.append(batch)
+    return out

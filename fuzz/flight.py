@@ -23,6 +23,7 @@ from spec import errors
 from spec.codec import REQUESTS
 
 CHUNK = 1 << 16
+_RESET = (errno.ECONNRESET, errno.EPIPE)
 
 
 class Flight:
@@ -36,9 +37,11 @@ class Flight:
             self.expected.append(REQUESTS.CMD_GET_STATUS.ID)
         self.data, self.pos = data, 0
         self.want = len(self.expected) if session.sync and not session.half_close else None
-        self.deadline = time.monotonic() + session_deadline(deadline_s, len(session.frames), len(data))
+        self.budget = session_deadline(deadline_s, len(session.frames), len(data))  # s from its turn
+        self.deadline = time.monotonic() + self.budget
         self.decoder = reply_decoder()
         self.done = False
+        self.reset = False  # the peer reset the connection (a close with our input unread)
         self.sending = True
         self.sock = socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET, socket.SOCK_STREAM)
         self.sock.setblocking(False)
@@ -63,6 +66,7 @@ class Flight:
             if exc.errno in (errno.ENOTCONN, errno.EINPROGRESS, errno.EALREADY):
                 return
             self.connected, self.sending = True, False  # the peer is gone; read what it said before it went
+            self.reset = exc.errno in _RESET
             return
         self.connected = True
         self.pos = sent
@@ -96,8 +100,9 @@ class Flight:
             self.pos += self.sock.send(self.data[self.pos : self.pos + CHUNK])
         except BlockingIOError:
             return
-        except OSError:
+        except OSError as exc:
             self.sending = False  # the peer is gone; read what it said before it went
+            self.reset = exc.errno in _RESET
             return
         if self.pos >= len(self.data):
             self.sending = False
@@ -113,7 +118,8 @@ class Flight:
         except ConnectionRefusedError:
             self._finish(refused=True)
             return
-        except OSError:
+        except OSError as exc:
+            self.reset = exc.errno in _RESET
             data = b""
         if not self.connected and not data:
             code = self.sock.getsockopt(socket.SOL_SOCKET, socket.SO_ERROR)

@@ -23,6 +23,9 @@ def render(stats: Any, title: str) -> Table:
     batches, singles = getattr(stats, "batches", 0), getattr(stats, "singles", 0)
     table.add_row("units", f"{stats.units:,} ({batches:,} batches, {singles:,} "
                   f"single, {getattr(stats, 'probes', 0):,} probes)")  # fmt: skip
+    if hasattr(stats, "pipelined"):
+        off = " - off: the target turned a client away" if stats.turn_aways else ""
+        table.add_row("pipelined", f"{stats.pipelined:,} units ({stats.retried:,} run again alone){off}")
     table.add_row("telegrams", f"{min(covered, n_tel)}/{n_tel} request telegrams, {ids} other ids")
     if hasattr(stats, "state_targets"):
         table.add_row("states", f"{len(stats.states)}/{stats.state_targets} (state, mode) reached")

@@ -42,6 +42,9 @@ def add_fuzz_arguments(p: argparse.ArgumentParser) -> None:
                    help="units between GET_STATUS liveness probes on the other port (1: after every unit)")  # fmt: skip
     p.add_argument("--lanes", type=int, choices=(1, 2), default=2,
                    help="2: refused cases run in pairs, one per port; 1: one at a time on --target's port")  # fmt: skip
+    p.add_argument("--no-pipeline", action="store_true",
+                   help="connect a port's next case only after the target closed the last one (default: up to 3 "
+                        "small cases wait behind it, when the target takes clients back to back)")  # fmt: skip
     p.add_argument("--big-share", type=_share, default=None, metavar="FRACTION",
                    help="of the cases over 1 MiB drawn, the share kept (default 0.25; 1: the natural mix)")  # fmt: skip
     p.add_argument("--quiet", action="store_true", help="no live view")
@@ -86,7 +89,7 @@ def run_fuzz(args: argparse.Namespace) -> int:
         host=host, port=port, second_port=second, duration=args.duration, seed=args.seed, out=args.out,
         corpus=args.corpus, allow_motion=args.allow_motion, launch=args.launch, max_cases=args.max_cases,
         max_findings=args.max_findings, deadline=args.deadline, minimize_seconds=args.minimize_seconds,
-        command=command, probe_every=max(1, args.probe_every), lanes=args.lanes,
+        command=command, probe_every=max(1, args.probe_every), lanes=args.lanes, pipeline=not args.no_pipeline,
     )  # fmt: skip
     if args.big_share is not None:
         opts.big_share = args.big_share
@@ -119,5 +122,6 @@ def _summary(out: Path, stats: object) -> None:
         "connections_closed_on_valid_input": getattr(s, "unexpected_closes", None),
         "replies_cut_by_a_refusal": getattr(s, "cut_replies", None),
         "dropped_unsafe": getattr(s, "dropped_unsafe", None),
+        "pipelining": {k: getattr(s, k, None) for k in ("pipelined", "retried", "turn_aways")},
     }
     (out / "summary.json").write_text(json.dumps(doc, indent=2) + "\n")

@@ -10,6 +10,10 @@ closes that connection). Without a bug it is a well-behaved target. Bugs (each i
 - ``hang-id``: telegram id 66 makes the handler busy-wait (the whole process stops answering)
 - ``stall-id``: telegram id 77 makes this connection wait forever (the other port still answers)
 - ``bad-reply``: CMD_GET_CAMERA is answered with a reply whose string length lies
+
+A second client on a busy port is turned away (closed unread) as soon as asyncio hands it over - even when the
+first has already sent its end-of-stream - except the first ``--admit-first N`` clients of a port, which wait
+for their turn: a target that takes clients back to back at first and turns them away later.
 """
 
 from __future__ import annotations
@@ -72,12 +76,19 @@ def check_bug(bug: str, frame: bytes) -> None:
 
 
 class Port:
-    def __init__(self, bug: str) -> None:
+    def __init__(self, bug: str, admit_first: int = 0) -> None:
         self.bug = bug
         self.busy = False
+        self.admit_first = admit_first
+        self.clients = 0
+        self.free = asyncio.Event()
 
     async def handle(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
-        if self.busy:  # one client per port (erratum E-WIRE-007): the second one is closed at once
+        self.clients += 1
+        while self.busy and self.clients <= self.admit_first:  # the first ones wait for their turn instead
+            self.free.clear()
+            await self.free.wait()
+        if self.busy:  # one client per port (erratum E-WIRE-007): the second one is closed at once, unread
             writer.close()
             return
         self.busy = True
@@ -85,6 +96,7 @@ class Port:
             await self.serve(reader, writer)
         finally:
             self.busy = False
+            self.free.set()
             writer.close()
 
     async def serve(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
@@ -126,10 +138,12 @@ async def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--ports", default="0,0")
     parser.add_argument("--bug", default="none")
+    parser.add_argument("--admit-first", type=int, default=0, metavar="N",
+                        help="the first N clients of a port wait for a busy port instead of being turned away")
     args = parser.parse_args()
     servers = []
     for p in args.ports.split(","):
-        port = Port(args.bug)
+        port = Port(args.bug, args.admit_first)
         server = await asyncio.start_server(port.handle, "127.0.0.1", int(p))
         servers.append(server)
         print(f"server started at port {server.sockets[0].getsockname()[1]}", flush=True)

@@ -117,6 +117,27 @@ def test_no_false_positive_on_a_well_behaved_server(tmp_path: Path) -> None:
     assert c.stats.states  # the fragile server always reports Ready, mode 0: one (state, mode) verified
 
 
+def test_a_target_that_turns_back_to_back_clients_away_is_not_pipelined(tmp_path: Path) -> None:
+    """The fragile server turns a client away while the port's previous one is still being handled, even if
+    that one has sent its end-of-stream: the start-up check sees it and the fuzzer never pipelines."""
+    c = campaign(tmp_path, "none", duration=3.0, max_findings=None)
+    assert c.run() == 0
+    assert not c.stats.findings and not c.stats.unconfirmed
+    assert (c.stats.turn_aways, c.stats.pipelined, c.pipelining) == (1, 0, False)
+
+
+def test_turn_aways_that_start_late_stop_pipelining_without_a_false_finding(tmp_path: Path) -> None:
+    """With --admit-first the target passes the start-up check and turns pipelined clients away later: the
+    units it turned away run again alone (not counted twice, no finding), and pipelining stops."""
+    launch = LAUNCH.replace("{bug}", "none") + " --admit-first 60"
+    c = campaign(tmp_path, "none", duration=4.0, max_findings=None, launch=launch)
+    assert c.run() == 0
+    assert not c.stats.findings and not c.stats.unconfirmed
+    assert c.stats.pipelined > 0 and c.stats.retried > 0
+    assert c.stats.turn_aways == 1 and not c.pipelining
+    assert c.stats.cases <= c.index  # a retried unit is counted once: no more cases than were drawn
+
+
 def test_without_motion_no_motion_telegram_is_sent(tmp_path: Path) -> None:
     from fuzz.safety import MOTION
 
