@@ -245,7 +245,7 @@ class Campaign:
         size = 0
         singles: list[Case] = []
         for c in cases:
-            if not (c.expect == KEEP and c.delivery.mode == "whole" and c.size < BATCH_BYTES // 4):
+            if not _batchable(c):
                 singles.append(c)
                 continue
             if len(batches[-1]) >= BATCH_CASES or size + c.size > BATCH_BYTES:
@@ -255,20 +255,18 @@ class Campaign:
             size += c.size
         batches = [b for b in batches if b]
         if self.o.lanes > 1:
-            whole = [[c] for c in singles if c.delivery.mode == "whole"]
-            self.run_lanes(_interleave(batches, whole))
-            if self.stop or self.need_prelude:
-                return
-            singles = [c for c in singles if c.delivery.mode != "whole"]
+            self.run_lanes(_interleave(batches, [[c] for c in singles]))
         else:
             for batch in batches:
-                self.run_batch(batch)
                 if self.stop or self.need_prelude:
                     return
-        for c in singles:
-            if self.stop or self.need_prelude:
-                return
-            self.run_single(c)
+                self.run_batch(batch)
+            for c in singles:
+                if self.stop or self.need_prelude:
+                    return
+                self.run_single(c)
+        if self.stop or self.need_prelude:
+            return
         self.units_here += 1
         if any(c.size > BIG_CASE for c in cases):
             self.need_prelude = True  # its document reset keeps a huge saved document from slowing every LOAD_*
@@ -431,8 +429,8 @@ class Campaign:
         """Whether the port of ``q`` takes ``unit`` now: when it is free, or pipelined behind its one flight."""
         if not q:
             return True
-        if not self.pipelining or alone or len(q) >= PIPELINE_DEPTH or sum(c.size for c in unit) > PIPELINE_BYTES:
-            return False
+        if not self.pipelining or alone or len(q) >= PIPELINE_DEPTH or not _whole(unit):
+            return False  # a slow delivery waiting behind would reach the target in one piece
         f = q[-1].flight
         return (f.connected and not f.sending and f.session.half_close and len(f.data) <= PIPELINE_BYTES
                 and all(i == GET_STATUS_ID for i in f.expected))  # fmt: skip
@@ -440,7 +438,7 @@ class Campaign:
     def _start(self, k: int, q: collections.deque[_InFlight], unit: list[Case], alone: bool) -> _InFlight:
         """Connect and send ``unit`` on port ``k``, behind the flights of ``q``."""
         self.lane_units += 1
-        probe = self.lane_units - self.lane_probed_at[k] >= self.o.probe_every
+        probe = self.lane_units - self.lane_probed_at[k] >= self.o.probe_every and unit[0].delivery.mode == "whole"
         if probe:
             self.lane_probed_at[k] = self.lane_units
         flight = Flight(self.o.host, self.ports[k], _lane_session(unit, probe), self.o.deadline)
@@ -659,8 +657,18 @@ def _owed(f: Flight, unit: list[Case], probe: bool) -> int:
     return 1 if probe and unit[0].size < 1 << 14 else 0
 
 
+def _whole(unit: list[Case]) -> bool:
+    """A small unit written in one piece: one that may wait behind another (pipelining)."""
+    return sum(c.size for c in unit) <= PIPELINE_BYTES and all(c.delivery.mode == "whole" for c in unit)
+
+
+def _batchable(c: Case) -> bool:
+    """A case the strict codec accepts, small and written whole: it goes into a batch."""
+    return c.expect == KEEP and c.delivery.mode == "whole" and c.size < BATCH_BYTES // 4
+
+
 def _is_batch(unit: list[Case]) -> bool:
-    return len(unit) > 1 or (unit[0].expect == KEEP and unit[0].size < BATCH_BYTES // 4)
+    return len(unit) > 1 or _batchable(unit[0])
 
 
 def _lane_session(unit: list[Case], probe: bool) -> Session:
@@ -670,7 +678,7 @@ def _lane_session(unit: list[Case], probe: bool) -> Session:
     known = all(c.answered is not None for c in unit)
     answered = [*LEAD_IDS[probe], *(i for c in unit for i in c.answered or ())] if known else None
     frames = [*lead, *(f for c in unit for f in c.frames)]
-    return Session(frames, half_close=True, sync=unit[0].expect == KEEP, answered=answered)
+    return Session(frames, unit[0].delivery, half_close=True, sync=unit[0].expect == KEEP, answered=answered)
 
 
 def _interleave(batches: list[list[Case]], singles: list[list[Case]]) -> list[list[Case]]:

@@ -4,13 +4,15 @@ Rules:
 - PlatformCtrl serves one client per port (guide 6.1) and both ports take every command, so two cases - one
   per port - can be in flight at once. The target works on one while we prepare or read the other; a
   sequential fuzzer leaves both sides idle half of the time.
-- A ``Flight`` is a ``fuzz.target.Session`` on its own connection (whole delivery only: slow and bytewise
-  cases keep the blocking path), with the same outcome and the same reply checks as ``fuzz.target.play``.
+- A ``Flight`` is a ``fuzz.target.Session`` on its own connection, with the same outcome and the same reply
+  checks as ``fuzz.target.play``. Slow and bytewise deliveries write piece by piece (one write each), the
+  pauses between them kept by the ``select`` loop instead of a sleep, so the other flights go on meanwhile.
 - ``fly`` runs flights to completion or to their deadlines; it never raises for anything the peer does.
 """
 
 from __future__ import annotations
 
+import collections
 import contextlib
 import errno
 import select
@@ -32,12 +34,21 @@ class Flight:
         self.out = Outcome()
         data = session.data
         self.expected = session_reply_ids(session)
+        pieces = session.delivery.chunks(data)  # (bytes, pause before them): one piece unless slow or bytewise
         if session.sync:
             data += GET_STATUS
+            pieces.append((GET_STATUS, 0.0))
             self.expected.append(REQUESTS.CMD_GET_STATUS.ID)
         self.data, self.pos = data, 0
+        self.pieces: collections.deque[tuple[int, float]] = collections.deque()  # (end offset, pause before it)
+        end = 0
+        for piece, pause in pieces:
+            end += len(piece)
+            self.pieces.append((end, pause))
+        self.next_at = 0.0  # monotonic time before which the next piece waits (a slow delivery's pause)
         self.want = len(self.expected) if session.sync and not session.half_close else None
-        self.budget = session_deadline(deadline_s, len(session.frames), len(data))  # s from its turn
+        pauses = sum(pause for _, pause in pieces)
+        self.budget = pauses + session_deadline(deadline_s, len(session.frames), len(data))  # s from its turn
         self.deadline = time.monotonic() + self.budget
         self.decoder = reply_decoder()
         self.done = False
@@ -51,12 +62,21 @@ class Flight:
         if code not in (0, errno.EINPROGRESS):
             self._finish(refused=code == errno.ECONNREFUSED, closed=code != errno.ECONNREFUSED)
         else:
-            self._send_now()
+            self._send_some()  # on loopback the handshake is done when connect_ex returns: no select round
 
-    def _send_now(self) -> None:
-        """Send at once: on loopback the handshake is done when ``connect_ex`` returns (no select round)."""
+    @property
+    def due(self) -> bool:
+        """Whether it has bytes to send now (not waiting for a slow delivery's pause)."""
+        return self.sending and time.monotonic() >= self.next_at
+
+    def _send_some(self) -> None:
+        """One write of the current piece (at most ``CHUNK`` bytes); after a piece, the next one's pause."""
+        if not self.pieces:  # nothing to send at all
+            self._sent_all()
+            return
+        end = self.pieces[0][0]
         try:
-            sent = self.sock.send(self.data[:CHUNK])
+            sent = self.sock.send(self.data[self.pos : min(end, self.pos + CHUNK)])
         except (BlockingIOError, InterruptedError):
             return  # still connecting (or a full buffer): select says when
         except ConnectionRefusedError:
@@ -69,12 +89,22 @@ class Flight:
             self.reset = exc.errno in _RESET
             return
         self.connected = True
-        self.pos = sent
-        if self.pos >= len(self.data):
-            self.sending = False
-            if self.session.half_close:
-                with contextlib.suppress(OSError):
-                    self.sock.shutdown(socket.SHUT_WR)
+        self.pos += sent
+        if self.pos < end:
+            return
+        self.pieces.popleft()
+        if self.pieces:
+            pause = self.pieces[0][1]
+            if pause > 0:
+                self.next_at = time.monotonic() + pause
+            return
+        self._sent_all()
+
+    def _sent_all(self) -> None:
+        self.sending = False
+        if self.session.half_close:
+            with contextlib.suppress(OSError):
+                self.sock.shutdown(socket.SHUT_WR)
 
     def fileno(self) -> int:
         return self.sock.fileno()
@@ -96,19 +126,8 @@ class Flight:
                 self._finish(refused=code == errno.ECONNREFUSED, closed=code != errno.ECONNREFUSED)
                 return
             self.connected = True
-        try:
-            self.pos += self.sock.send(self.data[self.pos : self.pos + CHUNK])
-        except BlockingIOError:
-            return
-        except OSError as exc:
-            self.sending = False  # the peer is gone; read what it said before it went
-            self.reset = exc.errno in _RESET
-            return
-        if self.pos >= len(self.data):
-            self.sending = False
-            if self.session.half_close:
-                with contextlib.suppress(OSError):
-                    self.sock.shutdown(socket.SHUT_WR)
+        if self.due:
+            self._send_some()
 
     def readable(self) -> None:
         try:
@@ -168,7 +187,10 @@ def _step(live: list[Flight]) -> None:
     if overdue:
         return  # the caller looks at the flights again
     wait = max(0.0, min(f.deadline for f in live) - now)
-    writers = [f for f in live if f.sending or not f.connected]
+    paused = [f.next_at for f in live if f.sending and f.connected and f.next_at > now]  # slow deliveries
+    if paused:
+        wait = min(wait, max(0.0, min(paused) - now))
+    writers = [f for f in live if not f.connected or (f.sending and f.next_at <= now)]
     readable, writable, _ = select.select(live, writers, [], wait)
     for f in writable:
         if not f.done:
