@@ -426,11 +426,12 @@ class Campaign:
                             self.prev_unit, self.unprobed = self.unprobed, []
 
     def _may_start(self, q: collections.deque[_InFlight], unit: list[Case], alone: bool) -> bool:
-        """Whether the port of ``q`` takes ``unit`` now: when it is free, or pipelined behind its one flight."""
+        """Whether the port of ``q`` takes ``unit`` now: when it is free, or pipelined behind its flights (not a
+        slow delivery: waiting behind another, its pieces would reach the target in one)."""
         if not q:
             return True
         if not self.pipelining or alone or len(q) >= PIPELINE_DEPTH or not _whole(unit):
-            return False  # a slow delivery waiting behind would reach the target in one piece
+            return False
         f = q[-1].flight
         return (f.connected and not f.sending and f.session.half_close and len(f.data) <= PIPELINE_BYTES
                 and all(i == GET_STATUS_ID for i in f.expected))  # fmt: skip
