@@ -106,6 +106,7 @@ class Stats:
     pipelined: int = 0  # lane units connected behind their port's previous unit
     retried: int = 0  # pipelined units run again alone (no reply: perhaps turned away)
     turn_aways: int = 0  # retries that then passed: the target turned a newcomer away (pipelining stopped)
+    turned_away: list[str] = field(default_factory=list)  # the cases of the unit that showed it
     duplicates: int = 0
     origins: collections.Counter[str] = field(default_factory=collections.Counter)
     telegrams: set[str] = field(default_factory=set)
@@ -418,6 +419,9 @@ class Campaign:
                     if e.alone and self.pipelining and e.owed:
                         self.pipelining = False  # it passed alone: the target turned the newcomer away
                         self.stats.turn_aways += 1
+                        # or it failed once, pipelined, and not again alone: shown so that a user can tell
+                        self.stats.turned_away = [f"{c.telegram} ({c.origin}{': ' + c.note if c.note else ''})"
+                                                  for c in e.unit[:3]]  # fmt: skip
                     if e.probe:
                         probed[k] = True
                         if all(probed):

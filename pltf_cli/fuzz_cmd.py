@@ -122,6 +122,6 @@ def _summary(out: Path, stats: object) -> None:
         "connections_closed_on_valid_input": getattr(s, "unexpected_closes", None),
         "replies_cut_by_a_refusal": getattr(s, "cut_replies", None),
         "dropped_unsafe": getattr(s, "dropped_unsafe", None),
-        "pipelining": {k: getattr(s, k, None) for k in ("pipelined", "retried", "turn_aways")},
+        "pipelining": {k: getattr(s, k, None) for k in ("pipelined", "retried", "turn_aways", "turned_away")},
     }
     (out / "summary.json").write_text(json.dumps(doc, indent=2) + "\n")
