@@ -138,6 +138,15 @@ def test_turn_aways_that_start_late_stop_pipelining_without_a_false_finding(tmp_
     assert c.stats.cases <= c.index  # a retried unit is counted once: no more cases than were drawn
 
 
+def test_one_lane_runs_batches_on_a_kept_connection_and_singles_one_at_a_time(tmp_path: Path) -> None:
+    """--lanes 1: every unit on --target's port, one at a time (the other port carries only the probe)."""
+    c = campaign(tmp_path, "none", duration=2.0, max_findings=None, lanes=1)
+    assert c.run() == 0
+    assert not c.stats.findings and not c.stats.unconfirmed
+    assert c.stats.batches and c.stats.singles and c.stats.probes and c.stats.pipelined == 0
+    assert c.stats.cases > 300
+
+
 def test_without_motion_no_motion_telegram_is_sent(tmp_path: Path) -> None:
     from fuzz.safety import MOTION
 
