@@ -56,7 +56,7 @@ WINDOWS_PER_STATE = 4  # windows fuzzed in one (state, mode) before the plan mov
 SWITCH_INTERVAL = 0.0002  # s
 SAVE_EVERY = 30.0  # s between saves of the corpus progress (a killed run resumes from there)
 HISTORY = 64  # sessions kept for a finding that needs more than its last unit
-LEAD_IDS = {False: (), True: (REQUESTS.CMD_GET_STATUS.ID,)}  # the answered ids of a session's lead
+LEAD_IDS = {False: (), True: (GET_STATUS_ID,)}  # the answered ids of a session's lead
 
 
 DROPPED = (
