@@ -190,7 +190,7 @@ def _step(live: list[Flight]) -> None:
     paused = [f.next_at for f in live if f.sending and f.connected and f.next_at > now]  # slow deliveries
     if paused:
         wait = min(wait, max(0.0, min(paused) - now))
-    writers = [f for f in live if not f.connected or (f.sending and f.next_at <= now)]
+    writers = [f for f in live if not f.connected or f.due]
     readable, writable, _ = select.select(live, writers, [], wait)
     for f in writable:
         if not f.done:

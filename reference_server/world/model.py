@@ -18,7 +18,7 @@ import random
 from typing import Any
 
 from reference_server.motion_api import Frame, MotionFactory, Params, Pose
-from reference_server.world.geometry import F64, MapGeometry
+from reference_server.world.geometry import MapGeometry
 from reference_server.world.world import World
 
 _MILLI_DEG = 180000.0 / math.pi
@@ -50,10 +50,7 @@ class WorldModel(World):
         return Frame(*super().commanded_frame())
 
     def remaining_path(self) -> list[Frame]:  # type: ignore[override]
-        return [Frame(x, y, 0.0) for x, y in super().remaining_path()]
-
-    def path_xy(self) -> F64:
-        return self.path_array()
+        return [Frame(x, y, 0.0) for x, y in self.path_xy().tolist()]
 
     def wheel_setpoints(self) -> tuple[float, float]:
         return self.setpoints

@@ -369,9 +369,9 @@ class World:
         return ref.x, ref.y, ref.theta
 
     def remaining_path(self) -> list[tuple[float, float]]:
-        return [(x, y) for x, y in self.path_array().tolist()]
+        return [(x, y) for x, y in self.path_xy().tolist()]
 
-    def path_array(self) -> F64:
+    def path_xy(self) -> F64:
         """``remaining_path`` as an (n, 2) array (GET_STATUS converts it in one numpy pass)."""
         return self.motion.path_points()
 
