@@ -21,11 +21,11 @@ from dataclasses import dataclass
 
 from lxml import etree
 
-from conformance_tests import chart
-from spec.codec import REPLIES, REQUESTS
-from spec.documents import SCHEMA_DIR, DocumentKind
-from spec.model import FieldDef, load_enums
-from spec.telegram import Telegram, user_fields
+from pltf.conformance_tests import chart
+from pltf.spec.codec import REPLIES, REQUESTS
+from pltf.spec.documents import SCHEMA_DIR, DocumentKind
+from pltf.spec.model import FieldDef, load_enums
+from pltf.spec.telegram import Telegram, user_fields
 
 XS = "{http://www.w3.org/2001/XMLSchema}"
 

@@ -12,10 +12,10 @@ import struct
 
 from hypothesis import strategies as st
 
-from spec.codec import telegram_set
-from spec.compiler import WIRE, allowed_values, value_range
-from spec.model import Direction, FieldDef
-from spec.telegram import Telegram, user_fields
+from pltf.spec.codec import telegram_set
+from pltf.spec.compiler import WIRE, allowed_values, value_range
+from pltf.spec.model import Direction, FieldDef
+from pltf.spec.telegram import Telegram, user_fields
 
 _INT_BOUNDS = {"B": (0, 255), "h": (-(2**15), 2**15 - 1), "i": (-(2**31), 2**31 - 1)}
 LATIN1 = st.characters(min_codepoint=0, max_codepoint=255)
