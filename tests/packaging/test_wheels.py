@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import re
+import shutil
 import subprocess
 import sys
 import time
@@ -20,7 +21,11 @@ from pathlib import Path
 import pytest
 
 REPO = Path(__file__).resolve().parents[2]
-SOURCES = {"pltf_spec": REPO / "spec", "pltf_client": REPO / "clients", "pltf_toolkit": REPO}
+SOURCES = {"pltf_spec": "spec", "pltf_client": "clients", "pltf_toolkit": "."}
+# what a build never reads: a copy without it is what a fresh clone holds (and build/ left over from an earlier
+# build would put deleted modules back into a wheel)
+UNTRACKED = shutil.ignore_patterns(".git", ".venv", "build", "dist", "*.egg-info", "__pycache__", "*.so",
+                                   "node_modules", ".mypy_cache", ".ruff_cache", ".pytest_cache", ".hypothesis")
 HEAVY = {"numpy", "scipy", "pymunk", "cantools", "lxml"}
 STARTED = re.compile(r"server started at port (\d+)")
 
@@ -35,9 +40,11 @@ def _run(*cmd: str | Path, cwd: Path, timeout: float = 600) -> subprocess.Comple
 @pytest.fixture(scope="module")
 def dist(tmp_path_factory: pytest.TempPathFactory) -> Path:
     out = tmp_path_factory.mktemp("dist")
+    tree = tmp_path_factory.mktemp("src") / "pltf"
+    shutil.copytree(REPO, tree, ignore=UNTRACKED)
     for source in SOURCES.values():
-        _run(sys.executable, "-m", "build", "--no-isolation", "--sdist", "--wheel", "--outdir", out, source,
-             cwd=source)
+        _run(sys.executable, "-m", "build", "--no-isolation", "--sdist", "--wheel", "--outdir", out, tree / source,
+             cwd=tree / source)
     return out
 
 
