@@ -38,10 +38,10 @@ import socket
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from reference_server.control_loop import CONTROL_PERIOD, MAX_CATCH_UP, ControlLoop
-from reference_server.platform import Platform
-from spec.codec import DEFAULT_MAX_LENGTH, TelegramDecoder, encode
-from spec.errors import RemoteProtocolError
+from pltf.reference_server.control_loop import CONTROL_PERIOD, MAX_CATCH_UP, ControlLoop
+from pltf.reference_server.platform import Platform
+from pltf.spec.codec import DEFAULT_MAX_LENGTH, TelegramDecoder, encode
+from pltf.spec.errors import RemoteProtocolError
 
 log = logging.getLogger("pltf.server")
 

@@ -7,7 +7,7 @@ import random
 
 import pytest
 
-from reference_server.control_loop import CONTROL_PERIOD, MAX_CATCH_UP, ControlLoop
+from pltf.reference_server.control_loop import CONTROL_PERIOD, MAX_CATCH_UP, ControlLoop
 
 
 class Ticks:

@@ -18,13 +18,13 @@ from typing import Any
 
 import pytest
 
-from reference_server.cli import build_platform
-from reference_server.commands import Outcome
-from reference_server.control_loop import ControlLoop
-from reference_server.platform import Platform
-from reference_server.storage import Storage
-from spec.codec import REQUESTS
-from spec.model import enum_classes
+from pltf.reference_server.cli import build_platform
+from pltf.reference_server.commands import Outcome
+from pltf.reference_server.control_loop import ControlLoop
+from pltf.reference_server.platform import Platform
+from pltf.reference_server.storage import Storage
+from pltf.spec.codec import REQUESTS
+from pltf.spec.model import enum_classes
 
 R: Any = REQUESTS
 MotionMode: Any = enum_classes()["MotionMode"]
