@@ -6,16 +6,20 @@ Rules:
   model see the same sequence of simulated times at every time scale; the time scale decides only how many
   wall seconds that sequence takes.
 - ``now(wall)`` is the simulated time at the wall-clock reading ``wall`` (seconds, any monotonic origin), and
-  it first runs every tick due by then. The network shell calls it from its timer AND for everything it hands
+  it first runs the ticks due by then. The network shell calls it from its timer AND for everything it hands
   the platform between two timer wake-ups (a telegram, a control-channel request): a command at simulated time
   t meets the state of the last tick at or before t, however late the shell's timer woke up. (Without that,
   at time scale 20 a wake-up 10 ms late - ten periods - let a command land on a state ten periods old, and
   the periods it skipped ran after it with the command already in force: the outcome depended on the load
   and the time scale.)
-- A shell that fell more than ``max_catch_up`` periods behind (its loop was blocked, or the time scale is more
-  than this machine can simulate) neither hands the platform a longer step nor runs the backlog: the simulated
-  time stands still for the part that could not be simulated (the wall-clock origin moves on by it, logged as
-  a warning), so the platform's trajectory is that of an undisturbed run, only later in wall time.
+- One reading runs at most ``burst`` ticks, so a reply never waits for more than that much simulation. A
+  backlog beyond it (the loop was blocked a moment) is worked off over the next readings, the shell's I/O in
+  between; meanwhile ``now`` is the time of the last tick (the platform's own time, a little behind the clock),
+  so a command still meets the state of its own time and the ticks after it stay after it.
+- A shell that fell more than ``max_catch_up`` periods behind (blocked for long, or a time scale beyond what
+  this machine can simulate) neither hands the platform a longer step nor works off that backlog: the
+  simulated time stands still for the part that could not be simulated (the wall-clock origin moves on by it,
+  logged as a warning), so the platform's trajectory is that of an undisturbed run, only later in wall time.
 - Sans-IO: no clock, no sleep; the caller reads its clock and passes the reading.
 """
 
@@ -28,7 +32,8 @@ from typing import Protocol
 log = logging.getLogger("pltf.server")
 
 CONTROL_PERIOD = 0.02  # simulated s (50 Hz)
-MAX_CATCH_UP = 500  # periods (10 s simulated) caught up at once; beyond that the simulated time is held
+MAX_CATCH_UP = 500  # periods (10 s simulated) of backlog worked off; beyond that the simulated time is held
+BURST = 25  # ticks one reading runs at most (0.5 s simulated; 10-15 ms of this machine's time for the world)
 HELD_WARNING_EVERY = 10.0  # simulated s between two warnings about held time
 
 
@@ -47,6 +52,7 @@ class ControlLoop:
         *,
         period: float = CONTROL_PERIOD,
         max_catch_up: int = MAX_CATCH_UP,
+        burst: int = BURST,
     ) -> None:
         if not time_scale > 0 or math.isinf(time_scale):
             raise ValueError(f"time scale must be > 0, not {time_scale}")
@@ -54,6 +60,7 @@ class ControlLoop:
         self.time_scale = time_scale
         self.period = period
         self.max_catch_up = max_catch_up
+        self.burst = burst
         self.origin = wall  # the wall-clock reading at simulated time 0 (moves on while the time is held)
         self.ticks = 0  # the platform has been ticked up to ticks * period
         self.held = 0.0  # simulated s the time stood still (the loop could not keep up)
@@ -79,7 +86,8 @@ class ControlLoop:
         return (self.ticks + 1) * self.period
 
     def now(self, wall: float) -> float:
-        """The simulated time at ``wall``, with the platform ticked up to it."""
+        """The simulated time at ``wall``, with the platform ticked up to it; behind by more than ``burst`` ticks,
+        ``burst`` ticks on and the time of the last one."""
         sim = self.sim(wall)
         due = int(sim / self.period) - self.ticks
         if due > self.max_catch_up:
@@ -92,10 +100,10 @@ class ControlLoop:
                 self._warned_at = self.ticks * self.period
                 log.warning("control loop %.1f s (simulated) behind: the simulated time was held (%.1f s in all)",
                             hold, self.held)  # fmt: skip
-        for _ in range(due):
+        for _ in range(min(due, self.burst)):
             self.ticks += 1
             self.platform.tick(self.ticks * self.period)
-        return sim
+        return sim if due <= self.burst else self.ticks * self.period
 
     def advance(self, sim: float) -> None:
         """Tick the platform up to the simulated time ``sim`` (a clock of the caller's own: a stepped test)."""
