@@ -20,8 +20,9 @@ Rules:
 - The platform is ticked at 50 Hz simulated time by the rules of reference_server/control_loop.py: every
   tick one period, at whole periods, at every time scale. The clock (``SimClock``) reads the loop's monotonic
   clock through the ``ControlLoop``, so reading it runs the ticks due: the timer reads it every period, and
-  every telegram is handed to the platform at a fresh reading, never on a state left behind by a late timer.
-  A loop that falls too far behind holds the simulated time instead of skipping it.
+  the telegrams of one read are handed to the platform at one fresh reading (they arrived together), never on
+  a state left behind by a late timer. A loop that falls too far behind holds the simulated time instead of
+  skipping it.
 - The stall timeout of a partial frame is in wall seconds at every time scale: it guards the connection (a TCP
   peer pauses in wall time), not the platform, and no telegram's meaning depends on it.
 - ``serve`` returns 0 after CMD_EXIT, SIGINT or SIGTERM, having closed every listener and connection.
@@ -306,9 +307,12 @@ class _Connection:
         decoder, platform, clock = self.decoder, self.server.platform, self.server.clock
         decoder.receive_data(data)
         replies: list[bytes] = []
+        now: float | None = None  # one simulated time for the telegrams of one read, the ticks due run first
         try:
             while (telegram := decoder.next_telegram()) is not None:
-                outcome = platform.handle(telegram, clock.now())
+                if now is None:
+                    now = clock.now()
+                outcome = platform.handle(telegram, now)
                 if outcome.frame is not None:
                     replies.append(outcome.frame)
                 elif outcome.reply is not None:
