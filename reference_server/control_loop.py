@@ -13,9 +13,10 @@ Rules:
   the periods it skipped ran after it with the command already in force: the outcome depended on the load
   and the time scale.)
 - One reading runs at most ``burst`` ticks, so a reply never waits for more than that much simulation. A
-  backlog beyond it (the loop was blocked a moment) is worked off over the next readings, the shell's I/O in
-  between; meanwhile ``now`` is the time of the last tick (the platform's own time, a little behind the clock),
-  so a command still meets the state of its own time and the ticks after it stay after it.
+  backlog beyond it (the loop was blocked a moment, or the machine cannot keep up) is worked off over the next
+  readings, the shell's I/O in between; meanwhile ``now`` is the time of the last tick (the platform's own
+  time, a little behind the clock), so a command still meets the state of its own time and the ticks after it
+  stay after it. A timer late by less than ``burst`` periods (25 ms at time scale 20) changes nothing at all.
 - A shell that fell more than ``max_catch_up`` periods behind (blocked for long, or a time scale beyond what
   this machine can simulate) neither hands the platform a longer step nor works off that backlog: the
   simulated time stands still for the part that could not be simulated (the wall-clock origin moves on by it,
@@ -33,7 +34,7 @@ log = logging.getLogger("pltf.server")
 
 CONTROL_PERIOD = 0.02  # simulated s (50 Hz)
 MAX_CATCH_UP = 500  # periods (10 s simulated) of backlog worked off; beyond that the simulated time is held
-BURST = 25  # ticks one reading runs at most (0.5 s simulated; 10-15 ms of this machine's time for the world)
+BURST = 25  # ticks a reading runs at most (0.5 s simulated, about 12 ms of the world's work on an idle core)
 HELD_WARNING_EVERY = 10.0  # simulated s between two warnings about held time
 
 
