@@ -1,0 +1,7 @@
+package model
+
+import pc "platformctrl"
+
+func moveToStation(p *Platform, t pc.Telegram) string {
+	return "not implemented yet"
+}
