@@ -47,7 +47,7 @@ func TestMoveRelEndsAtTheTargetPose(t *testing.T) {
 	h := start(t)
 	c := running(h, pc.ModeMotionAutomatic)
 	c.send(&pc.MoveRelRequest{X: 1000, Y: 0, Angle: 90000}) // 1 m ahead, then a quarter turn left
-	c.after(0.5)                                    // IpoTransVel 1000 mm/s: half way
+	c.after(0.5)                                            // IpoTransVel 1000 mm/s: half way
 	p := expectPose(t, c, 500, 0, 0, "after 0.5 s")
 	if p.VelTrans != 1000 || p.VelRot != 0 {
 		t.Errorf("velocity %g mm/s %g rad/s, want 1000, 0", p.VelTrans, p.VelRot)
@@ -91,7 +91,7 @@ func TestNewMovePreemptsAndBreakHalts(t *testing.T) {
 	c.send(&pc.BreakRequest{}) // E-MOT-005: halts at once, keeps the command
 	c.after(5)
 	expectPose(t, c, 500, 0, 0, "breaked")
-	c.send(&pc.MoveRelRequest{X: 100})  // refused in Breaked (E-SRV-005)
+	c.send(&pc.MoveRelRequest{X: 100}) // refused in Breaked (E-SRV-005)
 	c.send(&pc.ContinueRequest{})
 	c.after(0.5)
 	expectPose(t, c, 1000, 0, 0, "continued")

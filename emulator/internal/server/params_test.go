@@ -78,8 +78,8 @@ func TestRefusedSetKeepsTheOldValue(t *testing.T) {
 		{"IpoRotVel", "1e999"},
 		{"EndTurnEnabled", "on"}, // E-PAR-005: refused
 		{"EndTurnEnabled", "yes"},
-		{"MaxTransVel", "1000"},  // read-only (E-PAR-024)
-		{"iporotvel", "0.7"},     // keys are exact (E-PAR-003)
+		{"MaxTransVel", "1000"}, // read-only (E-PAR-024)
+		{"iporotvel", "0.7"},    // keys are exact (E-PAR-003)
 		{"Planning Enabled", "false"},
 	}
 	before := c.get(&pc.GetPltfParamVecRequest{}).(*pc.GetPltfParamVecReply).Parameters
