@@ -38,7 +38,7 @@ type config struct {
 func parseArgs(args []string, stderr io.Writer) (config, error) {
 	c := config{}
 	fs := flag.NewFlagSet("emulator", flag.ContinueOnError)
-	fs.SetOutput(stderr)
+	fs.SetOutput(io.Discard) // errors are one line (run prints them); --help prints the flags
 	ports := fs.String("ports", "10000,10002", "the two ports A,B (0: an ephemeral port)")
 	fs.StringVar(&c.host, "host", "127.0.0.1", "address to listen on")
 	delay := fs.Float64("reply-delay-ms", 2, "each reply is written this long after its request was handled")
@@ -49,6 +49,11 @@ func parseArgs(args []string, stderr io.Writer) (config, error) {
 	watchdog := fs.Float64("vel-watchdog-ms", 0, "velocity watchdog of MODE_MOTION_VEL (0: none, E-PAR-018 alternative)")
 	stall := fs.Float64("stall-timeout-s", 5, "a partial frame stalled this long closes its connection (E-SRV-014)")
 	if err := fs.Parse(args); err != nil {
+		if errors.Is(err, flag.ErrHelp) {
+			fmt.Fprintln(stderr, "usage: emulator [flags]  (a PlatformCtrl emulator, see emulator/README.md)")
+			fs.SetOutput(stderr)
+			fs.PrintDefaults()
+		}
 		return c, err
 	}
 	if fs.NArg() > 0 {
@@ -99,9 +104,10 @@ func startPose(path string) (model.Pose, error) {
 func run(args []string, stdout, stderr io.Writer, stop <-chan os.Signal) int {
 	c, err := parseArgs(args, stderr)
 	if err != nil {
-		if !errors.Is(err, flag.ErrHelp) {
-			fmt.Fprintln(stderr, "emulator:", err)
+		if errors.Is(err, flag.ErrHelp) {
+			return 0
 		}
+		fmt.Fprintln(stderr, "emulator:", err)
 		return 2
 	}
 	logf := func(format string, a ...any) { fmt.Fprintf(stdout, format+"\n", a...) }

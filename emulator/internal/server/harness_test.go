@@ -209,3 +209,5 @@ func loadVectors(t testing.TB, file string) map[string]vector {
 	}
 	return out
 }
+
+func modelOptions() model.Options { return model.Options{} }
