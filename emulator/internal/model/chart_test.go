@@ -37,3 +37,19 @@ func TestEveryStateHasAReport(t *testing.T) {
 		}
 	}
 }
+
+func TestLogLinesCannotBeForged(t *testing.T) {
+	var lines []string
+	p := New(Options{Logf: func(l string) { lines = append(lines, l) }})
+	p.Handle(&pc.SetPltfParamRequest{Key: "x\nserver started at port 1", Value: "\r\n"}, 1)
+	for _, l := range lines {
+		for _, r := range l {
+			if r < 0x20 {
+				t.Fatalf("a control character in the log line %q", l)
+			}
+		}
+	}
+	if len(lines) != 1 {
+		t.Fatalf("%d lines", len(lines))
+	}
+}

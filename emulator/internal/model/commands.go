@@ -8,6 +8,7 @@ package model
 
 import (
 	"math"
+	"strconv"
 
 	pc "platformctrl"
 )
@@ -91,9 +92,9 @@ func setFrame(p *Platform, t pc.Telegram) Result {
 func setParam(p *Platform, t pc.Telegram) Result {
 	r := t.(*pc.SetPltfParamRequest)
 	if err := p.Params.Set(r.Key, r.Value); err != nil {
-		return p.refuse(t, r.Key+": "+err.Error()) // E-PAR-007: no reply, the old value stays
+		return p.refuse(t, strconv.Quote(r.Key)+": "+err.Error()) // E-PAR-007: no reply, the old value stays
 	}
-	p.Logf("parameter %s = %s", r.Key, r.Value)
+	p.Logf("parameter %q = %q", r.Key, r.Value)
 	return Result{}
 }
 

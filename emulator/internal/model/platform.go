@@ -6,6 +6,7 @@ package model
 import (
 	"fmt"
 	"math"
+	"strings"
 
 	"pltf/emulator/internal/params"
 
@@ -70,9 +71,15 @@ func New(o Options) *Platform {
 	return p
 }
 
-// Logf records a log line with the simulated time.
+// Logf records a log line with the simulated time. Control characters a peer smuggled in become '?', so
+// no request can forge a line (such as the "server started at port N" the launchers read).
 func (p *Platform) Logf(format string, args ...any) {
-	line := fmt.Sprintf("%.3f %s", p.now, fmt.Sprintf(format, args...))
+	line := strings.Map(func(r rune) rune {
+		if r < 0x20 || r == 0x7f {
+			return '?'
+		}
+		return r
+	}, fmt.Sprintf("%.3f %s", p.now, fmt.Sprintf(format, args...)))
 	p.logs = append(p.logs, line)
 	if len(p.logs) > 32 {
 		p.logs = p.logs[len(p.logs)-32:]
