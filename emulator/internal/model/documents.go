@@ -5,7 +5,8 @@ package model
 // Rules:
 //   - A document is kept as sent: GET returns exactly the bytes (and name) SET got (E-XML-011: "the same
 //     document"). SET and LOAD refuse a document that is not well-formed, has the wrong root element, declares
-//     entities or is over 8 MiB (xmldoc.go); the emulator does not validate against spec/schemas.
+//     entities, is invalid against its schema of spec/schemas or is over 8 MiB (xmldoc.go); the active
+//     document stays.
 //   - LOAD/SAVE use the platform's fixed files (E-CMD-008) on a Disk; after LOAD or at start-up the name is
 //     the file name (E-SRV-011). LOAD of a missing file and SAVE without an active document are refused.
 //   - No active document: GET returns empty XML and an empty name (E-SRV-011).
@@ -72,7 +73,7 @@ func (d *Documents) Set(k DocKind, name, xml string) error {
 	if utf8.RuneCountInString(xml) > MaxDocument { // one rune per byte (Latin-1)
 		return errors.New("document over 8 MiB (E-XML-021)")
 	}
-	if err := checkDocument(bytesOf(xml), docRoots[k]); err != nil {
+	if err := checkKind(bytesOf(xml), k); err != nil {
 		return err
 	}
 	d.Active[k] = Document{Name: name, XML: xml, Active: true}
@@ -88,7 +89,7 @@ func (d *Documents) Load(k DocKind) error {
 	if len(b) > MaxDocument {
 		return errors.New("stored document over 8 MiB (E-XML-021)")
 	}
-	if err := checkDocument(b, docRoots[k]); err != nil {
+	if err := checkKind(b, k); err != nil {
 		return errors.New("stored " + k.String() + ": " + err.Error())
 	}
 	name := ""

@@ -1,9 +1,9 @@
 package model
 
-// What the emulator checks of a document (guide 6.5; E-XML-011, E-XML-012, E-XML-021): that it is one
-// well-formed XML document in its declared encoding, with the right root element, no entity declarations and
-// at most 64 levels of nesting. It does NOT validate against the XSDs of spec/schemas (the reference server
-// does); a well-formed document with the right root is kept as sent.
+// What the emulator checks of a document (guide 6.5; E-XML-011, E-XML-012, E-XML-021, E-XML-001 ff.): that it
+// is one well-formed XML document in its declared encoding, with the right root element, no entity
+// declarations and at most 64 levels of nesting, valid against its schema of spec/schemas (internal/xsd).
+// A document that passes is kept as sent.
 
 import (
 	"bytes"
@@ -11,8 +11,29 @@ import (
 	"errors"
 	"fmt"
 	"io"
+	"os"
 	"strings"
+
+	"pltf/emulator/internal/xsd"
 )
+
+// schemas: the compiled XSD of each kind (the text generated from spec/schemas into internal/xsd).
+var schemas = func() [3]*xsd.Schema {
+	var out [3]*xsd.Schema
+	for k, file := range [...]string{"map.xsd", "roadmap.xsd", "program.xsd"} {
+		s, err := xsd.Compile(file, func(name string) ([]byte, error) {
+			if src, ok := xsd.Files[name]; ok {
+				return []byte(src), nil
+			}
+			return nil, os.ErrNotExist
+		})
+		if err != nil {
+			panic("the schemas of spec/schemas do not compile: " + err.Error()) // our own data: a test catches it
+		}
+		out[k] = s
+	}
+	return out
+}()
 
 var docRoots = [...]string{"map", "roadmap", "program"}
 
@@ -34,11 +55,25 @@ func charsetReader(label string, in io.Reader) (io.Reader, error) {
 	return nil, fmt.Errorf("unsupported encoding %q", label)
 }
 
-func newDecoder(doc []byte) *xml.Decoder {
-	d := xml.NewDecoder(bytes.NewReader(bytes.TrimPrefix(doc, []byte("\xef\xbb\xbf"))))
+func newDecoder(doc []byte) *xml.Decoder { return readerDecoder(bytes.NewReader(doc)) }
+
+func readerDecoder(r io.Reader) *xml.Decoder {
+	b, _ := io.ReadAll(r)
+	d := xml.NewDecoder(bytes.NewReader(bytes.TrimPrefix(b, []byte("\xef\xbb\xbf"))))
 	d.Strict = true
 	d.CharsetReader = charsetReader
 	return d
+}
+
+// checkKind is checkDocument with the root element of kind k, then its schema.
+func checkKind(doc []byte, k DocKind) error {
+	if err := checkDocument(doc, docRoots[k]); err != nil {
+		return err
+	}
+	if err := schemas[k].Validate(doc, readerDecoder); err != nil {
+		return fmt.Errorf("invalid %s: %v", k, err)
+	}
+	return nil
 }
 
 // checkDocument refuses a document that is not one well-formed XML document with root element root.

@@ -10,7 +10,7 @@ import (
 	"pltf/emulator/internal/params/specgen"
 )
 
-// TestTableIsCurrent: table_gen.go is what `go run ./cmd/genparams` writes from spec/ today.
+// TestTableIsCurrent: table_gen.go is what `go run ./cmd/genspec` writes from spec/ today.
 func TestTableIsCurrent(t *testing.T) {
 	spec := filepath.Join("..", "..", "..", "spec")
 	p, err1 := os.ReadFile(filepath.Join(spec, "parameters.yaml"))
@@ -28,7 +28,7 @@ func TestTableIsCurrent(t *testing.T) {
 		t.Fatal(err)
 	}
 	if !bytes.Equal(have, want) {
-		t.Fatal("internal/params/table_gen.go is stale: run `go run ./cmd/genparams` in emulator/")
+		t.Fatal("internal/params/table_gen.go is stale: run `go run ./cmd/genspec` in emulator/")
 	}
 }
 

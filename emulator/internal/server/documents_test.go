@@ -53,6 +53,8 @@ func TestMalformedDocumentsAreRefused(t *testing.T) {
 		`<?xml version="1.0"?><!DOCTYPE map [<!ENTITY x SYSTEM "file:///etc/passwd">]><map>&x;</map>`,
 		`<?xml version="1.0" encoding="UTF-8"?><map name="` + "\u00ff" + `"/>`, // not UTF-8 (E-XML-011)
 		`<map/><map/>`,
+		`<?xml version="1.0"?><map Version="1.0"><layer><line><point x="0" y="0"/></line></layer></map>`, // E-XML: the schema
+		`<?xml version="1.0"?><map Version="1.0"><layer><fly/></layer></map>`,
 	} {
 		c.send(&pc.SetMapRequest{Name: "bad.map", XML: bad})
 		if r := c.get(&pc.GetMapRequest{}).(*pc.GetMapReply); r.XML != good || r.Name != "good.map" {
@@ -62,7 +64,8 @@ func TestMalformedDocumentsAreRefused(t *testing.T) {
 	// a DOCTYPE without entities is allowed (E-XML-012), and so is a declared ISO-8859-1 byte
 	for _, ok := range []string{
 		`<?xml version="1.0"?><!DOCTYPE map SYSTEM "map.dtd"><map/>`,
-		`<?xml version="1.0" encoding="ISO-8859-1"?><map><hiddenlabel text="B` + "\u00fc" + `ro"/></map>`,
+		`<?xml version="1.0" encoding="ISO-8859-1"?><map><layer><hiddenlabel text="B` + "\u00fc" +
+			`ro"><point x="0" y="0"/></hiddenlabel></layer></map>`,
 	} {
 		c.send(&pc.SetMapRequest{Name: "ok.map", XML: ok})
 		if r := c.get(&pc.GetMapRequest{}).(*pc.GetMapReply); r.XML != ok {
