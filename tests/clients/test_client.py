@@ -104,7 +104,7 @@ def test_one_method_per_command(tdef: Any) -> None:
         assert params == ["payload"]
         return
     fields = user_fields(tdef.request)
-    expected = [py_name(f) for f in fields]  # type: ignore[arg-type]  # a FieldDef reads like a stubgen Field + (["timeout"] if tdef.answered else [])
+    expected = [py_name(f) for f in fields] + (["timeout"] if tdef.answered else [])  # a FieldDef reads as a Field
     assert params == expected
     for f, p in zip(fields, params, strict=False):
         if f.unit:  # the guide's unit is in the name and in the docstring
