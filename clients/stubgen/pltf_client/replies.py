@@ -67,8 +67,8 @@ def collect_items() -> dict[str, Item]:
     """Every group item class, in the order of first use (by telegram, request before reply)."""
     items: dict[str, Item] = {}
     for command in commands():
-        for message in (command.request, command.reply):
-            for f in message.fields if message is not None else ():
+        for message in [m for m in (command.request, command.reply) if m is not None]:
+            for f in message.fields:
                 if not f.is_group:
                     continue
                 name = item_name(f)
