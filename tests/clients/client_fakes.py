@@ -218,13 +218,17 @@ STARTED = re.compile(r"server started at port (\d+)")
 
 
 class LiveServer:
-    """``python -m reference_server`` on two free ports, ready once both listen and the start-up is logged."""
+    """``python -m reference_server`` on two free ports, ready once both listen and the start-up is logged.
 
-    def __init__(self, data_dir: Path, log_path: Path) -> None:
+    ``time_scale``: simulated seconds per wall second; ``args``: more options of the server.
+    """
+
+    def __init__(self, data_dir: Path, log_path: Path, time_scale: float = 20.0, *args: str) -> None:
         self.log_path = log_path
+        self.time_scale = time_scale
         self._log = log_path.open("wb")
         cmd = [sys.executable, "-m", "reference_server", "--ports", "0,0", "--data-dir", str(data_dir),
-               "--time-scale", "20", "--seed", "1"]  # fmt: skip
+               "--time-scale", f"{time_scale:g}", "--seed", "1", *args]  # fmt: skip
         self.proc = subprocess.Popen(cmd, cwd=REPO, stdout=self._log, stderr=subprocess.STDOUT)
         deadline = time.monotonic() + 30
         while len(ports := STARTED.findall(self.log())) < 2 or "system state" not in self.log():
