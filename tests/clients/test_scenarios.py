@@ -1,7 +1,7 @@
 """The client against the reference server the way an application drives it: several commands in a row, retries,
 a goal next to the current pose, a goal that is refused (issue 22).
 
-One reference server (``python -m reference_server --time-scale 5``, the office fixture) serves the module; each
+One reference server (``python -m pltf.reference_server --time-scale 5``, the office fixture) serves the module; each
 scenario first brings the platform to Running in mode Automatic from wherever the one before left it, and
 drives in the office's east-west corridor (y 8800..11200 mm) or to its north rooms. A loaded machine makes the
 server catch up on its control periods in bursts (seconds of simulated time between two replies), so a goal
@@ -18,7 +18,7 @@ from collections.abc import Iterator
 import pytest
 from client_fakes import AUTOMATIC, READY, RUNNING, LiveServer
 
-from clients.pltf_client import (
+from pltf.client import (
     AsyncPlatformClient,
     CommandRejected,
     ConnectionClosed,

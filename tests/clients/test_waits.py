@@ -12,8 +12,8 @@ from typing import Any
 import pytest
 from client_fakes import status_telegram
 
-from clients.pltf_client import CommandRejected, MotionMode, OperationState, PlannerState, Status, Timeout
-from clients.pltf_client.waits import TAKE_UP_MS, TAKE_UP_S, Belongs, TargetWait, stamp_after
+from pltf.client import CommandRejected, MotionMode, OperationState, PlannerState, Status, Timeout
+from pltf.client.waits import TAKE_UP_MS, TAKE_UP_S, Belongs, TargetWait, stamp_after
 
 RUNNING, AUTOMATIC = OperationState.ST_OP_RUNNING, MotionMode.MODE_MOTION_AUTOMATIC
 COLLISION, FOUND = PlannerState.PLANNER_COLLISION_TARGET, PlannerState.PLANNER_PATH_FOUND
