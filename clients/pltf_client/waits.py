@@ -172,24 +172,27 @@ class Belongs:
     """Whether a status describes the move it follows, or may still show the move before (erratum E-CLI-001).
 
     Fed every status requested after the move, in order; the first is the reference. A later one belongs to the
-    move when its planner state differs from the reference's, its time stamp is ``TAKE_UP_MS`` later, or the
-    client waited ``TAKE_UP_S``; from then on every status does.
+    move when its planner state differs from the reference's (the planner worked since), or when the status
+    before it was made ``TAKE_UP_MS`` of platform time after the reference, or ``TAKE_UP_S`` after the wait
+    began: a platform answers a request before it runs the control periods that fell due meanwhile (the
+    reference server after a stall does), so the time is trusted from the next status on. From then on every
+    status belongs to the move.
     """
 
     def __init__(self, started: float) -> None:
         self.started = started
         self.reference: Status | None = None
         self.taken_up = False
+        self._due = False  # a status after the take-up time was seen: the next one belongs
 
     def __call__(self, status: Status, now: float) -> bool:
         ref = self.reference
         if ref is None:
             self.reference = status
         elif not self.taken_up:
-            self.taken_up = (
-                status.planner_state != ref.planner_state
-                or stamp_after(status.timestamp_ms, ref.timestamp_ms) >= TAKE_UP_MS
-                or now - self.started >= TAKE_UP_S
+            self.taken_up = self._due or status.planner_state != ref.planner_state
+            self._due = (
+                stamp_after(status.timestamp_ms, ref.timestamp_ms) >= TAKE_UP_MS or now - self.started >= TAKE_UP_S
             )
         return self.taken_up
 

@@ -2489,8 +2489,9 @@ int64_t stamp_after(int64_t later, int64_t earlier);
 /// Commands are not acknowledged (guide 6.1), so a refused move shows only in the status. Neither carries an
 /// identifier, and the platform takes a move up in its control loop: the first status after a move may still
 /// show the planner state and the target flag of the move before. That first status is the reference; the
-/// planner state and the flag count only from a status whose planner state differs from it, whose time stamp
-/// is kTakeUpMs later, or after kTakeUpWaitMs of waiting (erratum E-CLI-001 of the toolkit's errata register).
+/// planner state and the flag count only from a status whose planner state differs from it, or one after a status
+/// made kTakeUpMs (time stamp) after the reference or kTakeUpWaitMs after the wait began (erratum E-CLI-001 of the
+/// toolkit's errata register).
 /// The operation state and the motion mode are judged at once.
 class TargetWait {
  public:
@@ -2509,6 +2510,7 @@ class TargetWait {
   int64_t timeout_ms_;
   bool have_reference_ = false;
   bool taken_up_;
+  bool due_ = false;  ///< a status past the take-up time was seen: the next one belongs
   PlannerState ref_planner_ = PlannerState::PLANNER_STANDBY;
   int32_t ref_stamp_ = 0;
 };

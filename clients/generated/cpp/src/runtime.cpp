@@ -418,8 +418,10 @@ bool TargetWait::belongs(const GetStatusReply& status, int64_t now_ms) {
     ref_planner_ = status.planner_state;
     ref_stamp_ = status.timestamp;
   } else if (!taken_up_) {
-    taken_up_ = status.planner_state != ref_planner_ || stamp_after(status.timestamp, ref_stamp_) >= kTakeUpMs ||
-                now_ms - started_ms_ >= kTakeUpWaitMs;
+    // the time counts from the status after the one made past it: a platform may answer a request before it runs
+    // the control periods that fell due meanwhile
+    taken_up_ = due_ || status.planner_state != ref_planner_;
+    due_ = stamp_after(status.timestamp, ref_stamp_) >= kTakeUpMs || now_ms - started_ms_ >= kTakeUpWaitMs;
   }
   return taken_up_;
 }

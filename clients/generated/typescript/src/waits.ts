@@ -7,9 +7,10 @@
  * shows only in the status. Neither a move nor the status carries an identifier, and the platform takes a move up
  * in its control loop: the first status requested after a move may still show the planner state and the target
  * flag of the move before. The judge takes that first status as its reference and reads the planner state and
- * the flag only from a status that belongs to the move: its planner state differs from the reference's, its time
- * stamp is TAKE_UP_MS later, or the wait has lasted TAKE_UP_WAIT_MS (erratum E-CLI-001 of the toolkit's errata
- * register). The operation state and the motion mode are judged at once.
+ * the flag only from a status that belongs to the move: its planner state differs from the reference's, or the
+ * status before it was made TAKE_UP_MS (platform time stamp) after the reference or TAKE_UP_WAIT_MS after the wait
+ * began (erratum E-CLI-001 of the toolkit's errata register). The operation state and the motion mode are judged
+ * at once.
  */
 
 import { Flag, GetStatusReply, MotionMode, OperationState, PlannerState } from "./protocol";
@@ -62,6 +63,7 @@ export function stampAfter(later: number, earlier: number): number {
 export class TargetWait {
   private reference: GetStatusReply | null = null;
   private takenUp: boolean;
+  private due = false;
   last: GetStatusReply | null = null;
 
   /** `command`: the last move sent on the connection (null: none, every status counts); times in ms. */
@@ -124,10 +126,11 @@ export class TargetWait {
     if (ref === null) {
       this.reference = status;
     } else if (!this.takenUp) {
-      this.takenUp =
-        status.plannerState !== ref.plannerState ||
-        stampAfter(status.timestamp, ref.timestamp) >= TAKE_UP_MS ||
-        nowMs - this.startedMs >= TAKE_UP_WAIT_MS;
+      // the time counts from the status after the one made past it: a platform may answer a request before it
+      // runs the control periods that fell due meanwhile
+      this.takenUp = this.due || status.plannerState !== ref.plannerState;
+      this.due =
+        stampAfter(status.timestamp, ref.timestamp) >= TAKE_UP_MS || nowMs - this.startedMs >= TAKE_UP_WAIT_MS;
     }
     return this.takenUp;
   }
