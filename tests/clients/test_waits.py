@@ -42,8 +42,10 @@ def test_a_refusal_of_the_same_kind_is_reported_once_the_platform_time_moved_on(
     wait = judge()
     assert wait.observe(status(5000, COLLISION), now=0.001, seq=11) is False
     assert wait.observe(status(5000 + TAKE_UP_MS - 1, COLLISION), now=0.01, seq=12) is False
+    # made after the take-up time, but a platform may answer before it runs the periods due: the next one counts
+    assert wait.observe(status(5000 + TAKE_UP_MS, COLLISION), now=0.02, seq=13) is False
     with pytest.raises(CommandRejected, match=r"CMD_MOVE_ABS .*target collides.*PLANNER_COLLISION_TARGET"):
-        wait.observe(status(5000 + TAKE_UP_MS, COLLISION), now=0.02, seq=13)
+        wait.observe(status(5000 + TAKE_UP_MS + 20, COLLISION), now=0.03, seq=14)
 
 
 def test_a_refusal_after_a_different_planner_state_is_reported_at_once() -> None:
@@ -57,15 +59,17 @@ def test_a_stale_target_reached_does_not_end_the_wait() -> None:
     wait = judge()
     assert wait.observe(status(100, STANDBY, reached=True), now=0.0, seq=11) is False  # the move before's flag
     assert wait.observe(status(140, STANDBY, reached=True), now=0.01, seq=12) is False
-    assert wait.observe(status(100 + TAKE_UP_MS, STANDBY, reached=True), now=0.02, seq=13) is True  # at the goal
+    assert wait.observe(status(100 + TAKE_UP_MS, STANDBY, reached=True), now=0.02, seq=13) is False
+    assert wait.observe(status(120 + TAKE_UP_MS, STANDBY, reached=True), now=0.03, seq=14) is True  # at the goal
 
 
 def test_a_platform_whose_time_stamp_stands_still_is_judged_after_the_client_waited() -> None:
     wait = judge()
     assert wait.observe(status(0, COLLISION), now=0.0, seq=11) is False
     assert wait.observe(status(0, COLLISION), now=TAKE_UP_S - 0.01, seq=12) is False
+    assert wait.observe(status(0, COLLISION), now=TAKE_UP_S, seq=13) is False
     with pytest.raises(CommandRejected):
-        wait.observe(status(0, COLLISION), now=TAKE_UP_S, seq=13)
+        wait.observe(status(0, COLLISION), now=TAKE_UP_S + 0.05, seq=14)
 
 
 def test_state_and_mode_are_judged_at_once() -> None:
@@ -87,6 +91,14 @@ def test_the_time_out_names_the_move_and_the_pose() -> None:
     assert wait.observe(status(0, FOUND, est_x=1200), now=0.1, seq=11) is False
     with pytest.raises(Timeout, match=r"within 0.5 s after CMD_MOVE_ABS: the platform is at x=1200 mm"):
         wait.observe(status(20, FOUND, est_x=1200), now=0.5, seq=12)
+
+
+def test_a_stall_does_not_pass_for_the_take_up() -> None:
+    # the reference server after a stall: the status is made at the new time, before the periods that fell due
+    belongs = Belongs(started=0.0)
+    assert not belongs(status(1000, COLLISION), 0.0)  # the reference
+    assert not belongs(status(1000 + 5 * TAKE_UP_MS, COLLISION), 0.05)  # the periods since the move not run yet
+    assert belongs(status(1000 + 5 * TAKE_UP_MS + 20, COLLISION), 0.1)  # made after them
 
 
 def test_belongs_stays_taken_up() -> None:
