@@ -51,7 +51,7 @@ def stations_of(roadmap_xml: bytes) -> dict[str, Station]:
         point = st.find("point")
         if point is None:
             continue
-        name = st.get("name") or st.get("id", "")
+        name = st.get("name") or st.get("id") or ""
         out[name] = Station(name, int(float(point.get("x", "0"))), int(float(point.get("y", "0"))),
                             float(st.get("angle", "0")))  # fmt: skip
     return out
@@ -101,8 +101,8 @@ async def visit(pltf: AsyncPlatformClient, station: Station, args: argparse.Name
             status = await drive_to(pltf, station, args.drive, args.timeout)
             off = math.hypot(status.pose.x_mm - station.x_mm, status.pose.y_mm - station.y_mm)
             if off <= tolerance:
-                pose = status.pose
-                print(f"reached {station.name} x={pose.x_mm:.0f} y={pose.y_mm:.0f} angle={pose.angle_deg:.1f}", flush=True)
+                x, y, angle = status.pose
+                print(f"reached {station.name} x={x:.0f} y={y:.0f} angle={angle:.1f}", flush=True)
                 return True
             why = f"stopped {off:.0f} mm from the station"  # e.g. a MOVE_TO_STATION the platform ignored
         except (CommandRejected, Timeout) as exc:
@@ -155,8 +155,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--retries", type=int, default=3, help="retries of a refused goal (default 3)")
     parser.add_argument("--retry-delay", type=float, default=2.0, help="seconds before a retry (default 2)")
     parser.add_argument("--timeout", type=float, default=180.0, help="seconds to reach one station (default 180)")
-    parser.add_argument("--drive", choices=("plan", "roadmap"), default="plan",
-                        help="plan: CMD_MOVE_ABS, the planner's path (default); roadmap: CMD_MOVE_TO_STATION")  # fmt: skip
+    parser.add_argument(
+        "--drive",
+        choices=("plan", "roadmap"),
+        default="plan",
+        help="plan: CMD_MOVE_ABS, the planner's path (default); roadmap: CMD_MOVE_TO_STATION",
+    )
     parser.add_argument("--low-battery", type=int, default=22000, help="mV below which to warn (default 22000)")
     args = parser.parse_args(argv)
     try:

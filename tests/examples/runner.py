@@ -10,8 +10,8 @@ import sys
 import threading
 import time
 from collections.abc import Sequence
-from typing import Any
 from pathlib import Path
+from typing import Any
 
 from tests.clients.client_fakes import LiveServer
 
