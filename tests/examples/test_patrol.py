@@ -76,3 +76,11 @@ def test_an_unknown_station_is_a_usage_error(server: LiveServer) -> None:
     with Example(python_example("patrol.py", "--target", target(server), "--stations", "Corridor_01,Attic")) as run:
         assert run.finish() == 2
     assert "no station Attic in the roadmap" in run.stderr()
+
+
+def test_patrol_along_the_roadmap(server: LiveServer) -> None:
+    cmd = python_example("patrol.py", "--target", target(server), "--stations", "Corridor_02,Corridor_01",
+                         "--drive", "roadmap")  # fmt: skip
+    with Example(cmd) as run:
+        assert run.finish(timeout=60) == 0, (run.lines, run.stderr())
+    assert [m.group(1) for line in run.lines if (m := REACHED.match(line))] == ["Corridor_02", "Corridor_01"]
