@@ -36,11 +36,11 @@ STATE_COMMANDS: dict[str, tuple[OperationState, str]] = {
 }
 # guide 4.3 "Mode Automatic": the move commands that drive to a target (target_reached tells when).
 TARGET_COMMANDS = ("CMD_MOVE_ABS", "CMD_MOVE_REL", "CMD_MOVE_PATH", "CMD_MOVE_TO_STATION")
-# Planner states that end a planned move without reaching the target.
 # erratum E-CLI-001: a status belongs to the move once one of these shows the control loop took it up
 TAKE_UP_MS = 200  # platform time stamp (ms, E-REP-010) after the first status requested after the move
 TAKE_UP_S = 2.0  # client clock since the wait began, for a platform whose time stamp does not advance
 STAMP_MODULO = 2**31  # E-REP-010: the time stamp wraps at 2^31
+# Planner states that end a planned move without reaching the target.
 PLANNER_FAILED = {
     PlannerState.PLANNER_NO_PATH: "the planner found no path to the target",
     PlannerState.PLANNER_COLLISION_START: "the start of the planned path collides with an obstacle",
