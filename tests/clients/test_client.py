@@ -277,12 +277,38 @@ def test_move_that_cannot_run_is_rejected_at_once(
         elif step == "start":
             client.start()
         else:
-            fake.planner, fake.arrive_after = PlannerState.PLANNER_NO_PATH, 1000
+            fake.plan = PlannerState.PLANNER_NO_PATH
     client.move_abs(1000, 0, 0)
     t0 = time.monotonic()
     with pytest.raises(CommandRejected, match=message) as info:
         client.wait_target_reached(timeout=5)
     assert info.value.command == "CMD_MOVE_ABS" and time.monotonic() - t0 < 1
+
+
+def test_a_retried_goal_after_a_refusal_is_driven_to(client: PlatformClient, fake: FakePlatform) -> None:
+    # issue 22, bug 1: the platform takes a move up a control period later (FakePlatform), so the first status
+    # after the retry still shows the refusal before it (erratum E-CLI-001)
+    client.bring_up(timeout=1)
+    client.set_mode(AUTOMATIC)
+    client.start()
+    fake.plan = PlannerState.PLANNER_COLLISION_TARGET
+    client.move_abs(9000, 9000, 0)
+    with pytest.raises(CommandRejected, match="PLANNER_COLLISION_TARGET"):
+        client.wait_target_reached(timeout=5, poll=0.01)
+    fake.plan = PlannerState.PLANNER_PATH_FOUND
+    client.move_abs(3000, 200, 0)
+    status = client.wait_target_reached(timeout=5, poll=0.01)
+    assert status.target_reached and status.pose == (3000, 200, 0)
+
+
+def test_a_goal_after_a_reached_one_is_not_judged_by_the_old_flag(client: PlatformClient, fake: FakePlatform) -> None:
+    client.bring_up(timeout=1)
+    client.set_mode(AUTOMATIC)
+    client.start()
+    client.move_abs(1000, 0, 0)
+    client.wait_target_reached(timeout=5, poll=0.01)
+    client.move_abs(2000, 0, 0)  # the first status after it still says "reached" (at 1000)
+    assert client.wait_target_reached(timeout=5, poll=0.01).pose.x_mm == 2000
 
 
 def test_target_timeout_says_where_the_platform_is(client: PlatformClient, fake: FakePlatform) -> None:
@@ -296,7 +322,7 @@ def test_target_timeout_says_where_the_platform_is(client: PlatformClient, fake:
 
 
 def test_wait_until(client: PlatformClient) -> None:
-    assert client.wait_until(lambda s: s.motion_mode is MotionMode.MODE_MOTION_NO, timeout=1).timestamp_ms == 0
+    assert client.wait_until(lambda s: s.motion_mode is MotionMode.MODE_MOTION_NO, timeout=1).timestamp_ms == 20
     with pytest.raises(Timeout, match="docked not reached"):
         client.wait_until(lambda s: s.docked, timeout=0.1, what="docked")
 
