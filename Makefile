@@ -4,7 +4,14 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-slow lint typecheck docs docs-check bench clean install
+.PHONY: demo test test-slow lint typecheck docs docs-check bench clean install gui chromium
+
+# The GUI's front end (gui/web, TypeScript + vite) is built into gui/static/ with the machine's node and npm.
+GUI_WEB := gui/web
+GUI_MODULES := $(GUI_WEB)/node_modules/.installed
+GUI_BUILT := gui/static/index.html
+GUI_SOURCES := $(shell find $(GUI_WEB)/src -type f 2>/dev/null) $(GUI_WEB)/index.html $(GUI_WEB)/vite.config.ts \
+	$(GUI_WEB)/tsconfig.json $(wildcard clients/generated/typescript/src/*.ts)
 
 $(STAMP): pyproject.toml setup.py $(wildcard reference_server/world/*.c)
 	@test -x $(BIN)/python || $(PY) -m venv $(VENV)
@@ -12,12 +19,27 @@ $(STAMP): pyproject.toml setup.py $(wildcard reference_server/world/*.c)
 	$(BIN)/python -m pip install --quiet -e '.[dev]'
 	@touch $(STAMP)
 
-install: $(STAMP)
+install: $(STAMP) $(GUI_BUILT)
 
-test: $(STAMP)
+$(GUI_MODULES): $(GUI_WEB)/package.json $(GUI_WEB)/package-lock.json
+	cd $(GUI_WEB) && npm ci --no-audit --no-fund
+	@touch $@
+
+$(GUI_BUILT): $(GUI_MODULES) $(GUI_SOURCES)
+	cd $(GUI_WEB) && npm run build
+
+gui: $(GUI_BUILT)
+
+# The browser tests drive Debian's chromium (tests/gui); CI runs as root and reaches Debian's packages.
+chromium:
+	@command -v chromium >/dev/null 2>&1 || (apt-get update -qq && apt-get install -y -qq chromium)
+
+test: $(STAMP) $(GUI_BUILT) chromium
 	$(BIN)/ruff check .
 	$(BIN)/mypy
 	$(BIN)/python -m spec.docgen --check
+	$(BIN)/python -m gui.specgen --check
+	cd $(GUI_WEB) && npm test --silent
 	$(BIN)/python -m pytest -q -m "not slow"
 
 test-slow: $(STAMP)
@@ -42,4 +64,4 @@ demo: $(STAMP)
 	$(BIN)/python -m pltf_cli.demo
 
 clean:
-	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache
+	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache gui/static $(GUI_WEB)/node_modules

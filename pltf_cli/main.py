@@ -19,6 +19,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "serve": ("pltf_cli.serve_cmd", "run the reference server (PlatformCtrl stand-in) on two TCP ports"),
     "fuzz": ("pltf_cli.fuzz_cmd", "fuzz an implementation (or, --in-process, the codec) for crashes and hangs"),
     "run-program": ("pltf_cli.run_program_cmd", "run a task program (guide 6.5) here, driving a platform: remote mode"),
+    "gui": ("pltf_cli.gui_cmd", "PlatformCtrlGUI in the browser: map, control, hardware monitor, parameters (guide ch. 5)"),
     "stubs": ("pltf_cli.stubs_cmd", "generate the client stubs of one language (or --check a generated copy)"),
 }
 
