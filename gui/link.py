@@ -88,6 +88,8 @@ class PlatformLink:
         self._task: asyncio.Task[None] | None = None
         self._idle: asyncio.TimerHandle | None = None
         self._wake = asyncio.Event()
+        self._failure = ""  # the last failure in words, repeated while waiting to reconnect
+        self._reason = ""
 
     # ---- tabs
     def attach(self, tab: Hashable, send: Send) -> None:
@@ -180,7 +182,8 @@ class PlatformLink:
             self.stats.reconnects += 1
             delay = self.backoff[min(attempt - 1, len(self.backoff) - 1)]
             self.state = "waiting"
-            self._event("retry", f"reconnecting in {delay:g} s", delay=delay)
+            why = self._failure or "connection lost"
+            self._event("retry", f"{why}; reconnecting in {delay:g} s", delay=delay, reason=self._reason)
             self._wake.clear()
             with contextlib.suppress(TimeoutError):
                 await asyncio.wait_for(self._wake.wait(), delay)
@@ -202,6 +205,7 @@ class PlatformLink:
             return False
         self._writer = writer
         self.state = "connected"
+        self._failure = self._reason = ""
         self._event("connected", f"connected to {self.target}")
         received = 0
         while True:
@@ -255,6 +259,7 @@ class PlatformLink:
 
     def _fail(self, event: str, message: str) -> None:
         self.stats.errors += 1
+        self._failure, self._reason = message, event
         self._event(event, message)
 
 

@@ -57,6 +57,7 @@ export class MapView {
     this.summary = h("p", { class: "map-summary", id: "map-summary" });
     this.canvas.setAttribute("aria-describedby", "map-summary");
     this.message = h("p", { class: "map-message", role: "status", "aria-live": "polite" });
+    bind(this.message, "map.messages", { text: false });
     const toolbar = h("div", { role: "toolbar", class: "map-tools" });
     bind(toolbar, "map.tools", { text: false });
     const act = (key: Key, fn: () => void, shortcut = "") => {
@@ -206,8 +207,7 @@ export class MapView {
   }
 
   /** The pose a drag gives: left button moves it, right button turns it toward the pointer. */
-  private dragged(e: PointerEvent): Pose | null {
-    const d = this.drag;
+  private dragged(e: PointerEvent, d = this.drag): Pose | null {
     if (d?.pose === undefined) {
       return null;
     }
@@ -259,7 +259,7 @@ export class MapView {
       this.invalidate();
       return;
     }
-    const pose = this.dragged(e);
+    const pose = this.dragged(e, d);
     if (pose === null) {
       return;
     }

@@ -106,6 +106,8 @@ export class PlatformSession {
   readonly replies = new Topic<Telegram>();
   readonly wire = new Topic<WireRecord>();
   readonly gatewayStats = new Topic<Record<string, unknown>>();
+  /** Messages about single requests (not sent, refused by the gateway): shown, but not the connection's state. */
+  readonly notices = new Topic<string>();
   /** This tab's own traffic (TCP Client tab). */
   readonly traffic = { bytesOut: 0, bytesIn: 0, telegramsOut: 0, telegramsIn: 0, errors: 0, reconnects: 0, rtt: [] as number[] };
 
@@ -144,6 +146,7 @@ export class PlatformSession {
     if (farewell !== undefined && this.connected) {
       this.send(farewell);
     }
+    this.setConnected(false);
     if (this.ws?.readyState === WebSocket.OPEN) {
       this.ws.send(JSON.stringify({ op: "close" }));
     }
@@ -214,7 +217,7 @@ export class PlatformSession {
       }
       if (ev.event !== "lost") {
         this.traffic.errors++;
-        this.conn.publish(ev);
+        this.notices.publish(ev.message);
       }
       return;
     }
