@@ -13,10 +13,19 @@ GUI_BUILT := gui/static/index.html
 GUI_SOURCES := $(shell find $(GUI_WEB)/src -type f 2>/dev/null) $(GUI_WEB)/index.html $(GUI_WEB)/vite.config.ts \
 	$(GUI_WEB)/tsconfig.json $(wildcard clients/generated/typescript/src/*.ts)
 
-$(STAMP): pyproject.toml setup.py $(wildcard reference_server/world/*.c)
+# Three distributions, one import namespace `pltf` (spec/ -> pltf.spec, clients/pltf_client/ -> pltf.client, the
+# toolkit's folders -> pltf.*; see setup.py). mypy cannot run setuptools' editable import hooks, so it reads the
+# namespace through a tree of links in the venv (NSTREE).
+NSTREE := $(VENV)/namespace/pltf
+NSLINKS := spec:spec client:clients/pltf_client reference_server:reference_server fake_hardware:fake_hardware \
+	conformance_tests:conformance_tests fuzz:fuzz stubgen:clients/stubgen cli:pltf_cli fixtures:fixtures gui:gui
+
+$(STAMP): pyproject.toml setup.py spec/pyproject.toml clients/pyproject.toml $(wildcard reference_server/world/*.c)
 	@test -x $(BIN)/python || $(PY) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[dev]'
+	$(BIN)/python -m pip install --quiet -e ./spec -e ./clients -e '.[dev]'
+	@rm -rf $(NSTREE) && mkdir -p $(NSTREE)
+	@for l in $(NSLINKS); do ln -s "$(CURDIR)/$${l#*:}" "$(NSTREE)/$${l%%:*}"; done
 	@touch $(STAMP)
 
 install: $(STAMP) $(GUI_BUILT)
@@ -37,8 +46,8 @@ chromium:
 test: $(STAMP) $(GUI_BUILT) chromium
 	$(BIN)/ruff check .
 	$(BIN)/mypy
-	$(BIN)/python -m spec.docgen --check
-	$(BIN)/python -m gui.specgen --check
+	$(BIN)/python -m pltf.spec.docgen --check
+	$(BIN)/python -m pltf.gui.specgen --check
 	cd $(GUI_WEB) && npm test --silent
 	$(BIN)/python -m pytest -q -m "not slow"
 
@@ -52,16 +61,16 @@ typecheck: $(STAMP)
 	$(BIN)/mypy
 
 docs: $(STAMP)
-	$(BIN)/python -m spec.docgen
+	$(BIN)/python -m pltf.spec.docgen
 
 docs-check: $(STAMP)
-	$(BIN)/python -m spec.docgen --check
+	$(BIN)/python -m pltf.spec.docgen --check
 
 bench: $(STAMP)
 	$(BIN)/python -m benchmarks --json benchmarks/results.json
 
 demo: $(STAMP)
-	$(BIN)/python -m pltf_cli.demo
+	$(BIN)/python -m pltf.cli.demo
 
 clean:
 	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache gui/static $(GUI_WEB)/node_modules

@@ -25,14 +25,14 @@ import yaml
 from rich.console import Console
 from rich.table import Table
 
-from conformance_tests import docdata
-from conformance_tests.cases.motion import rest
-from conformance_tests.catalogue import Case, Level, Tier
-from conformance_tests.chart import St
-from conformance_tests.context import CaseContext, Config, Target
-from conformance_tests.launch import InProcessServer
-from spec.model import SPEC_DIR, enum_classes
-from spec.telegram import Telegram
+from pltf.conformance_tests import docdata
+from pltf.conformance_tests.cases.motion import rest
+from pltf.conformance_tests.catalogue import Case, Level, Tier
+from pltf.conformance_tests.chart import St
+from pltf.conformance_tests.context import CaseContext, Config, Target
+from pltf.conformance_tests.launch import InProcessServer
+from pltf.spec.model import SPEC_DIR, enum_classes
+from pltf.spec.telegram import Telegram
 
 VOLATILE_PATH = SPEC_DIR / "volatile.yaml"
 MotionMode = enum_classes()["MotionMode"]

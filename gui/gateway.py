@@ -21,8 +21,8 @@ from typing import Any
 
 from aiohttp import WSMsgType, web
 
-from gui.link import PlatformLink, parse_target
-from gui.network_ini import NetworkIni
+from pltf.gui.link import PlatformLink, parse_target
+from pltf.gui.network_ini import NetworkIni
 
 log = logging.getLogger("pltf.gui")
 STATIC = Path(__file__).resolve().parent / "static"

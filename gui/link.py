@@ -24,9 +24,9 @@ from collections.abc import Callable, Hashable
 from dataclasses import dataclass, field
 from typing import Any
 
-from gui.routing import ANSWERED, BadRequest, Router
-from spec.codec import FRAME_OVERHEAD
-from spec.errors import RemoteProtocolError
+from pltf.gui.routing import ANSWERED, BadRequest, Router
+from pltf.spec.codec import FRAME_OVERHEAD
+from pltf.spec.errors import RemoteProtocolError
 
 log = logging.getLogger("pltf.gui")
 

@@ -18,7 +18,7 @@ import logging
 import os
 from pathlib import Path
 
-from gui.link import parse_target
+from pltf.gui.link import parse_target
 
 log = logging.getLogger("pltf.gui")
 SECTION = "Network"

@@ -20,10 +20,10 @@ from collections import deque
 from collections.abc import Hashable, Iterator
 from dataclasses import dataclass, field
 
-from spec import errors
-from spec.codec import FRAME_OVERHEAD, HEADER, REPLIES, REQUESTS, TelegramDecoder
-from spec.model import load_telegrams
-from spec.telegram import Telegram
+from pltf.spec import errors
+from pltf.spec.codec import FRAME_OVERHEAD, HEADER, REPLIES, REQUESTS, TelegramDecoder
+from pltf.spec.model import load_telegrams
+from pltf.spec.telegram import Telegram
 
 # identifier -> telegram name, for the requests that are answered (guide 6.1)
 ANSWERED: dict[int, str] = {t.id: t.name for t in load_telegrams() if t.answered}

@@ -17,8 +17,8 @@ from urllib.parse import quote
 
 from aiohttp import web
 
-from gui.gateway import STATIC, make_app
-from gui.network_ini import NetworkIni, default_path
+from pltf.gui.gateway import STATIC, make_app
+from pltf.gui.network_ini import NetworkIni, default_path
 
 log = logging.getLogger("pltf.gui")
 

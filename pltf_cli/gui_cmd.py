@@ -8,8 +8,8 @@ import logging
 import sys
 from pathlib import Path
 
-from gui.link import parse_target
-from gui.serve import parse_listen, serve
+from pltf.gui.link import parse_target
+from pltf.gui.serve import parse_listen, serve
 
 
 def add_gui_arguments(p: argparse.ArgumentParser) -> None:

@@ -21,8 +21,8 @@ from typing import Any
 
 import pytest
 
-from clients.pltf_client import PlatformClient
-from conformance_tests.launch import ServerProcess
+from pltf.client import PlatformClient
+from pltf.conformance_tests.launch import ServerProcess
 
 REPO = Path(__file__).resolve().parents[2]
 CHROMIUM = "/usr/bin/chromium"
@@ -114,7 +114,7 @@ class Gateway:
     def __init__(self, ini: Path, reply_timeout: float = 2.0) -> None:
         env = dict(os.environ, PYTHONUNBUFFERED="1")
         self.proc = subprocess.Popen(
-            [sys.executable, "-m", "pltf_cli.main", "gui", "--target", "127.0.0.1:1", "--listen", "127.0.0.1:0",
+            [sys.executable, "-m", "pltf.cli.main", "gui", "--target", "127.0.0.1:1", "--listen", "127.0.0.1:0",
              "--network-ini", str(ini), "--reply-timeout", str(reply_timeout)],
             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, cwd=REPO, env=env,
         )  # fmt: skip

@@ -7,7 +7,7 @@ import socket
 import threading
 from collections.abc import Iterator
 
-from spec.codec import encode
+from pltf.spec.codec import encode
 from tests.clients.client_fakes import status_telegram
 
 
