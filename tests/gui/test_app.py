@@ -67,8 +67,8 @@ def test_open_socket_then_init_and_start_from_the_buttons(page: Any, gateway: Ga
     page.get_by_role("menuitem", name="Open Socket", exact=True).click()
     expect_text(readout(page, "Connection"), f"connected to {platform.target}")
     expect_text(readout(page, "System state"), "Not initialized")
-    assert button(page, "Init").is_enabled()
-    assert button(page, "Start").is_disabled()
+    playwright_sync.expect(button(page, "Init")).to_be_enabled()
+    playwright_sync.expect(button(page, "Start")).to_be_disabled()
     button(page, "Init").click()
     expect_text(readout(page, "System state"), "Ready")
     assert platform.other.get_status().operation_state == READY

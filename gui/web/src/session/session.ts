@@ -250,6 +250,8 @@ export class PlatformSession {
     }
     if (up) {
       this.refreshDocuments();
+    } else {
+      this.status.last = undefined; // no stale readings after a reconnect
     }
   }
 
