@@ -7,8 +7,8 @@ Rules:
 - Connection events are JSON objects ``{"event": ..., "target": ..., "message": ...}`` sent to every tab:
   connecting, connected, unreachable, refused, turned_away, dropped, timeout, malformed, closed, retry.
   Every failure is said in words and followed by a reconnect with backoff while any tab wants the socket open.
-- A platform that closes the connection before sending a single byte has turned us away: erratum E-WIRE-007
-  (a busy port accepts a second client and closes it at once).
+- A platform that closes the connection before sending a single byte has turned us away (erratum E-GUI-003;
+  E-WIRE-007: a busy port accepts a second client and closes it at once).
 - A request whose reply has not come within ``reply_timeout`` seconds ends the connection (the platform has
   stopped answering); a malformed reply does too (the stream is out of step).
 """

@@ -1,7 +1,8 @@
 """The known platform addresses: guide 5.2 "extend the file 'PltfGUI\\res\\inifiles.Network.ini' with the
 missing server".
 
-The guide does not show the file's content; ours is an INI file with one section ``[Network]`` whose values are
+The guide does not show the file's content; ours (erratum E-GUI-001) is an INI file with one section
+``[Network]`` whose values are
 ``HOST:PORT`` (the keys are free names)::
 
     [Network]

@@ -26,12 +26,6 @@ def test_targets_are_read_added_once_and_bad_lines_skipped(tmp_path: Path) -> No
 
 def test_pltf_gui_refuses_a_bad_target_in_one_line() -> None:
     out = subprocess.run([sys.executable, "-m", "pltf.cli.main", "gui", "--target", "nowhere"],
-                         capture_output=True, text=True, cwd=REPO, timeout=60)  # fmt: skip
+                         capture_output=True, text=True, check=False, cwd=REPO, timeout=60)  # fmt: skip
     assert out.returncode == 2
     assert out.stderr.strip() == "pltf gui: expected HOST:PORT with a port 1..65535, got 'nowhere'"
-
-
-def test_the_spec_json_of_the_front_end_is_fresh() -> None:
-    out = subprocess.run([sys.executable, "-m", "pltf.gui.specgen", "--check"], capture_output=True, text=True,
-                         cwd=REPO, timeout=60)  # fmt: skip
-    assert out.returncode == 0, out.stderr

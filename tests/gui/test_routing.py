@@ -40,7 +40,7 @@ def test_an_identical_pending_request_is_joined_not_sent_again() -> None:
     r = Router()
     assert r.submit("a", STATUS_REQ, 0.0) == STATUS_REQ
     assert r.submit("b", STATUS_REQ, 0.0) is None
-    [(frame, entry)] = list(r.receive_data(STATUS_REPLY))
+    [(_, entry)] = list(r.receive_data(STATUS_REPLY))
     assert entry.tabs == ["a", "b"] and entry.coalesced == 1
 
 
