@@ -5,7 +5,8 @@ Benchmarks:
   by a small fake platform that answers GET_MAP with it): frame time of a pan (300 frames of 12 px at four times the
   zoom-all scale) and of a zoom (zoom all, then 1.15x steps in and out). A frame is the map view's ``render()``
   plus a 1-pixel ``getImageData`` that forces the canvas to rasterize, so the time includes the drawing itself.
-  Target: p95 <= 16 ms. Baseline: the same frames with the static-layer cache off (every frame redraws the map).
+  Target: p95 <= 16 ms. Baseline: the same frames with the static layer drawn on the page in every frame (no layer
+  worker, no reuse). A row gives the layer worker's own time per layer (off the page's thread).
 - ``gui.status_latency``: a status change to the screen at the GUI's default polling rate: a plain client on the
   reference server's OTHER port sets the estimate (CMD_SET_FRM_PLTF); the time until the page's "Estimated pose"
   readout shows it (a MutationObserver stamps the change; both clocks are this machine's epoch clock).
@@ -145,7 +146,8 @@ class MapPlatform:
 PAN_ZOOM_JS = """async ([frames, cache]) => {
   const m = window.pltf.map;
   const ctx = m.canvas.getContext("2d");
-  if (!cache) { const orig = m.staticLayer.bind(m); m.staticLayer = () => { m.cache = null; return orig(); }; }
+  m.syncLayers = !cache;
+  m.layerTimes.length = 0;
   const out = { pan: [], zoom: [] };
   const frame = (kind) => {
     const t0 = performance.now();
@@ -160,9 +162,12 @@ PAN_ZOOM_JS = """async ([frames, cache]) => {
   m.zoomAll(); m.zoom(4); frame("zoom"); await tick();
   for (let i = 0; i < frames; i++) {
     const a = (i / frames) * 2 * Math.PI;
-    m.cam = { ...m.cam, cx: m.cam.cx + (12 * Math.cos(a)) / m.cam.scale, cy: m.cam.cy + (12 * Math.sin(a)) / m.cam.scale };
+    const c = m.cam;
+    m.cam = { ...c, cx: c.cx + (12 * Math.cos(a)) / c.scale, cy: c.cy + (12 * Math.sin(a)) / c.scale };
     frame("pan"); await tick();
   }
+  m.syncLayers = false;
+  out.layer = [...m.layerTimes];
   return out;
 }"""
 
@@ -183,13 +188,16 @@ def pan_zoom(config: Config) -> list[Row]:
     rows = []
     for kind in ("pan", "zoom"):
         for metric, q in (("p50", 0.5), ("p95", 0.95)):
-            rows.append(make_row("gui.pan_zoom", f"{kind}: culling + static-layer cache", f"frame_{metric}",
+            rows.append(make_row("gui.pan_zoom", f"{kind}: layer worker + culling", f"frame_{metric}",
                                  _percentile(ours[kind], q), "ms", higher_is_better=False,
-                                 baseline_subject=f"{kind}: culling, no cache",
+                                 baseline_subject=f"{kind}: drawn on the page per frame",
                                  baseline_value=_percentile(plain[kind], q),
-                                 target=Target("value", "<=", FRAME_TARGET_MS) if metric == "p95" else None))  # fmt: skip
-        rows.append(make_row("gui.pan_zoom", f"{kind}: culling + static-layer cache", "frame_max", max(ours[kind]),
+                                 target=None if metric != "p95" else Target("value", "<=", FRAME_TARGET_MS)))  # fmt: skip
+        rows.append(make_row("gui.pan_zoom", f"{kind}: layer worker + culling", "frame_max", max(ours[kind]),
                              "ms", higher_is_better=False))  # fmt: skip
+    if ours["layer"]:
+        rows.append(make_row("gui.pan_zoom", "layer worker (off the page's thread)", "layer_p50",
+                             _percentile(ours["layer"], 0.5), "ms", higher_is_better=False))  # fmt: skip
     return rows
 
 
@@ -216,12 +224,17 @@ def status_latency(config: Config) -> list[Row]:
                 time.sleep(random.uniform(0.1, 0.3))
                 t0 = time.time()
                 other.set_frm_pltf(x, 9000, 0)
-                while other.get_status().est_x_mm != x:
-                    pass
-                tight.append((time.time() - t0) * 1000)
                 shown = pg.wait_for_function(
                     f"() => window.__changes.find(([t, s]) => s.startsWith('x {x} mm'))", timeout=5000).json_value()
                 gui.append(shown[0] - t0 * 1000)
+            for i in range(n):  # the baseline apart: a client polling back to back loads the server
+                x = 5000 + 10 * i
+                time.sleep(random.uniform(0.1, 0.3))
+                t0 = time.time()
+                other.set_frm_pltf(x, 9000, 0)
+                while other.get_status().est_x_mm != x:
+                    pass
+                tight.append((time.time() - t0) * 1000)
     return [
         make_row("gui.status_latency", f"{GUI_TAG}, GET_STATUS at 20 Hz", metric, _percentile(gui, q), "ms",
                  higher_is_better=False, baseline_subject="GET_STATUS back to back (other port)",

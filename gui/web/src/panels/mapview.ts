@@ -3,9 +3,11 @@
  * the platform (CMD_SET_FRM_PLTF), the target flag (CMD_MOVE_ABS in Automatic) and the target station
  * (CMD_MOVE_TO_STATION).
  *
- * Rules: the static layer (grid, map, roadmap) is drawn into an offscreen canvas a margin larger than the view
- * and reused while the view pans inside it; the live layer (overlay.ts) is drawn every frame on top. Frames are
- * drawn on requestAnimationFrame only when something changed. The canvas exposes what it drew (data-drawn-*,
+ * Rules: the static layer (grid, map, roadmap) is drawn by a worker (view/layerworker.ts) into a bitmap a margin
+ * larger than the view; every frame draws the last bitmap moved and scaled to the current camera, then the live
+ * layer (overlay.ts) on top, and asks the worker for a new bitmap when the view has left the old one or its scale
+ * changed (one request in flight at a time). Without workers the layer is drawn on the page. Frames are drawn on
+ * requestAnimationFrame only when something changed. The canvas exposes what it drew (data-drawn-*,
  * an accessible summary) and its camera (data-camera) so tests and assistive tools can read the view.
  */
 import { h } from "../dom";
@@ -38,7 +40,15 @@ export class MapView {
   drawn: Record<string, number> = {};
   /** ms spent in the last frames' drawing (the benchmark reads it) */
   frameTimes: number[] = [];
-  private cache: { canvas: HTMLCanvasElement; cam: Camera; version: number } | null = null;
+  /** the last static layer: its image, the camera it was drawn for (margin included), the document version */
+  layer: { image: CanvasImageSource; cam: Camera; version: number } | null = null;
+  /** ms the layer worker took for its last layers (the benchmark reads it) */
+  layerTimes: number[] = [];
+  /** draw the static layer on the page in every frame (the benchmark's baseline) */
+  syncLayers = false;
+  private worker: Worker | null = null;
+  private inFlight: { id: number; version: number } | null = null;
+  private requestId = 0;
   private version = 0;
   private dirty = true;
   private scheduled = false;
@@ -82,6 +92,7 @@ export class MapView {
     toolButton("flag", "map.flag");
     this.root = h("section", { class: "map-view" }, toolbar, h("div", { class: "map-frame" }, this.canvas), this.message, this.summary);
     bind(this.root, "view.map", { text: false });
+    this.startWorker();
     this.wire();
     onLanguage(() => this.updateSummary());
   }
@@ -98,11 +109,10 @@ export class MapView {
         this.prepared = null;
         this.say(e instanceof MapParseError ? e.message : String(e));
       }
-      this.version++;
+      this.documentsChanged();
       if (!this.fitted) {
         this.zoomAll();
       }
-      this.invalidate();
     });
     s.roadmap.subscribe((r) => {
       try {
@@ -111,8 +121,7 @@ export class MapView {
         this.roadmap = null;
         this.say(String((e as Error).message));
       }
-      this.version++;
-      this.invalidate();
+      this.documentsChanged();
     });
     s.status.subscribe((st) => {
       this.status = st;
@@ -144,6 +153,48 @@ export class MapView {
     });
   }
 
+  private documentsChanged(): void {
+    this.version++;
+    this.worker?.postMessage({ type: "scene", scene: this.scene, roadmap: this.roadmap });
+    this.invalidate();
+  }
+
+  private startWorker(): void {
+    if (typeof Worker === "undefined" || typeof OffscreenCanvas === "undefined") {
+      return;
+    }
+    try {
+      this.worker = new Worker(new URL("../view/layerworker.ts", import.meta.url), { type: "module" });
+    } catch {
+      this.worker = null;
+      return;
+    }
+    this.worker.onmessage = (e: MessageEvent) => {
+      const m = e.data as { id: number; cam: Camera; bitmap: ImageBitmap; drawn: Record<string, number>; ms: number };
+      const asked = this.inFlight;
+      this.inFlight = null;
+      if (asked === null || asked.id !== m.id) {
+        m.bitmap.close();
+        return;
+      }
+      if (this.layer?.image instanceof ImageBitmap) {
+        this.layer.image.close();
+      }
+      this.layer = { image: m.bitmap, cam: m.cam, version: asked.version };
+      this.layerTimes.push(m.ms);
+      if (this.layerTimes.length > 1000) {
+        this.layerTimes.splice(0, 500);
+      }
+      this.countVisible(m.drawn);
+      this.invalidate();
+    };
+    this.worker.onerror = () => {
+      this.worker = null; // drawn on the page from now on
+      this.inFlight = null;
+      this.invalidate();
+    };
+  }
+
   private say(text: string): void {
     this.message.textContent = text;
   }
@@ -167,7 +218,6 @@ export class MapView {
     this.canvas.width = Math.max(1, Math.round(r.width * dpr));
     this.canvas.height = Math.max(1, Math.round(r.height * dpr));
     this.cam = { ...this.cam, width: r.width, height: r.height };
-    this.cache = null;
     if (!this.fitted && this.prepared?.bounds) {
       this.zoomAll();
     }
@@ -315,27 +365,62 @@ export class MapView {
     return { grid: o.grid, map: o.mapLayers.map, roadmap: o.mapLayers.roadmap, labels: o.mapLayers.hiddenlabel, kinds: o.mapLayers };
   }
 
-  private staticLayer(): HTMLCanvasElement {
+  /** Does the layer show the current view at its own scale, margin included? */
+  private covers(l: { cam: Camera; version: number } | null): boolean {
     const c = this.cam;
-    const cached = this.cache;
-    if (cached !== null && cached.version === this.version && cached.cam.scale === c.scale) {
-      const dx = (c.cx - cached.cam.cx) * c.scale;
-      const dy = (c.cy - cached.cam.cy) * c.scale;
-      if (Math.abs(dx) <= MARGIN && Math.abs(dy) <= MARGIN) {
-        return cached.canvas;
-      }
+    if (l === null || l.version !== this.version || l.cam.scale !== c.scale) {
+      return false;
     }
-    const canvas = cached?.canvas ?? document.createElement("canvas");
+    return Math.abs((c.cx - l.cam.cx) * c.scale) <= MARGIN && Math.abs((c.cy - l.cam.cy) * c.scale) <= MARGIN &&
+      l.cam.width >= c.width + 2 * MARGIN && l.cam.height >= c.height + 2 * MARGIN;
+  }
+
+  private layerCamera(): Camera {
+    const c = this.cam;
+    return { ...c, width: c.width + 2 * MARGIN, height: c.height + 2 * MARGIN };
+  }
+
+  /** Keep the static layer up to date: ask the worker (or draw here) when the view has left it. */
+  private updateLayer(): void {
+    if (this.covers(this.layer)) {
+      return;
+    }
     const dpr = window.devicePixelRatio || 1;
-    const big: Camera = { ...c, width: c.width + 2 * MARGIN, height: c.height + 2 * MARGIN };
+    if (this.worker !== null && !this.syncLayers) {
+      if (this.inFlight === null) {
+        this.inFlight = { id: ++this.requestId, version: this.version };
+        this.worker.postMessage({ type: "render", id: this.requestId, cam: this.layerCamera(), layers: this.layers(), dpr });
+      }
+      return;
+    }
+    const big = this.layerCamera();
+    const canvas = this.layer?.image instanceof HTMLCanvasElement ? this.layer.image : document.createElement("canvas");
     canvas.width = Math.round(big.width * dpr);
     canvas.height = Math.round(big.height * dpr);
     const ctx = canvas.getContext("2d")!;
     ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
-    const drawnAll = drawStatic(ctx, big, this.prepared, this.roadmap, this.layers());
-    this.cache = { canvas, cam: c, version: this.version };
-    this.countVisible(drawnAll);
-    return canvas;
+    const t0 = performance.now();
+    const drawn = drawStatic(ctx, big, this.prepared, this.roadmap, this.layers());
+    this.layerTimes.push(performance.now() - t0);
+    this.layer = { image: canvas, cam: big, version: this.version };
+    this.countVisible(drawn);
+  }
+
+  /** The last layer, moved and scaled to the current camera. */
+  private drawLayer(ctx: CanvasRenderingContext2D): void {
+    const l = this.layer;
+    const c = this.cam;
+    ctx.fillStyle = "#ffffff";
+    ctx.fillRect(0, 0, c.width, c.height);
+    if (l === null) {
+      return;
+    }
+    const r = c.scale / l.cam.scale;
+    const dx = c.width / 2 - (l.cam.width / 2) * r + (l.cam.cx - c.cx) * c.scale;
+    const dy = c.height / 2 - (l.cam.height / 2) * r + (c.cy - l.cam.cy) * c.scale;
+    ctx.imageSmoothingEnabled = false; // a scaled layer is a stand-in until the worker sends the new one
+    ctx.drawImage(l.image, dx, dy, l.cam.width * r, l.cam.height * r);
+    ctx.imageSmoothingEnabled = true;
   }
 
   /** What lies in the view itself (the static layer also draws the margin). */
@@ -376,11 +461,11 @@ export class MapView {
     const c = this.cam;
     const dpr = window.devicePixelRatio || 1;
     ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
-    const layer = this.staticLayer();
-    const cached = this.cache!.cam;
-    const dx = (c.cx - cached.cx) * c.scale;
-    const dy = (c.cy - cached.cy) * c.scale;
-    ctx.drawImage(layer, -MARGIN - dx, -MARGIN + dy, c.width + 2 * MARGIN, c.height + 2 * MARGIN);
+    if (this.syncLayers) {
+      this.layer = null;
+    }
+    this.updateLayer();
+    this.drawLayer(ctx);
     const o = this.options;
     const overlay: OverlayOptions = {
       showEstimated: o.showEstimated,
@@ -415,6 +500,7 @@ export class MapView {
     }
     this.canvas.dataset.camera = JSON.stringify({ cx: c.cx, cy: c.cy, scale: c.scale, width: c.width, height: c.height });
     this.frameTimes.push(performance.now() - t0);
+    this.canvas.dataset.layer = this.covers(this.layer) ? "current" : "stale";
     if (this.frameTimes.length > 1000) {
       this.frameTimes.splice(0, 500);
     }
