@@ -259,3 +259,16 @@ def test_each_fault_shows_its_message_and_the_gui_keeps_running(page: Any, gatew
     # ... and once the port is free again the GUI reconnects by itself
     expect_text(status, f"connected to {platform.target}", timeout=20_000)
     expect_text(readout(page, "System state"), "Not initialized")
+
+
+def test_two_tabs_share_the_one_connection_and_the_second_port_stays_free(browser: Any, page: Any, gateway: Gateway,
+                                                                           platform: Platform) -> None:  # fmt: skip
+    open_gui(page, gateway, platform.target)
+    second = browser.new_page()
+    try:
+        open_gui(second, gateway, platform.target)  # a second connection to the port would be turned away
+        button(page, "Init").click()
+        expect_text(readout(second, "System state"), "Ready")
+        assert platform.other.get_status().operation_state == READY  # the guide's second port is the user's
+    finally:
+        second.close()
