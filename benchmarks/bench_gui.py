@@ -179,7 +179,7 @@ def pan_zoom(config: Config) -> list[Row]:
     fake = MapPlatform(big_map())
     try:
         with gateway() as base, page(base, f"127.0.0.1:{fake.port}") as pg:
-            loaded = "() => window.pltf.map.prepared?.lines.get('line')?.grid.n === 50000"
+            loaded = "() => window.pltf.map.scene?.objects.length === 50000 && window.pltf.map.layer !== null"
             pg.wait_for_function(loaded, timeout=60_000)
             ours = pg.evaluate(PAN_ZOOM_JS, [frames, True])
             plain = pg.evaluate(PAN_ZOOM_JS, [frames, False])

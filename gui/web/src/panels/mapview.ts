@@ -13,7 +13,7 @@
 import { h } from "../dom";
 import { bind, onLanguage, t, type Key } from "../i18n/i18n";
 import { GetStatusReply, MotionMode, MoveAbsRequest, SetFrmPltfRequest } from "../pltf";
-import { countKinds, KINDS, type MapScene, MapParseError, parseMap } from "../scene/map";
+import { type Bounds, countKinds, KINDS, type MapScene, MapParseError, parseMap, sceneBounds } from "../scene/map";
 import { parseRoadmap, type Roadmap } from "../scene/roadmap";
 import type { PlatformSession } from "../session/session";
 import { type Camera, fit, panBy, toWorld, viewBounds, zoomAt } from "../view/camera";
@@ -31,7 +31,9 @@ export class MapView {
   cam: Camera = { cx: 0, cy: 0, scale: 0.05, width: 800, height: 600 };
   tool: Tool = "pan";
   scene: MapScene | null = null;
+  /** the scene's index for drawing on the page (built only without a worker, or for the benchmark's baseline) */
   prepared: Prepared | null = null;
+  bounds: Bounds | null = null;
   roadmap: Roadmap | null = null;
   status: GetStatusReply | null = null;
   flag: Pose | null = null;
@@ -102,10 +104,12 @@ export class MapView {
     s.map.subscribe((m) => {
       try {
         this.scene = parseMap(m.xml, m.name);
-        this.prepared = prepare(this.scene);
+        this.bounds = sceneBounds(this.scene);
+        this.prepared = null;
         this.say("");
       } catch (e) {
         this.scene = null;
+        this.bounds = null;
         this.prepared = null;
         this.say(e instanceof MapParseError ? e.message : String(e));
       }
@@ -218,7 +222,7 @@ export class MapView {
     this.canvas.width = Math.max(1, Math.round(r.width * dpr));
     this.canvas.height = Math.max(1, Math.round(r.height * dpr));
     this.cam = { ...this.cam, width: r.width, height: r.height };
-    if (!this.fitted && this.prepared?.bounds) {
+    if (!this.fitted && this.bounds) {
       this.zoomAll();
     }
     this.invalidate();
@@ -230,7 +234,7 @@ export class MapView {
   }
 
   zoomAll(): void {
-    const b = this.prepared?.bounds;
+    const b = this.bounds;
     if (b && this.cam.width > 1) {
       this.cam = fit(this.cam, b);
       this.fitted = true;
@@ -393,6 +397,9 @@ export class MapView {
       }
       return;
     }
+    if (this.prepared === null && this.scene !== null) {
+      this.prepared = prepare(this.scene);
+    }
     const big = this.layerCamera();
     const canvas = this.layer?.image instanceof HTMLCanvasElement ? this.layer.image : document.createElement("canvas");
     canvas.width = Math.round(big.width * dpr);
@@ -425,7 +432,7 @@ export class MapView {
 
   /** What lies in the view itself (the static layer also draws the margin). */
   private countVisible(drawnAll: Record<string, number>): void {
-    const whole = this.prepared?.bounds;
+    const whole = this.bounds;
     const v = viewBounds(this.cam);
     const inView = whole != null && v.minX <= whole.minX && v.minY <= whole.minY && v.maxX >= whole.maxX && v.maxY >= whole.maxY;
     this.drawn = drawnAll;

@@ -8,9 +8,16 @@ import { dump } from "../pltf";
 import type { PlatformSession, WireRecord } from "../session/session";
 
 export const MAX_RECORDS = 500;
+const MAX_TEXT = 300;
+
+/** What the inspector keeps of a telegram: its text, cut short (a decoded status holds ~20 KB of scan points). */
+interface Line {
+  text: string;
+  name: string;
+}
 
 export function wirePanel(session: PlatformSession): { root: HTMLElement; onShow: (on: boolean) => void } {
-  const records: WireRecord[] = [];
+  const records: Line[] = [];
   const pre = h("pre", { class: "wire", role: "log", tabindex: "0" });
   bind(pre, "menu.wire", { text: false });
   const hide = h("input", { type: "checkbox", checked: true });
@@ -23,9 +30,17 @@ export function wirePanel(session: PlatformSession): { root: HTMLElement; onShow
   bind(pause, "wire.pause", { text: false });
   let shown = false;
   let dirty = false;
+  const line = (r: WireRecord): Line => {
+    let text = dump(r.telegram);
+    if (text.length > MAX_TEXT) {
+      text = `${text.slice(0, MAX_TEXT)}... (${r.bytes} bytes)`;
+    }
+    const name = r.telegram.telegramName;
+    return { name, text: `${new Date(r.t).toISOString().slice(11, 23)} ${r.dir === "out" ? "->" : "<-"} ${name} ${text}` };
+  };
   session.wire.subscribe((r) => {
-    records.push(r);
-    if (records.length > 4 * MAX_RECORDS) {
+    records.push(line(r));
+    if (records.length > 2 * MAX_RECORDS) {
       records.splice(0, records.length - MAX_RECORDS);
     }
     dirty = true;
@@ -36,16 +51,8 @@ export function wirePanel(session: PlatformSession): { root: HTMLElement; onShow
       return;
     }
     dirty = false;
-    const shownRecords = records.filter((r) => !(hide.checked && hidden.has(r.telegram.telegramName))).slice(-MAX_RECORDS);
-    pre.textContent = shownRecords
-      .map((r) => {
-        let text = dump(r.telegram);
-        if (text.length > 300) {
-          text = `${text.slice(0, 300)}... (${r.bytes} bytes)`;
-        }
-        return `${new Date(r.t).toISOString().slice(11, 23)} ${r.dir === "out" ? "->" : "<-"} ${r.telegram.telegramName} ${text}`;
-      })
-      .join("\n");
+    const shownRecords = records.filter((r) => !(hide.checked && hidden.has(r.name))).slice(-MAX_RECORDS);
+    pre.textContent = shownRecords.map((r) => r.text).join("\n");
     pre.scrollTop = pre.scrollHeight;
   };
   hide.addEventListener("change", () => ((dirty = true), render()));
