@@ -102,7 +102,7 @@ class Platform:
 
 @pytest.fixture
 def platform() -> Iterator[Platform]:
-    with ServerProcess(time_scale=5.0, extra=["--control-port", "0"]) as server:
+    with ServerProcess(time_scale=5.0, extra=["--control-port", "0"], startup_timeout=60.0) as server:
         p = Platform(server)
         try:
             yield p
