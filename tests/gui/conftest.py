@@ -112,6 +112,7 @@ def platform() -> Iterator[Platform]:
 
 class Gateway:
     def __init__(self, ini: Path, reply_timeout: float = 2.0) -> None:
+        self.ini = ini
         env = dict(os.environ, PYTHONUNBUFFERED="1")
         self.proc = subprocess.Popen(
             [sys.executable, "-m", "pltf.cli.main", "gui", "--target", "127.0.0.1:1", "--listen", "127.0.0.1:0",

@@ -272,3 +272,37 @@ def test_two_tabs_share_the_one_connection_and_the_second_port_stays_free(browse
         assert platform.other.get_status().operation_state == READY  # the guide's second port is the user's
     finally:
         second.close()
+
+
+def test_shifting_the_platform_by_drag_and_drop_sets_the_estimate(page: Any, gateway: Gateway,
+                                                                   platform: Platform) -> None:  # fmt: skip
+    open_gui(page, gateway, platform.target)
+    x0, y0, _ = pose(platform.other)
+    button(page, "Shift platform").click()
+    sx, sy = to_screen(page, x0, y0)
+    tx, ty = to_screen(page, x0 + 1000, y0 - 400)
+    page.mouse.move(sx, sy)
+    page.mouse.down()
+    page.mouse.move(tx, ty, steps=6)
+    page.mouse.up()
+    expect_text(page.get_by_role("status", name="Map messages"), "CMD_SET_FRM_PLTF sent")
+    scale = float(json.loads(page.get_by_role("img", name="Map").get_attribute("data-camera"))["scale"])
+    def off() -> float:
+        x, y, _ = pose(platform.other)
+        return math.hypot(x - (x0 + 1000), y - (y0 - 400))
+
+    wait_for(lambda: off() <= 2 / scale, what="the estimate where the platform was dropped (over the other port)")
+
+
+def test_open_socket_at_lists_the_known_addresses_and_keeps_a_new_one(page: Any, gateway: Gateway,
+                                                                      platform: Platform) -> None:  # fmt: skip
+    open_gui(page, gateway, f"127.0.0.1:{free_port()}", connected=False)
+    page.get_by_role("menuitem", name="Socket", exact=True).click()
+    page.get_by_role("menuitem", name="Open Socket At", exact=True).click()
+    dialog = page.get_by_role("dialog", name="Open Socket At")
+    assert "127.0.0.1:10000" in dialog.get_by_role("combobox", name="Server").inner_text()
+    dialog.get_by_role("textbox", name="Address (HOST:PORT)").fill(platform.target)
+    dialog.get_by_role("button", name="Connect", exact=True).click()
+    expect_text(readout(page, "Connection"), f"connected to {platform.target}")
+    assert platform.target in gateway.ini.read_text(encoding="utf-8")
+    assert f"target={platform.target.replace(':', '%3A')}" in page.url
