@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-slow lint typecheck docs docs-check bench clean install gui chromium
+.PHONY: demo test test-slow lint typecheck docs docs-check bench clean install emulator gui chromium
 
 # The GUI's front end (gui/web, TypeScript + vite) is built into gui/static/ with the machine's node and npm.
 GUI_WEB := gui/web
@@ -68,6 +68,10 @@ docs-check: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/python -m benchmarks --json benchmarks/results.json
+
+# The Go emulator (issue 17), a second implementation of the protocol: emulator/bin/emulator.
+emulator:
+	sh emulator/build.sh
 
 demo: $(STAMP)
 	$(BIN)/python -m pltf.cli.demo

@@ -61,6 +61,7 @@ from pltf.spec.codec import REPLIES, REQUESTS, build, encode
 from pltf.spec.model import load_telegrams
 from pltf.spec.strategies import telegram_strategy
 from pltf.spec.telegram import user_fields
+from pltf.stubgen.pltf_client.names import UNIT_ALREADY_NAMED, py_name, reply_class_name
 
 
 # ---------------------------------------------------------------------------------------------- fixtures
@@ -103,14 +104,14 @@ def test_one_method_per_command(tdef: Any) -> None:
         assert params == ["payload"]
         return
     fields = user_fields(tdef.request)
-    expected = [_generate.py_name(f) for f in fields] + (["timeout"] if tdef.answered else [])
+    expected = [py_name(f) for f in fields] + (["timeout"] if tdef.answered else [])  # a FieldDef reads as a Field
     assert params == expected
     for f, p in zip(fields, params, strict=False):
         if f.unit:  # the guide's unit is in the name and in the docstring
-            assert p != f.name or f.name.endswith(_generate.UNIT_ALREADY_NAMED.get(f.unit, ("-",)))
+            assert p != f.name or f.name.endswith(UNIT_ALREADY_NAMED.get(f.unit, ("-",)))
             assert f"[{f.unit}]" in (sync.__doc__ or "")
     returns = inspect.signature(sync).return_annotation
-    assert returns == (_generate.reply_class_name(tdef) if tdef.answered else "None")
+    assert returns == (reply_class_name(tdef.name) if tdef.answered else "None")
 
 
 def test_reply_names_carry_units() -> None:
@@ -125,7 +126,7 @@ def test_every_answered_reply_converts_to_its_typed_object(data: st.DataObject) 
     cls = data.draw(st.sampled_from([c for c in REPLIES if c.DEF.answered]))
     telegram = data.draw(telegram_strategy(cls, max_items=3))
     typed = typed_reply(telegram)
-    assert type(typed).__name__ == _generate.reply_class_name(cls.DEF)
+    assert type(typed).__name__ == reply_class_name(cls.DEF.name)
     assert len(typed.__dataclass_fields__) == len(telegram)
     assert type(typed).from_telegram(telegram) == typed
 
