@@ -66,7 +66,7 @@ docs: $(STAMP)
 docs-check: $(STAMP)
 	$(BIN)/python -m pltf.spec.docgen --check
 
-bench: $(STAMP)
+bench: $(STAMP) $(GUI_BUILT) chromium
 	$(BIN)/python -m benchmarks --json benchmarks/results.json
 
 # The Go emulator (issue 17), a second implementation of the protocol: emulator/bin/emulator.
