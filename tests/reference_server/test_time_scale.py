@@ -30,8 +30,7 @@ R: Any = REQUESTS
 MotionMode: Any = enum_classes()["MotionMode"]
 OperationState: Any = enum_classes()["OperationState"]
 STOP_WITHIN = 3.0  # simulated s the conformance suite gives a halted platform to stop (conformance_tests motion)
-BRAKE = 5000.0  # mm/s^2: the motor boards' brake (fake_hardware MotorParams.brake_decel)
-RAMP = 2000.0  # mm/s^2: their ramp (MotorParams.acc_limit), the gentlest way they stop
+RAMP = 2000.0  # mm/s^2: the motor boards' ramp (fake_hardware MotorParams.acc_limit), the gentlest way they stop
 
 
 @pytest.fixture
@@ -74,7 +73,7 @@ class Driver:
         return pos.x, pos.y
 
 
-def moving(d: Driver) -> tuple[float, float]:
+def moving(d: Driver) -> None:
     """Running in Automatic, a MOVE_ABS 600 mm ahead under way at about 400 mm/s (the case's ``_moving``)."""
     d.at(0.0, R.CMD_CONNECT_TO_PLTF(), R.CMD_INIT_PLTF())
     d.at(1.0, R.CMD_SET_MODE(mode=MotionMode.MODE_MOTION_AUTOMATIC), R.CMD_START())
@@ -84,7 +83,6 @@ def moving(d: Driver) -> tuple[float, float]:
     while d.p.motion.v < 380.0:
         t += 0.02
         d.at(t)
-    return start
 
 
 def restart(d: Driver, t: float, gap: float) -> float:
@@ -103,17 +101,15 @@ def test_a_shutdown_brakes_the_platform_blind_and_a_restart_never_resumes_the_ol
     make_platform: Callable[[], Platform], scale: int, gap: float
 ) -> None:
     d = Driver(make_platform())
-    start = moving(d)
-    v0 = d.p.motion.v
-    t0 = d.t
+    moving(d)
+    v0, t0, at_shutdown = d.p.motion.v, d.t, d.p.motion.true_pose
     d.at(t0, R.CMD_SHUTDOWN_PLTF())
     status: Any = d.p.handle(R.CMD_GET_STATUS(), t0 + 0.02).reply
     assert status is not None
     # guide 6.3 "shutdown the CAN communication": no encoder frames (E-HW-004), no odometry - the status cannot
     # show that the body still brakes; a client sees "at rest" at once
     assert (status.operation_state, status.vel_trans) == (OperationState.ST_OP_NOT_INITIALIZED, 0)
-    rolling = d.true_speed()
-    assert rolling > 100.0, "the motor boards cannot stop 400 mm/s within one control period"
+    assert d.true_speed() > 100.0, "the motor boards cannot stop 400 mm/s within one control period"
     t_start = restart(d, d.t + gap, gap)
     at_start = d.true_speed()
     if scale == 1:  # the restart comes while the body still brakes (issue 23): it rolls on after CMD_START ...
@@ -121,13 +117,11 @@ def test_a_shutdown_brakes_the_platform_blind_and_a_restart_never_resumes_the_ol
     else:  # ... while a client ten times slower in simulated time restarts a platform that has stopped
         assert at_start == 0.0
     d.at(t_start + 2.0)
-    # ... but only as far as its braking takes it (the brakes, then at worst the boards' ramp): the old move,
-    # 600 mm ahead, does not resume
-    true = d.p.motion.true_pose
-    assert math.hypot(true.x - start[0], true.y - start[1]) < 300.0
     assert d.true_speed() == 0.0
-    travelled = true.x - d.estimate()[0]  # what the estimate missed while the bus was down (up to the restart)
-    assert 0.0 <= travelled <= v0 * v0 / (2 * BRAKE) + v0 * 0.06 + 20.0
+    # ... but only as far as stopping takes it (the brakes, at worst the boards' ramp, two periods late): the old
+    # move, 450 mm further on, does not resume
+    true = d.p.motion.true_pose
+    assert math.hypot(true.x - at_shutdown.x, true.y - at_shutdown.y) <= v0 * v0 / (2 * RAMP) + v0 * 0.04
 
 
 @pytest.mark.parametrize("gap", [0.015, 0.15, 0.3])
