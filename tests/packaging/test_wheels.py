@@ -3,7 +3,7 @@
 ``python -m build`` makes a wheel and an sdist of pltf-spec, pltf-client and pltf-toolkit; each is installed
 from the wheels alone into a fresh virtual environment, and every command runs from an empty folder:
 ``pltf serve`` (seeding the fixture office), ``conform``, ``fuzz``, ``stubs``, ``decode``, ``encode``,
-``run-program``. The client distribution alone brings no numpy, scipy, pymunk, cantools or lxml.
+``run-program``. The client distribution alone brings no numpy, scipy, pymunk, cantools, lxml or jsonschema.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ import pytest
 
 REPO = Path(__file__).resolve().parents[2]
 SOURCES = {"pltf_spec": REPO / "spec", "pltf_client": REPO / "clients", "pltf_toolkit": REPO}
-HEAVY = {"numpy", "scipy", "pymunk", "cantools", "lxml"}
+HEAVY = {"numpy", "scipy", "pymunk", "cantools", "lxml", "jsonschema"}
 STARTED = re.compile(r"server started at port (\d+)")
 
 
@@ -79,7 +79,7 @@ def test_the_client_distribution_alone_is_small_and_typed(dist: Path, tmp_path: 
     installed = {line.split("==")[0].lower() for line in _run(py, "-m", "pip", "freeze", cwd=empty).stdout.split()}
     assert not installed & HEAVY, installed
     probe = "import sys, pltf.client as c; print(c.__version__, sorted(set(sys.modules) & {'numpy', 'scipy', " \
-            "'pymunk', 'cantools', 'lxml'}))"
+            "'pymunk', 'cantools', 'lxml', 'jsonschema', 'asyncio', 'yaml'}))"
     out = _run(py, "-c", probe, cwd=empty).stdout.split(maxsplit=1)
     assert out[1].strip() == "[]", out
     site = Path(_run(py, "-c", "import pltf.client, os; print(os.path.dirname(pltf.client.__file__))",
