@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-slow lint typecheck docs docs-check bench clean install
+.PHONY: demo test test-slow lint typecheck docs docs-check bench clean install emulator
 
 # Three distributions, one import namespace `pltf` (spec/ -> pltf.spec, clients/pltf_client/ -> pltf.client, the
 # toolkit's folders -> pltf.*; see setup.py). mypy cannot run setuptools' editable import hooks, so it reads the
@@ -46,6 +46,10 @@ docs-check: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/python -m benchmarks --json benchmarks/results.json
+
+# The Go emulator (issue 17), a second implementation of the protocol: emulator/bin/emulator.
+emulator:
+	sh emulator/build.sh
 
 demo: $(STAMP)
 	$(BIN)/python -m pltf.cli.demo
