@@ -55,8 +55,8 @@ class TelegramSet:
     """All telegram classes of one direction, by name (attribute or ``[]``) and by id.
 
     A telegram's class, decoder and encoder are compiled the first time it is used (looked up by id or name,
-    decoded, or met while iterating): a process that decodes a few frames compiles a few telegrams, not 140
-    (spec/codec.py took ~80 of the client's ~570 ms import compiling all of them, issue 18). Two threads that
+    decoded, or met while iterating): a process that decodes a few frames compiles a few telegrams, not all 93
+    (compiling them all took ~80 ms of the client's ~570 ms import, issue 18). Two threads that
     compile the same telegram at once both get the one class that ``setdefault`` kept.
     """
 
