@@ -27,6 +27,7 @@ FOLDERS = {
     "pltf.stubgen": "clients/stubgen",
     "pltf.cli": "pltf_cli",
     "pltf.fixtures": "fixtures",
+    "pltf.zoo": "zoo",
 }
 
 
