@@ -293,3 +293,16 @@ class Session:
                     return False
         except ConnectionClosed:
             return True
+
+
+def wait_port_closed(host: str, port: int, within: float) -> bool:
+    """True when nothing accepts connections on ``port`` within ``within`` seconds."""
+    deadline = time.monotonic() + within
+    while time.monotonic() < deadline:
+        try:
+            with socket.create_connection((host, port), timeout=0.5):
+                pass
+        except OSError:
+            return True
+        time.sleep(0.05)
+    return False

@@ -69,7 +69,7 @@ def add_conform_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--list", action="store_true", help="list the selected cases and exit")
     p.add_argument("--verbose", action="store_true", help="print every verdict, not only the non-PASS ones")
     p.add_argument("--differential", action="store_true",
-                   help="also replay a session against an in-process reference server and diff the replies")
+                   help="also replay a session against a reference server started for it and diff the replies")
     p.add_argument("--stateful", type=int, default=0, metavar="N",
                    help="also run N stateful (Hypothesis) examples; a failure is saved as a replay script")
     p.add_argument("--stateful-out", default="conform-failures", metavar="DIR",

@@ -78,7 +78,7 @@ def run_fuzz(args: argparse.Namespace) -> int:
         print("pltf fuzz: --target HOST:PORT is required (or --in-process)", file=sys.stderr)
         return 2
     from pltf.fuzz.engine import Campaign, HarnessError, Options
-    from pltf.fuzz.launch import LaunchError
+    from pltf.zoo.launch import LaunchError
 
     host, port = args.target
     second = args.second_port if args.second_port is not None else (0 if port == 0 else port + 2)

@@ -132,12 +132,13 @@ class Launched:
             return None
         if proc.poll() is None:
             self._signal(proc, signal.SIGTERM)
-            try:
-                proc.wait(grace)
-            except subprocess.TimeoutExpired:
-                self._signal(proc, signal.SIGKILL)
-                proc.wait(5)
-        if self.new_session:  # whatever the target started itself and left behind
+            deadline = time.monotonic() + grace
+            while not _exited(proc.pid) and time.monotonic() < deadline:
+                time.sleep(0.01)
+            # the leader is alive or a zombie (not reaped yet), so its group id is still ours: end what is left
+            self._signal(proc, signal.SIGKILL)
+            proc.wait(5)
+        elif self.new_session:  # died by itself; its group may hold what it started (ESRCH when empty)
             with contextlib.suppress(ProcessLookupError, PermissionError):
                 os.killpg(proc.pid, signal.SIGKILL)
         if self._tmp is not None:
@@ -209,8 +210,8 @@ class Launcher(Launched):
 class _DataDirTarget(Launched):
     """A target whose data directory is ``{tmpdir}/data`` unless one is given."""
 
-    def __init__(self, argv: Sequence[str], data_dir: str | Path | None, **kw: object) -> None:
-        super().__init__(argv, **kw)  # type: ignore[arg-type]
+    def __init__(self, argv: Sequence[str], data_dir: str | Path | None, *, ports: tuple[int, int], name: str) -> None:
+        super().__init__(argv, ports=ports, name=name)
         self.data_dir = Path(data_dir) if data_dir is not None else None
 
     def data(self) -> Path:
@@ -218,6 +219,14 @@ class _DataDirTarget(Launched):
 
     def command(self) -> list[str]:
         return [a.replace("{data}", str(self.data())) for a in self.argv]
+
+
+def _exited(pid: int) -> bool:
+    """Has child ``pid`` exited? (Without reaping it: a zombie keeps its process group id reserved.)"""
+    try:
+        return os.waitid(os.P_PID, pid, os.WEXITED | os.WNOHANG | os.WNOWAIT) is not None
+    except ChildProcessError:
+        return True
 
 
 def python(module: str, *args: str) -> list[str]:

@@ -1,14 +1,14 @@
-"""Differential mode: the reference server in-process against the same server as a process shows no difference;
+"""Differential mode: the reference server against a second instance of itself shows no difference;
 a broken variant shows exactly where it differs; volatile fields are ignored or compared within tolerance."""
 
 from __future__ import annotations
 
 from pltf.conformance_tests.context import Config
 from pltf.conformance_tests.differential import compare, diff_replies, script, volatile
-from pltf.conformance_tests.launch import InProcessServer, ServerProcess
 from pltf.conformance_tests.mutants.catalogue import BY_ID
 from pltf.conformance_tests.mutants.proxy import FrameProxy
 from pltf.conformance_tests.readings import canonical
+from pltf.zoo import launch
 
 
 def test_volatile_fields_are_ignored_and_tolerances_applied() -> None:
@@ -21,7 +21,7 @@ def test_volatile_fields_are_ignored_and_tolerances_applied() -> None:
 
 
 def test_the_reference_agrees_with_itself_and_a_mutant_does_not() -> None:
-    with InProcessServer(time_scale=10.0) as ref, ServerProcess(time_scale=10.0) as tgt:
+    with launch.reference(time_scale=10.0) as ref, launch.reference(time_scale=10.0) as tgt:
         rc = Config("127.0.0.1", ref.ports[0], time_scale=10.0, simulator=True)
         tc = Config("127.0.0.1", tgt.ports[0], time_scale=10.0, simulator=True)
         assert compare(rc, tc, motion=True) == []
