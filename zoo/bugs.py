@@ -53,24 +53,25 @@ class Bug(Protocol):
     def on_request(self, piece: Piece, now: float) -> Fault | None: ...
 
 
-@dataclass
-class PlatformView:
-    state: str = NC
-    mode: int = MotionMode.MODE_MOTION_NO
-
-    def on_request(self, name: str, data: bytes) -> None:
-        if name == "CMD_SET_MODE":
-            if self.state == RD and len(data) >= 2:  # guide 6.3 CMD_SET_MODE: only in 'Ready'
-                self.mode = data[1]
-            return
-        self.state = CHART.get((self.state, name), self.state)
-
-
 def _decoded_field(piece: Piece, name: str) -> object:
     try:
         return getattr(decode_frame(piece.data, "request"), name)
     except errors.ProtocolError:
         return None
+
+
+@dataclass
+class PlatformView:
+    state: str = NC
+    mode: int = MotionMode.MODE_MOTION_NO
+
+    def on_request(self, name: str, piece: Piece) -> None:
+        if name == "CMD_SET_MODE":
+            mode = _decoded_field(piece, "mode")
+            if self.state == RD and isinstance(mode, int):  # guide 6.3 CMD_SET_MODE: only in 'Ready'
+                self.mode = mode
+            return
+        self.state = CHART.get((self.state, name), self.state)
 
 
 @dataclass
@@ -86,7 +87,7 @@ class CrashAfterStart:
         if name in PATH_MOVES and self.view.state == RU and self.view.mode != MotionMode.MODE_MOTION_AUTOMATIC:
             mode = MotionMode(self.view.mode).name if self.view.mode in MotionMode._value2member_map_ else "unknown"
             return Fault("crash", f"{name} in running, motion mode {mode}: the planner of mode Automatic is null")
-        self.view.on_request(name, piece.data[8:])
+        self.view.on_request(name, piece)
         return None
 
 

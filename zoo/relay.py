@@ -7,8 +7,8 @@ Rules:
   member with a bug cuts whole frames first, shows each to the bug, then passes it on - so the bug acts before
   the target does. A stream out of step is passed on raw (frames.py): the target behind judges it.
 - Target -> client: passed on as it comes, or, for a member that shapes replies, cut into frames, held until
-  due and written coalesced and in segments (schedule.py): with TCP_NODELAY each write is one send(), one
-  segment on the wire.
+  due and written coalesced and in segments (schedule.py): with TCP_NODELAY and a gap between them each write
+  is one send(), one segment on the wire.
 - Half-close travels (a client's end-of-stream is passed on and the target may still answer); when the target
   closes, the client is closed after the replies still held for it.
 - A crash calls ``on_exit`` (the member stops the target it started) and ends the process with status 134; a
@@ -34,6 +34,7 @@ from pltf.zoo.frames import FrameCutter
 from pltf.zoo.members import Member
 from pltf.zoo.schedule import ReplySchedule, segments
 
+SEGMENT_GAP = 0.001  # s between two writes of one chunk (slow link)
 HALF_CLOSE_WAIT = 15.0  # s the target may take to answer and close after a client's end-of-stream
 
 
@@ -202,7 +203,9 @@ class Relay:
                     with contextlib.suppress(TimeoutError):
                         await asyncio.wait_for(more.wait(), timeout)
                     continue
-                for seg in segments(schedule.due(loop.time()), self.rng, self.member.segment):
+                for i, seg in enumerate(segments(schedule.due(loop.time()), self.rng, self.member.segment)):
+                    if i:
+                        await asyncio.sleep(SEGMENT_GAP)  # one TCP segment per write (TCP_NODELAY), apart in time
                     writer.write(seg)
                     await writer.drain()
         finally:

@@ -5,8 +5,9 @@ Rules:
   pushed before it: the stream keeps its order (TCP), so one late reply holds back the ones behind it.
 - ``due(now)`` takes every piece due by ``now`` off the front and joins them into one chunk: replies that became
   due together leave together (coalesced), as a slow link delivers them.
-- ``segments(chunk, rng)`` cuts a chunk into writes of ``segment`` bytes at most (random sizes from 1), so a
-  client sees a reply split across many TCP segments.
+- ``segments(chunk, rng, segment)`` cuts the front of a chunk into small writes (1..``segment`` bytes, random),
+  ``SMALL_PIECES`` of them, and the rest into one: a client sees the header of a reply torn across TCP segments
+  and the end of one reply in the segment that carries the next (the relay leaves a gap between writes).
 - Time is ``now`` (seconds, any monotonic origin) and randomness a seeded ``random.Random``, both passed in.
 """
 
@@ -19,6 +20,7 @@ from collections.abc import Callable
 from pltf.zoo.frames import Piece
 
 Delay = Callable[[Piece, random.Random], float]
+SMALL_PIECES = 8
 
 
 def no_delay(piece: Piece, rng: random.Random) -> float:
@@ -70,13 +72,17 @@ class ReplySchedule:
         return bytes(out)
 
 
-def segments(chunk: bytes, rng: random.Random, segment: int) -> list[bytes]:
-    """``chunk`` cut into pieces of 1..``segment`` bytes (one piece when ``segment`` is 0)."""
+def segments(chunk: bytes, rng: random.Random, segment: int, pieces: int = SMALL_PIECES) -> list[bytes]:
+    """``chunk`` as writes: the first ``pieces`` of 1..``segment`` bytes each (a header torn apart), the rest in
+    one write (the whole chunk when ``segment`` is 0)."""
     if segment <= 0 or len(chunk) <= 1:
         return [chunk] if chunk else []
-    out, i = [], 0
-    while i < len(chunk):
+    out: list[bytes] = []
+    i = 0
+    while i < len(chunk) and len(out) < pieces:
         n = rng.randint(1, segment)
         out.append(chunk[i : i + n])
         i += n
+    if i < len(chunk):
+        out.append(chunk[i:])
     return out
