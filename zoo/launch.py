@@ -12,13 +12,15 @@ Rules:
   zoo; the emulator prefixes ``emulator:``) once per port, in port order, and we read them from its merged
   stdout/stderr. The output goes to a log file (no reader thread, no pipe to fill); ``output`` is its tail.
 - The child runs in a session (process group) of its own, so ``stop`` ends the target and whatever it started
-  itself (a zoo member's server) and nothing else: SIGTERM to the group, SIGKILL after a grace period.
+  itself (a zoo member's server) and nothing else: SIGTERM to the group, SIGKILL after a grace period. It also
+  gets SIGTERM when the thread that started it ends (PR_SET_PDEATHSIG): no target outlives its harness.
 - Every wait is bounded. A start that fails raises ``LaunchError`` with the command and the output's tail.
 """
 
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import os
 import re
 import shlex
@@ -29,7 +31,7 @@ import subprocess
 import sys
 import tempfile
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import IO
 
@@ -75,7 +77,8 @@ class Launched:
         env = dict(os.environ, PYTHONUNBUFFERED="1", **(self.env or {}))
         try:
             self.proc = subprocess.Popen(argv, stdout=self._log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
-                                         env=env, start_new_session=self.new_session)
+                                         env=env, start_new_session=self.new_session,
+                                         preexec_fn=_die_with_parent)  # noqa: PLW1509 (see _pdeathsig)
         except OSError as exc:
             self.cleanup()
             raise LaunchError(f"cannot start {self.name} ({shlex.join(argv)}): {exc}") from None
@@ -219,6 +222,19 @@ class _DataDirTarget(Launched):
 
     def command(self) -> list[str]:
         return [a.replace("{data}", str(self.data())) for a in self.argv]
+
+
+def _pdeathsig() -> Callable[[], None] | None:
+    """In the child before exec: SIGTERM when the thread that started it ends (Linux PR_SET_PDEATHSIG), so a
+    target outlives no harness, even one killed without its clean-up (a timeout, SIGKILL). The C function is
+    looked up here, in the parent: the child only calls it (no import, no lock taken between fork and exec)."""
+    if not sys.platform.startswith("linux"):
+        return None
+    prctl = ctypes.CDLL(None, use_errno=True).prctl
+    return lambda: prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG = 1
+
+
+_die_with_parent = _pdeathsig()
 
 
 def _exited(pid: int) -> bool:
