@@ -113,6 +113,12 @@ class Relay:
         self.turned_away += 1
         if self.member.turn_away == "rst":
             sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+        else:  # FIN first; what the newcomer sent is read away, else the close would reset the connection
+            with contextlib.suppress(OSError):
+                sock.shutdown(socket.SHUT_WR)
+                sock.setblocking(False)
+                while sock.recv(65536):
+                    pass
         sock.close()
 
     # ---- one client
