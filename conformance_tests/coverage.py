@@ -149,18 +149,6 @@ class Coverage:
         with self._lock:
             self.transitions.add((source.value, command, dest.value))
 
-    def merge(self, other: Coverage) -> None:
-        with self._lock:
-            self.sent_names |= other.sent_names
-            self.received_names |= other.received_names
-            self.fields |= other.fields
-            for src, dst in ((other.enum_values, self.enum_values), (other.reply_enum_values, self.reply_enum_values)):
-                for k, v in src.items():
-                    dst.setdefault(k, set()).update(v)
-            for k, els in other.elements.items():
-                self.elements.setdefault(k, set()).update(els)
-            self.transitions |= other.transitions
-
     # ---- report
     def metrics(self) -> list[Metric]:
         req_names = [c.NAME for c in REQUESTS]

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field, replace
 
 from pltf.fuzz.case import WHOLE, Delivery
 from pltf.fuzz.replies import reply_decoder
-from pltf.fuzz.wire import answered_ids, split_frames
+from pltf.fuzz.wire import answered_ids
 from pltf.spec import errors
 from pltf.spec.codec import REQUESTS, encode
 from pltf.spec.telegram import Telegram
@@ -308,7 +308,3 @@ class Prober:
             if attempt:
                 return "deaf"
         return "deaf"
-
-
-def frames_of(data: bytes) -> list[bytes]:
-    return split_frames(data) if data else []

@@ -7,9 +7,6 @@ Latin-1 text. ``hypothesis`` is a development dependency, so only tests and tool
 
 from __future__ import annotations
 
-import math
-import struct
-
 from hypothesis import strategies as st
 
 from pltf.spec.codec import telegram_set
@@ -58,8 +55,3 @@ def telegram_strategy(cls: type[Telegram], max_items: int = 8) -> st.SearchStrat
 
 def any_telegram(direction: Direction, max_items: int = 8) -> st.SearchStrategy[Telegram]:
     return st.one_of([telegram_strategy(cls, max_items) for cls in telegram_set(direction)])
-
-
-def is_finite_double(value: float) -> bool:
-    """Doubles round-trip bit for bit; NaN is excluded only because NaN != NaN."""
-    return not math.isnan(value) and struct.unpack(">d", struct.pack(">d", value))[0] == value

@@ -16,8 +16,6 @@ from pltf.fake_hardware.boards.base import Board, Builder, EmergencyCircuit, Han
 from pltf.fake_hardware.candb import Node, Signals, St
 from pltf.fake_hardware.canport import CanPort
 
-RELAYS = 8
-
 
 class RelayBoard(Board):
     def __init__(self, port: CanPort, circuit: EmergencyCircuit) -> None:
