@@ -251,13 +251,15 @@ def python(module: str, *args: str) -> list[str]:
 
 def reference(*, time_scale: float = 10.0, seed: int = 1, data_dir: str | Path | None = None,
               extra: Sequence[str] = (), mutant: str | None = None, ports: tuple[int, int] = (0, 0),
-              log_level: str = "INFO") -> _DataDirTarget:
+              log_level: str = "INFO", start_timeout: float = START_TIMEOUT) -> _DataDirTarget:
     """The reference server (or a model mutant of it: conformance_tests/mutants/patches.py)."""
     args = ["--ports", f"{ports[0]},{ports[1]}", "--data-dir", "{data}", "--time-scale", f"{time_scale:g}",
             "--seed", str(seed), "--log-level", log_level, *extra]
     argv = (python("pltf.conformance_tests.mutants.serve", mutant, *args) if mutant
             else python("pltf.reference_server", *args))
-    return _DataDirTarget(argv, data_dir, ports=ports, name=f"mutant {mutant}" if mutant else "reference server")
+    target = _DataDirTarget(argv, data_dir, ports=ports, name=f"mutant {mutant}" if mutant else "reference server")
+    target.start_timeout = start_timeout
+    return target
 
 
 def emulator_binary() -> Path | None:
