@@ -3,8 +3,9 @@ waiting on a target that no longer answers (issue 17: against a slow or stuck ta
 5 minutes, with verdicts that say why).
 
 Rules:
-- ``measure`` runs once, before the first case: CMD_GET_STATUS three times on a fresh connection to port A, the
-  first allowed ``PATIENCE`` s. Their median is the target's reply time (None when nothing came).
+- ``measure`` runs once, before the first case: CMD_GET_STATUS three times on a fresh connection to port A (a
+  connection turned away is retried for the connect window), the first allowed ``PATIENCE`` s. Their median is
+  the target's reply time (None when nothing came).
 - ``apply`` scales the run's waits to it: a reply time up to ``MAX_SCALED`` raises the wall floor of every wait
   derived from simulated time (``Config.min_wall``) and the connection probe's patience to ``SCALE`` times the
   reply time, so a slow but conforming target (a slow link) is judged on what it does, not on how fast it does
@@ -26,7 +27,7 @@ import time
 from dataclasses import dataclass, field
 
 from pltf.conformance_tests.context import Config, Target
-from pltf.conformance_tests.outcome import TargetFailure, Unreachable
+from pltf.conformance_tests.outcome import ConnectionClosed, TargetFailure, Unreachable
 from pltf.conformance_tests.wire import Session, WireLog
 from pltf.spec.codec import build
 
@@ -57,22 +58,31 @@ class Pace:
 
 def measure(target: Target, samples: int = 3) -> Pace:
     cfg = target.config
-    s = Session(cfg.host, target.port_of("A"), label="A", log=WireLog(max_entries=50), timeout=PATIENCE)
-    times: list[float] = []
-    try:
-        s.connect(timeout=min(cfg.reply_timeout, 5.0))
-        for i in range(samples):
-            t0 = time.monotonic()
-            s.request(build("request", "CMD_GET_STATUS"), timeout=PATIENCE if i == 0 else max(3 * times[0], 1.0))
-            times.append(time.monotonic() - t0)
-            if times[0] > MAX_SCALED:
-                break  # too slow to scale to: one sample says enough
-    except (TargetFailure, Unreachable) as exc:
-        if not times:
-            return Pace(None, str(exc))
-    finally:
-        s.close()
-    return Pace(statistics.median(times))
+    deadline = time.monotonic() + cfg.connect_window
+    while True:
+        times: list[float] = []
+        s = Session(cfg.host, target.port_of("A"), label="A", log=WireLog(max_entries=50), timeout=PATIENCE)
+        try:
+            s.connect(timeout=min(cfg.reply_timeout, 5.0))
+            for i in range(samples):
+                t0 = time.monotonic()
+                s.request(build("request", "CMD_GET_STATUS"), timeout=PATIENCE if i == 0 else max(3 * times[0], 1.0))
+                times.append(time.monotonic() - t0)
+                if times[0] > MAX_SCALED:
+                    break  # too slow to scale to: one sample says enough
+        except (ConnectionClosed, Unreachable) as exc:  # turned away: the port is not free yet (one client per port)
+            refused = "refused" in str(exc).lower()  # nothing listens: no use waiting
+            if not times and not refused and time.monotonic() < deadline:
+                time.sleep(0.05)
+                continue
+            if not times:
+                return Pace(None, str(exc))
+        except TargetFailure as exc:
+            if not times:
+                return Pace(None, str(exc))
+        finally:
+            s.close()
+        return Pace(statistics.median(times))
 
 
 def apply(pace: Pace, config: Config) -> None:
