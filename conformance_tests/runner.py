@@ -10,6 +10,8 @@ Rules:
   too. Attempts that disagree (one PASS, one FAIL) make the case INCONCLUSIVE: a flake is reported, not hidden.
 - After every ``abuse`` case the runner checks liveness: a new client is served on each port and the operation
   state and motion mode are what they were before the abuse.
+- A SHOULD or MAY case during which the target stopped answering (a reply timeout, and then no new client
+  served) is FAIL: whatever the case's level, a target must keep serving.
 - Bounds (pace.py): the target's reply time is measured once before the first case and scales the waits; every
   case (and the reset before a group) runs within a budget; a run budget and the watch on a target that stopped
   answering leave the remaining cases INCONCLUSIVE "not run" with the reason, so a run always ends.
@@ -250,6 +252,12 @@ class Runner:
                 break
         verdict, message = _resolve(attempts)
         last = attempts[-1]
+        if last.silent and verdict in (Verdict.NON_STRICT, Verdict.NA):
+            # a SHOULD or MAY case, but the target answers nobody any more: serving on is a MUST
+            problem = pace.health(self.target)
+            if problem:
+                verdict, message = Verdict.FAIL, (f"the target stopped answering during this case: {problem} "
+                                                  f"(the case: {first_line(message)})")
         self.watch.record(c.id, last.silent, first_line(last.message))
         return CaseResult(c, verdict, message, attempts)
 
