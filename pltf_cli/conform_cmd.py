@@ -18,6 +18,7 @@ from pltf.conformance_tests.baseline import Baseline, BaselineError
 from pltf.conformance_tests.catalogue import Tier, Verdict, load_all, select
 from pltf.conformance_tests.context import Config
 from pltf.conformance_tests.outcome import Outcome, Unreachable
+from pltf.conformance_tests.pace import run_budget
 
 
 def add_conform_arguments(p: argparse.ArgumentParser) -> None:
@@ -45,10 +46,16 @@ def add_conform_arguments(p: argparse.ArgumentParser) -> None:
                    help="exit 1 when an enforced coverage metric is below PCT percent")
     p.add_argument("--reruns", type=count, default=2, metavar="N", help="re-runs of an inconclusive case (default 2)")
     p.add_argument("--reply-timeout", type=positive, default=3.0, metavar="S", help="wall seconds per reply")
+    p.add_argument("--budget", type=positive, metavar="S",
+                   help="wall seconds for the whole run; the cases left then are INCONCLUSIVE 'not run' (default for "
+                        "the smoke and standard tiers: 280, or 80 + 600 / time scale when more; exhaustive: none)")
+    p.add_argument("--case-budget", type=positive, metavar="S",
+                   help="wall seconds one case may take (default 30 + 240 / time scale); a case still running then "
+                        "is INCONCLUSIVE 'case budget spent'")
     p.add_argument("--list", action="store_true", help="list the selected cases and exit")
     p.add_argument("--verbose", action="store_true", help="print every verdict, not only the non-PASS ones")
     p.add_argument("--differential", action="store_true",
-                   help="also replay a session against an in-process reference server and diff the replies")
+                   help="also replay a session against a reference server started for it and diff the replies")
     p.add_argument("--stateful", type=count, default=0, metavar="N",
                    help="also run N stateful (Hypothesis) examples; a failure is saved as a replay script")
     p.add_argument("--stateful-out", default="conform-failures", metavar="DIR",
@@ -69,7 +76,12 @@ def run_conform(args: argparse.Namespace) -> int:
     config = Config(host=host, port=number, second_port=args.second_port, time_scale=args.time_scale,
                     profile=args.profile, tier=Tier[args.tier.upper()], keyword=args.keyword,
                     allow_motion=args.allow_motion, simulator=args.target_is_simulator,
-                    allow_shutdown=args.allow_shutdown, reruns=max(0, args.reruns), reply_timeout=args.reply_timeout)
+                    allow_shutdown=args.allow_shutdown, reruns=max(0, args.reruns), reply_timeout=args.reply_timeout,
+                    case_budget=args.case_budget)
+    if args.budget is not None:
+        config.run_budget = args.budget
+    elif config.tier is not Tier.EXHAUSTIVE:  # a standard run ends within 5 minutes whatever the target does
+        config.run_budget = run_budget(config)
     try:
         cases = select(load_all().values(), tier=config.tier, keyword=config.keyword)
         baseline = Baseline.load(args.baseline) if args.baseline else Baseline()

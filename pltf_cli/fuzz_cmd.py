@@ -93,8 +93,8 @@ def run_fuzz(args: argparse.Namespace) -> int:
         raise CommandError(f"--second-port: the default, PORT+2 = {second}, is over 65535: give one")
 
     from pltf.fuzz.engine import Campaign, HarnessError, Options
-    from pltf.fuzz.launch import LaunchError
     from pltf.fuzz.view import LiveView
+    from pltf.zoo.launch import LaunchError
 
     opts = Options(
         host=host, port=port, second_port=second, duration=args.duration, seed=args.seed, out=args.out,
