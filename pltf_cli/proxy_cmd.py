@@ -1,0 +1,118 @@
+"""``pltf proxy``: a transparent TCP proxy in front of one or both ports of a PlatformCtrl (proxy/).
+
+It forwards bytes unchanged, shows every telegram of both directions live, and with ``--record FILE`` keeps the
+session (FILE, JSON lines) and a pcapng beside it. Runs until Ctrl-C (or SIGTERM). Exit status 0, or 2 for a
+user error (bad address, port in use, unwritable file).
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import signal
+import sys
+import time
+from pathlib import Path
+
+from proxy.capture import PcapngWriter
+from proxy.network import ProxyServer, Route
+from proxy.recorder import Recorder, Sink
+from proxy.session import Route as SessionRoute
+from proxy.session import SessionWriter
+from proxy.view import Selection, View
+from spec.codec import DEFAULT_MAX_LENGTH
+
+
+def _fail(message: str) -> int:
+    print(f"pltf: error: {message}", file=sys.stderr)
+    return 2
+
+
+def host_port(text: str) -> tuple[str, int]:
+    host, sep, port = text.rpartition(":")
+    if not sep or not host or not port.isdigit() or not 0 <= int(port) < 65536:
+        raise argparse.ArgumentTypeError(f"expected HOST:PORT, got {text!r}")
+    return host.strip("[]"), int(port)
+
+
+def port_pair(text: str) -> tuple[int, int]:
+    """``--second LISTEN_PORT[:TARGET_PORT]``: the second port, on the hosts of --listen and --target."""
+    parts = text.split(":")
+    if len(parts) not in (1, 2) or not all(p.isdigit() and int(p) < 65536 for p in parts):
+        raise argparse.ArgumentTypeError(f"expected PORT or LISTEN_PORT:TARGET_PORT, got {text!r}")
+    listen = int(parts[0])
+    return listen, int(parts[-1])
+
+
+def add_proxy_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--listen", type=host_port, required=True, metavar="HOST:PORT",
+                   help="where clients connect (port 0: any free port, printed at start)")
+    p.add_argument("--target", type=host_port, required=True, metavar="HOST:PORT", help="the platform (or server)")
+    p.add_argument("--second", type=port_pair, metavar="LPORT[:TPORT]",
+                   help="also proxy a second port: listen on LPORT, forward to TPORT of the target (guide 6.1: 10002)")
+    p.add_argument("--record", type=Path, metavar="FILE",
+                   help="write the session to FILE (JSON lines) and the traffic to FILE with suffix .pcapng")
+    p.add_argument("--pcapng", type=Path, metavar="FILE", help="the pcapng file (default: beside --record)")
+    p.add_argument("--filter", action="append", default=[], metavar="NAMES",
+                   help="show only these telegrams (names or globs, comma-separated, CMD_ optional; repeatable)")
+    p.add_argument("--hide", action="append", default=[], metavar="NAMES",
+                   help="do not show these telegrams (e.g. GET_STATUS when a client polls)")
+    p.add_argument("--quiet", action="store_true", help="no live view (recording goes on)")
+    p.add_argument("--relative-time", action="store_true", help="times in seconds since the proxy started")
+    p.add_argument("--max-length", type=int, default=DEFAULT_MAX_LENGTH, metavar="BYTES",
+                   help="frames longer than this are marked FrameTooLarge (default 16 MiB, erratum E-WIRE-004)")
+
+
+def _names(values: list[str]) -> list[str]:
+    return [n for v in values for n in v.split(",") if n.strip()]
+
+
+def run_proxy(args: argparse.Namespace) -> int:
+    (lhost, lport), (thost, tport) = args.listen, args.target
+    routes = [Route(lhost, lport, thost, tport)]
+    if args.second is not None:
+        routes.append(Route(lhost, args.second[0], thost, args.second[1]))
+    started = time.time()
+    sinks: list[Sink] = []
+    view = None
+    if not args.quiet:
+        view = View(sys.stdout, Selection(_names(args.filter), _names(args.hide)), color=sys.stdout.isatty(),
+                    t0=started if args.relative_time else None)  # fmt: skip
+        sinks.append(view.show)
+    try:
+        session = pcapng = None
+        if args.record is not None:
+            session = SessionWriter(args.record)
+            pcapng = PcapngWriter(args.pcapng or args.record.with_suffix(".pcapng"))
+        elif args.pcapng is not None:
+            pcapng = PcapngWriter(args.pcapng)
+    except OSError as exc:
+        return _fail(f"cannot write the recording: {exc.filename}: {exc.strerror}")
+    recorder = Recorder(sinks, pcapng, session, max_length=args.max_length)
+    try:
+        return asyncio.run(_serve(routes, recorder, view, started))
+    except OSError as exc:
+        return _fail(f"cannot listen on {lhost}: {exc.strerror or exc}")
+
+
+async def _serve(routes: list[Route], recorder: Recorder, view: View | None, started: float) -> int:
+    proxy = ProxyServer(routes, recorder, flush=view.flush if view is not None else None)
+    listening = await proxy.start()
+    if recorder.session is not None:
+        recorder.session.start([SessionRoute(f"{host}:{port}", f"{r.target_host}:{r.target_port}")
+                                for r, (host, port) in zip(routes, listening, strict=True)], started)  # fmt: skip
+    for route, (host, port) in zip(routes, listening, strict=True):
+        print(f"proxy listening at {host}:{port} -> {route.target_host}:{route.target_port}", flush=True)
+    loop = asyncio.get_running_loop()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        loop.add_signal_handler(sig, proxy.request_stop)
+    try:
+        await proxy.wait_stopped()
+    finally:
+        await proxy.close()
+    counts = recorder.counts
+    summary = f"{counts['connections']} connections, {sum(counts.values()) - counts['connections']} frames"
+    if counts["malformed"]:
+        summary += f", {counts['malformed']} malformed"
+    print(f"proxy stopped: {summary}", file=sys.stderr)
+    return 0
