@@ -19,6 +19,8 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import itertools
+import socket
+import struct
 import sys
 import time
 import traceback
@@ -37,6 +39,15 @@ class Route:
     listen_port: int
     target_host: str
     target_port: int
+
+
+def _reset(transport: asyncio.Transport) -> None:
+    """Close with a reset (RST), as the peer did: SO_LINGER 0, then abort (asyncio alone would send a FIN)."""
+    sock = transport.get_extra_info("socket")
+    if sock is not None:
+        with contextlib.suppress(OSError):
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+    transport.abort()
 
 
 class _Side(asyncio.Protocol):
@@ -140,7 +151,7 @@ class _Pair:
         other = self.other(side)
         if other is not None and other.transport is not None and not other.lost:
             if exc is not None:
-                other.transport.abort()
+                _reset(other.transport)
             else:
                 other.transport.close()  # after what it still has to write
         if other is None or other.lost or other.transport is None:
