@@ -21,6 +21,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "run-program": ("pltf_cli.run_program_cmd", "run a task program (guide 6.5) here, driving a platform: remote mode"),
     "stubs": ("pltf_cli.stubs_cmd", "generate the client stubs of one language (or --check a generated copy)"),
     "proxy": ("pltf_cli.proxy_cmd", "a transparent TCP proxy: decode both directions live, record the session"),
+    "dissector": ("pltf_cli.dissector_cmd", "write the Wireshark Lua dissector generated from spec/ (or --check it)"),
 }
 
 
