@@ -4,7 +4,9 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-slow lint typecheck docs docs-check bench clean install
+SUDO := $(if $(filter 0,$(shell id -u)),,sudo)
+
+.PHONY: demo test test-slow lint typecheck docs docs-check bench clean install tshark
 
 $(STAMP): pyproject.toml setup.py $(wildcard reference_server/world/*.c)
 	@test -x $(BIN)/python || $(PY) -m venv $(VENV)
@@ -14,13 +16,20 @@ $(STAMP): pyproject.toml setup.py $(wildcard reference_server/world/*.c)
 
 install: $(STAMP)
 
-test: $(STAMP)
+# tshark (Debian's package) runs the generated Wireshark dissector (proxy/pltf.lua) in tests/proxy and
+# benchmarks/bench_proxy.py. Idempotent: installed once, found on PATH afterwards.
+tshark:
+	@command -v tshark >/dev/null 2>&1 || { $(SUDO) apt-get update -qq && \
+		$(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq tshark; }
+
+test: $(STAMP) tshark
 	$(BIN)/ruff check .
 	$(BIN)/mypy
 	$(BIN)/python -m spec.docgen --check
+	$(BIN)/python -m proxy.dissector --check
 	$(BIN)/python -m pytest -q -m "not slow"
 
-test-slow: $(STAMP)
+test-slow: $(STAMP) tshark
 	$(BIN)/python -m pytest -q -m slow
 
 lint: $(STAMP)
@@ -31,11 +40,13 @@ typecheck: $(STAMP)
 
 docs: $(STAMP)
 	$(BIN)/python -m spec.docgen
+	$(BIN)/python -m proxy.dissector
 
 docs-check: $(STAMP)
 	$(BIN)/python -m spec.docgen --check
+	$(BIN)/python -m proxy.dissector --check
 
-bench: $(STAMP)
+bench: $(STAMP) tshark
 	$(BIN)/python -m benchmarks --json benchmarks/results.json
 
 demo: $(STAMP)
