@@ -8,10 +8,19 @@ SUDO := $(if $(filter 0,$(shell id -u)),,sudo)
 
 .PHONY: demo test test-slow lint typecheck docs docs-check bench clean install tshark
 
-$(STAMP): pyproject.toml setup.py $(wildcard reference_server/world/*.c)
+# Three distributions, one import namespace `pltf` (spec/ -> pltf.spec, clients/pltf_client/ -> pltf.client, the
+# toolkit's folders -> pltf.*; see setup.py). mypy cannot run setuptools' editable import hooks, so it reads the
+# namespace through a tree of links in the venv (NSTREE).
+NSTREE := $(VENV)/namespace/pltf
+NSLINKS := spec:spec client:clients/pltf_client reference_server:reference_server fake_hardware:fake_hardware \
+	conformance_tests:conformance_tests fuzz:fuzz stubgen:clients/stubgen cli:pltf_cli fixtures:fixtures proxy:proxy
+
+$(STAMP): pyproject.toml setup.py spec/pyproject.toml clients/pyproject.toml $(wildcard reference_server/world/*.c)
 	@test -x $(BIN)/python || $(PY) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[dev]'
+	$(BIN)/python -m pip install --quiet -e ./spec -e ./clients -e '.[dev]'
+	@rm -rf $(NSTREE) && mkdir -p $(NSTREE)
+	@for l in $(NSLINKS); do ln -s "$(CURDIR)/$${l#*:}" "$(NSTREE)/$${l%%:*}"; done
 	@touch $(STAMP)
 
 install: $(STAMP)
@@ -25,8 +34,8 @@ tshark:
 test: $(STAMP) tshark
 	$(BIN)/ruff check .
 	$(BIN)/mypy
-	$(BIN)/python -m spec.docgen --check
-	$(BIN)/python -m proxy.dissector --check
+	$(BIN)/python -m pltf.spec.docgen --check
+	$(BIN)/python -m pltf.proxy.dissector --check
 	$(BIN)/python -m pytest -q -m "not slow"
 
 test-slow: $(STAMP) tshark
@@ -39,18 +48,18 @@ typecheck: $(STAMP)
 	$(BIN)/mypy
 
 docs: $(STAMP)
-	$(BIN)/python -m spec.docgen
-	$(BIN)/python -m proxy.dissector
+	$(BIN)/python -m pltf.spec.docgen
+	$(BIN)/python -m pltf.proxy.dissector
 
 docs-check: $(STAMP)
-	$(BIN)/python -m spec.docgen --check
-	$(BIN)/python -m proxy.dissector --check
+	$(BIN)/python -m pltf.spec.docgen --check
+	$(BIN)/python -m pltf.proxy.dissector --check
 
 bench: $(STAMP) tshark
 	$(BIN)/python -m benchmarks --json benchmarks/results.json
 
 demo: $(STAMP)
-	$(BIN)/python -m pltf_cli.demo
+	$(BIN)/python -m pltf.cli.demo
 
 clean:
 	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache

@@ -1,4 +1,4 @@
-"""Codec rates: ``spec.codec`` side by side with a hand-written ``struct`` codec and with ``construct``.
+"""Codec rates: ``pltf.spec.codec`` side by side with a hand-written ``struct`` codec and with ``construct``.
 
 Telegrams: CMD_MOVE_VEL (a small command), CMD_MOVE_PATH with 100 frames, and a full CMD_GET_STATUS reply
 with 541 scan points (a 270-degree scanner at 0.5 degrees), 3 reflectors, 4 lines, 2 circles, 5 corners, a
@@ -7,7 +7,7 @@ with 541 scan points (a 270-degree scanner at 0.5 degrees), 3 reflectors, 4 line
 Targets (issue "codec rates"): >= 300,000 small telegrams/s decoded on one core; the status telegram decoded
 within 1.5x the time of the hand-written decoder and >= 10x faster than ``construct``.
 
-Subjects: ``spec.codec`` (ours: ``decode_frame`` / ``TelegramDecoder`` / ``encode``), ``handwritten``
+Subjects: ``pltf.spec.codec`` (ours: ``decode_frame`` / ``TelegramDecoder`` / ``encode``), ``handwritten``
 (``benchmarks.handwritten``), ``construct`` (``benchmarks.construct_defs``) and ``construct.compile`` (the same
 declarations compiled by construct, for information).
 """
@@ -22,10 +22,10 @@ from typing import Any
 from benchmarks import construct_defs as cs
 from benchmarks import handwritten as hw
 from benchmarks.harness import Config, Row, Target, benchmark, median_rates, rate_rows
-from spec.codec import REPLIES, REQUESTS, TelegramDecoder, decode_frame, encode
-from spec.telegram import Telegram
+from pltf.spec.codec import REPLIES, REQUESTS, TelegramDecoder, decode_frame, encode
+from pltf.spec.telegram import Telegram
 
-OURS = "spec.codec"
+OURS = "pltf.spec.codec"
 HANDWRITTEN = "handwritten"
 CONSTRUCT = "construct"
 CONSTRUCT_COMPILED = "construct.compile"

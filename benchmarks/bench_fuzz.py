@@ -1,15 +1,15 @@
 """Fuzzing rate against the reference server: ``pltf fuzz`` versus boofuzz driving the same telegrams.
 
-Set-up: each subject gets a fresh ``python -m reference_server`` (own process, own data dir, log level ERROR
+Set-up: each subject gets a fresh ``python -m pltf.reference_server`` (own process, own data dir, log level ERROR
 so that neither pays for the server's per-connection INFO lines) and runs for the same wall time (10 s),
 three times, interleaved; the median rate is reported.
 
-- ``pltf fuzz``: the network campaign of ``fuzz.engine`` as ``pltf fuzz --allow-motion`` runs it (state
+- ``pltf fuzz``: the network campaign of ``pltf.fuzz.engine`` as ``pltf fuzz --allow-motion`` runs it (state
   preludes, batching of the cases the codec accepts, one connection per case it refuses, the GET_STATUS
   liveness probe on the other port every 4 units).
 - ``pltf fuzz, probe every unit``: the same with the probe after every unit (the strictest oracle).
 - ``pltf fuzz, natural mix``: the same with every drawn case over 1 MiB kept (``--big-share 1``); by default
-  the scheduler keeps a quarter of them (``fuzz.schedule``: each costs the target up to 0.6 s).
+  the scheduler keeps a quarter of them (``pltf.fuzz.schedule``: each costs the target up to 0.6 s).
 - ``boofuzz``: one boofuzz request per request telegram of the spec (header and length as boofuzz
   primitives, the length computed by ``s_size`` over the data block, every field fuzzable with boofuzz's
   own value library), a ``Session`` on a TCP connection with no sleeps and no receive, the web UI off,
@@ -32,10 +32,10 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from benchmarks.harness import Config, Row, Target, benchmark, make_row
-from fuzz.engine import Campaign, Options
-from fuzz.launch import Launcher
-from fuzz.schedule import BIG_SHARE
-from spec.model import FieldDef, load_telegrams
+from pltf.fuzz.engine import Campaign, Options
+from pltf.fuzz.launch import Launcher
+from pltf.fuzz.schedule import BIG_SHARE
+from pltf.spec.model import FieldDef, load_telegrams
 
 OURS = "pltf fuzz"
 OURS_STRICT = "pltf fuzz, probe every unit"
@@ -43,7 +43,7 @@ OURS_NATURAL = "pltf fuzz, natural mix (--big-share 1)"
 BOOFUZZ = "boofuzz"
 RATE_TARGET = 3000.0
 SPEEDUP_TARGET = 10.0
-LAUNCH = f"{sys.executable} -m reference_server --ports {{ports}} --data-dir {{tmpdir}} --seed 1 --log-level ERROR"
+LAUNCH = f"{sys.executable} -m pltf.reference_server --ports {{ports}} --data-dir {{tmpdir}} --seed 1 --log-level ERROR"
 
 
 def free_ports() -> tuple[int, int]:

@@ -25,9 +25,9 @@ from unittest import mock
 import can
 
 from benchmarks.harness import Config, Row, Target, benchmark, make_row, median_times
-from fake_hardware import hardware as hardware_module
-from fake_hardware.boards.motor import MotorParams
-from fake_hardware.hardware import Hardware, build_platform_hardware
+from pltf.fake_hardware import hardware as hardware_module
+from pltf.fake_hardware.boards.motor import MotorParams
+from pltf.fake_hardware.hardware import Hardware, build_platform_hardware
 
 DT = 0.02  # s: the server's control period
 SIM_SECONDS = 20.0

@@ -9,7 +9,7 @@ Benchmarks:
   ``Platform`` with ``hardware_link`` ticking (``world_can_run``). Building, booting and connecting are not timed.
   Target >= 50x.
 - ``motion.planning``: time per query on a 50 x 50 m maze of 340 walls (36 rooms, doors, stubs: ``maze``): the
-  visibility-graph planner (``reference_server.world.planner``; its lookup data built once per map, reported as
+  visibility-graph planner (``pltf.reference_server.world.planner``; its lookup data built once per map, reported as
   its own row) against a plain grid A* at 5 cm (``grid_astar``, 8-connected, octile heuristic, occupancy inflated
   by the same radius with a distance transform). Target: p95 <= 50 ms. Both subjects answer the same queries (the
   grid only the first eight: it takes up to seconds each; a row compares both on exactly those).
@@ -38,13 +38,13 @@ import pymunk
 from scipy import ndimage  # type: ignore[import-untyped]
 
 from benchmarks.harness import Config, Row, Target, benchmark, make_row, median_times
-from reference_server.world import MapGeometry, World
-from reference_server.world.geometry import F64, _corners, circles, clearance, segments
-from reference_server.world.planner import Planner, PlannerState
-from reference_server.world.raycast import Scene, cast_fan, cast_fan_numpy
-from reference_server.world.sensors import LASER_FAN
-from spec.documents import DocumentKind, validate_document
-from spec.parameters import ParameterStore
+from pltf.reference_server.world import MapGeometry, World
+from pltf.reference_server.world.geometry import F64, _corners, circles, clearance, segments
+from pltf.reference_server.world.planner import Planner, PlannerState
+from pltf.reference_server.world.raycast import Scene, cast_fan, cast_fan_numpy
+from pltf.reference_server.world.sensors import LASER_FAN
+from pltf.spec.documents import DocumentKind, validate_document
+from pltf.spec.parameters import ParameterStore
 
 DT = 0.02
 RTF_TARGET = 50.0
@@ -115,12 +115,12 @@ def world_can_run(seconds: float) -> Run:
     import tempfile
     from pathlib import Path
 
-    from reference_server import hardware_link
-    from reference_server.enums import MotionMode
-    from reference_server.platform import Platform
-    from reference_server.storage import Storage
-    from reference_server.world.model import factory
-    from spec.codec import REQUESTS
+    from pltf.reference_server import hardware_link
+    from pltf.reference_server.enums import MotionMode
+    from pltf.reference_server.platform import Platform
+    from pltf.reference_server.storage import Storage
+    from pltf.reference_server.world.model import factory
+    from pltf.spec.codec import REQUESTS
 
     r: Any = REQUESTS
     tmp = tempfile.TemporaryDirectory()
@@ -165,7 +165,7 @@ def world_can_run(seconds: float) -> Run:
 def hardware_run(seconds: float) -> Run:
     """The CAN boards and the S300 alone, as ``world_can_run`` drives them but fed by fixed sources (a constant
     scan and ultrasonic echo, wheels rolling as driven): the share of a period the hardware takes by itself."""
-    from fake_hardware.hardware import build_platform_hardware
+    from pltf.fake_hardware.hardware import build_platform_hardware
 
     scan = [5000.0] * LASER_FAN.count
     echoes: list[float | None] = [2000.0] * 16

@@ -1,7 +1,7 @@
 """Reference server round trips: CMD_GET_POSITION on one connection, against a bare asyncio echo server.
 
 Set-up (issue "Reference server", benchmark): the reference server runs as its own process
-(``python -m reference_server``, time scale 1, so the 50 Hz control loop runs in real time) while a second
+(``python -m pltf.reference_server``, time scale 1, so the 50 Hz control loop runs in real time) while a second
 process polls CMD_GET_STATUS at 50 Hz on the other port. The client in this process sends one
 CMD_GET_POSITION at a time and waits for the reply. The baseline, in the same run, is a bare asyncio
 streams server (also its own process) that answers every frame with a frame of the GET_POSITION reply's
@@ -29,7 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from benchmarks.harness import Config, Row, Target, benchmark, make_row, rate_rows
-from spec.codec import REPLIES, REQUESTS, TelegramDecoder, decode_frame, encode
+from pltf.spec.codec import REPLIES, REQUESTS, TelegramDecoder, decode_frame, encode
 
 ROOT = Path(__file__).resolve().parents[1]
 SERVER = "reference_server"
@@ -147,7 +147,8 @@ def get_position(config: Config) -> list[Row]:
     samples: dict[str, list[list[float]]] = {SERVER: [], ECHO: []}
     with tempfile.TemporaryDirectory() as tmp_name:
         tmp = Path(tmp_name)
-        server_args = ["-m", "reference_server", "--ports", "0,0", "--data-dir", str(tmp / "data"), "--time-scale", "1"]
+        server_args = ["-m", "pltf.reference_server", "--ports", "0,0", "--data-dir", str(tmp / "data"),
+                       "--time-scale", "1"]
         with (
             _process(server_args, tmp / "server.log", 2) as ports,
             _process(_helper("--echo"), tmp / "echo.log", 1) as (echo_port,),

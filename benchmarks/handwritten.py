@@ -3,7 +3,7 @@
 What a careful engineer would write by hand for CMD_MOVE_VEL (request), CMD_MOVE_PATH (request) and the
 CMD_GET_STATUS reply (guide 6.2 framing; 6.3 CMD_MOVE_VEL, CMD_MOVE_PATH; 6.4 CMD_GET_STATUS), with every
 ``struct.Struct`` precompiled at import. To keep the comparison fair they do the same work as
-``spec.codec``:
+``pltf.spec.codec``:
 
 - the results are of the same kind: a named tuple per telegram with the same field names, groups as tuples of
   named tuples, repeated fields as tuples, plain ints and floats (so ``tuple(ours) == tuple(handwritten)``);

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from conformance_tests.catalogue import REGISTRY, Verdict
+from pltf.conformance_tests.catalogue import REGISTRY, Verdict
 
 NOT_PASS = frozenset(v for v in Verdict if v not in (Verdict.PASS, Verdict.SKIPPED))
 

@@ -22,7 +22,7 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
-from spec.errata import load_errata
+from pltf.spec.errata import load_errata
 
 
 class Level(enum.StrEnum):
@@ -152,7 +152,7 @@ def add(case_id: str, func: Callable[[Any], None], **kw: Any) -> Case:
 
 def load_all() -> dict[str, Case]:
     """Import every case module (registration happens at import) and return the registry."""
-    from conformance_tests import cases  # noqa: F401  (imports the case modules)
+    from pltf.conformance_tests import cases  # noqa: F401  (imports the case modules)
 
     return REGISTRY
 
@@ -192,7 +192,7 @@ def select(
 ) -> list[Case]:
     """The cases of ``tier`` and below that match ``keyword``, in run order: by group (cases.GROUP_ORDER), then
     as registered; destructive ones last."""
-    from conformance_tests.cases import GROUP_ORDER
+    from pltf.conformance_tests.cases import GROUP_ORDER
 
     rank = {g: i for i, g in enumerate(GROUP_ORDER)}
     chosen = [c for c in cases if c.tier <= tier and (keyword is None or matches(c, keyword))]

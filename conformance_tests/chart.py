@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import enum
 
-from spec.model import enum_classes
+from pltf.spec.model import enum_classes
 
 OperationState = enum_classes()["OperationState"]
 MotionMode = enum_classes()["MotionMode"]

@@ -21,15 +21,15 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
-from conformance_tests import chart
-from conformance_tests.catalogue import Case, Tier
-from conformance_tests.chart import St
-from conformance_tests.coverage import Coverage
-from conformance_tests.outcome import ConnectionClosed, Deviation, Fail, TargetFailure, Unreachable
-from conformance_tests.wire import Session, WireLog
-from spec.codec import build
-from spec.model import enum_classes
-from spec.telegram import Telegram
+from pltf.conformance_tests import chart
+from pltf.conformance_tests.catalogue import Case, Tier
+from pltf.conformance_tests.chart import St
+from pltf.conformance_tests.coverage import Coverage
+from pltf.conformance_tests.outcome import ConnectionClosed, Deviation, Fail, TargetFailure, Unreachable
+from pltf.conformance_tests.wire import Session, WireLog
+from pltf.spec.codec import build
+from pltf.spec.model import enum_classes
+from pltf.spec.telegram import Telegram
 
 T = TypeVar("T")
 MotionMode = enum_classes()["MotionMode"]

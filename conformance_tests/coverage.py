@@ -21,11 +21,11 @@ from dataclasses import dataclass
 
 from lxml import etree
 
-from conformance_tests import chart
-from spec.codec import REPLIES, REQUESTS
-from spec.documents import SCHEMA_DIR, DocumentKind
-from spec.model import FieldDef, load_enums
-from spec.telegram import Telegram, user_fields
+from pltf.conformance_tests import chart
+from pltf.spec.codec import REPLIES, REQUESTS
+from pltf.spec.documents import SCHEMA_DIR, DocumentKind
+from pltf.spec.model import FieldDef, load_enums
+from pltf.spec.telegram import Telegram, user_fields
 
 XS = "{http://www.w3.org/2001/XMLSchema}"
 
@@ -148,18 +148,6 @@ class Coverage:
     def transition(self, source: chart.St, command: str, dest: chart.St) -> None:
         with self._lock:
             self.transitions.add((source.value, command, dest.value))
-
-    def merge(self, other: Coverage) -> None:
-        with self._lock:
-            self.sent_names |= other.sent_names
-            self.received_names |= other.received_names
-            self.fields |= other.fields
-            for src, dst in ((other.enum_values, self.enum_values), (other.reply_enum_values, self.reply_enum_values)):
-                for k, v in src.items():
-                    dst.setdefault(k, set()).update(v)
-            for k, els in other.elements.items():
-                self.elements.setdefault(k, set()).update(els)
-            self.transitions |= other.transitions
 
     # ---- report
     def metrics(self) -> list[Metric]:

@@ -22,15 +22,15 @@ from typing import Any
 from rich.console import Console
 from rich.table import Table
 
-from conformance_tests import docdata
-from conformance_tests.cases.motion import rest
-from conformance_tests.catalogue import Case, Level, Tier
-from conformance_tests.chart import St
-from conformance_tests.context import CaseContext, Config, Target
-from conformance_tests.launch import InProcessServer
-from spec.model import enum_classes
-from spec.telegram import Telegram
-from spec.volatile import rule, values_differ, volatile
+from pltf.conformance_tests import docdata
+from pltf.conformance_tests.cases.motion import rest
+from pltf.conformance_tests.catalogue import Case, Level, Tier
+from pltf.conformance_tests.chart import St
+from pltf.conformance_tests.context import CaseContext, Config, Target
+from pltf.conformance_tests.launch import InProcessServer
+from pltf.spec.model import enum_classes
+from pltf.spec.telegram import Telegram
+from pltf.spec.volatile import rule, values_differ, volatile
 
 __all__ = ["Diff", "Step", "compare", "diff_replies", "play", "relative", "run_differential", "script", "volatile"]
 MotionMode = enum_classes()["MotionMode"]

@@ -1,11 +1,11 @@
 """Start a reference server for the suite: as a subprocess (tests, demo, mutants) or in-process (differential).
 
 Rules:
-- The subprocess is ``python -m reference_server --ports 0,0 ...`` (or the mutant bootstrap
-  ``python -m conformance_tests.mutants.serve MUTANT ...``); its ports are read from its log lines
+- The subprocess is ``python -m pltf.reference_server --ports 0,0 ...`` (or the mutant bootstrap
+  ``python -m pltf.conformance_tests.mutants.serve MUTANT ...``); its ports are read from its log lines
   ``server started at port N``. The data dir is a fresh temporary directory unless one is given (the server
   seeds it from fixtures/).
-- In-process, the server runs its asyncio loop in a daemon thread (reference_server.network.serve with
+- In-process, the server runs its asyncio loop in a daemon thread (pltf.reference_server.network.serve with
   ``handle_signals=False``) and is stopped through the loop, never by killing the process.
 - Both are context managers; ``stop`` ends only the process or thread they started.
 """
@@ -26,7 +26,6 @@ from pathlib import Path
 from typing import Any
 
 _STARTED = re.compile(r"server started at port (\d+)")
-REPO = Path(__file__).resolve().parent.parent
 
 
 class LaunchError(RuntimeError):
@@ -52,14 +51,13 @@ class ServerProcess:
         args = ["--ports", "0,0", "--data-dir", str(self.data_dir), "--time-scale", f"{self.time_scale:g}",
                 "--seed", str(self.seed), *self.extra]
         if self.mutant:
-            return [sys.executable, "-m", "conformance_tests.mutants.serve", self.mutant, *args]
-        return [sys.executable, "-m", "reference_server", *args]
+            return [sys.executable, "-m", "pltf.conformance_tests.mutants.serve", self.mutant, *args]
+        return [sys.executable, "-m", "pltf.reference_server", *args]
 
     def start(self) -> ServerProcess:
         env = dict(os.environ, PYTHONUNBUFFERED="1")
-        env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(REPO), env.get("PYTHONPATH")]))
         self.proc = subprocess.Popen(self.command(), stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-                                     env=env, cwd=REPO)
+                                     env=env)
         ready = threading.Event()
 
         def read() -> None:
@@ -130,9 +128,9 @@ class InProcessServer:
     def start(self) -> InProcessServer:
         import asyncio
 
-        from reference_server import network
-        from reference_server.cli import build_platform
-        from reference_server.storage import Storage
+        from pltf.reference_server import network
+        from pltf.reference_server.cli import build_platform
+        from pltf.reference_server.storage import Storage
 
         log = logging.getLogger("pltf.server")
         self._log_level = log.level

@@ -16,8 +16,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from conformance_tests.catalogue import Level, Verdict
-from spec.errata import load_errata
+from pltf.conformance_tests.catalogue import Level, Verdict
+from pltf.spec.errata import load_errata
 
 
 class Outcome(Exception):

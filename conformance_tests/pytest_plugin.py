@@ -1,6 +1,6 @@
 """The conformance suite as a pytest plugin: each case of the catalogue becomes a pytest item.
 
-Use it with ``-p`` (or ``pytest_plugins = ["conformance_tests.pytest_plugin"]`` in a conftest.py)::
+Use it with ``-p`` (or ``pytest_plugins = ["pltf.conformance_tests.pytest_plugin"]`` in a conftest.py)::
 
     pytest -p conformance_tests.pytest_plugin --pltf-target HOST:PORT [--pltf-second-port P]
            [--pltf-time-scale X] [--pltf-profile strict|original] [--pltf-tier smoke|standard|exhaustive]
@@ -18,11 +18,11 @@ from typing import Any
 
 import pytest
 
-from conformance_tests.catalogue import Case, Level, Tier, Verdict, load_all, select
-from conformance_tests.context import Config
-from conformance_tests.outcome import Unreachable
-from conformance_tests.runner import CaseResult, Runner
-from conformance_tests.wire import WireLog
+from pltf.conformance_tests.catalogue import Case, Level, Tier, Verdict, load_all, select
+from pltf.conformance_tests.context import Config
+from pltf.conformance_tests.outcome import Unreachable
+from pltf.conformance_tests.runner import CaseResult, Runner
+from pltf.conformance_tests.wire import WireLog
 
 _RUNNER = pytest.StashKey[Runner]()
 _RESULTS = pytest.StashKey[list[CaseResult]]()

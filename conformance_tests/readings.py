@@ -6,7 +6,7 @@ Rules:
   first, then combinations; a reply that decodes under one is returned in the canonical shape together with
   the ``Deviation`` naming the erratum and the alternative (the profile decides what that costs).
 - Each reading is data: a transformation of the spec's layout (retype, resize, drop or insert a field), compiled
-  once with ``spec.compiler.compile_telegram`` like any telegram, or for the few readings a layout cannot
+  once with ``pltf.spec.compiler.compile_telegram`` like any telegram, or for the few readings a layout cannot
   express (DOUBLE bounds, trailing fields) a small decoder. Readings whose wire layout is identical to the
   decision (E-REP-003 line order, E-REP-012 units, E-REP-013 name-first, E-REP-014 program name) are judged
   by the cases from the values, not here.
@@ -24,12 +24,12 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from conformance_tests.outcome import BadReply, Deviation
-from spec.codec import REPLIES
-from spec.compiler import compile_telegram
-from spec.errors import RemoteProtocolError, TrailingBytes
-from spec.model import FieldDef, TelegramDef
-from spec.telegram import Telegram, make_item_class, user_fields
+from pltf.conformance_tests.outcome import BadReply, Deviation
+from pltf.spec.codec import REPLIES
+from pltf.spec.compiler import compile_telegram
+from pltf.spec.errors import RemoteProtocolError, TrailingBytes
+from pltf.spec.model import FieldDef, TelegramDef
+from pltf.spec.telegram import Telegram, make_item_class, user_fields
 
 Layout = tuple[FieldDef, ...]
 

@@ -22,10 +22,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Protocol
 
-from conformance_tests.baseline import Baseline
-from conformance_tests.catalogue import Case, Level, Verdict
-from conformance_tests.context import CaseContext, Config, Status, Target
-from conformance_tests.outcome import (
+from pltf.conformance_tests.baseline import Baseline
+from pltf.conformance_tests.catalogue import Case, Level, Verdict
+from pltf.conformance_tests.context import CaseContext, Config, Status, Target
+from pltf.conformance_tests.outcome import (
     Deviation,
     Fail,
     Inconclusive,
@@ -35,7 +35,7 @@ from conformance_tests.outcome import (
     verdict_for_level,
     worst,
 )
-from conformance_tests.wire import WireEntry, WireLog
+from pltf.conformance_tests.wire import WireEntry, WireLog
 
 
 @dataclass

@@ -27,14 +27,14 @@ from hypothesis import strategies as st
 from hypothesis.stateful import RuleBasedStateMachine, initialize, invariant, rule, run_state_machine_as_test
 from rich.console import Console
 
-from conformance_tests import chart, docdata
-from conformance_tests.chart import St
-from conformance_tests.context import Config
-from conformance_tests.wire import Session
-from spec.codec import REPLIES, build, encode
-from spec.compiler import fixed_size
-from spec.model import enum_classes
-from spec.telegram import user_fields
+from pltf.conformance_tests import chart, docdata
+from pltf.conformance_tests.chart import St
+from pltf.conformance_tests.context import Config
+from pltf.conformance_tests.wire import Session
+from pltf.spec.codec import REPLIES, build, encode
+from pltf.spec.compiler import fixed_size
+from pltf.spec.model import enum_classes
+from pltf.spec.telegram import user_fields
 
 MotionMode = enum_classes()["MotionMode"]
 MODES = sorted(MotionMode._value2member_map_)

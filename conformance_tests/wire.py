@@ -21,10 +21,10 @@ import time
 from dataclasses import dataclass, field
 from typing import Protocol
 
-from conformance_tests import readings
-from conformance_tests.outcome import BadReply, ConnectionClosed, Deviation, ReplyTimeout, Unreachable
-from spec.codec import DEFAULT_MAX_LENGTH, HEADER, REQUESTS, encode
-from spec.telegram import Telegram
+from pltf.conformance_tests import readings
+from pltf.conformance_tests.outcome import BadReply, ConnectionClosed, Deviation, ReplyTimeout, Unreachable
+from pltf.spec.codec import DEFAULT_MAX_LENGTH, HEADER, REQUESTS, encode
+from pltf.spec.telegram import Telegram
 
 LOG_BYTES = 512  # bytes of one wire-log entry kept in full; the rest is summarised
 

@@ -16,7 +16,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, fields
 from typing import Any
 
-from fake_hardware.candb import Node, St
+from pltf.fake_hardware.candb import Node, St
 
 Readings = Mapping[str, Mapping[str, Any]]  # message function ("Encoder") -> last decoded signals
 

@@ -27,7 +27,7 @@ import cantools
 from cantools.database.can import Database, Message, Signal
 from cantools.database.conversion import IdentityConversion
 
-from spec.model import SPEC_DIR
+from pltf.spec.model import SPEC_DIR
 
 DBC_PATH = SPEC_DIR / "can" / "pltf.dbc"
 Signals = Mapping[str, Any]

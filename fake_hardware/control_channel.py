@@ -16,11 +16,11 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
 
-from fake_hardware.candb import MOTORS, Node
-from fake_hardware.faults import CONTROLLER, Fault, FaultError, FaultKind
+from pltf.fake_hardware.candb import MOTORS, Node
+from pltf.fake_hardware.faults import CONTROLLER, Fault, FaultError, FaultKind
 
 if TYPE_CHECKING:
-    from fake_hardware.hardware import Hardware
+    from pltf.fake_hardware.hardware import Hardware
 
 MAX_LINE = 4096
 ALIASES: dict[str, Node] = {

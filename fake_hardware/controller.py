@@ -22,11 +22,11 @@ from typing import Any, Literal
 
 import can
 
-from fake_hardware import candb
-from fake_hardware.board_status import BoardStatus, assemble
-from fake_hardware.candb import ALL_NODES, MOTORS, PREFIX, Node, St
-from fake_hardware.canport import CanPort
-from fake_hardware.records import CanRecord, ControllerError, HwEvent, SelfTestResult, Transaction
+from pltf.fake_hardware import candb
+from pltf.fake_hardware.board_status import BoardStatus, assemble
+from pltf.fake_hardware.candb import ALL_NODES, MOTORS, PREFIX, Node, St
+from pltf.fake_hardware.canport import CanPort
+from pltf.fake_hardware.records import CanRecord, ControllerError, HwEvent, SelfTestResult, Transaction
 
 __all__ = ["CanController", "CanRecord", "ControllerError", "HwEvent", "SelfTestResult", "Transaction"]
 

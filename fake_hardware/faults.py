@@ -18,14 +18,14 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any, Literal
 
-from fake_hardware.boards.ioboard import NOMINAL_BATTERY, IoBoard
-from fake_hardware.boards.motor import MotorBoard
-from fake_hardware.candb import MOTORS, Node
-from fake_hardware.controller import HwEvent
+from pltf.fake_hardware.boards.ioboard import NOMINAL_BATTERY, IoBoard
+from pltf.fake_hardware.boards.motor import MotorBoard
+from pltf.fake_hardware.candb import MOTORS, Node
+from pltf.fake_hardware.controller import HwEvent
 
 if TYPE_CHECKING:
-    from fake_hardware.canport import CanPort
-    from fake_hardware.hardware import Hardware
+    from pltf.fake_hardware.canport import CanPort
+    from pltf.fake_hardware.hardware import Hardware
 
 CONTROLLER = "CONTROLLER"  # target of bus-off / can-loss / can-delay on the controller's own interface
 

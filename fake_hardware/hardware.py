@@ -22,7 +22,7 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
-from fake_hardware.boards import (
+from pltf.fake_hardware.boards import (
     Board,
     EmergencyCircuit,
     GyroBoard,
@@ -33,14 +33,14 @@ from fake_hardware.boards import (
     RelayBoard,
     UltrasonicBoard,
 )
-from fake_hardware.boards.gyro import MotionSource
-from fake_hardware.boards.radar import VelocitySource
-from fake_hardware.boards.ultrasonic import RangeSource as UsRangeSource
-from fake_hardware.candb import ALL_NODES, Node
-from fake_hardware.canport import BusConditions, CanPort, open_bus
-from fake_hardware.controller import CanController, HwEvent, Params, Transaction
-from fake_hardware.faults import FaultInjector
-from fake_hardware.serial_scanner import RangeSource, S300Simulator, Scan, ScanReader, SerialLink, open_serial_link
+from pltf.fake_hardware.boards.gyro import MotionSource
+from pltf.fake_hardware.boards.radar import VelocitySource
+from pltf.fake_hardware.boards.ultrasonic import RangeSource as UsRangeSource
+from pltf.fake_hardware.candb import ALL_NODES, Node
+from pltf.fake_hardware.canport import BusConditions, CanPort, open_bus
+from pltf.fake_hardware.controller import CanController, HwEvent, Params, Transaction
+from pltf.fake_hardware.faults import FaultInjector
+from pltf.fake_hardware.serial_scanner import RangeSource, S300Simulator, Scan, ScanReader, SerialLink, open_serial_link
 
 _channels = itertools.count(1)
 

@@ -1,6 +1,6 @@
 """pyserial URL handler ``sim://``: an in-memory loopback for simulated time (what is written is read back).
 
-pyserial finds it through ``serial.protocol_handler_packages`` (``fake_hardware.serial_scanner`` registers the
+pyserial finds it through ``serial.protocol_handler_packages`` (``pltf.fake_hardware.serial_scanner`` registers the
 package), so ``serial.serial_for_url("sim://")`` works like ``loop://`` with three differences that matter in a
 simulation running faster than real time: whole byte strings instead of a queue of single bytes (about 100x
 faster), it never blocks (reads return what is there, whatever the timeout), and the buffer is bounded: bytes

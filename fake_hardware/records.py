@@ -1,6 +1,6 @@
 """What the controller hands back: events, connect/init transactions, self-test results, buffered CAN frames.
 
-Plain data; the controller (``fake_hardware.controller``) creates and updates them.
+Plain data; the controller (``pltf.fake_hardware.controller``) creates and updates them.
 """
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Literal, NamedTuple
 
-from fake_hardware.candb import Node, St
+from pltf.fake_hardware.candb import Node, St
 
 
 class HwEvent(NamedTuple):

@@ -33,8 +33,8 @@ import numpy as np
 import numpy.typing as npt
 import serial  # type: ignore[import-untyped]  # no stubs; types-pyserial is not a dependency
 
-if "fake_hardware" not in serial.protocol_handler_packages:
-    serial.protocol_handler_packages.append("fake_hardware")  # sim:// (fake_hardware/protocol_sim.py)
+if "pltf.fake_hardware" not in serial.protocol_handler_packages:
+    serial.protocol_handler_packages.append("pltf.fake_hardware")  # sim:// (fake_hardware/protocol_sim.py)
 
 POINTS = 541
 START_ANGLE = math.radians(-135.0)

@@ -12,7 +12,7 @@ import json
 from pathlib import Path
 from typing import Any
 
-from fuzz.case import Case
+from pltf.fuzz.case import Case
 
 MAX_CASES = 5_000
 MAX_CASE_BYTES = 1 << 16

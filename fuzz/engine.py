@@ -12,8 +12,8 @@ Rules:
 - The oracle after every unit: the unit's own outcome (connect refused = dead, no reply and no close within
   the deadline = hang or stall, replies that do not decode strictly or answer the wrong request = bad reply)
   and the liveness probe, GET_STATUS on the OTHER port within the deadline.
-- Before fuzzing in a state, its prelude (``fuzz.schedule.StatePlan``) drives the target there; the probe's
-  status shows whether it got there. Values from every reply go to ``fuzz.knowledge``.
+- Before fuzzing in a state, its prelude (``pltf.fuzz.schedule.StatePlan``) drives the target there; the probe's
+  status shows whether it got there. Values from every reply go to ``pltf.fuzz.knowledge``.
 - A finding is confirmed and delta-debugged against fresh instances when we launch the target
   (``--launch``); against a target we cannot restart it is written as found and the campaign stops when the
   target is gone.
@@ -29,18 +29,18 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from fuzz import safety
-from fuzz.case import Case
-from fuzz.corpus import Corpus
-from fuzz.findings import FindingWriter
-from fuzz.flight import Flight, fly, step_flights
-from fuzz.knowledge import Knowledge
-from fuzz.launch import Launcher
-from fuzz.prefetch import Prefetcher
-from fuzz.schedule import BIG_CASE, BIG_SHARE, DOCUMENT_RESET, HARVEST, Scheduler, StatePlan
-from fuzz.target import CUT, GET_STATUS, Conn, Outcome, Prober, Session, play, play_on, session_reply_ids
-from fuzz.wire import KEEP
-from spec.codec import REQUESTS
+from pltf.fuzz import safety
+from pltf.fuzz.case import Case
+from pltf.fuzz.corpus import Corpus
+from pltf.fuzz.findings import FindingWriter
+from pltf.fuzz.flight import Flight, fly, step_flights
+from pltf.fuzz.knowledge import Knowledge
+from pltf.fuzz.launch import Launcher
+from pltf.fuzz.prefetch import Prefetcher
+from pltf.fuzz.schedule import BIG_CASE, BIG_SHARE, DOCUMENT_RESET, HARVEST, Scheduler, StatePlan
+from pltf.fuzz.target import CUT, GET_STATUS, Conn, Outcome, Prober, Session, play, play_on, session_reply_ids
+from pltf.fuzz.wire import KEEP
+from pltf.spec.codec import REQUESTS
 
 WINDOW = 256  # cases drawn at a time, then run batch-first
 BATCH_CASES = 128
@@ -374,7 +374,7 @@ class Campaign:
             self._probe_ok([session], [case])
 
     def run_lanes(self, units: list[list[Case]]) -> None:
-        """Units in flight on both ports at once (``fuzz.flight``). A unit is a single case or a batch (its own
+        """Units in flight on both ports at once (``pltf.fuzz.flight``). A unit is a single case or a batch (its own
         connection, closed by a GET_STATUS ``sync``; while the target works through it the other port carries
         on). Every ``probe_every`` units a port's next session opens with a GET_STATUS: its reply is the liveness
         probe, on that port, of the units the other port carried before it.

@@ -4,7 +4,7 @@ Rules:
 - ``reproduce(sessions)`` starts a fresh target, replays, and names the failure it sees (``dead``, ``hang``,
   ``deaf``, ``stall``, ``bad-reply``, ``dropped``) or None. A candidate "still fails" when it fails the same way.
 - Candidates, smallest first: the failed unit after the state prelude; then everything since the prelude.
-  ddmin (``fuzz.minimize``) removes frames across sessions; a session left without frames is dropped.
+  ddmin (``pltf.fuzz.minimize``) removes frames across sessions; a session left without frames is dropped.
 - Without ``--launch`` nothing can be replayed: the finding is written as found (marked not minimized).
   With it, a failure that does not happen again on a fresh target (a load spike, state built up over a long
   run) is written under ``unconfirmed/`` and is not a finding (exit status 0).
@@ -18,13 +18,13 @@ import time
 from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
-from fuzz.case import WHOLE, Case
-from fuzz.minimize import ddmin, shortest_failing_prefix
-from fuzz.report import slug, write_finding
-from fuzz.target import Outcome, Prober, Session, expected_reply_ids, play
+from pltf.fuzz.case import WHOLE, Case
+from pltf.fuzz.minimize import ddmin, shortest_failing_prefix
+from pltf.fuzz.report import slug, write_finding
+from pltf.fuzz.target import Outcome, Prober, Session, expected_reply_ids, play
 
 if TYPE_CHECKING:
-    from fuzz.engine import Campaign
+    from pltf.fuzz.engine import Campaign
 
 
 class FindingWriter:

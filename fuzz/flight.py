@@ -4,8 +4,8 @@ Rules:
 - PlatformCtrl serves one client per port (guide 6.1) and both ports take every command, so two cases - one
   per port - can be in flight at once. The target works on one while we prepare or read the other; a
   sequential fuzzer leaves both sides idle half of the time.
-- A ``Flight`` is a ``fuzz.target.Session`` on its own connection, with the same outcome and the same reply
-  checks as ``fuzz.target.play``. Slow and bytewise deliveries write piece by piece (one write each), the
+- A ``Flight`` is a ``pltf.fuzz.target.Session`` on its own connection, with the same outcome and the same reply
+  checks as ``pltf.fuzz.target.play``. Slow and bytewise deliveries write piece by piece (one write each), the
   pauses between them kept by the ``select`` loop instead of a sleep, so the other flights go on meanwhile.
 - ``fly`` runs flights to completion or to their deadlines; it never raises for anything the peer does.
 """
@@ -19,10 +19,10 @@ import select
 import socket
 import time
 
-from fuzz.replies import reply_decoder
-from fuzz.target import CUT, GET_STATUS, RECV, Outcome, Session, check_order, session_deadline, session_reply_ids
-from spec import errors
-from spec.codec import REQUESTS
+from pltf.fuzz.replies import reply_decoder
+from pltf.fuzz.target import CUT, GET_STATUS, RECV, Outcome, Session, check_order, session_deadline, session_reply_ids
+from pltf.spec import errors
+from pltf.spec.codec import REQUESTS
 
 CHUNK = 1 << 16
 _RESET = (errno.ECONNRESET, errno.EPIPE)

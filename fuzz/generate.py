@@ -1,11 +1,11 @@
 """Generation from the spec: every request telegram with boundary and hostile field values.
 
 Rules:
-- The layouts come from ``spec.model.load_telegrams()``; no telegram is written by hand here. Values come
+- The layouts come from ``pltf.spec.model.load_telegrams()``; no telegram is written by hand here. Values come
   from per-wire-type tables (``BOUNDARY``: still valid for the codec, ``HOSTILE``: refused by it) and from
-  what the target told us (``fuzz.knowledge``: parameter keys, station names, the current pose).
+  what the target told us (``pltf.fuzz.knowledge``: parameter keys, station names, the current pose).
 - Each generator is ``(rng, kb) -> Case`` in ``GENERATORS``; randomness only from the ``random.Random`` given.
-- Telegrams the safety policy forbids (``fuzz.safety``) are never generated; the scheduler filters again
+- Telegrams the safety policy forbids (``pltf.fuzz.safety``) are never generated; the scheduler filters again
   after mutation.
 """
 
@@ -18,12 +18,12 @@ import struct
 from collections.abc import Callable
 from typing import Any
 
-from fuzz import xml_attacks
-from fuzz.case import Case
-from fuzz.knowledge import Knowledge
-from fuzz.wire import Group, Raw, Str, frame, frame_lie, pack_fields
-from spec.compiler import WIRE, allowed_values, value_range
-from spec.model import FieldDef, TelegramDef, load_telegrams
+from pltf.fuzz import xml_attacks
+from pltf.fuzz.case import Case
+from pltf.fuzz.knowledge import Knowledge
+from pltf.fuzz.wire import Group, Raw, Str, frame, frame_lie, pack_fields
+from pltf.spec.compiler import WIRE, allowed_values, value_range
+from pltf.spec.model import FieldDef, TelegramDef, load_telegrams
 
 I32_MIN, I32_MAX = -(2**31), 2**31 - 1
 INT_EDGES = (0, 1, -1, 2, 255, 256, 32767, 32768, 65535, 65536, I32_MAX, I32_MIN, I32_MAX - 1, I32_MIN + 1)

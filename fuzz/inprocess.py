@@ -1,8 +1,8 @@
 """In-process fuzzing of the codec and the XML validation: no sockets, full speed.
 
 Rules:
-- The same case stream as the network campaign (``fuzz.schedule.Scheduler``), plus mutated reply frames
-  (from ``spec.strategies``-shaped telegrams encoded honestly, then mutated) and the XML attacks.
+- The same case stream as the network campaign (``pltf.fuzz.schedule.Scheduler``), plus mutated reply frames
+  (from ``pltf.spec.strategies``-shaped telegrams encoded honestly, then mutated) and the XML attacks.
 - Oracle (h11's fuzz invariant, spec/errors.py): ``TelegramDecoder``/``decode_frame`` raise only
   ``RemoteProtocolError``, however the bytes are split; ``validate_document`` raises only ``DocumentError``;
   no call takes longer than the deadline (a SIGALRM interrupts Python-level loops; C code is timed).
@@ -22,17 +22,17 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from fuzz import mutate, xml_attacks
-from fuzz.case import Case
-from fuzz.engine import Stats
-from fuzz.generate import _valid_scalar
-from fuzz.knowledge import Knowledge
-from fuzz.report import slug
-from fuzz.schedule import Scheduler
-from spec import errors
-from spec.codec import REPLIES, TelegramDecoder, decode_frame, encode
-from spec.documents import DocumentError, DocumentKind, validate_document
-from spec.model import FieldDef
+from pltf.fuzz import mutate, xml_attacks
+from pltf.fuzz.case import Case
+from pltf.fuzz.engine import Stats
+from pltf.fuzz.generate import _valid_scalar
+from pltf.fuzz.knowledge import Knowledge
+from pltf.fuzz.report import slug
+from pltf.fuzz.schedule import Scheduler
+from pltf.spec import errors
+from pltf.spec.codec import REPLIES, TelegramDecoder, decode_frame, encode
+from pltf.spec.documents import DocumentError, DocumentKind, validate_document
+from pltf.spec.model import FieldDef
 
 _SCRIPT = '''#!/usr/bin/env python3
 """Reproducer of a pltf fuzz --in-process finding: {what}
@@ -49,9 +49,9 @@ DEADLINE = {deadline!r}
 
 
 def main():
-    from spec import errors
-    from spec.codec import decode_frame
-    from spec.documents import DocumentError, validate_document
+    from pltf.spec import errors
+    from pltf.spec.codec import decode_frame
+    from pltf.spec.documents import DocumentError, validate_document
 
     t0 = time.monotonic()
     try:

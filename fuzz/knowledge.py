@@ -10,7 +10,7 @@ import re
 from dataclasses import dataclass, field
 from typing import Any
 
-from spec.telegram import Telegram
+from pltf.spec.telegram import Telegram
 
 MAX_ITEMS = 256
 _LEARNT = frozenset(("CMD_GET_STATUS", "CMD_GET_PLTF_PARAM_VEC", "CMD_GET_PLTF_PARAM", "CMD_GET_ROADMAP", "CMD_GET_MAP",

@@ -14,9 +14,9 @@ import struct
 from collections.abc import Callable
 from dataclasses import replace
 
-from fuzz.case import Case, Delivery
-from fuzz.wire import frame_lie, split_frames
-from spec.codec import FRAME_OVERHEAD, HEADER, REQUESTS, encode
+from pltf.fuzz.case import Case, Delivery
+from pltf.fuzz.wire import frame_lie, split_frames
+from pltf.spec.codec import FRAME_OVERHEAD, HEADER, REQUESTS, encode
 
 INTERESTING_BYTES = (0x00, 0x01, 0x7F, 0x80, 0xFE, 0xFF)
 LENGTH_LIES = ("zero", "one_short", "one_long", "huge", "over_2_31", "max")

@@ -1,7 +1,7 @@
 """Windows of cases drawn ahead of the campaign, in a forked child process.
 
 Rules:
-- Windows come out in index order, so the stream is the one ``fuzz.schedule.Scheduler`` defines; what the
+- Windows come out in index order, so the stream is the one ``pltf.fuzz.schedule.Scheduler`` defines; what the
   target told us (``Knowledge``) goes to the child with each ``get`` and takes effect a few windows later.
 - Drawing runs beside the campaign instead of taking the campaign's interpreter lock between its socket calls.
 - The child writes each window itself, length-prefixed, into a pipe enlarged to ``PIPE_SIZE``: no feeder thread.
@@ -31,8 +31,8 @@ import time
 import traceback
 from typing import Any
 
-from fuzz.case import Case
-from fuzz.schedule import Scheduler
+from pltf.fuzz.case import Case
+from pltf.fuzz.schedule import Scheduler
 
 PIPE_SIZE = 1 << 20  # bytes (Linux's default /proc/sys/fs/pipe-max-size): a typical window fits whole
 GET_TIMEOUT = 30.0  # s the campaign waits for a window before it gives up

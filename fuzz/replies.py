@@ -1,10 +1,10 @@
 """Strict decoding of the target's replies, with the status reply memoized.
 
 Rules:
-- The oracle decodes every reply strictly (``spec.codec``); this module only saves repeating that work. A
+- The oracle decodes every reply strictly (``pltf.spec.codec``); this module only saves repeating that work. A
   CMD_GET_STATUS reply whose bytes equal the last one decoded everywhere but in the timestamp is that telegram
   with the new timestamp: the timestamp is an INT without range or enum (checked here at import), at a fixed
-  distance from the end (``spec.compiler.distance_from_end``), so the rest of the bytes decide everything else.
+  distance from the end (``pltf.spec.compiler.distance_from_end``), so the rest of the bytes decide everything else.
   Anything else goes to the codec.
 - Why: a campaign reads about 1,500 status replies a second from a target whose status changes 50 times a
   second; each strict decode of the 541-beam scan cost the campaign ~35 us.
@@ -14,10 +14,10 @@ from __future__ import annotations
 
 import struct
 
-from spec.codec import REPLIES, TelegramDecoder
-from spec.compiler import allowed_values, distance_from_end, value_range
-from spec.model import telegram_def
-from spec.telegram import Telegram
+from pltf.spec.codec import REPLIES, TelegramDecoder
+from pltf.spec.compiler import allowed_values, distance_from_end, value_range
+from pltf.spec.model import telegram_def
+from pltf.spec.telegram import Telegram
 
 _STATUS = REPLIES.by_name["CMD_GET_STATUS"]
 _STATUS_ID = _STATUS.ID

@@ -12,11 +12,11 @@ import re
 from pathlib import Path
 from typing import Any
 
-from fuzz.pcapng import Conversation, write_pcapng
-from fuzz.target import Outcome, Session
-from fuzz.wire import split_frames
-from spec import errors
-from spec.codec import REQUESTS
+from pltf.fuzz.pcapng import Conversation, write_pcapng
+from pltf.fuzz.target import Outcome, Session
+from pltf.fuzz.wire import split_frames
+from pltf.spec import errors
+from pltf.spec.codec import REQUESTS
 
 _SCRIPT = '''#!/usr/bin/env python3
 """Reproducer of a pltf fuzz finding: {kind}. {reason}
@@ -38,8 +38,8 @@ SESSIONS = {sessions}
 GET_STATUS = bytes.fromhex("ff01fe020000000112")
 HEADER = bytes.fromhex("ff01fe02")
 try:  # strict reply checks when the pltf toolkit is importable; framing checks only otherwise
-    from spec.codec import REPLIES
-    from spec.errors import RemoteProtocolError
+    from pltf.spec.codec import REPLIES
+    from pltf.spec.errors import RemoteProtocolError
 except ImportError:
     REPLIES = None
 
@@ -213,7 +213,7 @@ def describe_frames(data: bytes) -> list[str]:
 
 
 def script_sessions(sessions: list[Session]) -> list[dict[str, Any]]:
-    from fuzz.target import expected_reply_ids
+    from pltf.fuzz.target import expected_reply_ids
 
     return [
         {

@@ -1,13 +1,13 @@
 """What the fuzzer never sends, and what it sends only with ``--allow-motion``.
 
 Rules: one table per policy, each id with its reason. A case is dropped (not repaired) when any plausible
-reader of its bytes could see a forbidden id (``fuzz.wire.forbidden_ids``): a lenient or resynchronising
+reader of its bytes could see a forbidden id (``pltf.fuzz.wire.forbidden_ids``): a lenient or resynchronising
 server must not be able to find one either.
 """
 
 from __future__ import annotations
 
-from spec.codec import REQUESTS
+from pltf.spec.codec import REQUESTS
 
 # Telegrams that end the target on purpose: its death would be the protocol working, not a finding.
 NEVER: dict[int, str] = {

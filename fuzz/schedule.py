@@ -20,12 +20,12 @@ import random
 from dataclasses import replace
 from typing import Any
 
-from fuzz import generate, mutate
-from fuzz.case import Case
-from fuzz.knowledge import Knowledge
-from fuzz.wire import CLOSE, KEEP, forbidden_ids, survey
-from spec.codec import REQUESTS, encode
-from spec.model import enum_classes
+from pltf.fuzz import generate, mutate
+from pltf.fuzz.case import Case
+from pltf.fuzz.knowledge import Knowledge
+from pltf.fuzz.wire import CLOSE, KEEP, forbidden_ids, survey
+from pltf.spec.codec import REQUESTS, encode
+from pltf.spec.model import enum_classes
 
 MAX_DRAWS = 20
 BIG_CASE = 1 << 20  # bytes

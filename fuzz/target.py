@@ -19,12 +19,12 @@ import socket
 import time
 from dataclasses import dataclass, field, replace
 
-from fuzz.case import WHOLE, Delivery
-from fuzz.replies import reply_decoder
-from fuzz.wire import answered_ids, split_frames
-from spec import errors
-from spec.codec import REQUESTS, encode
-from spec.telegram import Telegram
+from pltf.fuzz.case import WHOLE, Delivery
+from pltf.fuzz.replies import reply_decoder
+from pltf.fuzz.wire import answered_ids
+from pltf.spec import errors
+from pltf.spec.codec import REQUESTS, encode
+from pltf.spec.telegram import Telegram
 
 GET_STATUS = encode(REQUESTS.CMD_GET_STATUS())
 RECV = 1 << 16
@@ -308,7 +308,3 @@ class Prober:
             if attempt:
                 return "deaf"
         return "deaf"
-
-
-def frames_of(data: bytes) -> list[bytes]:
-    return split_frames(data) if data else []

@@ -8,7 +8,7 @@ from rich.console import Console
 from rich.live import Live
 from rich.table import Table
 
-from fuzz.generate import request_defs
+from pltf.fuzz.generate import request_defs
 
 
 def render(stats: Any, title: str) -> Table:

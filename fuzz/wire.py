@@ -1,7 +1,7 @@
 """Raw frames for the fuzzer: writes any layout with any lie, and classifies bytes the way a server reads them.
 
 Rules:
-- ``spec.codec.encode`` refuses invalid values (it is the honest encoder); the fuzzer needs the dishonest one.
+- ``pltf.spec.codec.encode`` refuses invalid values (it is the honest encoder); the fuzzer needs the dishonest one.
   ``pack_fields`` walks a spec layout and writes whatever it is given: integers wrap to the field's width,
   doubles may be NaN, a string or group may carry a ``declared`` length or count that disagrees with its bytes.
 - ``classify`` decides, with the strict codec, what a well-behaved server (erratum E-WIRE-006) does with bytes:
@@ -20,9 +20,9 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from spec import errors
-from spec.codec import HEADER, REQUESTS, TelegramDecoder, frame
-from spec.model import FieldDef, load_telegrams
+from pltf.spec import errors
+from pltf.spec.codec import HEADER, REQUESTS, TelegramDecoder, frame
+from pltf.spec.model import FieldDef, load_telegrams
 
 KEEP, CLOSE, PARTIAL = "keep", "close", "partial"
 

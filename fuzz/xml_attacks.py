@@ -8,7 +8,7 @@ Rules:
 - Sizes are bounded (the largest document is ``BIG_POINTS`` points, about 7 MB, under the 8 MB document limit
   of erratum E-XML-021; "a million points" is the one that goes over it on purpose). Big documents are built
   once per process and cached.
-- "absurd" documents are schema-valid: they must pass ``spec.documents.validate_document`` (a test checks),
+- "absurd" documents are schema-valid: they must pass ``pltf.spec.documents.validate_document`` (a test checks),
   so they reach the target's geometry, planning and task interpreter rather than its validator.
 """
 

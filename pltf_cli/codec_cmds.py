@@ -6,9 +6,9 @@ import argparse
 import json
 import sys
 
-from spec import errors
-from spec.codec import TelegramDecoder, encode
-from spec.jsonio import fields_to_telegram, telegram_to_json
+from pltf.spec import errors
+from pltf.spec.codec import TelegramDecoder, encode
+from pltf.spec.jsonio import fields_to_telegram, telegram_to_json
 
 
 def _fail(message: str) -> int:

@@ -13,10 +13,10 @@ from pathlib import Path
 
 from rich.console import Console
 
-from conformance_tests.baseline import Baseline, BaselineError
-from conformance_tests.catalogue import Tier, load_all, select
-from conformance_tests.context import Config
-from conformance_tests.outcome import Outcome, Unreachable
+from pltf.conformance_tests.baseline import Baseline, BaselineError
+from pltf.conformance_tests.catalogue import Tier, load_all, select
+from pltf.conformance_tests.context import Config
+from pltf.conformance_tests.outcome import Outcome, Unreachable
 
 
 def _target(text: str) -> tuple[str, int]:
@@ -77,10 +77,10 @@ def add_conform_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run_conform(args: argparse.Namespace) -> int:
-    from conformance_tests.reports.console import ConsoleReporter
-    from conformance_tests.reports.files import write_json, write_junit
-    from conformance_tests.reports.html import write_html
-    from conformance_tests.runner import Runner
+    from pltf.conformance_tests.reports.console import ConsoleReporter
+    from pltf.conformance_tests.reports.files import write_json, write_junit
+    from pltf.conformance_tests.reports.html import write_html
+    from pltf.conformance_tests.runner import Runner
 
     host, port = args.target
     config = Config(host=host, port=port, second_port=args.second_port, time_scale=args.time_scale,
@@ -126,13 +126,13 @@ def run_conform(args: argparse.Namespace) -> int:
 
 
 def _differential(config: Config, console: Console) -> int:
-    from conformance_tests.differential import run_differential
+    from pltf.conformance_tests.differential import run_differential
 
     return _guarded("differential run", console, lambda: run_differential(config, console))
 
 
 def _stateful(config: Config, examples: int, out: str, console: Console) -> int:
-    from conformance_tests.stateful import run_stateful
+    from pltf.conformance_tests.stateful import run_stateful
 
     return _guarded("stateful run", console, lambda: run_stateful(config, examples, Path(out), console))
 

@@ -13,7 +13,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from pltf_cli.main import main as pltf
+from pltf.cli.main import main as pltf
 
 PORT_LINE = re.compile(r"server started at port (\d+)")
 REPORT = Path("demo-report.html")
@@ -22,7 +22,7 @@ REPORT = Path("demo-report.html")
 def start_server(data_dir: str, time_scale: float) -> tuple[subprocess.Popen[bytes], list[int], Path]:
     """Start the server with its log in a file (a pipe nobody drains would block it once full)."""
     log = Path(data_dir) / "server.log"
-    cmd = [sys.executable, "-m", "reference_server", "--ports", "0,0", "--data-dir", str(Path(data_dir) / "disk"),
+    cmd = [sys.executable, "-m", "pltf.reference_server", "--ports", "0,0", "--data-dir", str(Path(data_dir) / "disk"),
            "--time-scale", str(time_scale), "--seed", "1"]
     with log.open("wb") as sink:
         proc = subprocess.Popen(cmd, stdout=sink, stderr=subprocess.STDOUT)

@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from proxy.dissector import check, render
+from pltf.proxy.dissector import check, render
 
 
 def add_dissector_arguments(p: argparse.ArgumentParser) -> None:

@@ -61,12 +61,12 @@ def _share(text: str) -> float:
 
 
 def run_fuzz(args: argparse.Namespace) -> int:
-    from fuzz.view import LiveView
+    from pltf.fuzz.view import LiveView
 
     args.out.mkdir(parents=True, exist_ok=True)
     command = "pltf " + " ".join(shlex.quote(a) for a in sys.argv[1:])
     if args.in_process:
-        from fuzz.inprocess import InProcessCampaign
+        from pltf.fuzz.inprocess import InProcessCampaign
 
         ip = InProcessCampaign(args.seed, args.duration, args.out, args.max_cases, args.deadline, command)
         with LiveView("pltf fuzz --in-process", args.quiet) as view:
@@ -77,8 +77,8 @@ def run_fuzz(args: argparse.Namespace) -> int:
     if args.target is None:
         print("pltf fuzz: --target HOST:PORT is required (or --in-process)", file=sys.stderr)
         return 2
-    from fuzz.engine import Campaign, HarnessError, Options
-    from fuzz.launch import LaunchError
+    from pltf.fuzz.engine import Campaign, HarnessError, Options
+    from pltf.fuzz.launch import LaunchError
 
     host, port = args.target
     second = args.second_port if args.second_port is not None else (0 if port == 0 else port + 2)

@@ -13,20 +13,34 @@ from collections.abc import Sequence
 
 # name -> (module, help). The module defines add_arguments(parser) and run(args) -> int.
 COMMANDS: dict[str, tuple[str, str]] = {
-    "conform": ("pltf_cli.conform_cmd", "check a PlatformCtrl implementation over TCP: the conformance suite"),
-    "decode": ("pltf_cli.codec_cmds", "decode frames (hex) into JSON, one object per telegram"),
-    "encode": ("pltf_cli.codec_cmds", "encode a telegram from its name and fields JSON into hex"),
-    "serve": ("pltf_cli.serve_cmd", "run the reference server (PlatformCtrl stand-in) on two TCP ports"),
-    "fuzz": ("pltf_cli.fuzz_cmd", "fuzz an implementation (or, --in-process, the codec) for crashes and hangs"),
-    "run-program": ("pltf_cli.run_program_cmd", "run a task program (guide 6.5) here, driving a platform: remote mode"),
-    "stubs": ("pltf_cli.stubs_cmd", "generate the client stubs of one language (or --check a generated copy)"),
-    "proxy": ("pltf_cli.proxy_cmd", "a transparent TCP proxy: decode both directions live, record the session"),
-    "dissector": ("pltf_cli.dissector_cmd", "write the Wireshark Lua dissector generated from spec/ (or --check it)"),
+    "conform": ("pltf.cli.conform_cmd", "check a PlatformCtrl implementation over TCP: the conformance suite"),
+    "decode": ("pltf.cli.codec_cmds", "decode frames (hex) into JSON, one object per telegram"),
+    "encode": ("pltf.cli.codec_cmds", "encode a telegram from its name and fields JSON into hex"),
+    "serve": ("pltf.cli.serve_cmd", "run the reference server (PlatformCtrl stand-in) on two TCP ports"),
+    "fuzz": ("pltf.cli.fuzz_cmd", "fuzz an implementation (or, --in-process, the codec) for crashes and hangs"),
+    "run-program": ("pltf.cli.run_program_cmd", "run a task program (guide 6.5) here, driving a platform: remote mode"),
+    "stubs": ("pltf.cli.stubs_cmd", "generate the client stubs of one language (or --check a generated copy)"),
+    "proxy": ("pltf.cli.proxy_cmd", "a transparent TCP proxy: decode both directions live, record the session"),
+    "dissector": ("pltf.cli.dissector_cmd", "write the Wireshark Lua dissector generated from spec/ (or --check it)"),
 }
+
+
+class _Version(argparse.Action):
+    """``--version``: the installed distribution's version, looked up only when asked for."""
+
+    def __init__(self, option_strings: Sequence[str], dest: str, help: str | None = None) -> None:
+        super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS, help=help)
+
+    def __call__(self, parser: argparse.ArgumentParser, *_: object) -> None:
+        from importlib.metadata import version
+
+        print(f"pltf {version('pltf-toolkit')}")
+        parser.exit()
 
 
 def make_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="pltf", description="Neobotix PlatformCtrl protocol toolkit")
+    parser.add_argument("--version", action=_Version, help="print the toolkit's version and exit")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name, (module, help_text) in COMMANDS.items():
         mod = importlib.import_module(module)

@@ -14,13 +14,13 @@ import sys
 import time
 from pathlib import Path
 
-from proxy.capture import PcapngWriter
-from proxy.network import ProxyServer, Route
-from proxy.recorder import Recorder, Sink
-from proxy.session import Route as SessionRoute
-from proxy.session import SessionWriter
-from proxy.view import Selection, View
-from spec.codec import DEFAULT_MAX_LENGTH
+from pltf.proxy.capture import PcapngWriter
+from pltf.proxy.network import ProxyServer, Route
+from pltf.proxy.recorder import Recorder, Sink
+from pltf.proxy.session import Route as SessionRoute
+from pltf.proxy.session import SessionWriter
+from pltf.proxy.view import Selection, View
+from pltf.spec.codec import DEFAULT_MAX_LENGTH
 
 
 def _fail(message: str) -> int:

@@ -27,12 +27,12 @@ from rich.live import Live
 from rich.panel import Panel
 from rich.table import Table
 
-from clients.pltf_client import MotionMode, OperationState, PlatformClient, PlatformError
-from reference_server.tasks import interpreter as ip
-from reference_server.tasks.model import Program
-from reference_server.tasks.program import load_program
-from reference_server.tasks.remote import RemoteMachine
-from spec.documents import DocumentError
+from pltf.client import MotionMode, OperationState, PlatformClient, PlatformError
+from pltf.reference_server.tasks import interpreter as ip
+from pltf.reference_server.tasks.model import Program
+from pltf.reference_server.tasks.program import load_program
+from pltf.reference_server.tasks.remote import RemoteMachine
+from pltf.spec.documents import DocumentError
 
 LOG_LINES = 14
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import argparse
 
-from reference_server import cli
+from pltf.reference_server import cli
 
 
 def add_serve_arguments(p: argparse.ArgumentParser) -> None:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 
-from clients.stubgen import LANGS, check, generate
+from pltf.stubgen import LANGS, check, generate
 
 
 def add_stubs_arguments(p: argparse.ArgumentParser) -> None:

@@ -15,7 +15,7 @@ import itertools
 from pathlib import Path
 from typing import IO
 
-from fuzz.pcapng import CLIENT_IP, TcpFlow, enhanced_packet, file_header
+from pltf.fuzz.pcapng import CLIENT_IP, TcpFlow, enhanced_packet, file_header
 
 
 def ipv4(host: str, default: bytes = CLIENT_IP) -> bytes:

@@ -28,7 +28,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from proxy.recorder import Recorder
+from pltf.proxy.recorder import Recorder
 
 FLUSH_EVERY = 0.25  # s between flushes of the session file, the pcapng and the view
 

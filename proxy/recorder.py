@@ -12,9 +12,9 @@ from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from proxy.capture import PcapngWriter
-from proxy.session import SessionWriter
-from proxy.tap import CLOSE, OPEN, Record, Tap
+from pltf.proxy.capture import PcapngWriter
+from pltf.proxy.session import SessionWriter
+from pltf.proxy.tap import CLOSE, OPEN, Record, Tap
 
 Sink = Callable[[Record], None]
 

@@ -20,10 +20,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any
 
-from proxy.tap import CLOSE, FRAME, OPEN, RAW, Record
-from spec import errors
-from spec.codec import FRAME_OVERHEAD, telegram_set
-from spec.jsonio import telegram_to_json
+from pltf.proxy.tap import CLOSE, FRAME, OPEN, RAW, Record
+from pltf.spec import errors
+from pltf.spec.codec import FRAME_OVERHEAD, telegram_set
+from pltf.spec.jsonio import telegram_to_json
 
 FORMAT, VERSION = "pltf-session", 1
 KINDS = (FRAME, RAW, OPEN, CLOSE)

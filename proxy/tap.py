@@ -16,10 +16,10 @@ from __future__ import annotations
 import struct
 from dataclasses import dataclass
 
-from spec import errors
-from spec.codec import DEFAULT_MAX_LENGTH, FRAME_OVERHEAD, HEADER, telegram_set
-from spec.model import Direction
-from spec.telegram import Telegram
+from pltf.spec import errors
+from pltf.spec.codec import DEFAULT_MAX_LENGTH, FRAME_OVERHEAD, HEADER, telegram_set
+from pltf.spec.model import Direction
+from pltf.spec.telegram import Telegram
 
 _LENGTH = struct.Struct(">I")
 

@@ -13,8 +13,8 @@ import fnmatch
 from collections.abc import Sequence
 from typing import Any, TextIO
 
-from proxy.tap import CLOSE, OPEN, Record
-from spec.jsonio import telegram_to_json
+from pltf.proxy.tap import CLOSE, OPEN, Record
+from pltf.spec.jsonio import telegram_to_json
 
 ARROW = {"request": "->", "reply": "<-"}
 _COLOR = {"request": "\x1b[36m", "reply": "\x1b[32m", "malformed": "\x1b[1;31m", "event": "\x1b[2m"}

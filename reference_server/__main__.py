@@ -1,7 +1,7 @@
-"""``python -m reference_server``: see reference_server.cli."""
+"""``python -m pltf.reference_server``: see reference_server.cli."""
 
 import sys
 
-from reference_server.cli import main
+from pltf.reference_server.cli import main
 
 sys.exit(main())

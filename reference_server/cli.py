@@ -1,4 +1,4 @@
-"""Command line of the reference server: ``python -m reference_server`` and ``pltf serve`` share it.
+"""Command line of the reference server: ``python -m pltf.reference_server`` and ``pltf serve`` share it.
 
 Rules: options are parsed here, the data dir is opened (and seeded from the repository's fixtures when it is
 empty), then reference_server.network runs until CMD_EXIT or a signal. User errors print one line on stderr
@@ -15,14 +15,14 @@ import logging
 import sys
 from collections.abc import Callable, Sequence
 
-from reference_server import hardware_link, network
-from reference_server.control import start_control
-from reference_server.kinematics import Drive
-from reference_server.motion_api import MotionFactory
-from reference_server.platform import Platform
-from reference_server.storage import Storage
-from reference_server.tasks.local import factory as program_factory
-from reference_server.world.model import factory as world_factory
+from pltf.reference_server import hardware_link, network
+from pltf.reference_server.control import start_control
+from pltf.reference_server.kinematics import Drive
+from pltf.reference_server.motion_api import MotionFactory
+from pltf.reference_server.platform import Platform
+from pltf.reference_server.storage import Storage
+from pltf.reference_server.tasks.local import factory as program_factory
+from pltf.reference_server.world.model import factory as world_factory
 
 LOG_FORMAT = "%(asctime)s.%(msecs)03d %(levelname)-7s %(message)s"
 LOG_DATE = "%Y-%m-%d %H:%M:%S"
@@ -171,6 +171,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m reference_server", description="PlatformCtrl reference server")
+    parser = argparse.ArgumentParser(prog="python -m pltf.reference_server",
+                                     description="PlatformCtrl reference server")
     add_arguments(parser)
     return run(parser.parse_args(argv))

@@ -3,7 +3,7 @@ TCP port of the loopback interface (documented in fake_hardware/README.md, "Cont
 
 Rules:
 - A network module, like reference_server/network.py: sockets and asyncio live here; the protocol is parsed
-  and dispatched without I/O by ``fake_hardware.control_channel``. Each request gets the simulated ``now`` of
+  and dispatched without I/O by ``pltf.fake_hardware.control_channel``. Each request gets the simulated ``now`` of
   the server's clock; it runs on the server's event loop, so between two control periods, never during one.
 - Loopback only (127.0.0.1): the channel unplugs boards and presses the emergency stop; it must never face a
   network. Port 0 takes any free port; the port is logged as "control channel started at port N".
@@ -21,11 +21,11 @@ import socket
 from collections.abc import Callable
 from typing import TYPE_CHECKING, Any
 
-from fake_hardware.control_channel import ControlChannel, ControlSession
+from pltf.fake_hardware.control_channel import ControlChannel, ControlSession
 
 if TYPE_CHECKING:
-    from reference_server.network import Server
-    from reference_server.platform import Platform
+    from pltf.reference_server.network import Server
+    from pltf.reference_server.platform import Platform
 
 log = logging.getLogger("pltf.server")
 

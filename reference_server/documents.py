@@ -13,9 +13,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from reference_server.storage import Storage, StorageError
-from reference_server.tasks.program import compile_program
-from spec.documents import DocumentKind, validate_document
+from pltf.reference_server.storage import Storage, StorageError
+from pltf.reference_server.tasks.program import compile_program
+from pltf.spec.documents import DocumentKind, validate_document
 
 
 @dataclass(frozen=True)

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from spec.model import enum_classes
+from pltf.spec.model import enum_classes
 
 _E: dict[str, Any] = dict(enum_classes())
 MotionMode: Any = _E["MotionMode"]

@@ -25,13 +25,13 @@ import random
 from collections.abc import Callable, Iterable
 from typing import TYPE_CHECKING, Any, TypeVar
 
-from fake_hardware import ALL_NODES, Hardware, HwEvent, Node, St, Transaction, build_platform_hardware
-from fake_hardware.controller import HARDWARE_FAULTS
-from fake_hardware.serial_scanner import ANGLE_STEP, MAX_CM, POINTS, START_ANGLE, Ranges, Scan
-from reference_server.motion_api import MotionModel, WorldFeatures
+from pltf.fake_hardware import ALL_NODES, Hardware, HwEvent, Node, St, Transaction, build_platform_hardware
+from pltf.fake_hardware.controller import HARDWARE_FAULTS
+from pltf.fake_hardware.serial_scanner import ANGLE_STEP, MAX_CM, POINTS, START_ANGLE, Ranges, Scan
+from pltf.reference_server.motion_api import MotionModel, WorldFeatures
 
 if TYPE_CHECKING:
-    from reference_server.platform import Platform
+    from pltf.reference_server.platform import Platform
 
 HardwareFactory = Callable[["Platform"], "HardwareLink"]
 AUTO = "auto"

@@ -27,8 +27,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
-from fake_hardware.serial_scanner import Ranges
-from reference_server.motion_api import Frame, Params, Pose, normalize
+from pltf.fake_hardware.serial_scanner import Ranges
+from pltf.reference_server.motion_api import Frame, Params, Pose, normalize
 
 __all__ = ["Drive", "Frame", "Pose", "Roadmap", "Station", "normalize", "relative_to_world"]
 

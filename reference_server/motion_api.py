@@ -34,7 +34,7 @@ from typing import Any, NamedTuple, Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import NDArray
 
-from fake_hardware.serial_scanner import Ranges
+from pltf.fake_hardware.serial_scanner import Ranges
 
 # (x, y) points: pairs, or an (n, 2) array where a model has one already
 Points = Sequence[Sequence[float]] | NDArray[np.float64]

@@ -34,9 +34,9 @@ import socket
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from reference_server.platform import Platform
-from spec.codec import DEFAULT_MAX_LENGTH, TelegramDecoder, encode
-from spec.errors import RemoteProtocolError
+from pltf.reference_server.platform import Platform
+from pltf.spec.codec import DEFAULT_MAX_LENGTH, TelegramDecoder, encode
+from pltf.spec.errors import RemoteProtocolError
 
 log = logging.getLogger("pltf.server")
 

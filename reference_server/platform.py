@@ -33,20 +33,20 @@ import random
 from collections import deque
 from collections.abc import Callable
 
-from reference_server.commands import HANDLERS, Outcome, handler_names
-from reference_server.commands.data import DOCUMENT_OF
-from reference_server.commands.registry import ACCEPTED
-from reference_server.documents import Documents
-from reference_server.enums import MotionMode, PlannerState
-from reference_server.hardware_link import HardwareFactory, HardwareLink, react
-from reference_server.kinematics import Drive, Frame, Roadmap
-from reference_server.motion_api import MotionFactory, MotionModel, WorldFeatures, advance_ideal
-from reference_server.program_api import Program, ProgramFactory, no_program
-from reference_server.state_chart import EmergencyState, State, StateChart
-from reference_server.storage import Storage, StorageError
-from spec.documents import DocumentError, DocumentKind
-from spec.parameters import ParameterStore
-from spec.telegram import Telegram
+from pltf.reference_server.commands import HANDLERS, Outcome, handler_names
+from pltf.reference_server.commands.data import DOCUMENT_OF
+from pltf.reference_server.commands.registry import ACCEPTED
+from pltf.reference_server.documents import Documents
+from pltf.reference_server.enums import MotionMode, PlannerState
+from pltf.reference_server.hardware_link import HardwareFactory, HardwareLink, react
+from pltf.reference_server.kinematics import Drive, Frame, Roadmap
+from pltf.reference_server.motion_api import MotionFactory, MotionModel, WorldFeatures, advance_ideal
+from pltf.reference_server.program_api import Program, ProgramFactory, no_program
+from pltf.reference_server.state_chart import EmergencyState, State, StateChart
+from pltf.reference_server.storage import Storage, StorageError
+from pltf.spec.documents import DocumentError, DocumentKind
+from pltf.spec.parameters import ParameterStore
+from pltf.spec.telegram import Telegram
 
 log = logging.getLogger("pltf.server")
 

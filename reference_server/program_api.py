@@ -24,7 +24,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING, Protocol
 
 if TYPE_CHECKING:
-    from reference_server.platform import Platform
+    from pltf.reference_server.platform import Platform
 
 
 class Program(Protocol):

@@ -22,7 +22,7 @@ import enum
 from dataclasses import dataclass
 from typing import Any
 
-from spec.model import enum_classes
+from pltf.spec.model import enum_classes
 
 # The spec's enums are built at import; mypy sees them as plain IntEnum classes without members.
 OperationState: Any = enum_classes()["OperationState"]

@@ -20,15 +20,15 @@ from typing import TYPE_CHECKING, Any, cast
 
 import numpy as np
 
-from spec.codec import REPLIES, encode
-from spec.compiler import distance_from_end
-from spec.model import enum_classes, telegram_def
-from spec.parameters import ParameterError, ParameterStore
-from spec.telegram import Telegram
+from pltf.spec.codec import REPLIES, encode
+from pltf.spec.compiler import distance_from_end
+from pltf.spec.model import enum_classes, telegram_def
+from pltf.spec.parameters import ParameterError, ParameterStore
+from pltf.spec.telegram import Telegram
 
 if TYPE_CHECKING:
-    from reference_server.motion_api import Points
-    from reference_server.platform import Platform
+    from pltf.reference_server.motion_api import Points
+    from pltf.reference_server.platform import Platform
 
 ABSENT = -1  # status of a board that is not on the CAN bus (no reading of it is reported)
 # E-REP-020: a platform without a camera answers CMD_GET_CAMERA with empty strings (no invented address)

@@ -22,11 +22,12 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from spec.documents import DocumentKind
+from pltf.fixtures import DIR as FIXTURES_DIR
+from pltf.spec.documents import DocumentKind
 
 log = logging.getLogger("pltf.server")
 
-REPO_FIXTURES = Path(__file__).resolve().parent.parent / "fixtures"
+REPO_FIXTURES = FIXTURES_DIR
 
 FILES: dict[DocumentKind, str] = {
     DocumentKind.MAP: "Map/PltfMap.map",

@@ -16,10 +16,10 @@ import struct
 from collections.abc import Callable, Iterator
 from typing import Any
 
-from spec import errors
-from spec.compiler import Decoder, Encoder, compile_telegram
-from spec.model import DIRECTIONS, Direction, TelegramDef, load_telegrams
-from spec.telegram import Telegram
+from pltf.spec import errors
+from pltf.spec.compiler import Decoder, Encoder, compile_telegram
+from pltf.spec.model import DIRECTIONS, Direction, TelegramDef, load_telegrams
+from pltf.spec.telegram import Telegram
 
 HEADER = b"\xff\x01\xfe\x02"
 _FRAME_HEAD = struct.Struct(">4sI")

@@ -16,9 +16,9 @@ import struct
 from collections.abc import Callable
 from typing import Any
 
-from spec import errors
-from spec.model import Direction, FieldDef, TelegramDef, load_enums
-from spec.telegram import Telegram, make_item_class, make_telegram_class, user_fields
+from pltf.spec import errors
+from pltf.spec.model import Direction, FieldDef, TelegramDef, load_enums
+from pltf.spec.telegram import Telegram, make_item_class, make_telegram_class, user_fields
 
 # guide 6.2 (type table) and field evidence: BYTE u8, INT i32 two's complement MSB first, DOUBLE IEEE-754
 # big-endian, BOOL 1 byte 0/1, INT16 i16 (status scan points).

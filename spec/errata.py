@@ -17,7 +17,7 @@ from typing import Literal
 import jsonschema
 import yaml
 
-from spec.model import SPEC_DIR, SpecError
+from pltf.spec.model import SPEC_DIR, SpecError
 
 ERRATA_DIR = SPEC_DIR / "errata"
 ERRATUM_ID = re.compile(r"\bE-[A-Z]+-\d{3}\b")

@@ -10,10 +10,10 @@ from __future__ import annotations
 
 from typing import Any
 
-from spec import errors
-from spec.codec import build, telegram_set
-from spec.model import Direction, FieldDef, load_enums
-from spec.telegram import Telegram, user_fields
+from pltf.spec import errors
+from pltf.spec.codec import build, telegram_set
+from pltf.spec.model import Direction, FieldDef, load_enums
+from pltf.spec.telegram import Telegram, user_fields
 
 
 def _enum_names(fields: tuple[FieldDef, ...], values: dict[str, Any], prefix: str, out: dict[str, str]) -> None:

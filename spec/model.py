@@ -21,9 +21,6 @@ SPEC_DIR = Path(__file__).resolve().parent
 Direction = Literal["request", "reply"]
 DIRECTIONS: tuple[Direction, Direction] = ("request", "reply")
 
-SCALAR_TYPES = ("BYTE", "BOOL", "INT16", "INT", "DOUBLE")
-STRING_TYPES = ("STRING", "XML")
-
 
 class SpecError(Exception):
     """The spec data itself is invalid (a bug in spec/, never a peer's fault)."""

@@ -7,15 +7,12 @@ Latin-1 text. ``hypothesis`` is a development dependency, so only tests and tool
 
 from __future__ import annotations
 
-import math
-import struct
-
 from hypothesis import strategies as st
 
-from spec.codec import telegram_set
-from spec.compiler import WIRE, allowed_values, value_range
-from spec.model import Direction, FieldDef
-from spec.telegram import Telegram, user_fields
+from pltf.spec.codec import telegram_set
+from pltf.spec.compiler import WIRE, allowed_values, value_range
+from pltf.spec.model import Direction, FieldDef
+from pltf.spec.telegram import Telegram, user_fields
 
 _INT_BOUNDS = {"B": (0, 255), "h": (-(2**15), 2**15 - 1), "i": (-(2**31), 2**31 - 1)}
 LATIN1 = st.characters(min_codepoint=0, max_codepoint=255)
@@ -58,8 +55,3 @@ def telegram_strategy(cls: type[Telegram], max_items: int = 8) -> st.SearchStrat
 
 def any_telegram(direction: Direction, max_items: int = 8) -> st.SearchStrategy[Telegram]:
     return st.one_of([telegram_strategy(cls, max_items) for cls in telegram_set(direction)])
-
-
-def is_finite_double(value: float) -> bool:
-    """Doubles round-trip bit for bit; NaN is excluded only because NaN != NaN."""
-    return not math.isnan(value) and struct.unpack(">d", struct.pack(">d", value))[0] == value

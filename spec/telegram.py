@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections import namedtuple
 from typing import Any, ClassVar
 
-from spec.model import Direction, FieldDef, TelegramDef
+from pltf.spec.model import Direction, FieldDef, TelegramDef
 
 
 class Telegram(tuple):  # type: ignore[type-arg]

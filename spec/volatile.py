@@ -16,7 +16,7 @@ from typing import Any
 
 import yaml
 
-from spec.model import SPEC_DIR, FieldDef, load_telegrams
+from pltf.spec.model import SPEC_DIR, FieldDef, load_telegrams
 
 VOLATILE_PATH = SPEC_DIR / "volatile.yaml"
 

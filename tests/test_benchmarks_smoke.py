@@ -2,7 +2,7 @@
 
 No timing is asserted: ``--quick`` figures mean nothing. What must hold: the runner writes every row of the
 codec benchmark with positive figures and the machine's description, and the hand-written and construct
-codecs decode the same frames to the same values as ``spec.codec`` (and encode them to the same bytes).
+codecs decode the same frames to the same values as ``pltf.spec.codec`` (and encode them to the same bytes).
 """
 
 from __future__ import annotations
@@ -29,10 +29,10 @@ from benchmarks.bench_codec import (
     stream_chunks,
 )
 from benchmarks.harness import ROW_KEYS
-from spec import errors
-from spec.codec import REPLIES, REQUESTS, TelegramDecoder, decode_frame, encode
-from spec.strategies import telegram_strategy
-from spec.telegram import Telegram
+from pltf.spec import errors
+from pltf.spec.codec import REPLIES, REQUESTS, TelegramDecoder, decode_frame, encode
+from pltf.spec.strategies import telegram_strategy
+from pltf.spec.telegram import Telegram
 
 ROOT = Path(__file__).resolve().parents[1]
 SUBJECTS = [OURS, HANDWRITTEN, CONSTRUCT, CONSTRUCT_COMPILED]

@@ -6,7 +6,9 @@ GET_* requests (``get_status() -> Status``), waits (``wait_state``, ``wait_mode`
 ``wait_until``) and one exception family (``PlatformError``). See clients/README.md.
 """
 
-from clients.pltf_client._enums import (
+__version__ = "0.1.0"
+
+from pltf.client._enums import (
     AppError,
     BoardType,
     BrakeState,
@@ -26,7 +28,7 @@ from clients.pltf_client._enums import (
     ParamDataType,
     PlannerState,
 )
-from clients.pltf_client._replies import (
+from pltf.client._replies import (
     Button,
     Camera,
     CanMessage,
@@ -54,10 +56,10 @@ from clients.pltf_client._replies import (
     Variable,
     typed_reply,
 )
-from clients.pltf_client._reply_extras import Pose, format_param_value, parse_param_value
-from clients.pltf_client.aio import AsyncPlatformClient
-from clients.pltf_client.core import ClientCore, PendingReply
-from clients.pltf_client.errors import (
+from pltf.client._reply_extras import Pose, format_param_value, parse_param_value
+from pltf.client.aio import AsyncPlatformClient
+from pltf.client.core import ClientCore, PendingReply
+from pltf.client.errors import (
     CommandRejected,
     ConnectionClosed,
     InvalidArgument,
@@ -65,7 +67,7 @@ from clients.pltf_client.errors import (
     ProtocolError,
     Timeout,
 )
-from clients.pltf_client.sync import DEFAULT_PORT, DEFAULT_TIMEOUT, PlatformClient, WireLog
+from pltf.client.sync import DEFAULT_PORT, DEFAULT_TIMEOUT, PlatformClient, WireLog
 
 __all__ = [
     "DEFAULT_PORT",

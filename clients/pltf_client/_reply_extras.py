@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
-from clients.pltf_client._enums import EmergencyState, MotionMode, OperationState, ParamDataType
+from pltf.client._enums import EmergencyState, MotionMode, OperationState, ParamDataType
 
 
 class Pose(NamedTuple):

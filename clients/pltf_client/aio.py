@@ -17,15 +17,15 @@ from collections.abc import Callable
 from types import TracebackType
 from typing import Unpack
 
-from clients.pltf_client._commands import AsyncCommands
-from clients.pltf_client._enums import MotionMode, OperationState
-from clients.pltf_client._replies import Status
-from clients.pltf_client.base import DEFAULT_PORT, ClientBase, ClientOptions
-from clients.pltf_client.core import PendingReply
-from clients.pltf_client.errors import ConnectionClosed, ProtocolError, Timeout
-from clients.pltf_client.waits import ConditionWait, Judge, ModeWait, StateWait, TargetWait
-from spec.codec import build
-from spec.telegram import Telegram
+from pltf.client._commands import AsyncCommands
+from pltf.client._enums import MotionMode, OperationState
+from pltf.client._replies import Status
+from pltf.client.base import DEFAULT_PORT, ClientBase, ClientOptions
+from pltf.client.core import PendingReply
+from pltf.client.errors import ConnectionClosed, ProtocolError, Timeout
+from pltf.client.waits import ConditionWait, Judge, ModeWait, StateWait, TargetWait
+from pltf.spec.codec import build
+from pltf.spec.telegram import Telegram
 
 
 class AsyncPlatformClient(ClientBase, AsyncCommands):

@@ -10,10 +10,10 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import TypedDict
 
-from clients.pltf_client.core import ClientCore, PendingReply
-from clients.pltf_client.errors import InvalidArgument
-from spec.codec import DEFAULT_MAX_LENGTH
-from spec.telegram import Telegram
+from pltf.client.core import ClientCore, PendingReply
+from pltf.client.errors import InvalidArgument
+from pltf.spec.codec import DEFAULT_MAX_LENGTH
+from pltf.spec.telegram import Telegram
 
 DEFAULT_PORT = 10002  # guide 4.2: PlatformCtrl listens on 10000 and 10002; the field client's default
 DEFAULT_TIMEOUT = 5.0

@@ -1,7 +1,7 @@
 """The client's protocol core, without I/O: requests to bytes, received bytes to replies routed to their requests.
 
 Rules:
-- No socket, no clock, no asyncio here (like ``spec.codec``): the sync and asyncio clients own the I/O and
+- No socket, no clock, no asyncio here (like ``pltf.spec.codec``): the sync and asyncio clients own the I/O and
   call ``send`` / ``receive_data`` / ``connection_lost``; both behave the same because this file decides.
 - Guide 6.1: the platform "returns data only on request". Only a request whose telegram has a reply layout
   (``TelegramDef.answered``: the GET_* requests) gets a ``PendingReply``; commands are fire and forget.
@@ -17,10 +17,10 @@ from __future__ import annotations
 
 from collections import deque
 
-from clients.pltf_client.errors import ConnectionClosed, InvalidArgument, PlatformError, ProtocolError
-from spec import errors as codec_errors
-from spec.codec import DEFAULT_MAX_LENGTH, TelegramDecoder, encode
-from spec.telegram import Telegram
+from pltf.client.errors import ConnectionClosed, InvalidArgument, PlatformError, ProtocolError
+from pltf.spec import errors as codec_errors
+from pltf.spec.codec import DEFAULT_MAX_LENGTH, TelegramDecoder, encode
+from pltf.spec.telegram import Telegram
 
 MAX_UNSOLICITED = 100
 

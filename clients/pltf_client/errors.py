@@ -24,7 +24,7 @@ class ConnectionClosed(PlatformError):
 class ProtocolError(PlatformError):
     """The platform sent bytes the protocol does not allow; the connection has been closed.
 
-    The codec's ``spec.errors.RemoteProtocolError`` that was detected is the ``__cause__``.
+    The codec's ``pltf.spec.errors.RemoteProtocolError`` that was detected is the ``__cause__``.
     """
 
 

@@ -17,15 +17,15 @@ import time
 from collections.abc import Callable
 from types import TracebackType
 
-from clients.pltf_client._commands import Commands
-from clients.pltf_client._enums import MotionMode, OperationState
-from clients.pltf_client._replies import Status
-from clients.pltf_client.base import DEFAULT_PORT, DEFAULT_TIMEOUT, ClientBase, WireLog
-from clients.pltf_client.core import PendingReply
-from clients.pltf_client.errors import ConnectionClosed, ProtocolError, Timeout
-from clients.pltf_client.waits import ConditionWait, Judge, ModeWait, StateWait, TargetWait
-from spec.codec import build
-from spec.telegram import Telegram
+from pltf.client._commands import Commands
+from pltf.client._enums import MotionMode, OperationState
+from pltf.client._replies import Status
+from pltf.client.base import DEFAULT_PORT, DEFAULT_TIMEOUT, ClientBase, WireLog
+from pltf.client.core import PendingReply
+from pltf.client.errors import ConnectionClosed, ProtocolError, Timeout
+from pltf.client.waits import ConditionWait, Judge, ModeWait, StateWait, TargetWait
+from pltf.spec.codec import build
+from pltf.spec.telegram import Telegram
 
 __all__ = ["DEFAULT_PORT", "DEFAULT_TIMEOUT", "PlatformClient", "WireLog"]
 

@@ -14,9 +14,9 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 
-from clients.pltf_client._enums import EmergencyState, MotionMode, OperationState, PlannerState
-from clients.pltf_client._replies import Status
-from clients.pltf_client.errors import CommandRejected, Timeout
+from pltf.client._enums import EmergencyState, MotionMode, OperationState, PlannerState
+from pltf.client._replies import Status
+from pltf.client.errors import CommandRejected, Timeout
 
 _READY, _RUNNING, _BREAKED = OperationState.ST_OP_READY, OperationState.ST_OP_RUNNING, OperationState.ST_OP_BREAKED
 _NOT_INITIALIZED = OperationState.ST_OP_NOT_INITIALIZED

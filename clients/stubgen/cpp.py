@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from clients.stubgen import banner, fill, model, readme, template
-from clients.stubgen.model import Field, Message, doc_line, snake
-from clients.stubgen.renderer import Spelling, arguments, error_classes, methods, scripts, static
+from pltf.stubgen import banner, fill, model, readme, template
+from pltf.stubgen.model import Field, Message, doc_line, snake
+from pltf.stubgen.renderer import Spelling, arguments, error_classes, methods, scripts, static
 
 KEYWORDS = frozenset((
     "alignas", "alignof", "and", "and_eq", "asm", "auto", "bitand", "bitor", "bool", "break", "case", "catch",

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import functools
 
-from clients.stubgen import banner, fill, model, readme, template
-from clients.stubgen.model import ERRORS, Field, Message, doc_line, pascal, words
-from clients.stubgen.renderer import Spelling, arguments, convert, methods, protocol, scripts, static
+from pltf.stubgen import banner, fill, model, readme, template
+from pltf.stubgen.model import ERRORS, Field, Message, doc_line, pascal, words
+from pltf.stubgen.renderer import Spelling, arguments, convert, methods, protocol, scripts, static
 
 KEYWORDS = frozenset((
     "break", "case", "chan", "const", "continue", "default", "defer", "else", "fallthrough", "for", "func", "go",

@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from clients.stubgen import banner, fill, model, readme, template
-from clients.stubgen.model import ERRORS, Field, Message, camel, doc_line, field_doc
-from clients.stubgen.renderer import BUILDER, Spelling, arguments, convert, methods, protocol, scripts, static
+from pltf.stubgen import banner, fill, model, readme, template
+from pltf.stubgen.model import ERRORS, Field, Message, camel, doc_line, field_doc
+from pltf.stubgen.renderer import BUILDER, Spelling, arguments, convert, methods, protocol, scripts, static
 
 KEYWORDS = frozenset((
     "abstract", "assert", "boolean", "break", "byte", "case", "catch", "char", "class", "const", "continue",

@@ -1,8 +1,8 @@
 """The language-neutral view of the spec that every language module renders.
 
 Rules:
-- Only this module reads ``spec.model``; the language modules see ``Message``/``Field`` and the name helpers.
-- Everything a generated decoder needs to behave exactly like ``spec.codec`` is precomputed here, so the
+- Only this module reads ``pltf.spec.model``; the language modules see ``Message``/``Field`` and the name helpers.
+- Everything a generated decoder needs to behave exactly like ``pltf.spec.codec`` is precomputed here, so the
   generated runtimes stay small and identical in logic: the allowed values of enum and BOOL fields, the byte
   size of each run of fixed-size fields (checked whole before the run is read, as ``struct.unpack_from``
   does), and the fewest bytes a group item can take (a count is refused before any allocation).
@@ -18,9 +18,9 @@ import struct
 from dataclasses import dataclass
 from typing import Any
 
-from spec.model import EnumDef, FieldDef, TelegramDef, load_enums, load_telegrams
+from pltf.spec.model import EnumDef, FieldDef, TelegramDef, load_enums, load_telegrams
 
-GENERATOR = "clients.stubgen (pltf stubs)"
+GENERATOR = "pltf.stubgen (pltf stubs)"
 SCALAR_SIZE = {"BYTE": 1, "BOOL": 1, "INT16": 2, "INT": 4, "DOUBLE": 8}
 INT_BOUNDS = {"BYTE": (0, 255), "BOOL": (0, 1), "INT16": (-(2**15), 2**15 - 1), "INT": (-(2**31), 2**31 - 1)}
 TYPE_CODES = ("BYTE", "BOOL", "INT16", "INT", "DOUBLE", "STRING", "XML", "GROUP")
@@ -162,7 +162,7 @@ def _message(t: TelegramDef, direction: str) -> Message:
 
 @functools.cache
 def messages(direction: str) -> tuple[Message, ...]:
-    """Every telegram of one direction, by id (the sets of ``spec.codec``: opaque ones are in both)."""
+    """Every telegram of one direction, by id (the sets of ``pltf.spec.codec``: opaque ones are in both)."""
     return tuple(
         _message(t, direction)
         for t in load_telegrams()

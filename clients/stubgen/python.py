@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import keyword
 
-from clients.stubgen import banner, fill, readme, template
-from clients.stubgen.model import Field, Message, doc_line, enum_doc, enums, field_doc, safe, snake
-from clients.stubgen.renderer import Spelling, arguments, error_classes, methods, protocol, scripts, static
+from pltf.stubgen import banner, fill, readme, template
+from pltf.stubgen.model import Field, Message, doc_line, enum_doc, enums, field_doc, safe, snake
+from pltf.stubgen.renderer import Spelling, arguments, error_classes, methods, protocol, scripts, static
 
 KEYWORDS = frozenset(keyword.kwlist) | frozenset(("send", "receive", "request", "close"))
 PY_TYPE = {"BYTE": "int", "BOOL": "bool", "INT16": "int", "INT": "int", "DOUBLE": "float", "STRING": "str",

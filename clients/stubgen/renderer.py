@@ -13,8 +13,8 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from clients.stubgen import banner, fill, template
-from clients.stubgen.model import (
+from pltf.stubgen import banner, fill, template
+from pltf.stubgen.model import (
     ERRORS,
     Command,
     Field,

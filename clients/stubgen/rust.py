@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from clients.stubgen import banner, fill, model, readme, template
-from clients.stubgen.model import ERRORS, LEAF_ERRORS, Field, Message, doc_line, pascal, snake
-from clients.stubgen.renderer import BUILDER, Spelling, arguments, convert, methods, protocol, scripts, static
+from pltf.stubgen import banner, fill, model, readme, template
+from pltf.stubgen.model import ERRORS, LEAF_ERRORS, Field, Message, doc_line, pascal, snake
+from pltf.stubgen.renderer import BUILDER, Spelling, arguments, convert, methods, protocol, scripts, static
 
 KEYWORDS = frozenset((
     "as", "break", "const", "continue", "crate", "else", "enum", "extern", "false", "fn", "for", "if", "impl",

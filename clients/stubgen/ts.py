@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from clients.stubgen import banner, fill, model, readme, template
-from clients.stubgen.model import Field, Message, camel, doc_line, pascal, snake
-from clients.stubgen.renderer import Spelling, arguments, error_classes, methods, protocol, scripts, static
+from pltf.stubgen import banner, fill, model, readme, template
+from pltf.stubgen.model import Field, Message, camel, doc_line, pascal, snake
+from pltf.stubgen.renderer import Spelling, arguments, error_classes, methods, protocol, scripts, static
 
 RESERVED = frozenset((
     "break", "case", "catch", "class", "const", "continue", "debugger", "default", "delete", "do", "else", "enum",

@@ -6,8 +6,8 @@ Not every target language parses JSON with its standard library, so the runners 
     E <direction> <vector-name> <hex> <Error>   an invalid frame: decoding must raise <Error>
 
 ``<hex>`` is ``-`` for no bytes; ``<dump>`` is ``model.dump`` of the vector's fields (the rest of the line).
-Lines starting with ``#`` are comments. Run ``python -m clients.stubgen.vectors [DIR] OUT`` to write it
-(the fixture vectors, then ``sample_entries``: extra vectors made with ``spec.codec``).
+Lines starting with ``#`` are comments. Run ``python -m pltf.stubgen.vectors [DIR] OUT`` to write it
+(the fixture vectors, then ``sample_entries``: extra vectors made with ``pltf.spec.codec``).
 """
 
 from __future__ import annotations
@@ -20,14 +20,15 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from clients.stubgen.model import INT_BOUNDS, Field, Message, dump, messages
-from spec import errors
-from spec.codec import decode_frame, encode, frame, telegram_set
-from spec.jsonio import telegram_to_json
-from spec.model import load_telegrams
+from pltf.fixtures import DIR as FIXTURES_DIR
+from pltf.spec import errors
+from pltf.spec.codec import decode_frame, encode, frame, telegram_set
+from pltf.spec.jsonio import telegram_to_json
+from pltf.spec.model import load_telegrams
+from pltf.stubgen.model import INT_BOUNDS, Field, Message, dump, messages
 
 VECTOR_FILES = ("requests.json", "replies.json", "invalid.json")
-DEFAULT_DIR = Path(__file__).resolve().parents[2] / "fixtures" / "vectors"
+DEFAULT_DIR = FIXTURES_DIR / "vectors"
 
 
 def _entries(data: Any) -> list[dict[str, Any]]:
@@ -121,7 +122,7 @@ def _expect_error(name: str, direction: str, data: bytes) -> dict[str, Any] | No
 
 
 def sample_entries(seed: int = 9, per_telegram: int = 3) -> list[dict[str, Any]]:
-    """Vectors made with the Python codec (``spec.codec``): a few valid frames of every telegram in both
+    """Vectors made with the Python codec (``pltf.spec.codec``): a few valid frames of every telegram in both
     directions, and each of them broken (cut short, extended, a byte flipped) with the error it raises.
     They add coverage beside ``fixtures/vectors``; they are not an independent oracle."""
     rnd = random.Random(seed)
@@ -167,7 +168,7 @@ def write(out: Path, directory: Path = DEFAULT_DIR, samples: bool = False) -> in
 
 def main(argv: list[str]) -> int:
     if len(argv) not in (1, 2):
-        print("usage: python -m clients.stubgen.vectors [VECTOR_DIR] OUT", file=sys.stderr)
+        print("usage: python -m pltf.stubgen.vectors [VECTOR_DIR] OUT", file=sys.stderr)
         return 2
     directory = Path(argv[0]) if len(argv) == 2 else DEFAULT_DIR
     count = write(Path(argv[-1]), directory, samples=True)

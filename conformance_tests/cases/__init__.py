@@ -5,7 +5,7 @@ commands in every state, the replies, parameters, documents, CAN, special functi
 CMD_EXIT (final) last.
 """
 
-from conformance_tests.cases import (  # noqa: F401 - imported for registration
+from pltf.conformance_tests.cases import (  # noqa: F401 - imported for registration
     can,
     commands,
     documents,

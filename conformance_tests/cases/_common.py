@@ -6,11 +6,11 @@ import math
 from collections.abc import Iterable
 from typing import Any
 
-from conformance_tests import chart
-from conformance_tests.chart import St
-from conformance_tests.context import CaseContext, Status
-from conformance_tests.outcome import Fail, NotApplicable
-from spec.model import enum_classes
+from pltf.conformance_tests import chart
+from pltf.conformance_tests.chart import St
+from pltf.conformance_tests.context import CaseContext, Status
+from pltf.conformance_tests.outcome import Fail, NotApplicable
+from pltf.spec.model import enum_classes
 
 MotionMode = enum_classes()["MotionMode"]
 OperationState = enum_classes()["OperationState"]

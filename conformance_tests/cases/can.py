@@ -11,11 +11,11 @@ from __future__ import annotations
 import itertools
 from typing import Any
 
-from conformance_tests.cases._common import no_unsolicited
-from conformance_tests.catalogue import Level, case
-from conformance_tests.context import CaseContext
-from conformance_tests.outcome import Fail, NotApplicable
-from spec.codec import build
+from pltf.conformance_tests.cases._common import no_unsolicited
+from pltf.conformance_tests.catalogue import Level, case
+from pltf.conformance_tests.context import CaseContext
+from pltf.conformance_tests.outcome import Fail, NotApplicable
+from pltf.spec.codec import build
 
 ALL_IDS = range(2048)
 _BUFFER = ("guide 6.3 CMD_ADD_CAN_LISTENING_ID: \"Add a CAN-ID to the receive list. All messages with CAN-IDs of "

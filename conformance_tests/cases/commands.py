@@ -12,11 +12,11 @@ from collections.abc import Callable
 from functools import partial
 from typing import Any
 
-from conformance_tests.cases._common import STATES, no_unsolicited
-from conformance_tests.catalogue import Level, add
-from conformance_tests.context import CaseContext
-from conformance_tests.outcome import ConnectionClosed, Fail
-from spec.model import enum_classes
+from pltf.conformance_tests.cases._common import STATES, no_unsolicited
+from pltf.conformance_tests.catalogue import Level, add
+from pltf.conformance_tests.context import CaseContext
+from pltf.conformance_tests.outcome import ConnectionClosed, Fail
+from pltf.spec.model import enum_classes
 
 _E = enum_classes()
 Fields = Callable[[CaseContext], dict[str, Any]]

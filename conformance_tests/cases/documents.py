@@ -8,12 +8,12 @@ from __future__ import annotations
 
 from functools import partial
 
-from conformance_tests import docdata
-from conformance_tests.cases._common import STATES, no_unsolicited
-from conformance_tests.catalogue import Level, Tier, add, case
-from conformance_tests.context import CaseContext
-from conformance_tests.outcome import Fail
-from spec.codec import build
+from pltf.conformance_tests import docdata
+from pltf.conformance_tests.cases._common import STATES, no_unsolicited
+from pltf.conformance_tests.catalogue import Level, Tier, add, case
+from pltf.conformance_tests.context import CaseContext
+from pltf.conformance_tests.outcome import Fail
+from pltf.spec.codec import build
 
 KINDS = ("map", "roadmap", "program")
 _NAME = "conformance"

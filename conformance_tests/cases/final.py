@@ -3,11 +3,11 @@ with --allow-shutdown."""
 
 from __future__ import annotations
 
-from conformance_tests.catalogue import Level, case
-from conformance_tests.context import CaseContext
-from conformance_tests.launch import wait_port_closed
-from conformance_tests.outcome import ConnectionClosed, Fail
-from spec.codec import build
+from pltf.conformance_tests.catalogue import Level, case
+from pltf.conformance_tests.context import CaseContext
+from pltf.conformance_tests.launch import wait_port_closed
+from pltf.conformance_tests.outcome import ConnectionClosed, Fail
+from pltf.spec.codec import build
 
 
 @case("6.3/CMD_SHUTDOWN_HOST/accepted", destructive=True, errata=("E-CMD-012",), level=Level.MAY,

@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import struct
 
-from conformance_tests.cases._common import NO, MotionMode, far_frame
-from conformance_tests.catalogue import Level, Tier, case
-from conformance_tests.context import CaseContext
-from conformance_tests.outcome import Fail
-from conformance_tests.wire import Session
-from spec.codec import build, encode
+from pltf.conformance_tests.cases._common import NO, MotionMode, far_frame
+from pltf.conformance_tests.catalogue import Level, Tier, case
+from pltf.conformance_tests.context import CaseContext
+from pltf.conformance_tests.outcome import Fail
+from pltf.conformance_tests.wire import Session
+from pltf.spec.codec import build, encode
 
 VEL = MotionMode.MODE_MOTION_VEL
 

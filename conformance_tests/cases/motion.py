@@ -16,12 +16,12 @@ import time
 from dataclasses import dataclass
 from typing import Any
 
-from conformance_tests import docdata
-from conformance_tests.cases._common import MotionMode, angle_diff, expect_state, no_unsolicited
-from conformance_tests.catalogue import Level, case
-from conformance_tests.chart import St
-from conformance_tests.context import CaseContext
-from conformance_tests.outcome import Fail, Inconclusive
+from pltf.conformance_tests import docdata
+from pltf.conformance_tests.cases._common import MotionMode, angle_diff, expect_state, no_unsolicited
+from pltf.conformance_tests.catalogue import Level, case
+from pltf.conformance_tests.chart import St
+from pltf.conformance_tests.context import CaseContext
+from pltf.conformance_tests.outcome import Fail, Inconclusive
 
 NO, VEL, JOYSOFT = MotionMode.MODE_MOTION_NO, MotionMode.MODE_MOTION_VEL, MotionMode.MODE_MOTION_JOYSOFT
 AUTO, JOYHARD = MotionMode.MODE_MOTION_AUTOMATIC, MotionMode.MODE_MOTION_JOYHARD

@@ -7,8 +7,8 @@ from collections.abc import Callable
 from functools import partial
 from typing import Any
 
-from conformance_tests.cases._common import MotionMode
-from conformance_tests.cases.motion import (
+from pltf.conformance_tests.cases._common import MotionMode
+from pltf.conformance_tests.cases.motion import (
     _GATE,
     AUTO,
     JOYHARD,
@@ -21,9 +21,9 @@ from conformance_tests.cases.motion import (
     rest,
     still,
 )
-from conformance_tests.catalogue import Level, add
-from conformance_tests.chart import St
-from conformance_tests.context import CaseContext
+from pltf.conformance_tests.catalogue import Level, add
+from pltf.conformance_tests.chart import St
+from pltf.conformance_tests.context import CaseContext
 
 _MOVES: dict[str, tuple[int, Callable[[Pose], dict[str, Any]]]] = {
     "CMD_MOVE_VEL": (VEL, lambda p: {"vel_trans": 300, "vel_rot": 0}),

@@ -11,11 +11,11 @@ from __future__ import annotations
 import math
 from typing import Any
 
-from conformance_tests.cases._common import no_unsolicited, param_table
-from conformance_tests.catalogue import Level, Tier, case
-from conformance_tests.context import CaseContext
-from conformance_tests.outcome import Fail, NotApplicable
-from spec.parameters import Category, DataType, Parameter, load_parameters
+from pltf.conformance_tests.cases._common import no_unsolicited, param_table
+from pltf.conformance_tests.catalogue import Level, Tier, case
+from pltf.conformance_tests.context import CaseContext
+from pltf.conformance_tests.outcome import Fail, NotApplicable
+from pltf.spec.parameters import Category, DataType, Parameter, load_parameters
 
 SPEC = load_parameters()
 _UNSAFE = {Category.GEOM, Category.USONIC, Category.COLLISION}
@@ -137,7 +137,7 @@ def every_parameter(ctx: CaseContext) -> None:
     if not table:
         raise Fail("CMD_GET_PLTF_PARAM_VEC lists no parameter")
     s = ctx.session()
-    from spec.codec import build
+    from pltf.spec.codec import build
 
     for key in table:  # pipelined: every request first, then every reply
         s.send(build("request", "CMD_GET_PLTF_PARAM", key=key))

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import time
 
-from conformance_tests.cases._common import STATES, far_frame
-from conformance_tests.catalogue import Level, Tier, case
-from conformance_tests.context import CaseContext
-from conformance_tests.outcome import Fail, NotApplicable, TargetFailure
-from spec.codec import build
+from pltf.conformance_tests.cases._common import STATES, far_frame
+from pltf.conformance_tests.catalogue import Level, Tier, case
+from pltf.conformance_tests.context import CaseContext
+from pltf.conformance_tests.outcome import Fail, NotApplicable, TargetFailure
+from pltf.spec.codec import build
 
 _PORTS = ("guide 6.1: \"a socket server is established on the platform PC and listens for clients on the socket "
           "ports 10000 and 10002. For each port one client is able to connect to the platform.\"")

@@ -7,10 +7,10 @@ is an optional feature: a target that does not run the program at all is N/A.
 
 from __future__ import annotations
 
-from conformance_tests.cases._common import MotionMode, param_table
-from conformance_tests.catalogue import Level, case
-from conformance_tests.context import CaseContext
-from conformance_tests.outcome import Fail, NotApplicable
+from pltf.conformance_tests.cases._common import MotionMode, param_table
+from pltf.conformance_tests.catalogue import Level, case
+from pltf.conformance_tests.context import CaseContext
+from pltf.conformance_tests.outcome import Fail, NotApplicable
 
 PROGRAM = MotionMode.MODE_MOTION_PROGRAM
 KEY = "ViewPlanObstEnabled"

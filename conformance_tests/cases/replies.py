@@ -6,12 +6,12 @@ import math
 from functools import partial
 from typing import Any
 
-from conformance_tests.cases._common import STATES, no_unsolicited
-from conformance_tests.catalogue import Level, Tier, add, case
-from conformance_tests.context import CaseContext
-from conformance_tests.outcome import Fail, Inconclusive, ReplyTimeout
-from spec.codec import REPLIES, build
-from spec.errata import errata_for
+from pltf.conformance_tests.cases._common import STATES, no_unsolicited
+from pltf.conformance_tests.catalogue import Level, Tier, add, case
+from pltf.conformance_tests.context import CaseContext
+from pltf.conformance_tests.outcome import Fail, Inconclusive, ReplyTimeout
+from pltf.spec.codec import REPLIES, build
+from pltf.spec.errata import errata_for
 
 ANSWERED = [cls.NAME for cls in REPLIES if cls.DEF.answered]
 _SMOKE = {"CMD_GET_STATUS", "CMD_GET_POSITION"}

@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import math
 
-from conformance_tests.cases._common import FAR_OFFSET, no_unsolicited
-from conformance_tests.catalogue import Level, Tier, case
-from conformance_tests.context import CaseContext
-from conformance_tests.outcome import Fail, NotApplicable
-from spec.model import enum_classes
+from pltf.conformance_tests.cases._common import FAR_OFFSET, no_unsolicited
+from pltf.conformance_tests.catalogue import Level, Tier, case
+from pltf.conformance_tests.context import CaseContext
+from pltf.conformance_tests.outcome import Fail, NotApplicable
+from pltf.spec.model import enum_classes
 
 _E = enum_classes()
 

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from functools import partial
 
-from conformance_tests import chart
-from conformance_tests.cases._common import (
+from pltf.conformance_tests import chart
+from pltf.conformance_tests.cases._common import (
     NO,
     STATES,
     MotionMode,
@@ -14,11 +14,11 @@ from conformance_tests.cases._common import (
     no_unsolicited,
     probe_connected,
 )
-from conformance_tests.catalogue import Level, Tier, add, case
-from conformance_tests.chart import St
-from conformance_tests.context import CaseContext
-from conformance_tests.outcome import Fail, NotApplicable
-from spec.codec import build
+from pltf.conformance_tests.catalogue import Level, Tier, add, case
+from pltf.conformance_tests.chart import St
+from pltf.conformance_tests.context import CaseContext
+from pltf.conformance_tests.outcome import Fail, NotApplicable
+from pltf.spec.codec import build
 
 _GUIDE_TEXT = {
     "CMD_CONNECT_TO_PLTF": "guide 4.2: \"The initialization process starts with the command CMD_CONNECT_CAN\" "

@@ -11,8 +11,8 @@ import struct
 from dataclasses import dataclass
 from typing import Any
 
-from conformance_tests.mutants.proxy import Conn, FrameProxy
-from spec.codec import REPLIES, REQUESTS, frame
+from pltf.conformance_tests.mutants.proxy import Conn, FrameProxy
+from pltf.spec.codec import REPLIES, REQUESTS, frame
 
 _ID = {cls.NAME: cls.ID for cls in REQUESTS}
 
@@ -168,7 +168,7 @@ def _status_field(data: bytes, name: str, new_type: str) -> bytes:
     """Re-encode a GET_STATUS reply with one field in another wire type (an alternative reading's layout)."""
     import dataclasses
 
-    from spec.compiler import compile_telegram
+    from pltf.spec.compiler import compile_telegram
 
     t = REPLIES.decode_data(data)
     tdef = t.DEF
@@ -224,7 +224,7 @@ class IgnoreUndecodable(WireMutant):
     wants_client_frames = True
 
     def client_frame(self, proxy: FrameProxy, conn: Conn, data: bytes) -> None:
-        from spec.errors import RemoteProtocolError
+        from pltf.spec.errors import RemoteProtocolError
 
         try:
             REQUESTS.decode_data(data[8:])

@@ -1,6 +1,6 @@
 """Every case can fail: for each case, a mutant derived from what it checks, run until one kills it.
 
-``python -m conformance_tests.mutants.matrix [-k EXPR]`` prints, per case, the first mutant that kills it.
+``python -m pltf.conformance_tests.mutants.matrix [-k EXPR]`` prints, per case, the first mutant that kills it.
 
 Rules:
 - Candidates come from the case itself: an explicit entry of ``EXPLICIT`` for cases whose requirement a generic
@@ -21,14 +21,14 @@ import sys
 import time
 from collections.abc import Callable, Mapping
 
-from conformance_tests import chart
-from conformance_tests.catalogue import Case, Level, Tier, Verdict, load_all, select
-from conformance_tests.chart import St
-from conformance_tests.mutants import catalogue as mc
-from conformance_tests.mutants.catalogue import Mutant
-from conformance_tests.mutants.run import Bench
-from conformance_tests.runner import CaseResult
-from spec.codec import REQUESTS
+from pltf.conformance_tests import chart
+from pltf.conformance_tests.catalogue import Case, Level, Tier, Verdict, load_all, select
+from pltf.conformance_tests.chart import St
+from pltf.conformance_tests.mutants import catalogue as mc
+from pltf.conformance_tests.mutants.catalogue import Mutant
+from pltf.conformance_tests.mutants.run import Bench
+from pltf.conformance_tests.runner import CaseResult
+from pltf.spec.codec import REQUESTS
 
 # Case id -> why the reference server cannot pass it (N/A there). Empty: with its fake hardware (CAN boards with
 # traffic, IO outputs, ultrasonic board, head drive) and its task interpreter every standard case passes on it,
@@ -121,7 +121,7 @@ def find_killer(bench: Bench, case: Case) -> tuple[Mutant | None, CaseResult | N
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="python -m conformance_tests.mutants.matrix", description=__doc__)
+    p = argparse.ArgumentParser(prog="python -m pltf.conformance_tests.mutants.matrix", description=__doc__)
     p.add_argument("-k", dest="keyword")
     p.add_argument("--time-scale", type=float, default=10.0)
     args = p.parse_args(argv)

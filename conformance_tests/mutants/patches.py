@@ -12,31 +12,31 @@ from typing import Any
 
 
 def set_mode_anywhere() -> None:
-    from reference_server import state_chart as sc
+    from pltf.reference_server import state_chart as sc
 
     sc.RULES["CMD_SET_MODE"] = sc.Rule(frozenset({sc.State.READY, sc.State.RUNNING, sc.State.BREAKED}))
 
 
 def start_when_connected() -> None:
-    from reference_server import state_chart as sc
+    from pltf.reference_server import state_chart as sc
 
     sc.RULES["CMD_START"] = sc.Rule(frozenset({sc.State.READY, sc.State.CONNECTED}), sc.State.RUNNING)
 
 
 def break_no_transition() -> None:
-    from reference_server import state_chart as sc
+    from pltf.reference_server import state_chart as sc
 
     sc.RULES["CMD_BREAK"] = sc.Rule(sc.RULES["CMD_BREAK"].allowed, None)
 
 
 def shutdown_no_transition() -> None:
-    from reference_server import state_chart as sc
+    from pltf.reference_server import state_chart as sc
 
     sc.RULES["CMD_SHUTDOWN_PLTF"] = sc.Rule(sc.RULES["CMD_SHUTDOWN_PLTF"].allowed, None)
 
 
 def parameter_range_unchecked() -> None:
-    from spec import parameters
+    from pltf.spec import parameters
 
     parameters.Parameter._in_range = lambda self, value: value  # type: ignore[method-assign]
     original = parameters.Parameter.format
@@ -48,10 +48,10 @@ def parameter_range_unchecked() -> None:
 def documents_unvalidated() -> None:
     from lxml import etree
 
-    from reference_server import documents
+    from pltf.reference_server import documents
 
     def parse_only(kind: Any, data: bytes) -> Any:
-        from spec.documents import DocumentError
+        from pltf.spec.documents import DocumentError
 
         try:
             return etree.fromstring(data, etree.XMLParser(resolve_entities=False, no_network=True)).getroottree()
@@ -62,7 +62,7 @@ def documents_unvalidated() -> None:
 
 
 def refusal_clears_active() -> None:
-    from reference_server import documents
+    from pltf.reference_server import documents
 
     original = documents.Documents.set
 
@@ -74,14 +74,14 @@ def refusal_clears_active() -> None:
 
 
 def save_does_nothing() -> None:
-    from reference_server import documents
+    from pltf.reference_server import documents
 
     documents.Documents.save = lambda self, kind: self.storage.path(kind)  # type: ignore[method-assign]
 
 
 def stop_keeps_command() -> None:
-    from reference_server import kinematics
-    from reference_server.world import world
+    from pltf.reference_server import kinematics
+    from pltf.reference_server.world import world
 
     # both motion models of the server (pltf serve --motion ideal / world)
     kinematics.Drive.stop = lambda self: None  # type: ignore[method-assign]
@@ -89,7 +89,7 @@ def stop_keeps_command() -> None:
 
 
 def no_watchdog() -> None:
-    from reference_server import platform
+    from pltf.reference_server import platform
 
     original = platform.Platform.__init__
 
@@ -102,15 +102,15 @@ def no_watchdog() -> None:
 
 
 def moves_in_every_mode() -> None:
-    from reference_server import platform
+    from pltf.reference_server import platform
 
     platform.Platform._unless_mode = lambda self, name, *modes: None  # type: ignore[method-assign]
 
 
 def die_on_malformed() -> None:
-    from reference_server import network
-    from spec.codec import TelegramDecoder
-    from spec.errors import RemoteProtocolError
+    from pltf.reference_server import network
+    from pltf.spec.codec import TelegramDecoder
+    from pltf.spec.errors import RemoteProtocolError
 
     class Dying(TelegramDecoder):
         def next_telegram(self) -> Any:
@@ -124,7 +124,7 @@ def die_on_malformed() -> None:
 
 def allow_in_state(command: str, state: str) -> None:
     """``command`` is also accepted in ``state`` (a state chart cell flipped); its rule's target stays."""
-    from reference_server import state_chart as sc
+    from pltf.reference_server import state_chart as sc
 
     rule = sc.RULES[command]
     extra = next(s for s in sc.State if s.name.lower().replace("_", "-") == state)
@@ -133,7 +133,7 @@ def allow_in_state(command: str, state: str) -> None:
 
 def parameter_text_lenient() -> None:
     """Any number text is taken (fractions truncated, commas as points) and any word but true is false."""
-    from spec import parameters
+    from pltf.spec import parameters
 
     def integer(text: str) -> int:
         return int(float(text.replace(",", ".") or 0))

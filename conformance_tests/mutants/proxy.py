@@ -20,7 +20,7 @@ import threading
 from dataclasses import dataclass, field
 from typing import Any
 
-from spec.codec import DEFAULT_MAX_LENGTH, HEADER
+from pltf.spec.codec import DEFAULT_MAX_LENGTH, HEADER
 
 _LEN = struct.Struct(">I")
 

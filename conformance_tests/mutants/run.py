@@ -1,4 +1,4 @@
-"""Run cases against mutants: ``python -m conformance_tests.mutants.run [--all-cases] [MUTANT ...]``.
+"""Run cases against mutants: ``python -m pltf.conformance_tests.mutants.run [--all-cases] [MUTANT ...]``.
 
 ``Bench`` holds one reference server with a frame proxy in front (the wire mutants are swapped in and out of the
 proxy) and starts a patched server per model mutant. ``kill`` runs a mutant's killer case (or any cases) and
@@ -14,12 +14,12 @@ import time
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 
-from conformance_tests.catalogue import Case, Tier, Verdict, load_all, select
-from conformance_tests.context import Config
-from conformance_tests.launch import ServerProcess
-from conformance_tests.mutants.catalogue import MUTANTS, Mutant
-from conformance_tests.mutants.proxy import FrameProxy
-from conformance_tests.runner import CaseResult, Runner
+from pltf.conformance_tests.catalogue import Case, Tier, Verdict, load_all, select
+from pltf.conformance_tests.context import Config
+from pltf.conformance_tests.launch import ServerProcess
+from pltf.conformance_tests.mutants.catalogue import MUTANTS, Mutant
+from pltf.conformance_tests.mutants.proxy import FrameProxy
+from pltf.conformance_tests.runner import CaseResult, Runner
 
 KILLED = (Verdict.FAIL, Verdict.NON_STRICT)
 
@@ -63,7 +63,7 @@ def killer_case(mutant: Mutant) -> Case:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = argparse.ArgumentParser(prog="python -m conformance_tests.mutants.run", description=__doc__)
+    p = argparse.ArgumentParser(prog="python -m pltf.conformance_tests.mutants.run", description=__doc__)
     p.add_argument("mutants", nargs="*", help="mutant ids (default: all)")
     p.add_argument("--all-cases", action="store_true", help="run the whole standard tier against each mutant")
     p.add_argument("--time-scale", type=float, default=10.0)

@@ -9,7 +9,7 @@ from __future__ import annotations
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
-from conformance_tests.catalogue import SECTIONS, Verdict
+from pltf.conformance_tests.catalogue import SECTIONS, Verdict
 
 ORDER = [Verdict.PASS, Verdict.FAIL, Verdict.NON_STRICT, Verdict.NA, Verdict.INCONCLUSIVE, Verdict.ERROR,
          Verdict.SKIPPED]

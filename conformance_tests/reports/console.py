@@ -9,10 +9,10 @@ from rich.console import Console
 from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
-from conformance_tests.catalogue import Case, Verdict
-from conformance_tests.context import Config
-from conformance_tests.reports import ORDER, first_line, summary_rows
-from conformance_tests.runner import CaseResult, RunResult
+from pltf.conformance_tests.catalogue import Case, Verdict
+from pltf.conformance_tests.context import Config
+from pltf.conformance_tests.reports import ORDER, first_line, summary_rows
+from pltf.conformance_tests.runner import CaseResult, RunResult
 
 STYLE = {
     Verdict.PASS: "green", Verdict.FAIL: "bold red", Verdict.NON_STRICT: "yellow", Verdict.NA: "cyan",

@@ -7,9 +7,9 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Any
 
-from conformance_tests.catalogue import SECTIONS, Level, Verdict
-from conformance_tests.reports import first_line
-from conformance_tests.runner import CaseResult, RunResult
+from pltf.conformance_tests.catalogue import SECTIONS, Level, Verdict
+from pltf.conformance_tests.reports import first_line
+from pltf.conformance_tests.runner import CaseResult, RunResult
 
 
 def wire_lines(result: CaseResult) -> list[str]:

@@ -10,9 +10,9 @@ import datetime
 from html import escape
 from pathlib import Path
 
-from conformance_tests.catalogue import Verdict
-from conformance_tests.reports import ORDER, first_line, summary_rows
-from conformance_tests.runner import CaseResult, RunResult
+from pltf.conformance_tests.catalogue import Verdict
+from pltf.conformance_tests.reports import ORDER, first_line, summary_rows
+from pltf.conformance_tests.runner import CaseResult, RunResult
 
 _COLOURS = {
     Verdict.PASS: "#2e7d32", Verdict.FAIL: "#c62828", Verdict.NON_STRICT: "#ef6c00", Verdict.NA: "#00838f",

@@ -22,9 +22,9 @@ from typing import Any
 import can
 from cantools.database.can import Message
 
-from fake_hardware import candb
-from fake_hardware.candb import Node, Signals, St
-from fake_hardware.canport import CanPort
+from pltf.fake_hardware import candb
+from pltf.fake_hardware.candb import Node, Signals, St
+from pltf.fake_hardware.canport import CanPort
 
 Handler = Callable[[dict[str, Any], float], None]
 Builder = Callable[[float], Signals | None]  # None: nothing to send this cycle

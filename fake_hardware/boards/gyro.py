@@ -12,9 +12,9 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
-from fake_hardware.boards.base import Board, Builder
-from fake_hardware.candb import Node, Signals
-from fake_hardware.canport import CanPort
+from pltf.fake_hardware.boards.base import Board, Builder
+from pltf.fake_hardware.candb import Node, Signals
+from pltf.fake_hardware.canport import CanPort
 
 MotionSource = Callable[[float], tuple[float, float, float, float]]
 STILL = (0.0, 0.0, 9.81, 0.0)

@@ -11,9 +11,9 @@ from __future__ import annotations
 
 from typing import Any
 
-from fake_hardware.boards.base import Board, Builder, Handler
-from fake_hardware.candb import Node, Signals, St
-from fake_hardware.canport import CanPort
+from pltf.fake_hardware.boards.base import Board, Builder, Handler
+from pltf.fake_hardware.candb import Node, Signals, St
+from pltf.fake_hardware.canport import CanPort
 
 NOMINAL_BATTERY = 25_600.0  # mV, a charged 24 V lead battery
 LOW_BATTERY = 23_000.0  # mV

@@ -20,9 +20,9 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from fake_hardware.boards.base import Board, Builder, EmergencyCircuit, Handler
-from fake_hardware.candb import MOTORS, Node, Signals, St
-from fake_hardware.canport import CanPort
+from pltf.fake_hardware.boards.base import Board, Builder, EmergencyCircuit, Handler
+from pltf.fake_hardware.candb import MOTORS, Node, Signals, St
+from pltf.fake_hardware.canport import CanPort
 
 INT32 = 1 << 32
 

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 
-from fake_hardware.boards.base import Board, Builder
-from fake_hardware.candb import Node, Signals
-from fake_hardware.canport import CanPort
+from pltf.fake_hardware.boards.base import Board, Builder
+from pltf.fake_hardware.candb import Node, Signals
+from pltf.fake_hardware.canport import CanPort
 
 VelocitySource = Callable[[float], Sequence[float]]
 

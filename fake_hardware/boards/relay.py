@@ -12,11 +12,9 @@ from __future__ import annotations
 
 from typing import Any
 
-from fake_hardware.boards.base import Board, Builder, EmergencyCircuit, Handler
-from fake_hardware.candb import Node, Signals, St
-from fake_hardware.canport import CanPort
-
-RELAYS = 8
+from pltf.fake_hardware.boards.base import Board, Builder, EmergencyCircuit, Handler
+from pltf.fake_hardware.candb import Node, Signals, St
+from pltf.fake_hardware.canport import CanPort
 
 
 class RelayBoard(Board):

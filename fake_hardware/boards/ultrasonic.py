@@ -16,9 +16,9 @@ import math
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from fake_hardware.boards.base import Board, Builder, Handler
-from fake_hardware.candb import Node, Signals, St
-from fake_hardware.canport import CanPort
+from pltf.fake_hardware.boards.base import Board, Builder, Handler
+from pltf.fake_hardware.candb import Node, Signals, St
+from pltf.fake_hardware.canport import CanPort
 
 SENSORS = 16
 MAX_RANGE = 3000  # mm

@@ -13,8 +13,8 @@
 Importing this package registers every handler into ``registry.HANDLERS``.
 """
 
-from reference_server.commands import canbus, data, debug, motion, operation, request, special
-from reference_server.commands.registry import ACCEPTED, HANDLERS, Handler, Outcome, handler_names, handles
+from pltf.reference_server.commands import canbus, data, debug, motion, operation, request, special
+from pltf.reference_server.commands.registry import ACCEPTED, HANDLERS, Handler, Outcome, handler_names, handles
 
 __all__ = [
     "ACCEPTED",

@@ -14,13 +14,13 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from fake_hardware import MOTORS, CanController, ControllerError, Node
-from reference_server import status
-from reference_server.commands.registry import ACCEPTED, Outcome, handles
+from pltf.fake_hardware import MOTORS, CanController, ControllerError, Node
+from pltf.reference_server import status
+from pltf.reference_server.commands.registry import ACCEPTED, Outcome, handles
 
 if TYPE_CHECKING:
-    from reference_server.hardware_link import HardwareLink
-    from reference_server.platform import Platform
+    from pltf.reference_server.hardware_link import HardwareLink
+    from pltf.reference_server.platform import Platform
 
 
 @handles("CMD_CONNECT_TO_PLTF")

@@ -9,17 +9,17 @@ from __future__ import annotations
 import logging
 from typing import TYPE_CHECKING, Any
 
-from reference_server import status
-from reference_server.commands.motion import rad
-from reference_server.commands.registry import ACCEPTED, Outcome, handles
-from reference_server.documents import from_wire, to_wire
-from reference_server.kinematics import Frame
-from reference_server.storage import StorageError
-from spec.documents import DocumentError, DocumentKind
-from spec.parameters import ParameterError
+from pltf.reference_server import status
+from pltf.reference_server.commands.motion import rad
+from pltf.reference_server.commands.registry import ACCEPTED, Outcome, handles
+from pltf.reference_server.documents import from_wire, to_wire
+from pltf.reference_server.kinematics import Frame
+from pltf.reference_server.storage import StorageError
+from pltf.spec.documents import DocumentError, DocumentKind
+from pltf.spec.parameters import ParameterError
 
 if TYPE_CHECKING:
-    from reference_server.platform import Platform
+    from pltf.reference_server.platform import Platform
 
 DOCUMENT_OF = {"MAP": DocumentKind.MAP, "ROADMAP": DocumentKind.ROADMAP, "PROGRAM": DocumentKind.PROGRAM}
 

@@ -5,13 +5,13 @@ from __future__ import annotations
 import logging
 from typing import TYPE_CHECKING, Any
 
-from reference_server import status
-from reference_server.commands.registry import ACCEPTED, Outcome, handles
-from reference_server.enums import Event, MotionMode, MouseButton
-from reference_server.state_chart import State
+from pltf.reference_server import status
+from pltf.reference_server.commands.registry import ACCEPTED, Outcome, handles
+from pltf.reference_server.enums import Event, MotionMode, MouseButton
+from pltf.reference_server.state_chart import State
 
 if TYPE_CHECKING:
-    from reference_server.platform import Platform
+    from pltf.reference_server.platform import Platform
 
 
 @handles("CMD_GET_DEBUG_DATA")

@@ -11,12 +11,12 @@ import logging
 import math
 from typing import TYPE_CHECKING, Any
 
-from reference_server.commands.registry import ACCEPTED, Outcome, handles
-from reference_server.enums import MotionMode, PlannerState
-from reference_server.kinematics import Frame, relative_to_world
+from pltf.reference_server.commands.registry import ACCEPTED, Outcome, handles
+from pltf.reference_server.enums import MotionMode, PlannerState
+from pltf.reference_server.kinematics import Frame, relative_to_world
 
 if TYPE_CHECKING:
-    from reference_server.platform import Platform
+    from pltf.reference_server.platform import Platform
 
 
 def rad(milli_deg: int) -> float:

@@ -9,11 +9,11 @@ from __future__ import annotations
 import logging
 from typing import TYPE_CHECKING, Any
 
-from reference_server.commands.registry import ACCEPTED, Outcome, handles
-from reference_server.enums import MotionMode
+from pltf.reference_server.commands.registry import ACCEPTED, Outcome, handles
+from pltf.reference_server.enums import MotionMode
 
 if TYPE_CHECKING:
-    from reference_server.platform import Platform
+    from pltf.reference_server.platform import Platform
 
 
 def _program_mode(p: Platform) -> bool:

@@ -15,10 +15,10 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from spec.telegram import Telegram
+from pltf.spec.telegram import Telegram
 
 if TYPE_CHECKING:
-    from reference_server.platform import Platform
+    from pltf.reference_server.platform import Platform
 
 
 @dataclass(frozen=True)

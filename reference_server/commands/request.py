@@ -4,11 +4,11 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from reference_server import status
-from reference_server.commands.registry import Outcome, handles
+from pltf.reference_server import status
+from pltf.reference_server.commands.registry import Outcome, handles
 
 if TYPE_CHECKING:
-    from reference_server.platform import Platform
+    from pltf.reference_server.platform import Platform
 
 
 @handles("CMD_GET_STATUS")

@@ -10,10 +10,10 @@ from __future__ import annotations
 import logging
 from typing import TYPE_CHECKING, Any
 
-from reference_server.commands.registry import ACCEPTED, Outcome, handles
+from pltf.reference_server.commands.registry import ACCEPTED, Outcome, handles
 
 if TYPE_CHECKING:
-    from reference_server.platform import Platform
+    from pltf.reference_server.platform import Platform
 
 
 @handles("CMD_SPEAK_TEXT", "CMD_PLAY_SOUND")

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import re
 
-from reference_server.tasks.facade import Sensors, TaskError
-from spec.parameters import DataType
+from pltf.reference_server.tasks.facade import Sensors, TaskError
+from pltf.spec.parameters import DataType
 
 _LITERAL = {"true": True, "1": True, "false": False, "0": False}
 _COMPARISON = re.compile(r"(?:(DI|DO)([0-9]+)|param:([A-Za-z_][A-Za-z0-9_.\-]*))(==|!=)([A-Za-z0-9_.+\-]+)")

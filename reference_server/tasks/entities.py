@@ -21,9 +21,9 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any, ClassVar, NamedTuple
 
-from reference_server.tasks.facade import Pose, Target, TaskError
-from reference_server.tasks.model import Detection, Direction, Entity
-from spec.documents import DocumentError, DocumentKind, validate_document
+from pltf.reference_server.tasks.facade import Pose, Target, TaskError
+from pltf.reference_server.tasks.model import Detection, Direction, Entity
+from pltf.spec.documents import DocumentError, DocumentKind, validate_document
 
 CHARGING_PREFIX = "charg"
 

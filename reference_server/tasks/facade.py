@@ -17,8 +17,8 @@ import datetime
 from collections.abc import Sequence
 from typing import NamedTuple, Protocol
 
-from reference_server.tasks.model import Detection, Direction, Entity
-from spec.parameters import DataType
+from pltf.reference_server.tasks.model import Detection, Direction, Entity
+from pltf.spec.parameters import DataType
 
 
 class TaskError(Exception):

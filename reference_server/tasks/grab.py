@@ -8,7 +8,6 @@ would see: 25 mm per pixel, the platform at the centre heading up, 1 m range rin
 from __future__ import annotations
 
 import io
-import math
 from collections.abc import Sequence
 from pathlib import Path
 
@@ -68,14 +67,3 @@ def write_grab(folder: Path, filename: str, scan: bool, image: bool, points: Seq
         path.write_bytes(render_jpeg(points))
         written.append(str(path))
     return written
-
-
-def polar_to_points(ranges: Sequence[float], fov_deg: float = 270.0) -> list[Point]:
-    """Scanner ranges (mm, evenly over ``fov_deg`` centred ahead) -> points in platform coordinates."""
-    n = len(ranges)
-    if n == 0:
-        return []
-    start = -math.radians(fov_deg) / 2
-    step = math.radians(fov_deg) / max(1, n - 1)
-    return [(r * math.cos(start + i * step), r * math.sin(start + i * step)) for i, r in enumerate(ranges)
-            if math.isfinite(r) and r > 0]  # fmt: skip

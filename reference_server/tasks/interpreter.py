@@ -25,9 +25,9 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from reference_server.tasks import conditions, waits
-from reference_server.tasks import model as m
-from reference_server.tasks.facade import Machine, TaskError
+from pltf.reference_server.tasks import conditions, waits
+from pltf.reference_server.tasks import model as m
+from pltf.reference_server.tasks.facade import Machine, TaskError
 
 STEP_BUDGET = 1000  # commands one task may run in one tick before it must yield (a goto loop without waits)
 APPROACH_DISTANCE = 800.0  # mm short of a tracked entity where <moveto> stops, facing it (E-TASK-008)

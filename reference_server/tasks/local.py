@@ -18,16 +18,16 @@ import logging
 from collections.abc import Sequence
 from typing import Any, Protocol
 
-from reference_server import status
-from reference_server.tasks import entities, grab
-from reference_server.tasks.entities import StatusFields, StatusSensors
-from reference_server.tasks.facade import Target, TaskError
-from reference_server.tasks.interpreter import Interpreter
-from reference_server.tasks.program import compile_program
-from spec.codec import build
-from spec.documents import DocumentKind
-from spec.parameters import DataType, ParameterError
-from spec.telegram import Telegram
+from pltf.reference_server import status
+from pltf.reference_server.tasks import entities, grab
+from pltf.reference_server.tasks.entities import StatusFields, StatusSensors
+from pltf.reference_server.tasks.facade import Target, TaskError
+from pltf.reference_server.tasks.interpreter import Interpreter
+from pltf.reference_server.tasks.program import compile_program
+from pltf.spec.codec import build
+from pltf.spec.documents import DocumentKind
+from pltf.spec.parameters import DataType, ParameterError
+from pltf.spec.telegram import Telegram
 
 
 class Platform(Protocol):
@@ -215,5 +215,5 @@ class ProgramHook:
 
 
 def factory(platform: Platform) -> ProgramHook:
-    """reference_server.program_api.ProgramFactory of the task interpreter."""
+    """pltf.reference_server.program_api.ProgramFactory of the task interpreter."""
     return ProgramHook(platform)

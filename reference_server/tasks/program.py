@@ -15,8 +15,8 @@ from collections.abc import Callable
 from decimal import Decimal
 from typing import Any
 
-from reference_server.tasks import model as m
-from spec.documents import DocumentError, DocumentKind, validate_document
+from pltf.reference_server.tasks import model as m
+from pltf.spec.documents import DocumentError, DocumentKind, validate_document
 
 _TRUE = frozenset({"true", "1"})
 

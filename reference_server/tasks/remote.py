@@ -22,12 +22,12 @@ import threading
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-from clients.pltf_client import BoardType, DebugData, OutputLevel, PlatformClient, Status
-from reference_server.tasks import entities, grab
-from reference_server.tasks.entities import StatusFields, StatusSensors
-from reference_server.tasks.facade import Target, TaskError
-from spec.documents import DocumentError, DocumentKind, validate_document
-from spec.parameters import DataType
+from pltf.client import BoardType, DebugData, OutputLevel, PlatformClient, Status
+from pltf.reference_server.tasks import entities, grab
+from pltf.reference_server.tasks.entities import StatusFields, StatusSensors
+from pltf.reference_server.tasks.facade import Target, TaskError
+from pltf.spec.documents import DocumentError, DocumentKind, validate_document
+from pltf.spec.parameters import DataType
 
 log = logging.getLogger("pltf.tasks.remote")
 

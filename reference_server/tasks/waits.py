@@ -19,8 +19,8 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from reference_server.tasks import model as m
-from reference_server.tasks.facade import Sensors
+from pltf.reference_server.tasks import model as m
+from pltf.reference_server.tasks.facade import Sensors
 
 MAX_DATE_STEPS = 86_400  # seconds checked per tick at most (one simulated day between two ticks)
 

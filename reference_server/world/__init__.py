@@ -7,8 +7,8 @@ controller), automatic (move commands), replay (post-process recording), motion 
 ``random.Random`` come from the caller.
 """
 
-from reference_server.world.geometry import MapGeometry
-from reference_server.world.planner import PlannerState
-from reference_server.world.world import World
+from pltf.reference_server.world.geometry import MapGeometry
+from pltf.reference_server.world.planner import PlannerState
+from pltf.reference_server.world.world import World
 
 __all__ = ["MapGeometry", "PlannerState", "World"]

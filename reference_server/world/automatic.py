@@ -28,10 +28,10 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from reference_server.world.geometry import BOOL, F64, circles
-from reference_server.world.ipo import Interpolator, Ref, stabilize, track
-from reference_server.world.paths import NO_POINTS, Drive, Leg, Turn, direct, end_curve, polyline, wrap
-from reference_server.world.planner import Plan, PlannerState
+from pltf.reference_server.world.geometry import BOOL, F64, circles
+from pltf.reference_server.world.ipo import Interpolator, Ref, stabilize, track
+from pltf.reference_server.world.paths import NO_POINTS, Drive, Leg, Turn, direct, end_curve, polyline, wrap
+from pltf.reference_server.world.planner import Plan, PlannerState
 
 Params = Callable[[str], Any]
 Pose = tuple[float, float, float]

@@ -28,7 +28,7 @@ from lxml import etree  # type: ignore[import-untyped]
 from scipy.spatial import cKDTree  # type: ignore[import-untyped]
 
 try:
-    from reference_server.world import _geometry
+    from pltf.reference_server.world import _geometry
 
     HAVE_C = True
 except ImportError:  # not built (a source checkout without a compiler): numpy only

@@ -22,8 +22,8 @@ from typing import Any
 
 import numpy as np
 
-from reference_server.world.geometry import F64
-from reference_server.world.paths import Drive, Leg, Turn, sample_points, wrap
+from pltf.reference_server.world.geometry import F64
+from pltf.reference_server.world.paths import Drive, Leg, Turn, sample_points, wrap
 
 Params = Callable[[str], Any]
 

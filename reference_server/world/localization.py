@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from reference_server.world.geometry import F64
+from pltf.reference_server.world.geometry import F64
 
 ODO_VAR = 0.005  # mm^2 per mm of wheel travel (more than the simulated encoders' noise: the scale error too)
 MEAS_POS = 10.0  # mm: standard deviation of a matched scan's position

@@ -17,9 +17,9 @@ import math
 import random
 from typing import Any
 
-from reference_server.motion_api import Frame, MotionFactory, Params, Pose
-from reference_server.world.geometry import MapGeometry
-from reference_server.world.world import World
+from pltf.reference_server.motion_api import Frame, MotionFactory, Params, Pose
+from pltf.reference_server.world.geometry import MapGeometry
+from pltf.reference_server.world.world import World
 
 _MILLI_DEG = 180000.0 / math.pi
 

@@ -24,12 +24,12 @@ from typing import Any
 
 import numpy as np
 
-from reference_server.world.automatic import AutoJob, Navigator, Perception
-from reference_server.world.geometry import F64
-from reference_server.world.ipo import Ref
-from reference_server.world.paths import NO_POINTS
-from reference_server.world.planner import PlannerState
-from reference_server.world.replay import Recorder, ReplayJob
+from pltf.reference_server.world.automatic import AutoJob, Navigator, Perception
+from pltf.reference_server.world.geometry import F64
+from pltf.reference_server.world.ipo import Ref
+from pltf.reference_server.world.paths import NO_POINTS
+from pltf.reference_server.world.planner import PlannerState
+from pltf.reference_server.world.replay import Recorder, ReplayJob
 
 Params = Callable[[str], Any]
 Pose = tuple[float, float, float]

@@ -27,7 +27,7 @@ from functools import cached_property
 
 import numpy as np
 
-from reference_server.world.geometry import F64
+from pltf.reference_server.world.geometry import F64
 
 DS = 20.0  # mm between samples
 MAX_SAMPLES = 50_000  # per path (E-MOT-014): beyond DS * MAX_SAMPLES the samples spread out

@@ -20,7 +20,7 @@ from functools import cached_property
 
 import pymunk
 
-from reference_server.world.geometry import F64
+from pltf.reference_server.world.geometry import F64
 
 _BISECT = 8  # 1/256 of a step: well under a millimetre
 MAX_STEP = 50.0  # mm a single checked step may drive (a control period at MaxTransVel 1500 mm/s: 30 mm)

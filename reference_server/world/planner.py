@@ -26,7 +26,7 @@ import numpy as np
 from scipy.sparse import csr_matrix  # type: ignore[import-untyped]
 from scipy.sparse.csgraph import dijkstra  # type: ignore[import-untyped]
 
-from reference_server.world.geometry import F64, MapGeometry, circles, clearance, segments, segments_clear
+from pltf.reference_server.world.geometry import F64, MapGeometry, circles, clearance, segments, segments_clear
 
 _K = 8
 _PUSH = 1.002  # vertices a little outside the inflated obstacle

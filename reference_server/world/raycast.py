@@ -23,10 +23,10 @@ from functools import lru_cache
 import numpy as np
 import numpy.typing as npt
 
-from reference_server.world.geometry import F64, circles, segments
+from pltf.reference_server.world.geometry import F64, circles, segments
 
 try:
-    from reference_server.world import _raycast
+    from pltf.reference_server.world import _raycast
 
     HAVE_C = True
 except ImportError:  # not built (a source checkout without a compiler): numpy only

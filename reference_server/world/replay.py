@@ -19,10 +19,10 @@ from typing import Any
 
 import numpy as np
 
-from reference_server.world.automatic import AutoJob, Navigator, Perception
-from reference_server.world.geometry import F64
-from reference_server.world.ipo import Ref, track
-from reference_server.world.planner import PlannerState
+from pltf.reference_server.world.automatic import AutoJob, Navigator, Perception
+from pltf.reference_server.world.geometry import F64
+from pltf.reference_server.world.ipo import Ref, track
+from pltf.reference_server.world.planner import PlannerState
 
 Params = Callable[[str], Any]
 Pose = tuple[float, float, float]

@@ -23,8 +23,8 @@ from typing import Any
 
 import numpy as np
 
-from reference_server.world.geometry import F64
-from reference_server.world.raycast import I64, Fan, Scene, beam_offsets, cast_fan, cast_rays
+from pltf.reference_server.world.geometry import F64
+from pltf.reference_server.world.raycast import I64, Fan, Scene, beam_offsets, cast_fan, cast_rays
 
 LASER_FAN = Fan(541, math.radians(-135.0), math.radians(0.5), 30000.0)
 LASER_SIGMA = 10.0  # mm

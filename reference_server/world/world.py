@@ -26,9 +26,9 @@ from typing import Any
 
 import numpy as np
 
-from reference_server.world import sensors
-from reference_server.world.automatic import AutoJob, Perception
-from reference_server.world.geometry import (
+from pltf.reference_server.world import sensors
+from pltf.reference_server.world.automatic import AutoJob, Perception
+from pltf.reference_server.world.geometry import (
     BOOL,
     F64,
     MapGeometry,
@@ -40,12 +40,12 @@ from reference_server.world.geometry import (
     segments,
     segments_clear,
 )
-from reference_server.world.localization import Localization
-from reference_server.world.motion import Motion
-from reference_server.world.physics import Footprint, Physics
-from reference_server.world.planner import Plan, Planner, PlannerState
-from reference_server.world.raycast import Scene
-from reference_server.world.replay import ReplayJob
+from pltf.reference_server.world.localization import Localization
+from pltf.reference_server.world.motion import Motion
+from pltf.reference_server.world.physics import Footprint, Physics
+from pltf.reference_server.world.planner import Plan, Planner, PlannerState
+from pltf.reference_server.world.raycast import Scene
+from pltf.reference_server.world.replay import ReplayJob
 
 Params = Callable[[str], Any]
 Pose = tuple[float, float, float]

@@ -1,5 +1,5 @@
 """What the client tests share: ``FakePlatform`` (a stand-in PlatformCtrl in a thread), ``LiveServer``
-(``python -m reference_server`` in a subprocess) and the frames of the field capture.
+(``python -m pltf.reference_server`` in a subprocess) and the frames of the field capture.
 
 ``FakePlatform`` answers GET_STATUS and GET_POSITION with frames built by spec.codec, follows the state chart's
 main transitions and can be told to misbehave (hold replies back, answer in reverse order, hang up, send garbage).
@@ -18,9 +18,9 @@ import time
 from pathlib import Path
 from typing import Any
 
-from clients.pltf_client import EmergencyState, MotionMode, OperationState, PlannerState
-from spec.codec import REPLIES, TelegramDecoder, build, encode
-from spec.telegram import Telegram, user_fields
+from pltf.client import EmergencyState, MotionMode, OperationState, PlannerState
+from pltf.spec.codec import REPLIES, TelegramDecoder, build, encode
+from pltf.spec.telegram import Telegram, user_fields
 
 REPO = Path(__file__).resolve().parents[2]
 READY, RUNNING, BREAKED, NOT_INIT = (
@@ -196,12 +196,12 @@ STARTED = re.compile(r"server started at port (\d+)")
 
 
 class LiveServer:
-    """``python -m reference_server`` on two free ports, ready once both listen and the start-up is logged."""
+    """``python -m pltf.reference_server`` on two free ports, ready once both listen and the start-up is logged."""
 
     def __init__(self, data_dir: Path, log_path: Path) -> None:
         self.log_path = log_path
         self._log = log_path.open("wb")
-        cmd = [sys.executable, "-m", "reference_server", "--ports", "0,0", "--data-dir", str(data_dir),
+        cmd = [sys.executable, "-m", "pltf.reference_server", "--ports", "0,0", "--data-dir", str(data_dir),
                "--time-scale", "20", "--seed", "1"]  # fmt: skip
         self.proc = subprocess.Popen(cmd, cwd=REPO, stdout=self._log, stderr=subprocess.STDOUT)
         deadline = time.monotonic() + 30

@@ -3,7 +3,7 @@
 Most tests talk over real TCP to ``FakePlatform``: a tiny stand-in in a thread that answers GET_STATUS and
 GET_POSITION with frames built by spec.codec, follows the state chart's main transitions and can be told
 to misbehave (hold replies back, answer in reverse order, hang up, send garbage). The ``live`` tests run
-the same scenarios against ``python -m reference_server`` when it is there. The frames of the field
+the same scenarios against ``python -m pltf.reference_server`` when it is there. The frames of the field
 capture (field-evidence.md) are the independent oracle for what the methods put on the wire.
 """
 
@@ -33,7 +33,7 @@ from client_fakes import (
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from clients.pltf_client import (
+from pltf.client import (
     AsyncPlatformClient,
     ClientCore,
     CommandRejected,
@@ -55,12 +55,12 @@ from clients.pltf_client import (
     parse_param_value,
     typed_reply,
 )
-from clients.pltf_client.waits import StateWait, TargetWait
-from spec import errors as codec_errors
-from spec.codec import REPLIES, REQUESTS, build, encode
-from spec.model import load_telegrams
-from spec.strategies import telegram_strategy
-from spec.telegram import user_fields
+from pltf.client.waits import StateWait, TargetWait
+from pltf.spec import errors as codec_errors
+from pltf.spec.codec import REPLIES, REQUESTS, build, encode
+from pltf.spec.model import load_telegrams
+from pltf.spec.strategies import telegram_strategy
+from pltf.spec.telegram import user_fields
 
 
 # ---------------------------------------------------------------------------------------------- fixtures
@@ -79,7 +79,7 @@ def wait_for(predicate: Any, timeout: float = 5.0) -> None:
 
 # ---------------------------------------------------------------------------------------------- generated code
 def test_generated_modules_are_fresh() -> None:
-    assert _generate.main(["--check"]) == 0, "run `python -m clients.pltf_client._generate`"
+    assert _generate.main(["--check"]) == 0, "run `python -m pltf.client._generate`"
 
 
 def test_generate_check_fails_on_a_stale_file(tmp_path: Path) -> None:

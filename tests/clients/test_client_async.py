@@ -13,7 +13,7 @@ from typing import Any
 import pytest
 from client_fakes import AUTOMATIC, CAPTURED, READY, RUNNING, FakePlatform, LiveServer
 
-from clients.pltf_client import (
+from pltf.client import (
     AsyncPlatformClient,
     CommandRejected,
     ConnectionClosed,
@@ -24,7 +24,7 @@ from clients.pltf_client import (
     Status,
     Timeout,
 )
-from spec.codec import REQUESTS
+from pltf.spec.codec import REQUESTS
 
 
 def run_with_client(port: int, body: Callable[[AsyncPlatformClient], Awaitable[Any]], **options: Any) -> Any:

@@ -25,9 +25,9 @@ from pathlib import Path
 import pytest
 from client_fakes import LiveServer
 
-from clients.stubgen import LANGS, check, generate, render
-from clients.stubgen import vectors as stub_vectors
-from spec.codec import REPLIES, REQUESTS, TelegramDecoder, encode
+from pltf.spec.codec import REPLIES, REQUESTS, TelegramDecoder, encode
+from pltf.stubgen import LANGS, check, generate, render
+from pltf.stubgen import vectors as stub_vectors
 
 REPO = Path(__file__).resolve().parents[2]
 GENERATED = REPO / "clients" / "generated"
@@ -82,7 +82,7 @@ def test_check_reports_an_edited_file(tmp_path: Path) -> None:
 
 
 def test_pltf_stubs_writes_and_checks(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
-    from pltf_cli.main import main
+    from pltf.cli.main import main
 
     assert main(["stubs", "--lang", "go", "--out", str(tmp_path)]) == 0
     assert main(["stubs", "--lang", "go", "--check", str(tmp_path)]) == 0

@@ -6,8 +6,8 @@ from collections.abc import Iterator
 
 import pytest
 
-from conformance_tests.context import Config
-from conformance_tests.launch import ServerProcess
+from pltf.conformance_tests.context import Config
+from pltf.conformance_tests.launch import ServerProcess
 from tests.conformance_tests.fakes import TinyTarget
 
 TIME_SCALE = 10.0

@@ -16,12 +16,12 @@ import xml.etree.ElementTree as ET
 from collections.abc import Callable
 from typing import Any
 
-from conformance_tests import chart
-from conformance_tests.chart import St
-from conformance_tests.readings import canonical
-from spec.codec import REPLIES, TelegramDecoder, encode
-from spec.errors import RemoteProtocolError
-from spec.parameters import ParameterError, ParameterStore
+from pltf.conformance_tests import chart
+from pltf.conformance_tests.chart import St
+from pltf.conformance_tests.readings import canonical
+from pltf.spec.codec import REPLIES, TelegramDecoder, encode
+from pltf.spec.errors import RemoteProtocolError
+from pltf.spec.parameters import ParameterError, ParameterStore
 
 Handler = Callable[[socket.socket], None]
 

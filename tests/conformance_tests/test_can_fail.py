@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import pytest
 
-from conformance_tests.catalogue import Case, Tier, load_all, select
-from conformance_tests.mutants.matrix import NOT_ON_REFERENCE, candidates, find_killer
-from conformance_tests.mutants.run import Bench
+from pltf.conformance_tests.catalogue import Case, Tier, load_all, select
+from pltf.conformance_tests.mutants.matrix import NOT_ON_REFERENCE, candidates, find_killer
+from pltf.conformance_tests.mutants.run import Bench
 
 RUNNABLE = [c for c in select(load_all().values(), tier=Tier.STANDARD) if c.id not in NOT_ON_REFERENCE]
 # one case of every group, and the cases whose killer is not a generic fault

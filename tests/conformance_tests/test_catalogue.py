@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import pytest
 
-from conformance_tests import chart
-from conformance_tests.cases import GROUP_ORDER
-from conformance_tests.catalogue import ID_PATTERN, SECTIONS, Level, Tier, load_all, matches, select
-from conformance_tests.mutants.catalogue import MUTANTS
-from spec.codec import REPLIES, REQUESTS
-from spec.errata import load_errata
+from pltf.conformance_tests import chart
+from pltf.conformance_tests.cases import GROUP_ORDER
+from pltf.conformance_tests.catalogue import ID_PATTERN, SECTIONS, Level, Tier, load_all, matches, select
+from pltf.conformance_tests.mutants.catalogue import MUTANTS
+from pltf.spec.codec import REPLIES, REQUESTS
+from pltf.spec.errata import load_errata
 
 CASES = load_all()
 

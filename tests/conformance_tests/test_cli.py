@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from conformance_tests.launch import ServerProcess
-from pltf_cli.main import main
+from pltf.cli.main import main
+from pltf.conformance_tests.launch import ServerProcess
 from tests.conformance_tests.fakes import ScriptedServer
 
 

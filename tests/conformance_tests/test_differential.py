@@ -3,12 +3,12 @@ a broken variant shows exactly where it differs; volatile fields are ignored or 
 
 from __future__ import annotations
 
-from conformance_tests.context import Config
-from conformance_tests.differential import compare, diff_replies, script, volatile
-from conformance_tests.launch import InProcessServer, ServerProcess
-from conformance_tests.mutants.catalogue import BY_ID
-from conformance_tests.mutants.proxy import FrameProxy
-from conformance_tests.readings import canonical
+from pltf.conformance_tests.context import Config
+from pltf.conformance_tests.differential import compare, diff_replies, script, volatile
+from pltf.conformance_tests.launch import InProcessServer, ServerProcess
+from pltf.conformance_tests.mutants.catalogue import BY_ID
+from pltf.conformance_tests.mutants.proxy import FrameProxy
+from pltf.conformance_tests.readings import canonical
 
 
 def test_volatile_fields_are_ignored_and_tolerances_applied() -> None:
@@ -35,8 +35,8 @@ def test_the_reference_agrees_with_itself_and_a_mutant_does_not() -> None:
 def test_poses_are_compared_relative_to_the_start_of_the_session() -> None:
     import math
 
-    from conformance_tests.differential import relative
-    from spec.codec import REPLIES
+    from pltf.conformance_tests.differential import relative
+    from pltf.spec.codec import REPLIES
 
     origin = (2000.0, 10000.0, math.pi / 2)  # standing at (2000, 10000), facing +y
     pos = REPLIES.CMD_GET_POSITION(x=2000, y=11000, angle=math.pi, vel_trans=0.0, vel_rot=0.0)

@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import pytest
 
-from conformance_tests.catalogue import Verdict, load_all
-from conformance_tests.mutants.catalogue import MUTANTS, Mutant
-from conformance_tests.mutants.run import KILLED, Bench
+from pltf.conformance_tests.catalogue import Verdict, load_all
+from pltf.conformance_tests.mutants.catalogue import MUTANTS, Mutant
+from pltf.conformance_tests.mutants.run import KILLED, Bench
 
 
 @pytest.fixture(scope="module")

@@ -6,10 +6,10 @@ from types import SimpleNamespace
 
 import pytest
 
-from conformance_tests.baseline import Baseline, BaselineError
-from conformance_tests.catalogue import REGISTRY, Level, Verdict, load_all
-from conformance_tests.outcome import Deviation, deviation_verdict, verdict_for_level, worst
-from conformance_tests.runner import Attempt, _resolve
+from pltf.conformance_tests.baseline import Baseline, BaselineError
+from pltf.conformance_tests.catalogue import REGISTRY, Level, Verdict, load_all
+from pltf.conformance_tests.outcome import Deviation, deviation_verdict, verdict_for_level, worst
+from pltf.conformance_tests.runner import Attempt, _resolve
 
 load_all()
 

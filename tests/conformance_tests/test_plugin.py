@@ -2,20 +2,18 @@
 
 from __future__ import annotations
 
-import os
 import subprocess
 import sys
 from pathlib import Path
 
-from conformance_tests.launch import REPO, ServerProcess
+from pltf.conformance_tests.launch import ServerProcess
 
 
 def _pytest(tmp_path: Path, port: int, *args: str) -> subprocess.CompletedProcess[str]:
     (tmp_path / "pytest.ini").write_text("[pytest]\n")
-    env = dict(os.environ, PYTHONPATH=str(REPO))
-    cmd = [sys.executable, "-m", "pytest", "-p", "conformance_tests.pytest_plugin", "-p", "no:cacheprovider",
+    cmd = [sys.executable, "-m", "pytest", "-p", "pltf.conformance_tests.pytest_plugin", "-p", "no:cacheprovider",
            "--pltf-target", f"127.0.0.1:{port}", "--pltf-time-scale", "10", "--pltf-simulator", "-q", *args]
-    return subprocess.run(cmd, cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120, check=False)
+    return subprocess.run(cmd, cwd=tmp_path, capture_output=True, text=True, timeout=120, check=False)
 
 
 def test_plugin_runs_selected_cases_and_maps_verdicts(reference: ServerProcess, tmp_path: Path) -> None:

@@ -9,11 +9,11 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from conformance_tests import readings
-from conformance_tests.outcome import BadReply
-from spec.codec import REPLIES
-from spec.compiler import compile_telegram
-from spec.strategies import telegram_strategy
+from pltf.conformance_tests import readings
+from pltf.conformance_tests.outcome import BadReply
+from pltf.spec.codec import REPLIES
+from pltf.spec.compiler import compile_telegram
+from pltf.spec.strategies import telegram_strategy
 
 ANSWERED = [cls for cls in REPLIES if cls.DEF.answered]
 

@@ -11,13 +11,13 @@ from pathlib import Path
 
 import pytest
 
-from conformance_tests.catalogue import Tier, Verdict, load_all, select
-from conformance_tests.context import Config
-from conformance_tests.launch import ServerProcess
-from conformance_tests.mutants.matrix import NOT_ON_REFERENCE
-from conformance_tests.reports.files import write_json, write_junit
-from conformance_tests.reports.html import write_html
-from conformance_tests.runner import Runner, RunResult
+from pltf.conformance_tests.catalogue import Tier, Verdict, load_all, select
+from pltf.conformance_tests.context import Config
+from pltf.conformance_tests.launch import ServerProcess
+from pltf.conformance_tests.mutants.matrix import NOT_ON_REFERENCE
+from pltf.conformance_tests.reports.files import write_json, write_junit
+from pltf.conformance_tests.reports.html import write_html
+from pltf.conformance_tests.runner import Runner, RunResult
 
 TIME_SCALE = 10.0
 MAY_BE_NA = NOT_ON_REFERENCE  # N/A there (each with its reason), never FAIL; the list only shrinks

@@ -5,12 +5,12 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
-from conformance_tests.baseline import Baseline
-from conformance_tests.catalogue import Case, Level, Tier, Verdict, load_all, select
-from conformance_tests.chart import St
-from conformance_tests.context import CaseContext, Config
-from conformance_tests.outcome import Fail, Inconclusive, NotApplicable
-from conformance_tests.runner import Runner
+from pltf.conformance_tests.baseline import Baseline
+from pltf.conformance_tests.catalogue import Case, Level, Tier, Verdict, load_all, select
+from pltf.conformance_tests.chart import St
+from pltf.conformance_tests.context import CaseContext, Config
+from pltf.conformance_tests.outcome import Fail, Inconclusive, NotApplicable
+from pltf.conformance_tests.runner import Runner
 from tests.conformance_tests.fakes import TinyTarget
 
 

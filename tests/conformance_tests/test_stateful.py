@@ -7,9 +7,9 @@ import subprocess
 import sys
 from pathlib import Path
 
-from conformance_tests.context import Config
-from conformance_tests.launch import ServerProcess
-from conformance_tests.stateful import run_stateful
+from pltf.conformance_tests.context import Config
+from pltf.conformance_tests.launch import ServerProcess
+from pltf.conformance_tests.stateful import run_stateful
 
 
 def _replay(script: Path, port: int) -> subprocess.CompletedProcess[str]:

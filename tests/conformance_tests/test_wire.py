@@ -7,9 +7,9 @@ from typing import Any
 
 import pytest
 
-from conformance_tests.outcome import ConnectionClosed, Deviation, ReplyTimeout, Unreachable
-from conformance_tests.wire import Session, WireLog
-from spec.codec import REPLIES, build, encode, frame
+from pltf.conformance_tests.outcome import ConnectionClosed, Deviation, ReplyTimeout, Unreachable
+from pltf.conformance_tests.wire import Session, WireLog
+from pltf.spec.codec import REPLIES, build, encode, frame
 from tests.conformance_tests.fakes import ScriptedServer
 
 POSITION = REPLIES.CMD_GET_POSITION(x=1, y=-2, angle=0.5, vel_trans=0.0, vel_rot=0.0)

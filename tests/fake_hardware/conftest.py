@@ -13,7 +13,7 @@ from typing import Any
 import can
 import pytest
 
-from fake_hardware import Hardware, build_platform_hardware, candb
+from pltf.fake_hardware import Hardware, build_platform_hardware, candb
 
 DT = 0.02
 

@@ -9,8 +9,8 @@ from typing import Any
 
 import pytest
 
-from fake_hardware import ControllerError, Hardware, Node, St
-from fake_hardware.boards import IoBoard, MotorBoard, RelayBoard, UltrasonicBoard
+from pltf.fake_hardware import ControllerError, Hardware, Node, St
+from pltf.fake_hardware.boards import IoBoard, MotorBoard, RelayBoard, UltrasonicBoard
 from tests.fake_hardware.conftest import Sniffer, run
 
 

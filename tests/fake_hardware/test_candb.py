@@ -6,8 +6,8 @@ import random
 
 import pytest
 
-from fake_hardware import candb
-from fake_hardware.candb import APPLICATION_IDS, PREFIX, Node
+from pltf.fake_hardware import candb
+from pltf.fake_hardware.candb import APPLICATION_IDS, PREFIX, Node
 
 DB = candb.database()
 COMMON = ("Probe", "ProbeReply", "SelfTest", "SelfTestResult", "Shutdown")

@@ -1,4 +1,4 @@
-"""fake_hardware.control_channel: the line protocol, parsed and dispatched without I/O."""
+"""pltf.fake_hardware.control_channel: the line protocol, parsed and dispatched without I/O."""
 
 from __future__ import annotations
 
@@ -7,8 +7,8 @@ from typing import Any
 
 import pytest
 
-from fake_hardware import FaultKind, Hardware, Node, St
-from fake_hardware.control_channel import COMMANDS, MAX_LINE, CommandError, ControlChannel, ControlSession, parse
+from pltf.fake_hardware import FaultKind, Hardware, Node, St
+from pltf.fake_hardware.control_channel import COMMANDS, MAX_LINE, CommandError, ControlChannel, ControlSession, parse
 from tests.fake_hardware.conftest import run
 
 

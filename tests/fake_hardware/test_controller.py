@@ -1,4 +1,4 @@
-"""fake_hardware.controller: connect/init transactions, the absent status, raw CAN and the status snapshot."""
+"""pltf.fake_hardware.controller: connect/init transactions, the absent status, raw CAN and the status snapshot."""
 
 from __future__ import annotations
 
@@ -7,12 +7,12 @@ from typing import Any
 import can
 import pytest
 
-from fake_hardware import ALL_NODES, ControllerError, Hardware, Node, St
-from fake_hardware.board_status import BoardStatus, assemble
-from fake_hardware.boards import MotorBoard
-from fake_hardware.controller import CAN_ERR_BUSOFF, CAN_ERR_RESTARTED, LISTEN_BUFFER
-from spec.codec import REPLIES, decode_frame, encode
-from spec.model import load_telegrams
+from pltf.fake_hardware import ALL_NODES, ControllerError, Hardware, Node, St
+from pltf.fake_hardware.board_status import BoardStatus, assemble
+from pltf.fake_hardware.boards import MotorBoard
+from pltf.fake_hardware.controller import CAN_ERR_BUSOFF, CAN_ERR_RESTARTED, LISTEN_BUFFER
+from pltf.spec.codec import REPLIES, decode_frame, encode
+from pltf.spec.model import load_telegrams
 from tests.fake_hardware.conftest import Sniffer, run
 
 STATUS = next(t for t in load_telegrams() if t.name == "CMD_GET_STATUS")

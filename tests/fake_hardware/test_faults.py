@@ -6,9 +6,9 @@ from typing import Any
 
 import pytest
 
-from fake_hardware import Fault, FaultError, FaultKind, Hardware, Node, St
-from fake_hardware.boards import IoBoard, MotorBoard
-from fake_hardware.controller import NODE_TIMEOUT
+from pltf.fake_hardware import Fault, FaultError, FaultKind, Hardware, Node, St
+from pltf.fake_hardware.boards import IoBoard, MotorBoard
+from pltf.fake_hardware.controller import NODE_TIMEOUT
 from tests.fake_hardware.conftest import run
 
 K = FaultKind
@@ -99,7 +99,7 @@ def test_motor_over_temperature(hw: Hardware) -> None:
 
 
 def test_the_motor_heats_with_its_current() -> None:
-    from fake_hardware.boards.motor import MotorParams
+    from pltf.fake_hardware.boards.motor import MotorParams
 
     p = MotorParams()
     steady = p.ambient + p.heat_per_a2 * 5.0**2 * p.thermal_tau

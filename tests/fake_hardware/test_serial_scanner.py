@@ -1,4 +1,4 @@
-"""fake_hardware.serial_scanner: the S300-class telegram, its CRC, resynchronisation, and the pyserial links."""
+"""pltf.fake_hardware.serial_scanner: the S300-class telegram, its CRC, resynchronisation, and the pyserial links."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import serial  # type: ignore[import-untyped]
 from hypothesis import given
 from hypothesis import strategies as st
 
-from fake_hardware.serial_scanner import (
+from pltf.fake_hardware.serial_scanner import (
     POINTS,
     TELEGRAM_BYTES,
     S300Simulator,

@@ -27,10 +27,10 @@ import time
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
 
-from spec import errors
-from spec.codec import HEADER, REPLIES, REQUESTS, TelegramDecoder, encode
-from spec.compiler import allowed_values, value_range
-from spec.model import FieldDef
+from pltf.spec import errors
+from pltf.spec.codec import HEADER, REPLIES, REQUESTS, TelegramDecoder, encode
+from pltf.spec.compiler import allowed_values, value_range
+from pltf.spec.model import FieldDef
 
 HANG_ID, STALL_ID = 66, 77
 HANG_SECONDS = 60.0  # bounded: the tests kill the process long before

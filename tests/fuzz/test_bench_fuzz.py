@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import pytest
 
-from spec.codec import decode_frame
-from spec.model import load_telegrams
+from pltf.spec.codec import decode_frame
+from pltf.spec.model import load_telegrams
 
 bf = pytest.importorskip("boofuzz")
 

@@ -9,9 +9,9 @@ from collections.abc import Iterator
 
 import pytest
 
-from fuzz.case import Delivery
-from fuzz.flight import Flight, fly
-from fuzz.target import Session
+from pltf.fuzz.case import Delivery
+from pltf.fuzz.flight import Flight, fly
+from pltf.fuzz.target import Session
 
 
 class Listener:

@@ -11,8 +11,8 @@ from pathlib import Path
 
 import pytest
 
-from fuzz.engine import Campaign, Options
-from fuzz.launch import Launcher
+from pltf.fuzz.engine import Campaign, Options
+from pltf.fuzz.launch import Launcher
 
 SERVER = Path(__file__).with_name("fragile_server.py")
 LAUNCH = f"{sys.executable} {SERVER} --ports {{ports}} --bug {{bug}}"
@@ -148,12 +148,12 @@ def test_one_lane_runs_batches_on_a_kept_connection_and_singles_one_at_a_time(tm
 
 
 def test_without_motion_no_motion_telegram_is_sent(tmp_path: Path) -> None:
-    from fuzz.safety import MOTION
+    from pltf.fuzz.safety import MOTION
 
     c = campaign(tmp_path, "none", duration=2.0, max_findings=None, allow_motion=False)
     assert c.run() == 0
     names = set(c.stats.telegrams)
-    from spec.codec import REQUESTS
+    from pltf.spec.codec import REQUESTS
 
     assert not names & {REQUESTS.by_id[i].NAME for i in MOTION}
     assert all(s not in ("running", "breaked") for s, _ in c.stats.states)

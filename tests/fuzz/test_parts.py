@@ -12,17 +12,17 @@ from pathlib import Path
 
 import pytest
 
-from fuzz import generate, mutate, safety, xml_attacks
-from fuzz.case import Case, Delivery
-from fuzz.corpus import Corpus
-from fuzz.inprocess import InProcessCampaign
-from fuzz.knowledge import Knowledge
-from fuzz.minimize import ddmin
-from fuzz.pcapng import Conversation, write_pcapng
-from fuzz.schedule import BIG_CASE, Scheduler, StatePlan
-from fuzz.wire import CLOSE, KEEP, PARTIAL, Group, Str, classify, forbidden_ids, frame, frame_lie, pack_fields
-from spec.codec import REQUESTS, decode_frame, encode
-from spec.documents import validate_document
+from pltf.fuzz import generate, mutate, safety, xml_attacks
+from pltf.fuzz.case import Case, Delivery
+from pltf.fuzz.corpus import Corpus
+from pltf.fuzz.inprocess import InProcessCampaign
+from pltf.fuzz.knowledge import Knowledge
+from pltf.fuzz.minimize import ddmin
+from pltf.fuzz.pcapng import Conversation, write_pcapng
+from pltf.fuzz.schedule import BIG_CASE, Scheduler, StatePlan
+from pltf.fuzz.wire import CLOSE, KEEP, PARTIAL, Group, Str, classify, forbidden_ids, frame, frame_lie, pack_fields
+from pltf.spec.codec import REQUESTS, decode_frame, encode
+from pltf.spec.documents import validate_document
 
 MOVE_PATH = REQUESTS.CMD_MOVE_PATH.DEF
 
@@ -168,7 +168,7 @@ def test_pcapng_is_well_formed(tmp_path: Path) -> None:
         pos += length
     assert kinds[:2] == [0x0A0D0D0A, 1]
     assert len(packets) == 3 + 1 + 2 + 2  # handshake, request, 70 kB reply in two segments, two FINs
-    from fuzz.pcapng import _checksum
+    from pltf.fuzz.pcapng import _checksum
 
     for pkt in packets:
         ip = pkt[14:34]
@@ -194,7 +194,7 @@ def test_absurd_documents_are_schema_valid_and_attacks_are_refused() -> None:
     for kind, make in xml_attacks.ABSURD.items():
         for i in range(12):
             validate_document(kind, make(kind, random.Random(i)))  # type: ignore[arg-type]
-    from spec.documents import DocumentError
+    from pltf.spec.documents import DocumentError
 
     for name in ("billion_laughs", "xxe_file", "xxe_network", "xxe_parameter", "quadratic_blowup"):
         with pytest.raises(DocumentError):
@@ -212,7 +212,7 @@ def test_in_process_campaign_holds_the_codec_invariant(tmp_path: Path) -> None:
 
 
 def test_in_process_finding_and_its_reproducer(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    import fuzz.inprocess as ipm
+    import pltf.fuzz.inprocess as ipm
 
     real = ipm.decode_frame
 
@@ -236,7 +236,7 @@ def test_in_process_finding_and_its_reproducer(tmp_path: Path, monkeypatch: pyte
 
 
 def test_cli_exit_codes(tmp_path: Path) -> None:
-    from pltf_cli.main import main
+    from pltf.cli.main import main
 
     server = Path(__file__).with_name("fragile_server.py")
     base = ["fuzz", "--target", "127.0.0.1:0", "--duration", "20", "--seed", "1", "--quiet", "--deadline", "0.5",
@@ -250,7 +250,7 @@ def test_cli_exit_codes(tmp_path: Path) -> None:
 
 
 def test_shortest_failing_prefix_bisects() -> None:
-    from fuzz.minimize import shortest_failing_prefix
+    from pltf.fuzz.minimize import shortest_failing_prefix
 
     calls = []
 
@@ -263,7 +263,7 @@ def test_shortest_failing_prefix_bisects() -> None:
 
 
 def test_a_cases_answered_ids_are_those_a_session_would_decode() -> None:
-    from fuzz.target import Session, expected_reply_ids, session_reply_ids
+    from pltf.fuzz.target import Session, expected_reply_ids, session_reply_ids
 
     sched = Scheduler(3, safety.forbidden(True), Knowledge())
     for i in range(400):

@@ -6,11 +6,11 @@ import time
 
 import pytest
 
-from fuzz.case import Case
-from fuzz.knowledge import Knowledge
-from fuzz.prefetch import PIPE_SIZE, Prefetcher
-from fuzz.safety import forbidden
-from fuzz.schedule import Scheduler
+from pltf.fuzz.case import Case
+from pltf.fuzz.knowledge import Knowledge
+from pltf.fuzz.prefetch import PIPE_SIZE, Prefetcher
+from pltf.fuzz.safety import forbidden
+from pltf.fuzz.schedule import Scheduler
 
 
 class PoseEcho:

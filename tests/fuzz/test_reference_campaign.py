@@ -1,7 +1,7 @@
 """The fuzzer against the reference server: a short default-tier run and the 1,000,000-case campaign (slow).
 
 The campaign is also a command (fuzz/README.md):
-``pltf fuzz --target 127.0.0.1:0 --launch "python -m reference_server --ports {ports} --data-dir {tmpdir}"
+``pltf fuzz --target 127.0.0.1:0 --launch "python -m pltf.reference_server --ports {ports} --data-dir {tmpdir}"
 --allow-motion --duration 3600 --max-cases 1000000 --seed 1 --out fuzz-findings``
 (``PLTF_FUZZ_CASES=N`` makes the slow test shorter.)
 """
@@ -15,9 +15,9 @@ from pathlib import Path
 
 import pytest
 
-from fuzz.engine import Campaign, Options
+from pltf.fuzz.engine import Campaign, Options
 
-LAUNCH = f"{sys.executable} -m reference_server --ports {{ports}} --data-dir {{tmpdir}} --seed 1 --log-level INFO"
+LAUNCH = f"{sys.executable} -m pltf.reference_server --ports {{ports}} --data-dir {{tmpdir}} --seed 1 --log-level INFO"
 
 
 def options(tmp_path: Path, **changes: object) -> Options:

@@ -7,12 +7,12 @@ from pathlib import Path
 
 import pytest
 
-from fuzz.replies import StatusMemo, reply_decoder
-from reference_server.cli import build_platform
-from reference_server.status import status_frame
-from reference_server.storage import Storage
-from spec import errors
-from spec.codec import REPLIES, encode
+from pltf.fuzz.replies import StatusMemo, reply_decoder
+from pltf.reference_server.cli import build_platform
+from pltf.reference_server.status import status_frame
+from pltf.reference_server.storage import Storage
+from pltf.spec import errors
+from pltf.spec.codec import REPLIES, encode
 
 
 @pytest.fixture(scope="module")

@@ -9,9 +9,9 @@ import threading
 import time
 from typing import Any
 
-from proxy.network import ProxyServer, Route
-from proxy.recorder import Recorder
-from proxy.tap import Record
+from pltf.proxy.network import ProxyServer, Route
+from pltf.proxy.recorder import Recorder
+from pltf.proxy.tap import Record
 
 
 class ProxyThread:

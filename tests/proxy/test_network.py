@@ -9,8 +9,8 @@ import socket
 import struct
 import time
 
-from proxy.tap import CLOSE, FRAME, OPEN, RAW
-from spec.codec import REQUESTS, encode
+from pltf.proxy.tap import CLOSE, FRAME, OPEN, RAW
+from pltf.spec.codec import REQUESTS, encode
 from tests.proxy.helpers import Peer, ProxyThread, read_exactly, read_to_end
 
 STOP = encode(REQUESTS.CMD_STOP())

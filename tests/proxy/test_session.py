@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from proxy.session import Route, SessionError, SessionWriter, read_session, record_to_json
-from proxy.tap import CLOSE, OPEN, Record, Tap
+from pltf.proxy.session import Route, SessionError, SessionWriter, read_session, record_to_json
+from pltf.proxy.tap import CLOSE, OPEN, Record, Tap
 
 SET_MODE = bytes.fromhex("ff01fe02000000050f00000003")
 BAD = bytes.fromhex("ff01fe02000000050f00000007")

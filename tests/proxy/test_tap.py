@@ -7,9 +7,9 @@ from __future__ import annotations
 from hypothesis import given
 from hypothesis import strategies as st
 
-from proxy.tap import FRAME, RAW, Record, Tap
-from spec.codec import TelegramDecoder, decode_frame, encode
-from spec.jsonio import telegram_to_json
+from pltf.proxy.tap import FRAME, RAW, Record, Tap
+from pltf.spec.codec import TelegramDecoder, decode_frame, encode
+from pltf.spec.jsonio import telegram_to_json
 from tests.proxy.vectors import INVALID, VALID, stream_error
 
 STOP = encode(decode_frame(bytes.fromhex("ff01fe02000000010e"), "request"))  # CMD_STOP, field capture

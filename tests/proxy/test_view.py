@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import io
 
-from proxy.tap import CLOSE, Record, Tap
-from proxy.view import Selection, View, format_record
-from spec.codec import build, encode
+from pltf.proxy.tap import CLOSE, Record, Tap
+from pltf.proxy.view import Selection, View, format_record
+from pltf.spec.codec import build, encode
 
 
 def _rec(direction: str, name: str, **fields: object) -> Record:

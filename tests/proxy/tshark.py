@@ -12,8 +12,8 @@ from typing import Any
 
 import pytest
 
-from proxy.dissector import OUTPUT, field_abbr
-from spec.model import Direction, FieldDef, telegram_def
+from pltf.proxy.dissector import OUTPUT, field_abbr
+from pltf.spec.model import Direction, FieldDef, telegram_def
 
 
 def tshark_path() -> str:

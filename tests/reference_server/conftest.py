@@ -1,8 +1,8 @@
 """Fixtures of the reference server tests: a server in a background thread or a process, a blocking client.
 
 The end-to-end tests talk to a real server over real TCP on ephemeral ports. ``ServerThread`` runs the
-asyncio shell (reference_server.network.serve) in its own thread and event loop; the tests that need a
-separate process (exit status, signals, SIGKILL) start ``python -m reference_server`` instead.
+asyncio shell (pltf.reference_server.network.serve) in its own thread and event loop; the tests that need a
+separate process (exit status, signals, SIGKILL) start ``python -m pltf.reference_server`` instead.
 ``ServerThread(..., hardware=factory)`` gives the platform the fake hardware (reference_server.hardware_link);
 ``control=True`` starts the fault-control channel on 127.0.0.1 too (``control_port``).
 """
@@ -25,17 +25,17 @@ from typing import Any
 import can
 import pytest
 
-from fake_hardware import candb
-from reference_server import hardware_link
-from reference_server.control import ControlServer, start_control
-from reference_server.hardware_link import HardwareFactory
-from reference_server.motion_api import MotionFactory
-from reference_server.network import Server, serve
-from reference_server.platform import Platform
-from reference_server.program_api import ProgramFactory
-from reference_server.storage import Storage
-from spec.codec import REQUESTS, TelegramDecoder, encode
-from spec.telegram import Telegram
+from pltf.fake_hardware import candb
+from pltf.reference_server import hardware_link
+from pltf.reference_server.control import ControlServer, start_control
+from pltf.reference_server.hardware_link import HardwareFactory
+from pltf.reference_server.motion_api import MotionFactory
+from pltf.reference_server.network import Server, serve
+from pltf.reference_server.platform import Platform
+from pltf.reference_server.program_api import ProgramFactory
+from pltf.reference_server.storage import Storage
+from pltf.spec.codec import REQUESTS, TelegramDecoder, encode
+from pltf.spec.telegram import Telegram
 from tests.reference_server.helpers import REPO, wait_for
 
 TIME_SCALE = 20.0
@@ -203,7 +203,7 @@ STARTED = re.compile(r"server started at port (\d+)")
 
 
 class ServerProcess:
-    """``python -m reference_server`` (or ``pltf serve``); without the fake hardware unless ``hardware=True``
+    """``python -m pltf.reference_server`` (or ``pltf serve``); without the fake hardware unless ``hardware=True``
     (the process tests are about storage, signals and exit codes, and time the server's work)."""
 
     def __init__(
@@ -211,7 +211,7 @@ class ServerProcess:
     ) -> None:
         self.log_path = log_path
         cmd = [sys.executable, "-m", module]
-        if module == "pltf_cli.main":
+        if module == "pltf.cli.main":
             cmd.append("serve")
         cmd += ["--ports", "0,0", "--data-dir", str(data_dir), "--time-scale", str(TIME_SCALE), *extra]
         if not hardware:

@@ -6,8 +6,8 @@ import time
 from pathlib import Path
 from typing import Any
 
-from spec.compiler import allowed_values, value_range
-from spec.telegram import Telegram, user_fields
+from pltf.spec.compiler import allowed_values, value_range
+from pltf.spec.telegram import Telegram, user_fields
 
 REPO = Path(__file__).resolve().parents[2]
 

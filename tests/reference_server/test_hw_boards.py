@@ -8,9 +8,9 @@ from pathlib import Path
 
 import can
 
-from fake_hardware import ALL_NODES, Node, St, candb
-from reference_server.world.model import factory as world_factory
-from spec.codec import REQUESTS
+from pltf.fake_hardware import ALL_NODES, Node, St, candb
+from pltf.reference_server.world.model import factory as world_factory
+from pltf.spec.codec import REQUESTS
 from tests.reference_server.conftest import (
     EM_ACTIVE,
     OP_NOT_INIT,

@@ -6,8 +6,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from fake_hardware import St
-from reference_server.world.model import factory as world_factory
+from pltf.fake_hardware import St
+from pltf.reference_server.world.model import factory as world_factory
 from tests.reference_server.conftest import EM_ACTIVE, EM_NOT_ACTIVE, EM_RESET, MODE_VEL, OP_READY, OP_RUNNING, Rig, rig
 
 FORWARD = ("CMD_MOVE_VEL", {"vel_trans": 300, "vel_rot": 0})

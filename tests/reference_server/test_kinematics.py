@@ -7,10 +7,10 @@ from pathlib import Path
 
 import pytest
 
-from reference_server.kinematics import Drive, Frame, Roadmap, normalize, relative_to_world
-from reference_server.motion_api import advance_ideal
-from spec.documents import DocumentKind, validate_document
-from spec.parameters import ParameterStore
+from pltf.reference_server.kinematics import Drive, Frame, Roadmap, normalize, relative_to_world
+from pltf.reference_server.motion_api import advance_ideal
+from pltf.spec.documents import DocumentKind, validate_document
+from pltf.spec.parameters import ParameterStore
 
 DT = 0.02
 ROADMAP = Path(__file__).resolve().parents[2] / "fixtures" / "roadmaps" / "office.rm"

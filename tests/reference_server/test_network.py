@@ -12,10 +12,10 @@ from typing import Any
 
 import pytest
 
-from reference_server.state_chart import REPORTED, RULES, State
-from spec.codec import HEADER, REQUESTS, TelegramDecoder, decode_frame, encode
-from spec.model import enum_classes
-from spec.parameters import load_parameters
+from pltf.reference_server.state_chart import REPORTED, RULES, State
+from pltf.spec.codec import HEADER, REQUESTS, TelegramDecoder, decode_frame, encode
+from pltf.spec.model import enum_classes
+from pltf.spec.parameters import load_parameters
 from tests.reference_server.conftest import Client, ServerThread
 from tests.reference_server.helpers import REPO, sample, wait_for
 
@@ -368,7 +368,7 @@ def test_emergency_stop_is_seen_over_tcp(server: ServerThread) -> None:
 
 
 def test_an_internal_error_closes_only_that_connection(server: ServerThread, monkeypatch: pytest.MonkeyPatch) -> None:
-    from reference_server import commands
+    from pltf.reference_server import commands
 
     def broken(*args: object) -> None:
         raise RuntimeError("bug")

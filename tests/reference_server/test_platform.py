@@ -12,14 +12,14 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from reference_server.platform import Platform, handler_names
-from reference_server.state_chart import EmergencyState, OperationState, State
-from reference_server.status import ABSENT
-from reference_server.storage import Storage
-from spec.codec import REQUESTS, decode_frame, encode
-from spec.model import enum_classes
-from spec.parameters import load_parameters
-from spec.strategies import any_telegram
+from pltf.reference_server.platform import Platform, handler_names
+from pltf.reference_server.state_chart import EmergencyState, OperationState, State
+from pltf.reference_server.status import ABSENT
+from pltf.reference_server.storage import Storage
+from pltf.spec.codec import REQUESTS, decode_frame, encode
+from pltf.spec.model import enum_classes
+from pltf.spec.parameters import load_parameters
+from pltf.spec.strategies import any_telegram
 from tests.reference_server.helpers import REPO, sample
 from tests.reference_server.test_state_chart import GUIDE_TRANSITIONS
 

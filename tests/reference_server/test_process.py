@@ -15,9 +15,9 @@ from pathlib import Path
 
 import pytest
 
-from reference_server.storage import FILES, Storage
-from spec.codec import REQUESTS, encode
-from spec.documents import DocumentKind, validate_document
+from pltf.reference_server.storage import FILES, Storage
+from pltf.spec.codec import REQUESTS, encode
+from pltf.spec.documents import DocumentKind, validate_document
 from tests.reference_server.conftest import Client, ServerProcess
 from tests.reference_server.helpers import REPO, wait_for
 
@@ -57,7 +57,7 @@ def test_signals_exit_cleanly(tmp_path: Path, sig: signal.Signals) -> None:
 
 def test_pltf_serve_is_the_same_server(tmp_path: Path) -> None:
     srv = ServerProcess(tmp_path / "data", tmp_path / "log", "--seed", "7", "--log-level", "DEBUG",
-                        module="pltf_cli.main")  # fmt: skip
+                        module="pltf.cli.main")  # fmt: skip
     try:
         with Client(srv.ports[0]) as c:
             assert c.request(R.CMD_GET_MAP()).name == "PltfMap.map"
@@ -69,7 +69,7 @@ def test_pltf_serve_is_the_same_server(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize("args", [["--ports", "10000,x"], ["--ports", "70000"], ["--time-scale", "0"]])
 def test_bad_options_exit_2(args: list[str]) -> None:
-    done = subprocess.run([sys.executable, "-m", "reference_server", *args], cwd=REPO, capture_output=True,
+    done = subprocess.run([sys.executable, "-m", "pltf.reference_server", *args], cwd=REPO, capture_output=True,
                           timeout=20, check=False)  # fmt: skip
     assert done.returncode == 2
     assert b"error" in done.stderr
@@ -81,7 +81,7 @@ def test_a_port_in_use_is_a_one_line_error(tmp_path: Path) -> None:
         taken.listen()
         port = taken.getsockname()[1]
         done = subprocess.run(
-            [sys.executable, "-m", "reference_server", "--ports", f"0,{port}", "--data-dir", str(tmp_path)],
+            [sys.executable, "-m", "pltf.reference_server", "--ports", f"0,{port}", "--data-dir", str(tmp_path)],
             cwd=REPO, capture_output=True, timeout=20, check=False,
         )  # fmt: skip
     assert done.returncode == 2

@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from reference_server.world.geometry import point_segment_distance
+from pltf.reference_server.world.geometry import point_segment_distance
 from tests.reference_server.conftest import Client
 from tests.reference_server.world.scenarios import (
     START,

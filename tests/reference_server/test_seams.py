@@ -8,14 +8,14 @@ from typing import Any
 
 import pytest
 
-from reference_server.commands import HANDLERS, handles
-from reference_server.kinematics import Drive, Frame
-from reference_server.motion_api import MotionModel, Params
-from reference_server.platform import Platform
-from reference_server.program_api import NoProgram
-from reference_server.storage import Storage
-from spec.codec import REQUESTS
-from spec.model import enum_classes
+from pltf.reference_server.commands import HANDLERS, handles
+from pltf.reference_server.kinematics import Drive, Frame
+from pltf.reference_server.motion_api import MotionModel, Params
+from pltf.reference_server.platform import Platform
+from pltf.reference_server.program_api import NoProgram
+from pltf.reference_server.storage import Storage
+from pltf.spec.codec import REQUESTS
+from pltf.spec.model import enum_classes
 
 R = REQUESTS
 MotionMode: Any = enum_classes()["MotionMode"]
@@ -61,7 +61,7 @@ def to_ready(p: Platform, mode: int) -> None:
 def test_a_handler_is_registered_once() -> None:
     with pytest.raises(ValueError, match="already has a handler"):
         handles("CMD_START")(HANDLERS["CMD_START"])
-    assert HANDLERS["CMD_START"].__module__ == "reference_server.commands.operation"
+    assert HANDLERS["CMD_START"].__module__ == "pltf.reference_server.commands.operation"
 
 
 def test_operation_commands_drive_the_program_in_program_mode(tmp_path: Path) -> None:

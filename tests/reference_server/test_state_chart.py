@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from reference_server.state_chart import (
+from pltf.reference_server.state_chart import (
     ANY,
     CAN_UP,
     EMERGENCY_RESET_TIME,
@@ -14,7 +14,7 @@ from reference_server.state_chart import (
     State,
     StateChart,
 )
-from spec.codec import REQUESTS
+from pltf.spec.codec import REQUESTS
 
 NC, CO, RD, RU, BR = State
 

@@ -5,10 +5,10 @@ from __future__ import annotations
 import random
 from pathlib import Path
 
-from reference_server.cli import build_platform
-from reference_server.status import _i32, _i32_points, status_frame, status_reply
-from reference_server.storage import Storage
-from spec.codec import encode
+from pltf.reference_server.cli import build_platform
+from pltf.reference_server.status import _i32, _i32_points, status_frame, status_reply
+from pltf.reference_server.storage import Storage
+from pltf.spec.codec import encode
 
 
 def test_path_points_round_half_to_even_and_saturate() -> None:

@@ -7,9 +7,9 @@ from pathlib import Path
 
 import pytest
 
-from reference_server import storage as storage_mod
-from reference_server.storage import FILES, START_POSE_FILE, Storage, StorageError, atomic_write
-from spec.documents import DocumentKind, validate_document
+from pltf.reference_server import storage as storage_mod
+from pltf.reference_server.storage import FILES, START_POSE_FILE, Storage, StorageError, atomic_write
+from pltf.spec.documents import DocumentKind, validate_document
 
 
 def test_seed_from_fixtures_fills_an_empty_dir_only(tmp_path: Path) -> None:

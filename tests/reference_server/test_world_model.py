@@ -5,13 +5,13 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from reference_server.motion_api import Frame, advance_ideal
-from reference_server.platform import Platform
-from reference_server.storage import Storage
-from reference_server.world.model import factory
-from spec.codec import REQUESTS
-from spec.documents import DocumentKind, validate_document
-from spec.parameters import ParameterStore
+from pltf.reference_server.motion_api import Frame, advance_ideal
+from pltf.reference_server.platform import Platform
+from pltf.reference_server.storage import Storage
+from pltf.reference_server.world.model import factory
+from pltf.spec.codec import REQUESTS
+from pltf.spec.documents import DocumentKind, validate_document
+from pltf.spec.parameters import ParameterStore
 from tests.reference_server.helpers import REPO
 
 DT = 0.02

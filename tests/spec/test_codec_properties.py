@@ -11,11 +11,11 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from spec import errors
-from spec.codec import REPLIES, REQUESTS, TelegramDecoder, decode_frame, encode
-from spec.model import DIRECTIONS, Direction
-from spec.strategies import any_telegram, telegram_strategy
-from spec.telegram import Telegram
+from pltf.spec import errors
+from pltf.spec.codec import REPLIES, REQUESTS, TelegramDecoder, decode_frame, encode
+from pltf.spec.model import DIRECTIONS, Direction
+from pltf.spec.strategies import any_telegram, telegram_strategy
+from pltf.spec.telegram import Telegram
 
 SLOW = settings(max_examples=10_000, deadline=None)
 ALL = [(d, cls) for d, s in (("request", REQUESTS), ("reply", REPLIES)) for cls in s]

@@ -23,7 +23,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from lxml import etree
 
-from spec.documents import (
+from pltf.spec.documents import (
     DEFAULT_MAX_SIZE,
     MAX_DEPTH,
     SCHEMA_DIR,

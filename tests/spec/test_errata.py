@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from spec.errata import cited_ids, errata_for, load_errata
-from spec.model import load_telegrams
+from pltf.spec.errata import cited_ids, errata_for, load_errata
+from pltf.spec.model import load_telegrams
 
 ROOT = Path(__file__).resolve().parents[2]
 SOURCES = ["spec", "reference_server", "fake_hardware", "conformance_tests", "fuzz", "clients/stubgen", "pltf_cli"]

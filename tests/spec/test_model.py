@@ -1,11 +1,11 @@
-"""spec.model: lookups over the telegram definitions."""
+"""pltf.spec.model: lookups over the telegram definitions."""
 
 from __future__ import annotations
 
 import pytest
 
-from spec.compiler import distance_from_end
-from spec.model import load_telegrams, telegram_def
+from pltf.spec.compiler import distance_from_end
+from pltf.spec.model import load_telegrams, telegram_def
 
 
 def test_telegram_def_finds_every_telegram_by_name() -> None:

@@ -1,4 +1,4 @@
-"""spec.parameters: the table (guide 5.9, 6.4), value text, wire bounds, the store, the schema."""
+"""pltf.spec.parameters: the table (guide 5.9, 6.4), value text, wire bounds, the store, the schema."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ import yaml
 from hypothesis import given
 from hypothesis import strategies as st
 
-from spec.parameters import (
+from pltf.spec.parameters import (
     TABLE_PATH,
     Category,
     DataType,

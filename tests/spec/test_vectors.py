@@ -15,10 +15,10 @@ from typing import Any
 
 import pytest
 
-from pltf_cli.main import main as pltf
-from spec import errors
-from spec.codec import REPLIES, REQUESTS, decode_frame, encode
-from spec.jsonio import fields_to_telegram, telegram_to_json
+from pltf.cli.main import main as pltf
+from pltf.spec import errors
+from pltf.spec.codec import REPLIES, REQUESTS, decode_frame, encode
+from pltf.spec.jsonio import fields_to_telegram, telegram_to_json
 
 VECTORS = Path(__file__).resolve().parents[2] / "fixtures" / "vectors"
 ERROR_NAMES = {"BadHeader", "FrameTooLarge", "Truncated", "TrailingBytes", "UnknownTelegram", "FieldOutOfRange",

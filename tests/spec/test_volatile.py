@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from spec.volatile import EXACT, Rule, check_table, rule, values_differ
+from pltf.spec.volatile import EXACT, Rule, check_table, rule, values_differ
 
 
 def test_every_entry_names_a_reply_field() -> None:

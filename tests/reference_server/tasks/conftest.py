@@ -10,12 +10,12 @@ from pathlib import Path
 
 import pytest
 
-from clients.pltf_client import MotionMode, OperationState, PlatformClient, Status
-from pltf_cli.run_program_cmd import RunResult, prepare, run_remote
-from reference_server import hardware_link
-from reference_server.tasks.local import factory
-from reference_server.tasks.program import load_program
-from reference_server.tasks.remote import RemoteMachine
+from pltf.cli.run_program_cmd import RunResult, prepare, run_remote
+from pltf.client import MotionMode, OperationState, PlatformClient, Status
+from pltf.reference_server import hardware_link
+from pltf.reference_server.tasks.local import factory
+from pltf.reference_server.tasks.program import load_program
+from pltf.reference_server.tasks.remote import RemoteMachine
 from tests.reference_server.conftest import ServerThread
 
 SCALE = 50.0  # simulated seconds per wall second

@@ -7,9 +7,9 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from reference_server.tasks.facade import Pose, Target, TaskError
-from reference_server.tasks.model import Detection, Direction, Entity
-from spec.parameters import DataType
+from pltf.reference_server.tasks.facade import Pose, Target, TaskError
+from pltf.reference_server.tasks.model import Detection, Direction, Entity
+from pltf.spec.parameters import DataType
 
 EPOCH = datetime.datetime(2030, 1, 1)
 

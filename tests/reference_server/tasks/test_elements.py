@@ -5,8 +5,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from clients.pltf_client import OperationState
-from reference_server.status import ABSENT
+from pltf.client import OperationState
+from pltf.reference_server.status import ABSENT
 from tests.reference_server.helpers import REPO
 from tests.reference_server.tasks.conftest import Session, program, task
 

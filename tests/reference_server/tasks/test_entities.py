@@ -6,9 +6,9 @@ from typing import Any
 
 import pytest
 
-from reference_server.tasks.entities import StatusSensors
-from reference_server.tasks.local import LocalMachine
-from reference_server.tasks.remote import RemoteMachine
+from pltf.reference_server.tasks.entities import StatusSensors
+from pltf.reference_server.tasks.local import LocalMachine
+from pltf.reference_server.tasks.remote import RemoteMachine
 
 
 def test_a_facade_without_a_hook_cannot_be_built() -> None:

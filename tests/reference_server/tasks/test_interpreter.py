@@ -8,11 +8,11 @@ from __future__ import annotations
 
 import pytest
 
-from reference_server.tasks.facade import Target
-from reference_server.tasks.interpreter import STEP_BUDGET, Interpreter
-from reference_server.tasks.model import Entity
-from reference_server.tasks.program import ProgramError, load_program
-from spec.documents import DocumentError
+from pltf.reference_server.tasks.facade import Target
+from pltf.reference_server.tasks.interpreter import STEP_BUDGET, Interpreter
+from pltf.reference_server.tasks.model import Entity
+from pltf.reference_server.tasks.program import ProgramError, load_program
+from pltf.spec.documents import DocumentError
 from tests.reference_server.tasks.fake_machine import FakeMachine
 
 DT = 0.02

@@ -10,9 +10,9 @@ from pathlib import Path
 
 import pytest
 
-from clients.pltf_client import OperationState
-from reference_server.tasks.program import load_program
-from spec.documents import DocumentError
+from pltf.client import OperationState
+from pltf.reference_server.tasks.program import load_program
+from pltf.spec.documents import DocumentError
 from tests.reference_server.tasks.conftest import SCALE, Session, program, program_server, task
 from tests.reference_server.tasks.test_waits import at
 

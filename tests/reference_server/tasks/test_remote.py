@@ -6,7 +6,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from clients.pltf_client import MotionMode, OperationState
+from pltf.client import MotionMode, OperationState
 from tests.reference_server.conftest import ServerThread
 from tests.reference_server.helpers import REPO
 from tests.reference_server.tasks.conftest import SCALE, Session, program, task
@@ -59,7 +59,7 @@ def test_pltf_run_program_plain_and_invalid(server: ServerThread, tmp_path: Path
     good = tmp_path / "good.xml"
     good.write_text(program(task("<log message='hello from afar'/><wait><delay amount='200'/></wait>")))
     target = f"127.0.0.1:{server.ports[1]}"
-    cmd = [sys.executable, "-m", "pltf_cli.main", "run-program", "--target", target, "--time-scale", str(SCALE)]
+    cmd = [sys.executable, "-m", "pltf.cli.main", "run-program", "--target", target, "--time-scale", str(SCALE)]
     done = subprocess.run(
         [*cmd, "--plain", str(good)], check=False, capture_output=True, text=True, timeout=60, cwd=REPO
     )

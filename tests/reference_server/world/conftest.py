@@ -16,10 +16,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from reference_server.world import MapGeometry, World
-from reference_server.world.geometry import F64, circles, clearance, segments, segments_clear
-from spec.documents import DocumentKind, validate_document
-from spec.parameters import ParameterStore
+from pltf.reference_server.world import MapGeometry, World
+from pltf.reference_server.world.geometry import F64, circles, clearance, segments, segments_clear
+from pltf.spec.documents import DocumentKind, validate_document
+from pltf.spec.parameters import ParameterStore
 
 DT = 0.02
 FIXTURES = Path(__file__).resolve().parents[3] / "fixtures"

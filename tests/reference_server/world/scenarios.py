@@ -23,15 +23,15 @@ from typing import Any
 
 import numpy as np
 
-from reference_server import hardware_link
-from reference_server.network import CONTROL_PERIOD, Server, SimClock
-from reference_server.platform import Platform
-from reference_server.world import MapGeometry
-from reference_server.world.geometry import F64, circles, clearance, segments, segments_clear
-from reference_server.world.model import WorldModel, factory
-from spec.codec import REQUESTS
-from spec.documents import DocumentKind, validate_document
-from spec.model import enum_classes
+from pltf.reference_server import hardware_link
+from pltf.reference_server.network import CONTROL_PERIOD, Server, SimClock
+from pltf.reference_server.platform import Platform
+from pltf.reference_server.world import MapGeometry
+from pltf.reference_server.world.geometry import F64, circles, clearance, segments, segments_clear
+from pltf.reference_server.world.model import WorldModel, factory
+from pltf.spec.codec import REQUESTS
+from pltf.spec.documents import DocumentKind, validate_document
+from pltf.spec.model import enum_classes
 from tests.reference_server.conftest import Client, ServerThread
 
 R: Any = REQUESTS

@@ -8,11 +8,11 @@ import math
 
 import numpy as np
 
-from reference_server.kinematics import Frame, Roadmap, relative_to_world
-from reference_server.world import MapGeometry, PlannerState
-from reference_server.world.geometry import circles, segments
-from reference_server.world.paths import DS, MAX_SAMPLES
-from spec.documents import DocumentKind, validate_document
+from pltf.reference_server.kinematics import Frame, Roadmap, relative_to_world
+from pltf.reference_server.world import MapGeometry, PlannerState
+from pltf.reference_server.world.geometry import circles, segments
+from pltf.reference_server.world.paths import DS, MAX_SAMPLES
+from pltf.spec.documents import DocumentKind, validate_document
 from tests.reference_server.world.conftest import (
     CORRIDOR_WEST,
     OFFICE_ROADMAP,

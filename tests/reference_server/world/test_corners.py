@@ -9,7 +9,14 @@ import random
 import numpy as np
 import pytest
 
-from reference_server.world.geometry import _CORNER_MIN, _JOIN_TOL, F64, MapGeometry, point_segment_distance, segments
+from pltf.reference_server.world.geometry import (
+    _CORNER_MIN,
+    _JOIN_TOL,
+    F64,
+    MapGeometry,
+    point_segment_distance,
+    segments,
+)
 
 
 def corners_by_loop(walls: F64) -> F64:

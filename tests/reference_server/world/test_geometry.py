@@ -8,8 +8,8 @@ import random
 import numpy as np
 import pytest
 
-from reference_server.world import geometry
-from reference_server.world.geometry import (
+from pltf.reference_server.world import geometry
+from pltf.reference_server.world.geometry import (
     MapGeometry,
     circles,
     clearance,
@@ -19,7 +19,7 @@ from reference_server.world.geometry import (
     segments_clear,
     segments_clear_numpy,
 )
-from spec.documents import DocumentKind, validate_document
+from pltf.spec.documents import DocumentKind, validate_document
 
 MAP = b"""<?xml version="1.0"?>
 <map Version="1.0"><layer index="0">
@@ -126,7 +126,7 @@ def test_segments_clear_in_c_equals_numpy(seed: int) -> None:
 
 
 def test_segments_clear_in_c_refuses_a_short_radius_buffer() -> None:
-    from reference_server.world import _geometry
+    from pltf.reference_server.world import _geometry
 
     q = np.zeros((4, 4))
     with pytest.raises(ValueError, match="one item per query"):

@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from conformance_tests.cases._common import FAR_OFFSET
-from reference_server.world import MapGeometry
-from reference_server.world.localization import Localization
+from pltf.conformance_tests.cases._common import FAR_OFFSET
+from pltf.reference_server.world import MapGeometry
+from pltf.reference_server.world.localization import Localization
 from tests.reference_server.world.conftest import CORRIDOR_WEST, Sim, make_sim
 
 

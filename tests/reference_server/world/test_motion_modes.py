@@ -7,7 +7,7 @@ import math
 
 import pytest
 
-from reference_server.world import MapGeometry
+from pltf.reference_server.world import MapGeometry
 from tests.reference_server.world.conftest import CORRIDOR_WEST, DT, geometry_of, make_sim, room
 
 OPEN = geometry_of(room(20000, 20000))

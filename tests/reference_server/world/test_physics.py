@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from reference_server.world.geometry import circles, segments
-from reference_server.world.physics import Footprint, Physics, arc
+from pltf.reference_server.world.geometry import circles, segments
+from pltf.reference_server.world.physics import Footprint, Physics, arc
 
 FOOTPRINT = Footprint.from_params(650.0, 100.0, 430.0)  # the defaults (E-PAR-013)
 

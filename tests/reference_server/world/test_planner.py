@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from benchmarks.bench_motion import grid_astar, maze, occupancy, path_length, queries
-from reference_server.world import MapGeometry, PlannerState
-from reference_server.world.geometry import circles, segments, segments_clear
-from reference_server.world.planner import Planner
+from pltf.reference_server.world import MapGeometry, PlannerState
+from pltf.reference_server.world.geometry import circles, segments, segments_clear
+from pltf.reference_server.world.planner import Planner
 from tests.reference_server.world.conftest import geometry_of, make_sim, room
 
 R = 563.0  # the default footprint's circumscribed radius + margin

@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from reference_server.world import raycast
-from reference_server.world.raycast import Fan, Scene, cast_fan, cast_fan_numpy, cast_rays, cast_rays_numpy
-from reference_server.world.sensors import LASER_FAN
+from pltf.reference_server.world import raycast
+from pltf.reference_server.world.raycast import Fan, Scene, cast_fan, cast_fan_numpy, cast_rays, cast_rays_numpy
+from pltf.reference_server.world.sensors import LASER_FAN
 
 
 def _random_scene(rng: np.random.Generator, n: int = 120) -> Scene:
@@ -64,7 +64,7 @@ def test_c_loops_equal_numpy_bit_for_bit(seed: int) -> None:
 
 def test_the_c_loops_refuse_buffers_shorter_than_the_call() -> None:
     """A buffer too short for the call is a ValueError, not a read or write past its end."""
-    from reference_server.world import _raycast
+    from pltf.reference_server.world import _raycast
 
     scene = Scene.make(np.array([[1000.0, -500, 1000, 500]]))
     with pytest.raises(ValueError, match="oy"):

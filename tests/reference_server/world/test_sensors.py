@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from reference_server.world import MapGeometry
-from reference_server.world.sensors import LASER_FAN, LASER_SIGMA
+from pltf.reference_server.world import MapGeometry
+from pltf.reference_server.world.sensors import LASER_FAN, LASER_SIGMA
 from tests.reference_server.world.conftest import CORRIDOR_WEST, geometry_of, make_sim, room
 
 

@@ -1,0 +1,146 @@
+"""The three distributions, built and installed as a user installs them: outside the checkout.
+
+``python -m build`` makes a wheel and an sdist of pltf-spec, pltf-client and pltf-toolkit; each is installed
+from the wheels alone into a fresh virtual environment, and every command runs from an empty folder:
+``pltf serve`` (seeding the fixture office), ``conform``, ``fuzz``, ``stubs``, ``decode``, ``encode``,
+``run-program``. The client distribution alone brings no numpy, scipy, pymunk, cantools or lxml.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import shutil
+import subprocess
+import sys
+import time
+import zipfile
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+SOURCES = {"pltf_spec": "spec", "pltf_client": "clients", "pltf_toolkit": "."}
+# what a build never reads: a copy without it is what a fresh clone holds (and build/ left over from an earlier
+# build would put deleted modules back into a wheel)
+UNTRACKED = shutil.ignore_patterns(".git", ".venv", "build", "dist", "*.egg-info", "__pycache__", "*.so",
+                                   "node_modules", ".mypy_cache", ".ruff_cache", ".pytest_cache", ".hypothesis")
+HEAVY = {"numpy", "scipy", "pymunk", "cantools", "lxml"}
+STARTED = re.compile(r"server started at port (\d+)")
+
+
+def _run(*cmd: str | Path, cwd: Path, timeout: float = 600) -> subprocess.CompletedProcess[str]:
+    done = subprocess.run([str(c) for c in cmd], cwd=cwd, capture_output=True, text=True, timeout=timeout,
+                          check=False)
+    assert done.returncode == 0, f"{cmd}: {done.stdout[-2000:]}{done.stderr[-2000:]}"
+    return done
+
+
+@pytest.fixture(scope="module")
+def dist(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = tmp_path_factory.mktemp("dist")
+    tree = tmp_path_factory.mktemp("src") / "pltf"
+    shutil.copytree(REPO, tree, ignore=UNTRACKED)
+    for source in SOURCES.values():
+        _run(sys.executable, "-m", "build", "--no-isolation", "--sdist", "--wheel", "--outdir", out, tree / source,
+             cwd=tree / source)
+    return out
+
+
+def _venv(root: Path, dist: Path, requirement: str) -> Path:
+    _run(sys.executable, "-m", "venv", root, cwd=root.parent)
+    py = root / "bin" / "python"
+    _run(py, "-m", "pip", "install", "--quiet", "--find-links", dist, requirement, cwd=root.parent)
+    return py
+
+
+@pytest.fixture(scope="module")
+def toolkit(dist: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return _venv(tmp_path_factory.mktemp("toolkit-env") / "venv", dist, "pltf-toolkit")
+
+
+@pytest.fixture
+def empty(tmp_path: Path) -> Path:
+    folder = tmp_path / "empty"
+    folder.mkdir()
+    return folder
+
+
+def test_build_gives_a_wheel_and_an_sdist_of_each_distribution(dist: Path) -> None:
+    names = sorted(p.name for p in dist.iterdir())
+    for stem in SOURCES:
+        assert any(n.startswith(stem) and n.endswith(".whl") for n in names), names
+        assert any(n.startswith(stem) and n.endswith(".tar.gz") for n in names), names
+
+
+def test_wheels_install_nothing_but_the_pltf_namespace(dist: Path) -> None:
+    for wheel in dist.glob("*.whl"):
+        tops = {name.split("/")[0] for name in zipfile.ZipFile(wheel).namelist()}
+        assert {t for t in tops if not t.endswith(".dist-info")} == {"pltf"}, (wheel.name, tops)
+        assert not any(n == "pltf/__init__.py" for n in zipfile.ZipFile(wheel).namelist())  # PEP 420 namespace
+
+
+def test_the_client_distribution_alone_is_small_and_typed(dist: Path, tmp_path: Path, empty: Path) -> None:
+    py = _venv(tmp_path / "client-env", dist, "pltf-client")
+    installed = {line.split("==")[0].lower() for line in _run(py, "-m", "pip", "freeze", cwd=empty).stdout.split()}
+    assert not installed & HEAVY, installed
+    probe = "import sys, pltf.client as c; print(c.__version__, sorted(set(sys.modules) & {'numpy', 'scipy', " \
+            "'pymunk', 'cantools', 'lxml'}))"
+    out = _run(py, "-c", probe, cwd=empty).stdout.split(maxsplit=1)
+    assert out[1].strip() == "[]", out
+    site = Path(_run(py, "-c", "import pltf.client, os; print(os.path.dirname(pltf.client.__file__))",
+                     cwd=empty).stdout.strip())
+    assert (site / "py.typed").exists()
+
+
+def test_codec_commands_from_an_empty_folder(toolkit: Path, empty: Path) -> None:
+    pltf = toolkit.parent / "pltf"
+    assert _run(pltf, "--version", cwd=empty).stdout.startswith("pltf ")
+    decoded = json.loads(_run(pltf, "decode", "ff01fe02000000050f00000003", cwd=empty).stdout)
+    assert decoded["telegram"] == "CMD_SET_MODE" and decoded["fields"] == {"mode": 3}
+    encoded = _run(pltf, "encode", "CMD_SET_MODE", '{"mode": 3}', cwd=empty).stdout.strip()
+    assert encoded == "ff01fe02000000050f00000003"
+    _run(pltf, "stubs", "--lang", "go", "--out", empty / "go-client", cwd=empty)
+    assert (empty / "go-client" / "protocol.go").exists()
+
+
+@pytest.fixture
+def served(toolkit: Path, empty: Path) -> Iterator[list[int]]:
+    proc = subprocess.Popen([toolkit.parent / "pltf", "serve", "--ports", "0,0", "--data-dir", "data",
+                             "--time-scale", "20", "--log-level", "INFO"], cwd=empty, stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT, text=True)
+    ports: list[int] = []
+    deadline = time.monotonic() + 60
+    assert proc.stdout is not None
+    while len(ports) < 2 and time.monotonic() < deadline:
+        line = proc.stdout.readline()
+        if not line:
+            break
+        if m := STARTED.search(line):
+            ports.append(int(m.group(1)))
+    try:
+        assert len(ports) == 2, "pltf serve did not start"
+        yield ports
+    finally:
+        proc.terminate()
+        proc.wait(timeout=20)
+
+
+def test_serve_seeds_the_fixtures_and_the_tools_run_against_it(toolkit: Path, empty: Path, served: list[int]) -> None:
+    pltf = toolkit.parent / "pltf"
+    seeded = {p.name for p in (empty / "data").rglob("*") if p.is_file()}
+    assert {"office.map", "office.rm"} <= seeded or any(n.endswith(".map") for n in seeded), seeded
+    target = f"127.0.0.1:{served[0]}"
+    fixtures = Path(_run(toolkit, "-c", "import pltf.fixtures as f; print(f.DIR)", cwd=empty).stdout.strip())
+    _run(pltf, "run-program", fixtures / "programs" / "patrol.xml", "--target", f"127.0.0.1:{served[1]}",
+         "--time-scale", "20", "--plain", cwd=empty)
+    conform = subprocess.run([pltf, "conform", "--target", target, "--second-port", str(served[1]), "--tier", "smoke",
+                              "--time-scale", "20", "--json", "report.json"], cwd=empty, capture_output=True,
+                             text=True, timeout=600, check=False)
+    assert conform.returncode == 0, conform.stdout[-3000:] + conform.stderr[-2000:]
+    assert json.loads((empty / "report.json").read_text())
+    fuzz = subprocess.run([pltf, "fuzz", "--target", target, "--second-port", str(served[1]), "--duration", "3",
+                           "--seed", "1", "--quiet", "--out", "findings"], cwd=empty, capture_output=True,
+                          text=True, timeout=120, check=False)
+    assert fuzz.returncode == 0, fuzz.stdout[-3000:] + fuzz.stderr[-2000:]
