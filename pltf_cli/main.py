@@ -21,6 +21,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "run-program": ("pltf.cli.run_program_cmd", "run a task program (guide 6.5) here, driving a platform: remote mode"),
     "stubs": ("pltf.cli.stubs_cmd", "generate the client stubs of one language (or --check a generated copy)"),
     "proxy": ("pltf.cli.proxy_cmd", "a transparent TCP proxy: decode both directions live, record the session"),
+    "replay": ("pltf.cli.replay_cmd", "replay a recorded session against a target and name every reply that differs"),
     "dissector": ("pltf.cli.dissector_cmd", "write the Wireshark Lua dissector generated from spec/ (or --check it)"),
 }
 

@@ -88,10 +88,16 @@ class _Pair:
         self.client: _Side | None = None
         self.target: _Side | None = None
         self.ended: str | None = None  # how it ended, as the close record says it
+        self.ended_at = 0.0  # when one side ended it first (the close record's time)
         self.done = False
 
     def other(self, side: _Side) -> _Side | None:
         return self.target if side.c2s else self.client
+
+    def end(self, how: str) -> None:
+        """The first end of the connection (a FIN, a reset, a failed connect, the proxy stopping) is how it ended."""
+        if self.ended is None:
+            self.ended, self.ended_at = how, time.time()
 
     def client_connected(self, side: _Side) -> None:
         self.client = side
@@ -111,14 +117,14 @@ class _Pair:
         except OSError as exc:
             self.proxy.observe("opened", self.conn, time.time(), r.target_port, (peer[0], peer[1]),
                                (r.target_host, r.target_port))  # fmt: skip
-            self.ended = f"by proxy (target unreachable: {exc.strerror or exc})"
+            self.end(f"by proxy (target unreachable: {exc.strerror or exc})")
             self.client.transport.close()
             return
         self.target = side
         self.proxy.observe("opened", self.conn, time.time(), r.target_port, (peer[0], peer[1]),
                            (r.target_host, r.target_port))  # fmt: skip
         if self.client.lost:  # the client left while we connected
-            self.ended = self.ended or "by client (before the target answered)"
+            self.end("by client (before the target answered)")
             assert side.transport is not None
             side.transport.close()
             return
@@ -133,7 +139,7 @@ class _Pair:
     def eof(self, side: _Side) -> None:
         side.eof = True
         who = "client" if side.c2s else "target"
-        self.ended = self.ended or f"by {who} (FIN)"
+        self.end(f"by {who} (FIN)")
         other = self.other(side)
         if other is not None and other.transport is not None and not other.lost and other.transport.can_write_eof():
             other.transport.write_eof()
@@ -144,10 +150,7 @@ class _Pair:
     def lost(self, side: _Side, exc: Exception | None) -> None:
         side.lost = True
         who = "client" if side.c2s else "target"
-        if exc is not None:
-            self.ended = self.ended or f"by {who} (reset: {exc})"
-        else:
-            self.ended = self.ended or f"by {who} (closed)"
+        self.end(f"by {who} (reset: {exc})" if exc is not None else f"by {who} (closed)")
         other = self.other(side)
         if other is not None and other.transport is not None and not other.lost:
             if exc is not None:
@@ -169,7 +172,7 @@ class _Pair:
                 s.transport.close()
 
     def stop(self) -> None:
-        self.ended = self.ended or "by proxy (stopped)"
+        self.end("by proxy (stopped)")
         self._close_both()
 
     def _finish(self) -> None:
@@ -178,7 +181,8 @@ class _Pair:
         self.done = True
         self.proxy.pairs.discard(self)
         if self.target is not None or self.ended is not None:
-            self.proxy.observe("closed", self.conn, time.time(), self.ended or "by proxy (closed)")
+            self.end("by proxy (closed)")
+            self.proxy.observe("closed", self.conn, time.time(), self.ended, self.ended_at)
 
 
 class ProxyServer:

@@ -71,7 +71,8 @@ class Recorder:
             self.pcapng.fin(conn, now, c2s)
         self._emit((c.request if c2s else c.reply).end(now))
 
-    def closed(self, conn: int, now: float, detail: str) -> None:
+    def closed(self, conn: int, now: float, detail: str, ended_at: float | None = None) -> None:
+        """Both sides are gone; ``ended_at``: when the first of them ended it (the close record's time)."""
         c = self._conns.pop(conn, None)
         if c is None:
             return
@@ -83,7 +84,7 @@ class Recorder:
                 if c2s not in c.closed:
                     self.pcapng.fin(conn, now, c2s)
             self.pcapng.forget(conn)
-        self._emit([Record(now, conn, c.port, CLOSE, detail=detail)])
+        self._emit([Record(ended_at if ended_at is not None else now, conn, c.port, CLOSE, detail=detail)])
 
     def flush(self) -> None:
         for w in (self.pcapng, self.session):

@@ -8,7 +8,8 @@ Format (version 1):
   port), ``kind`` ("frame", "raw", "open", "close"), and for frames and raw bytes ``direction`` ("request":
   client to target, "reply": target to client), ``hex`` (the bytes as they passed), ``telegram`` (what
   ``pltf decode`` prints for them, or null) and ``error`` ("<codec error class>: reason", when malformed);
-  events carry ``detail`` (the client's address; who closed, and how).
+  events carry ``detail`` (the client's address; who ended the connection first, and how: "by client (FIN)",
+  "by target (reset: ...)", "by proxy (stopped)"); a close's ``time`` is when that first end happened.
 - ``hex`` is the truth: a reader decodes it again and ignores ``telegram``, which is there for people and jq.
 """
 
