@@ -33,7 +33,7 @@ from pltf.spec.codec import FRAME_OVERHEAD
 from pltf.spec.jsonio import telegram_to_json
 
 WAIT_GRACE = 2.0  # s (wall, unscaled) a wait may poll beyond twice its recorded duration
-MIN_WAIT_POLLS = 3  # a run of this many identical requests is a wait
+MIN_WAIT_POLLS = 2  # a run of this many identical requests is a wait
 
 
 @dataclass

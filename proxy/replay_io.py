@@ -173,6 +173,18 @@ class _Conn:
                 writer.write_eof()
             await self._until(lambda: self.eof, self.cfg.reply_timeout)
 
+    def _collect(self) -> None:
+        """The replies by step; a wait whose final reply came only after its time ends on its last poll's reply."""
+        for key, rec in self.got.items():
+            if isinstance(key, int):
+                self.out.replies[key] = rec
+        for wait in self.s.waits.values():
+            if wait.id not in self.out.wait_final:
+                polls = [("poll", wait.id, n) for n in range(self.out.polls.get(wait.id, 0), 0, -1)]
+                late = next((self.got[k] for k in [*polls, *reversed(wait.steps)] if k in self.got), None)
+                if late is not None:
+                    self.out.wait_final[wait.id] = late
+
     async def run(self) -> Outcome:
         s, cfg = self.s, self.cfg
         try:
@@ -201,9 +213,7 @@ class _Conn:
                 reading.cancel()
                 with contextlib.suppress(asyncio.CancelledError):
                     await reading
-            for key, rec in self.got.items():
-                if isinstance(key, int):
-                    self.out.replies[key] = rec
+            self._collect()
             return self.out
         finally:
             self.closed[s.conn].set()
