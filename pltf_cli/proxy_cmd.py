@@ -1,8 +1,9 @@
 """``pltf proxy``: a transparent TCP proxy in front of one or both ports of a PlatformCtrl (proxy/).
 
 It forwards bytes unchanged, shows every telegram of both directions live, and with ``--record FILE`` keeps the
-session (FILE, JSON lines) and a pcapng beside it. Runs until Ctrl-C (or SIGTERM). Exit status 0, or 2 for a
-user error (bad address, port in use, unwritable file).
+session (FILE, JSON lines) and a pcapng beside it. The decoding, the view and the files run in a process of
+their own (proxy/offload.py), so they never hold up a forwarded byte. Runs until Ctrl-C (or SIGTERM). Exit
+status 0, or 2 for a user error (bad address, port in use, unwritable file).
 """
 
 from __future__ import annotations
@@ -16,8 +17,8 @@ from pathlib import Path
 
 from pltf.proxy.capture import PcapngWriter
 from pltf.proxy.network import ProxyServer, Route
+from pltf.proxy.offload import RecorderPipe
 from pltf.proxy.recorder import Recorder, Sink
-from pltf.proxy.session import Route as SessionRoute
 from pltf.proxy.session import SessionWriter
 from pltf.proxy.view import Selection, View
 from pltf.spec.codec import DEFAULT_MAX_LENGTH
@@ -40,8 +41,7 @@ def port_pair(text: str) -> tuple[int, int]:
     parts = text.split(":")
     if len(parts) not in (1, 2) or not all(p.isdigit() and int(p) < 65536 for p in parts):
         raise argparse.ArgumentTypeError(f"expected PORT or LISTEN_PORT:TARGET_PORT, got {text!r}")
-    listen = int(parts[0])
-    return listen, int(parts[-1])
+    return int(parts[0]), int(parts[-1])
 
 
 def add_proxy_arguments(p: argparse.ArgumentParser) -> None:
@@ -67,40 +67,54 @@ def _names(values: list[str]) -> list[str]:
     return [n for v in values for n in v.split(",") if n.strip()]
 
 
+def _summary(recorder: Recorder) -> str:
+    counts = recorder.counts
+    frames = sum(counts.values()) - counts["connections"]
+    text = f"proxy stopped: {counts['connections']} connections, {frames} frames"
+    return text + (f", {counts['malformed']} malformed" if counts["malformed"] else "")
+
+
 def run_proxy(args: argparse.Namespace) -> int:
     (lhost, lport), (thost, tport) = args.listen, args.target
     routes = [Route(lhost, lport, thost, tport)]
     if args.second is not None:
         routes.append(Route(lhost, args.second[0], thost, args.second[1]))
     started = time.time()
-    sinks: list[Sink] = []
-    view = None
-    if not args.quiet:
-        view = View(sys.stdout, Selection(_names(args.filter), _names(args.hide)), color=sys.stdout.isatty(),
-                    t0=started if args.relative_time else None)  # fmt: skip
-        sinks.append(view.show)
+    pcapng_path = args.pcapng or (args.record.with_suffix(".pcapng") if args.record is not None else None)
+    for path in (args.record, pcapng_path):  # fail here, in one line, not in the recorder process
+        if path is not None:
+            try:
+                path.open("wb").close()
+            except OSError as exc:
+                return _fail(f"cannot write the recording: {path}: {exc.strerror}")
+
+    def make() -> Recorder:  # in the recorder process
+        sinks: list[Sink] = []
+        flushes = []
+        if not args.quiet:
+            view = View(sys.stdout, Selection(_names(args.filter), _names(args.hide)), color=sys.stdout.isatty(),
+                        t0=started if args.relative_time else None)  # fmt: skip
+            sinks.append(view.show)
+            flushes.append(view.flush)
+        session = SessionWriter(args.record) if args.record is not None else None
+        pcapng = PcapngWriter(pcapng_path) if pcapng_path is not None else None
+        return Recorder(sinks, pcapng, session, max_length=args.max_length, flushes=flushes)
+
+    pipe = RecorderPipe(make, _summary)
+    sys.stdout.flush()
+    pipe.start()
     try:
-        session = pcapng = None
-        if args.record is not None:
-            session = SessionWriter(args.record)
-            pcapng = PcapngWriter(args.pcapng or args.record.with_suffix(".pcapng"))
-        elif args.pcapng is not None:
-            pcapng = PcapngWriter(args.pcapng)
+        return asyncio.run(_serve(routes, pipe, started))
     except OSError as exc:
-        return _fail(f"cannot write the recording: {exc.filename}: {exc.strerror}")
-    recorder = Recorder(sinks, pcapng, session, max_length=args.max_length)
-    try:
-        return asyncio.run(_serve(routes, recorder, view, started))
-    except OSError as exc:
+        pipe.close(time.time())
         return _fail(f"cannot listen on {lhost}: {exc.strerror or exc}")
 
 
-async def _serve(routes: list[Route], recorder: Recorder, view: View | None, started: float) -> int:
-    proxy = ProxyServer(routes, recorder, flush=view.flush if view is not None else None)
+async def _serve(routes: list[Route], pipe: RecorderPipe, started: float) -> int:
+    proxy = ProxyServer(routes, pipe)
     listening = await proxy.start()
-    if recorder.session is not None:
-        recorder.session.start([SessionRoute(f"{host}:{port}", f"{r.target_host}:{r.target_port}")
-                                for r, (host, port) in zip(routes, listening, strict=True)], started)  # fmt: skip
+    pipe.session_start([(f"{h}:{p}", f"{r.target_host}:{r.target_port}")
+                        for r, (h, p) in zip(routes, listening, strict=True)], started)  # fmt: skip
     for route, (host, port) in zip(routes, listening, strict=True):
         print(f"proxy listening at {host}:{port} -> {route.target_host}:{route.target_port}", flush=True)
     loop = asyncio.get_running_loop()
@@ -110,9 +124,4 @@ async def _serve(routes: list[Route], recorder: Recorder, view: View | None, sta
         await proxy.wait_stopped()
     finally:
         await proxy.close()
-    counts = recorder.counts
-    summary = f"{counts['connections']} connections, {sum(counts.values()) - counts['connections']} frames"
-    if counts["malformed"]:
-        summary += f", {counts['malformed']} malformed"
-    print(f"proxy stopped: {summary}", file=sys.stderr)
     return 0

@@ -1,17 +1,20 @@
 """The forwarding core of ``pltf proxy``: asyncio, and the only module of the proxy with sockets and a clock.
 
 Rules:
-- Bytes first: a chunk is written to the other side as soon as it arrives, unchanged (no reframing, no
-  reassembly), and only then handed to the recorder (decode, view, session file, pcapng).
-- Flow control: when one side's write buffer is above asyncio's high-water mark, reading from the other side
-  pauses until it drains, so a slow reader slows its sender as it would without the proxy.
-- Ends travel: a FIN from one side becomes a FIN to the other (half-close); a reset becomes a reset (abort);
-  when both directions have ended, or one side is gone, the connection ends on both sides. A target that
-  cannot be reached closes the client at once.
+- Bytes first: a chunk is sent on to the other side as soon as it is read, unchanged (no reframing, no
+  reassembly), and only then reported to the observer (the recorder: decode, view, session file, pcapng).
+- Connections are plain non-blocking sockets on the loop's selector (``add_reader``), like the reference
+  server's: no transport or protocol objects on the data path, one read and one send per chunk.
+- Flow control: bytes the other side does not take yet wait in a buffer; above ``HIGH_WATER`` buffered bytes
+  reading from the sending side pauses until the buffer is below ``LOW_WATER``, so a slow reader slows its
+  sender as it would without the proxy.
+- Ends travel: a FIN from one side becomes a FIN to the other once what it still had to send is sent
+  (half-close); a reset becomes a reset (SO_LINGER 0). When both directions have ended, or one side is gone,
+  both sockets close. A target that cannot be reached closes the client at once.
 - One client connection, one target connection, on the route it arrived on; the proxy adds no policy of its
   own (a second client on a busy port is the target's to turn away, guide 6.1).
-- The proxy never dies of what passes through it: the recorder is sans-IO and handles malformed bytes; should
-  it fail anyway, the failure is reported once and recording stops while forwarding goes on.
+- The proxy never dies of what passes through it: the observer is handed bytes after they are forwarded;
+  should it fail, the failure is reported once and recording stops while forwarding goes on.
 """
 
 from __future__ import annotations
@@ -28,9 +31,12 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from pltf.proxy.recorder import Recorder
-
-FLUSH_EVERY = 0.25  # s between flushes of the session file, the pcapng and the view
+FLUSH_EVERY = 0.25  # s between flushes of the observer (session file, pcapng, view)
+READ_SIZE = 65536
+HIGH_WATER = 1 << 20  # bytes waiting for a side above which reading from the other side pauses
+LOW_WATER = 1 << 18
+BACKLOG = 100
+_LINGER_RESET = struct.pack("ii", 1, 0)
 
 
 @dataclass(frozen=True)
@@ -41,187 +47,237 @@ class Route:
     target_port: int
 
 
-def _reset(transport: asyncio.Transport) -> None:
-    """Close with a reset (RST), as the peer did: SO_LINGER 0, then abort (asyncio alone would send a FIN)."""
-    sock = transport.get_extra_info("socket")
-    if sock is not None:
-        with contextlib.suppress(OSError):
-            sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
-    transport.abort()
+class _Conn:
+    """One proxied connection: ``socks[True]`` is the client's socket (what it sends goes client -> target)."""
 
-
-class _Side(asyncio.Protocol):
-    """One of the two sockets of a proxied connection; ``c2s``: what it receives goes client -> target."""
-
-    def __init__(self, pair: _Pair, c2s: bool) -> None:
-        self.pair, self.c2s = pair, c2s
-        self.transport: asyncio.Transport | None = None
-        self.eof = False  # its peer sent FIN
-        self.lost = False
-
-    def connection_made(self, transport: asyncio.BaseTransport) -> None:
-        assert isinstance(transport, asyncio.Transport)
-        self.transport = transport
-        if self.c2s:
-            self.pair.client_connected(self)
-
-    def data_received(self, data: bytes) -> None:
-        self.pair.forward(self, data)
-
-    def eof_received(self) -> bool:
-        self.pair.eof(self)
-        return True  # keep writing the other direction
-
-    def connection_lost(self, exc: Exception | None) -> None:
-        self.pair.lost(self, exc)
-
-    def pause_writing(self) -> None:
-        self.pair.throttle(self, pause=True)
-
-    def resume_writing(self) -> None:
-        self.pair.throttle(self, pause=False)
-
-
-class _Pair:
-    def __init__(self, proxy: ProxyServer, conn: int, route: Route) -> None:
-        self.proxy, self.conn, self.route = proxy, conn, route
-        self.client: _Side | None = None
-        self.target: _Side | None = None
-        self.ended: str | None = None  # how it ended, as the close record says it
-        self.ended_at = 0.0  # when one side ended it first (the close record's time)
+    def __init__(self, proxy: ProxyServer, number: int, route: Route, client: socket.socket, peer: Any) -> None:
+        self.proxy, self.number, self.route = proxy, number, route
+        self.loop = proxy.loop
+        self.peer = (str(peer[0]), int(peer[1])) if isinstance(peer, tuple) else ("?", 0)
+        self.socks: dict[bool, socket.socket | None] = {True: client, False: None}
+        self.pending: dict[bool, bytearray] = {True: bytearray(), False: bytearray()}  # to send to that side
+        self.eof: dict[bool, bool] = {True: False, False: False}  # that side sent its FIN
+        self.shut: dict[bool, bool] = {True: False, False: False}  # we sent our FIN to that side
+        self.paused: dict[bool, bool] = {True: False, False: False}  # reading from that side paused
+        self.ended: str | None = None
+        self.ended_at = 0.0
         self.done = False
 
-    def other(self, side: _Side) -> _Side | None:
-        return self.target if side.c2s else self.client
+    # ------------------------------------------------------------------ set-up
+    async def connect(self) -> None:
+        r = self.route
+        try:
+            infos = await self.loop.getaddrinfo(r.target_host, r.target_port, type=socket.SOCK_STREAM)
+            family, kind, proto, _, addr = infos[0]
+            sock = socket.socket(family, kind, proto)
+            sock.setblocking(False)
+            try:
+                await self.loop.sock_connect(sock, addr)
+            except BaseException:
+                sock.close()
+                raise
+        except OSError as exc:
+            self.proxy.observe("opened", self.number, time.time(), r.target_port, self.peer,
+                               (r.target_host, r.target_port))  # fmt: skip
+            self._end(f"by proxy (target unreachable: {exc.strerror or exc})")
+            self._close_all()
+            return
+        _nodelay(sock)
+        self.socks[False] = sock
+        self.proxy.observe("opened", self.number, time.time(), r.target_port, self.peer, (r.target_host, r.target_port))
+        for side in (True, False):
+            self._reading(side, True)
 
-    def end(self, how: str) -> None:
-        """The first end of the connection (a FIN, a reset, a failed connect, the proxy stopping) is how it ended."""
+    def _reading(self, side: bool, on: bool) -> None:
+        sock = self.socks[side]
+        if sock is None:
+            return
+        if on:
+            self.loop.add_reader(sock, self._readable, side)
+        else:
+            self.loop.remove_reader(sock)
+
+    # ------------------------------------------------------------------ data
+    def _readable(self, side: bool) -> None:
+        sock = self.socks[side]
+        if sock is None:
+            return
+        try:
+            data = sock.recv(READ_SIZE)
+        except (BlockingIOError, InterruptedError):
+            return
+        except OSError as exc:
+            self._reset_by(side, exc)
+            return
+        if not data:
+            self._eof_from(side)
+            return
+        self._send(not side, data)
+        self.proxy.observe("data", self.number, time.time(), side, data)
+
+    def _send(self, side: bool, data: bytes) -> None:
+        """Bytes for ``side`` (True: the client): now when it takes them, else when it can."""
+        sock, buf = self.socks[side], self.pending[side]
+        if sock is None:
+            return
+        if not buf:
+            try:
+                n = sock.send(data)
+            except (BlockingIOError, InterruptedError):
+                n = 0
+            except OSError as exc:
+                self._reset_by(side, exc)
+                return
+            if n == len(data):
+                return
+            data = data[n:]
+            self.loop.add_writer(sock, self._writable, side)
+        buf += data
+        if len(buf) > HIGH_WATER and not self.paused[not side]:
+            self.paused[not side] = True
+            self._reading(not side, False)
+
+    def _writable(self, side: bool) -> None:
+        sock, buf = self.socks[side], self.pending[side]
+        if sock is None:
+            return
+        try:
+            n = sock.send(buf)
+        except (BlockingIOError, InterruptedError):
+            return
+        except OSError as exc:
+            self._reset_by(side, exc)
+            return
+        del buf[:n]
+        if self.paused[not side] and len(buf) < LOW_WATER and not self.eof[not side]:
+            self.paused[not side] = False
+            self._reading(not side, True)
+        if not buf:
+            self.loop.remove_writer(sock)
+            if self.eof[not side]:
+                self._shutdown(side)
+
+    # ------------------------------------------------------------------ ends
+    def _end(self, how: str) -> None:
+        """The first end (a FIN, a reset, a failed connect, the proxy stopping) is how the connection ended."""
         if self.ended is None:
             self.ended, self.ended_at = how, time.time()
 
-    def client_connected(self, side: _Side) -> None:
-        self.client = side
-        assert side.transport is not None
-        side.transport.pause_reading()  # until the target is connected
-        self.proxy.pairs.add(self)
-        self.proxy.tasks.add(task := asyncio.get_running_loop().create_task(self._connect()))
-        task.add_done_callback(self.proxy.tasks.discard)
+    def _eof_from(self, side: bool) -> None:
+        self._end(f"by {'client' if side else 'target'} (FIN)")
+        self.eof[side] = True
+        self._reading(side, False)
+        self.proxy.observe("half_closed", self.number, time.time(), side)
+        if not self.pending[not side]:
+            self._shutdown(not side)
 
-    async def _connect(self) -> None:
-        assert self.client is not None and self.client.transport is not None
-        r = self.route
-        peer = self.client.transport.get_extra_info("peername") or ("?", 0)
-        loop = asyncio.get_running_loop()
-        try:
-            _, side = await loop.create_connection(lambda: _Side(self, False), r.target_host, r.target_port)
-        except OSError as exc:
-            self.proxy.observe("opened", self.conn, time.time(), r.target_port, (peer[0], peer[1]),
-                               (r.target_host, r.target_port))  # fmt: skip
-            self.end(f"by proxy (target unreachable: {exc.strerror or exc})")
-            self.client.transport.close()
+    def _shutdown(self, side: bool) -> None:
+        """Our FIN to ``side`` (its peer sent one and everything before it is delivered)."""
+        sock = self.socks[side]
+        if sock is None or self.shut[side]:
             return
-        self.target = side
-        self.proxy.observe("opened", self.conn, time.time(), r.target_port, (peer[0], peer[1]),
-                           (r.target_host, r.target_port))  # fmt: skip
-        if self.client.lost:  # the client left while we connected
-            self.end("by client (before the target answered)")
-            assert side.transport is not None
-            side.transport.close()
-            return
-        self.client.transport.resume_reading()
+        self.shut[side] = True
+        with contextlib.suppress(OSError):
+            sock.shutdown(socket.SHUT_WR)
+        if self.eof[side] and self.eof[not side] and not any(self.pending.values()):
+            self._close_all()
 
-    def forward(self, side: _Side, data: bytes) -> None:
-        other = self.other(side)
-        if other is not None and other.transport is not None and not other.lost:
-            other.transport.write(data)
-        self.proxy.observe("data", self.conn, time.time(), side.c2s, data)
+    def _reset_by(self, side: bool, exc: OSError) -> None:
+        """``side`` reset the connection (or is gone): the other side gets a reset too."""
+        self._end(f"by {'client' if side else 'target'} (reset: {exc.strerror or exc})")
+        self._close_all(reset=True)
 
-    def eof(self, side: _Side) -> None:
-        side.eof = True
-        who = "client" if side.c2s else "target"
-        self.end(f"by {who} (FIN)")
-        other = self.other(side)
-        if other is not None and other.transport is not None and not other.lost and other.transport.can_write_eof():
-            other.transport.write_eof()
-        self.proxy.observe("half_closed", self.conn, time.time(), side.c2s)
-        if other is not None and other.eof:
-            self._close_both()
-
-    def lost(self, side: _Side, exc: Exception | None) -> None:
-        side.lost = True
-        who = "client" if side.c2s else "target"
-        self.end(f"by {who} (reset: {exc})" if exc is not None else f"by {who} (closed)")
-        other = self.other(side)
-        if other is not None and other.transport is not None and not other.lost:
-            if exc is not None:
-                _reset(other.transport)
-            else:
-                other.transport.close()  # after what it still has to write
-        if other is None or other.lost or other.transport is None:
-            self._finish()
-
-    def throttle(self, side: _Side, pause: bool) -> None:
-        other = self.other(side)
-        if other is not None and other.transport is not None and not other.lost:
-            with contextlib.suppress(RuntimeError):
-                (other.transport.pause_reading if pause else other.transport.resume_reading)()
-
-    def _close_both(self) -> None:
-        for s in (self.client, self.target):
-            if s is not None and s.transport is not None and not s.lost:
-                s.transport.close()
+    def _close_all(self, reset: bool = False) -> None:
+        for side in (True, False):
+            sock = self.socks[side]
+            if sock is None:
+                continue
+            self.loop.remove_reader(sock)
+            self.loop.remove_writer(sock)
+            if reset:
+                with contextlib.suppress(OSError):
+                    sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, _LINGER_RESET)
+            with contextlib.suppress(OSError):
+                sock.close()
+            self.socks[side] = None
+        self._finish()
 
     def stop(self) -> None:
-        self.end("by proxy (stopped)")
-        self._close_both()
+        self._end("by proxy (stopped)")
+        self._close_all()
 
     def _finish(self) -> None:
         if self.done:
             return
         self.done = True
-        self.proxy.pairs.discard(self)
-        if self.target is not None or self.ended is not None:
-            self.end("by proxy (closed)")
-            self.proxy.observe("closed", self.conn, time.time(), self.ended, self.ended_at)
+        self.proxy.conns.discard(self)
+        self._end("by proxy (closed)")
+        self.proxy.observe("closed", self.number, time.time(), self.ended, self.ended_at)
+
+
+def _nodelay(sock: socket.socket) -> None:
+    with contextlib.suppress(OSError):
+        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
 
 
 class ProxyServer:
-    def __init__(self, routes: list[Route], recorder: Recorder | None = None,
-                 flush: Callable[[], None] | None = None) -> None:  # fmt: skip
+    """Listens on each route and forwards; ``observer`` (a Recorder, or its pipe to a recorder process) gets
+    ``opened``/``data``/``half_closed``/``closed`` calls after the bytes moved, ``flush`` now and then, ``close``
+    at the end."""
+
+    def __init__(self, routes: list[Route], observer: Any = None, flush: Callable[[], None] | None = None) -> None:
         self.routes = routes
-        self.recorder = recorder
+        self.observer = observer
         self.flush_extra = flush
-        self.pairs: set[_Pair] = set()
+        self.conns: set[_Conn] = set()
         self.tasks: set[asyncio.Task[Any]] = set()
         self.listening: list[tuple[str, int]] = []
-        self._servers: list[asyncio.Server] = []
+        self._listeners: list[socket.socket] = []
         self._numbers = itertools.count(1)
         self._stopped = asyncio.Event()
+        self.loop = asyncio.get_running_loop()
 
     def observe(self, what: str, *args: Any) -> None:
-        """Hand an event to the recorder; a recorder failure stops recording, never forwarding."""
-        if self.recorder is None:
+        """Hand an event to the observer; a failure stops recording, never forwarding."""
+        if self.observer is None:
             return
         try:
-            getattr(self.recorder, what)(*args)
+            getattr(self.observer, what)(*args)
         except Exception:  # the proxy never dies of what passes through it
             print("pltf proxy: internal error while recording; recording stopped, forwarding goes on:\n"
                   + traceback.format_exc(limit=3), file=sys.stderr)  # fmt: skip
-            self.recorder = None
+            self.observer = None
 
     async def start(self) -> list[tuple[str, int]]:
-        loop = asyncio.get_running_loop()
         for route in self.routes:
-            server = await loop.create_server(self._factory(route), route.listen_host, route.listen_port)
-            self._servers.append(server)
-            host, port = server.sockets[0].getsockname()[:2]
+            sock = socket.create_server((route.listen_host, route.listen_port), backlog=BACKLOG)
+            sock.setblocking(False)
+            self._listeners.append(sock)
+            self.loop.add_reader(sock, self._accept, sock, route)
+            host, port = sock.getsockname()[:2]
             self.listening.append((host, port))
-        self.tasks.add(task := loop.create_task(self._flusher()))
-        task.add_done_callback(self.tasks.discard)
+        self._spawn(self._flusher())
         return self.listening
 
-    def _factory(self, route: Route) -> Callable[[], _Side]:
-        return lambda: _Side(_Pair(self, next(self._numbers), route), True)
+    def _spawn(self, coro: Any) -> None:
+        task = self.loop.create_task(coro)
+        self.tasks.add(task)
+        task.add_done_callback(self.tasks.discard)
+
+    def _accept(self, listener: socket.socket, route: Route) -> None:
+        for _ in range(BACKLOG):
+            try:
+                client, peer = listener.accept()
+            except (BlockingIOError, InterruptedError):
+                return
+            except OSError as exc:  # out of descriptors: try again later
+                print(f"pltf proxy: accept failed: {exc.strerror or exc}", file=sys.stderr)
+                return
+            client.setblocking(False)
+            _nodelay(client)
+            conn = _Conn(self, next(self._numbers), route, client, peer)
+            self.conns.add(conn)
+            self._spawn(conn.connect())
 
     async def _flusher(self) -> None:
         while True:
@@ -240,17 +296,14 @@ class ProxyServer:
         self._stopped.set()
 
     async def close(self) -> None:
-        for server in self._servers:
-            server.close()
-        for pair in list(self.pairs):
-            pair.stop()
-        await asyncio.sleep(0.05)  # let the closes reach the recorder
+        for sock in self._listeners:
+            self.loop.remove_reader(sock)
+            sock.close()
+        for conn in list(self.conns):
+            conn.stop()
         for task in list(self.tasks):
             task.cancel()
-        for server in self._servers:
-            with contextlib.suppress(Exception):
-                await server.wait_closed()
-        if self.recorder is not None:
-            self.observe("close", time.time())
+        await asyncio.sleep(0)
+        self.observe("close", time.time())
         if self.flush_extra is not None:
             self.flush_extra()

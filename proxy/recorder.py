@@ -29,8 +29,9 @@ class _Conn:
 
 class Recorder:
     def __init__(self, sinks: list[Sink], pcapng: PcapngWriter | None = None, session: SessionWriter | None = None,
-                 max_length: int | None = None) -> None:  # fmt: skip
+                 max_length: int | None = None, flushes: list[Callable[[], None]] | None = None) -> None:  # fmt: skip
         self.sinks = list(sinks)
+        self.flushes = list(flushes or [])  # e.g. the view's output
         self.pcapng, self.session = pcapng, session
         if session is not None:
             self.sinks.append(session.write)
@@ -90,6 +91,8 @@ class Recorder:
         for w in (self.pcapng, self.session):
             if w is not None:
                 w.flush()
+        for f in self.flushes:
+            f()
 
     def close(self, now: float) -> None:
         for conn in list(self._conns):
@@ -97,3 +100,5 @@ class Recorder:
         for w in (self.pcapng, self.session):
             if w is not None:
                 w.close()
+        for f in self.flushes:
+            f()
