@@ -6,7 +6,7 @@ STAMP := $(VENV)/.installed
 
 SUDO := $(if $(filter 0,$(shell id -u)),,sudo)
 
-.PHONY: demo test test-slow lint typecheck docs docs-check bench clean install tshark
+.PHONY: demo test test-slow lint typecheck docs docs-check bench clean install tshark emulator
 
 # Three distributions, one import namespace `pltf` (spec/ -> pltf.spec, clients/pltf_client/ -> pltf.client, the
 # toolkit's folders -> pltf.*; see setup.py). mypy cannot run setuptools' editable import hooks, so it reads the
@@ -57,6 +57,10 @@ docs-check: $(STAMP)
 
 bench: $(STAMP) tshark
 	$(BIN)/python -m benchmarks --json benchmarks/results.json
+
+# The Go emulator (issue 17), a second implementation of the protocol: emulator/bin/emulator.
+emulator:
+	sh emulator/build.sh
 
 demo: $(STAMP)
 	$(BIN)/python -m pltf.cli.demo
