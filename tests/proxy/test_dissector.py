@@ -188,3 +188,23 @@ def test_a_malformed_frame_is_marked_not_misdecoded(tmp_path: Path) -> None:
         else:  # the frame boundaries are lost: what follows is marked, not decoded
             assert "out of sync" in after.label and after.experts[0].startswith("OutOfSync: "), (v["name"], after.label)
             assert not [n for n, _, _ in after.fields if n.startswith(("pltf.req.", "pltf.rep."))]
+
+
+def test_a_fuzz_finding_opens_with_the_dissector(tmp_path: Path) -> None:
+    """The fuzzer writes its findings' exchange.pcapng with fuzz/pcapng.write_pcapng (fuzz/report.py): client
+    ports 40000+k against the target's port, whatever that is (Decode As). Its telegrams decode, its garbage is
+    marked."""
+    from pltf.fuzz.pcapng import Conversation, write_pcapng
+
+    status = bytes.fromhex(next(v["hex"] for v in REPLIES if v["telegram"] == "CMD_GET_STATUS"))
+    set_mode = bytes.fromhex("ff01fe02000000050f00000003")
+    convs = [Conversation(40000, 38123, [(1.0, "c2s", set_mode + bytes.fromhex("ff01fe020000000112")),
+                                         (1.1, "s2c", status)], client_fin=True, server_fin=True),
+             Conversation(40001, 38123, [(2.0, "c2s", bytes.fromhex("ff01fe02ffffffff12"))], client_fin=True,
+                          server_fin=True)]  # fmt: skip
+    path = tmp_path / "exchange.pcapng"
+    write_pcapng(path, convs)
+    shown = telegrams(run_tshark(path, "-d", "tcp.port==38123,pltf"))
+    assert [s.label.split(" (")[0] for s in shown] == [
+        "PlatformCtrl request: CMD_SET_MODE", "PlatformCtrl request: CMD_GET_STATUS",
+        "PlatformCtrl reply: CMD_GET_STATUS", "PlatformCtrl request: malformed [FrameTooLarge]"]  # fmt: skip
