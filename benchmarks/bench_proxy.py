@@ -80,7 +80,7 @@ def _proxy(target_port: int, tmp: Path) -> Iterator[int]:
         yield int(match.group(1))
     finally:
         proc.send_signal(2)
-        proc.wait(30)
+        proc.wait(600)  # the recorder process writes what it was handed before it ends
 
 
 def _connect(port: int) -> socket.socket:
