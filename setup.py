@@ -27,6 +27,7 @@ FOLDERS = {
     "pltf.stubgen": "clients/stubgen",
     "pltf.cli": "pltf_cli",
     "pltf.fixtures": "fixtures",
+    "pltf.gui": "gui",
     "pltf.proxy": "proxy",
 }
 

