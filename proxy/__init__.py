@@ -1,10 +1,12 @@
 """``pltf proxy``, ``pltf replay`` and ``pltf dissector``: see the traffic, keep it, replay it, open it in Wireshark.
 
-- ``tap``: live decoding of one direction of a proxied connection (sans-IO, the codec of spec/).
-- ``session``: the session file (JSON lines) written and read; ``capture``: the pcapng recording (fuzz/pcapng.py).
-- ``view``: the live view (one line per telegram, filtered by telegram name).
-- ``network``: the forwarding core (asyncio; the only module of the proxy that touches sockets).
+- ``network``: the forwarding core (asyncio, plain sockets; the only module of the proxy with sockets and a clock).
+- ``offload``: the recorder in a process of its own, fed through a pipe (nothing delays a forwarded byte).
+- ``recorder``: decode (``tap``, the codec of spec/), show (``view``), keep (``session``: JSON lines;
+  ``capture``: pcapng through fuzz/pcapng.py), sans-IO.
 - ``replay`` (plan and judgement, sans-IO), ``compare`` (field by field, spec/volatile.yaml), ``replay_io``
-  (asyncio) and ``report``: ``pltf replay``.
-- ``dissector``: the Wireshark Lua dissector generated from spec/ (``pltf.lua`` is its committed output).
+  (asyncio) and ``report`` (text, JUnit): ``pltf replay``.
+- ``dissector``: the Wireshark Lua dissector generated from spec/ (``lua/runtime.lua`` interprets the tables it
+  writes; ``pltf.lua`` is its committed output).
+See proxy/README.md.
 """
