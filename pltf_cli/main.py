@@ -31,6 +31,9 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "run-program": ("pltf.cli.run_program_cmd", "run a task program (guide 6.5) here, driving a platform: remote mode"),
     "gui": ("pltf.cli.gui_cmd", "PlatformCtrlGUI in the browser (guide ch. 5): map, control, monitor, parameters"),
     "stubs": ("pltf.cli.stubs_cmd", "generate the client stubs of one language (or --check a generated copy)"),
+    "proxy": ("pltf.cli.proxy_cmd", "a transparent TCP proxy: decode both directions live, record the session"),
+    "replay": ("pltf.cli.replay_cmd", "replay a recorded session against a target and name every reply that differs"),
+    "dissector": ("pltf.cli.dissector_cmd", "write the Wireshark Lua dissector generated from spec/ (or --check it)"),
     "completion": ("pltf.cli.completion", "print the bash or zsh completion script of pltf"),
 }
 
