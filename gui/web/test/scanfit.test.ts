@@ -43,6 +43,15 @@ describe("fitScan", () => {
     }
     expect(out[0].a.y).toBeLessThan(out[0].b.y); // front (left of a -> b) faces the scanner at the origin
   });
+  it("turns a line so its front faces the scanner whatever the order of the points", () => {
+    const cw = run(2000, 2000, 2000, -1000, 50);
+    expect(fitScan(cw, params)).toEqual([
+      { a: { x: 2000, y: -1000 }, b: { x: 2000, y: 2000 }, kind: "linemapped", support: 61 },
+    ]);
+    expect(fitScan(cw, { ...params, origin: { x: 5000, y: 0 } })).toEqual([
+      { a: { x: 2000, y: 2000 }, b: { x: 2000, y: -1000 }, kind: "linemapped", support: 61 },
+    ]);
+  });
   it("makes nothing of too few points", () => {
     expect(fitScan([], params)).toEqual([]);
     expect(fitScan(run(0, 1000, 1000, 1000, 500), params)).toEqual([]);
