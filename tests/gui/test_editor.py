@@ -49,7 +49,7 @@ def test_round_trip_add_a_line_and_undo(page: Any, gateway: Gateway, platform: P
     wait_for(lambda: state.get_attribute("data-objects") == str(len(objects) + 1), what="the added line")
     page.get_by_role("button", name="Send to platform", exact=True).click()
     after = _objects(_sent(platform, original))
-    added = [k for k, o in enumerate(after) if k >= len(objects) or o != objects[k]][0]
+    added = next(k for k, o in enumerate(after) if k >= len(objects) or o != objects[k])
     assert after[:added] + after[added + 1 :] == objects  # the edit touched nothing else
     tag, _, pts = after[added]
     assert tag == "line"
