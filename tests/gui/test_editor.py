@@ -69,3 +69,29 @@ def test_round_trip_add_a_line_and_undo(page: Any, gateway: Gateway, platform: P
     wait_for(lambda: _objects(platform.other.get_map().xml) == objects, what="the original map back")
     page.get_by_role("button", name="Redo", exact=True).click()
     wait_for(lambda: state.get_attribute("data-objects") == str(len(objects) + 1), what="redo")
+
+
+def test_trim_against_a_parallel_line_says_why_and_changes_nothing(page: Any, gateway: Gateway,
+                                                                   platform: Platform) -> None:  # fmt: skip
+    objects = _objects(platform.other.get_map().xml)
+    state = _open_editor(page, gateway, platform)
+    wait_for(lambda: state.get_attribute("data-objects") == str(len(objects)), what="the loaded map")
+    page.get_by_role("button", name="Trim", exact=True).click()
+    expect_text(page.get_by_role("note", name="Tool tip"), "Trim a line in respect of another line")
+    canvas = page.get_by_role("img", name="Map")
+    box = canvas.bounding_box()
+    cam = json.loads(canvas.get_attribute("data-camera"))
+
+    def click(x: float, y: float) -> None:
+        sx = (x - cam["cx"]) * cam["scale"] + cam["width"] / 2
+        sy = (cam["cy"] - y) * cam["scale"] + cam["height"] / 2
+        page.mouse.click(box["x"] + sx, box["y"] + sy)
+
+    click(10000, 11200)  # the corridor's north wall (9100,11200)-(18400,11200) ...
+    wait_for(lambda: '"points":[9100,11200,18400,11200]' in (state.get_attribute("data-selected") or ""),
+             what="the first line selected")  # fmt: skip
+    click(12000, 8800)  # ... against its south wall, parallel to it
+    expect_text(page.get_by_role("status", name="Messages", exact=True), "the lines are parallel: they never cross")
+    assert state.get_attribute("data-objects") == str(len(objects))
+    assert state.get_attribute("data-dirty") == "false"
+    assert page.get_by_role("button", name="Undo", exact=True).is_disabled()

@@ -10,11 +10,12 @@ import { GetMapReply, GetMapRequest, SetMapRequest } from "../pltf";
 import type { MapView } from "../panels/mapview";
 import type { PlatformSession } from "../session/session";
 import { toScreen } from "../view/camera";
-import { addObject, deleteObjects, History, invertLine, moveObjects } from "./commands";
-import { clean, snap, type Pt } from "./geometry";
+import { addObject, deleteObjects, History, invertLine, lineOp, moveObjects } from "./commands";
+import { clean, extend, orthogonal, parallel, snap, type Pt, type Seg, trim } from "./geometry";
 import { newMapDoc, parseMapDoc, writeMapDoc } from "./mapdoc";
 
-type EditTool = "select" | "addLine";
+type EditTool = "select" | "addLine" | "trim" | "extend" | "parallel" | "orthogonal";
+type RefTool = Exclude<EditTool, "select" | "addLine">;
 const GRID_MM = 10;
 const SNAP_PX = 8;
 
@@ -42,6 +43,10 @@ export function hit(h: History, x: number, y: number, tol: number): number | nul
   return best;
 }
 
+function nearer(s: Seg, p: Pt): "a" | "b" {
+  return Math.hypot(p.x - s.a.x, p.y - s.a.y) <= Math.hypot(p.x - s.b.x, p.y - s.b.y) ? "a" : "b";
+}
+
 export function mapEditor(
   session: PlatformSession,
   view: MapView,
@@ -55,7 +60,23 @@ export function mapEditor(
   const tip = h("p", { class: "edit-tip", role: "note" });
   bind(tip, "edit.tip", { text: false });
   const state = h("output", { class: "edit-state" });
-  const tipFor: Record<EditTool, Key> = { select: "edit.tipSelect", addLine: "edit.tipAddLine" };
+  const tipFor: Record<EditTool, Key> = {
+    select: "edit.tipSelect",
+    addLine: "edit.tipAddLine",
+    trim: "edit.tipTrim",
+    extend: "edit.tipExtend",
+    parallel: "edit.tipParallel",
+    orthogonal: "edit.tipOrthogonal",
+  };
+  /** The line clicked first in a two-click tool, and where it was clicked (trim keeps that side). */
+  let first: { id: number; at: Pt } | null = null;
+  const refOps: Record<RefTool, (s: Seg, r: Seg, at: Pt) => ReturnType<typeof trim>> = {
+    trim: (s, r, at) => trim(s, r, at),
+    extend: (s, r) => extend(s, r),
+    // guide 5.4 "Make lines parallel": turned about the end farther from the click (the click grabs the end to move)
+    parallel: (s, r, at) => parallel(s, r, nearer(s, at) === "a" ? "b" : "a"),
+    orthogonal: (s, r, at) => orthogonal(s, r, nearer(s, at) === "a" ? "b" : "a"),
+  };
 
   const refresh = (): void => {
     if (open) {
@@ -94,11 +115,27 @@ export function mapEditor(
       if (tool === "select") {
         selected = hit(history, x, y, SNAP_PX / pxPerMm);
         refresh();
+      } else if (tool !== "addLine") {
+        const id = hit(history, x, y, SNAP_PX / pxPerMm);
+        if (id === null) {
+          return;
+        }
+        if (first === null || first.id === id) {
+          first = { id, at: { x, y } };
+          selected = id;
+          refresh();
+        } else {
+          const f = first;
+          const op = refOps[tool];
+          first = null;
+          run(lineOp(history.doc, tool, (s, r) => op(s, r, f.at), f.id, id));
+        }
+        return;
       }
       drag = { from: tool === "select" ? { x, y } : p, to: p, pxPerMm };
     },
     move(x, y) {
-      if (drag !== null) {
+      if (drag !== null && (tool === "select" || tool === "addLine")) {
         drag.to = tool === "select" ? { x, y } : snap({ x, y }, endpoints(), SNAP_PX / drag.pxPerMm, GRID_MM);
       }
     },
@@ -161,6 +198,7 @@ export function mapEditor(
   const toolButtons = new Map<EditTool, HTMLButtonElement>();
   const setTool = (next: EditTool): void => {
     tool = next;
+    first = null;
     for (const [k, b] of toolButtons) {
       b.setAttribute("aria-pressed", String(k === next));
     }
@@ -197,6 +235,9 @@ export function mapEditor(
   });
   toolButtons.set("select", act("edit.select", () => setTool("select")));
   toolButtons.set("addLine", act("edit.addLine", () => setTool("addLine")));
+  for (const k of ["trim", "extend", "parallel", "orthogonal"] as const) {
+    toolButtons.set(k, act(`edit.${k}`, () => setTool(k)));
+  }
   act("edit.delete", () => {
     if (selected === null) {
       say(t("edit.noneSelected"));

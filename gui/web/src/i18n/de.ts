@@ -226,4 +226,12 @@ export const de: Record<Key, string> = {
   "edit.sent": "Karte an die Plattform gesendet (CMD_SET_MAP): {n} Objekte",
   "edit.loaded": "Karte in den Editor geladen: {n} Objekte",
   "edit.done": "{what}",
+  "edit.trim": "Stutzen",
+  "edit.extend": "Verlängern",
+  "edit.parallel": "Parallel machen",
+  "edit.orthogonal": "Orthogonal machen",
+  "edit.tipTrim": "Linie an einer anderen stutzen: zuerst die zu stutzende Linie, dann die Referenzlinie anklicken.",
+  "edit.tipExtend": "Linie bis zu einer anderen verlängern: zuerst die Linie, dann die Referenzlinie anklicken.",
+  "edit.tipParallel": "Linien parallel machen: zuerst die Linie, dann die Referenzlinie anklicken.",
+  "edit.tipOrthogonal": "Linien orthogonal machen: zuerst die Linie, dann die Referenzlinie anklicken.",
 };

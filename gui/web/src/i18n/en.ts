@@ -224,6 +224,14 @@ export const en = {
   "edit.sent": "Map sent to the platform (CMD_SET_MAP): {n} objects",
   "edit.loaded": "Map loaded into the editor: {n} objects",
   "edit.done": "{what}",
+  "edit.trim": "Trim",
+  "edit.extend": "Extend",
+  "edit.parallel": "Make parallel",
+  "edit.orthogonal": "Make orthogonal",
+  "edit.tipTrim": "Trim a line in respect of another line. Click the line you want to trim and then select another line as a reference line, which will trim the first one.",
+  "edit.tipExtend": "Extend a line to reach another line. Click the line you want to extend, then click on a reference line that the first line will be extended to.",
+  "edit.tipParallel": "Make lines parallel. Click on the line you want to be parallel to the reference line and click the reference line.",
+  "edit.tipOrthogonal": "Make lines orthogonal. Click on the line you want to make orthogonal, then click on a reference line.",
 } as const;
 
 export type Key = keyof typeof en;
