@@ -1,0 +1,264 @@
+"""Units in flight on the target's ports: one lane per port, pipelining, and newcomers turned away run again.
+
+Rules:
+- Both ports take every command, one client each (guide 6.1), so units run in two lanes driven by one
+  ``select`` loop (``pltf.fuzz.flight``). Each unit gets its own connection and opens with the lead GET_STATUS.
+- A unit the target did not admit (``pltf.fuzz.verdict``) goes back to the front of the queue and runs again
+  alone on a port whose backoff has passed (``pltf.fuzz.gate``); it is never judged or counted before it was
+  served. When no port has admitted us for ``patience`` seconds the target is gone (dead or hung), when one
+  port has not while the other has it is stuck (a stall): the lanes stop and say so.
+- Pipelining: behind a small unit fully sent, its write side shut and owing nothing but statuses, up to three
+  more small units wait connected on its port while the port's gate allows it; a waiting unit's deadline runs
+  from its turn.
+- A *dear* port (a connection costs milliseconds of release: a proxy, a slow accept) keeps one connection for
+  batches on the first port (``kept``): batch after batch on it, each ended by its sync reply, while the other
+  port spends fresh connections on the singles (and on batches when no single waits).
+- Every admitted unit is handed to the campaign's ``judge`` in its port's order; a False answer stops new units,
+  the ones in flight run out (and are judged too) and ``run`` returns: the ports are then free for replays.
+"""
+
+from __future__ import annotations
+
+import collections
+import contextlib
+import socket
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from pltf.fuzz.flight import Flight, fly, step_flights
+from pltf.fuzz.gate import DEPTH, Gate
+from pltf.fuzz.target import session_deadline
+from pltf.fuzz.unit import GET_STATUS_ID, PIPELINE_BYTES, Unit
+from pltf.fuzz.verdict import NOT_ADMITTED, Liveness, Verdict, judge
+
+RECENT = 16  # units remembered as "sent last"
+DONE, STOPPED = "done", "stopped"
+
+
+@dataclass(eq=False)
+class InFlight:
+    flight: Flight
+    unit: Unit
+    port: int  # index into the ports
+    behind: bool  # connected while another unit of ours was on the port (pipelined)
+    kept: bool  # on the kept batch connection
+    led: bool  # the session opens with the lead GET_STATUS
+    started: float
+    verdict: Verdict | None = None
+
+
+Judge = Callable[[InFlight, Verdict], bool]
+FlightFactory = Callable[..., Flight]
+
+
+class Lanes:
+    def __init__(self, host: str, ports: tuple[int, ...], deadline: float, pipelining: bool = True,
+                 patience: float | None = None, connect: FlightFactory = Flight, active: int | None = None) -> None:  # fmt: skip
+        """``active``: how many of the ports carry units (the first ones; the others only replays and checks)."""
+        self.host, self.ports, self.deadline = host, ports, deadline
+        self.connect = connect
+        self.active = len(ports) if active is None else min(active, len(ports))
+        self.gates = [Gate(k, pipelining) for k in range(len(ports))]
+        self.patience = patience if patience is not None else max(1.0, 2 * deadline)
+        self.live = Liveness(self.active, self.patience, time.monotonic())
+        self.turned_away: list[str] = []  # the unit that stopped pipelining on a port
+        self.flights: list[collections.deque[InFlight]] = [collections.deque() for _ in ports]
+        self.todo: collections.deque[Unit] = collections.deque()
+        self.recent: collections.deque[InFlight] = collections.deque(maxlen=RECENT)
+        self.kept: socket.socket | None = None
+        self.dear = False  # set by the campaign from the gates' release
+        self.stop = False
+        self.gone: str | None = None  # "dead", "hang" or "stall" once the lanes saw it
+        self.stuck: int | None = None  # the port of a stall
+
+    # ------------------------------------------------------------------ queue
+    def add(self, units: list[Unit]) -> None:
+        self.todo.extend(units)
+
+    def singles_waiting(self) -> int:
+        return sum(1 for u in self.todo if not u.batch)
+
+    # ------------------------------------------------------------------ the loop
+    def run(self, judge_unit: Judge, batches_only: bool = False) -> str:
+        """Run the queue; DONE when it is empty (``batches_only``: when no batch is queued or in flight - the
+        singles in flight go on in the next call), STOPPED when ``judge_unit`` said stop, else "dead", "hang",
+        "deaf" or "stall" (``gone``)."""
+        self.stop = False
+        while True:
+            if not self.stop and self.gone is None:
+                self._fill()
+            live = [e.flight for q in self.flights for e in q if not e.flight.done]
+            if batches_only and not self.stop and self.gone is None and not self._batches_pending():
+                return DONE
+            if not live and not any(self.flights):
+                if self.gone is not None:
+                    gone, self.gone = self.gone, None
+                    return gone
+                if self.stop:
+                    return STOPPED
+                if not self.todo:
+                    return DONE
+                wait = min(g.retry_at for g in self.gates[: self.active]) - time.monotonic()
+                time.sleep(max(0.0, min(wait, 0.05)))
+                continue
+            if live and not any(q and q[0].flight.done for q in self.flights):
+                step_flights(live, until=self._next_retry())
+            for q in self.flights:
+                while q and q[0].flight.done:
+                    e = q.popleft()
+                    _restart_clocks(q)
+                    self._done(e, judge_unit)
+
+    def _batches_pending(self) -> bool:
+        return any(u.batch for u in self.todo) or any(e.unit.batch for q in self.flights for e in q)
+
+    def _next_retry(self) -> float | None:
+        now = time.monotonic()
+        waits = [g.retry_at for g in self.gates if g.retry_at > now]
+        return min(waits) if self.todo and waits else None
+
+    def _fill(self) -> None:
+        """Start units on every port that takes one now."""
+        now = time.monotonic()
+        for k in range(self.active):
+            while self.todo and self.gates[k].may_connect(now):
+                unit = self._pick(k)
+                if unit is None or not self._may_start(k, unit):
+                    break
+                self.todo.remove(unit)
+                self.flights[k].append(self._start(k, unit))
+
+    def _pick(self, k: int) -> Unit | None:
+        """The unit port ``k`` takes next: the queue's first, except on a dear target (batches on the kept
+        connection of port 0, singles first on the others)."""
+        if not self.dear or self.active < 2:
+            return self.todo[0]
+        want_batch = k == 0
+        for u in self.todo:
+            if u.batch == want_batch:
+                return u
+        return None if k == 0 else self.todo[0]
+
+    def _may_start(self, k: int, unit: Unit) -> bool:
+        q = self.flights[k]
+        if not q:
+            return True
+        gate = self.gates[k]
+        if self.dear and k == 0:
+            return False  # the kept connection carries one batch at a time
+        if not gate.pipelining or unit.tries or len(q) >= DEPTH or not unit.whole:
+            return False
+        f = q[-1].flight
+        return (f.connected and not f.sending and f.session.half_close and len(f.data) <= PIPELINE_BYTES
+                and all(i == GET_STATUS_ID for i in f.expected))  # fmt: skip
+
+    def _start(self, k: int, unit: Unit) -> InFlight:
+        kept = self.dear and k == 0 and unit.batch
+        sock, self.kept = (self.kept, None) if kept else (None, self.kept)
+        led = sock is None
+        session = unit.session(lead=led, kept=kept)
+        flight = self.connect(self.host, self.ports[k], session, self.deadline, sock=sock)
+        q = self.flights[k]
+        behind = bool(q)
+        if behind:
+            flight.deadline = q[-1].flight.deadline + flight.budget  # its turn comes after the one before it
+        self.gates[k].connected(flight.started, behind)
+        e = InFlight(flight, unit, k, behind, kept, led, flight.started)
+        self.recent.append(e)
+        return e
+
+    # ------------------------------------------------------------------ a finished flight
+    def _done(self, e: InFlight, judge_unit: Judge) -> None:
+        now = time.monotonic()
+        f, unit, gate = e.flight, e.unit, self.gates[e.port]
+        v = judge(f.out, unit.owed(f.session, len(f.expected)), True, unit.keep)  # kept: no byte back, gone
+        e.verdict = v
+        if e.kept and f.kept is not None:
+            self.kept = f.kept
+        if v.kind == NOT_ADMITTED:
+            pipelining = gate.pipelining
+            gate.ended(now, admitted=False, behind=e.behind)
+            if pipelining and not gate.pipelining:
+                self.turned_away = unit.describe()
+            unit.tries += 1
+            self.live.turned_away(e.port, v.how, now)
+            self.todo.appendleft(unit)
+            self._look_at_liveness(now)
+            return
+        gate.admitted(e.started, e.behind)
+        gate.ended(now, admitted=True, behind=e.behind)
+        self.live.admitted(e.port, now)
+        if not judge_unit(e, v):
+            self.stop = True
+
+    def _look_at_liveness(self, now: float) -> None:
+        gone = self.live.verdict(now)
+        if gone is None:
+            port = self.live.stuck(now)
+            if port is None:
+                return
+            gone, self.stuck = "stall", port
+        self.gone = gone
+        self.stop = True
+
+    # ------------------------------------------------------------------ alone, outside the lanes
+    def alone(self, k: int, unit: Unit, patience: float | None = None) -> InFlight | None:
+        """Run ``unit`` alone on port ``k`` once the port is free (a replay, a check): turned away, it runs again
+        after the backoff; None when the port did not admit it within ``patience``."""
+        self.release()
+        end = time.monotonic() + (self.patience if patience is None else patience)
+        gate = self.gates[k]
+        while True:
+            now = time.monotonic()
+            if now < gate.retry_at:
+                time.sleep(gate.retry_at - now)
+            flight = self.connect(self.host, self.ports[k], unit.session(), self.deadline, sock=None)
+            e = InFlight(flight, unit, k, False, False, True, flight.started)
+            fly([flight])
+            v = judge(flight.out, unit.owed(flight.session, len(flight.expected)), True, unit.keep)
+            e.verdict = v
+            now = time.monotonic()
+            if v.kind != NOT_ADMITTED:
+                gate.admitted(e.started, False)
+                gate.ended(now, admitted=True, behind=False)
+                self.live.admitted(k, now)
+                return e
+            gate.ended(now, admitted=False, behind=False)
+            if now >= end:
+                self.live.turned_away(k, v.how, now)
+                return None
+
+    def release(self) -> None:
+        """Give the kept connection back in order (our end-of-stream, the target's close)."""
+        sock, self.kept = self.kept, None
+        if sock is None:
+            return
+        with contextlib.suppress(OSError):
+            sock.shutdown(socket.SHUT_WR)
+            sock.settimeout(self.deadline)
+            while sock.recv(1 << 16):
+                pass
+        sock.close()
+        self.gates[0].free_since = time.monotonic()
+
+    def drain(self) -> None:
+        """Let the flights in flight run out (unjudged); the ports are then free."""
+        fly([e.flight for q in self.flights for e in q])
+        for q in self.flights:
+            q.clear()
+
+    def close(self) -> None:
+        self.drain()
+        self.release()
+
+
+def _restart_clocks(q: collections.deque[InFlight]) -> None:
+    """A port's flight is done: the deadline of each one waiting behind it runs from now, in its turn."""
+    t = time.monotonic()
+    for e in q:
+        t += e.flight.budget
+        e.flight.deadline = t
+
+
+__all__ = ["DONE", "STOPPED", "InFlight", "Lanes", "session_deadline"]

@@ -1,0 +1,93 @@
+"""A unit: what one oracle verdict covers, and the session that carries it. No sockets.
+
+Rules:
+- A *batch* is cases the strict codec accepts, pipelined on one connection and closed by a GET_STATUS ``sync``
+  whose reply proves all of them were processed (the server answers nothing else, erratum E-CMD-013); a
+  *single* is one case the target should refuse, or that needs its own delivery.
+- A session opens with the *lead* GET_STATUS (any byte back: the target took the connection,
+  ``pltf.fuzz.verdict``), then the unit's state prelude and its *check* GET_STATUS (``pltf.fuzz.preludes``), then
+  the cases; our write side is shut after them (on a kept connection the sync reply ends the unit instead).
+- A single whose bytes may not arrive in one piece (over ``PIPELINE_BYTES``, or a slow or bytewise delivery) is
+  *gated*: its lead goes alone and the rest waits for the target's first byte, so that a target that closes
+  on it with our input unread (a reset) cannot lose the lead's reply - the proof it was served.
+- ``owed``: the replies the target must send (E-WIRE-006): every one of a batch; of a single, those asked before
+  its case (the lead, the prelude's, the check) - behind a gate only the lead.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from pltf.fuzz.case import WHOLE, Case
+from pltf.fuzz.preludes import Target
+from pltf.fuzz.target import GET_STATUS, Session
+from pltf.fuzz.wire import KEEP, answered_ids
+from pltf.spec.codec import REQUESTS
+
+GET_STATUS_ID = REQUESTS.CMD_GET_STATUS.ID
+PIPELINE_BYTES = 1 << 14  # units up to this size may be pipelined on a port (read whole by one recv)
+BATCH_CASES = 128
+BATCH_BYTES = 1 << 18
+
+
+def batchable(c: Case) -> bool:
+    """A case the strict codec accepts, small and written whole: it goes into a batch."""
+    return c.expect == KEEP and c.delivery.mode == "whole" and c.size < BATCH_BYTES // 4
+
+
+@dataclass(eq=False)
+class Unit:
+    cases: list[Case]
+    prelude: list[bytes] = field(default_factory=list)
+    target: Target | None = None  # the plan target its prelude drives to (None: no prelude)
+    tries: int = 0  # connections that were not admitted so far
+
+    @property
+    def keep(self) -> bool:
+        return all(c.expect == KEEP for c in self.cases)
+
+    @property
+    def batch(self) -> bool:
+        return len(self.cases) > 1 or (bool(self.cases) and batchable(self.cases[0]))
+
+    @property
+    def size(self) -> int:
+        return sum(c.size for c in self.cases) + sum(len(f) for f in self.prelude)
+
+    @property
+    def whole(self) -> bool:
+        """Small and written in one piece: it may wait behind another unit (pipelining)."""
+        return self.size <= PIPELINE_BYTES and all(c.delivery.mode == "whole" for c in self.cases)
+
+    @property
+    def head(self) -> list[bytes]:
+        """The prelude and its check (nothing without a prelude)."""
+        return [*self.prelude, GET_STATUS] if self.prelude else []
+
+    @property
+    def check_at(self) -> int | None:
+        """Index among the replies of a led session of the check's reply (None: no prelude)."""
+        if not self.prelude:
+            return None
+        return 1 + len(answered_ids(b"".join(self.prelude)))
+
+    def session(self, lead: bool = True, kept: bool = False) -> Session:
+        """The session carrying the unit: on its own connection (``kept`` False) or on a kept one."""
+        head = [*([GET_STATUS] if lead else []), *self.head]
+        frames = [*head, *(f for c in self.cases for f in c.frames)]
+        known = all(c.answered is not None for c in self.cases)
+        answered = [*answered_ids(b"".join(head)), *(i for c in self.cases for i in c.answered or ())] if known else None
+        delivery = self.cases[0].delivery if self.cases and not self.batch else WHOLE
+        gate = lead and not self.keep and not self.whole
+        return Session(frames, delivery, half_close=not kept, sync=self.keep, answered=answered, gate=gate, led=lead)
+
+    def owed(self, session: Session, expected: int) -> int:
+        """Replies owed in ``session`` (``expected``: the replies it asks for, sync included)."""
+        if self.keep:
+            return expected
+        if session.gate:
+            return 1
+        return len(answered_ids(b"".join(session.frames[: len(session.frames) - sum(len(c.frames) for c in self.cases)])))
+
+    def describe(self) -> list[str]:
+        return [f"{c.telegram} ({c.origin}{': ' + c.note if c.note else ''})" for c in self.cases[:3]]
