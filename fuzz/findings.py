@@ -73,8 +73,8 @@ class FindingWriter:
             for s in sessions:
                 out, served = play_admitted(o.host, port, s, o.deadline, patience, record)
                 outcomes.append(out)
-                if not served:
-                    return self._gone(second, patience), outcomes
+                if not served:  # the other port still serves: this one is stuck
+                    return self._gone(second, patience) or "stall", outcomes
                 expected = len(session_reply_ids(s)) + s.sync
                 v = judge(out, expected if s.sync else int(s.led), s.led, s.sync)
                 if v.kind == BAD_REPLY:

@@ -71,6 +71,7 @@ class Lanes:
         self.stop = False
         self.gone: str | None = None  # "dead", "hang" or "stall" once the lanes saw it
         self.stuck: int | None = None  # the port of a stall
+        self.suspect: int | None = None  # a port that has not served us for ``patience``: are the others alive?
 
     # ------------------------------------------------------------------ queue
     def add(self, units: list[Unit]) -> None:
@@ -92,6 +93,8 @@ class Lanes:
             if batches_only and not self.stop and self.gone is None and not self._batches_pending():
                 return DONE
             if not live and not any(self.flights):
+                if self.suspect is not None:
+                    self._check_suspect()
                 if self.gone is not None:
                     gone, self.gone = self.gone, None
                     return gone
@@ -132,13 +135,15 @@ class Lanes:
     def _pick(self, k: int) -> Unit | None:
         """The unit port ``k`` takes next: the queue's first, except on a dear target (batches on the kept
         connection of port 0, singles first on the others)."""
+        mine = (u for u in self.todo if u.pin is None or u.pin == k)
         if not self.dear or self.active < 2:
-            return self.todo[0]
-        want_batch = k == 0
-        for u in self.todo:
-            if u.batch == want_batch:
+            return next(mine, None)
+        first = None
+        for u in mine:
+            if u.batch == (k == 0):
                 return u
-        return None if k == 0 else self.todo[0]
+            first = first or u
+        return None if k == 0 else first
 
     def _may_start(self, k: int, unit: Unit) -> bool:
         q = self.flights[k]
@@ -182,6 +187,8 @@ class Lanes:
             if pipelining and not gate.pipelining:
                 self.turned_away = unit.describe()
             unit.tries += 1
+            if v.how == "timed-out":
+                unit.pin = e.port
             self.live.turned_away(e.port, v.how, now)
             self.todo.appendleft(unit)
             self._look_at_liveness(now)
@@ -194,13 +201,26 @@ class Lanes:
 
     def _look_at_liveness(self, now: float) -> None:
         gone = self.live.verdict(now)
-        if gone is None:
-            port = self.live.stuck(now)
-            if port is None:
+        if gone is not None:
+            self.gone, self.stop = gone, True
+            return
+        port = self.live.stuck(now)
+        if port is None:
+            port = next((k for k, t in self.live.failing_since.items() if now - t >= self.patience), None)
+            if port is not None:  # the other ports have had nothing to do: ask them, once the flights ran out
+                self.suspect, self.stop = port, True
+            return
+        self.gone, self.stuck, self.stop = "stall", port, True
+
+    def _check_suspect(self) -> None:
+        """One port has not served us for ``patience``: a stall when another one serves a GET_STATUS now."""
+        port, self.suspect = self.suspect, None
+        assert port is not None
+        for k in range(len(self.ports)):
+            if k != port and self.alone(k, Unit([]), patience=self.deadline) is not None:
+                self.gone, self.stuck = "stall", port
                 return
-            gone, self.stuck = "stall", port
-        self.gone = gone
-        self.stop = True
+        self.gone = self.live.verdict(time.monotonic() + self.patience) or "hang"
 
     # ------------------------------------------------------------------ alone, outside the lanes
     def alone(self, k: int, unit: Unit, patience: float | None = None) -> InFlight | None:

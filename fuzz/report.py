@@ -107,8 +107,8 @@ def read_frames(sock, want, deadline):
 
 
 def play(host, port, session, deadline_s):
-    """'refused', 'unserved' (nothing came back: turned away, or left in a backlog), 'stall', 'dropped',
-    'bad-reply: ...' or None."""
+    """'refused', 'unserved' (closed with nothing back: turned away), 'unanswered' (nothing back in time: a backlog,
+    or a target that stopped), 'stall', 'dropped', 'bad-reply: ...' or None."""
     try:
         sock = socket.create_connection((host, port), timeout=deadline_s)
     except ConnectionRefusedError:
@@ -125,7 +125,7 @@ def play(host, port, session, deadline_s):
                 sock.sendall(data[:gate])
                 frames, problem, timed_out, got = read_frames(sock, 1, deadline)
                 if not frames:
-                    return "bad-reply: " + problem if problem and got else "unserved"
+                    return "bad-reply: " + problem if problem and got else "unanswered" if timed_out else "unserved"
                 data = data[gate:]
             for chunk, pause in chunks(data, session["delivery"]):
                 if pause:
@@ -140,7 +140,7 @@ def play(host, port, session, deadline_s):
         want = session["replies"] - (1 if gate else 0) if session["sync"] and not session["half_close"] else None
         frames, problem, timed_out, more = read_frames(sock, want, deadline)
         if session["led"] and not got and not more:
-            return "unserved"
+            return "unanswered" if timed_out else "unserved"
         if problem and not (problem.startswith("reply cut") and not session["sync"]):
             return "bad-reply: " + problem
         if timed_out:
@@ -157,7 +157,7 @@ def play_served(host, port, session, deadline_s, patience):
     end, pause = time.monotonic() + patience, 0.001
     while True:
         verdict = play(host, port, session, deadline_s)
-        if verdict not in ("refused", "unserved") or time.monotonic() >= end:
+        if verdict not in ("refused", "unserved", "unanswered") or time.monotonic() >= end:
             return verdict
         time.sleep(pause)
         pause = min(0.016, pause * 1.6)
@@ -169,7 +169,7 @@ def probe(host, port, deadline_s, patience):
     verdict = play_served(host, port, PROBE, deadline_s, patience)
     if verdict is None:
         return None
-    return {{"refused": "dead", "stall": "hang", "unserved": "deaf"}}.get(verdict, "deaf")
+    return {{"refused": "dead", "stall": "hang", "unanswered": "hang", "unserved": "deaf"}}.get(verdict, "deaf")
 
 
 def main():
@@ -198,7 +198,7 @@ def main():
     after = probe(host, second, args.deadline, patience)
     if after is not None:
         verdict = after
-    elif verdict in ("refused", "unserved"):
+    elif verdict in ("refused", "unserved", "unanswered"):
         verdict = "stall"  # this port no longer serves us while the other one does
     if verdict is None:
         print("target survived: the failure did not happen again")

@@ -265,13 +265,14 @@ def served(out: Outcome, session: Session) -> bool:
 def play_admitted(
     host: str, port: int, session: Session, deadline_s: float, patience: float, record: bool = False
 ) -> tuple[Outcome, bool]:
-    """``play`` again, after a growing pause, while the target does not serve the connection (turned away, or
-    left in a backlog: ``pltf.fuzz.gate``), for ``patience`` seconds at most; (the last outcome, served)."""
+    """``play`` again, after a growing pause, while the target turns the connection away (``pltf.fuzz.gate``), for
+    ``patience`` seconds at most; (the last outcome, served). One left unanswered for the deadline is not tried
+    again: the port is held (by a stalled connection, or a target that stopped)."""
     end = time.monotonic() + patience
     backoff = BACKOFF_FIRST
     while True:
         out = play(host, port, session, deadline_s, record)
-        if served(out, session) or time.monotonic() >= end:
+        if served(out, session) or out.timed_out or time.monotonic() >= end:
             return out, served(out, session)
         time.sleep(backoff)
         backoff = min(BACKOFF_MAX, backoff * BACKOFF_GROWTH)

@@ -9,7 +9,10 @@ Rules:
   the cases; our write side is shut after them (on a kept connection the sync reply ends the unit instead).
 - A single whose bytes may not arrive in one piece (over ``PIPELINE_BYTES``, or a slow or bytewise delivery) is
   *gated*: its lead goes alone and the rest waits for the target's first byte, so that a target that closes
-  on it with our input unread (a reset) cannot lose the lead's reply - the proof it was served.
+  on it with our input unread (a reset) cannot lose the lead's reply - the proof it was served. So is every
+  unit that runs again after it was not served: a target that takes in a whole read before it answers anything
+  then shows whether the port or the unit kept it silent. A unit left unanswered runs again on the same port
+  (``pin``): were it the culprit, it would stall the other port too.
 - ``owed``: the replies the target must send (E-WIRE-006): every one of a batch; of a single, those asked before
   its case (the lead, the prelude's, the check) - behind a gate only the lead.
 """
@@ -41,6 +44,7 @@ class Unit:
     prelude: list[bytes] = field(default_factory=list)
     target: Target | None = None  # the plan target its prelude drives to (None: no prelude)
     tries: int = 0  # connections that were not admitted so far
+    pin: int | None = None  # the port it must run again on (it was left unanswered there)
 
     @property
     def keep(self) -> bool:
@@ -78,7 +82,7 @@ class Unit:
         known = all(c.answered is not None for c in self.cases)
         answered = [*answered_ids(b"".join(head)), *(i for c in self.cases for i in c.answered or ())] if known else None
         delivery = self.cases[0].delivery if self.cases and not self.batch else WHOLE
-        gate = lead and not self.keep and not self.whole
+        gate = lead and (self.tries > 0 or (not self.keep and not self.whole))
         return Session(frames, delivery, half_close=not kept, sync=self.keep, answered=answered, gate=gate, led=lead)
 
     def owed(self, session: Session, expected: int) -> int:
