@@ -8,8 +8,9 @@ Rules:
   targets, minimisation, the files).
 - A window of cases (``WINDOW``) becomes batches and singles; the first batch carries the state prelude, and so
   does every single about an operation or motion command. On a target whose connections are dear
-  (``pltf.fuzz.gate``) the singles a window brings beyond ``SINGLES_QUEUE`` waiting ones are skipped (counted):
-  the fresh connections they need are what the target has least of; batches run on a kept connection.
+  (``pltf.fuzz.gate``) the units of accepted cases run on a kept connection, and the cases a window brings that
+  need a fresh connection (the target should close on them) beyond ``SINGLES_QUEUE`` waiting are skipped
+  (counted): fresh connections are what such a target has least of.
 - A suspicion (``pltf.fuzz.verdict``) stops the lanes; once the ports are free its unit is replayed alone: a
   finding when it fails again the same way, else reported apart as unconfirmed (``stats.unconfirmed``), which
   never sets the exit status. A unit that timed out is a stall when another port still serves us, else a hang.
@@ -240,9 +241,9 @@ class Campaign:
         self.index = first + len(cases)
         units = self.units(cases)
         if self.lanes.dear:
-            room = max(0, SINGLES_QUEUE - self.lanes.singles_waiting())
-            singles = [u for u in units if not u.batch]
-            skip = set(singles[room:])
+            room = max(0, SINGLES_QUEUE - self.lanes.fresh_waiting())
+            fresh = [u for u in units if not u.keep]
+            skip = set(fresh[room:])
             self.stats.skipped += len(skip)
             units = [u for u in units if u not in skip]
         self.lanes.add(units)
@@ -347,7 +348,7 @@ class Campaign:
         if kind == TIMED_OUT:
             other = (port + 1) % len(self.ports)
             if self.lanes.alone(other, Unit([], []), patience=self.o.deadline) is None:
-                self.gone("hang", f"{reason}; then no port served a GET_STATUS within {self.o.deadline} s")
+                self.gone("hang", f"{reason}; then no port served a GET_STATUS within {self.o.deadline} s", s.unit)
                 return
             kind, port = "stall", other  # the unit's port may still be held by the stalled connection
             reason = f"{reason} within the deadline; the other port still answers"
@@ -365,7 +366,7 @@ class Campaign:
         if len(seen) < 2 and self.lanes.live.failing:  # a replay was not served: is the target still there?
             gone = self._cross_check()
             if gone is not None:
-                self.gone(gone)
+                self.gone(gone, culprit=s.unit)
                 return
         ok = confirmed(kind, seen)
         self.failure(kind, reason, [s.unit], ok, {"replays": seen, "port": self.ports[s.port]})
@@ -381,13 +382,15 @@ class Campaign:
         return self.lanes.live.verdict(time.monotonic() + self.lanes.patience) or "dead"
 
     # ------------------------------------------------------------------ findings
-    def gone(self, kind: str, reason: str | None = None) -> None:
-        """No port serves us (or one is stuck): one finding naming the units sent last."""
+    def gone(self, kind: str, reason: str | None = None, culprit: Unit | None = None) -> None:
+        """No port serves us (or one is stuck): one finding naming the units sent last (``culprit``, the one that
+        showed it, last of all)."""
         assert self.lanes is not None
         lanes = self.lanes
         if self.launcher is not None and not self.launcher.alive():
             kind = "dead"
-        last = [e.unit for e in lanes.recent]
+        last = [u for u in dict.fromkeys(e.unit for e in lanes.recent) if u is not culprit and u.cases]
+        last += [culprit] if culprit is not None else []
         lanes.drain()
         lanes.todo.clear()
         why = reason or {

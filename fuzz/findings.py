@@ -27,6 +27,7 @@ from pltf.fuzz.report import slug, write_finding
 from pltf.fuzz.target import GET_STATUS, Outcome, Session, play_admitted, session_reply_ids
 from pltf.fuzz.unit import Unit
 from pltf.fuzz.verdict import BAD_REPLY, DROPPED, OK, TIMED_OUT, judge
+from pltf.spec.codec import REQUESTS
 
 if TYPE_CHECKING:
     from pltf.fuzz.engine import Campaign
@@ -111,15 +112,22 @@ class FindingWriter:
             return [replace(sessions[k].with_frames(fr), gate=sessions[k].gate and len(fr) > 1)
                     for k, fr in sorted(keep.items())]  # fmt: skip
 
+        end = time.monotonic() + self.c.o.minimize_seconds
+
         def test(items: list[tuple[int, int]]) -> bool:
             nonlocal tests
+            if time.monotonic() > end:  # out of budget: the smallest failing sequence so far stays
+                return False
             tests += 1
             return self.reproduce(rebuild(items))[0] == kind
 
         best = shortest_failing_prefix(flat, test)
+        prelude = [i for i in best if i[0] == 0 and sessions[0].led and len(sessions) > 1]
         if len(best) > 1 and test(best[-1:]):  # the frame that tipped it over, alone
             best = best[-1:]
-        best = ddmin(best, test, max_tests=120, max_seconds=self.c.o.minimize_seconds)
+        elif len(prelude) + 1 < len(best) and test([*prelude, best[-1]]):  # ... behind the state prelude
+            best = [*prelude, best[-1]]
+        best = ddmin(best, test, max_tests=120, max_seconds=max(0.0, end - time.monotonic()))
         result = rebuild(best)
         simpler = [replace(s, delivery=WHOLE, gate=False) for s in result]
         if any(s.delivery != WHOLE or s.gate for s in result) and self.reproduce(simpler)[0] == kind:
@@ -150,7 +158,9 @@ class FindingWriter:
             got["sessions"], got["tests"] = self._minimize(kind, got["sessions"])
             got["minimized"] = True
         if got["sessions"] is not None:
-            verdict, got["outcomes"] = self.reproduce(got["sessions"], record=True, repeat=got["repeat"] * 2)
+            rounds = got["repeat"] * 2 if got["repeat"] > 1 else 1
+            verdict, got["outcomes"] = self.reproduce(got["sessions"], record=True, repeat=rounds,
+                                                      seconds=4 * REPEAT_SECONDS)  # fmt: skip
             got["reproduced"] = verdict == kind
         return got
 
@@ -160,6 +170,7 @@ class FindingWriter:
         """Write the failure; None for a duplicate. ``believed``: a finding (replays confirmed it, or no port
         serves us any more); else it goes under ``unconfirmed/``."""
         c = self.c
+        found_after = round(c.stats.elapsed, 1)
         culprit = units[-1].cases[-1] if units and units[-1].cases else None
         key = f"{kind}:{culprit.telegram if culprit else '-'}:{culprit.origin if culprit else '-'}"
         if believed and key in self.culprits:
@@ -180,7 +191,9 @@ class FindingWriter:
             self.signatures.add(signature)
             self.culprits.add(key)
         self.count += 1
-        name = f"finding-{self.count:03d}-{kind}-{slug(culprit.telegram if culprit else 'batch')}"
+        last = next((f for s in reversed(sessions) for f in reversed(s.frames[int(s.led) :])), b"")
+        called = _telegram(last) if fresh.get("sessions") else culprit.telegram if culprit else "batch"
+        name = f"finding-{self.count:03d}-{kind}-{slug(called)}"
         tail = list(c.launcher.output)[-30:] if c.launcher is not None else []
         description = {
             "signature": signature,
@@ -191,6 +204,7 @@ class FindingWriter:
                       "motion_mode": c.kb.motion_mode},
             "culprit": culprit.to_json() | {"frames": len(culprit.frames)} if culprit else None,
             "confirmed": believed,
+            "found_after_s": found_after,
             "evidence": evidence,
             "reproduced_on_fresh_target": fresh.get("reproduced", False),
             "repeat": fresh.get("repeat", 1),
@@ -202,7 +216,13 @@ class FindingWriter:
         directory = write_finding(where / name, kind, reason, sessions, description, fresh.get("outcomes", []),
                                   c.ports[0], c.o.deadline, repeat=fresh.get("repeat", 1))  # fmt: skip
         return {"kind": kind, "reason": reason, "dir": str(directory), "confirmed": believed, "signature": signature,
-                "reproduced": fresh.get("reproduced", False), "evidence": evidence}  # fmt: skip
+                "reproduced": fresh.get("reproduced", False), "evidence": evidence,
+                "found_after_s": description["found_after_s"]}  # fmt: skip
+
+
+def _telegram(frame: bytes) -> str:
+    t = REQUESTS.by_id.get(frame[8]) if len(frame) > 8 else None
+    return t.NAME if t is not None else f"id {frame[8]}" if len(frame) > 8 else "raw"
 
 
 __all__ = ["OK", "FindingWriter", "led", "prelude_session"]

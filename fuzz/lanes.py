@@ -10,9 +10,12 @@ Rules:
 - Pipelining: behind a small unit fully sent, its write side shut and owing nothing but statuses, up to three
   more small units wait connected on its port while the port's gate allows it; a waiting unit's deadline runs
   from its turn.
-- A *dear* port (a connection costs milliseconds of release: a proxy, a slow accept) keeps one connection for
-  batches on the first port (``kept``): batch after batch on it, each ended by its sync reply, while the other
-  port spends fresh connections on the singles (and on batches when no single waits).
+- A *dear* port (a connection costs milliseconds of release: a proxy, a slow accept) keeps one connection on
+  the first port (``kept``) for the units of accepted cases (batches, big documents): one after the other, each
+  ended by its sync reply, while the other port spends fresh connections on the cases the target should refuse
+  (and on the others when none waits).
+- Deadlines: a unit's budget (``pltf.fuzz.target.session_deadline``) runs from its turn on its port, plus the
+  size allowances of the units in flight on the other ports (a target may serve one port at a time).
 - Every admitted unit is handed to the campaign's ``judge`` in its port's order; a False answer stops new units,
   the ones in flight run out (and are judged too) and ``run`` returns: the ports are then free for replays.
 """
@@ -77,13 +80,14 @@ class Lanes:
     def add(self, units: list[Unit]) -> None:
         self.todo.extend(units)
 
-    def singles_waiting(self) -> int:
-        return sum(1 for u in self.todo if not u.batch)
+    def fresh_waiting(self) -> int:
+        """Units queued that need a fresh connection (a case the target should refuse closes it)."""
+        return sum(1 for u in self.todo if not u.keep)
 
     # ------------------------------------------------------------------ the loop
     def run(self, judge_unit: Judge, batches_only: bool = False) -> str:
-        """Run the queue; DONE when it is empty (``batches_only``: when no batch is queued or in flight - the
-        singles in flight go on in the next call), STOPPED when ``judge_unit`` said stop, else "dead", "hang",
+        """Run the queue; DONE when it is empty (``batches_only``: when no unit of accepted cases is queued or in
+        flight - the others go on in the next call), STOPPED when ``judge_unit`` said stop, else "dead", "hang",
         "deaf" or "stall" (``gone``)."""
         self.stop = False
         while True:
@@ -114,7 +118,8 @@ class Lanes:
                     self._done(e, judge_unit)
 
     def _batches_pending(self) -> bool:
-        return any(u.batch for u in self.todo) or any(e.unit.batch for q in self.flights for e in q)
+        """Units of accepted cases queued or in flight (on a dear target: the kept connection's)."""
+        return any(u.keep for u in self.todo) or any(e.unit.keep for q in self.flights for e in q)
 
     def _next_retry(self) -> float | None:
         now = time.monotonic()
@@ -140,7 +145,7 @@ class Lanes:
             return next(mine, None)
         first = None
         for u in mine:
-            if u.batch == (k == 0):
+            if u.keep == (k == 0):
                 return u
             first = first or u
         return None if k == 0 else first
@@ -159,7 +164,7 @@ class Lanes:
                 and all(i == GET_STATUS_ID for i in f.expected))  # fmt: skip
 
     def _start(self, k: int, unit: Unit) -> InFlight:
-        kept = self.dear and k == 0 and unit.batch
+        kept = self.dear and k == 0 and unit.keep
         sock, self.kept = (self.kept, None) if kept else (None, self.kept)
         led = sock is None
         session = unit.session(lead=led, kept=kept)
@@ -168,10 +173,24 @@ class Lanes:
         behind = bool(q)
         if behind:
             flight.deadline = q[-1].flight.deadline + flight.budget  # its turn comes after the one before it
+        self._share_allowances(k, flight)
         self.gates[k].connected(flight.started, behind)
         e = InFlight(flight, unit, k, behind, kept, led, flight.started)
-        self.recent.append(e)
+        if not unit.tries:  # a unit that runs again is already there
+            self.recent.append(e)
         return e
+
+    def _share_allowances(self, k: int, flight: Flight) -> None:
+        """A target may serve its ports one at a time: a unit's allowance for its size (a big document takes
+        seconds to parse) is added to the deadlines of the units in flight on the other ports, and theirs to
+        its deadline."""
+        now = time.monotonic()
+        mine = flight.budget - self.deadline
+        for j, q in enumerate(self.flights):
+            for e in q if j != k else ():
+                if not e.flight.done:
+                    flight.deadline += max(0.0, min(e.flight.deadline - now, e.flight.budget - self.deadline))
+                    e.flight.deadline += max(0.0, mine)
 
     # ------------------------------------------------------------------ a finished flight
     def _done(self, e: InFlight, judge_unit: Judge) -> None:

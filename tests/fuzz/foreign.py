@@ -376,7 +376,7 @@ def main() -> None:
     parser.add_argument("--turn-away", choices=("fin", "rst", "refuse"), default="fin")
     parser.add_argument("--accept-once", action="store_true", help="newcomers wait in the backlog")
     parser.add_argument("--bug", default="none", choices=("none", "move-crash", "vel-crash", "hang", "leak"))
-    parser.add_argument("--leak-limit-mb", type=float, default=24.0)
+    parser.add_argument("--leak-limit-mb", type=float, default=8.0)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--stats", help="write the clients served and turned away here at exit (JSON)")
     args = parser.parse_args()
