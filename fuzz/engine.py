@@ -258,14 +258,15 @@ class Campaign:
         assert self.lanes is not None
         while not self.stop:
             result = self.lanes.run(self.judge_unit, batches_only=batches_only)
+            if result not in (DONE, STOPPED):  # no port serves us: what looked suspicious died with it
+                culprit = self.suspicions[-1].unit if self.suspicions else None
+                self.suspicions.clear()
+                self.gone(result, culprit=culprit)
+                return
             if self.suspicions:
                 self.settle()
-            if result in (DONE, STOPPED):
-                if result == DONE:
-                    return
-                continue
-            self.gone(result)
-            return
+            if result == DONE:
+                return
 
     def units(self, cases: list[Case]) -> list[Unit]:
         """Batches (accepted cases, whole, at most ``BATCH_CASES``/``BATCH_BYTES``) spread among the singles;
@@ -362,7 +363,7 @@ class Campaign:
             got = e.verdict.kind
             return "stall" if got == TIMED_OUT else got
 
-        seen = confirm(kind, replay)
+        seen = confirm(kind, replay, *((1, 1) if kind == "stall" else ()))  # a stall holds the port it stalls
         if len(seen) < 2 and self.lanes.live.failing:  # a replay was not served: is the target still there?
             gone = self._cross_check()
             if gone is not None:
@@ -415,7 +416,7 @@ class Campaign:
         if self.o.max_findings is not None and len(self.stats.findings) >= self.o.max_findings:
             self.stop = True
             return
-        if self.launcher is not None and (kind in STOPS or finding is not None):
+        if self.launcher is not None and (kind in STOPS or self.writer.used_launcher):
             self.stats.restarts += 1
             self.lanes.close()
             self.start_target()

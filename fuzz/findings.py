@@ -56,6 +56,7 @@ class FindingWriter:
         self.culprits: set[str] = set()
         self.count = 0
         self.rounds = 1
+        self.used_launcher = False  # the last ``handle`` started fresh targets (the campaign's is gone)
 
     # ------------------------------------------------------------------ replay against a fresh target
     def reproduce(self, sessions: list[Session], record: bool = False, repeat: int = 1,
@@ -170,6 +171,7 @@ class FindingWriter:
         """Write the failure; None for a duplicate. ``believed``: a finding (replays confirmed it, or no port
         serves us any more); else it goes under ``unconfirmed/``."""
         c = self.c
+        self.used_launcher = False
         found_after = round(c.stats.elapsed, 1)
         culprit = units[-1].cases[-1] if units and units[-1].cases else None
         key = f"{kind}:{culprit.telegram if culprit else '-'}:{culprit.origin if culprit else '-'}"
@@ -179,6 +181,7 @@ class FindingWriter:
         sessions = [prelude_session(target), *(u.session() for u in units)]
         fresh: dict[str, Any] = {}
         if c.launcher is not None and believed:
+            self.used_launcher = True
             fresh = self._fresh(kind, units, history)
             if fresh.get("sessions") is not None:
                 sessions = fresh["sessions"]
