@@ -73,7 +73,7 @@ class FindingWriter:
         end = time.monotonic() + (seconds or REPEAT_SECONDS)
         for self.rounds in range(1, repeat + 1):
             for s in sessions:
-                out, served = play_admitted(o.host, port, s, o.deadline, patience, record)
+                out, served = play_admitted(o.host, port, s, o.deadline, patience, record, launcher.alive)
                 outcomes.append(out)
                 if not served:  # the other port still serves: this one is stuck
                     return self._gone(second, patience) or "stall", outcomes
@@ -94,6 +94,8 @@ class FindingWriter:
         """None when the probe port still serves a GET_STATUS; else dead, hang or deaf."""
         launcher, o = self.c.launcher, self.c.o
         assert launcher is not None
+        if not launcher.alive():
+            return "dead"
         out, served = play_admitted(o.host, second, Session([GET_STATUS], half_close=True, led=True), o.deadline,
                                     patience)  # fmt: skip
         if served and out.replies:
@@ -182,7 +184,11 @@ class FindingWriter:
         fresh: dict[str, Any] = {}
         if c.launcher is not None and believed:
             self.used_launcher = True
-            fresh = self._fresh(kind, units, history)
+            c.launcher.spares = True  # each test of the minimisation on a fresh instance, the next one warming up
+            try:
+                fresh = self._fresh(kind, units, history)
+            finally:
+                c.launcher.no_spares()
             if fresh.get("sessions") is not None:
                 sessions = fresh["sessions"]
             c.launcher.stop()

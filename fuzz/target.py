@@ -17,6 +17,7 @@ import ipaddress
 import select
 import socket
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 from pltf.fuzz.case import WHOLE, Delivery
@@ -263,16 +264,19 @@ def served(out: Outcome, session: Session) -> bool:
 
 
 def play_admitted(
-    host: str, port: int, session: Session, deadline_s: float, patience: float, record: bool = False
+    host: str, port: int, session: Session, deadline_s: float, patience: float, record: bool = False,
+    alive: Callable[[], bool] | None = None,
 ) -> tuple[Outcome, bool]:
     """``play`` again, after a growing pause, while the target turns the connection away (``pltf.fuzz.gate``), for
     ``patience`` seconds at most; (the last outcome, served). One left unanswered for the deadline is not tried
-    again: the port is held (by a stalled connection, or a target that stopped)."""
+    again: the port is held (by a stalled connection, or a target that stopped); nor one of a process that
+    ``alive`` says has ended."""
     end = time.monotonic() + patience
     backoff = BACKOFF_FIRST
     while True:
         out = play(host, port, session, deadline_s, record)
-        if served(out, session) or out.timed_out or time.monotonic() >= end:
+        gone = alive is not None and not alive()
+        if served(out, session) or out.timed_out or gone or time.monotonic() >= end:
             return out, served(out, session)
         time.sleep(backoff)
         backoff = min(BACKOFF_MAX, backoff * BACKOFF_GROWTH)
