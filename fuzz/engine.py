@@ -7,7 +7,7 @@ Rules:
   pipelining, newcomers turned away), ``pltf.fuzz.verdict`` (the oracle), ``pltf.fuzz.findings`` (fresh
   targets, minimisation, the files).
 - A window of cases (``WINDOW``) becomes batches and singles; the first batch carries the state prelude, and so
-  does every single about an operation or motion command. On a target whose connections are dear
+  does one single in ``STATEFUL_EVERY`` about an operation or motion command. On a target whose connections are dear
   (``pltf.fuzz.gate``) the units of accepted cases run on a kept connection, and the cases a window brings that
   need a fresh connection (the target should close on them) beyond ``SINGLES_QUEUE`` waiting are skipped
   (counted): fresh connections are what such a target has least of.
@@ -46,6 +46,7 @@ from pltf.fuzz.verdict import TIMED_OUT, Verdict, confirm, confirmed
 WINDOW = 256  # cases drawn at a time
 MEASURE = 6  # status-only clients per port at the start: does it answer, what does a connection cost
 SINGLES_QUEUE = 32  # singles waiting at most on a dear target (the rest of a window's are skipped)
+STATEFUL_EVERY = 4  # one single about an operation or motion command in so many carries the state prelude
 # Where the case generator runs in a thread (no fork), the main thread, back from a socket wait, can queue
 # behind it for milliseconds per unit with the default 5 ms GIL switch interval; a short one keeps it low.
 SWITCH_INTERVAL = 0.0002  # s
@@ -87,7 +88,7 @@ class Stats:
     units: int = 0
     batches: int = 0
     singles: int = 0
-    probes: int = 0  # units whose lead GET_STATUS was answered (each one a liveness probe)
+    probes: int = 0  # units whose lead was answered (each one a liveness probe)
     restarts: int = 0
     cut_replies: int = 0
     dropped_unsafe: int = 0
@@ -145,6 +146,7 @@ class Campaign:
         self.history: collections.deque[Session] = collections.deque(maxlen=HISTORY)
         self.suspicions: list[Suspicion] = []
         self.not_admitted_before = 0  # connections not served by the targets before the last restart
+        self.stateful = 0  # singles about an operation or motion command drawn so far
         self.stop = False
         self.coverage: set[tuple[Any, ...]] = set()
         self.writer = FindingWriter(self, self.corpus.known_findings())
@@ -164,7 +166,7 @@ class Campaign:
                 e = lanes.alone(k, status)
                 if e is None or e.verdict is None or e.verdict.suspicious or not e.flight.out.replies:
                     why = e.verdict.reason if e is not None and e.verdict is not None else "no client admitted"
-                    raise HarnessError(f"the target does not answer GET_STATUS on {self.o.host}:{self.ports[k]}: "
+                    raise HarnessError(f"the target does not answer on {self.o.host}:{self.ports[k]}: "
                                        f"{why}")  # fmt: skip
                 self._learn(e.flight.out.replies)
         lanes.dear = self.o.lanes > 1 and any(g.dear for g in lanes.gates[: self.o.lanes])
@@ -278,7 +280,11 @@ class Campaign:
         target = self.plan.current
         for c in cases:
             if not batchable(c):
-                prelude = preludes.path(state, mode, target, self.forbidden) if c.telegram in STATEFUL else []
+                prelude = []
+                if c.telegram in STATEFUL:
+                    self.stateful += 1
+                    if self.stateful % STATEFUL_EVERY == 0:  # a prelude costs a target as much as a few cases
+                        prelude = preludes.path(state, mode, target, self.forbidden)
                 singles.append(Unit([c], prelude, target if prelude else None))
                 continue
             if len(batches[-1]) >= BATCH_CASES or size + c.size > BATCH_BYTES:
@@ -303,7 +309,7 @@ class Campaign:
         st.cut_replies += v.cut
         self.history.append(e.flight.session)
         self._learn(out.replies)
-        at = unit.check_at if e.led else None
+        at = None if unit.check_at is None else unit.check_at - (not e.led)
         if at is not None and unit.target is not None and len(out.replies) > at:
             check = out.replies[at]
             if check.NAME == "CMD_GET_STATUS" and self.plan.check(unit.target, check.operation_state,  # type: ignore[attr-defined]
@@ -349,7 +355,7 @@ class Campaign:
         if kind == TIMED_OUT:
             other = (port + 1) % len(self.ports)
             if self.lanes.alone(other, Unit([], []), patience=self.o.deadline) is None:
-                self.gone("hang", f"{reason}; then no port served a GET_STATUS within {self.o.deadline} s", s.unit)
+                self.gone("hang", f"{reason}; then no port served us within {self.o.deadline} s", s.unit)
                 return
             kind, port = "stall", other  # the unit's port may still be held by the stalled connection
             reason = f"{reason} within the deadline; the other port still answers"

@@ -8,7 +8,7 @@ Rules:
   prelude of its target (the last first), then the units together, then everything since the last restart;
   for a death none of those causes (a leak: the target dies of what piles up), each of the largest units is
   repeated until the instance dies (``REPEAT_MAX`` rounds, ``REPEAT_SECONDS``), then all of them. ddmin
-  (``pltf.fuzz.minimize``) then removes frames across sessions, the lead GET_STATUS of each kept: it tells a
+  (``pltf.fuzz.minimize``) then removes frames across sessions, the lead of each kept: it tells a
   newcomer turned away from one served (``pltf.fuzz.verdict``); every replay waits for the port as the lanes do.
 - The signature (kind and the ids of the minimal frames) deduplicates findings within a run and, through the
   corpus, across resumed runs; a failure whose culprit was seen before is not reproduced again.
@@ -24,7 +24,7 @@ from pltf.fuzz import preludes
 from pltf.fuzz.case import WHOLE
 from pltf.fuzz.minimize import ddmin, shortest_failing_prefix
 from pltf.fuzz.report import slug, write_finding
-from pltf.fuzz.target import GET_STATUS, Outcome, Session, play_admitted, session_reply_ids
+from pltf.fuzz.target import LEAD, Outcome, Session, play_admitted, session_reply_ids
 from pltf.fuzz.unit import Unit
 from pltf.fuzz.verdict import BAD_REPLY, DROPPED, OK, TIMED_OUT, judge
 from pltf.spec.codec import REQUESTS
@@ -38,15 +38,15 @@ GONE = ("dead", "hang", "deaf")
 
 
 def led(s: Session) -> Session:
-    """A session a fresh connection can replay: opened by the lead GET_STATUS, our write side shut at the end."""
+    """A session a fresh connection can replay: opened by the lead, our write side shut at the end."""
     if s.led:
         return s
-    answered = None if s.answered is None else [GET_STATUS[8], *s.answered]
-    return replace(s, frames=[GET_STATUS, *s.frames], half_close=True, led=True, answered=answered)
+    answered = None if s.answered is None else [LEAD[8], *s.answered]
+    return replace(s, frames=[LEAD, *s.frames], half_close=True, led=True, answered=answered)
 
 
 def prelude_session(target: preludes.Target) -> Session:
-    return Session([GET_STATUS, *preludes.full(target)], sync=True, half_close=True, led=True)
+    return Session([LEAD, *preludes.full(target)], sync=True, half_close=True, led=True)
 
 
 class FindingWriter:
@@ -67,7 +67,7 @@ class FindingWriter:
         port, second = launcher.start()
         patience = max(1.0, 2 * o.deadline)
         outcomes: list[Outcome] = []
-        status = Session([GET_STATUS], half_close=True, led=True)
+        status = Session([LEAD], half_close=True, led=True)
         if not play_admitted(o.host, second, status, o.deadline, patience)[1]:
             return None, outcomes
         end = time.monotonic() + (seconds or REPEAT_SECONDS)
@@ -91,12 +91,12 @@ class FindingWriter:
         return self._gone(second, patience) or ("dead" if not launcher.alive() else None), outcomes
 
     def _gone(self, second: int, patience: float) -> str | None:
-        """None when the probe port still serves a GET_STATUS; else dead, hang or deaf."""
+        """None when the probe port still serves us; else dead, hang or deaf."""
         launcher, o = self.c.launcher, self.c.o
         assert launcher is not None
         if not launcher.alive():
             return "dead"
-        out, served = play_admitted(o.host, second, Session([GET_STATUS], half_close=True, led=True), o.deadline,
+        out, served = play_admitted(o.host, second, Session([LEAD], half_close=True, led=True), o.deadline,
                                     patience)  # fmt: skip
         if served and out.replies:
             return None

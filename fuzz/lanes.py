@@ -2,7 +2,9 @@
 
 Rules:
 - Both ports take every command, one client each (guide 6.1), so units run in two lanes driven by one
-  ``select`` loop (``pltf.fuzz.flight``). Each unit gets its own connection and opens with the lead GET_STATUS.
+  ``select`` loop (``pltf.fuzz.flight``). Each unit gets its own connection and opens with the lead
+  (``pltf.fuzz.unit``) - once ``WARMUP`` units were served and none turned away, a unit that owes no reply goes
+  without, but for one in ``LEAD_EVERY`` (``_led``); the first unit not served brings the lead back for good.
 - A unit the target did not admit (``pltf.fuzz.verdict``) goes back to the front of the queue and runs again
   alone on a port whose backoff has passed (``pltf.fuzz.gate``); it is never judged or counted before it was
   served. When no port has admitted us for ``patience`` seconds the target is gone (dead or hung), when one
@@ -31,11 +33,13 @@ from dataclasses import dataclass
 
 from pltf.fuzz.flight import Flight, fly, step_flights
 from pltf.fuzz.gate import DEPTH, Gate
-from pltf.fuzz.target import session_deadline
-from pltf.fuzz.unit import GET_STATUS_ID, PIPELINE_BYTES, Unit
+from pltf.fuzz.target import LEAD_IDS, session_deadline
+from pltf.fuzz.unit import PIPELINE_BYTES, Unit
 from pltf.fuzz.verdict import NOT_ADMITTED, Liveness, Verdict, judge
 
 RECENT = 16  # units remembered as "sent last"
+WARMUP = 256  # units served, none turned away, before some may go without a lead
+LEAD_EVERY = 4  # then: one unit in so many on a port keeps it (the liveness probe), and every unit that owes replies
 DONE, STOPPED = "done", "stopped"
 
 
@@ -46,7 +50,7 @@ class InFlight:
     port: int  # index into the ports
     behind: bool  # connected while another unit of ours was on the port (pipelined)
     kept: bool  # on the kept batch connection
-    led: bool  # the session opens with the lead GET_STATUS
+    led: bool  # the session opens with the lead
     started: float
     verdict: Verdict | None = None
 
@@ -57,7 +61,8 @@ FlightFactory = Callable[..., Flight]
 
 class Lanes:
     def __init__(self, host: str, ports: tuple[int, ...], deadline: float, pipelining: bool = True,
-                 patience: float | None = None, connect: FlightFactory = Flight, active: int | None = None) -> None:  # fmt: skip
+                 patience: float | None = None, connect: FlightFactory = Flight,
+                 active: int | None = None) -> None:  # fmt: skip
         """``active``: how many of the ports carry units (the first ones; the others only replays and checks)."""
         self.host, self.ports, self.deadline = host, ports, deadline
         self.connect = connect
@@ -66,6 +71,10 @@ class Lanes:
         self.patience = patience if patience is not None else max(1.0, 2 * deadline)
         self.live = Liveness(self.active, self.patience, time.monotonic())
         self.turned_away: list[str] = []  # the unit that stopped pipelining on a port
+        self.served = 0  # units admitted
+        self.unled = False  # units that owe nothing may go without the lead (``WARMUP``)
+        self.unled_ever_off = False  # a newcomer was turned away: every unit keeps its lead for good
+        self.since_lead = [0] * len(ports)
         self.flights: list[collections.deque[InFlight]] = [collections.deque() for _ in ports]
         self.todo: collections.deque[Unit] = collections.deque()
         self.recent: collections.deque[InFlight] = collections.deque(maxlen=RECENT)
@@ -161,12 +170,25 @@ class Lanes:
             return False
         f = q[-1].flight
         return (f.connected and not f.sending and f.session.half_close and len(f.data) <= PIPELINE_BYTES
-                and all(i == GET_STATUS_ID for i in f.expected))  # fmt: skip
+                and all(i in LEAD_IDS for i in f.expected))  # fmt: skip
+
+    def _led(self, k: int, unit: Unit, fresh: bool) -> bool:
+        """Whether a unit on a fresh connection opens with the lead: always, until ``WARMUP`` units were served
+        with none turned away; then a unit that owes no reply (a case the target should refuse, written whole)
+        goes without, except one in ``LEAD_EVERY`` on the port, which probes. A reply costs a target a write
+        (on the reference server a third of a refused case's cost)."""
+        if not fresh:
+            return False
+        self.since_lead[k] += 1
+        if not self.unled or unit.keep or unit.tries or not unit.whole or self.since_lead[k] >= LEAD_EVERY:
+            self.since_lead[k] = 0
+            return True
+        return False
 
     def _start(self, k: int, unit: Unit) -> InFlight:
         kept = self.dear and k == 0 and unit.keep
         sock, self.kept = (self.kept, None) if kept else (None, self.kept)
-        led = sock is None
+        led = self._led(k, unit, sock is None)
         session = unit.session(lead=led, kept=kept)
         flight = self.connect(self.host, self.ports[k], session, self.deadline, sock=sock)
         q = self.flights[k]
@@ -196,7 +218,8 @@ class Lanes:
     def _done(self, e: InFlight, judge_unit: Judge) -> None:
         now = time.monotonic()
         f, unit, gate = e.flight, e.unit, self.gates[e.port]
-        v = judge(f.out, unit.owed(f.session, len(f.expected)), True, unit.keep)  # kept: no byte back, gone
+        # on the kept connection, too, nothing back means the unit was not served (the connection is gone)
+        v = judge(f.out, unit.owed(f.session, len(f.expected)), e.led or e.kept, unit.keep)
         e.verdict = v
         if e.kept and f.kept is not None:
             self.kept = f.kept
@@ -206,6 +229,7 @@ class Lanes:
             if pipelining and not gate.pipelining:
                 self.turned_away = unit.describe()
             unit.tries += 1
+            self.unled, self.unled_ever_off = False, True
             if v.how == "timed-out":
                 unit.pin = e.port
             self.live.turned_away(e.port, v.how, now)
@@ -215,6 +239,8 @@ class Lanes:
         gate.admitted(e.started, e.behind)
         gate.ended(now, admitted=True, behind=e.behind)
         self.live.admitted(e.port, now)
+        self.served += 1
+        self.unled = self.served >= WARMUP and not self.unled_ever_off
         if not judge_unit(e, v):
             self.stop = True
 
@@ -232,7 +258,7 @@ class Lanes:
         self.gone, self.stuck, self.stop = "stall", port, True
 
     def _check_suspect(self) -> None:
-        """One port has not served us for ``patience``: a stall when another one serves a GET_STATUS now."""
+        """One port has not served us for ``patience``: a stall when another one serves us now."""
         port, self.suspect = self.suspect, None
         assert port is not None
         for k in range(len(self.ports)):

@@ -6,9 +6,10 @@ Rules:
   mode applies, ``WINDOWS_PER_STATE`` windows each (mode-major, so every state comes early in a run).
 - ``full(target)`` gets there from anywhere (STOP, SHUTDOWN, CONNECT, INIT, SET_MODE, START, BREAK): what a
   fresh target needs, and where the minimiser starts (it keeps the frames a fresh target needs).
-- ``path(state, mode, target)`` is the shortest way from the state the target reported last, over the chart as
-  the conformance suite reads it (``pltf.conformance_tests.chart.TRANSITIONS``). ST_OP_NOT_INITIALIZED stands
-  for Not connected and Connected alike: read as Not connected (a CONNECT where connected changes nothing).
+- ``path(state, mode, target)`` is the shortest way from the state the target reported last, over ``CHART`` (the
+  guide's transitions, as the conformance suite's oracle and the reference server read them; a command absent
+  from a state changes nothing there). ST_OP_NOT_INITIALIZED stands for Not connected and Connected alike: read
+  as Not connected (a CONNECT where connected changes nothing).
   An unknown state takes the full prelude. Forbidden commands (no ``--allow-motion``) are never on a path.
 - A unit with a prelude carries a GET_STATUS after it (the *check*); its reply says whether the target got
   there (``reached``). Units get one when they are the first batch of a window, or a single about an
@@ -25,7 +26,6 @@ import collections
 import functools
 from typing import Any
 
-from pltf.conformance_tests.chart import TRANSITIONS, St
 from pltf.fuzz.case import Case
 from pltf.spec.codec import REQUESTS, encode
 from pltf.spec.model import enum_classes, load_telegrams
@@ -54,10 +54,24 @@ STATES: dict[str, tuple[int, list[bytes], bool]] = {
 }
 REPORTED = {OP.ST_OP_READY: "ready", OP.ST_OP_RUNNING: "running", OP.ST_OP_BREAKED: "breaked",
             OP.ST_OP_NOT_INITIALIZED: "not_connected"}  # fmt: skip
-CHART = {(s.value.replace("-", "_"), cmd): t.value.replace("-", "_") for (s, cmd), t in TRANSITIONS.items()
-         if cmd != "CMD_SET_MODE"}  # fmt: skip
+CHART: dict[tuple[str, str], str] = {
+    # guide 4.2: "The initialization process starts with the command CMD_CONNECT_CAN" (= CMD_CONNECT_TO_PLTF, E-CMD-002)
+    ("not_connected", "CMD_CONNECT_TO_PLTF"): "connected",
+    # guide 4.2: "The command CMD_INIT_CAN initializes all hardware components" (= CMD_INIT_PLTF)
+    ("connected", "CMD_INIT_PLTF"): "ready",
+    # guide 6.3 CMD_START: "The operation state changes into the state 'Moving'" (E-CMD-003: Running)
+    ("ready", "CMD_START"): "running",
+    # guide 6.3 CMD_BREAK: "... into the state 'Break'"; CMD_CONTINUE: "... into the state 'Moving'"
+    ("running", "CMD_BREAK"): "breaked",
+    ("breaked", "CMD_CONTINUE"): "running",
+    # guide 6.3 CMD_STOP: "The operation state changes into the state 'Ready'"
+    ("running", "CMD_STOP"): "ready",
+    ("breaked", "CMD_STOP"): "ready",
+    # guide 6.3 CMD_SHUTDOWN_PLTF: "Used to shutdown the CAN communication"
+    **{(s, "CMD_SHUTDOWN_PLTF"): "not_connected" for s in ("connected", "ready", "running", "breaked")},
+}
 STATEFUL = frozenset(t.name for t in load_telegrams() if t.category in ("operation", "motion"))
-CHART_IDS = frozenset(REQUESTS[cmd].ID for _, cmd in TRANSITIONS)
+CHART_IDS = frozenset(REQUESTS[cmd].ID for _, cmd in CHART) | {REQUESTS.CMD_SET_MODE.ID}
 # Tiny valid documents made active and saved at every state switch: a huge (or merely real) document saved
 # by an earlier case would otherwise make every later LOAD_* cost the target milliseconds for the rest of the run.
 TINY = {
@@ -96,7 +110,8 @@ def full(target: Target) -> list[bytes]:
 @functools.cache
 def _steps(start: str, goal: str, forbidden: frozenset[int]) -> tuple[str, ...] | None:
     """The chart commands of a shortest way from ``start`` to ``goal`` (breadth first), or None."""
-    seen, todo = {start: ()}, collections.deque([start])
+    seen: dict[str, tuple[str, ...]] = {start: ()}
+    todo = collections.deque([start])
     while todo:
         state = todo.popleft()
         if state == goal:
@@ -110,6 +125,15 @@ def _steps(start: str, goal: str, forbidden: frozenset[int]) -> tuple[str, ...] 
 
 def path(state: int | None, mode: int | None, target: Target, forbidden: frozenset[int]) -> list[bytes]:
     """The prelude from the reported ``state`` (ST_OP_*) and ``mode`` to ``target``; ``full`` when unknown."""
+    return list(_path(state, mode, target, forbidden))
+
+
+@functools.cache
+def _path(state: int | None, mode: int | None, target: Target, forbidden: frozenset[int]) -> tuple[bytes, ...]:
+    return tuple(_find_path(state, mode, target, forbidden))
+
+
+def _find_path(state: int | None, mode: int | None, target: Target, forbidden: frozenset[int]) -> list[bytes]:
     name, want = target
     here = REPORTED.get(state) if state is not None else None
     if here is None:

@@ -29,6 +29,11 @@ from pltf.spec.codec import REQUESTS, encode
 from pltf.spec.telegram import Telegram
 
 GET_STATUS = encode(REQUESTS.CMD_GET_STATUS())
+# The lead of every session (``pltf.fuzz.verdict``): any answered request proves a connection was served; this is
+# the one a server answers at least cost (the reference server: ~60 us and a 33-byte reply, where GET_STATUS costs
+# ~150 us and 2.7 KB). The state comes from the batches' sync GET_STATUS and the preludes' check.
+LEAD = encode(REQUESTS.CMD_GET_POSITION())
+LEAD_IDS = frozenset({REQUESTS.CMD_GET_POSITION.ID, REQUESTS.CMD_GET_STATUS.ID})  # the replies of lead and syncs
 RECV = 1 << 16
 CUT = "reply cut off by the close"
 BIG_SEND = 1 << 16  # bytes; bigger writes interleave reading (see Conn._send_reading)

@@ -4,7 +4,7 @@ Rules:
 - A *batch* is cases the strict codec accepts, pipelined on one connection and closed by a GET_STATUS ``sync``
   whose reply proves all of them were processed (the server answers nothing else, erratum E-CMD-013); a
   *single* is one case the target should refuse, or that needs its own delivery.
-- A session opens with the *lead* GET_STATUS (any byte back: the target took the connection,
+- A session opens with the *lead* (``pltf.fuzz.target.LEAD``: any byte back, the target took the connection,
   ``pltf.fuzz.verdict``), then the unit's state prelude and its *check* GET_STATUS (``pltf.fuzz.preludes``), then
   the cases; our write side is shut after them (on a kept connection the sync reply ends the unit instead).
 - A single whose bytes may not arrive in one piece (over ``PIPELINE_BYTES``, or a slow or bytewise delivery) is
@@ -19,15 +19,17 @@ Rules:
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 from pltf.fuzz.case import WHOLE, Case
 from pltf.fuzz.preludes import Target
-from pltf.fuzz.target import GET_STATUS, Session
+from pltf.fuzz.target import GET_STATUS, LEAD, Session
 from pltf.fuzz.wire import KEEP, answered_ids
 from pltf.spec.codec import REQUESTS
 
 GET_STATUS_ID = REQUESTS.CMD_GET_STATUS.ID
+LEAD_ID = LEAD[8]
 PIPELINE_BYTES = 1 << 14  # units up to this size may be pipelined on a port (read whole by one recv)
 BATCH_CASES = 128
 BATCH_BYTES = 1 << 18
@@ -68,19 +70,23 @@ class Unit:
         """The prelude and its check (nothing without a prelude)."""
         return [*self.prelude, GET_STATUS] if self.prelude else []
 
+    @functools.cached_property
+    def prelude_ids(self) -> list[int]:
+        """The ids of the answered requests of the prelude and its check."""
+        return [*answered_ids(b"".join(self.prelude)), GET_STATUS_ID] if self.prelude else []
+
     @property
     def check_at(self) -> int | None:
         """Index among the replies of a led session of the check's reply (None: no prelude)."""
-        if not self.prelude:
-            return None
-        return 1 + len(answered_ids(b"".join(self.prelude)))
+        return len(self.prelude_ids) if self.prelude else None
 
     def session(self, lead: bool = True, kept: bool = False) -> Session:
         """The session carrying the unit: on its own connection (``kept`` False) or on a kept one."""
-        head = [*([GET_STATUS] if lead else []), *self.head]
+        head = [*([LEAD] if lead else []), *self.head]
         frames = [*head, *(f for c in self.cases for f in c.frames)]
         known = all(c.answered is not None for c in self.cases)
-        answered = [*answered_ids(b"".join(head)), *(i for c in self.cases for i in c.answered or ())] if known else None
+        ids = [*([LEAD_ID] if lead else []), *self.prelude_ids]
+        answered = [*ids, *(i for c in self.cases for i in c.answered or ())] if known else None
         delivery = self.cases[0].delivery if self.cases and not self.batch else WHOLE
         gate = lead and (self.tries > 0 or (not self.keep and not self.whole))
         return Session(frames, delivery, half_close=not kept, sync=self.keep, answered=answered, gate=gate, led=lead)
@@ -91,7 +97,7 @@ class Unit:
             return expected
         if session.gate:
             return 1
-        return len(answered_ids(b"".join(session.frames[: len(session.frames) - sum(len(c.frames) for c in self.cases)])))
+        return int(session.led) + len(self.prelude_ids)
 
     def describe(self) -> list[str]:
         return [f"{c.telegram} ({c.origin}{': ' + c.note if c.note else ''})" for c in self.cases[:3]]

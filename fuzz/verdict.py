@@ -1,7 +1,7 @@
 """The oracle of one finished unit, and what it takes to believe it: no sockets, no clock.
 
 Rules:
-- Every lane unit opens with a GET_STATUS, the *lead*. Any byte back means the target took the connection
+- Every lane unit opens with an answered request, the *lead*. Any byte back means the target took the connection
   (admitted); a connection refused, closed or reset without a byte back, or left unanswered, was never served:
   the target turned the newcomer away, left it in its listen backlog behind another client, or is gone. That
   is ``NOT_ADMITTED``, never a finding by itself: the unit runs again once the port is free (``pltf.fuzz.gate``)
@@ -60,7 +60,7 @@ def admitted(out: Outcome) -> bool:
 
 def judge(out: Outcome, owed: int, led: bool, keep: bool) -> Verdict:
     """The verdict of a finished unit. ``owed``: the replies the target must send (E-WIRE-006); ``led``: the
-    session opened with the lead GET_STATUS; ``keep``: every case of the unit is accepted by the strict codec."""
+    session opened with the lead; ``keep``: every case of the unit is accepted by the strict codec."""
     if out.refused:
         return Verdict(NOT_ADMITTED, HOW["refused"], "refused")
     if led and not admitted(out):

@@ -47,7 +47,8 @@ HEADER = b"\xff\x01\xfe\x02"
 HANG_SECONDS = 60.0
 READ = 1 << 16
 HIGH_WATER = 4 << 20  # bytes buffered one way before reading that side pauses
-REFERENCE = f"{sys.executable} -m pltf.reference_server --ports {{ports}} --data-dir {{tmpdir}} --seed 1 --log-level ERROR"
+REFERENCE = (f"{sys.executable} -m pltf.reference_server --ports {{ports}} --data-dir {{tmpdir}} --seed 1 "
+             "--log-level ERROR")
 # guide 6.3 ids of the chart commands and the bugs' telegrams (spec/telegrams.yaml)
 CONNECT, SHUTDOWN, INIT, START, BREAK, CONTINUE, STOP, SET_MODE = 0, 1, 2, 11, 12, 13, 14, 15
 MOVE_REL, MOVE_VEL_WHEEL, SET_PLTF_PARAM, DOCUMENTS = 22, 23, 37, frozenset({25, 32, 40})
@@ -78,16 +79,17 @@ class Platform:
             self.mode = _i32(head, 1)
         elif size == 1:
             self.state = CHART.get((self.state, ident), self.state)
-        if self.bug == "move-crash" and ident == MOVE_REL and self.state == "running":
-            if max(abs(_i32(head, 1)), abs(_i32(head, 5))) >= BIG:
-                self.crash(134, "CMD_MOVE_REL far out while running")
-        if self.bug == "vel-crash" and ident == MOVE_VEL_WHEEL and (self.state, self.mode) == ("running", MODE_VEL):
-            if min(_i32(head, 1), _i32(head, 5)) <= -BIG:
-                self.crash(134, "CMD_MOVE_VEL_WHEEL with a huge negative velocity in mode VEL")
+        running = self.state == "running"
+        far = max(abs(_i32(head, 1)), abs(_i32(head, 5))) >= BIG
+        if self.bug == "move-crash" and ident == MOVE_REL and running and far:
+            self.crash(134, "CMD_MOVE_REL far out while running")
+        vel = running and self.mode == MODE_VEL
+        if self.bug == "vel-crash" and ident == MOVE_VEL_WHEEL and vel and min(_i32(head, 1), _i32(head, 5)) <= -BIG:
+            self.crash(134, "CMD_MOVE_VEL_WHEEL with a huge negative velocity in mode VEL")
         if self.bug == "hang" and ident == SET_PLTF_PARAM and len(head) >= 5:
             n = _i32(head, 1)
             value_at = 5 + n + 4
-            if 0 <= n and value_at <= len(head) and head[value_at : value_at + 3].lower() in (b"nan", b"inf"):
+            if n >= 0 and value_at <= len(head) and head[value_at : value_at + 3].lower() in (b"nan", b"inf"):
                 print("foreign target: hanging on a parameter value", flush=True)
                 time.sleep(HANG_SECONDS)
         if self.bug == "leak" and ident in DOCUMENTS:

@@ -20,7 +20,8 @@ from pltf.fuzz.engine import Campaign, Options
 from pltf.fuzz.launch import Launcher
 
 FOREIGN = Path(__file__).with_name("foreign.py")
-REFERENCE = f"{sys.executable} -m pltf.reference_server --ports {{ports}} --data-dir {{tmpdir}} --seed 1 --log-level INFO"
+REFERENCE = (f"{sys.executable} -m pltf.reference_server --ports {{ports}} --data-dir {{tmpdir}} --seed 1 "
+             "--log-level INFO")
 EMULATOR = Path(__file__).resolve().parents[2] / "emulator" / "bin" / "emulator"
 CONFORMING = {
     "slow-release, turned away with FIN": "--release 5-50 --turn-away fin",
@@ -31,8 +32,7 @@ CONFORMING = {
 PLANTED = {
     # bug: (kind, the telegram that kills, frames a fresh target needs before it)
     "move-crash": ("dead", "CMD_MOVE_REL", ("CMD_CONNECT_TO_PLTF", "CMD_INIT_PLTF", "CMD_START")),
-    "vel-crash": ("dead", "CMD_MOVE_VEL_WHEEL", ("CMD_CONNECT_TO_PLTF", "CMD_INIT_PLTF", "CMD_SET_MODE(mode=3)",
-                                                 "CMD_START")),  # fmt: skip
+    "vel-crash": ("dead", "CMD_MOVE_VEL_WHEEL", ("CMD_INIT_PLTF", "CMD_SET_MODE(mode=3)", "CMD_START")),
     "hang": ("hang", "CMD_SET_PLTF_PARAM", ()),
     "leak": ("dead", "CMD_SET_", ()),  # a document, repeated: the leak piles up
 }
