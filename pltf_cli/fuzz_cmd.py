@@ -146,10 +146,16 @@ def _summary(out: Path, stats: object) -> None:
         "findings": s.findings,  # type: ignore[attr-defined]
         "unconfirmed": getattr(s, "unconfirmed", []),
         "units": {k: getattr(s, k, None) for k in ("batches", "singles", "probes", "restarts", "duplicates")},
-        "connections_closed_on_valid_input": getattr(s, "unexpected_closes", None),
         "replies_cut_by_a_refusal": getattr(s, "cut_replies", None),
         "dropped_unsafe": getattr(s, "dropped_unsafe", None),
-        "pipelining": {k: getattr(s, k, None) for k in ("pipelined", "retried", "turn_aways", "turned_away")},
+        "pipelining": {k: getattr(s, k, None) for k in ("pipelined", "turn_aways", "turned_away")},
+        "connections": {
+            "not_admitted": getattr(s, "not_admitted", None),  # turned away or left in a backlog: run again
+            "release_ms": getattr(s, "release_ms", None),  # per port: mean wait for a fresh connection
+            "dear": getattr(s, "dear", None),  # batches on a kept connection, singles skipped beyond a queue
+            "singles_skipped": getattr(s, "skipped", None),
+        },
+        "replays": getattr(s, "replays", None),
     }
     out.mkdir(parents=True, exist_ok=True)
     (out / "summary.json").write_text(json.dumps(doc, indent=2) + "\n")
