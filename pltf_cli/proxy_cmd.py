@@ -15,6 +15,7 @@ import sys
 import time
 from pathlib import Path
 
+from pltf.cli.options import CommandError, exit_status
 from pltf.proxy.capture import PcapngWriter
 from pltf.proxy.network import ProxyServer, Route
 from pltf.proxy.offload import RecorderPipe
@@ -25,8 +26,8 @@ from pltf.spec.codec import DEFAULT_MAX_LENGTH
 
 
 def _fail(message: str) -> int:
-    print(f"pltf: error: {message}", file=sys.stderr)
-    return 2
+    """A usage or connection error: ``pltf CMD: error: ...`` and status 2, printed by pltf.cli.main."""
+    raise CommandError(message)
 
 
 def host_port(text: str) -> tuple[str, int]:
@@ -45,6 +46,8 @@ def port_pair(text: str) -> tuple[int, int]:
 
 
 def add_proxy_arguments(p: argparse.ArgumentParser) -> None:
+    p.epilog = exit_status(ok="stopped by Ctrl-C",
+                           usage="usage error: bad arguments, the listen port in use, an unwritable --record")
     p.add_argument("--listen", type=host_port, required=True, metavar="HOST:PORT",
                    help="where clients connect (port 0: any free port, printed at start)")
     p.add_argument("--target", type=host_port, required=True, metavar="HOST:PORT", help="the platform (or server)")

@@ -13,6 +13,7 @@ import sys
 import time
 from pathlib import Path
 
+from pltf.cli.options import CommandError, exit_status
 from pltf.cli.proxy_cmd import host_port
 from pltf.proxy.replay import counts, judge, plan
 from pltf.proxy.replay_io import Settings, replay
@@ -21,8 +22,8 @@ from pltf.proxy.session import SessionError, read_session
 
 
 def _fail(message: str) -> int:
-    print(f"pltf: error: {message}", file=sys.stderr)
-    return 2
+    """A usage or connection error: ``pltf CMD: error: ...`` and status 2, printed by pltf.cli.main."""
+    raise CommandError(message)
 
 
 def _positive(text: str) -> float:
@@ -42,6 +43,8 @@ def _port(text: str) -> int:
 
 
 def add_replay_arguments(p: argparse.ArgumentParser) -> None:
+    p.epilog = exit_status(ok="every reply as recorded (within the volatile table)", failed="a reply differs",
+                           usage="usage or connection error: bad arguments, an unreadable session, no target")
     p.add_argument("session", type=Path, help="a session file written by `pltf proxy --record`")
     p.add_argument("--target", type=host_port, required=True, metavar="HOST:PORT",
                    help="where to replay the session's first port")
