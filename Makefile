@@ -4,7 +4,9 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-slow lint typecheck docs docs-check bench clean install emulator gui chromium
+SUDO := $(if $(filter 0,$(shell id -u)),,sudo)
+
+.PHONY: demo test test-slow lint typecheck docs docs-check bench clean install emulator gui chromium tshark
 
 # The GUI's front end (gui/web, TypeScript + vite) is built into gui/static/ with the machine's node and npm.
 GUI_WEB := gui/web
@@ -18,7 +20,7 @@ GUI_SOURCES := $(shell find $(GUI_WEB)/src -type f 2>/dev/null) $(GUI_WEB)/index
 # namespace through a tree of links in the venv (NSTREE).
 NSTREE := $(VENV)/namespace/pltf
 NSLINKS := spec:spec client:clients/pltf_client reference_server:reference_server fake_hardware:fake_hardware \
-	conformance_tests:conformance_tests fuzz:fuzz stubgen:clients/stubgen cli:pltf_cli fixtures:fixtures gui:gui zoo:zoo
+	conformance_tests:conformance_tests fuzz:fuzz stubgen:clients/stubgen cli:pltf_cli fixtures:fixtures gui:gui zoo:zoo proxy:proxy
 
 $(STAMP): pyproject.toml setup.py spec/pyproject.toml clients/pyproject.toml $(wildcard reference_server/world/*.c)
 	@test -x $(BIN)/python || $(PY) -m venv $(VENV)
@@ -29,6 +31,12 @@ $(STAMP): pyproject.toml setup.py spec/pyproject.toml clients/pyproject.toml $(w
 	@touch $(STAMP)
 
 install: $(STAMP) $(GUI_BUILT)
+
+# tshark (Debian's package) runs the generated Wireshark dissector (proxy/pltf.lua) in tests/proxy and
+# benchmarks/bench_proxy.py. Idempotent: installed once, found on PATH afterwards.
+tshark:
+	@command -v tshark >/dev/null 2>&1 || { $(SUDO) apt-get update -qq && \
+		$(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq tshark; }
 
 $(GUI_MODULES): $(GUI_WEB)/package.json $(GUI_WEB)/package-lock.json
 	cd $(GUI_WEB) && npm ci --no-audit --no-fund
@@ -43,15 +51,16 @@ gui: $(GUI_BUILT)
 chromium:
 	@command -v chromium >/dev/null 2>&1 || (apt-get update -qq && apt-get install -y -qq chromium)
 
-test: $(STAMP) $(GUI_BUILT) chromium
+test: $(STAMP) $(GUI_BUILT) chromium tshark
 	$(BIN)/ruff check .
 	$(BIN)/mypy
 	$(BIN)/python -m pltf.spec.docgen --check
 	$(BIN)/python -m pltf.gui.specgen --check
+	$(BIN)/python -m pltf.proxy.dissector --check
 	cd $(GUI_WEB) && npm test --silent
 	$(BIN)/python -m pytest -q -m "not slow"
 
-test-slow: $(STAMP)
+test-slow: $(STAMP) tshark
 	$(BIN)/python -m pytest -q -m slow
 
 lint: $(STAMP)
@@ -62,11 +71,13 @@ typecheck: $(STAMP)
 
 docs: $(STAMP)
 	$(BIN)/python -m pltf.spec.docgen
+	$(BIN)/python -m pltf.proxy.dissector
 
 docs-check: $(STAMP)
 	$(BIN)/python -m pltf.spec.docgen --check
+	$(BIN)/python -m pltf.proxy.dissector --check
 
-bench: $(STAMP) $(GUI_BUILT) chromium
+bench: $(STAMP) $(GUI_BUILT) chromium tshark
 	$(BIN)/python -m benchmarks --json benchmarks/results.json
 
 # The Go emulator (issue 17), a second implementation of the protocol: emulator/bin/emulator.

@@ -29,6 +29,7 @@ FOLDERS = {
     "pltf.fixtures": "fixtures",
     "pltf.gui": "gui",
     "pltf.zoo": "zoo",
+    "pltf.proxy": "proxy",
 }
 
 
