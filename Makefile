@@ -4,14 +4,23 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: demo test test-slow lint typecheck docs docs-check bench clean install
+SUDO := $(if $(filter 0,$(shell id -u)),,sudo)
+
+.PHONY: demo test test-slow lint typecheck docs docs-check bench clean install emulator gui chromium tshark
+
+# The GUI's front end (gui/web, TypeScript + vite) is built into gui/static/ with the machine's node and npm.
+GUI_WEB := gui/web
+GUI_MODULES := $(GUI_WEB)/node_modules/.installed
+GUI_BUILT := gui/static/index.html
+GUI_SOURCES := $(shell find $(GUI_WEB)/src -type f 2>/dev/null) $(GUI_WEB)/index.html $(GUI_WEB)/vite.config.ts \
+	$(GUI_WEB)/tsconfig.json $(wildcard clients/generated/typescript/src/*.ts)
 
 # Three distributions, one import namespace `pltf` (spec/ -> pltf.spec, clients/pltf_client/ -> pltf.client, the
 # toolkit's folders -> pltf.*; see setup.py). mypy cannot run setuptools' editable import hooks, so it reads the
 # namespace through a tree of links in the venv (NSTREE).
 NSTREE := $(VENV)/namespace/pltf
 NSLINKS := spec:spec client:clients/pltf_client reference_server:reference_server fake_hardware:fake_hardware \
-	conformance_tests:conformance_tests fuzz:fuzz stubgen:clients/stubgen cli:pltf_cli fixtures:fixtures
+	conformance_tests:conformance_tests fuzz:fuzz stubgen:clients/stubgen cli:pltf_cli fixtures:fixtures gui:gui zoo:zoo proxy:proxy
 
 $(STAMP): pyproject.toml setup.py spec/pyproject.toml clients/pyproject.toml $(wildcard reference_server/world/*.c)
 	@test -x $(BIN)/python || $(PY) -m venv $(VENV)
@@ -21,15 +30,37 @@ $(STAMP): pyproject.toml setup.py spec/pyproject.toml clients/pyproject.toml $(w
 	@for l in $(NSLINKS); do ln -s "$(CURDIR)/$${l#*:}" "$(NSTREE)/$${l%%:*}"; done
 	@touch $(STAMP)
 
-install: $(STAMP)
+install: $(STAMP) $(GUI_BUILT)
 
-test: $(STAMP)
+# tshark (Debian's package) runs the generated Wireshark dissector (proxy/pltf.lua) in tests/proxy and
+# benchmarks/bench_proxy.py. Idempotent: installed once, found on PATH afterwards.
+tshark:
+	@command -v tshark >/dev/null 2>&1 || { $(SUDO) apt-get update -qq && \
+		$(SUDO) env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq tshark; }
+
+$(GUI_MODULES): $(GUI_WEB)/package.json $(GUI_WEB)/package-lock.json
+	cd $(GUI_WEB) && npm ci --no-audit --no-fund
+	@touch $@
+
+$(GUI_BUILT): $(GUI_MODULES) $(GUI_SOURCES)
+	cd $(GUI_WEB) && npm run build
+
+gui: $(GUI_BUILT)
+
+# The browser tests drive Debian's chromium (tests/gui); CI runs as root and reaches Debian's packages.
+chromium:
+	@command -v chromium >/dev/null 2>&1 || (apt-get update -qq && apt-get install -y -qq chromium)
+
+test: $(STAMP) $(GUI_BUILT) chromium tshark
 	$(BIN)/ruff check .
 	$(BIN)/mypy
 	$(BIN)/python -m pltf.spec.docgen --check
+	$(BIN)/python -m pltf.gui.specgen --check
+	$(BIN)/python -m pltf.proxy.dissector --check
+	cd $(GUI_WEB) && npm test --silent
 	$(BIN)/python -m pytest -q -m "not slow"
 
-test-slow: $(STAMP)
+test-slow: $(STAMP) tshark
 	$(BIN)/python -m pytest -q -m slow
 
 lint: $(STAMP)
@@ -40,15 +71,21 @@ typecheck: $(STAMP)
 
 docs: $(STAMP)
 	$(BIN)/python -m pltf.spec.docgen
+	$(BIN)/python -m pltf.proxy.dissector
 
 docs-check: $(STAMP)
 	$(BIN)/python -m pltf.spec.docgen --check
+	$(BIN)/python -m pltf.proxy.dissector --check
 
-bench: $(STAMP)
+bench: $(STAMP) $(GUI_BUILT) chromium tshark
 	$(BIN)/python -m benchmarks --json benchmarks/results.json
+
+# The Go emulator (issue 17), a second implementation of the protocol: emulator/bin/emulator.
+emulator:
+	sh emulator/build.sh
 
 demo: $(STAMP)
 	$(BIN)/python -m pltf.cli.demo
 
 clean:
-	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache
+	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache gui/static $(GUI_WEB)/node_modules

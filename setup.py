@@ -27,6 +27,9 @@ FOLDERS = {
     "pltf.stubgen": "clients/stubgen",
     "pltf.cli": "pltf_cli",
     "pltf.fixtures": "fixtures",
+    "pltf.gui": "gui",
+    "pltf.zoo": "zoo",
+    "pltf.proxy": "proxy",
 }
 
 

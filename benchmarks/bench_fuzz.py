@@ -48,9 +48,9 @@ from pathlib import Path
 
 from benchmarks.harness import Config, Row, Target, benchmark, make_row
 from pltf.fuzz.engine import Campaign, Options
-from pltf.fuzz.launch import Launcher
 from pltf.fuzz.schedule import BIG_SHARE
 from pltf.spec.model import FieldDef, load_telegrams
+from pltf.zoo.launch import Launcher
 
 OURS = "pltf fuzz"
 OURS_PLAIN = "pltf fuzz, no pipelining"

@@ -1,4 +1,4 @@
-"""Differential mode: one scripted session against an in-process reference server and against the target, the
+"""Differential mode: one scripted session against a reference server of our own and against the target, the
 replies diffed field by field.
 
 Rules:
@@ -15,13 +15,10 @@ Rules:
 
 from __future__ import annotations
 
-import fnmatch
-import functools
 import math
 from dataclasses import dataclass
 from typing import Any
 
-import yaml
 from rich.console import Console
 from rich.table import Table
 
@@ -30,17 +27,13 @@ from pltf.conformance_tests.cases.motion import rest
 from pltf.conformance_tests.catalogue import Case, Level, Tier
 from pltf.conformance_tests.chart import St
 from pltf.conformance_tests.context import CaseContext, Config, Target
-from pltf.conformance_tests.launch import InProcessServer
-from pltf.spec.model import SPEC_DIR, enum_classes
+from pltf.spec.model import enum_classes
 from pltf.spec.telegram import Telegram
+from pltf.spec.volatile import rule, values_differ, volatile
+from pltf.zoo import launch
 
-VOLATILE_PATH = SPEC_DIR / "volatile.yaml"
+__all__ = ["Diff", "Step", "compare", "diff_replies", "play", "relative", "run_differential", "script", "volatile"]
 MotionMode = enum_classes()["MotionMode"]
-
-
-@functools.cache
-def volatile() -> dict[str, dict[str, Any]]:
-    return yaml.safe_load(VOLATILE_PATH.read_text(encoding="utf-8")) or {}
 
 
 @dataclass(frozen=True)
@@ -135,20 +128,6 @@ class Diff:
     target: Any
 
 
-def _rule(telegram: str, name: str) -> tuple[bool, float | None]:
-    spec = volatile().get(telegram, {})
-    if any(fnmatch.fnmatchcase(name, pat) for pat in spec.get("ignore", ())):
-        return True, None
-    tol = spec.get("tolerance", {}).get(name)
-    return False, None if tol is None else float(tol)
-
-
-def _values_differ(a: Any, b: Any, tol: float | None) -> bool:
-    if tol is not None and isinstance(a, (int, float)) and isinstance(b, (int, float)):
-        return not (math.isfinite(a) and math.isfinite(b) and abs(a - b) <= tol)
-    return bool(a != b)
-
-
 def _is_group(value: Any) -> bool:
     return isinstance(value, tuple) and bool(value) and hasattr(value[0], "_fields")
 
@@ -158,21 +137,22 @@ def diff_replies(step: int, request: str, ref: Telegram, tgt: Telegram) -> list[
         return [Diff(step, request, "(telegram)", ref.NAME, tgt.NAME)]
     out: list[Diff] = []
     for name, a, b in zip(ref._fields, ref, tgt, strict=True):
-        ignored, tol = _rule(ref.NAME, name)
-        if ignored:
+        r = rule(ref.NAME, name)
+        if r.ignored:
             continue
+        tol = r.tolerance
         if _is_group(a) or _is_group(b):
             if len(a) != len(b):
                 out.append(Diff(step, request, f"{name} (count)", len(a), len(b)))
                 continue
             for i, (ia, ib) in enumerate(zip(a, b, strict=True)):
                 for sub, va, vb in zip(ia._fields, ia, ib, strict=True):
-                    if _values_differ(va, vb, tol):
+                    if values_differ(va, vb, tol):
                         out.append(Diff(step, request, f"{name}[{i}].{sub}", va, vb))
         elif name == "xml" and isinstance(a, str) and isinstance(b, str):
             if not docdata.same(a, b) and a != b:
                 out.append(Diff(step, request, name, a[:60] + "...", b[:60] + "..."))
-        elif _values_differ(a, b, tol):
+        elif values_differ(a, b, tol):
             out.append(Diff(step, request, name, a, b))
     return out
 
@@ -234,7 +214,7 @@ def compare(reference: Config, target: Config, motion: bool) -> list[Diff]:
 
 def run_differential(config: Config, console: Console) -> int:
     """``pltf conform --differential``: 0 when the target answers like the reference server, else 1."""
-    with InProcessServer(time_scale=config.time_scale) as ref:
+    with launch.reference(time_scale=config.time_scale) as ref:
         ref_config = Config("127.0.0.1", ref.ports[0], time_scale=config.time_scale, simulator=True)
         diffs = compare(ref_config, config, motion=config.motion_allowed)
     if not diffs:

@@ -4,11 +4,17 @@ Rules: one Section Header Block, one Ethernet interface, one Enhanced Packet Blo
 conversation gets a handshake, its payloads with consistent sequence/ack numbers and valid checksums, and the
 FINs that were seen, so Wireshark's "Follow TCP stream" shows the exchange. Only ``struct``, no I/O but the
 final write.
+
+Two ways in: ``write_pcapng`` writes whole recorded conversations at once (the fuzzer's findings);
+``TcpFlow`` builds one conversation packet by packet as it happens, and ``file_header``/``enhanced_packet``
+frame the blocks, for a writer that streams (the proxy's recordings, crafted segments in tests).
 """
 
 from __future__ import annotations
 
+import itertools
 import struct
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -18,6 +24,8 @@ CLIENT_MAC = bytes.fromhex("020000000001")
 SERVER_MAC = bytes.fromhex("020000000002")
 MSS = 65_000
 SYN, ACK, PSH, FIN = 0x02, 0x10, 0x08, 0x01
+
+Packet = tuple[float, bytes]  # (unix time, Ethernet frame)
 
 
 @dataclass
@@ -57,50 +65,71 @@ def _block(kind: int, body: bytes) -> bytes:
     return struct.pack("<II", kind, n) + body + struct.pack("<I", n)
 
 
-def _epb(t: float, pkt: bytes) -> bytes:
+def file_header() -> bytes:
+    """The Section Header Block and the one Ethernet Interface Description Block every file starts with."""
+    return _block(0x0A0D0D0A, struct.pack("<IHHq", 0x1A2B3C4D, 1, 0, -1)) + _block(1, struct.pack("<HHI", 1, 0, 0))
+
+
+def enhanced_packet(t: float, pkt: bytes) -> bytes:
+    """One Enhanced Packet Block (interface 0, microsecond time stamp)."""
     us = int(t * 1_000_000)
     return _block(6, struct.pack("<IIIII", 0, us >> 32, us & 0xFFFFFFFF, len(pkt), len(pkt)) + pkt)
 
 
-def _conversation(conv: Conversation, ident: list[int]) -> list[tuple[float, bytes]]:
-    out: list[tuple[float, bytes]] = []
-    t0 = conv.events[0][0] if conv.events else 0.0
-    cseq, sseq = 1000, 5000
-    c, s = (CLIENT_IP, conv.client_port), (SERVER_IP, conv.server_port)
+class TcpFlow:
+    """One TCP conversation built packet by packet: consistent sequence and ack numbers, payloads cut at MSS.
 
-    def emit(t: float, c2s: bool, flags: int, payload: bytes = b"") -> None:
-        nonlocal cseq, sseq
-        ident[0] += 1
-        (src, sp), (dst, dp) = (c, s) if c2s else (s, c)
-        seq, ack = (cseq, sseq) if c2s else (sseq, cseq)
-        out.append((t, _packet(src, dst, sp, dp, seq, ack, flags, payload, ident[0], c2s)))
+    ``ident`` numbers the IP datagrams; conversations written to one file share it.
+    """
+
+    def __init__(self, client_port: int, server_port: int, ident: Iterator[int] | None = None, *,
+                 client_ip: bytes = CLIENT_IP, server_ip: bytes = SERVER_IP) -> None:  # fmt: skip
+        self.client = (client_ip, client_port)
+        self.server = (server_ip, server_port)
+        self.ident = ident if ident is not None else itertools.count(1)
+        self.cseq, self.sseq = 1000, 5000
+
+    def _emit(self, t: float, c2s: bool, flags: int, payload: bytes = b"") -> Packet:
+        (src, sp), (dst, dp) = (self.client, self.server) if c2s else (self.server, self.client)
+        seq, ack = (self.cseq, self.sseq) if c2s else (self.sseq, self.cseq)
+        pkt = _packet(src, dst, sp, dp, seq, ack, flags, payload, next(self.ident), c2s)
         step = len(payload) + (1 if flags & (SYN | FIN) else 0)
         if c2s:
-            cseq += step
+            self.cseq += step
         else:
-            sseq += step
+            self.sseq += step
+        return t, pkt
 
-    emit(t0, True, SYN)
-    emit(t0, False, SYN | ACK)
-    emit(t0, True, ACK)
+    def handshake(self, t: float) -> list[Packet]:
+        return [self._emit(t, True, SYN), self._emit(t, False, SYN | ACK), self._emit(t, True, ACK)]
+
+    def data(self, t: float, c2s: bool, payload: bytes) -> list[Packet]:
+        """The payload as one segment, or several of at most MSS bytes."""
+        return [self._emit(t, c2s, PSH | ACK, payload[k : k + MSS]) for k in range(0, len(payload), MSS)]
+
+    def fin(self, t: float, c2s: bool) -> list[Packet]:
+        return [self._emit(t, c2s, FIN | ACK)]
+
+
+def _conversation(conv: Conversation, ident: Iterator[int]) -> list[Packet]:
+    t0 = conv.events[0][0] if conv.events else 0.0
+    flow = TcpFlow(conv.client_port, conv.server_port, ident)
+    out = flow.handshake(t0)
     last = t0
     for t, direction, payload in conv.events:
         last = t
-        for k in range(0, len(payload), MSS):
-            emit(t, direction == "c2s", PSH | ACK, payload[k : k + MSS])
+        out += flow.data(t, direction == "c2s", payload)
     if conv.client_fin:
-        emit(last, True, FIN | ACK)
+        out += flow.fin(last, True)
     if conv.server_fin:
-        emit(last, False, FIN | ACK)
+        out += flow.fin(last, False)
     return out
 
 
 def write_pcapng(path: Path, conversations: list[Conversation]) -> None:
-    shb = _block(0x0A0D0D0A, struct.pack("<IHHq", 0x1A2B3C4D, 1, 0, -1))
-    idb = _block(1, struct.pack("<HHI", 1, 0, 0))
-    ident = [0]
-    packets: list[tuple[float, bytes]] = []
+    ident = itertools.count(1)
+    packets: list[Packet] = []
     for conv in conversations:
         packets.extend(_conversation(conv, ident))
     packets.sort(key=lambda p: p[0])
-    path.write_bytes(shb + idb + b"".join(_epb(t, pkt) for t, pkt in packets))
+    path.write_bytes(file_header() + b"".join(enhanced_packet(t, pkt) for t, pkt in packets))

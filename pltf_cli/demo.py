@@ -61,6 +61,10 @@ def main() -> int:
             for line in log.read_text(errors="replace").splitlines()[-5:]:
                 print(f"  server | {line}")
     print(f"\nReport: {REPORT.resolve()} (open it in a browser); JSON: demo-report.json")
+    # issue 19: the GUI on a reference server (the demo's own server was busy with the suite on both its ports)
+    print("\nTo watch and drive a reference server in the browser (PlatformCtrlGUI, guide ch. 5):\n"
+          "  .venv/bin/pltf serve --ports 10000,10002 &\n"
+          "  .venv/bin/pltf gui --target 127.0.0.1:10000 --open   # http://127.0.0.1:8080/?target=127.0.0.1:10000")
     return status
 
 

@@ -1,4 +1,5 @@
-"""Hand-written convenience on the generated reply classes (their bases, see ``REPLY_EXTRAS`` in _generate.py).
+"""Hand-written convenience on the generated reply classes (their bases: ``REPLY_EXTRAS`` in the generator,
+clients/stubgen/pltf_client/replies.py).
 
 Rules: properties only, computed from the fields the generated subclass declares (re-declared here as
 annotations so mypy can check them); no state, no I/O. Units follow the guide (6.4 CMD_GET_STATUS:

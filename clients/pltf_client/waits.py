@@ -8,6 +8,10 @@ Rules:
   status shows it did not take effect, quoting the rule of the guide (``STATE_COMMANDS``).
 - The platform handles one connection's telegrams in order, so a status requested after a command shows
   the platform after that command (the reason a judge ignores statuses requested before it).
+- But a move is taken up in the platform's control loop, later: the planner state and the target-reached flag
+  of a status requested right after a move may still describe the move before. ``TargetWait`` judges them only
+  in a status that belongs to the move (erratum E-CLI-001, ``Belongs``); the operation state and the motion mode
+  are decided when the command is handled and are judged at once.
 """
 
 from __future__ import annotations
@@ -32,6 +36,10 @@ STATE_COMMANDS: dict[str, tuple[OperationState, str]] = {
 }
 # guide 4.3 "Mode Automatic": the move commands that drive to a target (target_reached tells when).
 TARGET_COMMANDS = ("CMD_MOVE_ABS", "CMD_MOVE_REL", "CMD_MOVE_PATH", "CMD_MOVE_TO_STATION")
+# erratum E-CLI-001: a status belongs to the move once one of these shows the control loop took it up
+TAKE_UP_MS = 200  # platform time stamp (ms, E-REP-010) after the first status requested after the move
+TAKE_UP_S = 2.0  # client clock since the wait began, for a platform whose time stamp does not advance
+STAMP_MODULO = 2**31  # E-REP-010: the time stamp wraps at 2^31
 # Planner states that end a planned move without reaching the target.
 PLANNER_FAILED = {
     PlannerState.PLANNER_NO_PATH: "the planner found no path to the target",
@@ -80,13 +88,13 @@ class Judge:
                 raise Timeout(f"{self.what}: no status requested after the command within {self.timeout:g} s")
             return False
         self.last = status
-        if self.check(status):
+        if self.check(status, now):
             return True
         if now >= self.deadline:
             raise self.timed_out(status)
         return False
 
-    def check(self, status: Status) -> bool:
+    def check(self, status: Status, now: float) -> bool:
         """True when ``status`` shows the condition met (raises CommandRejected when it cannot be any more)."""
         raise NotImplementedError
 
@@ -103,7 +111,7 @@ class ConditionWait(Judge):
         self.condition = condition
         self.what = what
 
-    def check(self, status: Status) -> bool:
+    def check(self, status: Status, now: float) -> bool:
         return self.condition(status)
 
 
@@ -116,7 +124,7 @@ class StateWait(Judge):
         super().__init__(now, timeout, self.command[1] if self.command else 0)
         self.what = f"operation state {want.name}"
 
-    def check(self, status: Status) -> bool:
+    def check(self, status: Status, now: float) -> bool:
         return status.operation_state == self.want
 
     def timed_out(self, status: Status) -> Exception:
@@ -139,7 +147,7 @@ class ModeWait(Judge):
         super().__init__(now, timeout, self.command[1] if self.command else 0)
         self.what = f"motion mode {want.name}"
 
-    def check(self, status: Status) -> bool:
+    def check(self, status: Status, now: float) -> bool:
         return status.motion_mode == self.want
 
     def timed_out(self, status: Status) -> Exception:
@@ -154,11 +162,47 @@ class ModeWait(Judge):
                        f"{status.motion_mode.name}")  # fmt: skip
 
 
+def stamp_after(later: int, earlier: int) -> int:
+    """Milliseconds from time stamp ``earlier`` to ``later`` across the wrap at 2^31 (negative: not later)."""
+    diff = (later - earlier) % STAMP_MODULO
+    return diff if diff < STAMP_MODULO // 2 else diff - STAMP_MODULO
+
+
+class Belongs:
+    """Whether a status describes the move it follows, or may still show the move before (erratum E-CLI-001).
+
+    Fed every status requested after the move, in order; the first is the reference. A later one belongs to the
+    move when its planner state differs from the reference's (the planner worked since), or when the status
+    before it was made ``TAKE_UP_MS`` of platform time after the reference, or ``TAKE_UP_S`` after the wait
+    began: a platform answers a request before it runs the control periods that fell due meanwhile (the
+    reference server after a stall does), so the time is trusted from the next status on. From then on every
+    status belongs to the move.
+    """
+
+    def __init__(self, started: float) -> None:
+        self.started = started
+        self.reference: Status | None = None
+        self.taken_up = False
+        self._due = False  # a status after the take-up time was seen: the next one belongs
+
+    def __call__(self, status: Status, now: float) -> bool:
+        ref = self.reference
+        if ref is None:
+            self.reference = status
+        elif not self.taken_up:
+            self.taken_up = self._due or status.planner_state != ref.planner_state
+            self._due = (
+                stamp_after(status.timestamp_ms, ref.timestamp_ms) >= TAKE_UP_MS or now - self.started >= TAKE_UP_S
+            )
+        return self.taken_up
+
+
 class TargetWait(Judge):
     """Wait until the platform reports its target reached, after the last move command sent (if any).
 
     With a move command sent on this connection, a status showing that the move cannot run (not in state
-    Running or Breaked, not in mode Automatic, a failed plan) raises CommandRejected at once.
+    Running or Breaked, not in mode Automatic) raises CommandRejected at once; a failed plan and the target
+    flag count only in a status that belongs to the move (erratum E-CLI-001).
     """
 
     what = "target"
@@ -166,24 +210,31 @@ class TargetWait(Judge):
     def __init__(self, last_sent: Mapping[str, int], now: float, timeout: float) -> None:
         self.command = last_of(last_sent, TARGET_COMMANDS)
         super().__init__(now, timeout, self.command[1] if self.command else 0)
+        self.belongs = Belongs(now)
 
-    def check(self, status: Status) -> bool:
-        if self.command is not None:
-            name = self.command[0]
-            if status.operation_state not in (_RUNNING, _BREAKED):
-                raise CommandRejected(
-                    name,
-                    f"the operation state is {status.operation_state.name}: the platform moves only in state Running "
-                    f"(guide 4.2){_emergency_note(status)}",
-                )
-            if status.motion_mode != MotionMode.MODE_MOTION_AUTOMATIC:
-                raise CommandRejected(
-                    name,
-                    f"the motion mode is {status.motion_mode.name}: move commands with a target run in mode "
-                    f"MODE_MOTION_AUTOMATIC only (guide 4.3)",
-                )
-            if not status.target_reached and status.planner_state in PLANNER_FAILED:
-                raise CommandRejected(name, f"{PLANNER_FAILED[status.planner_state]} ({status.planner_state.name})")
+    def check(self, status: Status, now: float) -> bool:
+        if self.command is None:  # no move sent here (a new connection): nothing to tell old from new
+            return status.target_reached
+        name = self.command[0]
+        if status.operation_state not in (_RUNNING, _BREAKED):
+            raise CommandRejected(
+                name,
+                f"the operation state is {status.operation_state.name}: the platform moves only in state Running "
+                f"(guide 4.2){_emergency_note(status)}",
+            )
+        if status.motion_mode != MotionMode.MODE_MOTION_AUTOMATIC:
+            raise CommandRejected(
+                name,
+                f"the motion mode is {status.motion_mode.name}: move commands with a target run in mode "
+                f"MODE_MOTION_AUTOMATIC only (guide 4.3)",
+            )
+        # guide 4.3 Mode Automatic: "If a new move command is set while the platform is moving, the execution of
+        # the old command will be stopped immediately and the new command will be started": until the status
+        # shows the new command started, its planner state and target flag may be the old command's (E-CLI-001)
+        if not self.belongs(status, now):
+            return False
+        if not status.target_reached and status.planner_state in PLANNER_FAILED:
+            raise CommandRejected(name, f"{PLANNER_FAILED[status.planner_state]} ({status.planner_state.name})")
         return status.target_reached
 
     def timed_out(self, status: Status) -> Exception:

@@ -11,6 +11,10 @@ Each language is one module with ``render() -> {relative path: text}`` that hold
 the loops over fields, telegrams and commands once for all of them. Text that is the same for every telegram
 lives in ``templates/<lang>/`` (``templates/shell/``: the scripts every language has) and is filled in with
 ``@@NAME@@`` placeholders.
+
+The toolkit's own Python client (``pltf.client``) has its typed modules generated the same way, by the
+subpackage ``pltf_client`` (``python -m pltf.client._generate``): the same spec view and name helpers of
+``model``, its templates in ``templates/pltf_client/``.
 """
 
 from __future__ import annotations

@@ -16,7 +16,7 @@ KEYWORDS = frozenset((
     "thread_local", "throw", "true", "try", "typedef", "typeid", "typename", "union", "unsigned", "using",
     "virtual", "void", "volatile", "wchar_t", "while", "xor", "xor_eq",
 ))
-CLIENT_NAMES = frozenset(("send", "receive", "request"))
+CLIENT_NAMES = frozenset(("send", "receive", "request", "wait_target_reached", "wait_until"))
 CPP_TYPE = {"BYTE": "uint8_t", "BOOL": "bool", "INT16": "int16_t", "INT": "int32_t", "DOUBLE": "double",
             "STRING": "std::string", "XML": "std::string"}
 HEAD = banner("// ")
@@ -81,8 +81,12 @@ def _header() -> str:
     enum_text = []
     for name, e in model.enums().items():
         values = "\n".join(f"  {k} = {v}," for k, v in e.values.items())
+        cases = "\n".join(f'    case {name}::{k}: return "{k}";' for k in e.values)
         enum_text.append(f"/// {model.enum_doc(name)}\n"
-                         f"enum class {name} : int32_t {{\n{values}\n}};\n")
+                         f"enum class {name} : int32_t {{\n{values}\n}};\n\n"
+                         f"/// The name of a {name} value (\"?\" for a value the spec does not list).\n"
+                         f"inline const char* to_string({name} v) {{\n  switch (v) {{\n{cases}\n  }}\n"
+                         f'  return "?";\n}}\n')
     items = []
     for name, fields in model.item_types().items():
         body = "\n".join(SPELLING.members(fields, default=_default))

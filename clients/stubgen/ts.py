@@ -136,7 +136,7 @@ def render() -> dict[str, str]:
         "src/client.ts": HEAD + fill(template("typescript", "client.ts.tmpl"), METHODS=methods(_method, METHOD)),
         **static("typescript", HEAD, {"tsconfig.json": "tsconfig.json.tmpl", "src/index.ts": "index.ts.tmpl",
                                       "src/codec.ts": "codec.ts.tmpl", "src/smoke.ts": "smoke.ts.tmpl",
-                                      "src/vectors.ts": "vectors.ts.tmpl"}),
+                                      "src/vectors.ts": "vectors.ts.tmpl", "src/waits.ts": "waits.ts.tmpl"}),
         **scripts("typescript",
                   "npm install (typescript, @types/node; from the npm registry when not cached), then tsc.",
                   "node dist/smoke.js", "node dist/vectors.js", "node_modules/\ndist/\npackage-lock.json\n"),

@@ -1,6 +1,6 @@
 """Motion mode Automatic (guide 4.3): one move command as a job that plans, drives, avoids and settles.
 
-Rules (errata E-MOT-006, E-MOT-007, E-MOT-009):
+Rules (errata E-MOT-006, E-MOT-007, E-MOT-009, E-MOT-015):
 - Phases: ``plan`` (the first control step after the command: the planner state is PLANNING until then),
   ``drive`` (the interpolator runs the legs), ``settle`` (position stabilisation and the final turn), ``done``.
 - CMD_MOVE_ABS/REL ("goto"): PlanningEnabled -> the planner's shortest path; a failure (no path, collision at
@@ -13,6 +13,9 @@ Rules (errata E-MOT-006, E-MOT-007, E-MOT-009):
   planning -> replan around the seen obstacle (circles clustered from the points), at most every
   ``REPLAN_EVERY`` s; goto without planning -> wait until the obstacle goes; path -> wait
   PathObstacleWaitTime, then plan a detour to the next free point of the path behind the obstacle and rejoin.
+- A target within the tolerances of the pose (every frame within TargetReachedTolPos, E-MOT-015): reached at
+  once where the platform stands when the angle is within TargetReachedTolAngle too, else a turn on the spot;
+  the planner is not asked (STANDBY).
 - Settle: with PositionStabilizationEnabled the platform is driven onto the target within
   TargetReachedTolPos; then it turns to the target angle within TargetReachedTolAngle (also without
   EndTurnEnabled, after the curve, when the angle is still off). Target reached = both within tolerance.
@@ -164,6 +167,8 @@ class AutoJob:
         return legs
 
     def _start(self, now: float, pose: Pose, p: Params, nav: Navigator) -> None:
+        if self._at_target(pose, p):
+            return
         first = self.frames[0] if self.kind == "path" else self.goal
         if self.planning:
             plan = nav.plan(pose, first, self._circles())
@@ -183,6 +188,23 @@ class AutoJob:
         if self.kind == "path":
             points += [f[:2] for f in self.frames[1:]]
         self.ipo, self.phase = Interpolator(self._legs(points, pose, p, nav)), "drive"
+
+    def _at_target(self, pose: Pose, p: Params) -> bool:
+        """A move whose frames all lie within TargetReachedTolPos of the pose drives no leg (erratum E-MOT-015)."""
+        # guide 4.3 Mode Automatic: "If the target is reached, the platform stops and waits for a new move
+        # command"; E-PAR-021: reached = the position and the angle within TargetReachedTolPos/-Angle
+        tol_pos = float(p("TargetReachedTolPos"))
+        if any(math.hypot(f[0] - pose[0], f[1] - pose[1]) > tol_pos for f in self.frames):
+            return False
+        self.planner_state = PlannerState.STANDBY
+        err = wrap(self.goal[2] - pose[2])
+        if abs(err) <= math.radians(float(p("TargetReachedTolAngle"))):
+            self.reached, self.phase = True, "done"
+            self.events.append(f"target reached where the platform stands: x {pose[0]:.0f} mm, y {pose[1]:.0f} mm, "
+                               f"a {pose[2]:.3f} rad")  # fmt: skip
+        else:
+            self.ipo, self.phase = Interpolator([Turn(pose[0], pose[1], pose[2], pose[2] + err)]), "drive"
+        return True
 
     # ---- obstacles
     def _circles(self) -> F64:

@@ -58,7 +58,10 @@ TRANSITIONS = {
 class FakePlatform:
     """A stand-in PlatformCtrl on 127.0.0.1: one client at a time, served by a thread.
 
-    A move in state Running and mode Automatic arrives after ``arrive_after`` status requests.
+    A move in state Running and mode Automatic is taken up like in a control loop: the first status requested
+    after it still shows the planner state and target flag of the move before; from the next one the planner
+    state is ``plan`` (a failure ends the move there) and the target is reached ``arrive_after`` status
+    requests after the move. Each status reply's time stamp is ``stamp_step`` ms later than the one before.
     """
 
     def __init__(self) -> None:
@@ -70,6 +73,10 @@ class FakePlatform:
         self.planner = PlannerState.PLANNER_STANDBY
         self.emergency = EmergencyState.ST_EM_NOT_ACTIVE
         self.arrive_after = 3
+        self.plan = PlannerState.PLANNER_PATH_FOUND  # the planner's verdict on the next move
+        self.stamp_step = 20  # ms per status reply (0: a platform whose time stamp stands still)
+        self.stamp = 0
+        self._taken_up = True  # the last move showed in a status
         self.received: list[Telegram] = []
         self.reply_delay = 0.0  # seconds before each reply
         self.reverse = False  # hold a reply back until the next one, then send both in reverse order
@@ -156,25 +163,40 @@ class FakePlatform:
             x, y, a = t.x, t.y, t.angle
             if name == "CMD_MOVE_REL":
                 x, y, a = self.pose[0] + x, self.pose[1] + y, self.pose[2] + a
-            self.target, self.target_reached, self.countdown = (x, y, a), False, self.arrive_after
+            self.target, self.countdown, self._taken_up = (x, y, a), self.arrive_after, False
         elif name == "CMD_GET_POSITION":
             x, y, a = self.pose
             return build("reply", "CMD_GET_POSITION", x=x, y=y, angle=math.radians(a / 1000), vel_trans=0.0,
                          vel_rot=0.0)  # fmt: skip
         elif name == "CMD_GET_STATUS":
-            if self.target is not None:
-                self.countdown -= 1
-                if self.countdown <= 0:
-                    self.pose, self.target, self.target_reached = self.target, None, True
+            self._control_period()
             reported = NOT_INIT if self.state == "connected" else self.state
             x, y, a = self.pose
             return status_telegram(
                 est_x=x, est_y=y, est_angle=a, cmd_x=x, cmd_y=y, cmd_angle=a, operation_state=int(reported),
                 motion_mode=int(self.mode), target_reached=int(self.target_reached), planner_state=int(self.planner),
                 emergency_state=int(self.emergency), initialized=int(reported != NOT_INIT), scan=((10, -20), (30, 40)),
-                ir_active=(0, 1, 0, 1),
+                ir_active=(0, 1, 0, 1), timestamp=self.stamp,
             )  # fmt: skip
         return None
+
+    def _control_period(self) -> None:
+        """What the platform did since the last status request (one status request: one control period)."""
+        self.stamp += self.stamp_step
+        if self.target is None:
+            return
+        if not self._taken_up:  # the first status after the move: the move before still shows
+            self._taken_up = True
+            return
+        if self.countdown == self.arrive_after:  # the first period of the move: the planner's verdict
+            self.target_reached, self.planner = False, self.plan
+            if self.plan != PlannerState.PLANNER_PATH_FOUND:
+                self.target = None
+                return
+        self.countdown -= 1
+        if self.countdown <= 0:
+            self.pose, self.target, self.target_reached = self.target, None, True
+            self.planner = PlannerState.PLANNER_STANDBY
 
     def names(self) -> list[str]:
         return [t.NAME for t in self.received]
@@ -196,13 +218,17 @@ STARTED = re.compile(r"server started at port (\d+)")
 
 
 class LiveServer:
-    """``python -m pltf.reference_server`` on two free ports, ready once both listen and the start-up is logged."""
+    """``python -m pltf.reference_server`` on two free ports, ready once both listen and the start-up is logged.
 
-    def __init__(self, data_dir: Path, log_path: Path) -> None:
+    ``time_scale``: simulated seconds per wall second; ``args``: more options of the server.
+    """
+
+    def __init__(self, data_dir: Path, log_path: Path, time_scale: float = 20.0, *args: str) -> None:
         self.log_path = log_path
+        self.time_scale = time_scale
         self._log = log_path.open("wb")
         cmd = [sys.executable, "-m", "pltf.reference_server", "--ports", "0,0", "--data-dir", str(data_dir),
-               "--time-scale", "20", "--seed", "1"]  # fmt: skip
+               "--time-scale", f"{time_scale:g}", "--seed", "1", *args]  # fmt: skip
         self.proc = subprocess.Popen(cmd, cwd=REPO, stdout=self._log, stderr=subprocess.STDOUT)
         deadline = time.monotonic() + 30
         while len(ports := STARTED.findall(self.log())) < 2 or "system state" not in self.log():

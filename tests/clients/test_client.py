@@ -61,6 +61,7 @@ from pltf.spec.codec import REPLIES, REQUESTS, build, encode
 from pltf.spec.model import load_telegrams
 from pltf.spec.strategies import telegram_strategy
 from pltf.spec.telegram import user_fields
+from pltf.stubgen.pltf_client.names import UNIT_ALREADY_NAMED, py_name, reply_class_name
 
 
 # ---------------------------------------------------------------------------------------------- fixtures
@@ -103,14 +104,14 @@ def test_one_method_per_command(tdef: Any) -> None:
         assert params == ["payload"]
         return
     fields = user_fields(tdef.request)
-    expected = [_generate.py_name(f) for f in fields] + (["timeout"] if tdef.answered else [])
+    expected = [py_name(f) for f in fields] + (["timeout"] if tdef.answered else [])  # a FieldDef reads as a Field
     assert params == expected
     for f, p in zip(fields, params, strict=False):
         if f.unit:  # the guide's unit is in the name and in the docstring
-            assert p != f.name or f.name.endswith(_generate.UNIT_ALREADY_NAMED.get(f.unit, ("-",)))
+            assert p != f.name or f.name.endswith(UNIT_ALREADY_NAMED.get(f.unit, ("-",)))
             assert f"[{f.unit}]" in (sync.__doc__ or "")
     returns = inspect.signature(sync).return_annotation
-    assert returns == (_generate.reply_class_name(tdef) if tdef.answered else "None")
+    assert returns == (reply_class_name(tdef.name) if tdef.answered else "None")
 
 
 def test_reply_names_carry_units() -> None:
@@ -125,7 +126,7 @@ def test_every_answered_reply_converts_to_its_typed_object(data: st.DataObject) 
     cls = data.draw(st.sampled_from([c for c in REPLIES if c.DEF.answered]))
     telegram = data.draw(telegram_strategy(cls, max_items=3))
     typed = typed_reply(telegram)
-    assert type(typed).__name__ == _generate.reply_class_name(cls.DEF)
+    assert type(typed).__name__ == reply_class_name(cls.DEF.name)
     assert len(typed.__dataclass_fields__) == len(telegram)
     assert type(typed).from_telegram(telegram) == typed
 
@@ -276,12 +277,38 @@ def test_move_that_cannot_run_is_rejected_at_once(
         elif step == "start":
             client.start()
         else:
-            fake.planner, fake.arrive_after = PlannerState.PLANNER_NO_PATH, 1000
+            fake.plan = PlannerState.PLANNER_NO_PATH
     client.move_abs(1000, 0, 0)
     t0 = time.monotonic()
     with pytest.raises(CommandRejected, match=message) as info:
         client.wait_target_reached(timeout=5)
     assert info.value.command == "CMD_MOVE_ABS" and time.monotonic() - t0 < 1
+
+
+def test_a_retried_goal_after_a_refusal_is_driven_to(client: PlatformClient, fake: FakePlatform) -> None:
+    # issue 22, bug 1: the platform takes a move up a control period later (FakePlatform), so the first status
+    # after the retry still shows the refusal before it (erratum E-CLI-001)
+    client.bring_up(timeout=1)
+    client.set_mode(AUTOMATIC)
+    client.start()
+    fake.plan = PlannerState.PLANNER_COLLISION_TARGET
+    client.move_abs(9000, 9000, 0)
+    with pytest.raises(CommandRejected, match="PLANNER_COLLISION_TARGET"):
+        client.wait_target_reached(timeout=5, poll=0.01)
+    fake.plan = PlannerState.PLANNER_PATH_FOUND
+    client.move_abs(3000, 200, 0)
+    status = client.wait_target_reached(timeout=5, poll=0.01)
+    assert status.target_reached and status.pose == (3000, 200, 0)
+
+
+def test_a_goal_after_a_reached_one_is_not_judged_by_the_old_flag(client: PlatformClient, fake: FakePlatform) -> None:
+    client.bring_up(timeout=1)
+    client.set_mode(AUTOMATIC)
+    client.start()
+    client.move_abs(1000, 0, 0)
+    client.wait_target_reached(timeout=5, poll=0.01)
+    client.move_abs(2000, 0, 0)  # the first status after it still says "reached" (at 1000)
+    assert client.wait_target_reached(timeout=5, poll=0.01).pose.x_mm == 2000
 
 
 def test_target_timeout_says_where_the_platform_is(client: PlatformClient, fake: FakePlatform) -> None:
@@ -295,7 +322,7 @@ def test_target_timeout_says_where_the_platform_is(client: PlatformClient, fake:
 
 
 def test_wait_until(client: PlatformClient) -> None:
-    assert client.wait_until(lambda s: s.motion_mode is MotionMode.MODE_MOTION_NO, timeout=1).timestamp_ms == 0
+    assert client.wait_until(lambda s: s.motion_mode is MotionMode.MODE_MOTION_NO, timeout=1).timestamp_ms == 20
     with pytest.raises(Timeout, match="docked not reached"):
         client.wait_until(lambda s: s.docked, timeout=0.1, what="docked")
 

@@ -19,6 +19,7 @@ from pltf.client import (
     ConnectionClosed,
     MotionMode,
     OperationState,
+    PlannerState,
     Position,
     ProtocolError,
     Status,
@@ -180,3 +181,21 @@ def test_live_async(live: LiveServer) -> None:
         return math.hypot(end.x_mm - start.x_mm, end.y_mm - start.y_mm)
 
     assert run_with_client(live.ports[0], body, timeout=5) == pytest.approx(300, abs=30)
+
+
+def test_a_retried_goal_after_a_refusal_is_driven_to(fake: FakePlatform) -> None:
+    # issue 22, bug 1, through the asyncio client (the same judges, erratum E-CLI-001)
+    async def body(pltf: AsyncPlatformClient) -> Status:
+        await pltf.bring_up(timeout=1)
+        await pltf.set_mode(AUTOMATIC)
+        await pltf.start()
+        fake.plan = PlannerState.PLANNER_COLLISION_TARGET
+        await pltf.move_abs(9000, 9000, 0)
+        with pytest.raises(CommandRejected, match="PLANNER_COLLISION_TARGET"):
+            await pltf.wait_target_reached(timeout=5, poll=0.01)
+        fake.plan = PlannerState.PLANNER_PATH_FOUND
+        await pltf.move_abs(3000, 200, 0)
+        return await pltf.wait_target_reached(timeout=5, poll=0.01)
+
+    status = run_with_client(fake.port, body)
+    assert status.target_reached and status.pose == (3000, 200, 0)

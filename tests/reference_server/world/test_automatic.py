@@ -7,6 +7,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
 from pltf.reference_server.kinematics import Frame, Roadmap, relative_to_world
 from pltf.reference_server.world import MapGeometry, PlannerState
@@ -263,3 +264,51 @@ def test_targets_at_the_int_limits_are_driven_towards_with_a_bounded_path() -> N
     path.run(4.0)  # a start turn of ~3 s on the spot to face north, then away
     assert path.world.active and path.world.truth[1] > 10200.0  # towards the first frame
     assert len(path.world.remaining_path()) <= MAX_SAMPLES * DS / 100.0 + 10
+
+
+# Issue 22: a target within TargetReachedTolPos / TargetReachedTolAngle of the pose is reached where the platform
+# stands (E-PAR-021, E-MOT-015); before, the planner's 2 mm leg turned the platform round to drive it.
+NEAR_POSE = (3502.0, 10500.0, math.radians(45.8))
+NEAR_GOAL = (3500.0, 10500.0, math.radians(45.0))
+
+
+def _swing(sim: Sim, start: tuple[float, float, float]) -> tuple[float, float]:
+    """The farthest the true pose got from ``start``: (mm, degrees)."""
+    pts = np.asarray(sim.trace)
+    turn = np.abs((pts[:, 2] - start[2] + np.pi) % (2 * np.pi) - np.pi)
+    return float(np.hypot(pts[:, 0] - start[0], pts[:, 1] - start[1]).max()), float(np.degrees(turn.max()))
+
+
+@pytest.mark.parametrize("planning", [True, False])
+def test_a_target_within_the_tolerances_does_not_move_the_platform(office: MapGeometry, planning: bool) -> None:
+    sim = make_sim(office, NEAR_POSE, PlanningEnabled=planning)
+    sim.world.move_to(NEAR_GOAL)
+    assert sim.until_idle(5.0)
+    assert sim.world.target_reached, sim.events[-3:]
+    moved, turned = _swing(sim, NEAR_POSE)
+    assert moved < 1.0 and turned < 0.1, (moved, turned)
+    assert sim.now <= 0.1  # decided in the first control periods
+    assert sim.world.motion.planner_state is PlannerState.STANDBY
+
+
+@pytest.mark.parametrize("planning", [True, False])
+def test_a_target_within_the_position_tolerance_only_turns_on_the_spot(office: MapGeometry, planning: bool) -> None:
+    goal = (3500.0, 10500.0, math.radians(120.0))
+    sim = make_sim(office, NEAR_POSE, PlanningEnabled=planning)
+    sim.world.move_to(goal)
+    assert sim.until_idle(30.0)
+    _reached(sim, goal)
+    moved, turned = _swing(sim, NEAR_POSE)
+    assert moved < 15.0, moved  # a turn about the wheel axis, no leg driven
+    assert turned < 120.0 - 45.8 + 3.0, turned  # the short way round, no swing beyond the goal
+
+
+def test_move_to_the_station_where_the_platform_stands_does_not_move_it(office: MapGeometry) -> None:
+    roadmap = Roadmap(validate_document(DocumentKind.ROADMAP, OFFICE_ROADMAP.read_bytes()))
+    sim = make_sim(office, (5001.0, 10001.0, math.radians(0.5)))
+    frames = roadmap.route(roadmap.nearest(5001.0, 10001.0).id, roadmap.find("Corridor_01").id)  # type: ignore[union-attr]
+    assert frames is not None
+    sim.world.command_path([(f.x, f.y, f.angle) for f in frames])
+    assert sim.until_idle(5.0)
+    assert sim.world.target_reached
+    assert _swing(sim, (5001.0, 10001.0, math.radians(0.5)))[0] < 1.0

@@ -12,6 +12,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <exception>
+#include <functional>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -177,11 +178,31 @@ enum class CanNode : int32_t {
   CANNODE_USBOARD = 3,
 };
 
+/// The name of a CanNode value ("?" for a value the spec does not list).
+inline const char* to_string(CanNode v) {
+  switch (v) {
+    case CanNode::CANNODE_IOBOARD: return "CANNODE_IOBOARD";
+    case CanNode::CANNODE_MOTORRIGHT: return "CANNODE_MOTORRIGHT";
+    case CanNode::CANNODE_MOTORLEFT: return "CANNODE_MOTORLEFT";
+    case CanNode::CANNODE_USBOARD: return "CANNODE_USBOARD";
+  }
+  return "?";
+}
+
 /// Index of the motor whose brake is set. [guide 6.3 CMD_SET_BRAKE]
 enum class MotorIndex : int32_t {
   CANNODE_MOTORRIGHT = 1,
   CANNODE_MOTORLEFT = 2,
 };
+
+/// The name of a MotorIndex value ("?" for a value the spec does not list).
+inline const char* to_string(MotorIndex v) {
+  switch (v) {
+    case MotorIndex::CANNODE_MOTORRIGHT: return "CANNODE_MOTORRIGHT";
+    case MotorIndex::CANNODE_MOTORLEFT: return "CANNODE_MOTORLEFT";
+  }
+  return "?";
+}
 
 /// Desired state of the brake (inverted logic, field evidence). [guide 6.3 CMD_SET_BRAKE]
 enum class BrakeState : int32_t {
@@ -189,11 +210,29 @@ enum class BrakeState : int32_t {
   BRAKE_DISABLED = 1,
 };
 
+/// The name of a BrakeState value ("?" for a value the spec does not list).
+inline const char* to_string(BrakeState v) {
+  switch (v) {
+    case BrakeState::BRAKE_ENABLED: return "BRAKE_ENABLED";
+    case BrakeState::BRAKE_DISABLED: return "BRAKE_DISABLED";
+  }
+  return "?";
+}
+
 /// Board that carries the digital output. [guide 6.3 CMD_SET_DIGOUT]
 enum class BoardType : int32_t {
   TYPE_IOBOARD = 0,
   TYPE_RELAYBOARD = 1,
 };
+
+/// The name of a BoardType value ("?" for a value the spec does not list).
+inline const char* to_string(BoardType v) {
+  switch (v) {
+    case BoardType::TYPE_IOBOARD: return "TYPE_IOBOARD";
+    case BoardType::TYPE_RELAYBOARD: return "TYPE_RELAYBOARD";
+  }
+  return "?";
+}
 
 /// Value of a digital output. [guide 6.3 CMD_SET_DIGOUT]
 enum class OutputLevel : int32_t {
@@ -201,11 +240,29 @@ enum class OutputLevel : int32_t {
   OUTPUT_HIGH = 1,
 };
 
+/// The name of a OutputLevel value ("?" for a value the spec does not list).
+inline const char* to_string(OutputLevel v) {
+  switch (v) {
+    case OutputLevel::OUTPUT_LOW: return "OUTPUT_LOW";
+    case OutputLevel::OUTPUT_HIGH: return "OUTPUT_HIGH";
+  }
+  return "?";
+}
+
 /// What happens to the buffered messages after the reply. [guide 6.3 CMD_GET_CAN_MESSAGES]
 enum class CanBufferMode : int32_t {
   CAN_MESSAGES_KEEP = 0,
   CAN_MESSAGES_DELETE = 1,
 };
+
+/// The name of a CanBufferMode value ("?" for a value the spec does not list).
+inline const char* to_string(CanBufferMode v) {
+  switch (v) {
+    case CanBufferMode::CAN_MESSAGES_KEEP: return "CAN_MESSAGES_KEEP";
+    case CanBufferMode::CAN_MESSAGES_DELETE: return "CAN_MESSAGES_DELETE";
+  }
+  return "?";
+}
 
 /// Motion mode of the platform. [guide 6.3 CMD_SET_MODE; 4.3]
 enum class MotionMode : int32_t {
@@ -218,6 +275,20 @@ enum class MotionMode : int32_t {
   MODE_MOTION_POST_PROCESS_REPLAY = 6,
 };
 
+/// The name of a MotionMode value ("?" for a value the spec does not list).
+inline const char* to_string(MotionMode v) {
+  switch (v) {
+    case MotionMode::MODE_MOTION_NO: return "MODE_MOTION_NO";
+    case MotionMode::MODE_MOTION_JOYHARD: return "MODE_MOTION_JOYHARD";
+    case MotionMode::MODE_MOTION_JOYSOFT: return "MODE_MOTION_JOYSOFT";
+    case MotionMode::MODE_MOTION_VEL: return "MODE_MOTION_VEL";
+    case MotionMode::MODE_MOTION_AUTOMATIC: return "MODE_MOTION_AUTOMATIC";
+    case MotionMode::MODE_MOTION_PROGRAM: return "MODE_MOTION_PROGRAM";
+    case MotionMode::MODE_MOTION_POST_PROCESS_REPLAY: return "MODE_MOTION_POST_PROCESS_REPLAY";
+  }
+  return "?";
+}
+
 /// Operation state of the state chart. [guide 6.4 CMD_GET_STATUS (Active operation state); 4.2 figure 2]
 enum class OperationState : int32_t {
   ST_OP_READY = 0,
@@ -226,12 +297,33 @@ enum class OperationState : int32_t {
   ST_OP_NOT_INITIALIZED = 3,
 };
 
+/// The name of a OperationState value ("?" for a value the spec does not list).
+inline const char* to_string(OperationState v) {
+  switch (v) {
+    case OperationState::ST_OP_READY: return "ST_OP_READY";
+    case OperationState::ST_OP_RUNNING: return "ST_OP_RUNNING";
+    case OperationState::ST_OP_BREAKED: return "ST_OP_BREAKED";
+    case OperationState::ST_OP_NOT_INITIALIZED: return "ST_OP_NOT_INITIALIZED";
+  }
+  return "?";
+}
+
 /// State of the emergency-stop circuit. [guide 6.4 CMD_GET_STATUS (Active emergency state)]
 enum class EmergencyState : int32_t {
   ST_EM_NOT_ACTIVE = 0,
   ST_EM_ACTIVE = 1,
   ST_EM_RESET = 2,
 };
+
+/// The name of a EmergencyState value ("?" for a value the spec does not list).
+inline const char* to_string(EmergencyState v) {
+  switch (v) {
+    case EmergencyState::ST_EM_NOT_ACTIVE: return "ST_EM_NOT_ACTIVE";
+    case EmergencyState::ST_EM_ACTIVE: return "ST_EM_ACTIVE";
+    case EmergencyState::ST_EM_RESET: return "ST_EM_RESET";
+  }
+  return "?";
+}
 
 /// State of the path planner. [guide 6.4 CMD_GET_STATUS (Planner state)]
 enum class PlannerState : int32_t {
@@ -243,17 +335,48 @@ enum class PlannerState : int32_t {
   PLANNER_COLLISION_TARGET = 5,
 };
 
+/// The name of a PlannerState value ("?" for a value the spec does not list).
+inline const char* to_string(PlannerState v) {
+  switch (v) {
+    case PlannerState::PLANNER_STANDBY: return "PLANNER_STANDBY";
+    case PlannerState::PLANNER_PLANNING: return "PLANNER_PLANNING";
+    case PlannerState::PLANNER_NO_PATH: return "PLANNER_NO_PATH";
+    case PlannerState::PLANNER_PATH_FOUND: return "PLANNER_PATH_FOUND";
+    case PlannerState::PLANNER_COLLISION_START: return "PLANNER_COLLISION_START";
+    case PlannerState::PLANNER_COLLISION_TARGET: return "PLANNER_COLLISION_TARGET";
+  }
+  return "?";
+}
+
 /// Error code of a local application. [guide 6.4 CMD_GET_STATUS (Error code of applications)]
 enum class AppError : int32_t {
   APP_ERR_NONE = 0,
   APP_ERR_DOCKING = 1,
 };
 
+/// The name of a AppError value ("?" for a value the spec does not list).
+inline const char* to_string(AppError v) {
+  switch (v) {
+    case AppError::APP_ERR_NONE: return "APP_ERR_NONE";
+    case AppError::APP_ERR_DOCKING: return "APP_ERR_DOCKING";
+  }
+  return "?";
+}
+
 /// A BYTE flag of the status telegram (0 / 1). [guide 6.4 CMD_GET_STATUS (Miscellaneous status information)]
 enum class Flag : int32_t {
   OFF = 0,
   ON = 1,
 };
+
+/// The name of a Flag value ("?" for a value the spec does not list).
+inline const char* to_string(Flag v) {
+  switch (v) {
+    case Flag::OFF: return "OFF";
+    case Flag::ON: return "ON";
+  }
+  return "?";
+}
 
 /// Category the parameter belongs to (the tabs of 5.9). [guide 6.4 CMD_GET_PLTF_PARAM]
 enum class ParamCategory : int32_t {
@@ -270,6 +393,24 @@ enum class ParamCategory : int32_t {
   INFRARED = 10,
 };
 
+/// The name of a ParamCategory value ("?" for a value the spec does not list).
+inline const char* to_string(ParamCategory v) {
+  switch (v) {
+    case ParamCategory::GEOM: return "GEOM";
+    case ParamCategory::PLANNING: return "PLANNING";
+    case ParamCategory::IPO: return "IPO";
+    case ParamCategory::LOCALIZATION: return "LOCALIZATION";
+    case ParamCategory::TRACKING_DETECTION: return "TRACKING_DETECTION";
+    case ParamCategory::COLLISION: return "COLLISION";
+    case ParamCategory::SURVEILLANCE: return "SURVEILLANCE";
+    case ParamCategory::MOTION_CTRL: return "MOTION_CTRL";
+    case ParamCategory::MAPPING: return "MAPPING";
+    case ParamCategory::USONIC: return "USONIC";
+    case ParamCategory::INFRARED: return "INFRARED";
+  }
+  return "?";
+}
+
 /// Data type of a parameter value. [guide 6.4 CMD_GET_PLTF_PARAM]
 enum class ParamDataType : int32_t {
   BOOLEAN = 0,
@@ -277,11 +418,30 @@ enum class ParamDataType : int32_t {
   DOUBLE = 2,
 };
 
+/// The name of a ParamDataType value ("?" for a value the spec does not list).
+inline const char* to_string(ParamDataType v) {
+  switch (v) {
+    case ParamDataType::BOOLEAN: return "BOOLEAN";
+    case ParamDataType::INTEGER: return "INTEGER";
+    case ParamDataType::DOUBLE: return "DOUBLE";
+  }
+  return "?";
+}
+
 /// Button state of the mouse obstacle. [guide 6.3 CMD_MOUSE_MOVE]
 enum class MouseButton : int32_t {
   EV_MOUSE_RBUTTON_DOWN = 2,
   EV_MOUSE_RBUTTON_UP = 5,
 };
+
+/// The name of a MouseButton value ("?" for a value the spec does not list).
+inline const char* to_string(MouseButton v) {
+  switch (v) {
+    case MouseButton::EV_MOUSE_RBUTTON_DOWN: return "EV_MOUSE_RBUTTON_DOWN";
+    case MouseButton::EV_MOUSE_RBUTTON_UP: return "EV_MOUSE_RBUTTON_UP";
+  }
+  return "?";
+}
 
 /// Event set by CMD_SET_EVENT (post-process recording and replay). [guide 6.3 CMD_SET_EVENT]
 enum class Event : int32_t {
@@ -292,6 +452,19 @@ enum class Event : int32_t {
   EV_BREAK_POST_PROCESS_REPLAY = 5,
   EV_CONTINUE_POST_PROCESS_REPLAY = 6,
 };
+
+/// The name of a Event value ("?" for a value the spec does not list).
+inline const char* to_string(Event v) {
+  switch (v) {
+    case Event::EV_START_POST_PROCESS_RECORDING: return "EV_START_POST_PROCESS_RECORDING";
+    case Event::EV_STOP_POST_PROCESS_RECORDING: return "EV_STOP_POST_PROCESS_RECORDING";
+    case Event::EV_START_POST_PROCESS_REPLAY: return "EV_START_POST_PROCESS_REPLAY";
+    case Event::EV_STOP_POST_PROCESS_REPLAY: return "EV_STOP_POST_PROCESS_REPLAY";
+    case Event::EV_BREAK_POST_PROCESS_REPLAY: return "EV_BREAK_POST_PROCESS_REPLAY";
+    case Event::EV_CONTINUE_POST_PROCESS_REPLAY: return "EV_CONTINUE_POST_PROCESS_REPLAY";
+  }
+  return "?";
+}
 
 /// Type of a graphical debug object. [guide 6.4 CMD_GET_DEBUG_DATA (Graphical objects vector)]
 enum class GraphicType : int32_t {
@@ -316,6 +489,32 @@ enum class GraphicType : int32_t {
   TYPE_POINT_PERM = 18,
 };
 
+/// The name of a GraphicType value ("?" for a value the spec does not list).
+inline const char* to_string(GraphicType v) {
+  switch (v) {
+    case GraphicType::TYPE_POINT_CROSS: return "TYPE_POINT_CROSS";
+    case GraphicType::TYPE_POINT_RECT: return "TYPE_POINT_RECT";
+    case GraphicType::TYPE_POINT_TRIA: return "TYPE_POINT_TRIA";
+    case GraphicType::TYPE_POINT_SMALLDOT: return "TYPE_POINT_SMALLDOT";
+    case GraphicType::TYPE_POINT_LARGEDOT: return "TYPE_POINT_LARGEDOT";
+    case GraphicType::TYPE_LINE_THIN: return "TYPE_LINE_THIN";
+    case GraphicType::TYPE_LINE_THICK: return "TYPE_LINE_THICK";
+    case GraphicType::TYPE_LINE_ARROW: return "TYPE_LINE_ARROW";
+    case GraphicType::TYPE_LINE_DOUBLEDOT: return "TYPE_LINE_DOUBLEDOT";
+    case GraphicType::TYPE_FRAME_RECT: return "TYPE_FRAME_RECT";
+    case GraphicType::TYPE_FRAME_CIRC: return "TYPE_FRAME_CIRC";
+    case GraphicType::TYPE_FRAME_TRIA: return "TYPE_FRAME_TRIA";
+    case GraphicType::TYPE_FRAME_PLTF: return "TYPE_FRAME_PLTF";
+    case GraphicType::TYPE_CIRCLE: return "TYPE_CIRCLE";
+    case GraphicType::TYPE_STRING: return "TYPE_STRING";
+    case GraphicType::TYPE_ELLIPSE: return "TYPE_ELLIPSE";
+    case GraphicType::TYPE_NUM_LABEL: return "TYPE_NUM_LABEL";
+    case GraphicType::TYPE_POINT_PIXEL: return "TYPE_POINT_PIXEL";
+    case GraphicType::TYPE_POINT_PERM: return "TYPE_POINT_PERM";
+  }
+  return "?";
+}
+
 /// Colour of a graphical debug object. [guide 6.4 CMD_GET_DEBUG_DATA (Graphical objects vector)]
 enum class GraphicColor : int32_t {
   COLOR_RED = 20,
@@ -330,6 +529,24 @@ enum class GraphicColor : int32_t {
   COLOR_DARKGRAY = 29,
   COLOR_CYAN = 30,
 };
+
+/// The name of a GraphicColor value ("?" for a value the spec does not list).
+inline const char* to_string(GraphicColor v) {
+  switch (v) {
+    case GraphicColor::COLOR_RED: return "COLOR_RED";
+    case GraphicColor::COLOR_GREEN: return "COLOR_GREEN";
+    case GraphicColor::COLOR_BLUE: return "COLOR_BLUE";
+    case GraphicColor::COLOR_PINK: return "COLOR_PINK";
+    case GraphicColor::COLOR_MAGENTA: return "COLOR_MAGENTA";
+    case GraphicColor::COLOR_WHITE: return "COLOR_WHITE";
+    case GraphicColor::COLOR_YELLOW: return "COLOR_YELLOW";
+    case GraphicColor::COLOR_GRAY: return "COLOR_GRAY";
+    case GraphicColor::COLOR_ORANGE: return "COLOR_ORANGE";
+    case GraphicColor::COLOR_DARKGRAY: return "COLOR_DARKGRAY";
+    case GraphicColor::COLOR_CYAN: return "COLOR_CYAN";
+  }
+  return "?";
+}
 
 // ------------------------------------------------------------------ group items
 
@@ -2243,6 +2460,61 @@ class TelegramDecoder {
   std::exception_ptr error_;
 };
 
+// ------------------------------------------------------------------ waits
+
+/// A wait found that the command it follows was not carried out; what() says what the status showed.
+class CommandRejected : public std::runtime_error {
+ public:
+  CommandRejected(const std::string& command, const std::string& reason)
+      : std::runtime_error(command + " was not carried out: " + reason), command_(command) {}
+  const std::string& command() const { return command_; }
+
+ private:
+  std::string command_;
+};
+
+/// A wait's condition did not come in time.
+class WaitTimeout : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// guide 4.3 Mode Automatic: the move commands that drive to a target (target reached tells when).
+bool is_target_command(const std::string& name);
+/// Milliseconds from time stamp `earlier` to `later` across the wrap at 2^31 (negative: not later).
+int64_t stamp_after(int64_t later, int64_t earlier);
+
+/// The judge of one wait for the target, without I/O: feed it every status requested after the move, in order.
+///
+/// Commands are not acknowledged (guide 6.1), so a refused move shows only in the status. Neither carries an
+/// identifier, and the platform takes a move up in its control loop: the first status after a move may still
+/// show the planner state and the target flag of the move before. That first status is the reference; the
+/// planner state and the flag count only from a status whose planner state differs from it, or one after a status
+/// made kTakeUpMs (time stamp) after the reference or kTakeUpWaitMs after the wait began (erratum E-CLI-001 of the
+/// toolkit's errata register).
+/// The operation state and the motion mode are judged at once.
+class TargetWait {
+ public:
+  static constexpr int64_t kTakeUpMs = 200;
+  static constexpr int64_t kTakeUpWaitMs = 2000;
+  /// `command`: the last move sent on the connection ("": none, every status counts); times in ms.
+  TargetWait(std::string command, int64_t started_ms, int64_t timeout_ms);
+  /// True when the target is reached; throws CommandRejected when the move cannot run, WaitTimeout at the end.
+  bool observe(const GetStatusReply& status, int64_t now_ms);
+
+ private:
+  bool check(const GetStatusReply& status, int64_t now_ms);
+  bool belongs(const GetStatusReply& status, int64_t now_ms);
+  std::string command_;
+  int64_t started_ms_;
+  int64_t timeout_ms_;
+  bool have_reference_ = false;
+  bool taken_up_;
+  bool due_ = false;  ///< a status past the take-up time was seen: the next one belongs
+  PlannerState ref_planner_ = PlannerState::PLANNER_STANDBY;
+  int32_t ref_stamp_ = 0;
+};
+
 // ------------------------------------------------------------------ client
 
 /// One blocking connection to PlatformCtrl (it listens on ports 10000 and 10002).
@@ -2409,9 +2681,18 @@ class Client {
   /// CMD_SHUTDOWN_HOST (id 99): Shut the host computer down (layout unknown).
   void shutdown_host(const std::string& payload = {});
 
+  /// Poll the status every `poll_ms` until the platform reports its target reached; returns that status.
+  /// Throws CommandRejected when the status shows the last move cannot run (not Running or Breaked, not mode
+  /// Automatic, the planner failed; judged as TargetWait says) and WaitTimeout after `timeout_ms`.
+  GetStatusReply wait_target_reached(int timeout_ms = 60000, int poll_ms = 50);
+  /// Poll the status every `poll_ms` until `condition(status)` holds; returns that status (else WaitTimeout).
+  GetStatusReply wait_until(const std::function<bool(const GetStatusReply&)>& condition, int timeout_ms = 10000,
+                            int poll_ms = 50, const std::string& what = "condition");
+
  private:
   int fd_ = -1;
   TelegramDecoder decoder_{Direction::Reply};
+  std::string last_move_;  ///< the last move command with a target sent here (what wait_target_reached follows)
 };
 
 }  // namespace platformctrl

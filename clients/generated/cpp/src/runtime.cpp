@@ -15,10 +15,12 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <system_error>
+#include <thread>
 
 namespace platformctrl {
 
@@ -323,6 +325,7 @@ Client::~Client() {
 
 void Client::send(const Telegram& request) {
   std::string bytes = encode(request);
+  if (is_target_command(request.telegram_name())) last_move_ = request.telegram_name();
   size_t done = 0;
   while (done < bytes.size()) {
     ssize_t n = ::send(fd_, bytes.data() + done, bytes.size() - done, MSG_NOSIGNAL);
@@ -349,6 +352,106 @@ std::unique_ptr<Telegram> Client::receive() {
       throw std::runtime_error("the server closed the connection");
     }
     decoder_.feed(buf, static_cast<size_t>(n));
+  }
+}
+
+
+// ------------------------------------------------------------------ waits (erratum E-CLI-001)
+
+bool is_target_command(const std::string& name) {
+  return name == "CMD_MOVE_ABS" || name == "CMD_MOVE_REL" || name == "CMD_MOVE_PATH" ||
+         name == "CMD_MOVE_TO_STATION";
+}
+
+int64_t stamp_after(int64_t later, int64_t earlier) {
+  const int64_t modulo = int64_t{1} << 31;  // the time stamp wraps at 2^31 (erratum E-REP-010)
+  int64_t diff = ((later - earlier) % modulo + modulo) % modulo;
+  return diff < modulo / 2 ? diff : diff - modulo;
+}
+
+TargetWait::TargetWait(std::string command, int64_t started_ms, int64_t timeout_ms)
+    : command_(std::move(command)), started_ms_(started_ms), timeout_ms_(timeout_ms), taken_up_(command_.empty()) {}
+
+bool TargetWait::observe(const GetStatusReply& status, int64_t now_ms) {
+  if (check(status, now_ms)) return true;
+  if (now_ms - started_ms_ >= timeout_ms_) {
+    char where[160];
+    std::snprintf(where, sizeof where, "the platform is at x=%d mm y=%d mm angle=%g deg", status.est_x, status.est_y,
+                  status.est_angle / 1000.0);
+    throw WaitTimeout("target not reached within " + std::to_string(timeout_ms_) + " ms" +
+                      (command_.empty() ? "" : " after " + command_) + ": " + where + ", state " +
+                      to_string(status.operation_state) + ", planner " + to_string(status.planner_state));
+  }
+  return false;
+}
+
+bool TargetWait::check(const GetStatusReply& status, int64_t now_ms) {
+  const bool reached = status.target_reached == Flag::ON;
+  if (command_.empty()) return reached;
+  if (status.operation_state != OperationState::ST_OP_RUNNING &&
+      status.operation_state != OperationState::ST_OP_BREAKED) {
+    throw CommandRejected(command_, std::string("the operation state is ") + to_string(status.operation_state) +
+                                        ": the platform moves only in state Running (guide 4.2)");
+  }
+  if (status.motion_mode != MotionMode::MODE_MOTION_AUTOMATIC) {
+    throw CommandRejected(command_, std::string("the motion mode is ") + to_string(status.motion_mode) +
+                                        ": move commands with a target run in mode MODE_MOTION_AUTOMATIC only"
+                                        " (guide 4.3)");
+  }
+  if (!belongs(status, now_ms)) return false;  // may still be the move before's planner state and flag
+  const char* failed = nullptr;
+  switch (status.planner_state) {
+    case PlannerState::PLANNER_NO_PATH: failed = "the planner found no path to the target"; break;
+    case PlannerState::PLANNER_COLLISION_START: failed = "the start of the planned path collides with an obstacle"; break;
+    case PlannerState::PLANNER_COLLISION_TARGET: failed = "the target collides with an obstacle"; break;
+    default: break;
+  }
+  if (!reached && failed != nullptr) {
+    throw CommandRejected(command_, std::string(failed) + " (" + to_string(status.planner_state) + ")");
+  }
+  return reached;
+}
+
+bool TargetWait::belongs(const GetStatusReply& status, int64_t now_ms) {
+  if (!have_reference_) {
+    have_reference_ = true;
+    ref_planner_ = status.planner_state;
+    ref_stamp_ = status.timestamp;
+  } else if (!taken_up_) {
+    // the time counts from the status after the one made past it: a platform may answer a request before it runs
+    // the control periods that fell due meanwhile
+    taken_up_ = due_ || status.planner_state != ref_planner_;
+    due_ = stamp_after(status.timestamp, ref_stamp_) >= kTakeUpMs || now_ms - started_ms_ >= kTakeUpWaitMs;
+  }
+  return taken_up_;
+}
+
+namespace {
+int64_t monotonic_ms() {
+  return std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+}  // namespace
+
+GetStatusReply Client::wait_target_reached(int timeout_ms, int poll_ms) {
+  TargetWait judge(last_move_, monotonic_ms(), timeout_ms);
+  for (;;) {
+    GetStatusReply status = get_status();
+    if (judge.observe(status, monotonic_ms())) return status;
+    std::this_thread::sleep_for(std::chrono::milliseconds(poll_ms));
+  }
+}
+
+GetStatusReply Client::wait_until(const std::function<bool(const GetStatusReply&)>& condition, int timeout_ms,
+                                  int poll_ms, const std::string& what) {
+  const int64_t deadline = monotonic_ms() + timeout_ms;
+  for (;;) {
+    GetStatusReply status = get_status();
+    if (condition(status)) return status;
+    if (monotonic_ms() >= deadline) {
+      throw WaitTimeout(what + " not reached within " + std::to_string(timeout_ms) + " ms");
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(poll_ms));
   }
 }
 

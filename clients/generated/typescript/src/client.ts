@@ -5,6 +5,7 @@ import * as net from "node:net";
 
 import { TelegramDecoder } from "./codec";
 import * as p from "./protocol";
+import { TARGET_COMMANDS, TargetWait, WaitTimeout } from "./waits";
 import { encode, Telegram, TelegramClass } from "./wire";
 
 /** One connection to PlatformCtrl (it listens on ports 10000 and 10002). */
@@ -13,6 +14,8 @@ export class Client {
   private readonly queue: Telegram[] = [];
   private waiters: Array<{ resolve: (t: Telegram) => void; reject: (e: Error) => void }> = [];
   private failure: Error | null = null;
+  /** The last move command with a target sent here (guide 4.3): what waitTargetReached waits for. */
+  private lastMove: string | null = null;
 
   private constructor(private readonly socket: net.Socket, readonly timeoutMs: number) {
     socket.on("data", (chunk: Buffer) => this.onData(chunk));
@@ -45,6 +48,9 @@ export class Client {
   /** Send one request; commands other than GET_* are not acknowledged. */
   send(request: Telegram): Promise<void> {
     const frame = encode(request);
+    if (TARGET_COMMANDS.has(request.telegramName)) {
+      this.lastMove = request.telegramName;
+    }
     return new Promise((resolve, reject) => this.socket.write(frame, (e) => (e ? reject(e) : resolve())));
   }
 
@@ -84,6 +90,43 @@ export class Client {
       if (t instanceof reply) {
         return t;
       }
+    }
+  }
+
+  /**
+   * Poll the status every `pollMs` until the platform reports its target reached; resolves to that status.
+   * Rejects with CommandRejected when the status shows the last move cannot run (not Running or Breaked, not mode
+   * Automatic, the planner failed) and with WaitTimeout after `timeoutMs`. The planner state and the target flag
+   * count only in a status that belongs to the last move (waits.ts, erratum E-CLI-001).
+   */
+  async waitTargetReached(timeoutMs = 60000, pollMs = 50): Promise<p.GetStatusReply> {
+    const judge = new TargetWait(this.lastMove, performance.now(), timeoutMs);
+    for (;;) {
+      const status = await this.getStatus();
+      if (judge.observe(status, performance.now())) {
+        return status;
+      }
+      await new Promise((resolve) => setTimeout(resolve, pollMs));
+    }
+  }
+
+  /** Poll the status every `pollMs` until `condition(status)` holds; resolves to that status (else WaitTimeout). */
+  async waitUntil(
+    condition: (status: p.GetStatusReply) => boolean,
+    timeoutMs = 10000,
+    pollMs = 50,
+    what = "condition",
+  ): Promise<p.GetStatusReply> {
+    const deadline = performance.now() + timeoutMs;
+    for (;;) {
+      const status = await this.getStatus();
+      if (condition(status)) {
+        return status;
+      }
+      if (performance.now() >= deadline) {
+        throw new WaitTimeout(`${what} not reached within ${timeoutMs} ms`);
+      }
+      await new Promise((resolve) => setTimeout(resolve, pollMs));
     }
   }
 

@@ -4,4 +4,5 @@
 export * from "./wire";
 export * from "./protocol";
 export * from "./codec";
+export * from "./waits";
 export { Client } from "./client";

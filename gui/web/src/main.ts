@@ -1,0 +1,117 @@
+/**
+ * PlatformCtrlGUI in the browser (guide ch. 5): the shell that puts the panels together. The session is the only
+ * thing that talks to the gateway; every panel subscribes to it and sends through it.
+ */
+import "./style.css";
+import { Dock } from "./dock";
+import { h } from "./dom";
+import { bind, type Key, onLanguage, t } from "./i18n/i18n";
+import { GetDebugDataRequest, GetPltfParamVecRequest } from "./pltf";
+import { hardwareMonitor } from "./panels/hwmonitor";
+import { logPanel } from "./panels/log";
+import { MapView } from "./panels/mapview";
+import { parametersWindow } from "./panels/params";
+import { plotsPanel } from "./panels/plots";
+import { wirePanel } from "./panels/wire";
+import { mapEditor } from "./editor/editpanel";
+import { footprint } from "./view/overlay";
+import { closeSocket, menubar, openSocketAt, shutdownPlatform } from "./panels/menubar";
+import { motionPanel } from "./panels/motion";
+import { operationPanel } from "./panels/operation";
+import { statusBar } from "./panels/statusbar";
+import { ViewOptions, viewOptionsPanel } from "./panels/viewoptions";
+import { PlatformSession } from "./session/session";
+
+const params = new URLSearchParams(window.location.search);
+const target = params.get("target") ?? localStorage.getItem("pltf.lastTarget") ?? "";
+const wsUrl = new URL("ws", window.location.href);
+wsUrl.protocol = wsUrl.protocol === "https:" ? "wss:" : "ws:";
+const session = new PlatformSession(wsUrl.href.split("?")[0], target);
+const options = new ViewOptions();
+
+const notice = h("p", { class: "notice", role: "status", "aria-live": "polite" });
+bind(notice, "app.messages", { text: false });
+const say = (text: string) => (notice.textContent = text);
+session.notices.subscribe(say);
+
+const map = new MapView(session, options);
+const dock = new Dock();
+const hw = hardwareMonitor(session, say);
+const paramsWin = parametersWindow(session);
+const plots = plotsPanel(session);
+const wire = wirePanel(session);
+dock.add("hardware", "menu.hardwareMonitor", hw.root, hw.onShow);
+dock.add("parameters", "menu.platformParameters", paramsWin.root, paramsWin.onShow);
+dock.add("view-options", "menu.viewOptions", viewOptionsPanel(options));
+dock.add("plots", "menu.plots", plots.root, plots.onShow);
+dock.add("log", "menu.log", logPanel(session));
+dock.add("wire", "menu.wire", wire.root, wire.onShow);
+const editor = mapEditor(session, map, say);
+dock.add("edit-map", "menu.editMap", editor.root, editor.onShow);
+
+// The platform's own geometry (guide 5.9 Geometry, UltraSonic) for the footprint and the ultrasonic sensors.
+session.params.subscribe((r) => {
+  const v = new Map(r.parameters.map((p) => [p.key, Number(p.value)]));
+  const num = (k: string, d: number) => (Number.isFinite(v.get(k)) ? v.get(k)! : d);
+  map.footprint = footprint(num("PltfLength", 650), num("DistWheels", 430), num("DistPltfCenterToWheelAxis", 100));
+  map.usSensors = Array.from({ length: 16 }, (_, i) => {
+    const n = String(i + 1).padStart(2, "0");
+    return { x: num(`USSensor${n}PosX`, 0), y: num(`USSensor${n}PosY`, 0), angle: num(`USSensor${n}Angle`, 0) };
+  });
+  map.invalidate();
+});
+session.poll("debug", () => new GetDebugDataRequest(), 1);
+session.setPolling("debug", true);
+session.conn.subscribe((ev) => {
+  if (ev.event === "connected") {
+    session.request(new GetPltfParamVecRequest()).catch(() => undefined);
+  }
+});
+
+const menus: Array<[Key, Array<{ key: Key; run?: () => void; shortcut?: string }>]> = [
+  ["menu.socket", [
+    { key: "menu.openSocket", run: () => session.open(), shortcut: "Control+O" },
+    { key: "menu.openSocketAt", run: () => void openSocketAt(session, say) },
+    { key: "menu.closeSocket", run: () => closeSocket(session) },
+    { key: "menu.shutdownPlatform", run: () => void shutdownPlatform(session, say) },
+  ]],
+  ["menu.view", [
+    { key: "menu.map", run: () => map.canvas.focus() },
+    { key: "menu.hardwareMonitor", run: () => dock.show("hardware") },
+    { key: "menu.viewOptions", run: () => dock.show("view-options") },
+    { key: "menu.plots", run: () => dock.show("plots") },
+    { key: "menu.log", run: () => dock.show("log") },
+    { key: "menu.wire", run: () => dock.show("wire") },
+  ]],
+  ["menu.parameter", [{ key: "menu.platformParameters", run: () => dock.show("parameters") }]],
+  ["menu.edit", [{ key: "menu.editMap", run: () => dock.show("edit-map") }, { key: "menu.editRoadmap" }]],
+];
+
+const header = h("header", { class: "top" }, menubar(menus), h("h1", { class: "title" }));
+onLanguage(() => {
+  header.querySelector("h1")!.textContent = `${t("app.title")} ${session.target}`;
+  document.title = t("app.title");
+});
+const app = document.getElementById("app")!;
+app.append(
+  header,
+  operationPanel(session, say),
+  h("main", { class: "workspace" }, h("div", { class: "center" }, map.root, motionPanel(session, map, say)), dock.root),
+  notice,
+  statusBar(session),
+);
+dock.show("hardware");
+document.addEventListener("keydown", (e) => {
+  if (e.ctrlKey && e.key.toLowerCase() === "o") {
+    e.preventDefault();
+    session.open();
+  }
+});
+
+// Exposed for the browser tests and the benchmark (read-only use).
+(window as unknown as { pltf: unknown }).pltf = { session, map, options, dock };
+
+if (target !== "") {
+  localStorage.setItem("pltf.lastTarget", target);
+  session.open();
+}

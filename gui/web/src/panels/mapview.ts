@@ -1,0 +1,556 @@
+/**
+ * The map view and its tools (guide 5.3): refresh, zoom all, zoom in/out, zoom to a selected area, pan, shift
+ * the platform (CMD_SET_FRM_PLTF), the target flag (CMD_MOVE_ABS in Automatic) and the target station
+ * (CMD_MOVE_TO_STATION).
+ *
+ * Rules: the static layer (grid, map, roadmap) is drawn by a worker (view/layerworker.ts) into a bitmap a margin
+ * larger than the view; every frame draws the last bitmap moved and scaled to the current camera, then the live
+ * layer (overlay.ts) on top, and asks the worker for a new bitmap when the view has left the old one or its scale
+ * changed (one request in flight at a time). Without workers the layer is drawn on the page. Frames are drawn on
+ * requestAnimationFrame only when something changed. The canvas exposes what it drew (data-drawn-*,
+ * an accessible summary) and its camera (data-camera) so tests and assistive tools can read the view.
+ */
+import { h } from "../dom";
+import { bind, onLanguage, t, type Key } from "../i18n/i18n";
+import { GetStatusReply, MotionMode, MoveAbsRequest, SetFrmPltfRequest } from "../pltf";
+import { type Bounds, countKinds, KINDS, type MapScene, MapParseError, parseMap, sceneBounds } from "../scene/map";
+import { parseRoadmap, type Roadmap } from "../scene/roadmap";
+import type { PlatformSession } from "../session/session";
+import { type Camera, fit, panBy, toWorld, viewBounds, zoomAt } from "../view/camera";
+import { drawStatic, type Layers, prepare, type Prepared } from "../view/maprender";
+import { drawFlag, drawStatus, footprint, type Footprint, type OverlayOptions, type Pose, type UsSensor } from "../view/overlay";
+import type { ViewOptions } from "./viewoptions";
+
+type Tool = "pan" | "zoomArea" | "shift" | "flag" | "edit";
+
+/** The map editor's hold on the view (editor/editpanel.ts): pointer events in world mm, and its own drawing. */
+export interface EditHooks {
+  down(x: number, y: number, pxPerMm: number): void;
+  move(x: number, y: number): void;
+  up(x: number, y: number): void;
+  draw(ctx: CanvasRenderingContext2D, cam: Camera): void;
+}
+const MARGIN = 256; // px of static layer beyond each edge of the view
+
+export class MapView {
+  readonly root: HTMLElement;
+  readonly canvas: HTMLCanvasElement;
+  readonly summary: HTMLElement;
+  cam: Camera = { cx: 0, cy: 0, scale: 0.05, width: 800, height: 600 };
+  tool: Tool = "pan";
+  scene: MapScene | null = null;
+  /** the scene's index for drawing on the page (built only without a worker, or for the benchmark's baseline) */
+  prepared: Prepared | null = null;
+  bounds: Bounds | null = null;
+  roadmap: Roadmap | null = null;
+  status: GetStatusReply | null = null;
+  flag: Pose | null = null;
+  footprint: Footprint = footprint(650, 430, 100);
+  usSensors: UsSensor[] = [];
+  drawn: Record<string, number> = {};
+  /** ms spent in the last frames' drawing (the benchmark reads it) */
+  frameTimes: number[] = [];
+  /** the last static layer: its image, the camera it was drawn for (margin included), the document version */
+  layer: { image: CanvasImageSource; cam: Camera; version: number } | null = null;
+  /** ms the layer worker took for its last layers (the benchmark reads it) */
+  layerTimes: number[] = [];
+  /** draw the static layer on the page in every frame (the benchmark's baseline) */
+  syncLayers = false;
+  private worker: Worker | null = null;
+  private inFlight: { id: number; version: number } | null = null;
+  private requestId = 0;
+  private version = 0;
+  private dirty = true;
+  private scheduled = false;
+  private drag: { x: number; y: number; button: number; cam: Camera; pose?: Pose } | null = null;
+  private area: { x0: number; y0: number; x1: number; y1: number } | null = null;
+  private toolButtons = new Map<Tool, HTMLButtonElement>();
+  private fitted = false;
+  private message: HTMLElement;
+  /** set while the map editor is open: the view shows its document and hands it the pointer in tool "edit" */
+  editHooks: EditHooks | null = null;
+
+  constructor(
+    readonly session: PlatformSession,
+    readonly options: ViewOptions,
+  ) {
+    this.canvas = h("canvas", { role: "img", tabindex: "0", class: "map-canvas" });
+    bind(this.canvas, "map.canvas", { text: false });
+    this.summary = h("p", { class: "map-summary", id: "map-summary" });
+    this.canvas.setAttribute("aria-describedby", "map-summary");
+    this.message = h("p", { class: "map-message", role: "status", "aria-live": "polite" });
+    bind(this.message, "map.messages", { text: false });
+    const toolbar = h("div", { role: "toolbar", class: "map-tools" });
+    bind(toolbar, "map.tools", { text: false });
+    const act = (key: Key, fn: () => void, shortcut = "") => {
+      const b = h("button", { type: "button", "aria-keyshortcuts": shortcut || false });
+      bind(b, key);
+      b.addEventListener("click", fn);
+      toolbar.append(b);
+      return b;
+    };
+    act("map.refresh", () => session.refreshDocuments(), "R");
+    act("map.zoomAll", () => this.zoomAll(), "A");
+    act("map.zoomIn", () => this.zoom(1.5), "+");
+    act("map.zoomOut", () => this.zoom(1 / 1.5), "-");
+    const toolButton = (tool: Tool, key: Key) => {
+      const b = act(key, () => this.setTool(this.tool === tool ? "pan" : tool));
+      b.setAttribute("aria-pressed", String(tool === this.tool));
+      this.toolButtons.set(tool, b);
+    };
+    toolButton("zoomArea", "map.zoomArea");
+    toolButton("pan", "map.pan");
+    toolButton("shift", "map.shift");
+    toolButton("flag", "map.flag");
+    this.root = h("section", { class: "map-view" }, toolbar, h("div", { class: "map-frame" }, this.canvas), this.message, this.summary);
+    bind(this.root, "view.map", { text: false });
+    this.startWorker();
+    this.wire();
+    onLanguage(() => this.updateSummary());
+  }
+
+  private wire(): void {
+    const s = this.session;
+    s.map.subscribe((m) => {
+      if (this.editHooks !== null) {
+        return; // the editor shows its own document
+      }
+      try {
+        this.scene = parseMap(m.xml, m.name);
+        this.bounds = sceneBounds(this.scene);
+        this.prepared = null;
+        this.say("");
+      } catch (e) {
+        this.scene = null;
+        this.bounds = null;
+        this.prepared = null;
+        this.say(e instanceof MapParseError ? e.message : String(e));
+      }
+      this.documentsChanged();
+      if (!this.fitted) {
+        this.zoomAll();
+      }
+    });
+    s.roadmap.subscribe((r) => {
+      try {
+        this.roadmap = parseRoadmap(r.xml, r.name);
+      } catch (e) {
+        this.roadmap = null;
+        this.say(String((e as Error).message));
+      }
+      this.documentsChanged();
+    });
+    s.status.subscribe((st) => {
+      this.status = st;
+      if (this.options.centerPlatform) {
+        this.cam = { ...this.cam, cx: st.estX, cy: st.estY };
+      }
+      this.invalidate();
+    });
+    this.options.changed.subscribe(() => {
+      this.version++;
+      this.invalidate();
+    });
+    new ResizeObserver(() => this.resize()).observe(this.canvas);
+    this.canvas.addEventListener("wheel", (e) => {
+      e.preventDefault();
+      this.zoom(e.deltaY < 0 ? 1.2 : 1 / 1.2, e.offsetX, e.offsetY);
+    }, { passive: false });
+    this.canvas.addEventListener("pointerdown", (e) => this.down(e));
+    this.canvas.addEventListener("pointermove", (e) => this.move(e));
+    this.canvas.addEventListener("pointerup", (e) => this.up(e));
+    this.canvas.addEventListener("contextmenu", (e) => e.preventDefault());
+    this.canvas.addEventListener("keydown", (e) => {
+      const step = 60;
+      const moves: Record<string, [number, number]> = { h: [step, 0], l: [-step, 0], k: [0, step], j: [0, -step] };
+      const m = moves[e.key];
+      if (m !== undefined) {
+        this.setCamera(panBy(this.cam, m[0], m[1]));
+      }
+    });
+  }
+
+  /** Show a document (the editor's): drawn like the platform's map until the editor closes. */
+  showScene(scene: MapScene | null): void {
+    this.scene = scene;
+    this.bounds = scene === null ? null : sceneBounds(scene);
+    this.prepared = null;
+    this.documentsChanged();
+  }
+
+  private documentsChanged(): void {
+    this.version++;
+    this.worker?.postMessage({ type: "scene", scene: this.scene, roadmap: this.roadmap });
+    this.invalidate();
+  }
+
+  private startWorker(): void {
+    if (typeof Worker === "undefined" || typeof OffscreenCanvas === "undefined") {
+      return;
+    }
+    try {
+      this.worker = new Worker(new URL("../view/layerworker.ts", import.meta.url), { type: "module" });
+    } catch {
+      this.worker = null;
+      return;
+    }
+    this.worker.onmessage = (e: MessageEvent) => {
+      const m = e.data as { id: number; cam: Camera; bitmap: ImageBitmap; drawn: Record<string, number>; ms: number };
+      const asked = this.inFlight;
+      this.inFlight = null;
+      if (asked === null || asked.id !== m.id) {
+        m.bitmap.close();
+        return;
+      }
+      if (this.layer?.image instanceof ImageBitmap) {
+        this.layer.image.close();
+      }
+      this.layer = { image: m.bitmap, cam: m.cam, version: asked.version };
+      this.layerTimes.push(m.ms);
+      if (this.layerTimes.length > 1000) {
+        this.layerTimes.splice(0, 500);
+      }
+      this.countVisible(m.drawn);
+      this.invalidate();
+    };
+    this.worker.onerror = () => {
+      this.worker = null; // drawn on the page from now on
+      this.inFlight = null;
+      this.invalidate();
+    };
+  }
+
+  private say(text: string): void {
+    this.message.textContent = text;
+  }
+
+  setTool(tool: Tool): void {
+    this.tool = tool;
+    for (const [k, b] of this.toolButtons) {
+      b.setAttribute("aria-pressed", String(k === tool));
+    }
+    if (tool === "flag" && this.flag === null) {
+      const st = this.status;
+      this.flag = st ? { x: st.estX, y: st.estY, angle: st.estAngle / 1000 } : { x: this.cam.cx, y: this.cam.cy, angle: 0 };
+    }
+    this.canvas.dataset.tool = tool;
+    this.invalidate();
+  }
+
+  private resize(): void {
+    const r = this.canvas.getBoundingClientRect();
+    const dpr = window.devicePixelRatio || 1;
+    this.canvas.width = Math.max(1, Math.round(r.width * dpr));
+    this.canvas.height = Math.max(1, Math.round(r.height * dpr));
+    this.cam = { ...this.cam, width: r.width, height: r.height };
+    if (!this.fitted && this.bounds) {
+      this.zoomAll();
+    }
+    this.invalidate();
+  }
+
+  setCamera(cam: Camera): void {
+    this.cam = cam;
+    this.invalidate();
+  }
+
+  zoomAll(): void {
+    const b = this.bounds;
+    if (b && this.cam.width > 1) {
+      this.cam = fit(this.cam, b);
+      this.fitted = true;
+    }
+    this.invalidate();
+  }
+
+  zoom(factor: number, sx = this.cam.width / 2, sy = this.cam.height / 2): void {
+    this.setCamera(zoomAt(this.cam, factor, sx, sy));
+  }
+
+  // ---- pointer tools
+  private down(e: PointerEvent): void {
+    this.canvas.setPointerCapture(e.pointerId);
+    this.canvas.focus();
+    this.drag = { x: e.offsetX, y: e.offsetY, button: e.button, cam: this.cam };
+    if (this.tool === "edit" && this.editHooks !== null) {
+      const [wx, wy] = toWorld(this.cam, e.offsetX, e.offsetY);
+      this.editHooks.down(wx, wy, this.cam.scale);
+      return;
+    }
+    if (this.tool === "shift" && this.status) {
+      this.drag.pose = { x: this.status.estX, y: this.status.estY, angle: this.status.estAngle / 1000 };
+    } else if (this.tool === "flag" && this.flag) {
+      this.drag.pose = { ...this.flag };
+    } else if (this.tool === "zoomArea") {
+      this.area = { x0: e.offsetX, y0: e.offsetY, x1: e.offsetX, y1: e.offsetY };
+    }
+  }
+
+  /** The pose a drag gives: left button moves it, right button turns it toward the pointer. */
+  private dragged(e: PointerEvent, d = this.drag): Pose | null {
+    if (d?.pose === undefined) {
+      return null;
+    }
+    const [wx, wy] = toWorld(this.cam, e.offsetX, e.offsetY);
+    if (d.button === 2) {
+      const angle = (Math.atan2(wy - d.pose.y, wx - d.pose.x) * 180) / Math.PI;
+      return { ...d.pose, angle: Math.round(angle * 10) / 10 };
+    }
+    const [w0x, w0y] = toWorld(this.cam, d.x, d.y);
+    return { x: Math.round(d.pose.x + wx - w0x), y: Math.round(d.pose.y + wy - w0y), angle: d.pose.angle };
+  }
+
+  private ghost: Pose | null = null;
+
+  private move(e: PointerEvent): void {
+    const d = this.drag;
+    if (d === null) {
+      return;
+    }
+    if (this.tool === "edit" && this.editHooks !== null) {
+      const [wx, wy] = toWorld(this.cam, e.offsetX, e.offsetY);
+      this.editHooks.move(wx, wy);
+      this.invalidate();
+      return;
+    }
+    if (this.tool === "pan" || ((this.tool === "shift" || this.tool === "flag") && d.pose === undefined)) {
+      this.setCamera(panBy(d.cam, e.offsetX - d.x, e.offsetY - d.y));
+    } else if (this.tool === "zoomArea" && this.area) {
+      this.area.x1 = e.offsetX;
+      this.area.y1 = e.offsetY;
+      this.invalidate();
+    } else if (this.tool === "flag") {
+      this.flag = this.dragged(e);
+      this.invalidate();
+    } else if (this.tool === "shift") {
+      this.ghost = this.dragged(e);
+      this.invalidate();
+    }
+  }
+
+  private up(e: PointerEvent): void {
+    const d = this.drag;
+    this.drag = null;
+    if (d === null) {
+      return;
+    }
+    if (this.tool === "edit" && this.editHooks !== null) {
+      const [wx, wy] = toWorld(this.cam, e.offsetX, e.offsetY);
+      this.editHooks.up(wx, wy);
+      this.invalidate();
+      return;
+    }
+    if (this.tool === "zoomArea" && this.area) {
+      const a = this.area;
+      this.area = null;
+      if (Math.abs(a.x1 - a.x0) > 4 && Math.abs(a.y1 - a.y0) > 4) {
+        const [x0, y0] = toWorld(this.cam, Math.min(a.x0, a.x1), Math.max(a.y0, a.y1));
+        const [x1, y1] = toWorld(this.cam, Math.max(a.x0, a.x1), Math.min(a.y0, a.y1));
+        this.setCamera(fit(this.cam, { minX: x0, minY: y0, maxX: x1, maxY: y1 }, 0));
+      }
+      this.invalidate();
+      return;
+    }
+    const pose = this.dragged(e, d);
+    if (pose === null) {
+      return;
+    }
+    if (this.tool === "shift") {
+      this.ghost = null;
+      // guide 5.3: "The platform can be shifted by drag and drop. The frame is rotated with a right-click."
+      this.send(new SetFrmPltfRequest({ x: pose.x, y: pose.y, angle: Math.round(pose.angle * 1000) }), "map.sentShift", pose);
+    } else if (this.tool === "flag") {
+      this.flag = pose;
+      this.sendFlag();
+    }
+    this.invalidate();
+  }
+
+  /** guide 5.3: "Used in motion mode Automatic, the platform will move to a specified location." */
+  sendFlag(): void {
+    const f = this.flag;
+    if (f === null) {
+      return;
+    }
+    if (this.status?.motionMode !== MotionMode.MODE_MOTION_AUTOMATIC) {
+      this.say(t("map.flagNeedsAutomatic"));
+      return;
+    }
+    this.send(new MoveAbsRequest({ x: f.x, y: f.y, angle: Math.round(f.angle * 1000) }), "map.sentFlag", f);
+  }
+
+  private send(req: SetFrmPltfRequest | MoveAbsRequest, key: Key, p: Pose): void {
+    try {
+      this.session.send(req);
+      this.say(t(key, { x: p.x, y: p.y, angle: p.angle.toFixed(1) }));
+    } catch (e) {
+      this.say((e as Error).message);
+    }
+  }
+
+  // ---- drawing
+  invalidate(): void {
+    this.dirty = true;
+    if (!this.scheduled) {
+      this.scheduled = true;
+      requestAnimationFrame(() => {
+        this.scheduled = false;
+        if (this.dirty) {
+          this.render();
+        }
+      });
+    }
+  }
+
+  private layers(): Layers {
+    const o = this.options;
+    return { grid: o.grid, map: o.mapLayers.map, roadmap: o.mapLayers.roadmap, labels: o.mapLayers.hiddenlabel, kinds: o.mapLayers };
+  }
+
+  /** Does the layer show the current view at its own scale, margin included? */
+  private covers(l: { cam: Camera; version: number } | null): boolean {
+    const c = this.cam;
+    if (l === null || l.version !== this.version || l.cam.scale !== c.scale) {
+      return false;
+    }
+    return Math.abs((c.cx - l.cam.cx) * c.scale) <= MARGIN && Math.abs((c.cy - l.cam.cy) * c.scale) <= MARGIN &&
+      l.cam.width >= c.width + 2 * MARGIN && l.cam.height >= c.height + 2 * MARGIN;
+  }
+
+  private layerCamera(): Camera {
+    const c = this.cam;
+    return { ...c, width: c.width + 2 * MARGIN, height: c.height + 2 * MARGIN };
+  }
+
+  /** Keep the static layer up to date: ask the worker (or draw here) when the view has left it. */
+  private updateLayer(): void {
+    if (this.covers(this.layer)) {
+      return;
+    }
+    const dpr = window.devicePixelRatio || 1;
+    if (this.worker !== null && !this.syncLayers) {
+      if (this.inFlight === null) {
+        this.inFlight = { id: ++this.requestId, version: this.version };
+        this.worker.postMessage({ type: "render", id: this.requestId, cam: this.layerCamera(), layers: this.layers(), dpr });
+      }
+      return;
+    }
+    if (this.prepared === null && this.scene !== null) {
+      this.prepared = prepare(this.scene);
+    }
+    const big = this.layerCamera();
+    const canvas = this.layer?.image instanceof HTMLCanvasElement ? this.layer.image : document.createElement("canvas");
+    canvas.width = Math.round(big.width * dpr);
+    canvas.height = Math.round(big.height * dpr);
+    const ctx = canvas.getContext("2d")!;
+    ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
+    const t0 = performance.now();
+    const drawn = drawStatic(ctx, big, this.prepared, this.roadmap, this.layers());
+    this.layerTimes.push(performance.now() - t0);
+    this.layer = { image: canvas, cam: big, version: this.version };
+    this.countVisible(drawn);
+  }
+
+  /** The last layer, moved and scaled to the current camera. */
+  private drawLayer(ctx: CanvasRenderingContext2D): void {
+    const l = this.layer;
+    const c = this.cam;
+    ctx.fillStyle = "#ffffff";
+    ctx.fillRect(0, 0, c.width, c.height);
+    if (l === null) {
+      return;
+    }
+    const r = c.scale / l.cam.scale;
+    const dx = c.width / 2 - (l.cam.width / 2) * r + (l.cam.cx - c.cx) * c.scale;
+    const dy = c.height / 2 - (l.cam.height / 2) * r + (c.cy - l.cam.cy) * c.scale;
+    ctx.imageSmoothingEnabled = false; // a scaled layer is a stand-in until the worker sends the new one
+    ctx.drawImage(l.image, dx, dy, l.cam.width * r, l.cam.height * r);
+    ctx.imageSmoothingEnabled = true;
+  }
+
+  /** What lies in the view itself (the static layer also draws the margin). */
+  private countVisible(drawnAll: Record<string, number>): void {
+    const whole = this.bounds;
+    const v = viewBounds(this.cam);
+    const inView = whole != null && v.minX <= whole.minX && v.minY <= whole.minY && v.maxX >= whole.maxX && v.maxY >= whole.maxY;
+    this.drawn = drawnAll;
+    this.canvas.dataset.complete = String(inView);
+    for (const k of [...KINDS, "station", "edge", "pathpoint"]) {
+      this.canvas.dataset[`drawn${k[0].toUpperCase()}${k.slice(1)}`] = String(drawnAll[k] ?? 0);
+    }
+    this.updateSummary();
+  }
+
+  private updateSummary(): void {
+    const scene = this.scene;
+    if (scene === null) {
+      this.summary.textContent = t("map.none");
+      return;
+    }
+    const counts = countKinds(scene);
+    const parts = KINDS.filter((k) => counts[k] > 0).map((k) => `${t(`kind.${k}` as Key)}: ${this.drawn[k] ?? 0}/${counts[k]}`);
+    if (this.roadmap) {
+      parts.push(`${t("kind.station")}: ${this.drawn.station ?? 0}/${this.roadmap.stations.length}`);
+      parts.push(`${t("kind.edge")}: ${this.drawn.edge ?? 0}/${this.roadmap.edges.length}`);
+    }
+    this.summary.textContent = `${t("map.summary", { name: scene.name || "-" })} ${parts.join(", ")}`;
+  }
+
+  render(): void {
+    const t0 = performance.now();
+    this.dirty = false;
+    const ctx = this.canvas.getContext("2d");
+    if (ctx === null) {
+      return;
+    }
+    const c = this.cam;
+    const dpr = window.devicePixelRatio || 1;
+    ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
+    if (this.syncLayers) {
+      this.layer = null;
+    }
+    this.updateLayer();
+    this.drawLayer(ctx);
+    const o = this.options;
+    const overlay: OverlayOptions = {
+      showEstimated: o.showEstimated,
+      showDesired: o.showDesired,
+      scan: o.localization,
+      ultrasonic: o.ultrasonic,
+      path: o.planning,
+      localization: o.localization,
+      planObstacles: o.planning,
+    };
+    if (this.status) {
+      const live = drawStatus(ctx, c, this.status, this.footprint, this.usSensors, overlay);
+      this.canvas.dataset.drawnScan = String(live.scan);
+      this.canvas.dataset.drawnUltrasonic = String(live.ultrasonic);
+      this.canvas.dataset.drawnPath = String(live.path);
+    }
+    if (this.ghost) {
+      ctx.globalAlpha = 0.6;
+      drawStatus(ctx, c, Object.assign(new GetStatusReply(), { estX: this.ghost.x, estY: this.ghost.y, estAngle: this.ghost.angle * 1000 }), this.footprint, [], { ...overlay, showDesired: false, scan: false, ultrasonic: false, path: false, localization: false });
+      ctx.globalAlpha = 1;
+    }
+    if (this.flag && this.tool === "flag") {
+      drawFlag(ctx, c, this.flag);
+      this.canvas.dataset.flag = `${this.flag.x},${this.flag.y},${this.flag.angle}`;
+    }
+    this.editHooks?.draw(ctx, c);
+    if (this.area) {
+      const a = this.area;
+      ctx.strokeStyle = "#1565c0";
+      ctx.setLineDash([4, 3]);
+      ctx.strokeRect(Math.min(a.x0, a.x1), Math.min(a.y0, a.y1), Math.abs(a.x1 - a.x0), Math.abs(a.y1 - a.y0));
+      ctx.setLineDash([]);
+    }
+    this.canvas.dataset.camera = JSON.stringify({ cx: c.cx, cy: c.cy, scale: c.scale, width: c.width, height: c.height });
+    this.frameTimes.push(performance.now() - t0);
+    this.canvas.dataset.layer = this.covers(this.layer) ? "current" : "stale";
+    if (this.frameTimes.length > 1000) {
+      this.frameTimes.splice(0, 500);
+    }
+  }
+}
+
+export { countKinds };

@@ -1,0 +1,68 @@
+/**
+ * The wire inspector (beyond the original): every telegram this tab sent or received, decoded by the generated
+ * codec (its canonical dump). GET_STATUS polling can be hidden; the view can be paused.
+ */
+import { h } from "../dom";
+import { bind } from "../i18n/i18n";
+import { dump } from "../pltf";
+import type { PlatformSession, WireRecord } from "../session/session";
+
+export const MAX_RECORDS = 500;
+const MAX_TEXT = 300;
+
+/** What the inspector keeps of a telegram: its text, cut short (a decoded status holds ~20 KB of scan points). */
+interface Line {
+  text: string;
+  name: string;
+}
+
+export function wirePanel(session: PlatformSession): { root: HTMLElement; onShow: (on: boolean) => void } {
+  const records: Line[] = [];
+  const pre = h("pre", { class: "wire", role: "log", tabindex: "0" });
+  bind(pre, "menu.wire", { text: false });
+  const hide = h("input", { type: "checkbox", checked: true });
+  const pause = h("input", { type: "checkbox" });
+  const hideCap = h("span");
+  const pauseCap = h("span");
+  bind(hideCap, "wire.hidePolling", { name: false });
+  bind(hide, "wire.hidePolling", { text: false });
+  bind(pauseCap, "wire.pause", { name: false });
+  bind(pause, "wire.pause", { text: false });
+  let shown = false;
+  let dirty = false;
+  const line = (r: WireRecord): Line => {
+    let text = dump(r.telegram);
+    if (text.length > MAX_TEXT) {
+      text = `${text.slice(0, MAX_TEXT)}... (${r.bytes} bytes)`;
+    }
+    const name = r.telegram.telegramName;
+    return { name, text: `${new Date(r.t).toISOString().slice(11, 23)} ${r.dir === "out" ? "->" : "<-"} ${name} ${text}` };
+  };
+  session.wire.subscribe((r) => {
+    records.push(line(r));
+    if (records.length > 2 * MAX_RECORDS) {
+      records.splice(0, records.length - MAX_RECORDS);
+    }
+    dirty = true;
+  }, false);
+  const hidden = new Set(["CMD_GET_STATUS", "CMD_GET_POSITION", "CMD_GET_DEBUG_DATA", "CMD_GET_CAN_MESSAGES"]);
+  const render = () => {
+    if (!shown || !dirty || pause.checked) {
+      return;
+    }
+    dirty = false;
+    const shownRecords = records.filter((r) => !(hide.checked && hidden.has(r.name))).slice(-MAX_RECORDS);
+    pre.textContent = shownRecords.map((r) => r.text).join("\n");
+    pre.scrollTop = pre.scrollHeight;
+  };
+  hide.addEventListener("change", () => ((dirty = true), render()));
+  window.setInterval(render, 300);
+  return {
+    root: h("div", {}, h("div", { class: "row" }, h("label", { class: "check" }, hide, hideCap), h("label", { class: "check" }, pause, pauseCap)), pre),
+    onShow: (on) => {
+      shown = on;
+      dirty = true;
+      render();
+    },
+  };
+}

@@ -1,0 +1,32 @@
+"""``pltf dissector``: write the Wireshark Lua dissector generated from spec/ (or ``--check`` a copy of it)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from pltf.proxy.dissector import check, render
+
+
+def add_dissector_arguments(p: argparse.ArgumentParser) -> None:
+    where = p.add_mutually_exclusive_group(required=True)
+    where.add_argument("--out", type=Path, metavar="FILE", help="write the dissector to FILE (e.g. pltf.lua)")
+    where.add_argument("--check", type=Path, metavar="FILE", help="exit 1 if FILE differs from a fresh generation")
+
+
+def run_dissector(args: argparse.Namespace) -> int:
+    if args.check is not None:
+        problem = check(args.check)
+        if problem:
+            print(f"pltf: {problem}", file=sys.stderr)
+            return 1
+        print(f"{args.check}: up to date")
+        return 0
+    try:
+        args.out.write_text(render(), encoding="utf-8")
+    except OSError as exc:
+        print(f"pltf: error: cannot write {args.out}: {exc.strerror}", file=sys.stderr)
+        return 2
+    print(f"wrote {args.out} (Wireshark: wireshark -X lua_script:{args.out}, or copy it into the Lua plugins folder)")
+    return 0

@@ -1,0 +1,127 @@
+"""``pltf proxy``: a transparent TCP proxy in front of one or both ports of a PlatformCtrl (proxy/).
+
+It forwards bytes unchanged, shows every telegram of both directions live, and with ``--record FILE`` keeps the
+session (FILE, JSON lines) and a pcapng beside it. The decoding, the view and the files run in a process of
+their own (proxy/offload.py), so they never hold up a forwarded byte. Runs until Ctrl-C (or SIGTERM). Exit
+status 0, or 2 for a user error (bad address, port in use, unwritable file).
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import signal
+import sys
+import time
+from pathlib import Path
+
+from pltf.proxy.capture import PcapngWriter
+from pltf.proxy.network import ProxyServer, Route
+from pltf.proxy.offload import RecorderPipe
+from pltf.proxy.recorder import Recorder, Sink
+from pltf.proxy.session import SessionWriter
+from pltf.proxy.view import Selection, View
+from pltf.spec.codec import DEFAULT_MAX_LENGTH
+
+
+def _fail(message: str) -> int:
+    print(f"pltf: error: {message}", file=sys.stderr)
+    return 2
+
+
+def host_port(text: str) -> tuple[str, int]:
+    host, sep, port = text.rpartition(":")
+    if not sep or not host or not port.isdigit() or not 0 <= int(port) < 65536:
+        raise argparse.ArgumentTypeError(f"expected HOST:PORT, got {text!r}")
+    return host.strip("[]"), int(port)
+
+
+def port_pair(text: str) -> tuple[int, int]:
+    """``--second LISTEN_PORT[:TARGET_PORT]``: the second port, on the hosts of --listen and --target."""
+    parts = text.split(":")
+    if len(parts) not in (1, 2) or not all(p.isdigit() and int(p) < 65536 for p in parts):
+        raise argparse.ArgumentTypeError(f"expected PORT or LISTEN_PORT:TARGET_PORT, got {text!r}")
+    return int(parts[0]), int(parts[-1])
+
+
+def add_proxy_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--listen", type=host_port, required=True, metavar="HOST:PORT",
+                   help="where clients connect (port 0: any free port, printed at start)")
+    p.add_argument("--target", type=host_port, required=True, metavar="HOST:PORT", help="the platform (or server)")
+    p.add_argument("--second", type=port_pair, metavar="LPORT[:TPORT]",
+                   help="also proxy a second port: listen on LPORT, forward to TPORT of the target (guide 6.1: 10002)")
+    p.add_argument("--record", type=Path, metavar="FILE",
+                   help="write the session to FILE (JSON lines) and the traffic to FILE with suffix .pcapng")
+    p.add_argument("--pcapng", type=Path, metavar="FILE", help="the pcapng file (default: beside --record)")
+    p.add_argument("--filter", action="append", default=[], metavar="NAMES",
+                   help="show only these telegrams (names or globs, comma-separated, CMD_ optional; repeatable)")
+    p.add_argument("--hide", action="append", default=[], metavar="NAMES",
+                   help="do not show these telegrams (e.g. GET_STATUS when a client polls)")
+    p.add_argument("--quiet", action="store_true", help="no live view (recording goes on)")
+    p.add_argument("--relative-time", action="store_true", help="times in seconds since the proxy started")
+    p.add_argument("--max-length", type=int, default=DEFAULT_MAX_LENGTH, metavar="BYTES",
+                   help="frames longer than this are marked FrameTooLarge (default 16 MiB, erratum E-WIRE-004)")
+
+
+def _names(values: list[str]) -> list[str]:
+    return [n for v in values for n in v.split(",") if n.strip()]
+
+
+def _summary(recorder: Recorder) -> str:
+    counts = recorder.counts
+    frames = sum(counts.values()) - counts["connections"]
+    text = f"proxy stopped: {counts['connections']} connections, {frames} frames"
+    return text + (f", {counts['malformed']} malformed" if counts["malformed"] else "")
+
+
+def run_proxy(args: argparse.Namespace) -> int:
+    (lhost, lport), (thost, tport) = args.listen, args.target
+    routes = [Route(lhost, lport, thost, tport)]
+    if args.second is not None:
+        routes.append(Route(lhost, args.second[0], thost, args.second[1]))
+    started = time.time()
+    pcapng_path = args.pcapng or (args.record.with_suffix(".pcapng") if args.record is not None else None)
+    for path in (args.record, pcapng_path):  # fail here, in one line, not in the recorder process
+        if path is not None:
+            try:
+                path.open("wb").close()
+            except OSError as exc:
+                return _fail(f"cannot write the recording: {path}: {exc.strerror}")
+
+    def make() -> Recorder:  # in the recorder process
+        sinks: list[Sink] = []
+        flushes = []
+        if not args.quiet:
+            view = View(sys.stdout, Selection(_names(args.filter), _names(args.hide)), color=sys.stdout.isatty(),
+                        t0=started if args.relative_time else None)  # fmt: skip
+            sinks.append(view.show)
+            flushes.append(view.flush)
+        session = SessionWriter(args.record) if args.record is not None else None
+        pcapng = PcapngWriter(pcapng_path) if pcapng_path is not None else None
+        return Recorder(sinks, pcapng, session, max_length=args.max_length, flushes=flushes)
+
+    pipe = RecorderPipe(make, _summary)
+    sys.stdout.flush()
+    pipe.start()
+    try:
+        return asyncio.run(_serve(routes, pipe, started))
+    except OSError as exc:
+        pipe.close(time.time())
+        return _fail(f"cannot listen on {lhost}: {exc.strerror or exc}")
+
+
+async def _serve(routes: list[Route], pipe: RecorderPipe, started: float) -> int:
+    proxy = ProxyServer(routes, pipe)
+    listening = await proxy.start()
+    pipe.session_start([(f"{h}:{p}", f"{r.target_host}:{r.target_port}")
+                        for r, (h, p) in zip(routes, listening, strict=True)], started)  # fmt: skip
+    for route, (host, port) in zip(routes, listening, strict=True):
+        print(f"proxy listening at {host}:{port} -> {route.target_host}:{route.target_port}", flush=True)
+    loop = asyncio.get_running_loop()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        loop.add_signal_handler(sig, proxy.request_stop)
+    try:
+        await proxy.wait_stopped()
+    finally:
+        await proxy.close()
+    return 0

@@ -1,0 +1,82 @@
+"""Field-by-field comparison of a recorded reply with a replayed one (sans-IO).
+
+Rules: telegrams are compared in the JSON shape ``pltf decode`` prints (what the session file keeps); the
+volatile-field table (spec/volatile.yaml) decides per top-level field: ignored, compared within a tolerance (a
+group's tolerance applies to its items' numbers), or exact. A group whose item counts differ is one difference
+(its count), not one per item. Enum values are named, long strings cut, so that a difference reads as what a
+person would check: ``motion_mode: recorded MODE_MOTION_VEL (3), replayed MODE_MOTION_NO (0)``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from pltf.spec.jsonio import telegram_to_json
+from pltf.spec.telegram import Telegram
+from pltf.spec.volatile import rule, values_differ
+
+CUT = 60
+
+
+@dataclass(frozen=True)
+class FieldDiff:
+    path: str  # "motion_mode", "scan (count)", "parameters[3].value", "us_distance[2]"
+    recorded: str
+    replayed: str
+
+
+def _show(value: Any, name: str | None = None) -> str:
+    if name is not None:
+        return f"{name} ({value})"
+    if isinstance(value, str):
+        text = repr(value)
+        return text if len(text) <= CUT else f"{text[:CUT]}... ({len(value)} characters)"
+    return repr(value)
+
+
+def _strings(a: str, b: str) -> tuple[str, str]:
+    """Long strings that differ, shown around the first character where they do."""
+    if len(a) <= CUT and len(b) <= CUT:
+        return _show(a), _show(b)
+    k = next((i for i, (x, y) in enumerate(zip(a, b, strict=False)) if x != y), min(len(a), len(b)))
+    lo = max(0, k - 20)
+    return (f"...{a[lo : k + 30]!r}... ({len(a)} characters, differs at {k})",
+            f"...{b[lo : k + 30]!r}... ({len(b)} characters)")  # fmt: skip
+
+
+def diff_telegrams(recorded: Telegram, replayed: Telegram) -> list[FieldDiff]:
+    """The fields of two replies that differ beyond the volatile-field table (an empty list: the same reply)."""
+    if recorded.NAME != replayed.NAME:
+        return [FieldDiff("(telegram)", recorded.NAME, replayed.NAME)]
+    a, b = telegram_to_json(recorded), telegram_to_json(replayed)
+    names_a, names_b = a.get("names", {}), b.get("names", {})
+    layout = recorded.DEF.layout(recorded.DIRECTION) if recorded.DEF.layout_known else None
+    groups = {f.name for f in layout or () if f.is_group}
+    out: list[FieldDiff] = []
+    for field, va in a["fields"].items():
+        vb = b["fields"][field]
+        r = rule(recorded.NAME, field)
+        if r.ignored:
+            continue
+        if field in groups:
+            if len(va) != len(vb):
+                out.append(FieldDiff(f"{field} (count)", str(len(va)), str(len(vb))))
+                continue
+            for i, (ia, ib) in enumerate(zip(va, vb, strict=True)):
+                for sub, x in ia.items():
+                    if values_differ(x, ib[sub], r.tolerance):
+                        key = f"{field}/{i}/{sub}"
+                        out.append(FieldDiff(f"{field}[{i}].{sub}", _show(x, names_a.get(key)),
+                                             _show(ib[sub], names_b.get(key))))  # fmt: skip
+        elif isinstance(va, list):
+            for i, (x, y) in enumerate(zip(va, vb, strict=True)):
+                if values_differ(x, y, r.tolerance):
+                    key = f"{field}/{i}"
+                    out.append(FieldDiff(f"{field}[{i}]", _show(x, names_a.get(key)), _show(y, names_b.get(key))))
+        elif isinstance(va, str) and isinstance(vb, str):
+            if va != vb:
+                out.append(FieldDiff(field, *_strings(va, vb)))
+        elif values_differ(va, vb, r.tolerance):
+            out.append(FieldDiff(field, _show(va, names_a.get(field)), _show(vb, names_b.get(field))))
+    return out

@@ -1,0 +1,195 @@
+"""Fixtures of the GUI tests: the reference server (a subprocess, with its fault-control channel), the gateway
+(``pltf gui`` as a subprocess), Debian's chromium driven by Playwright, and a plain client on the server's OTHER
+port to check what the GUI did.
+
+A page fixture fails the test on any browser console error or uncaught page error. Screenshots go to
+``$PLTF_GUI_ARTIFACTS`` (default: a ``gui-artifacts`` folder in pytest's temporary directory).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import socket
+import subprocess
+import sys
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from pltf.client import PlatformClient
+from pltf.zoo import launch
+
+REPO = Path(__file__).resolve().parents[2]
+CHROMIUM = "/usr/bin/chromium"
+CHROMIUM_ARGS = [
+    "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking", "--disable-component-update",
+    "--disable-sync", "--no-first-run",
+]  # fmt: skip
+VIEWPORT = {"width": 1400, "height": 900}
+
+playwright_sync = pytest.importorskip("playwright.sync_api")
+
+
+def _need_browser() -> None:
+    if not Path(CHROMIUM).exists():
+        pytest.fail(f"{CHROMIUM} is missing: `make chromium` installs Debian's chromium")
+    if not (REPO / "gui" / "static" / "index.html").is_file():
+        pytest.fail("the GUI is not built: `make gui`")
+
+
+def wait_for(pred: Callable[[], Any], timeout: float = 10.0, what: str = "condition", every: float = 0.05) -> Any:
+    deadline = time.monotonic() + timeout
+    while True:
+        value = pred()
+        if value:
+            return value
+        if time.monotonic() > deadline:
+            raise AssertionError(f"timed out after {timeout} s waiting for {what}")
+        time.sleep(every)
+
+
+class Control:
+    """The reference server's fault-control channel (fake_hardware/control_channel.py): one line, one JSON answer."""
+
+    def __init__(self, port: int) -> None:
+        self.sock = socket.create_connection(("127.0.0.1", port), timeout=5)
+        self.file = self.sock.makefile("rwb")
+
+    def __call__(self, line: str) -> dict[str, Any]:
+        self.file.write(line.encode() + b"\n")
+        self.file.flush()
+        answer: dict[str, Any] = json.loads(self.file.readline())
+        assert answer.get("ok"), answer
+        return answer
+
+    def close(self) -> None:
+        self.file.close()
+        self.sock.close()
+
+
+class Platform:
+    """A running reference server: its two ports, its control channel, a client on the second port."""
+
+    def __init__(self, server: launch.Launched) -> None:
+        self.server = server
+        self.ports = server.ports
+        found = wait_for(lambda: re.findall(r"control channel started at port (\d+)", "\n".join(server.log_lines)),
+                         timeout=10, what="the control channel")  # fmt: skip
+        self.control = Control(int(found[0]))
+        self._other: PlatformClient | None = None
+
+    @property
+    def target(self) -> str:
+        return f"127.0.0.1:{self.ports[0]}"
+
+    @property
+    def other(self) -> PlatformClient:
+        """A plain client on the port the GUI does not use (guide 6.1: 10000 and 10002)."""
+        if self._other is None:
+            self._other = PlatformClient("127.0.0.1", self.ports[1], timeout=5.0)
+        return self._other
+
+    def close(self) -> None:
+        if self._other is not None:
+            self._other.close()
+        self.control.close()
+
+
+@pytest.fixture
+def platform() -> Iterator[Platform]:
+    with launch.reference(time_scale=5.0, extra=["--control-port", "0"], start_timeout=60.0) as server:
+        p = Platform(server)
+        try:
+            yield p
+        finally:
+            p.close()
+
+
+class Gateway:
+    def __init__(self, ini: Path, reply_timeout: float = 2.0) -> None:
+        self.ini = ini
+        env = dict(os.environ, PYTHONUNBUFFERED="1")
+        self.proc = subprocess.Popen(
+            [sys.executable, "-m", "pltf.cli.main", "gui", "--target", "127.0.0.1:1", "--listen", "127.0.0.1:0",
+             "--network-ini", str(ini), "--reply-timeout", str(reply_timeout)],
+            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, cwd=REPO, env=env,
+        )  # fmt: skip
+        assert self.proc.stdout is not None
+        line = self.proc.stdout.readline()
+        m = re.search(r"gui serving at (http://[^/]+)/", line)
+        if m is None:
+            self.proc.kill()
+            raise AssertionError(f"the gateway did not start: {line}{self.proc.stdout.read()}")
+        self.base = m.group(1)
+
+    def url(self, target: str) -> str:
+        return f"{self.base}/?target={target}"
+
+    def stop(self) -> None:
+        self.proc.terminate()
+        try:
+            self.proc.communicate(timeout=10)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            self.proc.communicate()
+
+
+@pytest.fixture(scope="session")
+def gateway(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Gateway]:
+    _need_browser()
+    ini = tmp_path_factory.mktemp("gui") / "Network.ini"
+    ini.write_text("[Network]\nlab = 127.0.0.1:10000\n", encoding="utf-8")
+    gw = Gateway(ini)
+    try:
+        yield gw
+    finally:
+        gw.stop()
+
+
+@pytest.fixture(scope="session")
+def browser() -> Iterator[Any]:
+    _need_browser()
+    with playwright_sync.sync_playwright() as pw:
+        b = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
+        try:
+            yield b
+        finally:
+            b.close()
+
+
+@pytest.fixture(scope="session")
+def artifacts(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    out = os.environ.get("PLTF_GUI_ARTIFACTS")
+    path = Path(out) if out else tmp_path_factory.mktemp("gui-artifacts")
+    path.mkdir(parents=True, exist_ok=True)
+    return path
+
+
+@pytest.fixture
+def page(browser: Any) -> Iterator[Any]:
+    context = browser.new_context(viewport=VIEWPORT)
+    pg = context.new_page()
+    problems: list[str] = []
+    pg.on("console", lambda m: problems.append(f"console {m.type}: {m.text}") if m.type == "error" else None)
+    pg.on("pageerror", lambda e: problems.append(f"page error: {e}"))
+    pg.set_default_timeout(10_000)
+    try:
+        yield pg
+    finally:
+        context.close()
+    assert not problems, "the browser reported errors:\n" + "\n".join(problems)
+
+
+def open_gui(page: Any, gateway: Gateway, target: str, *, connected: bool = True) -> None:
+    page.goto(gateway.url(target))
+    if connected:
+        expect_text(page.get_by_role("status", name="Connection"), f"connected to {target}")
+
+
+def expect_text(locator: Any, text: str | re.Pattern[str], timeout: float = 10_000) -> None:
+    playwright_sync.expect(locator).to_contain_text(text, timeout=timeout)

@@ -1,0 +1,155 @@
+"""proxy/network.py over real loopback sockets: bytes pass unchanged both ways however they are cut, garbage
+included; half-close, reset and an unreachable target look to the other side as they would without the proxy;
+a slow reader slows the sender; nothing that passes through stops the proxy."""
+
+from __future__ import annotations
+
+import random
+import socket
+import struct
+import time
+
+from pltf.proxy.tap import CLOSE, FRAME, OPEN, RAW
+from pltf.spec.codec import REQUESTS, encode
+from tests.proxy.helpers import Peer, ProxyThread, read_exactly, read_to_end
+
+STOP = encode(REQUESTS.CMD_STOP())
+SET_MODE = bytes.fromhex("ff01fe02000000050f00000003")
+GARBAGE = b"\x00\x01garbage\xff\x01\xfe"
+
+
+def test_bytes_pass_unchanged_however_they_are_cut() -> None:
+    peer = Peer()
+    with ProxyThread([peer.port]) as proxy, socket.create_connection(("127.0.0.1", proxy.ports[0])) as c:
+        sent = SET_MODE + STOP + SET_MODE
+        for i in range(0, len(sent), 3):  # split
+            c.sendall(sent[i : i + 3])
+            time.sleep(0.002)
+        c.sendall(STOP * 5 + GARBAGE)  # coalesced, then not a frame
+        expected = sent + STOP * 5 + GARBAGE
+        assert peer.wait_bytes(len(expected)) == expected
+        back = bytes(range(256)) * 40 + STOP
+        peer.accepted().sendall(back)
+        assert read_exactly(c, len(back)) == back
+        c.close()
+        assert peer.eof.wait(5)
+        peer.accepted().close()
+        recs = proxy.wait_records(lambda rs: any(r.kind == CLOSE for r in rs))
+    peer.close()
+    requests = [r for r in recs if r.direction == "request"]
+    assert [r.name for r in requests[:9]] == ["CMD_SET_MODE", "CMD_STOP", "CMD_SET_MODE"] + ["CMD_STOP"] * 5 + [
+        "malformed"]
+    assert requests[8].kind == RAW and requests[8].error and requests[8].error.startswith("BadHeader")
+    assert b"".join(r.raw for r in requests) == expected
+    replies = [r for r in recs if r.direction == "reply"]
+    assert replies[0].error and replies[0].error.startswith("BadHeader")  # bytes(range(256)) is no frame
+    assert b"".join(r.raw for r in replies) == back
+    assert next(r.kind for r in recs) == OPEN and recs[-1].detail == "by client (FIN)"
+
+
+def test_half_close_travels_and_the_other_direction_keeps_going() -> None:
+    peer = Peer()
+    with ProxyThread([peer.port]) as proxy, socket.create_connection(("127.0.0.1", proxy.ports[0])) as c:
+        c.sendall(STOP + STOP[:5])
+        c.shutdown(socket.SHUT_WR)
+        assert peer.eof.wait(5), "the client's FIN did not reach the target"
+        assert bytes(peer.received) == STOP + STOP[:5]
+        peer.accepted().sendall(b"late reply")
+        peer.accepted().shutdown(socket.SHUT_WR)
+        assert read_to_end(c) == b"late reply"
+        recs = proxy.wait_records(lambda rs: any(r.kind == CLOSE for r in rs))
+    peer.close()
+    truncated = [r for r in recs if r.error and r.error.startswith("Truncated")]
+    assert truncated[0].raw == STOP[:5] and truncated[0].direction == "request"
+
+
+def test_a_reset_travels_as_a_reset() -> None:
+    server = socket.create_server(("127.0.0.1", 0))
+    server.settimeout(5)
+    with ProxyThread([server.getsockname()[1]]) as proxy, socket.create_connection(("127.0.0.1", proxy.ports[0])) as c:
+        c.sendall(STOP)
+        conn, _ = server.accept()
+        assert read_exactly(conn, len(STOP)) == STOP
+        conn.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+        conn.close()  # RST
+        c.settimeout(5)
+        try:
+            got = c.recv(100)
+        except ConnectionResetError:
+            got = None
+        assert got is None, f"expected a reset, got {got!r}"
+        recs = proxy.wait_records(lambda rs: any(r.kind == CLOSE for r in rs))
+    server.close()
+    assert recs[-1].detail.startswith("by target (reset")
+
+
+def test_an_unreachable_target_closes_the_client() -> None:
+    s = socket.create_server(("127.0.0.1", 0))
+    dead = s.getsockname()[1]
+    s.close()
+    with ProxyThread([dead]) as proxy, socket.create_connection(("127.0.0.1", proxy.ports[0])) as c:
+        assert read_to_end(c) == b""
+        recs = proxy.wait_records(lambda rs: any(r.kind == CLOSE for r in rs))
+    assert [r.kind for r in recs] == [OPEN, CLOSE]
+    assert recs[1].detail.startswith("by proxy (target unreachable")
+
+
+def test_a_slow_reader_slows_the_sender() -> None:
+    peer = Peer()
+    with ProxyThread([peer.port]) as proxy, socket.create_connection(("127.0.0.1", proxy.ports[0])) as c:
+        c.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 1 << 16)
+        conn = peer.accepted()
+        conn.settimeout(2.0)
+        blob = random.Random(1).randbytes(64 << 20)
+        pushed = 0
+        try:
+            while pushed < len(blob):
+                pushed += conn.send(blob[pushed : pushed + (1 << 20)])
+        except TimeoutError:
+            pass
+        assert pushed < 32 << 20, f"{pushed} bytes went into a client that reads nothing: no back-pressure"
+        conn.settimeout(None)
+        got = bytearray()
+        c.settimeout(10)
+        import threading
+
+        def rest() -> None:
+            conn.sendall(blob[pushed:])
+
+        t = threading.Thread(target=rest)
+        t.start()
+        while len(got) < len(blob):
+            got += c.recv(1 << 20)
+        t.join()
+        assert got == blob
+        assert proxy.alive
+    peer.close()
+
+
+def test_garbage_and_abrupt_clients_do_not_stop_the_proxy() -> None:
+    rng = random.Random(7)
+    peer_sock = socket.create_server(("127.0.0.1", 0))
+    peer_sock.settimeout(5)
+    with ProxyThread([peer_sock.getsockname()[1]]) as proxy:
+        for i in range(60):
+            c = socket.create_connection(("127.0.0.1", proxy.ports[0]))
+            conn, _ = peer_sock.accept()
+            c.sendall(rng.randbytes(rng.randrange(1, 3000)) if i % 3 else b"\xff\x01\xfe\x02\xff\xff\xff\xff")
+            conn.sendall(rng.randbytes(rng.randrange(1, 3000)))
+            if i % 2:
+                c.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+            c.close()
+            conn.close()
+        with socket.create_connection(("127.0.0.1", proxy.ports[0])) as c:
+            conn, _ = peer_sock.accept()
+            c.sendall(STOP)
+            assert read_exactly(conn, len(STOP)) == STOP
+            conn.sendall(b"ok")
+            assert read_exactly(c, 2) == b"ok"
+            conn.close()
+        recs = proxy.wait_records(lambda rs: sum(r.kind == CLOSE for r in rs) == 61)
+        assert proxy.alive and proxy.error is None
+    peer_sock.close()
+    assert sum(r.kind == OPEN for r in recs) == 61
+    assert any(r.error and r.error.startswith("FrameTooLarge") for r in recs)
+    assert [r.name for r in recs if r.kind == FRAME and r.direction == "request"][-1] == "CMD_STOP"

@@ -1,0 +1,202 @@
+"""proxy/replay.py: the plan (pairing, waits, timing, the order of connections) and the judgement, sans-IO; then
+``pltf replay`` for real: client scenarios recorded through the proxy against the reference server replay
+against a fresh one with no difference, and against a mutant of the conformance suite with the differences
+named."""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import time
+import xml.etree.ElementTree as ET
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from pltf.cli.main import main as pltf
+from pltf.conformance_tests.launch import ServerProcess
+from pltf.conformance_tests.readings import canonical
+from pltf.proxy.capture import PcapngWriter
+from pltf.proxy.recorder import Recorder
+from pltf.proxy.replay import Outcome, judge, plan
+from pltf.proxy.session import Route, Session, SessionWriter, read_session
+from pltf.proxy.tap import CLOSE, OPEN, Record, Tap
+from pltf.spec.codec import build, encode
+from tests.proxy.helpers import ProxyThread
+from tests.proxy.scenarios import all_scenarios
+from tests.proxy.tshark import run_tshark, telegrams
+
+TIME_SCALE = 10.0
+STATUS: Any = canonical("CMD_GET_STATUS", {})
+
+
+def rec(t: float, conn: int, direction: str, name: str, port: int = 10000, **fields: Any) -> Record:
+    telegram = STATUS if name == "STATUS" else build(direction, name, **fields)  # type: ignore[arg-type]
+    (r,) = Tap(direction, conn, port).feed(encode(telegram), t)  # type: ignore[arg-type]
+    return r
+
+
+def event(t: float, conn: int, kind: str, detail: str = "", port: int = 10000) -> Record:
+    return Record(t, conn, port, kind, detail=detail)
+
+
+def session(*records: Record) -> Session:
+    return Session(0.0, (Route("l:1", "h:10000"), Route("l:2", "h:10002")), records)
+
+
+# ---------------------------------------------------------------------------------------------- the plan
+
+
+def test_replies_pair_with_requests_by_identifier_and_timing_is_relative() -> None:
+    s = session(
+        event(1.0, 1, OPEN),
+        rec(1.0, 1, "request", "CMD_GET_POSITION"), rec(1.0, 1, "request", "CMD_SET_MODE", mode=4),
+        rec(1.1, 1, "request", "CMD_GET_STATUS"),
+        rec(1.3, 1, "reply", "STATUS"),  # answers out of order: by identifier
+        rec(1.4, 1, "reply", "CMD_GET_POSITION", x=1, y=2, angle=0.0, vel_trans=0.0, vel_rot=0.0),
+        rec(1.5, 1, "reply", "CMD_GET_CAMERA", ip="x", camera_id="y"),  # nobody asked
+        rec(2.0, 1, "request", "CMD_STOP"),
+        event(2.5, 1, CLOSE, "by target (FIN)"),
+    )
+    (script,) = plan(s)
+    names = [st.request.name for st in script.steps]
+    assert names == ["CMD_GET_POSITION", "CMD_SET_MODE", "CMD_GET_STATUS", "CMD_STOP"]
+    assert [st.reply.name if st.reply else None for st in script.steps] == [
+        "CMD_GET_POSITION", None, "CMD_GET_STATUS", None]
+    assert [st.answered for st in script.steps] == [True, False, True, False]
+    assert [st.after_replies for st in script.steps] == [0, 0, 0, 3]
+    assert script.steps[3].gap == pytest.approx(0.5)  # after the last reply, not after the previous request
+    assert [u.name for u in script.unsolicited] == ["CMD_GET_CAMERA"]
+    assert script.closed_by == "target" and script.close_gap == pytest.approx(0.5) and script.waits == {}
+
+
+def test_a_run_of_the_same_request_is_a_wait() -> None:
+    records = [event(0.0, 1, OPEN)]
+    for k in range(4):
+        records += [rec(1 + k * 0.1, 1, "request", "CMD_GET_STATUS"), rec(1.05 + k * 0.1, 1, "reply", "STATUS")]
+    records += [rec(2.0, 1, "request", "CMD_GET_STATUS"), rec(2.1, 1, "request", "CMD_STOP"),
+                rec(2.2, 1, "request", "CMD_GET_STATUS"), rec(2.3, 1, "reply", "STATUS")]  # fmt: skip
+    (script,) = plan(session(*records))
+    (wait,) = script.waits.values()
+    assert wait.steps == [0, 1, 2, 3, 4] and wait.interval == pytest.approx(0.1) and wait.final == 4
+    assert script.steps[5].wait is None and script.steps[6].wait is None
+
+
+def test_a_connection_waits_for_the_ones_closed_before_it_on_its_port() -> None:
+    s = session(event(0.0, 1, OPEN), event(1.0, 1, CLOSE, "by client (FIN)"),
+                event(0.5, 2, OPEN, port=10002), event(1.5, 3, OPEN), event(3.0, 2, CLOSE, "by client (FIN)", 10002),
+                event(3.0, 3, CLOSE, "by client (FIN)"))  # fmt: skip
+    scripts = {sc.conn: sc for sc in plan(s)}
+    assert scripts[3].after_closes == [1] and scripts[2].after_closes == [] and scripts[2].route == 1
+
+
+# ---------------------------------------------------------------------------------------------- the judgement
+
+
+def test_the_judgement_names_each_difference() -> None:
+    s = session(
+        event(0.0, 1, OPEN),
+        rec(1.0, 1, "request", "CMD_GET_STATUS"), rec(1.1, 1, "reply", "STATUS"),
+        rec(2.0, 1, "request", "CMD_GET_PLTF_PARAM", key="IpoTransVel"),
+        rec(2.1, 1, "reply", "CMD_GET_PLTF_PARAM", key="IpoTransVel", value="800", category=2, data_type=1,
+            minimum=50, maximum=1500),
+        rec(3.0, 1, "request", "CMD_GET_CAMERA"),
+        event(4.0, 1, CLOSE, "by target (FIN)"),
+    )
+    (script,) = plan(s)
+    same = Outcome(1, replies={0: script.steps[0].reply, 1: script.steps[1].reply, 2: rec(3.1, 1, "reply",
+                   "CMD_GET_CAMERA", ip="a", camera_id="b")}, sent=3, closed_by_target_after=3)  # type: ignore[dict-item]  # fmt: skip
+    assert [d.path for d in judge([script], {1: same})] == ["(reply)"]  # the camera was never answered on record
+    other = Outcome(1, replies={0: rec(1.1, 1, "reply", "STATUS").__class__(
+        **{**rec(1.1, 1, "reply", "STATUS").__dict__, "telegram": STATUS.replace(motion_mode=3)})}, sent=3)
+    diffs = judge([script], {1: other})
+    assert [(d.telegram, d.path, d.recorded, d.replayed) for d in diffs] == [
+        ("CMD_GET_STATUS", "motion_mode", f"{_mode(STATUS.motion_mode)}", "MODE_MOTION_VEL (3)"),
+        ("CMD_GET_PLTF_PARAM", "(reply)", "CMD_GET_PLTF_PARAM", "no reply"),
+        ("(connection)", "end", "closed by the target", "kept open by the target"),
+    ]
+    cut = judge([script], {1: Outcome(1, replies=same.replies, sent=1, closed_by_target_after=1)})
+    assert any(d.path == "requests" and "before CMD_GET_PLTF_PARAM key='IpoTransVel'" in d.replayed for d in cut)
+
+
+def _mode(value: int) -> str:
+    from pltf.spec.model import enum_classes
+
+    return f"{enum_classes()['MotionMode'](value).name} ({value})"
+
+
+# ---------------------------------------------------------------------------------------------- for real
+
+
+@pytest.fixture(scope="module")
+def recorded(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Path]:
+    """The client scenarios through the proxy (in a thread) against the reference server: session + pcapng."""
+    out = tmp_path_factory.mktemp("recorded")
+    with ServerProcess(time_scale=TIME_SCALE) as server:
+        writer = SessionWriter(out / "session.jsonl")
+        recorder = Recorder([], PcapngWriter(out / "session.pcapng"), writer)
+        with ProxyThread(server.ports, recorder) as proxy:
+            writer.start([Route(f"127.0.0.1:{p}", f"127.0.0.1:{q}") for p, q in zip(proxy.ports, server.ports,
+                                                                                      strict=True)], time.time())
+            all_scenarios(proxy.ports)
+    yield out / "session.jsonl"
+
+
+def _replay(path: Path, ports: list[int], *extra: str) -> tuple[int, str]:
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        code = pltf(["replay", str(path), "--target", f"127.0.0.1:{ports[0]}", "--second-port", str(ports[1]),
+                     "--reply-timeout", "10", *extra])  # fmt: skip
+    return code, out.getvalue()
+
+
+def test_the_recording_holds_every_exchange(recorded: Path) -> None:
+    s = read_session(recorded)
+    names = [r.name for r in s.records]
+    assert names.count("open") == names.count("close") == 3
+    assert {"CMD_MOVE_REL", "CMD_GET_PLTF_PARAM_VEC", "CMD_SET_PLTF_PARAM", "CMD_GET_MAP"} <= set(names)
+    assert [r.error.split(":")[0] for r in s.records if r.error] == ["BadHeader"]
+    assert s.records[-1].detail.startswith("by target")  # the bad header closed it
+
+
+def test_the_pcapng_opens_in_tshark_with_the_dissector(recorded: Path) -> None:
+    s = read_session(recorded)
+    shown = telegrams(run_tshark(recorded.with_suffix(".pcapng"), "-d", f"tcp.port=={s.ports[0]},pltf", "-d",
+                                 f"tcp.port=={s.ports[1]},pltf"))  # fmt: skip
+    in_session = [r for r in s.records if r.kind in ("frame", "raw")]
+    assert len(shown) == len(in_session)
+    for sh, r in zip(shown, in_session, strict=True):
+        assert (r.name in sh.label) if r.telegram is not None else ("[BadHeader]" in sh.label), (sh.label, r.name)
+
+
+def test_the_session_replays_against_the_reference_server_with_no_difference(recorded: Path, tmp_path: Path) -> None:
+    with ServerProcess(time_scale=TIME_SCALE) as server:
+        code, out = _replay(recorded, server.ports, "--junit", str(tmp_path / "replay.xml"))
+    assert code == 0, out
+    assert out.endswith(": no difference\n") and " 0 of " not in out
+    root = ET.parse(tmp_path / "replay.xml").getroot()
+    assert root.get("failures") == "0" and len(root.findall(".//testcase")) >= 6
+
+
+def test_against_a_mutant_the_differences_are_named(recorded: Path, tmp_path: Path) -> None:
+    with ServerProcess(time_scale=TIME_SCALE, mutant="set_mode_anywhere") as server:  # CMD_SET_MODE in Running
+        code, out = _replay(recorded, server.ports, "--time-scale", "2", "--junit", str(tmp_path / "replay.xml"))
+    assert code == 1, out
+    assert "CMD_GET_STATUS: " in out
+    assert "motion_mode: recorded MODE_MOTION_AUTOMATIC (4), replayed MODE_MOTION_VEL (3)" in out
+    failed = [c.get("name") for c in ET.parse(tmp_path / "replay.xml").getroot().iter("testcase")
+              if c.find("failure") is not None]
+    assert failed == ["CMD_GET_STATUS"]
+
+
+def test_replay_errors_are_one_line(tmp_path: Path, recorded: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    bad = tmp_path / "bad.jsonl"
+    bad.write_text("not a session\n")
+    assert pltf(["replay", str(bad), "--target", "127.0.0.1:1"]) == 2
+    assert pltf(["replay", str(recorded), "--target", "127.0.0.1:1"]) == 2  # two ports, --second-port missing
+    assert pltf(["replay", str(recorded), "--target", "127.0.0.1:1", "--second-port", "2"]) == 2  # nothing there
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 3 and all(line.startswith("pltf: error: ") for line in err), err
+    assert "--second-port" in err[1] and "cannot connect" in err[2]
