@@ -100,21 +100,25 @@ def run_proxy(args: argparse.Namespace) -> int:
         pcapng = PcapngWriter(pcapng_path) if pcapng_path is not None else None
         return Recorder(sinks, pcapng, session, max_length=args.max_length, flushes=flushes)
 
-    pipe = RecorderPipe(make, _summary)
-    sys.stdout.flush()
-    pipe.start()
+    pipe = None
+    if not (args.quiet and pcapng_path is None):  # nothing to show or keep: forwarding only, no recorder process
+        pipe = RecorderPipe(make, _summary)
+        sys.stdout.flush()
+        pipe.start()
     try:
         return asyncio.run(_serve(routes, pipe, started))
     except OSError as exc:
-        pipe.close(time.time())
+        if pipe is not None:
+            pipe.close(time.time())
         return _fail(f"cannot listen on {lhost}: {exc.strerror or exc}")
 
 
-async def _serve(routes: list[Route], pipe: RecorderPipe, started: float) -> int:
+async def _serve(routes: list[Route], pipe: RecorderPipe | None, started: float) -> int:
     proxy = ProxyServer(routes, pipe)
     listening = await proxy.start()
-    pipe.session_start([(f"{h}:{p}", f"{r.target_host}:{r.target_port}")
-                        for r, (h, p) in zip(routes, listening, strict=True)], started)  # fmt: skip
+    if pipe is not None:
+        pipe.session_start([(f"{h}:{p}", f"{r.target_host}:{r.target_port}")
+                            for r, (h, p) in zip(routes, listening, strict=True)], started)  # fmt: skip
     for route, (host, port) in zip(routes, listening, strict=True):
         print(f"proxy listening at {host}:{port} -> {route.target_host}:{route.target_port}", flush=True)
     loop = asyncio.get_running_loop()
@@ -124,4 +128,6 @@ async def _serve(routes: list[Route], pipe: RecorderPipe, started: float) -> int
         await proxy.wait_stopped()
     finally:
         await proxy.close()
+    if pipe is None:
+        print("proxy stopped", file=sys.stderr)
     return 0
