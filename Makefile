@@ -20,7 +20,7 @@ GUI_SOURCES := $(shell find $(GUI_WEB)/src -type f 2>/dev/null) $(GUI_WEB)/index
 # namespace through a tree of links in the venv (NSTREE).
 NSTREE := $(VENV)/namespace/pltf
 NSLINKS := spec:spec client:clients/pltf_client reference_server:reference_server fake_hardware:fake_hardware \
-	conformance_tests:conformance_tests fuzz:fuzz stubgen:clients/stubgen cli:pltf_cli fixtures:fixtures gui:gui proxy:proxy
+	conformance_tests:conformance_tests fuzz:fuzz stubgen:clients/stubgen cli:pltf_cli fixtures:fixtures gui:gui zoo:zoo proxy:proxy
 
 $(STAMP): pyproject.toml setup.py spec/pyproject.toml clients/pyproject.toml $(wildcard reference_server/world/*.c)
 	@test -x $(BIN)/python || $(PY) -m venv $(VENV)

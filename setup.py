@@ -28,6 +28,7 @@ FOLDERS = {
     "pltf.cli": "pltf_cli",
     "pltf.fixtures": "fixtures",
     "pltf.gui": "gui",
+    "pltf.zoo": "zoo",
     "pltf.proxy": "proxy",
 }
 

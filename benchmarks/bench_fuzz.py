@@ -1,28 +1,43 @@
-"""Fuzzing rate against the reference server: ``pltf fuzz`` versus boofuzz driving the same telegrams.
+"""Fuzzing rate: ``pltf fuzz`` versus boofuzz driving the same telegrams, on three targets.
 
-Set-up: each subject gets a fresh ``python -m pltf.reference_server`` (own process, own data dir, log level ERROR
-so that neither pays for the server's per-connection INFO lines) and runs for the same wall time (10 s),
-three times, interleaved; the median rate is reported.
+Targets, each started fresh per subject and run (own process, own data dir, log level ERROR so that neither pays
+for per-connection INFO lines):
+
+- ``reference server``: ``python -m pltf.reference_server``. It reads what a port's client sent before it judges a
+  newcomer (erratum E-WIRE-007), so clients may follow each other back to back.
+- ``slow-release proxy``: the reference server behind ``tests/fuzz/foreign.py --release 5-50``, a plain TCP proxy
+  that frees a port 5-50 ms after its client left and turns newcomers away until then (FIN): what a foreign
+  platform behind a proxy does. No read-ahead helps here.
+- ``accept-once proxy``: the same proxy with ``--accept-once``: newcomers wait in the listen backlog until the
+  port's client has gone (the E-WIRE-007 alternative reading).
+
+Subjects, each for the same wall time (10 s), three times, interleaved; the median rate is reported:
 
 - ``pltf fuzz``: the network campaign of ``pltf.fuzz.engine`` as ``pltf fuzz --allow-motion`` runs it (state
-  preludes, batching of the cases the codec accepts, one connection per case it refuses, the GET_STATUS
-  liveness probe on the other port every 4 units).
-- ``pltf fuzz, probe every unit``: the same with the probe after every unit (the strictest oracle).
-- ``pltf fuzz, natural mix``: the same with every drawn case over 1 MiB kept (``--big-share 1``); by default
-  the scheduler keeps a quarter of them (``pltf.fuzz.schedule``: each costs the target up to 0.6 s).
-- ``boofuzz``: one boofuzz request per request telegram of the spec (header and length as boofuzz
-  primitives, the length computed by ``s_size`` over the data block, every field fuzzable with boofuzz's
-  own value library), a ``Session`` on a TCP connection with no sleeps and no receive, the web UI off,
-  results in a throw-away sqlite file: boofuzz as one would set it up for speed.
+  preludes, batching of the cases the codec accepts, a fresh connection per case it refuses, every unit opened by
+  the GET_STATUS that proves it was served). A case is counted when the target served it: one turned away runs
+  again and counts once. ``false findings`` counts its findings and unconfirmed suspicions: every target here
+  conforms, so each one would be false.
+- ``pltf fuzz, no pipelining`` (reference server): each port's next case connects only once the last has gone: the
+  rate without the server's read-ahead.
+- ``pltf fuzz, natural mix (--big-share 1)`` (reference server): every drawn case over 1 MiB kept (by default the
+  scheduler keeps a quarter of them: ``pltf.fuzz.schedule``).
+- ``boofuzz``: one boofuzz request per request telegram of the spec (header and length as boofuzz primitives, the
+  length computed by ``s_size`` over the data block, every field fuzzable with boofuzz's own value library), a
+  ``Session`` on a TCP connection with no sleeps and no receive, the web UI off, results in a throw-away sqlite
+  file: boofuzz as one would set it up for speed. It opens a connection per case and never reads, so it does not
+  notice a newcomer turned away: behind a proxy its rate counts only the connections the proxy served (the
+  proxy's own count, ``--stats``); its own count is in ``boofuzz, as it counts``.
 
-A case is one test case: one boofuzz mutation, one ``pltf fuzz`` case. Targets (issue "Protocol fuzzer"):
->= 3,000 cases/s and >= 10x boofuzz (time ratio <= 0.1).
+A case is one test case: one boofuzz mutation, one ``pltf fuzz`` case. Targets: >= 3,000 cases/s against the
+reference server, >= 10x boofuzz (time ratio <= 0.1) on every target, no false finding.
 """
 
 from __future__ import annotations
 
 import contextlib
 import io
+import json
 import socket
 import statistics
 import sys
@@ -33,17 +48,28 @@ from pathlib import Path
 
 from benchmarks.harness import Config, Row, Target, benchmark, make_row
 from pltf.fuzz.engine import Campaign, Options
-from pltf.fuzz.launch import Launcher
 from pltf.fuzz.schedule import BIG_SHARE
 from pltf.spec.model import FieldDef, load_telegrams
+from pltf.zoo.launch import Launcher
 
 OURS = "pltf fuzz"
-OURS_STRICT = "pltf fuzz, probe every unit"
+OURS_PLAIN = "pltf fuzz, no pipelining"
 OURS_NATURAL = "pltf fuzz, natural mix (--big-share 1)"
 BOOFUZZ = "boofuzz"
+BOOFUZZ_NOMINAL = "boofuzz, as it counts"
+FALSE = "pltf fuzz false findings"
 RATE_TARGET = 3000.0
 SPEEDUP_TARGET = 10.0
-LAUNCH = f"{sys.executable} -m pltf.reference_server --ports {{ports}} --data-dir {{tmpdir}} --seed 1 --log-level ERROR"
+REFERENCE = (f"{sys.executable} -m pltf.reference_server --ports {{ports}} --data-dir {{tmpdir}} --seed 1 "
+             "--log-level ERROR")
+# The foreign targets are the fuzzer's test targets (tests/fuzz/foreign.py), run as a program, not imported.
+FOREIGN = Path(__file__).resolve().parents[1] / "tests" / "fuzz" / "foreign.py"
+TARGETS = {
+    "reference server": REFERENCE,
+    "slow-release proxy": f"{sys.executable} {FOREIGN} --ports {{ports}} --release 5-50 --turn-away fin",
+    "accept-once proxy": f"{sys.executable} {FOREIGN} --ports {{ports}} --accept-once",
+}
+DIRECT = "reference server"
 
 
 def free_ports() -> tuple[int, int]:
@@ -59,24 +85,26 @@ def free_ports() -> tuple[int, int]:
 
 
 @contextlib.contextmanager
-def reference_server() -> Iterator[tuple[int, int]]:
+def started(launch: str, stats: Path | None = None) -> Iterator[Launcher]:
+    """The target started on two free ports (the proxy writing its counts to ``stats`` when it ends)."""
     a, b = free_ports()
-    launcher = Launcher(LAUNCH, "127.0.0.1", a, b)
+    launcher = Launcher(launch + (f" --stats {stats}" if stats is not None else ""), "127.0.0.1", a, b)
     launcher.start()
     try:
-        yield launcher.ports
+        yield launcher
     finally:
         launcher.cleanup()
 
 
-def ours(seconds: float, probe_every: int, big_share: float = BIG_SHARE) -> float:
+def ours(launch: str, seconds: float, pipeline: bool = True, big_share: float = BIG_SHARE) -> tuple[float, int]:
+    """(cases per second, findings and unconfirmed suspicions) of a campaign of ``seconds``."""
     a, b = free_ports()
     with tempfile.TemporaryDirectory() as out:
         opts = Options(host="127.0.0.1", port=a, second_port=b, duration=seconds, seed=1, out=Path(out),
-                       allow_motion=True, launch=LAUNCH, probe_every=probe_every, big_share=big_share)  # fmt: skip
+                       allow_motion=True, launch=launch, pipeline=pipeline, big_share=big_share)  # fmt: skip
         campaign = Campaign(opts)
         campaign.run()
-        return campaign.stats.rate
+        return campaign.stats.rate, len(campaign.stats.findings) + len(campaign.stats.unconfirmed)
 
 
 # ---------------------------------------------------------------------------------------------- boofuzz
@@ -127,40 +155,54 @@ def boofuzz_requests(bf: object) -> list[object]:
     return out
 
 
-def run_boofuzz(seconds: float) -> float:
+def run_boofuzz(launch: str, seconds: float) -> tuple[float, float]:
+    """(cases per second as boofuzz counts them, cases per second the target served)."""
     import boofuzz as bf
 
-    with reference_server() as (port, _), tempfile.TemporaryDirectory() as tmp:
-        session = bf.Session(
-            target=bf.Target(connection=bf.TCPSocketConnection("127.0.0.1", port)),
-            sleep_time=0,
-            restart_sleep_time=0,
-            receive_data_after_each_request=False,
-            receive_data_after_fuzz=False,
-            check_data_received_each_request=False,
-            web_port=None,
-            fuzz_loggers=[bf.FuzzLoggerText(file_handle=io.StringIO())],
-            db_filename=str(Path(tmp) / "boofuzz.db"),
-            crash_threshold_element=10**9,
-            crash_threshold_request=10**9,
-        )
-        for request in boofuzz_requests(bf):
-            session.connect(request)
-        counted = {"n": 0}
-        original = session._fuzz_current_case
-        t0 = time.monotonic()
-        stop = t0 + seconds
+    proxy = launch != REFERENCE
+    with tempfile.TemporaryDirectory() as tmp:
+        stats = Path(tmp) / "served.json"
+        with started(launch, stats if proxy else None) as target:
+            nominal, elapsed = _boofuzz(bf, target.ports[0], seconds, Path(tmp))
+        if not proxy:
+            return nominal, nominal
+        served = json.loads(stats.read_text())["served"][0] if stats.exists() else 0
+        return nominal, served / elapsed
 
-        def counting(*args: object, **kwargs: object) -> object:
-            if time.monotonic() >= stop:
-                raise _Done  # boofuzz logs it and re-raises: the run ends
-            counted["n"] += 1
-            return original(*args, **kwargs)
 
-        session._fuzz_current_case = counting  # type: ignore[method-assign]
-        with contextlib.suppress(_Done):
-            thread_safe_run(session)
-        return counted["n"] / (time.monotonic() - t0)
+def _boofuzz(bf: object, port: int, seconds: float, tmp: Path) -> tuple[float, float]:
+    """boofuzz against ``port`` for ``seconds``: (cases per second, seconds)."""
+    session = bf.Session(  # type: ignore[attr-defined]
+        target=bf.Target(connection=bf.TCPSocketConnection("127.0.0.1", port)),  # type: ignore[attr-defined]
+        sleep_time=0,
+        restart_sleep_time=0,
+        receive_data_after_each_request=False,
+        receive_data_after_fuzz=False,
+        check_data_received_each_request=False,
+        web_port=None,
+        fuzz_loggers=[bf.FuzzLoggerText(file_handle=io.StringIO())],  # type: ignore[attr-defined]
+        db_filename=str(tmp / "boofuzz.db"),
+        crash_threshold_element=10**9,
+        crash_threshold_request=10**9,
+    )
+    for request in boofuzz_requests(bf):
+        session.connect(request)
+    counted = {"n": 0}
+    original = session._fuzz_current_case
+    t0 = time.monotonic()
+    stop = t0 + seconds
+
+    def counting(*args: object, **kwargs: object) -> object:
+        if time.monotonic() >= stop:
+            raise _Done  # boofuzz logs it and re-raises: the run ends
+        counted["n"] += 1
+        return original(*args, **kwargs)
+
+    session._fuzz_current_case = counting
+    with contextlib.suppress(_Done):
+        thread_safe_run(session)
+    elapsed = time.monotonic() - t0
+    return counted["n"] / elapsed, elapsed
 
 
 class _Done(Exception):
@@ -175,29 +217,47 @@ def thread_safe_run(session: object) -> None:
 
 @benchmark()
 def cases_per_second(config: Config) -> list[Row]:
-    """pltf fuzz vs boofuzz: test cases per second against the reference server (same telegrams)."""
+    """pltf fuzz vs boofuzz: test cases per second on the reference server and two foreign targets."""
     seconds = 2.0 if config.quick else 10.0
     repeats = 1 if config.quick else 3
-    samples: dict[str, list[float]] = {OURS: [], OURS_STRICT: [], OURS_NATURAL: [], BOOFUZZ: []}
+    samples: dict[tuple[str, str], list[float]] = {}
+    false: dict[str, int] = dict.fromkeys(TARGETS, 0)
+
+    def add(target: str, subject: str, value: float) -> None:
+        samples.setdefault((target, subject), []).append(value)
+
     for _ in range(repeats):  # interleaved, so a noisy spell on the machine hits every subject
-        samples[OURS].append(ours(seconds, probe_every=4))
-        samples[OURS_STRICT].append(ours(seconds, probe_every=1))
-        samples[OURS_NATURAL].append(ours(seconds, probe_every=4, big_share=1.0))
-        samples[BOOFUZZ].append(run_boofuzz(seconds))
+        for target, launch in TARGETS.items():
+            rate, wrong = ours(launch, seconds)
+            add(target, OURS, rate)
+            false[target] += wrong
+            if target == DIRECT:
+                add(target, OURS_PLAIN, ours(launch, seconds, pipeline=False)[0])
+                add(target, OURS_NATURAL, ours(launch, seconds, big_share=1.0)[0])
+            nominal, served = run_boofuzz(launch, seconds)
+            add(target, BOOFUZZ, served)
+            if target != DIRECT:
+                add(target, BOOFUZZ_NOMINAL, nominal)
     rates = {k: statistics.median(v) for k, v in samples.items()}
     name = "fuzz.cases_per_second"
-    return [
-        make_row(name, OURS, "cases_per_second", rates[OURS], "cases/s", higher_is_better=True,
-                 target=Target("value", ">=", RATE_TARGET)),
-        make_row(name, OURS, "cases_per_second", rates[OURS], "cases/s", higher_is_better=True,
-                 baseline_subject=BOOFUZZ, baseline_value=rates[BOOFUZZ],
-                 target=Target("ratio", "<=", 1 / SPEEDUP_TARGET)),
-        make_row(name, OURS_STRICT, "cases_per_second", rates[OURS_STRICT], "cases/s", higher_is_better=True,
-                 baseline_subject=BOOFUZZ, baseline_value=rates[BOOFUZZ]),
-        make_row(name, OURS_NATURAL, "cases_per_second", rates[OURS_NATURAL], "cases/s", higher_is_better=True,
-                 baseline_subject=BOOFUZZ, baseline_value=rates[BOOFUZZ]),
-        make_row(name, BOOFUZZ, "cases_per_second", rates[BOOFUZZ], "cases/s", higher_is_better=True),
-    ]  # fmt: skip
+    rows = [make_row(name, f"{OURS} ({DIRECT})", "cases_per_second", rates[DIRECT, OURS], "cases/s",
+                     higher_is_better=True, target=Target("value", ">=", RATE_TARGET))]  # fmt: skip
+    for target in TARGETS:
+        subjects = [s for t, s in rates if t == target]
+        for subject in subjects:
+            base = BOOFUZZ if subject != BOOFUZZ else None
+            goal = Target("ratio", "<=", 1 / SPEEDUP_TARGET) if subject == OURS else None
+            rows.append(make_row(name, f"{subject} ({target})", "cases_per_second", rates[target, subject], "cases/s",
+                                 higher_is_better=True, baseline_subject=base and f"{base} ({target})",
+                                 baseline_value=base and rates[target, base], target=goal))  # fmt: skip
+        rows.append(make_row(name, f"{FALSE} ({target})", "findings", false[target], "findings",
+                             higher_is_better=False, target=Target("value", "<=", 0)))  # fmt: skip
+    for target in TARGETS:
+        if target != DIRECT:  # through a foreign target against the reference server directly
+            rows.append(make_row(name, f"{OURS} ({target})", "cases_per_second", rates[target, OURS], "cases/s",
+                                 higher_is_better=True, baseline_subject=f"{OURS} ({DIRECT})",
+                                 baseline_value=rates[DIRECT, OURS]))  # fmt: skip
+    return rows
 
 
 __all__ = ["boofuzz_requests", "cases_per_second"]

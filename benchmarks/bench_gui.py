@@ -38,9 +38,9 @@ from typing import Any
 
 from benchmarks.harness import Config, Row, Target, benchmark, make_row
 from pltf.client import MotionMode, OperationState, PlatformClient
-from pltf.conformance_tests.launch import ServerProcess
 from pltf.spec.codec import REPLIES, REQUESTS, TelegramDecoder, build, encode
 from pltf.spec.telegram import user_fields
+from pltf.zoo import launch
 
 ROOT = Path(__file__).resolve().parents[1]
 CHROMIUM = "/usr/bin/chromium"
@@ -217,7 +217,8 @@ def status_latency(config: Config) -> list[Row]:
     n = 8 if config.quick else 60
     gui: list[float] = []
     tight: list[float] = []
-    with ServerProcess(time_scale=1.0) as server, gateway() as base, page(base, f"127.0.0.1:{server.ports[0]}") as pg:
+    with (launch.reference(time_scale=1.0) as server, gateway() as base,
+          page(base, f"127.0.0.1:{server.ports[0]}") as pg):
         pg.evaluate(OBSERVE_JS)
         with PlatformClient("127.0.0.1", server.ports[1], timeout=5.0) as other:
             for i in range(n):
@@ -261,7 +262,7 @@ def _cpu_share(pid: int, seconds: float) -> float:
 def polling_cost(config: Config) -> list[Row]:
     """CPU share of the reference server caused by the GUI's polling (target <= 5 % of a core)."""
     window = 3.0 if config.quick else POLL_WINDOW
-    with ServerProcess(time_scale=1.0) as server:
+    with launch.reference(time_scale=1.0) as server:
         assert server.proc is not None
         pid = server.proc.pid
         time.sleep(2.0)
@@ -283,7 +284,8 @@ def polling_cost(config: Config) -> list[Row]:
 def heap_growth(config: Config) -> list[Row]:
     """JS heap growth over a window of live updates (the issue's 10 minutes: PLTF_GUI_HEAP_SECONDS=600)."""
     seconds = 5.0 if config.quick else float(os.environ.get("PLTF_GUI_HEAP_SECONDS", "60"))
-    with ServerProcess(time_scale=1.0) as server, gateway() as base, page(base, f"127.0.0.1:{server.ports[0]}") as pg:
+    with (launch.reference(time_scale=1.0) as server, gateway() as base,
+          page(base, f"127.0.0.1:{server.ports[0]}") as pg):
         cdp = pg.context.new_cdp_session(pg)
 
         def heap_mb() -> float:

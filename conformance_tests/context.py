@@ -25,8 +25,8 @@ from pltf.conformance_tests import chart
 from pltf.conformance_tests.catalogue import Case, Tier
 from pltf.conformance_tests.chart import St
 from pltf.conformance_tests.coverage import Coverage
-from pltf.conformance_tests.outcome import ConnectionClosed, Deviation, Fail, TargetFailure, Unreachable
-from pltf.conformance_tests.wire import Session, WireLog
+from pltf.conformance_tests.outcome import ConnectionClosed, Deviation, Fail, NoConnection, TargetFailure, Unreachable
+from pltf.conformance_tests.wire import CaseBudget, Session, WireLog
 from pltf.spec.codec import build
 from pltf.spec.model import enum_classes
 from pltf.spec.telegram import Telegram
@@ -52,6 +52,9 @@ class Config:
     reply_timeout: float = 3.0  # wall seconds for one reply
     connect_window: float = 5.0  # wall seconds to get a port back after our previous client left
     min_wall: float = 0.25  # wall floor of every wait derived from simulated time
+    probe_timeout: float = 1.0  # wall seconds for the GET_STATUS that probes a new connection
+    case_budget: float | None = None  # wall seconds one case may take (None: pace.case_budget)
+    run_budget: float | None = None  # wall seconds the whole run may take (None: no limit)
 
     @property
     def motion_allowed(self) -> bool:
@@ -80,6 +83,7 @@ class Target:
         self.config = config
         self.coverage = coverage or Coverage()
         self._sessions: dict[str, Session] = {}
+        self.budget = CaseBudget()  # the running case's (pace.py); every session of the run carries it
 
     def port_of(self, label: str) -> int:
         if label.startswith("B"):
@@ -88,19 +92,22 @@ class Target:
             return self.config.second_port
         return self.config.port
 
-    def connect(self, label: str, log: WireLog, observer: Any, *, probe: bool = True) -> Session:
+    def connect(self, label: str, log: WireLog, observer: Any, *, probe: bool = True, window: float | None = None,
+                probe_timeout: float | None = None) -> Session:
         """A new session on the port of ``label``, probed with GET_STATUS and retried (see the module rules)."""
         cfg = self.config
-        deadline = time.monotonic() + cfg.connect_window
+        window = cfg.connect_window if window is None else window
+        deadline = time.monotonic() + window
         delay, last = 0.01, "no attempt"
         while True:
             s = Session(cfg.host, self.port_of(label), label=label, log=log, timeout=cfg.reply_timeout,
-                        observer=observer, profile=cfg.profile)
+                        observer=observer, profile=cfg.profile, budget=self.budget)
             try:
                 s.connect()
                 if not probe:
                     return s
-                s.request(build("request", "CMD_GET_STATUS"), timeout=min(cfg.reply_timeout, 1.0))
+                s.request(build("request", "CMD_GET_STATUS"),
+                          timeout=probe_timeout or min(cfg.reply_timeout, cfg.probe_timeout))
                 return s
             except Unreachable as exc:
                 if "refused" in str(exc).lower():
@@ -112,7 +119,8 @@ class Target:
                 s.close()
             if time.monotonic() + delay > deadline:
                 raise Unreachable(f"port {label} ({cfg.host}:{self.port_of(label)}): no working connection "
-                                  f"within {cfg.connect_window:.0f} s: {last}")
+                                  f"within {window:.0f} s: {last}")
+            self.budget.check()
             time.sleep(delay)
             delay = min(delay * 2, 0.2)
 
@@ -203,7 +211,7 @@ class CaseContext:
         try:
             return self.target.session(label, self.log, self)
         except Unreachable as exc:
-            raise ConnectionClosed(f"target unreachable: {exc}") from None
+            raise NoConnection(f"target unreachable: {exc}") from None
 
     def fresh(self, label: str = "A", *, probe: bool = True) -> Session:
         """A new connection of our own on the port of ``label``; the persistent one there is closed first."""
@@ -211,14 +219,14 @@ class CaseContext:
         try:
             s = self.target.connect(label, self.log, self, probe=probe)
         except Unreachable as exc:
-            raise ConnectionClosed(f"target unreachable: {exc}") from None
+            raise NoConnection(f"target unreachable: {exc}") from None
         self._extra.append(s)
         return s
 
     def extra(self, label: str) -> Session:
         """An additional raw connection (no probe, no retry) - e.g. a second client on a busy port."""
         s = Session(self.config.host, self.target.port_of(label), label=label, log=self.log,
-                    timeout=self.config.reply_timeout, observer=self, profile=self.profile)
+                    timeout=self.config.reply_timeout, observer=self, profile=self.profile, budget=self.target.budget)
         try:
             s.connect()
         except Unreachable as exc:

@@ -1,4 +1,4 @@
-"""Differential mode: one scripted session against an in-process reference server and against the target, the
+"""Differential mode: one scripted session against a reference server of our own and against the target, the
 replies diffed field by field.
 
 Rules:
@@ -27,10 +27,10 @@ from pltf.conformance_tests.cases.motion import rest
 from pltf.conformance_tests.catalogue import Case, Level, Tier
 from pltf.conformance_tests.chart import St
 from pltf.conformance_tests.context import CaseContext, Config, Target
-from pltf.conformance_tests.launch import InProcessServer
 from pltf.spec.model import enum_classes
 from pltf.spec.telegram import Telegram
 from pltf.spec.volatile import rule, values_differ, volatile
+from pltf.zoo import launch
 
 __all__ = ["Diff", "Step", "compare", "diff_replies", "play", "relative", "run_differential", "script", "volatile"]
 MotionMode = enum_classes()["MotionMode"]
@@ -214,7 +214,7 @@ def compare(reference: Config, target: Config, motion: bool) -> list[Diff]:
 
 def run_differential(config: Config, console: Console) -> int:
     """``pltf conform --differential``: 0 when the target answers like the reference server, else 1."""
-    with InProcessServer(time_scale=config.time_scale) as ref:
+    with launch.reference(time_scale=config.time_scale) as ref:
         ref_config = Config("127.0.0.1", ref.ports[0], time_scale=config.time_scale, simulator=True)
         diffs = compare(ref_config, config, motion=config.motion_allowed)
     if not diffs:

@@ -8,7 +8,8 @@ Rules:
   erratum. With the ``original`` profile an alternative the register marks ``accept`` gives NON-STRICT; every
   other deviation is graded like a Fail at the erratum's level (MAY deviations are informative only).
 - ``NotApplicable`` - the target shows or declares that it lacks an optional feature.
-- ``Inconclusive`` - the observation cannot tell pass from fail (noise, timing); the runner re-runs the case.
+- ``Inconclusive`` - the observation cannot tell pass from fail (noise, timing); the runner re-runs the case,
+  except when it is ``BudgetSpent`` (the case's time budget ran out, pace.py).
 - Anything else escaping a case is a harness ERROR.
 """
 
@@ -47,6 +48,10 @@ class BadReply(TargetFailure):
     pass
 
 
+class NoConnection(ConnectionClosed):
+    """No working connection to the target could be made within the connect window (it is gone or answers nobody)."""
+
+
 class Unreachable(Exception):
     """The target cannot be reached at all (exit status 2)."""
 
@@ -57,6 +62,10 @@ class NotApplicable(Outcome):
 
 class Inconclusive(Outcome):
     pass
+
+
+class BudgetSpent(Inconclusive):
+    """The case's time budget ran out before the case could finish: a target too slow to judge (not re-run)."""
 
 
 @dataclass(frozen=True)

@@ -117,6 +117,7 @@ def pytest_sessionstart(session: pytest.Session) -> None:
         runner.target.connect("A", WireLog(), _Quiet(), probe=False).close()
     except Unreachable as exc:
         pytest.exit(f"pltf conformance: {exc}", returncode=2)
+    runner.prepare()  # the target's reply time scales the waits (pace.py)
     session.config.stash[_RUNNER] = runner
 
 

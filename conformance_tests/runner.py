@@ -10,6 +10,11 @@ Rules:
   too. Attempts that disagree (one PASS, one FAIL) make the case INCONCLUSIVE: a flake is reported, not hidden.
 - After every ``abuse`` case the runner checks liveness: a new client is served on each port and the operation
   state and motion mode are what they were before the abuse.
+- A SHOULD or MAY case during which the target stopped answering (a reply timeout, and then no new client
+  served) is FAIL: whatever the case's level, a target must keep serving.
+- Bounds (pace.py): the target's reply time is measured once before the first case and scales the waits; every
+  case (and the reset before a group) runs within a budget; a run budget and the watch on a target that stopped
+  answering leave the remaining cases INCONCLUSIVE "not run" with the reason, so a run always ends.
 - Exit status (``RunResult.exit_code``): 2 when a harness error occurred, 1 when a case FAILed or a MUST case
   stayed INCONCLUSIVE (unless the baseline expects it) or a baseline entry is stale, else 0.
 """
@@ -22,20 +27,28 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Protocol
 
+from pltf.conformance_tests import pace
 from pltf.conformance_tests.baseline import Baseline
 from pltf.conformance_tests.catalogue import Case, Level, Verdict
 from pltf.conformance_tests.context import CaseContext, Config, Status, Target
 from pltf.conformance_tests.outcome import (
+    BudgetSpent,
     Deviation,
     Fail,
     Inconclusive,
+    NoConnection,
     NotApplicable,
+    ReplyTimeout,
     Unreachable,
     deviation_verdict,
     verdict_for_level,
     worst,
 )
 from pltf.conformance_tests.wire import WireEntry, WireLog
+
+
+def first_line(text: str) -> str:
+    return text.splitlines()[0] if text else ""
 
 
 @dataclass
@@ -47,6 +60,8 @@ class Attempt:
     deviations: list[Deviation]
     notes: list[str]
     precondition: bool = False
+    silent: bool = False  # the target did not answer at all (a reply timeout, no connection, a spent budget)
+    final: bool = False  # not to be re-run (the case's budget ran out)
 
 
 @dataclass
@@ -92,6 +107,7 @@ class RunResult:
     duration: float
     stale: list[str] = field(default_factory=list)
     harness_error: str | None = None
+    notes: list[str] = field(default_factory=list)  # about the run as a whole (the target's pace, budgets)
 
     @property
     def exit_code(self) -> int:
@@ -143,6 +159,8 @@ class Runner:
         self.reporters = list(reporters)
         self.baseline = baseline or Baseline()
         self.target = Target(config)
+        self.watch = pace.Watch()
+        self.notes: list[str] = []
 
     def _emit(self, hook: str, *args: object) -> None:
         for r in self.reporters:
@@ -160,13 +178,19 @@ class Runner:
         except Unreachable as exc:
             harness_error = str(exc)
         if harness_error is None:
+            self.prepare()
             group = None
+            budget = self.config.run_budget
             for c in self.cases:
-                if c.group != group:
-                    group = c.group
-                    self.reset(c)
                 self._emit("on_case_start", c)
-                result = self.run_case(c)
+                if budget is not None and time.monotonic() - t0 > budget:
+                    result = CaseResult(c, Verdict.INCONCLUSIVE, f"not run: the run's budget of {budget:g} s is spent "
+                                                                 "(--budget)")
+                else:
+                    if c.group != group:
+                        group = c.group
+                        self.reset(c)
+                    result = self.run_case(c)
                 results.append(result)
                 self._emit("on_case_end", result)
         self.target.close()
@@ -174,35 +198,67 @@ class Runner:
         stale = self.baseline.stale(ran)
         for r in results:
             r.expected_failure = self.baseline.expects(r)
-        run = RunResult(self.config, results, self.target, started, time.monotonic() - t0, stale, harness_error)
+        run = RunResult(self.config, results, self.target, started, time.monotonic() - t0, stale, harness_error,
+                        self.notes)
         self._emit("on_finish", run)
         return run
 
+    def prepare(self) -> pace.Pace:
+        """Measure the target's reply time and scale the run's waits to it (pace.py); noted in the run."""
+        p = pace.measure(self.target)
+        pace.apply(p, self.config)
+        self.notes.append(p.describe(self.config))
+        if p.reply is None or p.reply > self.config.reply_timeout:
+            self.watch.pace = self.notes[-1]
+        return p
+
+    def _budget(self, seconds: float) -> None:
+        self.target.budget.seconds = seconds
+        self.target.budget.deadline = time.monotonic() + seconds
+
+    def _unbudgeted(self) -> None:
+        self.target.budget.deadline = None
+
     def reset(self, c: Case) -> None:
         """The known state before a group: Ready, MODE_MOTION_NO (best effort; the cases report what is wrong)."""
+        if self.watch.tripped:
+            return
         ctx = CaseContext(self.target, c)
+        self._budget(pace.case_budget(self.config))
         try:
             ctx.ready()
         except Exception:
             pass
         finally:
             ctx.finish()
+            self._unbudgeted()
 
     # ---- one case
     def run_case(self, c: Case) -> CaseResult:
         skip = self._gate(c)
         if skip:
             return CaseResult(c, Verdict.SKIPPED, skip)
+        stuck = self.watch.blocks(self.target)
+        if stuck:
+            return CaseResult(c, Verdict.INCONCLUSIVE, stuck)
         attempts: list[Attempt] = []
         for _ in range(1 + max(0, self.config.reruns)):
             a = self._attempt(c)
             attempts.append(a)
-            again = a.verdict is Verdict.INCONCLUSIVE or (
+            again = (a.verdict is Verdict.INCONCLUSIVE and not a.final) or (
                 c.timing and a.verdict in (Verdict.FAIL, Verdict.NON_STRICT) and not a.precondition
             )
-            if not again:
+            if not again or a.silent:
                 break
         verdict, message = _resolve(attempts)
+        last = attempts[-1]
+        if last.silent and verdict in (Verdict.NON_STRICT, Verdict.NA):
+            # a SHOULD or MAY case, but the target answers nobody any more: serving on is a MUST
+            problem = pace.health(self.target)
+            if problem:
+                verdict, message = Verdict.FAIL, (f"the target stopped answering during this case: {problem} "
+                                                  f"(the case: {first_line(message)})")
+        self.watch.record(c.id, last.silent, first_line(last.message))
         return CaseResult(c, verdict, message, attempts)
 
     def _gate(self, c: Case) -> str:
@@ -216,20 +272,25 @@ class Runner:
     def _attempt(self, c: Case) -> Attempt:
         ctx = CaseContext(self.target, c)
         t0 = time.monotonic()
-        verdict, message, pre = Verdict.PASS, "", False
+        verdict, message, pre, silent = Verdict.PASS, "", False, False
+        budget = pace.case_budget(self.config)
+        self._budget(budget)
         try:
             c.func(ctx)
         except Fail as exc:
             verdict, message, pre = _fail_verdict(c, exc), str(exc), exc.precondition
+            silent = isinstance(exc, (ReplyTimeout, NoConnection))
         except NotApplicable as exc:
             verdict, message = Verdict.NA, str(exc)
         except Inconclusive as exc:
-            verdict, message = Verdict.INCONCLUSIVE, str(exc)
+            verdict, message, silent = Verdict.INCONCLUSIVE, str(exc), isinstance(exc, BudgetSpent)
         except Exception as exc:
             tb = traceback.format_exception(exc)
             verdict, message = Verdict.ERROR, f"harness error: {exc!r}\n{''.join(tb[-6:])}"
         finally:
+            self._budget(max(10.0, budget / 4))  # the clean-up's own budget
             ctx.finish()
+            self._unbudgeted()
         if c.abuse and verdict is not Verdict.ERROR:
             problem = _liveness(ctx, ctx.abuse_from)
             if problem:
@@ -245,7 +306,7 @@ class Runner:
         if ctx.unsolicited:
             ctx.note(f"{len(ctx.unsolicited)} unsolicited frame(s) received (guide 6.1, erratum E-CMD-013)")
         return Attempt(verdict, message, time.monotonic() - t0, list(ctx.log.entries), list(ctx.deviations),
-                       list(ctx.notes), pre)
+                       list(ctx.notes), pre, silent, final=silent and verdict is Verdict.INCONCLUSIVE)
 
 
 def _fail_verdict(c: Case, exc: Fail) -> Verdict:

@@ -22,7 +22,14 @@ from dataclasses import dataclass, field
 from typing import Protocol
 
 from pltf.conformance_tests import readings
-from pltf.conformance_tests.outcome import BadReply, ConnectionClosed, Deviation, ReplyTimeout, Unreachable
+from pltf.conformance_tests.outcome import (
+    BadReply,
+    BudgetSpent,
+    ConnectionClosed,
+    Deviation,
+    ReplyTimeout,
+    Unreachable,
+)
 from pltf.spec.codec import DEFAULT_MAX_LENGTH, HEADER, REQUESTS, encode
 from pltf.spec.telegram import Telegram
 
@@ -85,6 +92,23 @@ class _NullObserver:
 _LEN = struct.Struct(">I")
 
 
+@dataclass
+class CaseBudget:
+    """The wall-clock end of the running case's budget (monotonic s; None: none). Every read of a session that
+    carries it ends there with ``BudgetSpent`` (conformance_tests/pace.py sets it)."""
+
+    deadline: float | None = None
+    seconds: float = 0.0
+
+    def clip(self, deadline: float) -> float:
+        return deadline if self.deadline is None else min(deadline, self.deadline)
+
+    def check(self) -> None:
+        if self.deadline is not None and time.monotonic() >= self.deadline:
+            raise BudgetSpent(f"case budget of {self.seconds:.0f} s spent: the target is too slow to finish this "
+                              "case in it")
+
+
 class Session:
     """One TCP connection to one port of the target."""
 
@@ -98,8 +122,10 @@ class Session:
         timeout: float = 3.0,
         observer: Observer | None = None,
         profile: str = "strict",
+        budget: CaseBudget | None = None,
     ) -> None:
         self.host, self.port, self.label = host, port, label
+        self.budget = budget
         self.log = log if log is not None else WireLog()
         self.timeout = timeout
         self.observer: Observer = observer or _NullObserver()
@@ -184,6 +210,9 @@ class Session:
         """Receive some bytes before ``deadline``; False on timeout; ConnectionClosed at EOF."""
         if self.eof or self.sock is None:
             raise ConnectionClosed(f"port {self.label}: the connection is closed")
+        if self.budget is not None:
+            self.budget.check()
+            deadline = self.budget.clip(deadline)
         remaining = deadline - time.monotonic()
         if remaining <= 0:
             return False
@@ -191,6 +220,8 @@ class Session:
         try:
             data = self.sock.recv(65536)
         except TimeoutError:
+            if self.budget is not None:
+                self.budget.check()
             return False
         except (ConnectionResetError, ConnectionAbortedError) as exc:
             data = b""
@@ -293,3 +324,16 @@ class Session:
                     return False
         except ConnectionClosed:
             return True
+
+
+def wait_port_closed(host: str, port: int, within: float) -> bool:
+    """True when nothing accepts connections on ``port`` within ``within`` seconds."""
+    deadline = time.monotonic() + within
+    while time.monotonic() < deadline:
+        try:
+            with socket.create_connection((host, port), timeout=0.5):
+                pass
+        except OSError:
+            return True
+        time.sleep(0.05)
+    return False

@@ -1,15 +1,17 @@
-"""From a failed unit to a finding on disk: confirm on a fresh target, delta-debug, deduplicate, write.
+"""From a failure to a finding on disk: reproduce on a fresh target, delta-debug, deduplicate, write.
 
 Rules:
-- ``reproduce(sessions)`` starts a fresh target, replays, and names the failure it sees (``dead``, ``hang``,
-  ``deaf``, ``stall``, ``bad-reply``, ``dropped``) or None. A candidate "still fails" when it fails the same way.
-- Candidates, smallest first: the failed unit after the state prelude; then everything since the prelude.
-  ddmin (``pltf.fuzz.minimize``) removes frames across sessions; a session left without frames is dropped.
-- Without ``--launch`` nothing can be replayed: the finding is written as found (marked not minimized).
-  With it, a failure that does not happen again on a fresh target (a load spike, state built up over a long
-  run) is written under ``unconfirmed/`` and is not a finding (exit status 0).
-- The signature (kind and the ids of the minimal frames) deduplicates findings within a run and, through
-  the corpus, across resumed runs.
+- ``handle`` gets the failure's kind, the units it covers (the suspicious unit, or the units sent last before a
+  death) and whether the campaign believes it (replays on the live target, or a target no port serves). Only
+  a believed failure is a finding; the rest is written under ``unconfirmed/`` and never sets the exit status.
+- With ``--launch`` a believed failure is reproduced on fresh instances: each unit alone after the full state
+  prelude of its target (the last first), then the units together, then everything since the last restart;
+  for a death none of those causes (a leak: the target dies of what piles up), each of the largest units is
+  repeated until the instance dies (``REPEAT_MAX`` rounds, ``REPEAT_SECONDS``), then all of them. ddmin
+  (``pltf.fuzz.minimize``) then removes frames across sessions, the lead of each kept: it tells a
+  newcomer turned away from one served (``pltf.fuzz.verdict``); every replay waits for the port as the lanes do.
+- The signature (kind and the ids of the minimal frames) deduplicates findings within a run and, through the
+  corpus, across resumed runs; a failure whose culprit was seen before is not reproduced again.
 """
 
 from __future__ import annotations
@@ -18,119 +20,218 @@ import time
 from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
-from pltf.fuzz.case import WHOLE, Case
+from pltf.fuzz import preludes
+from pltf.fuzz.case import WHOLE
 from pltf.fuzz.minimize import ddmin, shortest_failing_prefix
 from pltf.fuzz.report import slug, write_finding
-from pltf.fuzz.target import Outcome, Prober, Session, expected_reply_ids, play
+from pltf.fuzz.target import LEAD, Outcome, Session, play_admitted, session_reply_ids
+from pltf.fuzz.unit import Unit
+from pltf.fuzz.verdict import BAD_REPLY, DROPPED, OK, TIMED_OUT, judge
+from pltf.spec.codec import REQUESTS
 
 if TYPE_CHECKING:
     from pltf.fuzz.engine import Campaign
+
+REPEAT_MAX = 400  # rounds of a repeated candidate at most
+REPEAT_SECONDS = 20.0  # s a repeated candidate may take
+GONE = ("dead", "hang", "deaf")
+
+
+def led(s: Session) -> Session:
+    """A session a fresh connection can replay: opened by the lead, our write side shut at the end."""
+    if s.led:
+        return s
+    answered = None if s.answered is None else [LEAD[8], *s.answered]
+    return replace(s, frames=[LEAD, *s.frames], half_close=True, led=True, answered=answered)
+
+
+def prelude_session(target: preludes.Target) -> Session:
+    return Session([LEAD, *preludes.full(target)], sync=True, half_close=True, led=True)
 
 
 class FindingWriter:
     def __init__(self, campaign: Campaign, known: set[str]) -> None:
         self.c = campaign
         self.signatures: set[str] = set(known)
+        self.culprits: set[str] = set()
         self.count = 0
+        self.rounds = 1
+        self.used_launcher = False  # the last ``handle`` started fresh targets (the campaign's is gone)
 
     # ------------------------------------------------------------------ replay against a fresh target
-    def reproduce(self, sessions: list[Session], record: bool = False) -> tuple[str | None, list[Outcome]]:
+    def reproduce(self, sessions: list[Session], record: bool = False, repeat: int = 1,
+                  seconds: float | None = None) -> tuple[str | None, list[Outcome]]:  # fmt: skip
+        """Start a fresh target, replay ``sessions`` (``repeat`` rounds, until it dies), name the failure."""
         launcher, o = self.c.launcher, self.c.o
         assert launcher is not None
         port, second = launcher.start()
-        prober = Prober(o.host, second, o.deadline)
+        patience = max(1.0, 2 * o.deadline)
         outcomes: list[Outcome] = []
-        try:
-            if prober.probe() is not None:
-                return None, outcomes
+        status = Session([LEAD], half_close=True, led=True)
+        if not play_admitted(o.host, second, status, o.deadline, patience)[1]:
+            return None, outcomes
+        end = time.monotonic() + (seconds or REPEAT_SECONDS)
+        for self.rounds in range(1, repeat + 1):
             for s in sessions:
-                out = play(o.host, port, s, o.deadline, record)
+                out, served = play_admitted(o.host, port, s, o.deadline, patience, record, launcher.alive)
                 outcomes.append(out)
-                if out.refused:
-                    return "dead", outcomes
-                if out.bad_reply is not None:
-                    return "bad-reply", outcomes
-                if s.sync and out.closed and len(out.replies) < len(expected_reply_ids(s.data)) + 1:
-                    verdict = prober.probe()
-                    return (verdict.partition(":")[0] if verdict else "dropped"), outcomes
-                if out.timed_out:
-                    verdict = prober.probe()
-                    return (verdict.partition(":")[0] if verdict else "stall"), outcomes
-            time.sleep(0.02)
-            verdict = prober.probe()
-            if verdict is not None:
-                return verdict.partition(":")[0], outcomes
-            return ("dead" if not launcher.alive() else None), outcomes
-        finally:
-            prober.close()
+                if not served:  # the other port still serves: this one is stuck
+                    return self._gone(second, patience) or "stall", outcomes
+                expected = len(session_reply_ids(s)) + s.sync
+                v = judge(out, expected if s.sync else int(s.led), s.led, s.sync)
+                if v.kind == BAD_REPLY:
+                    return BAD_REPLY, outcomes
+                if v.kind in (DROPPED, TIMED_OUT):
+                    time.sleep(0.02)
+                    gone = self._gone(second, o.deadline)
+                    return (gone or ("stall" if v.kind == TIMED_OUT else DROPPED)), outcomes
+            if repeat > 1 and (not launcher.alive() or time.monotonic() > end):
+                break
+        time.sleep(0.02)
+        return self._gone(second, patience) or ("dead" if not launcher.alive() else None), outcomes
+
+    def _gone(self, second: int, patience: float) -> str | None:
+        """None when the probe port still serves us; else dead, hang or deaf."""
+        launcher, o = self.c.launcher, self.c.o
+        assert launcher is not None
+        if not launcher.alive():
+            return "dead"
+        out, served = play_admitted(o.host, second, Session([LEAD], half_close=True, led=True), o.deadline,
+                                    patience)  # fmt: skip
+        if served and out.replies:
+            return None
+        if not launcher.alive() or out.refused:
+            return "dead"
+        return "hang" if out.timed_out else "deaf"
 
     def _minimize(self, kind: str, sessions: list[Session]) -> tuple[list[Session], int]:
-        flat = [(k, j) for k, s in enumerate(sessions) for j in range(len(s.frames))]
+        flat = [(k, j) for k, s in enumerate(sessions) for j in range(int(s.led), len(s.frames))]
         tests = 0
 
         def rebuild(items: list[tuple[int, int]]) -> list[Session]:
             keep: dict[int, list[bytes]] = {}
             for k, j in items:
-                keep.setdefault(k, []).append(sessions[k].frames[j])
-            return [sessions[k].with_frames(fr) for k, fr in sorted(keep.items())]
+                keep.setdefault(k, sessions[k].frames[:1] if sessions[k].led else []).append(sessions[k].frames[j])
+            return [replace(sessions[k].with_frames(fr), gate=sessions[k].gate and len(fr) > 1)
+                    for k, fr in sorted(keep.items())]  # fmt: skip
+
+        end = time.monotonic() + self.c.o.minimize_seconds
 
         def test(items: list[tuple[int, int]]) -> bool:
             nonlocal tests
+            if time.monotonic() > end:  # out of budget: the smallest failing sequence so far stays
+                return False
             tests += 1
             return self.reproduce(rebuild(items))[0] == kind
 
         best = shortest_failing_prefix(flat, test)
+        prelude = [i for i in best if i[0] == 0 and sessions[0].led and len(sessions) > 1]
         if len(best) > 1 and test(best[-1:]):  # the frame that tipped it over, alone
             best = best[-1:]
-        best = ddmin(best, test, max_tests=120, max_seconds=self.c.o.minimize_seconds)
+        elif len(prelude) + 1 < len(best) and test([*prelude, best[-1]]):  # ... behind the state prelude
+            best = [*prelude, best[-1]]
+        best = ddmin(best, test, max_tests=120, max_seconds=max(0.0, end - time.monotonic()))
         result = rebuild(best)
-        simpler = [replace(s, delivery=WHOLE) for s in result]
-        if any(s.delivery != WHOLE for s in result) and self.reproduce(simpler)[0] == kind:
+        simpler = [replace(s, delivery=WHOLE, gate=False) for s in result]
+        if any(s.delivery != WHOLE or s.gate for s in result) and self.reproduce(simpler)[0] == kind:
             result = simpler
         return result, tests
 
-    # ------------------------------------------------------------------ a failed unit
-    def handle(
-        self, kind: str, reason: str, prelude: Session, unit: list[Session], history: list[Session], cases: list[Case]
-    ) -> dict[str, Any] | None:
+    def _fresh(self, kind: str, units: list[Unit], history: list[Session]) -> dict[str, Any]:
+        """Reproduce on fresh instances and minimise; what was found out."""
         c = self.c
-        sessions = [prelude, *unit]
-        minimized, confirmed, tests = False, False, 0
-        outcomes: list[Outcome] = []
-        if c.launcher is not None:
-            for candidate in ([prelude, *unit], [prelude, *[s for s in history if s is not prelude]]):
-                if self.reproduce(candidate)[0] == kind:
-                    sessions, confirmed = candidate, True
+        sessions_of = [(prelude_session(u.target or c.plan.current), u.session()) for u in units]
+        candidates = [list(pair) for pair in reversed(sessions_of[-4:])]
+        if len(units) > 1:
+            candidates.append([sessions_of[-1][0], *(s for _, s in sessions_of)])
+        if history:
+            candidates.append([prelude_session(c.plan.current), *(led(s) for s in history)])
+        got: dict[str, Any] = {"sessions": None, "repeat": 1, "minimized": False, "tests": 0}
+        for candidate in candidates:
+            if self.reproduce(candidate)[0] == kind:
+                got["sessions"] = candidate
+                break
+        if got["sessions"] is None and kind in GONE:
+            largest = sorted(sessions_of, key=lambda p: -len(p[1].data))[:3]
+            for candidate in [*([p, s] for p, s in largest), [sessions_of[-1][0], *(s for _, s in sessions_of)]]:
+                if self.reproduce(candidate, repeat=REPEAT_MAX, seconds=REPEAT_SECONDS)[0] == kind:
+                    got["sessions"], got["repeat"] = candidate, self.rounds
                     break
-            if confirmed:
-                sessions, tests = self._minimize(kind, sessions)
-                minimized = True
-            got, outcomes = self.reproduce(sessions, record=True)
-            confirmed = confirmed and got == kind
-            c.launcher.stop()
-        ids = [f[8] for s in sessions for f in s.frames if len(f) > 8]
-        signature = f"{kind}:{','.join(map(str, ids[-8:]))}"
-        if signature in self.signatures:
+        if got["sessions"] is not None and got["repeat"] == 1:
+            got["sessions"], got["tests"] = self._minimize(kind, got["sessions"])
+            got["minimized"] = True
+        if got["sessions"] is not None:
+            rounds = got["repeat"] * 2 if got["repeat"] > 1 else 1
+            verdict, got["outcomes"] = self.reproduce(got["sessions"], record=True, repeat=rounds,
+                                                      seconds=4 * REPEAT_SECONDS)  # fmt: skip
+            got["reproduced"] = verdict == kind
+        return got
+
+    # ------------------------------------------------------------------ a failure
+    def handle(self, kind: str, reason: str, units: list[Unit], history: list[Session], believed: bool,
+               evidence: dict[str, Any]) -> dict[str, Any] | None:  # fmt: skip
+        """Write the failure; None for a duplicate. ``believed``: a finding (replays confirmed it, or no port
+        serves us any more); else it goes under ``unconfirmed/``."""
+        c = self.c
+        self.used_launcher = False
+        found_after = round(c.stats.elapsed, 1)
+        culprit = units[-1].cases[-1] if units and units[-1].cases else None
+        key = f"{kind}:{culprit.telegram if culprit else '-'}:{culprit.origin if culprit else '-'}"
+        if believed and key in self.culprits:
             return None
-        self.signatures.add(signature)
+        target = units[-1].target if units and units[-1].target else c.plan.current
+        sessions = [prelude_session(target), *(u.session() for u in units)]
+        fresh: dict[str, Any] = {}
+        if c.launcher is not None and believed:
+            self.used_launcher = True
+            c.launcher.spares = True  # each test of the minimisation on a fresh instance, the next one warming up
+            try:
+                fresh = self._fresh(kind, units, history)
+            finally:
+                c.launcher.no_spares()
+            if fresh.get("sessions") is not None:
+                sessions = fresh["sessions"]
+            c.launcher.stop()
+        ids = [f[8] for s in sessions for f in s.frames[int(s.led) :] if len(f) > 8]
+        signature = f"{kind}:{','.join(map(str, ids[-8:]))}"
+        if believed and signature in self.signatures:
+            return None
+        if believed:
+            self.signatures.add(signature)
+            self.culprits.add(key)
         self.count += 1
-        culprit = cases[-1] if cases else None
-        name = f"finding-{self.count:03d}-{kind}-{slug(culprit.telegram if culprit else 'batch')}"
+        last = next((f for s in reversed(sessions) for f in reversed(s.frames[int(s.led) :])), b"")
+        called = _telegram(last) if fresh.get("sessions") else culprit.telegram if culprit else "batch"
+        name = f"finding-{self.count:03d}-{kind}-{slug(called)}"
         tail = list(c.launcher.output)[-30:] if c.launcher is not None else []
         description = {
             "signature": signature,
             "command": c.o.command,
             "seed": c.o.seed,
             "case_index_before": c.index,
-            "state": {"target": list(c.plan.current), "operation_state": c.kb.operation_state,
+            "state": {"target": list(target), "operation_state": c.kb.operation_state,
                       "motion_mode": c.kb.motion_mode},
             "culprit": culprit.to_json() | {"frames": len(culprit.frames)} if culprit else None,
-            "confirmed_on_fresh_target": confirmed,
-            "minimized": minimized,
-            "minimize_tests": tests,
+            "confirmed": believed,
+            "found_after_s": found_after,
+            "evidence": evidence,
+            "reproduced_on_fresh_target": fresh.get("reproduced", False),
+            "repeat": fresh.get("repeat", 1),
+            "minimized": fresh.get("minimized", False),
+            "minimize_tests": fresh.get("tests", 0),
             "target_output_tail": tail,
         }  # fmt: skip
-        # with a launcher a finding must reproduce on a fresh target; one that does not is kept for inspection
-        where = c.o.out if confirmed or c.launcher is None else c.o.out / "unconfirmed"
-        directory = write_finding(where / name, kind, reason, sessions, description, outcomes, c.ports[0], c.o.deadline)
-        return {"kind": kind, "reason": reason, "dir": str(directory), "confirmed": confirmed, "signature": signature}
+        where = c.o.out if believed else c.o.out / "unconfirmed"
+        directory = write_finding(where / name, kind, reason, sessions, description, fresh.get("outcomes", []),
+                                  c.ports[0], c.o.deadline, repeat=fresh.get("repeat", 1))  # fmt: skip
+        return {"kind": kind, "reason": reason, "dir": str(directory), "confirmed": believed, "signature": signature,
+                "reproduced": fresh.get("reproduced", False), "evidence": evidence,
+                "found_after_s": description["found_after_s"]}  # fmt: skip
+
+
+def _telegram(frame: bytes) -> str:
+    t = REQUESTS.by_id.get(frame[8]) if len(frame) > 8 else None
+    return t.NAME if t is not None else f"id {frame[8]}" if len(frame) > 8 else "raw"
+
+
+__all__ = ["OK", "FindingWriter", "led", "prelude_session"]

@@ -25,16 +25,23 @@ from pltf.spec import errors
 from pltf.spec.codec import REQUESTS
 
 CHUNK = 1 << 16
+AWAIT = -1.0  # the pause of a piece that waits for the peer's first byte (the rest of a gated session)
 _RESET = (errno.ECONNRESET, errno.EPIPE)
 
 
 class Flight:
-    def __init__(self, host: str, port: int, session: Session, deadline_s: float) -> None:
+    def __init__(self, host: str, port: int, session: Session, deadline_s: float,
+                 sock: socket.socket | None = None) -> None:  # fmt: skip
+        """``sock``: a connection kept from the flight before (``keep``), already served by the target."""
         self.session = session
         self.out = Outcome()
         data = session.data
         self.expected = session_reply_ids(session)
-        pieces = session.delivery.chunks(data)  # (bytes, pause before them): one piece unless slow or bytewise
+        gate = session.gate_bytes
+        pieces = [(data[:gate], 0.0)] if gate else []
+        pieces += session.delivery.chunks(data[gate:])  # (bytes, pause before them): one piece unless slow/bytewise
+        if gate and len(pieces) > 1:
+            pieces[1] = (pieces[1][0], AWAIT)
         if session.sync:
             data += GET_STATUS
             pieces.append((GET_STATUS, 0.0))
@@ -43,17 +50,25 @@ class Flight:
         self.pieces: collections.deque[tuple[int, float]] = collections.deque()  # (end offset, pause before it)
         end = 0
         for piece, pause in pieces:
-            end += len(piece)
-            self.pieces.append((end, pause))
+            if piece:
+                end += len(piece)
+                self.pieces.append((end, pause))
         self.next_at = 0.0  # monotonic time before which the next piece waits (a slow delivery's pause)
+        self.awaiting = False  # the next piece waits for a byte back (a gated session's lead)
         self.want = len(self.expected) if session.sync and not session.half_close else None
-        pauses = sum(pause for _, pause in pieces)
+        pauses = sum(pause for _, pause in pieces if pause > 0)
         self.budget = pauses + session_deadline(deadline_s, len(session.frames), len(data))  # s from its turn
-        self.deadline = time.monotonic() + self.budget
+        self.started = time.monotonic()
+        self.deadline = self.started + self.budget
         self.decoder = reply_decoder()
         self.done = False
         self.reset = False  # the peer reset the connection (a close with our input unread)
         self.sending = True
+        self.kept: socket.socket | None = None  # the connection, still open, after a clean finish of ``want``
+        if sock is not None:
+            self.sock, self.connected = sock, True
+            self._send_some()
+            return
         self.sock = socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET, socket.SOCK_STREAM)
         self.sock.setblocking(False)
         self.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
@@ -66,8 +81,8 @@ class Flight:
 
     @property
     def due(self) -> bool:
-        """Whether it has bytes to send now (not waiting for a slow delivery's pause)."""
-        return self.sending and time.monotonic() >= self.next_at
+        """Whether it has bytes to send now (not waiting for a slow delivery's pause or a gated lead's reply)."""
+        return self.sending and not self.awaiting and time.monotonic() >= self.next_at
 
     def _send_some(self) -> None:
         """One write of the current piece (at most ``CHUNK`` bytes); after a piece, the next one's pause."""
@@ -95,7 +110,9 @@ class Flight:
         self.pieces.popleft()
         if self.pieces:
             pause = self.pieces[0][1]
-            if pause > 0:
+            if pause == AWAIT:
+                self.awaiting = self.out.got == 0
+            elif pause > 0:
                 self.next_at = time.monotonic() + pause
             return
         self._sent_all()
@@ -117,7 +134,11 @@ class Flight:
         self.out.closed = closed or (self.want is not None and len(self.out.replies) < self.want)
         if self.out.bad_reply is None and not refused:
             self.out.bad_reply = check_order(self.out.replies, self.expected)
-        self.sock.close()
+        clean = not (refused or timed_out or self.out.closed or self.out.bad_reply or self.decoder.pending)
+        if self.want is not None and clean:
+            self.kept = self.sock  # a kept connection: the next flight goes on with it
+        else:
+            self.sock.close()
 
     def writable(self) -> None:
         if not self.connected:
@@ -149,7 +170,10 @@ class Flight:
         if not data:
             self.decoder.receive_data(b"")
         else:
+            self.out.got += len(data)
             self.decoder.receive_data(data)
+            if self.awaiting:
+                self.awaiting = False
         try:
             while (t := self.decoder.next_telegram()) is not None:
                 self.out.replies.append(t)
@@ -170,16 +194,19 @@ def fly(flights: list[Flight]) -> None:
         _step(live)
 
 
-def step_flights(flights: list[Flight]) -> list[Flight]:
-    """Drive ``flights`` until at least one of them is done (or past its deadline); the ones done."""
+def step_flights(flights: list[Flight], until: float | None = None) -> list[Flight]:
+    """Drive ``flights`` until at least one of them is done (or past its deadline), or the monotonic time
+    ``until`` has come; the ones done."""
     while not (done := [f for f in flights if f.done]):
-        _step(flights)
+        if until is not None and time.monotonic() >= until:
+            break
+        _step(flights, until)
     return done
 
 
-def _step(live: list[Flight]) -> None:
+def _step(live: list[Flight], until: float | None = None) -> None:
     """One round over flights not done: finish those past their deadline; if none was, wait for the sockets
-    of all of them until the nearest deadline and drive the ones that are ready."""
+    of all of them until the nearest deadline (or ``until``) and drive the ones that are ready."""
     now = time.monotonic()
     overdue = [f for f in live if now >= f.deadline]
     for f in overdue:
@@ -187,6 +214,8 @@ def _step(live: list[Flight]) -> None:
     if overdue:
         return  # the caller looks at the flights again
     wait = max(0.0, min(f.deadline for f in live) - now)
+    if until is not None:
+        wait = min(wait, max(0.0, until - now))
     paused = [f.next_at for f in live if f.sending and f.connected and f.next_at > now]  # slow deliveries
     if paused:
         wait = min(wait, max(0.0, min(paused) - now))

@@ -7,6 +7,9 @@ Rules:
   port order (the reference server's convention); we read them from its merged stdout/stderr.
 - Every wait is bounded; ``stop`` ends only the process we started (terminate, then kill).
 - The target's output goes to a log file (a pipe would cost us a reader thread); ``output`` is its tail.
+- Warm spares (``spares = True``, ephemeral ports only): while one instance is in use the next one starts, so
+  that delta debugging, which wants a fresh instance per test, waits for a start only when the spare is not yet
+  up. A spare that is not taken is stopped with the launcher.
 """
 
 from __future__ import annotations
@@ -14,6 +17,7 @@ from __future__ import annotations
 import re
 import shlex
 import shutil
+import socket
 import subprocess
 import tempfile
 import time
@@ -28,97 +32,131 @@ class LaunchError(RuntimeError):
     """The target could not be started (the harness's problem: exit status 2)."""
 
 
-class Launcher:
-    def __init__(self, template: str, host: str, port: int, second_port: int) -> None:
-        self.template, self.host = template, host
-        self.want = (port, second_port)
-        self.ports = (port, second_port)
-        self.proc: subprocess.Popen[bytes] | None = None
-        self._log: IO[bytes] | None = None
-        self._tmp: str | None = None
-        self.starts = 0
+class Instance:
+    """One started target process, its log and its data directory."""
 
-    def command(self) -> list[str]:
-        a, b = self.want
-        self._tmp = tempfile.mkdtemp(prefix="pltf-fuzz-target-")
-        text = self.template.format(port=a, second_port=b, ports=f"{a},{b}", tmpdir=self._tmp)
-        return shlex.split(text)
-
-    def start(self) -> tuple[int, int]:
-        self.cleanup()
-        self._log = tempfile.NamedTemporaryFile(prefix="pltf-fuzz-target-", suffix=".log", delete=False)  # noqa: SIM115
+    def __init__(self, template: str, want: tuple[int, int]) -> None:
+        a, b = want
+        self.tmp = tempfile.mkdtemp(prefix="pltf-fuzz-target-")
+        self.log: IO[bytes] = tempfile.NamedTemporaryFile(prefix="pltf-fuzz-target-", suffix=".log", delete=False)  # noqa: SIM115
+        command = shlex.split(template.format(port=a, second_port=b, ports=f"{a},{b}", tmpdir=self.tmp))
         try:
-            self.proc = subprocess.Popen(
-                self.command(), stdout=self._log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL
-            )
+            self.proc = subprocess.Popen(command, stdout=self.log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL)
         except OSError as exc:
+            self.cleanup()
             raise LaunchError(f"cannot start the target: {exc}") from None
-        self.starts += 1
-        if 0 in self.want:
-            deadline = time.monotonic() + START_TIMEOUT
-            seen: list[int] = []
-            while len(seen) < 2 and self.alive() and time.monotonic() < deadline:
-                time.sleep(0.02)
-                seen = [int(m) for m in STARTED.findall(self._read_log())]
-            if len(seen) < 2:
-                tail = " | ".join(self.output[-5:])
-                self.stop()
-                raise LaunchError(f"the target did not report two ports ('server started at port N'): {tail}")
-            self.ports = (seen[0], seen[1])
-        else:
-            self.ports = self.want
-            self._wait_listening()
-        return self.ports
+        self.ports = want
 
-    def _read_log(self, limit: int = 1 << 20) -> str:
-        if self._log is None:
-            return ""
-        with open(self._log.name, "rb") as fh:
+    def alive(self) -> bool:
+        return self.proc.poll() is None
+
+    def read_log(self, limit: int = 1 << 20) -> str:
+        with open(self.log.name, "rb") as fh:
             fh.seek(0, 2)
             size = fh.tell()
             fh.seek(max(0, size - limit))
             return fh.read().decode("utf-8", "replace")
 
+    def stop(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.terminate()
+            try:
+                self.proc.wait(2)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait(5)
+        shutil.rmtree(self.tmp, ignore_errors=True)
+
+    def cleanup(self) -> None:
+        if hasattr(self, "proc"):
+            self.stop()
+        shutil.rmtree(self.tmp, ignore_errors=True)
+        self.log.close()
+        Path(self.log.name).unlink(missing_ok=True)
+
+
+class Launcher:
+    def __init__(self, template: str, host: str, port: int, second_port: int) -> None:
+        self.template, self.host = template, host
+        self.want = (port, second_port)
+        self.ports = (port, second_port)
+        self.current: Instance | None = None
+        self.spare: Instance | None = None
+        self.spares = False
+        self.starts = 0
+
+    @property
+    def proc(self) -> subprocess.Popen[bytes] | None:
+        return self.current.proc if self.current is not None else None
+
+    def start(self) -> tuple[int, int]:
+        """A fresh instance (the warm spare when there is one), its ports once it serves them."""
+        self.cleanup_current()
+        inst = self.spare if self.spare is not None and self.spare.alive() else None
+        if inst is None and self.spare is not None:
+            self.spare.cleanup()
+        self.spare = None
+        inst = inst or Instance(self.template, self.want)
+        self.current = inst
+        self.starts += 1
+        try:
+            self.ports = self._ready(inst)
+        finally:
+            if self.spares and 0 in self.want:
+                self.spare = Instance(self.template, self.want)
+        return self.ports
+
+    def _ready(self, inst: Instance) -> tuple[int, int]:
+        deadline = time.monotonic() + START_TIMEOUT
+        if 0 in self.want:
+            seen: list[int] = []
+            while len(seen) < 2 and inst.alive() and time.monotonic() < deadline:
+                seen = [int(m) for m in STARTED.findall(inst.read_log())]
+                if len(seen) < 2:
+                    time.sleep(0.02)
+            if len(seen) < 2:
+                tail = " | ".join(self.output[-5:])
+                self.stop()
+                raise LaunchError(f"the target did not report two ports ('server started at port N'): {tail}")
+            return seen[0], seen[1]
+        while time.monotonic() < deadline and inst.alive():
+            try:
+                socket.create_connection((self.host, self.want[1]), timeout=0.5).close()
+                return self.want
+            except OSError:
+                time.sleep(0.05)
+        raise LaunchError(f"the target does not listen on {self.host}:{self.want[1]}")
+
     @property
     def output(self) -> list[str]:
         """The last lines the target wrote (stdout and stderr)."""
-        return self._read_log(1 << 16).splitlines()[-200:]
-
-    def _wait_listening(self) -> None:
-        import socket
-
-        deadline = time.monotonic() + START_TIMEOUT
-        while time.monotonic() < deadline and self.alive():
-            try:
-                socket.create_connection((self.host, self.ports[1]), timeout=0.5).close()
-                return
-            except OSError:
-                time.sleep(0.05)
-        raise LaunchError(f"the target does not listen on {self.host}:{self.ports[1]}")
+        return self.current.read_log(1 << 16).splitlines()[-200:] if self.current is not None else []
 
     def alive(self) -> bool:
-        return self.proc is not None and self.proc.poll() is None
+        return self.current is not None and self.current.alive()
 
     def exit_code(self) -> int | None:
-        return None if self.proc is None else self.proc.poll()
+        return None if self.current is None else self.current.proc.poll()
 
     def stop(self) -> None:
-        proc, self.proc = self.proc, None
-        if proc is not None and proc.poll() is None:
-            proc.terminate()
-            try:
-                proc.wait(2)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait(5)
-        if self._tmp is not None:
-            shutil.rmtree(self._tmp, ignore_errors=True)
-            self._tmp = None
+        """Stop the instance in use (its log stays readable until the next start)."""
+        if self.current is not None:
+            self.current.stop()
+
+    def cleanup_current(self) -> None:
+        if self.current is not None:
+            self.current.cleanup()
+            self.current = None
+
+    def no_spares(self) -> None:
+        self.spares = False
+        if self.spare is not None:
+            self.spare.cleanup()
+            self.spare = None
 
     def cleanup(self) -> None:
-        """Stop the target and remove its log."""
-        self.stop()
-        if self._log is not None:
-            self._log.close()
-            Path(self._log.name).unlink(missing_ok=True)
-            self._log = None
+        """Stop every instance and remove the logs."""
+        self.cleanup_current()
+        if self.spare is not None:
+            self.spare.cleanup()
+            self.spare = None

@@ -24,8 +24,10 @@ _SCRIPT = '''#!/usr/bin/env python3
 Found by: {command}
 Usage: python {name} --target HOST:PORT [--second-port PORT] [--deadline SECONDS]
 Exit status: 1 when the failure happened again ({kind}), 0 when the target survived, 2 on a usage error.
-Standard library only; it replays {n_frames} frame(s) on {n_sessions} connection(s), then probes liveness with
-CMD_GET_STATUS on --second-port (or the same port).
+Standard library only; it replays {n_frames} frame(s) on {n_sessions} connection(s) ({repeat} round(s)), then
+probes liveness with CMD_GET_STATUS on --second-port (or the same port). Each connection opens with a
+CMD_GET_STATUS: one that gets nothing back was not served (a target turns newcomers away, or leaves them in its
+listen backlog, while a port is busy) and runs again after a short pause.
 """
 
 import argparse
@@ -35,7 +37,10 @@ import time
 
 KIND = {kind!r}
 SESSIONS = {sessions}
+REPEAT = {repeat}  # rounds of the sessions (a failure that piles up, such as a leak, needs several)
 GET_STATUS = bytes.fromhex("ff01fe020000000112")
+PROBE = {{"frames": GET_STATUS.hex(), "delivery": ["whole", 1, 0.0], "half_close": True, "sync": False, "led": True,
+         "gate": 0, "replies": 1}}
 HEADER = bytes.fromhex("ff01fe02")
 try:  # strict reply checks when the pltf toolkit is importable; framing checks only otherwise
     from pltf.spec.codec import REPLIES
@@ -68,50 +73,60 @@ def chunks(data, delivery):
 
 
 def read_frames(sock, want, deadline):
-    """Read replies until `want` frames (None: until EOF); returns (frames, problem, timed_out)."""
-    buf, frames = b"", []
+    """Read replies until `want` frames (None: until EOF); (frames, problem, timed_out, bytes received)."""
+    buf, frames, got = b"", [], 0
     while want is None or len(frames) < want:
         while len(buf) >= 8:
             if buf[:4] != HEADER:
-                return frames, "reply with a bad header " + buf[:4].hex(), False
+                return frames, "reply with a bad header " + buf[:4].hex(), False, got
             n = int.from_bytes(buf[4:8], "big")
             if len(buf) < 8 + n:
                 break
             problem = strict(buf[8:8 + n])
             if problem:
-                return frames, problem, False
+                return frames, problem, False, got
             frames.append(buf[8:8 + n])
             buf = buf[8 + n:]
             if want is not None and len(frames) >= want:
-                return frames, None, False
+                return frames, None, False, got
         left = deadline - time.monotonic()
         if left <= 0:
-            return frames, None, True
+            return frames, None, True, got
         sock.settimeout(left)
         try:
             data = sock.recv(65536)
         except socket.timeout:
-            return frames, None, True
+            return frames, None, True, got
         except OSError:
             data = b""
         if not data:
-            return frames, ("reply cut off by the close" if buf else None), False
+            return frames, ("reply cut off by the close" if buf else None), False, got
+        got += len(data)
         buf += data
-    return frames, None, False
+    return frames, None, False, got
 
 
 def play(host, port, session, deadline_s):
-    """'refused', 'stall', 'dropped', 'bad-reply: ...' or None."""
+    """'refused', 'unserved' (closed with nothing back: turned away), 'unanswered' (nothing back in time: a backlog,
+    or a target that stopped), 'stall', 'dropped', 'bad-reply: ...' or None."""
     try:
         sock = socket.create_connection((host, port), timeout=deadline_s)
     except ConnectionRefusedError:
         return "refused"
     except OSError:
-        return None
+        return "unserved"
     sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+    deadline = time.monotonic() + deadline_s
     try:
         data = bytes.fromhex(session["frames"])
+        gate, got = session["gate"], 0
         try:
+            if gate:  # the lead GET_STATUS alone; the rest once it is answered
+                sock.sendall(data[:gate])
+                frames, problem, timed_out, got = read_frames(sock, 1, deadline)
+                if not frames:
+                    return "bad-reply: " + problem if problem and got else "unanswered" if timed_out else "unserved"
+                data = data[gate:]
             for chunk, pause in chunks(data, session["delivery"]):
                 if pause:
                     time.sleep(pause)
@@ -121,40 +136,40 @@ def play(host, port, session, deadline_s):
             if session["half_close"]:
                 sock.shutdown(socket.SHUT_WR)
         except OSError:
-            return None
-        want = session["replies"] if session["sync"] and not session["half_close"] else None
-        frames, problem, timed_out = read_frames(sock, want, time.monotonic() + deadline_s)
-        if problem:
+            pass  # the peer is gone: what did it say before it went?
+        want = session["replies"] - (1 if gate else 0) if session["sync"] and not session["half_close"] else None
+        frames, problem, timed_out, more = read_frames(sock, want, deadline)
+        if session["led"] and not got and not more:
+            return "unanswered" if timed_out else "unserved"
+        if problem and not (problem.startswith("reply cut") and not session["sync"]):
             return "bad-reply: " + problem
         if timed_out:
             return "stall"
-        if session["sync"] and len(frames) < session["replies"]:
+        if session["sync"] and len(frames) + (1 if gate else 0) < session["replies"]:
             return "dropped"
         return None
     finally:
         sock.close()
 
 
-def probe(host, port, deadline_s):
-    """None when GET_STATUS is answered, else 'dead', 'hang' or 'deaf'."""
-    try:
-        sock = socket.create_connection((host, port), timeout=deadline_s)
-    except ConnectionRefusedError:
-        return "dead"
-    except OSError:
-        return "hang"
-    try:
-        sock.sendall(GET_STATUS)
-        frames, problem, timed_out = read_frames(sock, 1, time.monotonic() + deadline_s)
-    except OSError:
-        return "dead"
-    finally:
-        sock.close()
-    if timed_out:
-        return "hang"
-    if not frames or frames[0][:1] != b"\\x12":
-        return "deaf"
-    return None
+def play_served(host, port, session, deadline_s, patience):
+    """`play` again, after a growing pause, while the target does not serve us (up to `patience` s)."""
+    end, pause = time.monotonic() + patience, 0.001
+    while True:
+        verdict = play(host, port, session, deadline_s)
+        if verdict not in ("refused", "unserved", "unanswered") or time.monotonic() >= end:
+            return verdict
+        time.sleep(pause)
+        pause = min(0.016, pause * 1.6)
+
+
+def probe(host, port, deadline_s, patience):
+    """None when a GET_STATUS is answered (waiting for the port as `play_served` does), else 'dead', 'hang' or
+    'deaf'."""
+    verdict = play_served(host, port, PROBE, deadline_s, patience)
+    if verdict is None:
+        return None
+    return {{"refused": "dead", "stall": "hang", "unanswered": "hang", "unserved": "deaf"}}.get(verdict, "deaf")
 
 
 def main():
@@ -162,27 +177,33 @@ def main():
     parser.add_argument("--target", required=True, metavar="HOST:PORT")
     parser.add_argument("--second-port", type=int, help="port of the liveness probe (default: the same port)")
     parser.add_argument("--deadline", type=float, default={deadline!r})
+    parser.add_argument("--patience", type=float, help="s to wait for a port that turns us away (default: "
+                        "twice the deadline, at least 1)")
     args = parser.parse_args()
     host, _, port = args.target.rpartition(":")
     if not host or not port.isdigit():
         parser.error("--target must be HOST:PORT")
     port = int(port)
+    second = args.second_port or port
+    patience = args.patience or max(1.0, 2 * args.deadline)
     verdict = None
-    for session in SESSIONS:
-        verdict = play(host, port, session, args.deadline)
-        if verdict == "refused":
-            verdict = "dead"
-            break
-        if verdict:
+    for _ in range(REPEAT):
+        for session in SESSIONS:
+            verdict = play_served(host, port, session, args.deadline, patience)
+            if verdict:
+                break
+        if verdict or (REPEAT > 1 and probe(host, second, args.deadline, patience)):
             break
     time.sleep(0.05)
-    after = probe(host, args.second_port or port, args.deadline)
+    after = probe(host, second, args.deadline, patience)
     if after is not None:
         verdict = after
+    elif verdict in ("refused", "unserved", "unanswered"):
+        verdict = "stall"  # this port no longer serves us while the other one does
     if verdict is None:
         print("target survived: the failure did not happen again")
         return 0
-    print("reproduced:", verdict)
+    print("reproduced:", verdict.replace("refused", "dead"))
     return 1
 
 
@@ -221,6 +242,8 @@ def script_sessions(sessions: list[Session]) -> list[dict[str, Any]]:
             "delivery": [s.delivery.mode, s.delivery.pieces, s.delivery.pause],
             "half_close": s.half_close,
             "sync": s.sync,
+            "led": s.led,
+            "gate": s.gate_bytes,
             "replies": len(expected_reply_ids(s.data)) + (1 if s.sync else 0),
         }
         for s in sessions
@@ -236,6 +259,7 @@ def write_finding(
     outcomes: list[Outcome],
     server_port: int,
     deadline: float,
+    repeat: int = 1,
 ) -> Path:
     directory.mkdir(parents=True, exist_ok=True)
     frames = [f for s in sessions for f in s.frames]
@@ -251,6 +275,7 @@ def write_finding(
         n_sessions=len(sessions),
         sessions=sessions_src,
         deadline=deadline,
+        repeat=repeat,
     )
     (directory / "repro.py").write_text(script)
     desc = dict(description)
@@ -263,6 +288,7 @@ def write_finding(
         if sum(len(s.data) for s in sessions) < 1 << 20
         else "see sequence.hex",
         replay="python repro.py --target HOST:PORT [--second-port PORT]",
+        repeat=repeat,
     )
     (directory / "finding.json").write_text(json.dumps(desc, indent=2, default=str) + "\n")
     convs = []

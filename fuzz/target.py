@@ -17,9 +17,11 @@ import ipaddress
 import select
 import socket
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 
 from pltf.fuzz.case import WHOLE, Delivery
+from pltf.fuzz.gate import BACKOFF_FIRST, BACKOFF_GROWTH, BACKOFF_MAX
 from pltf.fuzz.replies import reply_decoder
 from pltf.fuzz.wire import answered_ids
 from pltf.spec import errors
@@ -27,6 +29,11 @@ from pltf.spec.codec import REQUESTS, encode
 from pltf.spec.telegram import Telegram
 
 GET_STATUS = encode(REQUESTS.CMD_GET_STATUS())
+# The lead of every session (``pltf.fuzz.verdict``): any answered request proves a connection was served; this is
+# the one a server answers at least cost (the reference server: ~60 us and a 33-byte reply, where GET_STATUS costs
+# ~150 us and 2.7 KB). The state comes from the batches' sync GET_STATUS and the preludes' check.
+LEAD = encode(REQUESTS.CMD_GET_POSITION())
+LEAD_IDS = frozenset({REQUESTS.CMD_GET_POSITION.ID, REQUESTS.CMD_GET_STATUS.ID})  # the replies of lead and syncs
 RECV = 1 << 16
 CUT = "reply cut off by the close"
 BIG_SEND = 1 << 16  # bytes; bigger writes interleave reading (see Conn._send_reading)
@@ -46,6 +53,13 @@ class Session:
     half_close: bool = False
     sync: bool = False
     answered: list[int] | None = None  # ids of the answered requests among the frames, when known already
+    gate: bool = False  # the first frame (the lead GET_STATUS) goes alone; the rest waits for a byte back
+    led: bool = False  # the first frame is the lead GET_STATUS: a byte back proves the target served us
+
+    @property
+    def gate_bytes(self) -> int:
+        """Bytes written before the gate (0: no gate)."""
+        return len(self.frames[0]) if self.gate and len(self.frames) > 1 else 0
 
     @property
     def data(self) -> bytes:
@@ -58,7 +72,8 @@ class Session:
     def to_json(self) -> dict[str, object]:
         d = self.delivery
         return {"frames": [f.hex() for f in self.frames], "delivery": {"mode": d.mode, "pieces": d.pieces,
-                "pause": d.pause}, "half_close": self.half_close, "sync": self.sync}  # fmt: skip
+                "pause": d.pause}, "half_close": self.half_close, "sync": self.sync, "gate": self.gate,
+                "led": self.led}  # fmt: skip
 
 
 @dataclass
@@ -68,6 +83,7 @@ class Outcome:
     timed_out: bool = False  # neither the expected replies nor a close within the deadline
     bad_reply: str | None = None
     replies: list[Telegram] = field(default_factory=list)
+    got: int = 0  # bytes the peer sent us (none at all: it never served the connection)
     sent: list[tuple[float, bytes]] = field(default_factory=list)  # (time, bytes) for the pcapng
     received: list[tuple[float, bytes]] = field(default_factory=list)
 
@@ -109,6 +125,7 @@ class Conn:
         self.sent: list[tuple[float, bytes]] = []
         self.received: list[tuple[float, bytes]] = []
         self.eof = False
+        self.got = 0  # bytes received
 
     def close(self) -> None:
         with contextlib.suppress(OSError):
@@ -141,6 +158,7 @@ class Conn:
                     raise ConnectionResetError("peer closed while we were sending")
                 if self.record:
                     self.received.append((time.time(), got))
+                self.got += len(got)
                 self.decoder.receive_data(got)
             if writable:
                 pos += self.sock.send(view[pos : pos + BIG_SEND])
@@ -182,6 +200,7 @@ class Conn:
             if not data:
                 self.eof = True
                 continue
+            self.got += len(data)
             self.decoder.receive_data(data)
         return replies, None, False
 
@@ -216,7 +235,17 @@ def play_on(conn: Conn, session: Session, deadline_s: float, out: Outcome) -> No
     """Run ``session`` on an open connection (a kept batch connection, or a fresh one)."""
     data = session.data
     expected = session_reply_ids(session)
+    deadline = time.monotonic() + session_deadline(deadline_s, len(session.frames), len(data))
+    gate = session.gate_bytes
     try:
+        if gate:  # the lead alone, then the rest once the target has answered it
+            conn.send(data[:gate])
+            lead, bad, timed_out = conn.read_replies(1, deadline)
+            out.replies.extend(lead)
+            if bad is not None or timed_out or not lead:
+                out.bad_reply, out.timed_out, out.closed, out.got = bad, timed_out, conn.eof, conn.got
+                return
+            data = data[gate:]
         conn.send(data, session.delivery)
         if session.sync:
             conn.send(GET_STATUS)
@@ -225,86 +254,34 @@ def play_on(conn: Conn, session: Session, deadline_s: float, out: Outcome) -> No
             conn.shut_write()
     except OSError:
         conn.eof = True  # the peer is gone; read what it said before it went
-    deadline = time.monotonic() + session_deadline(deadline_s, len(session.frames), len(data))
-    want = len(expected) if session.sync and not session.half_close else None
+    want = len(expected) - len(out.replies) if session.sync and not session.half_close else None
     replies, bad, timed_out = conn.read_replies(want, deadline)
-    out.replies = replies
-    out.bad_reply = bad or check_order(replies, expected)
+    out.replies.extend(replies)
+    out.bad_reply = bad or check_order(out.replies, expected)
     out.timed_out = timed_out
     out.closed = conn.eof or (want is not None and len(replies) < want)
+    out.got = conn.got
 
 
-class Prober:
-    """GET_STATUS on the other port over one kept connection; reconnects once when the peer dropped it."""
+def served(out: Outcome, session: Session) -> bool:
+    """Whether the target served the connection: for a led session, anything came back; else not refused."""
+    return out.got > 0 or bool(out.replies) if session.led else not out.refused
 
-    def __init__(self, host: str, port: int, deadline_s: float) -> None:
-        self.host, self.port, self.deadline_s = host, port, deadline_s
-        self.conn: Conn | None = None
-        self.last_status: Telegram | None = None
-        self.pending = False
 
-    def close(self) -> None:
-        if self.conn is not None:
-            self.conn.close()
-            self.conn = None
-
-    def probe(self) -> str | None:
-        """None when the target answered; else "dead" (refused), "hang" (no answer in time), "deaf" (every
-        connection closed without an answer) or "bad-reply: ..."."""
-        self.collect()
-        self.send()
-        return self.collect()
-
-    def release(self) -> str | None:
-        """Collect a pending probe, then give the port back in order (our end-of-stream, the peer's close), so
-        that the next client on it is not turned away as a second one. Returns the pending probe's verdict."""
-        verdict = self.collect()
-        if self.conn is not None:
-            conn, self.conn = self.conn, None
-            conn.shut_write()
-            conn.read_replies(None, time.monotonic() + self.deadline_s)
-            conn.close()
-        return verdict
-
-    def send(self) -> None:
-        """Send a probe now, read its answer later (``collect``): the round trip overlaps our next unit."""
-        self.pending = True
-        try:
-            if self.conn is None:
-                self.conn = Conn(self.host, self.port, self.deadline_s)
-            self.conn.send(GET_STATUS)
-        except OSError:
-            self.close()  # collect() reconnects and asks again
-
-    def collect(self) -> str | None:
-        """The verdict of the probe sent last (None: none pending, or it was answered)."""
-        if not self.pending:
-            return None
-        self.pending = False
-        for attempt in range(2):
-            try:
-                if self.conn is None:
-                    self.conn = Conn(self.host, self.port, self.deadline_s)
-                    self.conn.send(GET_STATUS)
-                replies, bad, timed_out = self.conn.read_replies(1, time.monotonic() + self.deadline_s)
-            except ConnectionRefusedError:
-                self.close()
-                return "dead"
-            except OSError:
-                replies, bad, timed_out = [], None, False
-            if bad is not None:
-                self.close()
-                return f"bad-reply: {bad}"
-            if timed_out:
-                self.close()
-                return "hang"
-            if replies:
-                if replies[0].ID != REQUESTS.CMD_GET_STATUS.ID:
-                    self.close()
-                    return f"bad-reply: probe answered with id {replies[0].ID}"
-                self.last_status = replies[0]
-                return None
-            self.close()  # closed under us: reconnect once (a restart, or the server dropped an idle client)
-            if attempt:
-                return "deaf"
-        return "deaf"
+def play_admitted(
+    host: str, port: int, session: Session, deadline_s: float, patience: float, record: bool = False,
+    alive: Callable[[], bool] | None = None,
+) -> tuple[Outcome, bool]:
+    """``play`` again, after a growing pause, while the target turns the connection away (``pltf.fuzz.gate``), for
+    ``patience`` seconds at most; (the last outcome, served). One left unanswered for the deadline is not tried
+    again: the port is held (by a stalled connection, or a target that stopped); nor one of a process that
+    ``alive`` says has ended."""
+    end = time.monotonic() + patience
+    backoff = BACKOFF_FIRST
+    while True:
+        out = play(host, port, session, deadline_s, record)
+        gone = alive is not None and not alive()
+        if served(out, session) or out.timed_out or gone or time.monotonic() >= end:
+            return out, served(out, session)
+        time.sleep(backoff)
+        backoff = min(BACKOFF_MAX, backoff * BACKOFF_GROWTH)

@@ -24,8 +24,11 @@ def render(stats: Any, title: str) -> Table:
     table.add_row("units", f"{stats.units:,} ({batches:,} batches, {singles:,} "
                   f"single, {getattr(stats, 'probes', 0):,} probes)")  # fmt: skip
     if hasattr(stats, "pipelined"):
-        off = " - off: the target turned a client away" if stats.turn_aways else ""
-        table.add_row("pipelined", f"{stats.pipelined:,} units ({stats.retried:,} run again alone){off}")
+        off = " - off on a port: the target turned pipelined clients away" if stats.turn_aways else ""
+        table.add_row("pipelined", f"{stats.pipelined:,} units{off}")
+        release = ", ".join(f"{ms:g}" for ms in stats.release_ms)
+        dear = f"; dear: batches kept, {stats.skipped:,} singles skipped" if stats.dear else ""
+        table.add_row("connections", f"{stats.not_admitted:,} not served (run again); release {release} ms{dear}")
     table.add_row("telegrams", f"{min(covered, n_tel)}/{n_tel} request telegrams, {ids} other ids")
     if hasattr(stats, "state_targets"):
         table.add_row("states", f"{len(stats.states)}/{stats.state_targets} (state, mode) reached")
@@ -34,6 +37,10 @@ def render(stats: Any, title: str) -> Table:
     style = "bold red" if stats.findings else "green"
     table.add_row("findings", f"[{style}]{len(stats.findings)}[/{style}]"
                   + "".join(f"\n{f['kind']}: {f['dir']}" for f in stats.findings[-5:]))  # fmt: skip
+    unconfirmed = getattr(stats, "unconfirmed", [])
+    if unconfirmed:
+        table.add_row("unconfirmed", f"[yellow]{len(unconfirmed)}[/yellow] (did not happen again when replayed; "
+                      "not findings)" + "".join(f"\n{f['kind']}: {f['dir']}" for f in unconfirmed[-3:]))  # fmt: skip
     return table
 
 
@@ -62,7 +69,8 @@ class LiveView:
         elif not self.quiet and stats.elapsed - self._last_line >= 5.0:
             self._last_line = stats.elapsed
             self.console.print(f"{stats.elapsed:6.1f} s  {stats.cases:,} cases ({stats.rate:,.0f}/s)  "
-                               f"{len(stats.findings)} findings")  # fmt: skip
+                               f"{len(stats.findings)} findings, {len(getattr(stats, 'unconfirmed', []))} "
+                               "unconfirmed")  # fmt: skip
 
     def final(self, stats: Any) -> None:
         if not self.quiet:

@@ -13,43 +13,23 @@ from pathlib import Path
 
 from rich.console import Console
 
+from pltf.cli.options import USAGE, CommandError, count, exit_status, port, positive, target
 from pltf.conformance_tests.baseline import Baseline, BaselineError
-from pltf.conformance_tests.catalogue import Tier, load_all, select
+from pltf.conformance_tests.catalogue import Tier, Verdict, load_all, select
 from pltf.conformance_tests.context import Config
 from pltf.conformance_tests.outcome import Outcome, Unreachable
-
-
-def _target(text: str) -> tuple[str, int]:
-    host, sep, port = text.rpartition(":")
-    if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
-        raise argparse.ArgumentTypeError(f"expected HOST:PORT, got {text!r}")
-    return host.strip("[]"), int(port)
-
-
-def _port(text: str) -> int:
-    if not text.isdigit() or not 0 < int(text) < 65536:
-        raise argparse.ArgumentTypeError(f"expected a port number, got {text!r}")
-    return int(text)
-
-
-def _positive(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}")
-    return value
+from pltf.conformance_tests.pace import run_budget
 
 
 def add_conform_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--target", type=_target, required=True, metavar="HOST:PORT", help="the server to check")
-    p.add_argument("--second-port", type=_port, metavar="PORT", help="the target's second port (guide 6.1: 10002)")
-    p.add_argument("--time-scale", type=_positive, default=1.0, metavar="X",
+    p.add_argument("--target", type=target, required=True, metavar="HOST:PORT", help="the server to check")
+    p.add_argument("--second-port", type=port, metavar="PORT", help="the target's second port (guide 6.1: 10002)")
+    p.add_argument("--time-scale", type=positive, default=1.0, metavar="X",
                    help="the target's simulated seconds per wall second (default 1: a real platform)")
     p.add_argument("--profile", choices=("strict", "original"), default="strict",
                    help="original: accept the alternative readings the errata register marks 'accept'")
-    p.add_argument("--tier", choices=[t.name.lower() for t in Tier], default="standard")
+    p.add_argument("--tier", choices=[t.name.lower() for t in Tier], default="standard",
+                   help="how many cases: smoke < standard < exhaustive (default standard)")
     p.add_argument("-k", dest="keyword", metavar="EXPR", help="select cases: and/or/not over id substrings or globs")
     p.add_argument("--junit", metavar="FILE", help="write a JUnit XML report")
     p.add_argument("--json", metavar="FILE", help="write a JSON report (with wire logs and coverage)")
@@ -64,16 +44,26 @@ def add_conform_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--write-baseline", metavar="FILE", help="write the failures of this run as a baseline")
     p.add_argument("--coverage-threshold", type=float, metavar="PCT",
                    help="exit 1 when an enforced coverage metric is below PCT percent")
-    p.add_argument("--reruns", type=int, default=2, metavar="N", help="re-runs of an inconclusive case (default 2)")
-    p.add_argument("--reply-timeout", type=_positive, default=3.0, metavar="S", help="wall seconds per reply")
+    p.add_argument("--reruns", type=count, default=2, metavar="N", help="re-runs of an inconclusive case (default 2)")
+    p.add_argument("--reply-timeout", type=positive, default=3.0, metavar="S", help="wall seconds per reply")
+    p.add_argument("--budget", type=positive, metavar="S",
+                   help="wall seconds for the whole run; the cases left then are INCONCLUSIVE 'not run' (default for "
+                        "the smoke and standard tiers: 280, or 80 + 600 / time scale when more; exhaustive: none)")
+    p.add_argument("--case-budget", type=positive, metavar="S",
+                   help="wall seconds one case may take (default 30 + 240 / time scale); a case still running then "
+                        "is INCONCLUSIVE 'case budget spent'")
     p.add_argument("--list", action="store_true", help="list the selected cases and exit")
     p.add_argument("--verbose", action="store_true", help="print every verdict, not only the non-PASS ones")
     p.add_argument("--differential", action="store_true",
-                   help="also replay a session against an in-process reference server and diff the replies")
-    p.add_argument("--stateful", type=int, default=0, metavar="N",
+                   help="also replay a session against a reference server started for it and diff the replies")
+    p.add_argument("--stateful", type=count, default=0, metavar="N",
                    help="also run N stateful (Hypothesis) examples; a failure is saved as a replay script")
     p.add_argument("--stateful-out", default="conform-failures", metavar="DIR",
                    help="where stateful failures are saved (default conform-failures/)")
+    p.epilog = exit_status(ok="every selected MUST case passed (--list: listed)",
+                           failed="a case failed, a baseline entry is stale or coverage is below the threshold",
+                           usage="usage or connection error: bad arguments, an unreadable baseline, no case "
+                                 "selected, the target unreachable, a harness error")
 
 
 def run_conform(args: argparse.Namespace) -> int:
@@ -82,17 +72,21 @@ def run_conform(args: argparse.Namespace) -> int:
     from pltf.conformance_tests.reports.html import write_html
     from pltf.conformance_tests.runner import Runner
 
-    host, port = args.target
-    config = Config(host=host, port=port, second_port=args.second_port, time_scale=args.time_scale,
+    host, number = args.target
+    config = Config(host=host, port=number, second_port=args.second_port, time_scale=args.time_scale,
                     profile=args.profile, tier=Tier[args.tier.upper()], keyword=args.keyword,
                     allow_motion=args.allow_motion, simulator=args.target_is_simulator,
-                    allow_shutdown=args.allow_shutdown, reruns=max(0, args.reruns), reply_timeout=args.reply_timeout)
+                    allow_shutdown=args.allow_shutdown, reruns=max(0, args.reruns), reply_timeout=args.reply_timeout,
+                    case_budget=args.case_budget)
+    if args.budget is not None:
+        config.run_budget = args.budget
+    elif config.tier is not Tier.EXHAUSTIVE:  # a standard run ends within 5 minutes whatever the target does
+        config.run_budget = run_budget(config)
     try:
         cases = select(load_all().values(), tier=config.tier, keyword=config.keyword)
         baseline = Baseline.load(args.baseline) if args.baseline else Baseline()
     except (ValueError, BaselineError) as exc:
-        print(f"pltf conform: {exc}", file=sys.stderr)
-        return 2
+        raise CommandError(str(exc)) from None
     console = Console(width=None if sys.stdout.isatty() else 140)
     if args.list:
         for c in cases:
@@ -102,8 +96,7 @@ def run_conform(args: argparse.Namespace) -> int:
         console.print(f"{len(cases)} cases")
         return 0
     if not cases:
-        print("pltf conform: no case selected", file=sys.stderr)
-        return 2
+        raise CommandError("no case selected")
     run = Runner(config, cases, [ConsoleReporter(console, verbose=args.verbose)], baseline).run()
     code = run.exit_code
     for path, write in ((args.junit, write_junit), (args.json, write_json), (args.html, write_html)):
@@ -122,6 +115,11 @@ def run_conform(args: argparse.Namespace) -> int:
         code = max(code, _differential(config, console))
     if code != 2 and args.stateful:
         code = max(code, _stateful(config, args.stateful, args.stateful_out, console))
+    if run.harness_error:
+        raise CommandError(f"target unreachable: {run.harness_error}")
+    if code == USAGE:
+        errors = sum(r.verdict is Verdict.ERROR for r in run.results)
+        raise CommandError(f"{errors} case(s) ended in a harness ERROR (see above)")
     return code
 
 
@@ -143,8 +141,7 @@ def _guarded(what: str, console: Console, run: Callable[[], int]) -> int:
     try:
         return run()
     except Unreachable as exc:
-        console.print(f"[bold red]{what}: target unreachable:[/] {exc}")
-        return 2
+        raise CommandError(f"{what}: target unreachable: {exc}") from None
     except (Outcome, OSError) as exc:
         console.print(f"[bold red]{what} aborted: FAIL[/] {exc}")
         return 1

@@ -1,29 +1,32 @@
-"""``pltf fuzz``: the protocol fuzzer (fuzz/); exit 0 nothing found, 1 findings written to --out, 2 harness error."""
+"""``pltf fuzz``: the protocol fuzzer (fuzz/); exit 0 nothing found, 1 findings written to --out, 2 harness error.
+
+The arguments are checked before anything is created: --out appears with the first finding or the summary. A
+target that does not answer the first liveness probe (on the second port) is named by the port the user gave
+when nothing listens there either.
+"""
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import shlex
 import sys
 from pathlib import Path
 
-
-def _target(text: str) -> tuple[str, int]:
-    host, _, port = text.rpartition(":")
-    if not host or not port.isdigit():
-        raise argparse.ArgumentTypeError("expected HOST:PORT")
-    return host, int(port)
+from pltf.cli.options import CommandError, check_listening, count, exit_status, port, positive, target_or_zero
 
 
 def add_fuzz_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--target", type=_target, metavar="HOST:PORT", help="the port to fuzz (port 0 with --launch: "
+    p.add_argument("--target", type=target_or_zero, metavar="HOST:PORT", help="the port to fuzz (port 0 with --launch: "
                    "ephemeral ports read from the target's 'server started at port N' lines)")  # fmt: skip
     p.add_argument(
-        "--second-port", type=int, help="port of the liveness probe (default: PORT+2, guide 6.1 10000/10002)"
+        "--second-port", type=port, metavar="PORT",
+        help="port of the liveness probe (default: PORT+2, guide 6.1 10000/10002)",
     )
-    p.add_argument("--duration", type=float, default=60.0, metavar="SECONDS")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--duration", type=positive, default=60.0, metavar="SECONDS",
+                   help="wall seconds to fuzz (default 60)")
+    p.add_argument("--seed", type=int, default=0, help="seed of the case generator (default 0): same seed, same cases")
     p.add_argument("--out", type=Path, default=Path("fuzz-findings"), metavar="DIR", help="findings are written here")
     p.add_argument("--corpus", type=Path, metavar="DIR", help="resume from / save progress and interesting inputs")
     p.add_argument(
@@ -34,10 +37,11 @@ def add_fuzz_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--in-process", action="store_true", help="fuzz spec.codec and the XML validation directly")
     p.add_argument("--launch", metavar="CMD", help="start (and restart) the target with CMD; {port} {second_port} "
                    "{ports} {tmpdir} are replaced. Needed to minimize deaths and hangs.")  # fmt: skip
-    p.add_argument("--deadline", type=float, default=2.0, metavar="SECONDS", help="liveness and reply deadline")
-    p.add_argument("--max-cases", type=int, help="stop after this many cases")
-    p.add_argument("--max-findings", type=int, help="stop after this many findings")
-    p.add_argument("--minimize-seconds", type=float, default=60.0, help="time budget of one delta debugging")
+    p.add_argument("--deadline", type=positive, default=2.0, metavar="SECONDS", help="liveness and reply deadline")
+    p.add_argument("--max-cases", type=count, metavar="N", help="stop after this many cases")
+    p.add_argument("--max-findings", type=count, metavar="N", help="stop after this many findings")
+    p.add_argument("--minimize-seconds", type=positive, default=60.0, metavar="SECONDS",
+                   help="time budget of one delta debugging (default 60)")
     p.add_argument("--probe-every", type=int, default=4, metavar="UNITS",
                    help="units between GET_STATUS liveness probes on the other port (1: after every unit)")  # fmt: skip
     p.add_argument("--lanes", type=int, choices=(1, 2), default=2,
@@ -48,6 +52,9 @@ def add_fuzz_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--big-share", type=_share, default=None, metavar="FRACTION",
                    help="of the cases over 1 MiB drawn, the share kept (default 0.25; 1: the natural mix)")  # fmt: skip
     p.add_argument("--quiet", action="store_true", help="no live view")
+    p.epilog = exit_status(ok="nothing found", failed="findings written to --out",
+                           usage="usage or connection error: bad arguments, nothing listening on --target or the "
+                                 "probe port, the launch command failed")
 
 
 def _share(text: str) -> float:
@@ -60,31 +67,35 @@ def _share(text: str) -> float:
     return value
 
 
-def run_fuzz(args: argparse.Namespace) -> int:
-    from pltf.fuzz.view import LiveView
+def _check_out(out: Path) -> None:
+    """--out is created when the first finding (or the summary) is written; here only checked that it can be."""
+    if out.exists() and not out.is_dir():
+        raise CommandError(f"--out {out}: not a directory")
+    parent = next((d for d in (out, *out.parents) if d.exists()), Path("."))
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise CommandError(f"--out {out}: {parent} is not writable")
 
-    args.out.mkdir(parents=True, exist_ok=True)
+
+def run_fuzz(args: argparse.Namespace) -> int:
+    _check_out(args.out)
     command = "pltf " + " ".join(shlex.quote(a) for a in sys.argv[1:])
     if args.in_process:
-        from pltf.fuzz.inprocess import InProcessCampaign
-
-        ip = InProcessCampaign(args.seed, args.duration, args.out, args.max_cases, args.deadline, command)
-        with LiveView("pltf fuzz --in-process", args.quiet) as view:
-            code = ip.run(view.update)
-        view.final(ip.stats)
-        _summary(args.out, ip.stats)
-        return code
+        return _in_process(args, command)
     if args.target is None:
-        print("pltf fuzz: --target HOST:PORT is required (or --in-process)", file=sys.stderr)
-        return 2
-    from pltf.fuzz.engine import Campaign, HarnessError, Options
-    from pltf.fuzz.launch import LaunchError
-
+        raise CommandError("--target HOST:PORT is required (or --in-process)")
     host, port = args.target
-    second = args.second_port if args.second_port is not None else (0 if port == 0 else port + 2)
+    if port == 0 and not args.launch:
+        raise CommandError("--target port 0 (the ports the target reports) needs --launch")
     if host not in ("127.0.0.1", "localhost", "::1") and args.launch:
-        print("pltf fuzz: --launch needs a loopback --target", file=sys.stderr)
-        return 2
+        raise CommandError("--launch needs a loopback --target")
+    second = args.second_port if args.second_port is not None else (0 if port == 0 else port + 2)
+    if second > 65535:
+        raise CommandError(f"--second-port: the default, PORT+2 = {second}, is over 65535: give one")
+
+    from pltf.fuzz.engine import Campaign, HarnessError, Options
+    from pltf.fuzz.view import LiveView
+    from pltf.zoo.launch import LaunchError
+
     opts = Options(
         host=host, port=port, second_port=second, duration=args.duration, seed=args.seed, out=args.out,
         corpus=args.corpus, allow_motion=args.allow_motion, launch=args.launch, max_cases=args.max_cases,
@@ -98,12 +109,28 @@ def run_fuzz(args: argparse.Namespace) -> int:
         with LiveView(f"pltf fuzz {host}:{port}", args.quiet) as view:
             campaign.on_tick = view.update
             code = campaign.run()
-    except (HarnessError, LaunchError, OSError) as exc:
-        print(f"pltf fuzz: {exc}", file=sys.stderr)
+    except HarnessError as exc:  # at the start: the probe port did not answer
         campaign.close()
-        return 2
+        if not args.launch:  # a dead target is named by the port given, not by the probe's
+            check_listening(host, port, args.deadline)
+        raise CommandError(f"{exc} (the liveness probe's port: --second-port, default PORT+2)") from None
+    except (LaunchError, OSError) as exc:
+        campaign.close()
+        raise CommandError(str(exc)) from None
     view.final(campaign.stats)
     _summary(args.out, campaign.stats)
+    return code
+
+
+def _in_process(args: argparse.Namespace, command: str) -> int:
+    from pltf.fuzz.inprocess import InProcessCampaign
+    from pltf.fuzz.view import LiveView
+
+    ip = InProcessCampaign(args.seed, args.duration, args.out, args.max_cases, args.deadline, command)
+    with LiveView("pltf fuzz --in-process", args.quiet) as view:
+        code = ip.run(view.update)
+    view.final(ip.stats)
+    _summary(args.out, ip.stats)
     return code
 
 
@@ -119,9 +146,16 @@ def _summary(out: Path, stats: object) -> None:
         "findings": s.findings,  # type: ignore[attr-defined]
         "unconfirmed": getattr(s, "unconfirmed", []),
         "units": {k: getattr(s, k, None) for k in ("batches", "singles", "probes", "restarts", "duplicates")},
-        "connections_closed_on_valid_input": getattr(s, "unexpected_closes", None),
         "replies_cut_by_a_refusal": getattr(s, "cut_replies", None),
         "dropped_unsafe": getattr(s, "dropped_unsafe", None),
-        "pipelining": {k: getattr(s, k, None) for k in ("pipelined", "retried", "turn_aways", "turned_away")},
+        "pipelining": {k: getattr(s, k, None) for k in ("pipelined", "turn_aways", "turned_away")},
+        "connections": {
+            "not_admitted": getattr(s, "not_admitted", None),  # turned away or left in a backlog: run again
+            "release_ms": getattr(s, "release_ms", None),  # per port: mean wait for a fresh connection
+            "dear": getattr(s, "dear", None),  # batches on a kept connection, singles skipped beyond a queue
+            "singles_skipped": getattr(s, "skipped", None),
+        },
+        "replays": getattr(s, "replays", None),
     }
+    out.mkdir(parents=True, exist_ok=True)
     (out / "summary.json").write_text(json.dumps(doc, indent=2) + "\n")

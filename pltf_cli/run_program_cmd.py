@@ -27,6 +27,7 @@ from rich.live import Live
 from rich.panel import Panel
 from rich.table import Table
 
+from pltf.cli.options import CommandError, exit_status, positive, target
 from pltf.client import MotionMode, OperationState, PlatformClient, PlatformError
 from pltf.reference_server.tasks import interpreter as ip
 from pltf.reference_server.tasks.model import Program
@@ -35,23 +36,6 @@ from pltf.reference_server.tasks.remote import RemoteMachine
 from pltf.spec.documents import DocumentError
 
 LOG_LINES = 14
-
-
-def _target(text: str) -> tuple[str, int]:
-    host, sep, port = text.rpartition(":")
-    if not sep or not host or not port.isdigit() or not 0 < int(port) < 65536:
-        raise argparse.ArgumentTypeError(f"expected HOST:PORT, got {text!r}")
-    return host.strip("[]"), int(port)
-
-
-def _positive(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}")
-    return value
 
 
 def _epoch(text: str) -> datetime.datetime:
@@ -63,10 +47,10 @@ def _epoch(text: str) -> datetime.datetime:
 
 def add_run_program_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("program", type=Path, metavar="FILE.xml", help="the program document (guide 6.5 Program)")
-    p.add_argument("--target", type=_target, required=True, metavar="HOST:PORT", help="the platform to drive")
+    p.add_argument("--target", type=target, required=True, metavar="HOST:PORT", help="the platform to drive")
     p.add_argument(
         "--time-scale",
-        type=_positive,
+        type=positive,
         default=1.0,
         metavar="X",
         help="the target's simulated seconds per wall second (default 1: a real platform)",
@@ -84,14 +68,18 @@ def add_run_program_arguments(p: argparse.ArgumentParser) -> None:
         metavar="ISO",
         help="local time at the start, for <date> waits (default: this computer's clock)",
     )
-    p.add_argument("--period", type=_positive, default=0.05, metavar="S", help="wall seconds per tick (default 0.05)")
-    p.add_argument("--timeout", type=_positive, metavar="S", help="give up after S simulated seconds (exit 1)")
+    p.add_argument("--period", type=positive, default=0.05, metavar="S", help="wall seconds per tick (default 0.05)")
+    p.add_argument("--timeout", type=positive, metavar="S", help="give up after S simulated seconds (exit 1)")
     p.add_argument(
         "--stdin-events",
         action="store_true",
         help="raise user events from standard input: one id per line (E-TASK-012)",
     )
     p.add_argument("--plain", action="store_true", help="print log lines instead of the live view")  # fmt: skip
+    p.epilog = exit_status(ok="every task ended without error",
+                           failed="a task failed, or --timeout expired (the platform is stopped)",
+                           usage="usage or connection error: an unreadable or invalid program, the target "
+                                 "unreachable or lost")
 
 
 @dataclass
@@ -205,17 +193,14 @@ def run_run_program(args: argparse.Namespace) -> int:
     try:
         program = load_program(args.program.read_bytes())
     except OSError as exc:
-        err.print(f"pltf: error: {args.program}: {exc.strerror or exc}", markup=False)
-        return 2
+        raise CommandError(f"{args.program}: {exc.strerror or exc}") from None
     except DocumentError as exc:
-        err.print(f"pltf: error: {args.program}: {exc}", markup=False)
-        return 2
+        raise CommandError(f"{args.program}: {exc}") from None
     host, port = args.target
     try:
         client = PlatformClient(host, port)
     except PlatformError as exc:
-        err.print(f"pltf: error: {exc}", markup=False)
-        return 2
+        raise CommandError(str(exc)) from None
     data_dir = args.data_dir or args.program.resolve().parent
     view = View(args.program.name, f"{host}:{port}")
     machine = RemoteMachine(client, data_dir, args.epoch or datetime.datetime.now().replace(microsecond=0))
@@ -246,10 +231,10 @@ def run_run_program(args: argparse.Namespace) -> int:
         _stop_quietly(client)
         return 130
     except PlatformError as exc:
-        err.print(f"pltf: error: {exc}", markup=False)
-        return 2
+        raise CommandError(str(exc)) from None
     if result.failed:
-        err.print(f"pltf: task(s) failed: {', '.join(result.failed)}", markup=False)
+        err.print(f"pltf run-program: task(s) failed: {', '.join(result.failed)}", markup=False)
     if not result.finished:
-        err.print(f"pltf: program still running after {result.elapsed:.1f} s simulated: stopped", markup=False)
+        err.print(f"pltf run-program: program still running after {result.elapsed:.1f} s simulated: stopped",
+                  markup=False)
     return 0 if result.finished and not result.failed else 1

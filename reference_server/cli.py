@@ -38,18 +38,26 @@ def _ideal(seed: int) -> MotionFactory:
 MOTION: dict[str, Callable[[int], MotionFactory]] = {"world": world_factory, "ideal": _ideal}
 
 
-def parse_ports(text: str) -> list[int]:
+def _numbers(text: str) -> list[int]:
     try:
         ports = [int(part) for part in text.split(",")]
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected comma-separated port numbers, got {text!r}") from None
-    if not ports or any(not 0 <= p <= 65535 for p in ports):
+    if any(not 0 <= p <= 65535 for p in ports):
         raise argparse.ArgumentTypeError(f"ports must be 0..65535 (0: any free port), got {text!r}")
     return ports
 
 
+def parse_ports(text: str) -> list[int]:
+    """``--ports``: the guide's two ports (6.1), or one: a platform with a single socket."""
+    ports = _numbers(text)
+    if len(ports) not in (1, 2):
+        raise argparse.ArgumentTypeError(f"expected one or two ports (PORT[,PORT]), got {text!r}")
+    return ports
+
+
 def parse_port(text: str) -> int:
-    ports = parse_ports(text)
+    ports = _numbers(text)
     if len(ports) != 1:
         raise argparse.ArgumentTypeError(f"expected one port number, got {text!r}")
     return ports[0]
@@ -71,7 +79,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "--ports",
         type=parse_ports,
         default=list(DEFAULT_PORTS),
-        help="comma-separated ports, 0 = any free port (default 10000,10002)",
+        metavar="PORT[,PORT]",
+        help="the two ports (guide 6.1: 10000,10002, the default), each serving the full command set to one "
+        "client at a time; one port: only that one is served (tools that need a second port, such as conform "
+        "--second-port and fuzz's liveness probe, then have none); 0 = any free port, printed at start",
     )
     p.add_argument("--data-dir", default="data", help="the platform's hard disk; seeded from fixtures/ when empty")
     p.add_argument(
@@ -131,24 +142,25 @@ def build_platform(
     return Platform(storage, seed=seed, motion=MOTION[motion](seed), program=program_factory, hardware=link)
 
 
-def run(args: argparse.Namespace) -> int:
+def run(args: argparse.Namespace, prog: str = "pltf serve") -> int:
+    """Serve until CMD_EXIT or a signal; a user error is one line ``PROG: error: ...`` on stderr and status 2."""
     logging.basicConfig(level=args.log_level, format=LOG_FORMAT, datefmt=LOG_DATE, stream=sys.stderr, force=True)
     try:
         storage = Storage(args.data_dir)
     except OSError as exc:
-        print(f"pltf: error: data dir {args.data_dir}: {exc.strerror or exc}", file=sys.stderr)
+        print(f"{prog}: error: data dir {args.data_dir}: {exc.strerror or exc}", file=sys.stderr)
         return 2
     seeded = storage.seed_from_fixtures()
     if seeded:
         log.info("data dir %s was empty: seeded %d files from fixtures", storage.root, len(seeded))
     if args.no_hardware and args.control_port is not None:
-        print("pltf: error: --control-port needs the fake hardware (drop --no-hardware)", file=sys.stderr)
+        print(f"{prog}: error: --control-port needs the fake hardware (drop --no-hardware)", file=sys.stderr)
         return 2
     try:
         platform = build_platform(storage, args.seed, motion=args.motion, hardware=not args.no_hardware,
                                   can_interface=args.can_interface, can_channel=args.can_channel)  # fmt: skip
     except (OSError, ValueError, ImportError) as exc:  # python-can: an unknown interface, a missing channel
-        print(f"pltf: error: CAN interface {args.can_interface} {args.can_channel or ''}: {exc}", file=sys.stderr)
+        print(f"{prog}: error: CAN interface {args.can_interface} {args.can_channel or ''}: {exc}", file=sys.stderr)
         return 2
     options: dict[str, object] = {}
     if args.control_port is not None:
@@ -162,7 +174,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         return network.run(platform, args.host, args.ports, args.time_scale, **options)
     except OSError as exc:
-        print(f"pltf: error: cannot listen on {args.host} {args.ports}: {exc.strerror or exc}", file=sys.stderr)
+        print(f"{prog}: error: cannot listen on {args.host} {args.ports}: {exc.strerror or exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:  # a signal before the handlers were installed
         return 0
@@ -174,4 +186,4 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m pltf.reference_server",
                                      description="PlatformCtrl reference server")
     add_arguments(parser)
-    return run(parser.parse_args(argv))
+    return run(parser.parse_args(argv), parser.prog)

@@ -17,8 +17,14 @@ Rules:
   connection is read at once; the replies to one read go out in one write; replies the client does not take
   wait (reading pauses above ``HIGH_WATER`` buffered bytes, as ``StreamWriter.drain`` would), and a closing
   connection sends what it owes before it closes. Per-connection log lines are formatted only when enabled.
-- The control loop ticks the platform at 50 Hz simulated time: ``dt`` = 0.02 s simulated, i.e. every
-  0.02 / time_scale wall seconds; when the loop falls behind it catches up, within limits.
+- The platform is ticked at 50 Hz simulated time by the rules of reference_server/control_loop.py: every
+  tick one period, at whole periods, at every time scale. The clock (``SimClock``) reads the loop's monotonic
+  clock through the ``ControlLoop``, so reading it runs the ticks due: the timer reads it every period, and
+  the telegrams of one read are handed to the platform at one fresh reading (they arrived together), never on
+  a state left behind by a late timer. A loop that falls too far behind holds the simulated time instead of
+  skipping it.
+- The stall timeout of a partial frame is in wall seconds at every time scale: it guards the connection (a TCP
+  peer pauses in wall time), not the platform, and no telegram's meaning depends on it.
 - ``serve`` returns 0 after CMD_EXIT, SIGINT or SIGTERM, having closed every listener and connection.
 """
 
@@ -28,21 +34,19 @@ import asyncio
 import contextlib
 import errno
 import logging
-import math
 import signal
 import socket
 from collections.abc import Callable, Sequence
 from typing import Any
 
+from pltf.reference_server.control_loop import CONTROL_PERIOD, MAX_CATCH_UP, ControlLoop
 from pltf.reference_server.platform import Platform
 from pltf.spec.codec import DEFAULT_MAX_LENGTH, TelegramDecoder, encode
 from pltf.spec.errors import RemoteProtocolError
 
 log = logging.getLogger("pltf.server")
 
-CONTROL_PERIOD = 0.02  # simulated s (50 Hz)
 STALL_TIMEOUT = 5.0  # wall s a partial frame may wait for its rest
-MAX_CATCH_UP = 500  # periods (10 s simulated) caught up at once; beyond that they are skipped
 READ_SIZE = 65536
 BACKLOG = 100  # listen backlog, and connections accepted per wake-up (asyncio's defaults)
 HIGH_WATER = 1 << 16  # bytes of unsent replies above which reading pauses (asyncio's default high-water mark)
@@ -55,21 +59,27 @@ _ACCEPT_ERRORS = (errno.EMFILE, errno.ENFILE, errno.ENOBUFS, errno.ENOMEM)
 
 
 class SimClock:
-    """Simulated seconds since start: wall time on the loop's monotonic clock times ``time_scale``."""
+    """Simulated seconds since start: the loop's monotonic clock read through the ``ControlLoop``, which ticks the
+    platform up to the time it reads (reference_server/control_loop.py)."""
 
-    def __init__(self, loop: asyncio.AbstractEventLoop, time_scale: float) -> None:
-        if not time_scale > 0:
-            raise ValueError(f"time scale must be > 0, not {time_scale}")
+    def __init__(self, loop: asyncio.AbstractEventLoop, control: ControlLoop) -> None:
         self.loop = loop
-        self.time_scale = time_scale
-        self._t0 = loop.time()
+        self.control = control
+
+    @property
+    def time_scale(self) -> float:
+        return self.control.time_scale
+
+    def begin(self) -> float:
+        """The simulated time now, at which the platform boots: the ticks before it do not happen."""
+        return self.control.begin(self.loop.time())
 
     def now(self) -> float:
-        return (self.loop.time() - self._t0) * self.time_scale
+        return self.control.now(self.loop.time())
 
     def wall_at(self, sim: float) -> float:
         """The loop time at which the simulated clock reads ``sim``."""
-        return self._t0 + sim / self.time_scale
+        return self.control.wall_at(sim)
 
 
 class _Peer:
@@ -120,7 +130,8 @@ class Server:
 
     async def start(self) -> list[int]:
         loop = self._loop = asyncio.get_running_loop()
-        self._clock = SimClock(loop, self.time_scale)
+        self.control = ControlLoop(self.platform, self.time_scale, loop.time())
+        self._clock = SimClock(loop, self.control)
         try:
             for index, port in enumerate(self.requested_ports):
                 socks = await self._listen(loop, port)
@@ -167,7 +178,7 @@ class Server:
 
     async def run(self) -> int:
         """Boot the platform, run the control loop until ``stop``, then close everything."""
-        self.platform.boot(self.clock.now())
+        self.platform.boot(self.clock.begin())
         sim = asyncio.create_task(self._simulate())
         try:
             await self._stopped.wait()
@@ -181,23 +192,12 @@ class Server:
             log.info("server stopped")
         return self.exit_code
 
-    # ---- the control loop (50 Hz simulated)
+    # ---- the control loop (50 Hz simulated; reference_server/control_loop.py)
     async def _simulate(self) -> None:
         clock, loop = self.clock, asyncio.get_running_loop()
-        ticks = int(clock.now() / CONTROL_PERIOD)
-        warned_at = -math.inf
         while True:
-            due = int(clock.now() / CONTROL_PERIOD) - ticks
-            if due > MAX_CATCH_UP:  # the loop was blocked (or the time scale is beyond this machine)
-                if ticks * CONTROL_PERIOD - warned_at >= 10.0:
-                    log.warning("control loop %d periods behind: skipped", due - 1)
-                    warned_at = ticks * CONTROL_PERIOD
-                ticks += due - 1
-                due = 1
-            for _ in range(due):
-                ticks += 1
-                self.platform.tick(ticks * CONTROL_PERIOD)
-            await asyncio.sleep(max(0.0, clock.wall_at((ticks + 1) * CONTROL_PERIOD) - loop.time()))
+            clock.now()  # runs the ticks due
+            await asyncio.sleep(max(0.0, clock.wall_at(self.control.next_tick) - loop.time()))
 
     # ---- connections
     def _accept(self, index: int, listener: socket.socket) -> None:
@@ -307,9 +307,12 @@ class _Connection:
         decoder, platform, clock = self.decoder, self.server.platform, self.server.clock
         decoder.receive_data(data)
         replies: list[bytes] = []
+        now: float | None = None  # one simulated time for the telegrams of one read, the ticks due run first
         try:
             while (telegram := decoder.next_telegram()) is not None:
-                outcome = platform.handle(telegram, clock.now())
+                if now is None:
+                    now = clock.now()
+                outcome = platform.handle(telegram, now)
                 if outcome.frame is not None:
                     replies.append(outcome.frame)
                 elif outcome.reply is not None:
@@ -476,3 +479,6 @@ def _on_signal(server: Server, sig: signal.Signals) -> None:
 def run(platform: Platform, host: str, ports: Sequence[int], time_scale: float = 1.0, **options: object) -> int:
     """Blocking entry point for the command line."""
     return asyncio.run(serve(platform, host, ports, time_scale, **options))  # type: ignore[arg-type]
+
+
+__all__ = ["CONTROL_PERIOD", "MAX_CATCH_UP", "STALL_TIMEOUT", "Server", "SimClock", "run", "serve"]

@@ -13,12 +13,12 @@ Rules:
 from __future__ import annotations
 
 import struct
-from collections.abc import Callable, Iterator
-from typing import Any
+from collections.abc import Callable, Iterable, Iterator, Mapping
+from typing import Any, TypeVar
 
 from pltf.spec import errors
 from pltf.spec.compiler import Decoder, Encoder, compile_telegram
-from pltf.spec.model import DIRECTIONS, Direction, TelegramDef, load_telegrams
+from pltf.spec.model import Direction, TelegramDef, load_telegrams
 from pltf.spec.telegram import Telegram
 
 HEADER = b"\xff\x01\xfe\x02"
@@ -27,25 +27,64 @@ FRAME_OVERHEAD = _FRAME_HEAD.size  # header + length field
 # Erratum E-WIRE-004: the guide sets no maximum; 16 MiB holds any map a platform can use.
 DEFAULT_MAX_LENGTH = 16 * 1024 * 1024
 
+K = TypeVar("K", int, str)
+_Compiled = tuple[type[Telegram], Decoder, Encoder]
+
+
+class _Classes(Mapping[K, type[Telegram]]):
+    """A TelegramSet's classes by id or by name: the keys are known at once, a class is compiled when looked up."""
+
+    def __init__(self, owner: TelegramSet, defs: dict[K, TelegramDef]) -> None:
+        self._owner = owner
+        self._defs: dict[K, TelegramDef] = defs
+
+    def __getitem__(self, key: K) -> type[Telegram]:
+        return self._owner._compiled(self._defs[key])[0]
+
+    def __contains__(self, key: object) -> bool:
+        return key in self._defs
+
+    def __iter__(self) -> Iterator[K]:
+        return iter(self._defs)
+
+    def __len__(self) -> int:
+        return len(self._defs)
+
 
 class TelegramSet:
-    """All telegram classes of one direction, by name (attribute or ``[]``) and by id."""
+    """All telegram classes of one direction, by name (attribute or ``[]``) and by id.
 
-    def __init__(self, direction: Direction) -> None:
+    A telegram's class, decoder and encoder are compiled the first time it is used (looked up by id or name,
+    decoded, or met while iterating): a process that decodes a few frames compiles a few telegrams, not all 93
+    (compiling them all took ~80 ms of the client's ~570 ms import, issue 18). Two threads that
+    compile the same telegram at once both get the one class that ``setdefault`` kept.
+    """
+
+    def __init__(self, direction: Direction, tdefs: Iterable[TelegramDef] = ()) -> None:
         self.direction = direction
-        self.by_id: dict[int, type[Telegram]] = {}
-        self.by_name: dict[str, type[Telegram]] = {}
+        self._defs: dict[int, TelegramDef] = {}
+        self._names: dict[str, TelegramDef] = {}
+        self._done: dict[int, _Compiled] = {}
         self._decoders: list[Decoder | None] = [None] * 256
         self._encoders: dict[type[Telegram], Encoder] = {}
+        self.by_id: Mapping[int, type[Telegram]] = _Classes(self, self._defs)
+        self.by_name: Mapping[str, type[Telegram]] = _Classes(self, self._names)
+        for tdef in tdefs:
+            self._add(tdef)
 
     def _add(self, tdef: TelegramDef) -> None:
-        cls, dec, enc = compile_telegram(tdef, self.direction)
-        self.by_id[tdef.id] = cls
-        self.by_name[tdef.name] = cls
-        for alias in tdef.aliases:
-            self.by_name[alias] = cls
-        self._decoders[tdef.id] = dec
-        self._encoders[cls] = enc
+        self._defs[tdef.id] = tdef
+        for name in (tdef.name, *tdef.aliases):
+            self._names[name] = tdef
+
+    def _compiled(self, tdef: TelegramDef) -> _Compiled:
+        done = self._done.get(tdef.id)
+        if done is None:
+            mine = compile_telegram(tdef, self.direction)
+            self._encoders[mine[0]] = mine[2]  # before it is published: whoever gets the class can encode it
+            done = self._done.setdefault(tdef.id, mine)
+            self._decoders[tdef.id] = done[1]
+        return done
 
     def __getattr__(self, name: str) -> type[Telegram]:
         try:
@@ -60,7 +99,7 @@ class TelegramSet:
         return iter(self.by_id.values())
 
     def __len__(self) -> int:
-        return len(self.by_id)
+        return len(self._defs)
 
     def decode_data(self, data: bytes) -> Telegram:
         """Decode one telegram's data (identifier first, no header or length)."""
@@ -68,7 +107,10 @@ class TelegramSet:
             raise errors.UnknownTelegram("empty telegram: no identifier byte")
         dec = self._decoders[data[0]]
         if dec is None:
-            raise errors.UnknownTelegram(f"unknown {self.direction} identifier {data[0]}")
+            tdef = self._defs.get(data[0])
+            if tdef is None:
+                raise errors.UnknownTelegram(f"unknown {self.direction} identifier {data[0]}")
+            dec = self._compiled(tdef)[1]
         return dec(data)
 
     def encode_data(self, telegram: Telegram) -> bytes:
@@ -79,12 +121,11 @@ class TelegramSet:
 
 
 def _build() -> dict[Direction, TelegramSet]:
-    sets = {d: TelegramSet(d) for d in DIRECTIONS}
-    for tdef in load_telegrams():
-        sets["request"]._add(tdef)
-        if tdef.reply is not None or not tdef.layout_known:
-            sets["reply"]._add(tdef)
-    return sets
+    tdefs = load_telegrams()
+    return {
+        "request": TelegramSet("request", tdefs),
+        "reply": TelegramSet("reply", (t for t in tdefs if t.reply is not None or not t.layout_known)),
+    }
 
 
 _SETS = _build()

@@ -4,7 +4,12 @@
 spec, named after it (``CMD_MOVE_ABS`` -> ``move_abs(x_mm, y_mm, angle_mdeg)``), typed replies for the
 GET_* requests (``get_status() -> Status``), waits (``wait_state``, ``wait_mode``, ``wait_target_reached``,
 ``wait_until``) and one exception family (``PlatformError``). See clients/README.md.
+
+``AsyncPlatformClient`` is imported on first use (PEP 562 ``__getattr__``): asyncio alone costs a blocking
+client's process more than the rest of the library (issue 18: ``import pltf.client`` under 100 ms).
 """
+
+from typing import TYPE_CHECKING, Any
 
 __version__ = "0.1.0"
 
@@ -57,7 +62,6 @@ from pltf.client._replies import (
     typed_reply,
 )
 from pltf.client._reply_extras import Pose, format_param_value, parse_param_value
-from pltf.client.aio import AsyncPlatformClient
 from pltf.client.core import ClientCore, PendingReply
 from pltf.client.errors import (
     CommandRejected,
@@ -68,6 +72,27 @@ from pltf.client.errors import (
     Timeout,
 )
 from pltf.client.sync import DEFAULT_PORT, DEFAULT_TIMEOUT, PlatformClient, WireLog
+
+if TYPE_CHECKING:
+    from pltf.client.aio import AsyncPlatformClient
+
+# attribute -> the module that defines it, imported when the attribute is first read
+_LAZY = {"AsyncPlatformClient": "pltf.client.aio"}
+
+
+def __getattr__(name: str) -> Any:
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    import importlib
+
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted({*globals(), *_LAZY})
 
 __all__ = [
     "DEFAULT_PORT",

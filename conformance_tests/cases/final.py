@@ -5,8 +5,8 @@ from __future__ import annotations
 
 from pltf.conformance_tests.catalogue import Level, case
 from pltf.conformance_tests.context import CaseContext
-from pltf.conformance_tests.launch import wait_port_closed
 from pltf.conformance_tests.outcome import ConnectionClosed, Fail
+from pltf.conformance_tests.wire import wait_port_closed
 from pltf.spec.codec import build
 
 

@@ -28,6 +28,7 @@ AUTO, JOYHARD = MotionMode.MODE_MOTION_AUTOMATIC, MotionMode.MODE_MOTION_JOYHARD
 POS_TOL, ANG_TOL = 100.0, math.radians(5.0)
 # "still": what a standing platform's estimate may do under localization noise (E-MOT-004), far below any move
 STILL_POS, STILL_ANG, STILL_V, STILL_W = 20.0, math.radians(1.0), 5.0, 0.02
+STOP_WITHIN = 3.0  # simulated s a halted platform may take to come to rest
 
 
 @dataclass(frozen=True)
@@ -384,13 +385,18 @@ def short_of(halted: Pose, target: Pose, command: str) -> None:
         raise Fail(f"{command} sent early in a 600 mm move: the platform went on to the target {target.describe()}")
 
 
-def _halts(ctx: CaseContext, command: str, state: St) -> None:
+def _halts(ctx: CaseContext, command: str, state: St, *, blind: bool = False) -> None:
     start = begin(ctx, AUTO)
     far = _moving(ctx, start)
     ctx.send(command)
     expect_state(ctx, state, f"{command} while moving", within=5.0)
-    halted = rest(ctx, within=3.0)
+    halted = rest(ctx, within=STOP_WITHIN)
     short_of(halted, far, command)
+    if blind:
+        # Without its CAN bus a platform has no odometry: it may report v 0 and a standing pose while the body still
+        # brakes. Restarted then - a client at time scale 1 does it 30 ms later - it shows the end of its braking
+        # after CMD_START, which is no resumed move (issue 23): it gets the time to stop, in simulated seconds.
+        ctx.sleep(STOP_WITHIN)
     ctx.ensure(St.RUNNING, AUTO)
     # measured from the pose after the restart, not from ``halted``: a restart re-initialises the drives and the
     # localization, and the estimate may settle by a few cm (it was frozen while CAN was down) - not a move
@@ -412,7 +418,7 @@ def stop_halts(ctx: CaseContext) -> None:
                   "cannot move: the platform stops",
       telegrams=("CMD_SHUTDOWN_PLTF", "CMD_MOVE_ABS"))
 def shutdown_halts(ctx: CaseContext) -> None:
-    _halts(ctx, "CMD_SHUTDOWN_PLTF", St.NOT_CONNECTED)
+    _halts(ctx, "CMD_SHUTDOWN_PLTF", St.NOT_CONNECTED, blind=True)
 
 
 @case("6.4/CMD_GET_STATUS/target-reached", **_GATE, level=Level.SHOULD, errata=("E-PAR-021",),

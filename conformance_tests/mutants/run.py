@@ -16,10 +16,10 @@ from contextlib import contextmanager
 
 from pltf.conformance_tests.catalogue import Case, Tier, Verdict, load_all, select
 from pltf.conformance_tests.context import Config
-from pltf.conformance_tests.launch import ServerProcess
 from pltf.conformance_tests.mutants.catalogue import MUTANTS, Mutant
 from pltf.conformance_tests.mutants.proxy import FrameProxy
 from pltf.conformance_tests.runner import CaseResult, Runner
+from pltf.zoo import launch
 
 KILLED = (Verdict.FAIL, Verdict.NON_STRICT)
 
@@ -46,9 +46,9 @@ class Bench:
     def target(self, mutant: Mutant | None, *, proxied: bool = True) -> Iterator[list[int]]:
         """The ports of the mutant (a faithful proxy in front of the reference server when None)."""
         patch = mutant.patch if mutant is not None else None
-        with ServerProcess(time_scale=self.time_scale, mutant=patch) as server:
+        with launch.reference(time_scale=self.time_scale, mutant=patch) as server:
             if patch is not None or not proxied:
-                yield server.ports
+                yield list(server.ports)
                 return
             with FrameProxy("127.0.0.1", server.ports, mutant.make() if mutant is not None else None) as proxy:
                 yield proxy.ports

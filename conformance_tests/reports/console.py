@@ -84,4 +84,6 @@ class ConsoleReporter:
             c.print(f"{len(expected)} failure(s) expected by the baseline")
         for line in run.stale:
             c.print(f"[bold red]stale baseline entry:[/] {line}")
+        for line in run.notes:
+            c.print(f"[bold]note:[/] {line}")
         c.print(f"{len(run.results)} cases in {run.duration:.1f} s - exit status {run.exit_code}")

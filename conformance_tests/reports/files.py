@@ -7,7 +7,7 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Any
 
-from pltf.conformance_tests.catalogue import SECTIONS, Level, Verdict
+from pltf.conformance_tests.catalogue import SECTIONS, Verdict
 from pltf.conformance_tests.reports import first_line
 from pltf.conformance_tests.runner import CaseResult, RunResult
 
@@ -42,12 +42,28 @@ def run_dict(run: RunResult) -> dict[str, Any]:
         "tier": cfg.tier.name.lower(), "time_scale": cfg.time_scale, "started": run.started,
         "duration": round(run.duration, 3), "exit_code": run.exit_code, "harness_error": run.harness_error,
         "counts": {v.value: n for v, n in run.counts().items()}, "stale_baseline": run.stale,
+        "notes": list(run.notes),
         "coverage": run.target.coverage.as_dict(), "cases": [case_dict(r) for r in run.results],
     }  # fmt: skip
 
 
 def write_json(run: RunResult, path: str | Path) -> None:
     Path(path).write_text(json.dumps(run_dict(run), indent=1) + "\n", encoding="utf-8")
+
+
+def _outcome(r: CaseResult) -> tuple[str, str] | None:
+    """The JUnit element a result gets (tag, message) - or None for a pass. The testsuite's ``failures``,
+    ``errors`` and ``skipped`` attributes count exactly these elements."""
+    msg = first_line(r.message)
+    if r.expected_failure:
+        return "skipped", f"expected by the baseline: {r.verdict} {msg}"
+    if r.blocking:  # FAIL, or INCONCLUSIVE of a MUST case: what fails the run
+        return "failure", msg
+    if r.verdict is Verdict.ERROR:
+        return "error", msg
+    if r.verdict in (Verdict.NA, Verdict.SKIPPED):
+        return "skipped", f"{r.verdict}: {msg}"
+    return None
 
 
 def write_junit(run: RunResult, path: str | Path) -> None:
@@ -58,29 +74,26 @@ def write_junit(run: RunResult, path: str | Path) -> None:
         by_section.setdefault(r.case.section, []).append(r)
     for section in sorted(by_section):
         results = by_section[section]
-        failures = sum(r.verdict in (Verdict.FAIL, Verdict.INCONCLUSIVE) and not r.expected_failure for r in results)
+        outcomes = [_outcome(r) for r in results]
+        tags = [o[0] for o in outcomes if o is not None]
         suite = ET.SubElement(
             suites, "testsuite", name=f"guide {section} {SECTIONS.get(section, '')}".strip(), tests=str(len(results)),
-            failures=str(failures), errors=str(sum(r.verdict is Verdict.ERROR for r in results)),
-            skipped=str(sum(r.verdict in (Verdict.NA, Verdict.SKIPPED) for r in results)),
+            failures=str(tags.count("failure")), errors=str(tags.count("error")), skipped=str(tags.count("skipped")),
             time=f"{sum(r.duration for r in results):.3f}",
         )
-        for r in results:
+        for r, outcome in zip(results, outcomes, strict=True):
             tc = ET.SubElement(suite, "testcase", classname=f"guide.{section}.{r.case.group}", name=r.case.id,
                                time=f"{r.duration:.3f}")
             props = ET.SubElement(tc, "properties")
             for name, value in (("level", r.case.level.value), ("verdict", r.verdict.value),
                                 ("requirement", r.case.requirement), ("errata", " ".join(r.case.errata))):
                 ET.SubElement(props, "property", name=name, value=value)
-            msg = first_line(r.message)
-            if r.expected_failure:
-                ET.SubElement(tc, "skipped", message=f"expected by the baseline: {r.verdict} {msg}")
-            elif r.verdict is Verdict.FAIL or (r.verdict is Verdict.INCONCLUSIVE and r.case.level is Level.MUST):
-                ET.SubElement(tc, "failure", type=r.verdict.value, message=msg).text = r.message
-            elif r.verdict is Verdict.ERROR:
-                ET.SubElement(tc, "error", type="ERROR", message=msg).text = r.message
-            elif r.verdict in (Verdict.NA, Verdict.SKIPPED):
-                ET.SubElement(tc, "skipped", message=f"{r.verdict}: {msg}")
+            if outcome is not None:
+                tag, msg = outcome
+                attrs = {"message": msg} if tag == "skipped" else {"type": r.verdict.value, "message": msg}
+                element = ET.SubElement(tc, tag, attrs)
+                if tag != "skipped":
+                    element.text = r.message
             out = [f"verdict: {r.verdict} ({r.case.level})", f"requirement: {r.case.requirement}"]
             out += [f"deviation: {d.describe()}" for d in r.deviations] + [f"note: {n}" for n in r.notes]
             out += ["wire log (t, port, dir, telegram, hex):", *wire_lines(r)]

@@ -7,21 +7,21 @@ from collections.abc import Iterator
 import pytest
 
 from pltf.conformance_tests.context import Config
-from pltf.conformance_tests.launch import ServerProcess
+from pltf.zoo import launch
 from tests.conformance_tests.fakes import TinyTarget
 
 TIME_SCALE = 10.0
 
 
 @pytest.fixture(scope="session")
-def reference() -> Iterator[ServerProcess]:
+def reference() -> Iterator[launch.Launched]:
     """A reference server shared by the tests that only read or restore what they change (never CMD_EXIT)."""
-    with ServerProcess(time_scale=TIME_SCALE) as server:
+    with launch.reference(time_scale=TIME_SCALE) as server:
         yield server
 
 
 @pytest.fixture
-def reference_config(reference: ServerProcess) -> Config:
+def reference_config(reference: launch.Launched) -> Config:
     return Config("127.0.0.1", reference.ports[0], reference.ports[1], time_scale=TIME_SCALE, simulator=True)
 
 

@@ -9,16 +9,16 @@ from pathlib import Path
 import pytest
 
 from pltf.cli.main import main
-from pltf.conformance_tests.launch import ServerProcess
+from pltf.zoo import launch
 from tests.conformance_tests.fakes import ScriptedServer
 
 
-def _args(server: ServerProcess, *extra: str) -> list[str]:
+def _args(server: launch.Launched, *extra: str) -> list[str]:
     return ["conform", "--target", f"127.0.0.1:{server.ports[0]}", "--second-port", str(server.ports[1]),
             "--time-scale", "10", "--target-is-simulator", *extra]
 
 
-def test_passing_selection_exits_0_and_writes_reports(reference: ServerProcess, tmp_path: Path,
+def test_passing_selection_exits_0_and_writes_reports(reference: launch.Launched, tmp_path: Path,
                                                       capsys: pytest.CaptureFixture[str]) -> None:
     code = main(_args(reference, "-k", "6.3/CMD_SET_MODE/* or 6.2/framing/coalesced", "--json",
                       str(tmp_path / "r.json"), "--junit", str(tmp_path / "r.xml"), "--html", str(tmp_path / "r.html")))
@@ -30,19 +30,19 @@ def test_passing_selection_exits_0_and_writes_reports(reference: ServerProcess, 
     assert (tmp_path / "r.xml").exists() and (tmp_path / "r.html").exists()
 
 
-def test_a_stale_baseline_entry_exits_1(reference: ServerProcess, tmp_path: Path) -> None:
+def test_a_stale_baseline_entry_exits_1(reference: launch.Launched, tmp_path: Path) -> None:
     base = tmp_path / "known.txt"
     base.write_text("6.3/CMD_SET_MODE/in-running FAIL  # claimed broken, but it passes\n")
     assert main(_args(reference, "-k", "6.3/CMD_SET_MODE/in-running", "--baseline", str(base))) == 1
 
 
-def test_coverage_below_the_threshold_exits_1(reference: ServerProcess) -> None:
+def test_coverage_below_the_threshold_exits_1(reference: launch.Launched) -> None:
     assert main(_args(reference, "-k", "6.1/ports/reconnect", "--coverage-threshold", "100")) == 1
     assert main(_args(reference, "-k", "6.1/ports/reconnect", "--coverage-threshold", "0")) == 0
 
 
 def test_a_failing_case_exits_1(tmp_path: Path) -> None:
-    with ServerProcess(time_scale=10.0, mutant="set_mode_anywhere") as broken:
+    with launch.reference(time_scale=10.0, mutant="set_mode_anywhere") as broken:
         assert main(_args(broken, "-k", "6.3/CMD_SET_MODE/in-running", "--write-baseline",
                           str(tmp_path / "b.txt"))) == 1
     assert "6.3/CMD_SET_MODE/in-running  FAIL" in (tmp_path / "b.txt").read_text()
@@ -68,7 +68,7 @@ def test_list(capsys: pytest.CaptureFixture[str]) -> None:
     assert "6.2/framing/header-and-length" in out and "cases" in out
 
 
-def test_differential_and_stateful_from_the_command_line(reference: ServerProcess, tmp_path: Path,
+def test_differential_and_stateful_from_the_command_line(reference: launch.Launched, tmp_path: Path,
                                                          capsys: pytest.CaptureFixture[str]) -> None:
     code = main(_args(reference, "-k", "6.1/ports/reconnect", "--differential", "--stateful", "5",
                       "--stateful-out", str(tmp_path / "st")))

@@ -1,14 +1,19 @@
-"""Differential mode: the reference server in-process against the same server as a process shows no difference;
+"""Differential mode: the reference server against a second instance of itself shows no difference;
 a broken variant shows exactly where it differs; volatile fields are ignored or compared within tolerance."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
+import pytest
+import yaml
+
 from pltf.conformance_tests.context import Config
 from pltf.conformance_tests.differential import compare, diff_replies, script, volatile
-from pltf.conformance_tests.launch import InProcessServer, ServerProcess
 from pltf.conformance_tests.mutants.catalogue import BY_ID
 from pltf.conformance_tests.mutants.proxy import FrameProxy
 from pltf.conformance_tests.readings import canonical
+from pltf.zoo import launch
 
 
 def test_volatile_fields_are_ignored_and_tolerances_applied() -> None:
@@ -21,7 +26,7 @@ def test_volatile_fields_are_ignored_and_tolerances_applied() -> None:
 
 
 def test_the_reference_agrees_with_itself_and_a_mutant_does_not() -> None:
-    with InProcessServer(time_scale=10.0) as ref, ServerProcess(time_scale=10.0) as tgt:
+    with launch.reference(time_scale=10.0) as ref, launch.reference(time_scale=10.0) as tgt:
         rc = Config("127.0.0.1", ref.ports[0], time_scale=10.0, simulator=True)
         tc = Config("127.0.0.1", tgt.ports[0], time_scale=10.0, simulator=True)
         assert compare(rc, tc, motion=True) == []
@@ -30,6 +35,24 @@ def test_the_reference_agrees_with_itself_and_a_mutant_does_not() -> None:
             diffs = compare(rc, Config("127.0.0.1", proxy.ports[0], time_scale=10.0), motion=False)
     assert diffs and {d.path for d in diffs} == {"motion_mode"}
     assert all(d.target == 0 and d.reference != 0 for d in diffs)
+
+
+EMULATOR_DIFFERENCES = Path(__file__).resolve().parents[2] / "zoo" / "emulator_differences.yaml"
+
+
+def test_the_reference_and_the_emulator_differ_exactly_where_documented() -> None:
+    if launch.emulator_binary() is None:
+        pytest.skip(f"no emulator: {launch.why_no_emulator()}")
+    documented = yaml.safe_load(EMULATOR_DIFFERENCES.read_text(encoding="utf-8"))
+    with launch.reference(time_scale=10.0) as ref, launch.emulator(time_scale=10.0) as emu:
+        rc = Config("127.0.0.1", ref.ports[0], time_scale=10.0, simulator=True, reply_timeout=10.0)
+        ec = Config("127.0.0.1", emu.ports[0], time_scale=10.0, simulator=True, reply_timeout=10.0)
+        diffs = compare(rc, ec, motion=True)
+    named = {(d.request.split("(")[0], d.path) for d in diffs}
+    assert named == {(e["reply"], e["field"]) for e in documented}
+    for e in documented:
+        seen = {(d.reference, d.target) for d in diffs if (d.request.split("(")[0], d.path) == (e["reply"], e["field"])}
+        assert seen == {(e["reference"], e["emulator"])}, e["reply"]
 
 
 def test_poses_are_compared_relative_to_the_start_of_the_session() -> None:

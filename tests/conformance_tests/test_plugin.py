@@ -6,7 +6,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from pltf.conformance_tests.launch import ServerProcess
+from pltf.zoo import launch
 
 
 def _pytest(tmp_path: Path, port: int, *args: str) -> subprocess.CompletedProcess[str]:
@@ -16,16 +16,16 @@ def _pytest(tmp_path: Path, port: int, *args: str) -> subprocess.CompletedProces
     return subprocess.run(cmd, cwd=tmp_path, capture_output=True, text=True, timeout=120, check=False)
 
 
-def test_plugin_runs_selected_cases_and_maps_verdicts(reference: ServerProcess, tmp_path: Path) -> None:
+def test_plugin_runs_selected_cases_and_maps_verdicts(reference: launch.Launched, tmp_path: Path) -> None:
     selection = "6.3/CMD_SET_MODE/in- or optional-modes or digout/sets"
     ok = _pytest(tmp_path, reference.ports[0], "-k", selection)
     assert ok.returncode == 0, ok.stdout + ok.stderr
     assert "7 passed" in ok.stdout and "skipped" not in ok.stdout  # the IO board is on the reference's CAN bus
-    with ServerProcess(time_scale=10.0, extra=["--no-hardware"]) as bare:
+    with launch.reference(time_scale=10.0, extra=["--no-hardware"]) as bare:
         na = _pytest(tmp_path, bare.ports[0], "-k", selection)
     assert na.returncode == 0, na.stdout + na.stderr
     assert "6 passed, 1 skipped" in na.stdout  # N/A (no IO board) is a skip
-    with ServerProcess(time_scale=10.0, mutant="set_mode_anywhere") as broken:
+    with launch.reference(time_scale=10.0, mutant="set_mode_anywhere") as broken:
         bad = _pytest(tmp_path, broken.ports[0], "-k", "6.3/CMD_SET_MODE/in-running or 6.3/CMD_SET_MODE/in-ready")
     assert bad.returncode == 1
     assert "pltf-conformance::6.3/CMD_SET_MODE/in-running" in bad.stdout and "FAILED" in bad.stdout

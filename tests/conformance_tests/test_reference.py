@@ -13,18 +13,18 @@ import pytest
 
 from pltf.conformance_tests.catalogue import Tier, Verdict, load_all, select
 from pltf.conformance_tests.context import Config
-from pltf.conformance_tests.launch import ServerProcess
 from pltf.conformance_tests.mutants.matrix import NOT_ON_REFERENCE
 from pltf.conformance_tests.reports.files import write_json, write_junit
 from pltf.conformance_tests.reports.html import write_html
 from pltf.conformance_tests.runner import Runner, RunResult
+from pltf.zoo import launch
 
 TIME_SCALE = 10.0
 MAY_BE_NA = NOT_ON_REFERENCE  # N/A there (each with its reason), never FAIL; the list only shrinks
 
 
 def standard_run(**kw: object) -> RunResult:
-    with ServerProcess(time_scale=TIME_SCALE) as server:
+    with launch.reference(time_scale=TIME_SCALE) as server:
         config = Config("127.0.0.1", server.ports[0], server.ports[1], time_scale=TIME_SCALE, simulator=True,
                         allow_shutdown=True, **kw)  # type: ignore[arg-type]
         return Runner(config, select(load_all().values(), tier=Tier.STANDARD)).run()

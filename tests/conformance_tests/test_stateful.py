@@ -8,8 +8,8 @@ import sys
 from pathlib import Path
 
 from pltf.conformance_tests.context import Config
-from pltf.conformance_tests.launch import ServerProcess
 from pltf.conformance_tests.stateful import run_stateful
+from pltf.zoo import launch
 
 
 def _replay(script: Path, port: int) -> subprocess.CompletedProcess[str]:
@@ -18,11 +18,11 @@ def _replay(script: Path, port: int) -> subprocess.CompletedProcess[str]:
 
 
 def test_stateful_machine_passes_the_reference_and_shrinks_a_broken_chart(tmp_path: Path) -> None:
-    with ServerProcess(time_scale=10.0) as ref:
+    with launch.reference(time_scale=10.0) as ref:
         assert run_stateful(Config("127.0.0.1", ref.ports[0], time_scale=10.0), 30, tmp_path / "ok",
                             derandomize=True) == 0
         assert not (tmp_path / "ok").exists()
-        with ServerProcess(time_scale=10.0, mutant="set_mode_anywhere") as broken:
+        with launch.reference(time_scale=10.0, mutant="set_mode_anywhere") as broken:
             assert run_stateful(Config("127.0.0.1", broken.ports[0], time_scale=10.0), 150, tmp_path / "bad",
                                 derandomize=True) == 1
             script = tmp_path / "bad" / "replay_stateful.py"

@@ -13,8 +13,8 @@ from pathlib import Path
 
 import pytest
 
-from pltf.fuzz.launch import Launcher
 from pltf.spec.codec import TelegramDecoder, build, encode
+from pltf.zoo.launch import Launcher
 
 REPO = Path(__file__).resolve().parents[2]
 EMULATOR = REPO / "emulator"

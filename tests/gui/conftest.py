@@ -22,7 +22,7 @@ from typing import Any
 import pytest
 
 from pltf.client import PlatformClient
-from pltf.conformance_tests.launch import ServerProcess
+from pltf.zoo import launch
 
 REPO = Path(__file__).resolve().parents[2]
 CHROMIUM = "/usr/bin/chromium"
@@ -75,7 +75,7 @@ class Control:
 class Platform:
     """A running reference server: its two ports, its control channel, a client on the second port."""
 
-    def __init__(self, server: ServerProcess) -> None:
+    def __init__(self, server: launch.Launched) -> None:
         self.server = server
         self.ports = server.ports
         found = wait_for(lambda: re.findall(r"control channel started at port (\d+)", "\n".join(server.log_lines)),
@@ -102,7 +102,7 @@ class Platform:
 
 @pytest.fixture
 def platform() -> Iterator[Platform]:
-    with ServerProcess(time_scale=5.0, extra=["--control-port", "0"], startup_timeout=60.0) as server:
+    with launch.reference(time_scale=5.0, extra=["--control-port", "0"], start_timeout=60.0) as server:
         p = Platform(server)
         try:
             yield p

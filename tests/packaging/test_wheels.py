@@ -3,9 +3,9 @@
 ``python -m build`` makes a wheel and an sdist of pltf-spec, pltf-client and pltf-toolkit; each is installed
 from the wheels alone into a fresh virtual environment, and every command runs from an empty folder:
 ``pltf serve`` (seeding the fixture office), ``conform``, ``fuzz``, ``stubs``, ``decode``, ``encode``,
-``run-program``. The client distribution alone brings no numpy, scipy, pymunk, cantools or lxml. The toolkit's
-wheel is built with a compiler that always fails (``CC=false``): the install succeeds without the C extensions and
-every command runs on their numpy fallbacks.
+``run-program``. The client distribution alone brings no numpy, scipy, pymunk, cantools, lxml or jsonschema. The
+toolkit's wheel is built with a compiler that always fails (``CC=false``): the install succeeds without the C
+extensions and every command runs on their numpy fallbacks.
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ SOURCES = {"pltf_spec": "spec", "pltf_client": "clients", "pltf_toolkit": "."}
 # build would put deleted modules back into a wheel)
 UNTRACKED = shutil.ignore_patterns(".git", ".venv", "build", "dist", "*.egg-info", "__pycache__", "*.so",
                                    "node_modules", ".mypy_cache", ".ruff_cache", ".pytest_cache", ".hypothesis")
-HEAVY = {"numpy", "scipy", "pymunk", "cantools", "lxml"}
+HEAVY = {"numpy", "scipy", "pymunk", "cantools", "lxml", "jsonschema"}
 STARTED = re.compile(r"server started at port (\d+)")
 # building three distributions and installing numpy, scipy and the rest into fresh environments takes minutes
 pytestmark = pytest.mark.timeout(1800)
@@ -99,7 +99,7 @@ def test_the_client_distribution_alone_is_small_and_typed(dist: Path, tmp_path: 
     installed = {line.split("==")[0].lower() for line in _run(py, "-m", "pip", "freeze", cwd=empty).stdout.split()}
     assert not installed & HEAVY, installed
     probe = "import sys, pltf.client as c; print(c.__version__, sorted(set(sys.modules) & {'numpy', 'scipy', " \
-            "'pymunk', 'cantools', 'lxml'}))"
+            "'pymunk', 'cantools', 'lxml', 'jsonschema', 'asyncio', 'yaml'}))"
     out = _run(py, "-c", probe, cwd=empty).stdout.split(maxsplit=1)
     assert out[1].strip() == "[]", out
     site = Path(_run(py, "-c", "import pltf.client, os; print(os.path.dirname(pltf.client.__file__))",

@@ -347,6 +347,24 @@ def test_simulated_time_follows_the_time_scale(server: ServerThread) -> None:
         assert abs(s.est_x - (HOME[0] + 1000)) <= 20 and s.est_y == HOME[1]
 
 
+def test_a_reply_after_a_blocked_loop_shows_the_state_at_its_timestamp(server: ServerThread) -> None:
+    """A request handled after the loop was blocked meets the platform ticked on towards the request's simulated
+    time - a burst of ticks at most, then the platform's own time (reference_server/control_loop.py) - and its
+    reply shows the state of its timestamp, not the state the last timer wake-up left (100 periods old here)."""
+    assert server.loop is not None
+    with Client(server.ports[0]) as c:
+        go_to(c, State.RUNNING)
+        c.send(R.CMD_MOVE_REL(x=20000, y=0, angle=0))
+        wait_for(lambda: c.status().vel_trans >= 990)  # cruising at IpoTransVel (1000 mm/s)
+        s1 = c.status()
+        server.loop.call_soon_threadsafe(time.sleep, 0.1)  # 2 s simulated at time scale 20
+        time.sleep(0.02)
+        s2 = c.status()  # sent while the loop is blocked: its read is handled before the timer runs again
+        elapsed = (s2.timestamp - s1.timestamp) / 1000.0
+        assert elapsed >= 0.45 and s2.vel_trans >= 990  # a burst (0.5 s simulated) at least
+        assert s2.est_x - s1.est_x == pytest.approx(1000.0 * elapsed, abs=60.0)  # 1000 mm/s, within 3 periods
+
+
 def test_emergency_stop_is_seen_over_tcp(server: ServerThread) -> None:
     def press(pressed: bool) -> None:
         server.platform.set_emergency(pressed, server.server.clock.now())  # type: ignore[union-attr]

@@ -13,6 +13,7 @@ import { MapView } from "./panels/mapview";
 import { parametersWindow } from "./panels/params";
 import { plotsPanel } from "./panels/plots";
 import { wirePanel } from "./panels/wire";
+import { mapEditor } from "./editor/editpanel";
 import { footprint } from "./view/overlay";
 import { closeSocket, menubar, openSocketAt, shutdownPlatform } from "./panels/menubar";
 import { motionPanel } from "./panels/motion";
@@ -45,6 +46,8 @@ dock.add("view-options", "menu.viewOptions", viewOptionsPanel(options));
 dock.add("plots", "menu.plots", plots.root, plots.onShow);
 dock.add("log", "menu.log", logPanel(session));
 dock.add("wire", "menu.wire", wire.root, wire.onShow);
+const editor = mapEditor(session, map, say);
+dock.add("edit-map", "menu.editMap", editor.root, editor.onShow);
 
 // The platform's own geometry (guide 5.9 Geometry, UltraSonic) for the footprint and the ultrasonic sensors.
 session.params.subscribe((r) => {
@@ -81,7 +84,7 @@ const menus: Array<[Key, Array<{ key: Key; run?: () => void; shortcut?: string }
     { key: "menu.wire", run: () => dock.show("wire") },
   ]],
   ["menu.parameter", [{ key: "menu.platformParameters", run: () => dock.show("parameters") }]],
-  ["menu.edit", [{ key: "menu.editMap" }, { key: "menu.editRoadmap" }]],
+  ["menu.edit", [{ key: "menu.editMap", run: () => dock.show("edit-map") }, { key: "menu.editRoadmap" }]],
 ];
 
 const header = h("header", { class: "top" }, menubar(menus), h("h1", { class: "title" }));

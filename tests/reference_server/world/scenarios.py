@@ -78,8 +78,10 @@ class _StepClock(SimClock):
     """Simulated time that moves only when the test says."""
 
     def __init__(self) -> None:  # no loop: nothing reads the wall clock
-        self.time_scale = math.inf
         self.ticks = 0
+
+    def begin(self) -> float:
+        return self.now()
 
     def now(self) -> float:
         return self.ticks * CONTROL_PERIOD
@@ -100,9 +102,8 @@ class _Stepped(Server):
     async def periods(self, n: int) -> None:
         clock = self.clock
         assert isinstance(clock, _StepClock)
-        for _ in range(n):
-            clock.ticks += 1
-            self.platform.tick(clock.now())
+        clock.ticks += n
+        self.control.advance(clock.now())  # the control loop's ticks (reference_server/control_loop.py)
 
 
 class SteppedServer(WorldServer):

@@ -21,7 +21,15 @@ import { drawStatic, type Layers, prepare, type Prepared } from "../view/maprend
 import { drawFlag, drawStatus, footprint, type Footprint, type OverlayOptions, type Pose, type UsSensor } from "../view/overlay";
 import type { ViewOptions } from "./viewoptions";
 
-type Tool = "pan" | "zoomArea" | "shift" | "flag";
+type Tool = "pan" | "zoomArea" | "shift" | "flag" | "edit";
+
+/** The map editor's hold on the view (editor/editpanel.ts): pointer events in world mm, and its own drawing. */
+export interface EditHooks {
+  down(x: number, y: number, pxPerMm: number): void;
+  move(x: number, y: number): void;
+  up(x: number, y: number): void;
+  draw(ctx: CanvasRenderingContext2D, cam: Camera): void;
+}
 const MARGIN = 256; // px of static layer beyond each edge of the view
 
 export class MapView {
@@ -59,6 +67,8 @@ export class MapView {
   private toolButtons = new Map<Tool, HTMLButtonElement>();
   private fitted = false;
   private message: HTMLElement;
+  /** set while the map editor is open: the view shows its document and hands it the pointer in tool "edit" */
+  editHooks: EditHooks | null = null;
 
   constructor(
     readonly session: PlatformSession,
@@ -102,6 +112,9 @@ export class MapView {
   private wire(): void {
     const s = this.session;
     s.map.subscribe((m) => {
+      if (this.editHooks !== null) {
+        return; // the editor shows its own document
+      }
       try {
         this.scene = parseMap(m.xml, m.name);
         this.bounds = sceneBounds(this.scene);
@@ -155,6 +168,14 @@ export class MapView {
         this.setCamera(panBy(this.cam, m[0], m[1]));
       }
     });
+  }
+
+  /** Show a document (the editor's): drawn like the platform's map until the editor closes. */
+  showScene(scene: MapScene | null): void {
+    this.scene = scene;
+    this.bounds = scene === null ? null : sceneBounds(scene);
+    this.prepared = null;
+    this.documentsChanged();
   }
 
   private documentsChanged(): void {
@@ -251,6 +272,11 @@ export class MapView {
     this.canvas.setPointerCapture(e.pointerId);
     this.canvas.focus();
     this.drag = { x: e.offsetX, y: e.offsetY, button: e.button, cam: this.cam };
+    if (this.tool === "edit" && this.editHooks !== null) {
+      const [wx, wy] = toWorld(this.cam, e.offsetX, e.offsetY);
+      this.editHooks.down(wx, wy, this.cam.scale);
+      return;
+    }
     if (this.tool === "shift" && this.status) {
       this.drag.pose = { x: this.status.estX, y: this.status.estY, angle: this.status.estAngle / 1000 };
     } else if (this.tool === "flag" && this.flag) {
@@ -281,6 +307,12 @@ export class MapView {
     if (d === null) {
       return;
     }
+    if (this.tool === "edit" && this.editHooks !== null) {
+      const [wx, wy] = toWorld(this.cam, e.offsetX, e.offsetY);
+      this.editHooks.move(wx, wy);
+      this.invalidate();
+      return;
+    }
     if (this.tool === "pan" || ((this.tool === "shift" || this.tool === "flag") && d.pose === undefined)) {
       this.setCamera(panBy(d.cam, e.offsetX - d.x, e.offsetY - d.y));
     } else if (this.tool === "zoomArea" && this.area) {
@@ -300,6 +332,12 @@ export class MapView {
     const d = this.drag;
     this.drag = null;
     if (d === null) {
+      return;
+    }
+    if (this.tool === "edit" && this.editHooks !== null) {
+      const [wx, wy] = toWorld(this.cam, e.offsetX, e.offsetY);
+      this.editHooks.up(wx, wy);
+      this.invalidate();
       return;
     }
     if (this.tool === "zoomArea" && this.area) {
@@ -498,6 +536,7 @@ export class MapView {
       drawFlag(ctx, c, this.flag);
       this.canvas.dataset.flag = `${this.flag.x},${this.flag.y},${this.flag.angle}`;
     }
+    this.editHooks?.draw(ctx, c);
     if (this.area) {
       const a = this.area;
       ctx.strokeStyle = "#1565c0";

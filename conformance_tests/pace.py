@@ -1,0 +1,171 @@
+"""A bounded run against any target: one early measurement of its reply time, budgets, and a watch that stops
+waiting on a target that no longer answers (issue 17: against a slow or stuck target a standard run ends within
+5 minutes, with verdicts that say why).
+
+Rules:
+- ``measure`` runs once, before the first case: CMD_GET_STATUS three times on a fresh connection to port A (a
+  connection turned away is retried for the connect window), the first allowed ``PATIENCE`` s. Their median is
+  the target's reply time (None when nothing came).
+- ``apply`` scales the run's waits to it: a reply time up to ``MAX_SCALED`` raises the wall floor of every wait
+  derived from simulated time (``Config.min_wall``) and the connection probe's patience to ``SCALE`` times the
+  reply time, so a slow but conforming target (a slow link) is judged on what it does, not on how fast it does
+  it. A slower target keeps the configured waits, and the run says at its start why its cases will fail.
+- Budgets (wall seconds): a case's waits end at its budget, ``CASE_WALL + CASE_SIM / time scale`` unless given;
+  the case is then INCONCLUSIVE "case budget spent" and not re-run. The run's budget (``Config.run_budget``) ends
+  the run: the cases left are INCONCLUSIVE "not run".
+- ``Watch``: after ``STUCK_AFTER`` cases in a row that ended with the target not answering at all (a reply
+  timeout, no working connection, a spent budget), one health check - a new connection answered with
+  CMD_GET_STATUS within the reply timeout. If it fails, the cases that follow are not run (INCONCLUSIVE, "the
+  target stopped answering ...", naming the first silent case); a health check every ``RECHECK`` s lets them run
+  again when the target answers again.
+"""
+
+from __future__ import annotations
+
+import statistics
+import time
+from dataclasses import dataclass, field
+
+from pltf.conformance_tests.context import Config, Target
+from pltf.conformance_tests.outcome import ConnectionClosed, TargetFailure, Unreachable
+from pltf.conformance_tests.wire import Session, WireLog
+from pltf.spec.codec import build
+
+PATIENCE = 15.0  # s the first GET_STATUS of the run may take
+MAX_SCALED = 1.0  # s: a reply time up to this scales the waits; a slower target is not waited for
+SCALE = 4.0  # waits scale to this many reply times
+CASE_WALL, CASE_SIM = 30.0, 240.0  # a case's budget: wall s + simulated s (at the declared time scale)
+STUCK_AFTER = 3  # silent cases in a row before the health check
+RECHECK = 20.0  # s between two health checks while the target stays silent
+
+
+@dataclass(frozen=True)
+class Pace:
+    reply: float | None  # the median GET_STATUS round trip, s (None: no reply within PATIENCE)
+    error: str = ""
+
+    def describe(self, config: Config) -> str:
+        if self.reply is None:
+            return f"the target did not answer CMD_GET_STATUS within {PATIENCE:g} s at the start ({self.error})"
+        text = f"the target answers CMD_GET_STATUS in {self.reply * 1000:.0f} ms"
+        if self.reply > config.reply_timeout:
+            text += (f", over the reply timeout of {config.reply_timeout:g} s (--reply-timeout): every case that "
+                     "reads the status will fail on it")
+        elif self.reply > MAX_SCALED:
+            text += f"; the waits are not scaled beyond {MAX_SCALED:g} s"
+        return text
+
+
+def measure(target: Target, samples: int = 3) -> Pace:
+    cfg = target.config
+    deadline = time.monotonic() + cfg.connect_window
+    while True:
+        times: list[float] = []
+        s = Session(cfg.host, target.port_of("A"), label="A", log=WireLog(max_entries=50), timeout=PATIENCE)
+        try:
+            s.connect(timeout=min(cfg.reply_timeout, 5.0))
+            for i in range(samples):
+                t0 = time.monotonic()
+                s.request(build("request", "CMD_GET_STATUS"), timeout=PATIENCE if i == 0 else max(3 * times[0], 1.0))
+                times.append(time.monotonic() - t0)
+                if times[0] > MAX_SCALED:
+                    break  # too slow to scale to: one sample says enough
+        except (ConnectionClosed, Unreachable) as exc:  # turned away: the port is not free yet (one client per port)
+            refused = "refused" in str(exc).lower()  # nothing listens: no use waiting
+            if not times and not refused and time.monotonic() < deadline:
+                time.sleep(0.05)
+                continue
+            if not times:
+                return Pace(None, str(exc))
+        except TargetFailure as exc:
+            if not times:
+                return Pace(None, str(exc))
+        finally:
+            s.close()
+        return Pace(statistics.median(times))
+
+
+def apply(pace: Pace, config: Config) -> None:
+    """Scale the run's waits to the measured reply time (see the module rules)."""
+    if pace.reply is not None and pace.reply <= MAX_SCALED:
+        config.min_wall = max(config.min_wall, SCALE * pace.reply)
+        config.probe_timeout = max(config.probe_timeout, SCALE * pace.reply)
+
+
+def run_budget(config: Config) -> float:
+    """The default budget of a smoke or standard run: 280 s (a run ends within 5 minutes), or twice what the
+    standard tier needs against a healthy target at the declared time scale when that is more (about 40 s of
+    requests and 300 simulated s of motion and waiting: 680 s at time scale 1)."""
+    return max(280.0, 2 * (40.0 + 300.0 / config.time_scale))
+
+
+def case_budget(config: Config) -> float:
+    return config.case_budget if config.case_budget is not None else CASE_WALL + CASE_SIM / config.time_scale
+
+
+@dataclass
+class Watch:
+    """Counts silent cases and decides whether the next case runs (see the module rules)."""
+
+    silent_run: int = 0
+    pace: str = ""  # what the early measurement found, when it explains the silence
+    stuck_since: str = ""  # the first case of the silent run that tripped the watch ("" while not tripped)
+    why: str = ""
+    last_check: float = field(default=float("-inf"))
+    _first: str = ""
+
+    @property
+    def tripped(self) -> bool:
+        return bool(self.stuck_since)
+
+    def record(self, case_id: str, silent: bool, why: str) -> None:
+        if not silent:
+            self.silent_run, self.stuck_since = 0, ""
+            return
+        self.silent_run += 1
+        if self.silent_run == 1:
+            self.why, self._first = why, case_id
+        if self.silent_run >= STUCK_AFTER and not self.tripped:
+            self.last_check = float("-inf")  # check at once
+            self.stuck_since = self._first
+
+    def blocks(self, target: Target) -> str:
+        """'' when the next case may run; else why it is not run."""
+        if not self.tripped:
+            return ""
+        now = time.monotonic()
+        if now - self.last_check >= RECHECK:
+            self.last_check = now
+            problem = health(target)
+            if not problem:
+                self.silent_run, self.stuck_since = 0, ""
+                return ""
+            self.why = problem
+        return (f"not run: the target stopped answering at {self.stuck_since} and still does not "
+                f"({self.why}){'; ' + self.pace if self.pace else ''}")
+
+
+def health(target: Target) -> str:
+    """'' when port A takes a new client and answers CMD_GET_STATUS within the reply timeout; else the problem."""
+    cfg = target.config
+    target.close()  # one client per port: our own sessions would keep the port busy
+    try:
+        target.connect("A", WireLog(max_entries=50), _Quiet(), window=min(cfg.connect_window, 2.0),
+                       probe_timeout=cfg.reply_timeout).close()
+    except Unreachable as exc:
+        return str(exc)
+    return ""
+
+
+class _Quiet:
+    def on_sent(self, telegram: object) -> None:
+        pass
+
+    def on_received(self, telegram: object) -> None:
+        pass
+
+    def on_deviation(self, deviation: object) -> None:
+        pass
+
+    def on_unsolicited(self, port: str, data: bytes) -> None:
+        pass

@@ -1,0 +1,329 @@
+"""Units in flight on the target's ports: one lane per port, pipelining, and newcomers turned away run again.
+
+Rules:
+- Both ports take every command, one client each (guide 6.1), so units run in two lanes driven by one
+  ``select`` loop (``pltf.fuzz.flight``). Each unit gets its own connection and opens with the lead
+  (``pltf.fuzz.unit``) - once ``WARMUP`` units were served and none turned away, a unit that owes no reply goes
+  without, but for one in ``LEAD_EVERY`` (``_led``); the first unit not served brings the lead back for good.
+- A unit the target did not admit (``pltf.fuzz.verdict``) goes back to the front of the queue and runs again
+  alone on a port whose backoff has passed (``pltf.fuzz.gate``); it is never judged or counted before it was
+  served. When no port has admitted us for ``patience`` seconds the target is gone (dead or hung), when one
+  port has not while the other has it is stuck (a stall): the lanes stop and say so.
+- Pipelining: behind a small unit fully sent, its write side shut and owing nothing but statuses, up to three
+  more small units wait connected on its port while the port's gate allows it; a waiting unit's deadline runs
+  from its turn.
+- A *dear* port (a connection costs milliseconds of release: a proxy, a slow accept) keeps one connection on
+  the first port (``kept``) for the units of accepted cases (batches, big documents): one after the other, each
+  ended by its sync reply, while the other port spends fresh connections on the cases the target should refuse
+  (and on the others when none waits).
+- Deadlines: a unit's budget (``pltf.fuzz.target.session_deadline``) runs from its turn on its port, plus the
+  size allowances of the units in flight on the other ports (a target may serve one port at a time).
+- Every admitted unit is handed to the campaign's ``judge`` in its port's order; a False answer stops new units,
+  the ones in flight run out (and are judged too) and ``run`` returns: the ports are then free for replays.
+"""
+
+from __future__ import annotations
+
+import collections
+import contextlib
+import socket
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from pltf.fuzz.flight import Flight, fly, step_flights
+from pltf.fuzz.gate import DEPTH, Gate
+from pltf.fuzz.target import LEAD_IDS, session_deadline
+from pltf.fuzz.unit import PIPELINE_BYTES, Unit
+from pltf.fuzz.verdict import NOT_ADMITTED, Liveness, Verdict, judge
+
+RECENT = 16  # units remembered as "sent last"
+WARMUP = 256  # units served, none turned away, before some may go without a lead
+LEAD_EVERY = 4  # then: one unit in so many on a port keeps it (the liveness probe), and every unit that owes replies
+DONE, STOPPED = "done", "stopped"
+
+
+@dataclass(eq=False)
+class InFlight:
+    flight: Flight
+    unit: Unit
+    port: int  # index into the ports
+    behind: bool  # connected while another unit of ours was on the port (pipelined)
+    kept: bool  # on the kept batch connection
+    led: bool  # the session opens with the lead
+    started: float
+    verdict: Verdict | None = None
+
+
+Judge = Callable[[InFlight, Verdict], bool]
+FlightFactory = Callable[..., Flight]
+
+
+class Lanes:
+    def __init__(self, host: str, ports: tuple[int, ...], deadline: float, pipelining: bool = True,
+                 patience: float | None = None, connect: FlightFactory = Flight,
+                 active: int | None = None) -> None:  # fmt: skip
+        """``active``: how many of the ports carry units (the first ones; the others only replays and checks)."""
+        self.host, self.ports, self.deadline = host, ports, deadline
+        self.connect = connect
+        self.active = len(ports) if active is None else min(active, len(ports))
+        self.gates = [Gate(k, pipelining) for k in range(len(ports))]
+        self.patience = patience if patience is not None else max(1.0, 2 * deadline)
+        self.live = Liveness(self.active, self.patience, time.monotonic())
+        self.turned_away: list[str] = []  # the unit that stopped pipelining on a port
+        self.served = 0  # units admitted
+        self.unled = False  # units that owe nothing may go without the lead (``WARMUP``)
+        self.unled_ever_off = False  # a newcomer was turned away: every unit keeps its lead for good
+        self.since_lead = [0] * len(ports)
+        self.flights: list[collections.deque[InFlight]] = [collections.deque() for _ in ports]
+        self.todo: collections.deque[Unit] = collections.deque()
+        self.recent: collections.deque[InFlight] = collections.deque(maxlen=RECENT)
+        self.kept: socket.socket | None = None
+        self.dear = False  # set by the campaign from the gates' release
+        self.stop = False
+        self.gone: str | None = None  # "dead", "hang" or "stall" once the lanes saw it
+        self.stuck: int | None = None  # the port of a stall
+        self.suspect: int | None = None  # a port that has not served us for ``patience``: are the others alive?
+
+    # ------------------------------------------------------------------ queue
+    def add(self, units: list[Unit]) -> None:
+        self.todo.extend(units)
+
+    def fresh_waiting(self) -> int:
+        """Units queued that need a fresh connection (a case the target should refuse closes it)."""
+        return sum(1 for u in self.todo if not u.keep)
+
+    # ------------------------------------------------------------------ the loop
+    def run(self, judge_unit: Judge, batches_only: bool = False) -> str:
+        """Run the queue; DONE when it is empty (``batches_only``: when no unit of accepted cases is queued or in
+        flight - the others go on in the next call), STOPPED when ``judge_unit`` said stop, else "dead", "hang",
+        "deaf" or "stall" (``gone``)."""
+        self.stop = False
+        while True:
+            if not self.stop and self.gone is None:
+                self._fill()
+            live = [e.flight for q in self.flights for e in q if not e.flight.done]
+            if batches_only and not self.stop and self.gone is None and not self._batches_pending():
+                return DONE
+            if not live and not any(self.flights):
+                if self.suspect is not None:
+                    self._check_suspect()
+                if self.gone is not None:
+                    gone, self.gone = self.gone, None
+                    return gone
+                if self.stop:
+                    return STOPPED
+                if not self.todo:
+                    return DONE
+                wait = min(g.retry_at for g in self.gates[: self.active]) - time.monotonic()
+                time.sleep(max(0.0, min(wait, 0.05)))
+                continue
+            if live and not any(q and q[0].flight.done for q in self.flights):
+                step_flights(live, until=self._next_retry())
+            for q in self.flights:
+                while q and q[0].flight.done:
+                    e = q.popleft()
+                    _restart_clocks(q)
+                    self._done(e, judge_unit)
+
+    def _batches_pending(self) -> bool:
+        """Units of accepted cases queued or in flight (on a dear target: the kept connection's)."""
+        return any(u.keep for u in self.todo) or any(e.unit.keep for q in self.flights for e in q)
+
+    def _next_retry(self) -> float | None:
+        now = time.monotonic()
+        waits = [g.retry_at for g in self.gates if g.retry_at > now]
+        return min(waits) if self.todo and waits else None
+
+    def _fill(self) -> None:
+        """Start units on every port that takes one now."""
+        now = time.monotonic()
+        for k in range(self.active):
+            while self.todo and self.gates[k].may_connect(now):
+                unit = self._pick(k)
+                if unit is None or not self._may_start(k, unit):
+                    break
+                self.todo.remove(unit)
+                self.flights[k].append(self._start(k, unit))
+
+    def _pick(self, k: int) -> Unit | None:
+        """The unit port ``k`` takes next: the queue's first, except on a dear target (batches on the kept
+        connection of port 0, singles first on the others)."""
+        mine = (u for u in self.todo if u.pin is None or u.pin == k)
+        if not self.dear or self.active < 2:
+            return next(mine, None)
+        first = None
+        for u in mine:
+            if u.keep == (k == 0):
+                return u
+            first = first or u
+        return None if k == 0 else first
+
+    def _may_start(self, k: int, unit: Unit) -> bool:
+        q = self.flights[k]
+        if not q:
+            return True
+        gate = self.gates[k]
+        if self.dear and k == 0:
+            return False  # the kept connection carries one batch at a time
+        if not gate.pipelining or unit.tries or len(q) >= DEPTH or not unit.whole:
+            return False
+        f = q[-1].flight
+        return (f.connected and not f.sending and f.session.half_close and len(f.data) <= PIPELINE_BYTES
+                and all(i in LEAD_IDS for i in f.expected))  # fmt: skip
+
+    def _led(self, k: int, unit: Unit, fresh: bool) -> bool:
+        """Whether a unit on a fresh connection opens with the lead: always, until ``WARMUP`` units were served
+        with none turned away; then a unit that owes no reply (a case the target should refuse, written whole)
+        goes without, except one in ``LEAD_EVERY`` on the port, which probes. A reply costs a target a write
+        (on the reference server a third of a refused case's cost)."""
+        if not fresh:
+            return False
+        self.since_lead[k] += 1
+        if not self.unled or unit.keep or unit.tries or not unit.whole or self.since_lead[k] >= LEAD_EVERY:
+            self.since_lead[k] = 0
+            return True
+        return False
+
+    def _start(self, k: int, unit: Unit) -> InFlight:
+        kept = self.dear and k == 0 and unit.keep
+        sock, self.kept = (self.kept, None) if kept else (None, self.kept)
+        led = self._led(k, unit, sock is None)
+        session = unit.session(lead=led, kept=kept)
+        flight = self.connect(self.host, self.ports[k], session, self.deadline, sock=sock)
+        q = self.flights[k]
+        behind = bool(q)
+        if behind:
+            flight.deadline = q[-1].flight.deadline + flight.budget  # its turn comes after the one before it
+        self._share_allowances(k, flight)
+        self.gates[k].connected(flight.started, behind)
+        e = InFlight(flight, unit, k, behind, kept, led, flight.started)
+        if not unit.tries:  # a unit that runs again is already there
+            self.recent.append(e)
+        return e
+
+    def _share_allowances(self, k: int, flight: Flight) -> None:
+        """A target may serve its ports one at a time: a unit's allowance for its size (a big document takes
+        seconds to parse) is added to the deadlines of the units in flight on the other ports, and theirs to
+        its deadline."""
+        now = time.monotonic()
+        mine = flight.budget - self.deadline
+        for j, q in enumerate(self.flights):
+            for e in q if j != k else ():
+                if not e.flight.done:
+                    flight.deadline += max(0.0, min(e.flight.deadline - now, e.flight.budget - self.deadline))
+                    e.flight.deadline += max(0.0, mine)
+
+    # ------------------------------------------------------------------ a finished flight
+    def _done(self, e: InFlight, judge_unit: Judge) -> None:
+        now = time.monotonic()
+        f, unit, gate = e.flight, e.unit, self.gates[e.port]
+        # on the kept connection, too, nothing back means the unit was not served (the connection is gone)
+        v = judge(f.out, unit.owed(f.session, len(f.expected)), e.led or e.kept, unit.keep)
+        e.verdict = v
+        if e.kept and f.kept is not None:
+            self.kept = f.kept
+        if v.kind == NOT_ADMITTED:
+            pipelining = gate.pipelining
+            gate.ended(now, admitted=False, behind=e.behind)
+            if pipelining and not gate.pipelining:
+                self.turned_away = unit.describe()
+            unit.tries += 1
+            self.unled, self.unled_ever_off = False, True
+            if v.how == "timed-out":
+                unit.pin = e.port
+            self.live.turned_away(e.port, v.how, now)
+            self.todo.appendleft(unit)
+            self._look_at_liveness(now)
+            return
+        gate.admitted(e.started, e.behind)
+        gate.ended(now, admitted=True, behind=e.behind)
+        self.live.admitted(e.port, now)
+        self.served += 1
+        self.unled = self.served >= WARMUP and not self.unled_ever_off
+        if not judge_unit(e, v):
+            self.stop = True
+
+    def _look_at_liveness(self, now: float) -> None:
+        gone = self.live.verdict(now)
+        if gone is not None:
+            self.gone, self.stop = gone, True
+            return
+        port = self.live.stuck(now)
+        if port is None:
+            port = next((k for k, t in self.live.failing_since.items() if now - t >= self.patience), None)
+            if port is not None:  # the other ports have had nothing to do: ask them, once the flights ran out
+                self.suspect, self.stop = port, True
+            return
+        self.gone, self.stuck, self.stop = "stall", port, True
+
+    def _check_suspect(self) -> None:
+        """One port has not served us for ``patience``: a stall when another one serves us now."""
+        port, self.suspect = self.suspect, None
+        assert port is not None
+        for k in range(len(self.ports)):
+            if k != port and self.alone(k, Unit([]), patience=self.deadline) is not None:
+                self.gone, self.stuck = "stall", port
+                return
+        self.gone = self.live.verdict(time.monotonic() + self.patience) or "hang"
+
+    # ------------------------------------------------------------------ alone, outside the lanes
+    def alone(self, k: int, unit: Unit, patience: float | None = None) -> InFlight | None:
+        """Run ``unit`` alone on port ``k`` once the port is free (a replay, a check): turned away, it runs again
+        after the backoff; None when the port did not admit it within ``patience``."""
+        self.release()
+        end = time.monotonic() + (self.patience if patience is None else patience)
+        gate = self.gates[k]
+        while True:
+            now = time.monotonic()
+            if now < gate.retry_at:
+                time.sleep(gate.retry_at - now)
+            flight = self.connect(self.host, self.ports[k], unit.session(), self.deadline, sock=None)
+            e = InFlight(flight, unit, k, False, False, True, flight.started)
+            fly([flight])
+            v = judge(flight.out, unit.owed(flight.session, len(flight.expected)), True, unit.keep)
+            e.verdict = v
+            now = time.monotonic()
+            if v.kind != NOT_ADMITTED:
+                gate.admitted(e.started, False)
+                gate.ended(now, admitted=True, behind=False)
+                self.live.admitted(k, now)
+                return e
+            gate.ended(now, admitted=False, behind=False)
+            if now >= end:
+                self.live.turned_away(k, v.how, now)
+                return None
+
+    def release(self) -> None:
+        """Give the kept connection back in order (our end-of-stream, the target's close)."""
+        sock, self.kept = self.kept, None
+        if sock is None:
+            return
+        with contextlib.suppress(OSError):
+            sock.shutdown(socket.SHUT_WR)
+            sock.settimeout(self.deadline)
+            while sock.recv(1 << 16):
+                pass
+        sock.close()
+        self.gates[0].free_since = time.monotonic()
+
+    def drain(self) -> None:
+        """Let the flights in flight run out (unjudged); the ports are then free."""
+        fly([e.flight for q in self.flights for e in q])
+        for q in self.flights:
+            q.clear()
+
+    def close(self) -> None:
+        self.drain()
+        self.release()
+
+
+def _restart_clocks(q: collections.deque[InFlight]) -> None:
+    """A port's flight is done: the deadline of each one waiting behind it runs from now, in its turn."""
+    t = time.monotonic()
+    for e in q:
+        t += e.flight.budget
+        e.flight.deadline = t
+
+
+__all__ = ["DONE", "STOPPED", "InFlight", "Lanes", "session_deadline"]

@@ -1,0 +1,103 @@
+"""A unit: what one oracle verdict covers, and the session that carries it. No sockets.
+
+Rules:
+- A *batch* is cases the strict codec accepts, pipelined on one connection and closed by a GET_STATUS ``sync``
+  whose reply proves all of them were processed (the server answers nothing else, erratum E-CMD-013); a
+  *single* is one case the target should refuse, or that needs its own delivery.
+- A session opens with the *lead* (``pltf.fuzz.target.LEAD``: any byte back, the target took the connection,
+  ``pltf.fuzz.verdict``), then the unit's state prelude and its *check* GET_STATUS (``pltf.fuzz.preludes``), then
+  the cases; our write side is shut after them (on a kept connection the sync reply ends the unit instead).
+- A single whose bytes may not arrive in one piece (over ``PIPELINE_BYTES``, or a slow or bytewise delivery) is
+  *gated*: its lead goes alone and the rest waits for the target's first byte, so that a target that closes
+  on it with our input unread (a reset) cannot lose the lead's reply - the proof it was served. So is every
+  unit that runs again after it was not served: a target that takes in a whole read before it answers anything
+  then shows whether the port or the unit kept it silent. A unit left unanswered runs again on the same port
+  (``pin``): were it the culprit, it would stall the other port too.
+- ``owed``: the replies the target must send (E-WIRE-006): every one of a batch; of a single, those asked before
+  its case (the lead, the prelude's, the check) - behind a gate only the lead.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass, field
+
+from pltf.fuzz.case import WHOLE, Case
+from pltf.fuzz.preludes import Target
+from pltf.fuzz.target import GET_STATUS, LEAD, Session
+from pltf.fuzz.wire import KEEP, answered_ids
+from pltf.spec.codec import REQUESTS
+
+GET_STATUS_ID = REQUESTS.CMD_GET_STATUS.ID
+LEAD_ID = LEAD[8]
+PIPELINE_BYTES = 1 << 14  # units up to this size may be pipelined on a port (read whole by one recv)
+BATCH_CASES = 128
+BATCH_BYTES = 1 << 18
+
+
+def batchable(c: Case) -> bool:
+    """A case the strict codec accepts, small and written whole: it goes into a batch."""
+    return c.expect == KEEP and c.delivery.mode == "whole" and c.size < BATCH_BYTES // 4
+
+
+@dataclass(eq=False)
+class Unit:
+    cases: list[Case]
+    prelude: list[bytes] = field(default_factory=list)
+    target: Target | None = None  # the plan target its prelude drives to (None: no prelude)
+    tries: int = 0  # connections that were not admitted so far
+    pin: int | None = None  # the port it must run again on (it was left unanswered there)
+
+    @property
+    def keep(self) -> bool:
+        return all(c.expect == KEEP for c in self.cases)
+
+    @property
+    def batch(self) -> bool:
+        return len(self.cases) > 1 or (bool(self.cases) and batchable(self.cases[0]))
+
+    @property
+    def size(self) -> int:
+        return sum(c.size for c in self.cases) + sum(len(f) for f in self.prelude)
+
+    @property
+    def whole(self) -> bool:
+        """Small and written in one piece: it may wait behind another unit (pipelining)."""
+        return self.size <= PIPELINE_BYTES and all(c.delivery.mode == "whole" for c in self.cases)
+
+    @property
+    def head(self) -> list[bytes]:
+        """The prelude and its check (nothing without a prelude)."""
+        return [*self.prelude, GET_STATUS] if self.prelude else []
+
+    @functools.cached_property
+    def prelude_ids(self) -> list[int]:
+        """The ids of the answered requests of the prelude and its check."""
+        return [*answered_ids(b"".join(self.prelude)), GET_STATUS_ID] if self.prelude else []
+
+    @property
+    def check_at(self) -> int | None:
+        """Index among the replies of a led session of the check's reply (None: no prelude)."""
+        return len(self.prelude_ids) if self.prelude else None
+
+    def session(self, lead: bool = True, kept: bool = False) -> Session:
+        """The session carrying the unit: on its own connection (``kept`` False) or on a kept one."""
+        head = [*([LEAD] if lead else []), *self.head]
+        frames = [*head, *(f for c in self.cases for f in c.frames)]
+        known = all(c.answered is not None for c in self.cases)
+        ids = [*([LEAD_ID] if lead else []), *self.prelude_ids]
+        answered = [*ids, *(i for c in self.cases for i in c.answered or ())] if known else None
+        delivery = self.cases[0].delivery if self.cases and not self.batch else WHOLE
+        gate = lead and (self.tries > 0 or (not self.keep and not self.whole))
+        return Session(frames, delivery, half_close=not kept, sync=self.keep, answered=answered, gate=gate, led=lead)
+
+    def owed(self, session: Session, expected: int) -> int:
+        """Replies owed in ``session`` (``expected``: the replies it asks for, sync included)."""
+        if self.keep:
+            return expected
+        if session.gate:
+            return 1
+        return int(session.led) + len(self.prelude_ids)
+
+    def describe(self) -> list[str]:
+        return [f"{c.telegram} ({c.origin}{': ' + c.note if c.note else ''})" for c in self.cases[:3]]

@@ -1,0 +1,205 @@
+/**
+ * The editor's commands and its history (guide 5.4 "Undo", "Redo"; unbounded while the editor is open).
+ *
+ * A command is data: the objects it replaces, inserts or removes, each with its position in the document, so
+ * doing it and undoing it are the same small function and an edit touches only its objects. The builders below
+ * read the document and return a command (or, for a geometric operation with no solution, the reason, the
+ * document untouched); `History.run` applies it.
+ */
+import type { MapObject } from "../scene/map";
+import * as g from "./geometry";
+import type { MapDoc } from "./mapdoc";
+
+export interface Change {
+  index: number;
+  before: MapObject | null;
+  after: MapObject | null;
+}
+
+export interface Command {
+  label: string;
+  changes: Change[];
+}
+
+function applyChanges(doc: MapDoc, changes: readonly Change[]): void {
+  const objs = doc.scene.objects;
+  for (const c of changes) {
+    if (c.before === null && c.after !== null) {
+      objs.splice(c.index, 0, c.after);
+      doc.nextId = Math.max(doc.nextId, c.after.id + 1);
+    } else if (c.before !== null && objs[c.index]?.id !== c.before.id) {
+      throw new Error(`command out of step with the document at object ${c.before.id}`);
+    } else if (c.after === null) {
+      objs.splice(c.index, 1);
+    } else {
+      objs[c.index] = c.after;
+    }
+  }
+}
+
+const inverse = (changes: readonly Change[]): Change[] =>
+  changes.map((c) => ({ index: c.index, before: c.after, after: c.before })).reverse();
+
+export class History {
+  private done: Command[] = [];
+  private undone: Command[] = [];
+  private saved: Command | null = null;
+
+  constructor(public readonly doc: MapDoc) {}
+
+  run(cmd: Command): void {
+    applyChanges(this.doc, cmd.changes);
+    this.done.push(cmd);
+    this.undone = [];
+  }
+
+  /** The label of the command undone, or null when there is nothing to undo. */
+  undo(): string | null {
+    const cmd = this.done.pop();
+    if (cmd === undefined) {
+      return null;
+    }
+    applyChanges(this.doc, inverse(cmd.changes));
+    this.undone.push(cmd);
+    return cmd.label;
+  }
+
+  redo(): string | null {
+    const cmd = this.undone.pop();
+    if (cmd === undefined) {
+      return null;
+    }
+    applyChanges(this.doc, cmd.changes);
+    this.done.push(cmd);
+    return cmd.label;
+  }
+
+  get canUndo(): boolean {
+    return this.done.length > 0;
+  }
+
+  get canRedo(): boolean {
+    return this.undone.length > 0;
+  }
+
+  /** Mark the document saved (or sent): `dirty` is false until the next change, undo or redo. */
+  markSaved(): void {
+    this.saved = this.done[this.done.length - 1] ?? null;
+  }
+
+  get dirty(): boolean {
+    return (this.done[this.done.length - 1] ?? null) !== this.saved;
+  }
+}
+
+function indexOf(doc: MapDoc, id: number): number {
+  const k = doc.scene.objects.findIndex((o) => o.id === id);
+  if (k < 0) {
+    throw new Error(`no object ${id} in the map`);
+  }
+  return k;
+}
+
+/** Add an object (its id is the document's next) at the end of the document. */
+export function addObject(doc: MapDoc, obj: Omit<MapObject, "id">, label = `add ${obj.kind}`): Command {
+  const after: MapObject = { ...obj, id: doc.nextId, points: [...obj.points], attrs: { ...obj.attrs } };
+  return { label, changes: [{ index: doc.scene.objects.length, before: null, after }] };
+}
+
+/** Delete objects (highest position first, so the positions stay right). */
+export function deleteObjects(doc: MapDoc, ids: Iterable<number>, label = "delete"): Command {
+  const at = [...new Set(ids)].map((id) => indexOf(doc, id)).sort((a, b) => b - a);
+  return { label, changes: at.map((index) => ({ index, before: doc.scene.objects[index], after: null })) };
+}
+
+/** Clear the map (guide 5.4 "Clear the map"), undoable like any edit. */
+export function clearMap(doc: MapDoc): Command {
+  return deleteObjects(
+    doc,
+    doc.scene.objects.map((o) => o.id),
+    "clear",
+  );
+}
+
+function replace(doc: MapDoc, id: number, points: number[], label: string): Command {
+  const index = indexOf(doc, id);
+  const before = doc.scene.objects[index];
+  return { label, changes: [{ index, before, after: { ...before, points } }] };
+}
+
+/** Move objects by (dx, dy) mm (guide 5.4 "Edit objects in the map by drag and drop"). */
+export function moveObjects(doc: MapDoc, ids: Iterable<number>, dx: number, dy: number): Command {
+  const changes: Change[] = [];
+  for (const id of new Set(ids)) {
+    const index = indexOf(doc, id);
+    const before = doc.scene.objects[index];
+    const points = before.points.map((v, k) => g.clean(v + (k % 2 === 0 ? dx : dy)));
+    changes.push({ index, before, after: { ...before, points } });
+  }
+  return { label: "move", changes };
+}
+
+/** Move one vertex of a polygon or line (guide 5.4 "Edit vertices of a polygon"). */
+export function moveVertex(doc: MapDoc, id: number, vertex: number, p: g.Pt): Command {
+  const before = doc.scene.objects[indexOf(doc, id)];
+  if (vertex < 0 || 2 * vertex + 1 >= before.points.length) {
+    throw new Error(`object ${id} has no vertex ${vertex}`);
+  }
+  const points = [...before.points];
+  points[2 * vertex] = p.x;
+  points[2 * vertex + 1] = p.y;
+  return replace(doc, id, points, "edit vertex");
+}
+
+export function segOf(o: MapObject): g.Result<g.Seg> {
+  if (o.points.length !== 4) {
+    return { ok: false, reason: `a <${o.kind}> is not a line` };
+  }
+  const [x0, y0, x1, y1] = o.points;
+  return { ok: true, value: { a: { x: x0, y: y0 }, b: { x: x1, y: y1 } } };
+}
+
+type LineOp = (s: g.Seg, r: g.Seg) => g.Result<g.Seg>;
+
+/** A geometric operation of line `id` against reference line `refId`: a command, or why not (nothing changed). */
+export function lineOp(doc: MapDoc, label: string, op: LineOp, id: number, refId: number): g.Result<Command> {
+  if (id === refId) {
+    return { ok: false, reason: "the reference line is the line itself" };
+  }
+  const s = segOf(doc.scene.objects[indexOf(doc, id)]);
+  const r = segOf(doc.scene.objects[indexOf(doc, refId)]);
+  if (!s.ok || !r.ok) {
+    return { ok: false, reason: !s.ok ? s.reason : (r as { reason: string }).reason };
+  }
+  const out = op(s.value, r.value);
+  if (!out.ok) {
+    return out;
+  }
+  const { a, b } = out.value;
+  return { ok: true, value: replace(doc, id, [a.x, a.y, b.x, b.y], label) };
+}
+
+/** Invert a line's direction (guide 5.4): its front turns to the other side. */
+export function invertLine(doc: MapDoc, id: number): g.Result<Command> {
+  const s = segOf(doc.scene.objects[indexOf(doc, id)]);
+  if (!s.ok) {
+    return s;
+  }
+  const out = g.invert(s.value);
+  if (!out.ok) {
+    return out;
+  }
+  const { a, b } = out.value;
+  return { ok: true, value: replace(doc, id, [a.x, a.y, b.x, b.y], "invert") };
+}
+
+/** Add several objects as one step of the history (e.g. every line converted from one scan). */
+export function addObjects(doc: MapDoc, objs: ReadonlyArray<Omit<MapObject, "id">>, label: string): Command {
+  const n = doc.scene.objects.length;
+  const changes = objs.map((o, k) => ({
+    index: n + k,
+    before: null,
+    after: { ...o, id: doc.nextId + k, points: [...o.points], attrs: { ...o.attrs } },
+  }));
+  return { label, changes };
+}

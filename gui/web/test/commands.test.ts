@@ -1,0 +1,113 @@
+import { describe, expect, it } from "vitest";
+import office from "../../../fixtures/maps/office.map?raw";
+import {
+  addObject,
+  addObjects,
+  clearMap,
+  deleteObjects,
+  History,
+  invertLine,
+  lineOp,
+  moveObjects,
+  moveVertex,
+} from "../src/editor/commands";
+import { extend, trim } from "../src/editor/geometry";
+import { parseMapDoc, writeMapDoc } from "../src/editor/mapdoc";
+
+const fresh = (): History => new History(parseMapDoc(office));
+const snapshot = (h: History): string => JSON.stringify(h.doc.scene.objects);
+const pointsOf = (h: History, id: number): number[] => {
+  const o = h.doc.scene.objects.find((x) => x.id === id);
+  if (o === undefined) throw new Error(`no object ${id}`);
+  return o.points;
+};
+
+describe("history", () => {
+  it("undo and redo restore exact coordinates, unbounded", () => {
+    const h = fresh();
+    const start = snapshot(h);
+    // id 5 is the corridor wall (0,11200)-(4400,11200); id 15 the wall at x = 7000 from y 11200 to 20000
+    for (let k = 0; k < 500; k++) {
+      h.run(moveObjects(h.doc, [5], 0.1, 0.3));
+    }
+    expect(pointsOf(h, 5)).toEqual([50, 11350, 4450, 11350]);
+    const ext = lineOp(h.doc, "extend", extend, 5, 15);
+    if (!ext.ok) throw new Error(ext.reason);
+    h.run(ext.value);
+    expect(pointsOf(h, 5)).toEqual([50, 11350, 7000, 11350]);
+    const afterAll = snapshot(h);
+    while (h.undo() !== null) {
+      /* all the way back */
+    }
+    expect(snapshot(h)).toBe(start);
+    expect(pointsOf(h, 5)).toEqual([0, 11200, 4400, 11200]);
+    while (h.redo() !== null) {
+      /* all the way forward */
+    }
+    expect(snapshot(h)).toBe(afterAll);
+  });
+  it("a new command drops the redo branch; dirty follows save, undo and redo", () => {
+    const h = fresh();
+    expect(h.dirty).toBe(false);
+    h.run(moveObjects(h.doc, [1], 10, 0));
+    expect(h.dirty).toBe(true);
+    h.markSaved();
+    expect(h.dirty).toBe(false);
+    h.undo();
+    expect(h.dirty).toBe(true);
+    h.run(moveObjects(h.doc, [1], 0, 10));
+    expect(h.canRedo).toBe(false);
+    expect(pointsOf(h, 1)).toEqual([0, 10, 32000, 10]);
+  });
+  it("add, delete and clear keep the document order through undo", () => {
+    const h = fresh();
+    const start = writeMapDoc(h.doc);
+    h.run(addObject(h.doc, { kind: "line", layer: 0, points: [100, 100, 900, 100], attrs: {} }));
+    h.run(deleteObjects(h.doc, [3, 40, 7]));
+    h.run(
+      addObjects(
+        h.doc,
+        [
+          { kind: "linemapped", layer: 1, points: [0, 0, 1000, 0], attrs: {} },
+          { kind: "auxlinemapped", layer: 1, points: [0, 0, 0, 300], attrs: {} },
+        ],
+        "convert lines from scan",
+      ),
+    );
+    expect(h.doc.scene.objects.map((o) => o.id).slice(-3)).toEqual([48, 49, 50]);
+    h.run(clearMap(h.doc));
+    expect(h.doc.scene.objects).toEqual([]);
+    expect(writeMapDoc(h.doc)).toContain(`<layer index="0"/>`);
+    for (let k = 0; k < 4; k++) h.undo();
+    expect(writeMapDoc(h.doc)).toBe(start);
+  });
+  it("an edit changes only the objects it touches", () => {
+    const h = fresh();
+    const before = h.doc.scene.objects.slice();
+    h.run(moveVertex(h.doc, 0, 2, { x: 31000, y: 19000 }));
+    const after = h.doc.scene.objects;
+    expect(after[0].points).toEqual([0, 0, 32000, 0, 31000, 19000, 0, 20000]);
+    expect(after.filter((o, k) => o !== before[k]).map((o) => o.id)).toEqual([0]);
+  });
+});
+
+describe("geometric commands", () => {
+  it("trim against a parallel line says why and changes nothing", () => {
+    const h = fresh();
+    const start = snapshot(h);
+    const r = lineOp(h.doc, "trim", trim, 5, 10); // corridor walls y = 11200 and y = 8800
+    expect(r).toEqual({ ok: false, reason: "the lines are parallel: they never cross" });
+    expect(lineOp(h.doc, "trim", trim, 5, 5)).toEqual({ ok: false, reason: "the reference line is the line itself" });
+    expect(lineOp(h.doc, "trim", trim, 0, 5)).toEqual({ ok: false, reason: "a <workarea> is not a line" });
+    expect(snapshot(h)).toBe(start);
+  });
+  it("invert swaps a line's ends and undo swaps them back", () => {
+    const h = fresh();
+    const r = invertLine(h.doc, 1);
+    if (!r.ok) throw new Error(r.reason);
+    h.run(r.value);
+    expect(pointsOf(h, 1)).toEqual([32000, 0, 0, 0]);
+    h.undo();
+    expect(pointsOf(h, 1)).toEqual([0, 0, 32000, 0]);
+  });
+});

@@ -1,0 +1,62 @@
+"""unit: what one verdict covers and the session that carries it (no sockets)."""
+
+from __future__ import annotations
+
+from pltf.fuzz.case import Case, Delivery
+from pltf.fuzz.target import GET_STATUS, LEAD
+from pltf.fuzz.unit import PIPELINE_BYTES, Unit
+from pltf.fuzz.wire import CLOSE, KEEP, frame, survey
+from pltf.spec.codec import REQUESTS, encode
+
+STATUS_ID = REQUESTS.CMD_GET_STATUS.ID
+POSITION_ID = REQUESTS.CMD_GET_POSITION.ID
+POSITION = encode(REQUESTS.CMD_GET_POSITION())
+START = encode(REQUESTS.CMD_START())
+
+
+WHOLE = Delivery()
+
+
+def case(*frames: bytes, delivery: Delivery = WHOLE) -> Case:
+    kind, answered = survey(b"".join(frames))
+    return Case(tuple(frames), "gen.boundary", "x", expect=kind, answered=tuple(answered), delivery=delivery)
+
+
+def test_a_batch_opens_with_the_lead_then_its_prelude_and_check_and_owes_every_reply() -> None:
+    assert LEAD == POSITION  # the cheapest request a server answers
+    unit = Unit([case(POSITION), case(encode(REQUESTS.CMD_STOP()))], [START], ("running", 0))
+    s = unit.session()
+    assert s.frames == [LEAD, START, GET_STATUS, POSITION, encode(REQUESTS.CMD_STOP())]
+    assert s.led and s.half_close and s.sync and not s.gate
+    assert s.answered == [POSITION_ID, STATUS_ID, POSITION_ID]
+    assert unit.check_at == 1  # the lead's reply, then the check's
+    assert unit.owed(s, 4) == 4  # lead, check, position, sync
+    assert unit.batch and unit.keep and unit.whole
+
+
+def test_a_refused_single_owes_the_replies_before_it_and_a_big_one_is_gated() -> None:
+    bad = frame(b"\xfe")  # unknown id: the target closes
+    small = Unit([case(bad)])
+    s = small.session()
+    assert s.frames == [LEAD, bad] and not s.gate and not s.sync
+    assert small.owed(s, 1) == 1 and not small.keep and not small.batch
+    big = Unit([case(frame(b"\xfe" + bytes(PIPELINE_BYTES)))])
+    assert big.session().gate and big.owed(big.session(), 1) == 1  # the rest waits for the lead's reply
+    slow = Unit([case(bad, delivery=Delivery("slow", 4, 0.01))])
+    assert slow.session().gate and slow.session().delivery.mode == "slow" and not slow.whole
+
+
+def test_a_unit_that_runs_again_is_gated_and_a_kept_connection_has_no_lead() -> None:
+    unit = Unit([case(POSITION)])
+    assert not unit.session().gate
+    unit.tries = 1
+    assert unit.session().gate
+    kept = unit.session(lead=False, kept=True)
+    assert kept.frames == [POSITION] and not kept.half_close and kept.sync and not kept.led
+
+
+def test_a_status_only_unit_proves_a_port_serves() -> None:
+    unit = Unit([])
+    s = unit.session()
+    assert s.frames == [LEAD] and s.sync and unit.keep and not unit.batch
+    assert survey(s.data) == (KEEP, [POSITION_ID]) and survey(frame(b"\xfe"))[0] == CLOSE

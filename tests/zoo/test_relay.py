@@ -1,0 +1,269 @@
+"""Each zoo member on the wire: what a client sees through it, in front of one reference server (--upstream).
+
+The timings a test needs to observe (a release window, a status delay, a hang) are set wide or short on the command
+line so that a loaded machine cannot blur them; the members' defaults run in tests/zoo/test_conformance.py.
+"""
+
+from __future__ import annotations
+
+import shutil
+import socket
+import subprocess
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+import pytest
+
+from pltf.spec.codec import TelegramDecoder, build, encode
+from pltf.spec.telegram import Telegram
+from pltf.zoo import launch
+
+STATUS = encode(build("request", "CMD_GET_STATUS"))
+POSITION = encode(build("request", "CMD_GET_POSITION"))
+
+
+@pytest.fixture(scope="module")
+def upstream() -> Iterator[launch.Launched]:
+    with launch.reference(time_scale=10.0) as server:
+        yield server
+
+
+@contextmanager
+def member(upstream: launch.Launched, name: str, *extra: str) -> Iterator[launch.Launched]:
+    a, b = upstream.ports
+    with launch.Launched(launch.python("pltf.zoo", name, "--upstream", f"127.0.0.1:{a},{b}", *extra),
+                         name=f"zoo {name}") as z:
+        yield z
+
+
+def connect(z: launch.Launched, index: int = 0, timeout: float = 5.0) -> socket.socket:
+    s = socket.create_connection(("127.0.0.1", z.ports[index]), timeout=timeout)
+    s.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+    return s
+
+
+def replies(s: socket.socket, n: int = 1, timeout: float = 5.0) -> list[Telegram]:
+    """The next ``n`` replies (AssertionError at EOF or on timeout)."""
+    dec, out = TelegramDecoder("reply"), []
+    s.settimeout(timeout)
+    while len(out) < n:
+        data = s.recv(65536)
+        assert data, f"closed after {len(out)} of {n} replies"
+        dec.receive_data(data)
+        out += list(dec)
+    return out
+
+
+def turned_away(s: socket.socket, within: float = 2.0) -> str:
+    """'fin' or 'rst' when the target closed the connection without a byte, '' when it stayed open."""
+    s.settimeout(within)
+    try:
+        data = s.recv(100)
+    except ConnectionResetError:
+        return "rst"
+    except TimeoutError:
+        return ""
+    assert data == b"", f"a turned-away client got bytes: {data.hex()}"
+    return "fin"
+
+
+def newcomer(z: launch.Launched) -> str:
+    """What a new client meets: 'fin' or 'rst' (turned away; a reset may end the connect itself), '' (kept)."""
+    try:
+        with connect(z) as s:
+            return turned_away(s)
+    except ConnectionResetError:
+        return "rst"
+
+
+def served(z: launch.Launched, within: float) -> tuple[float, int]:
+    """Seconds until a newcomer is served (its GET_STATUS answered) and how many were turned away meanwhile;
+    AssertionError after ``within``."""
+    t0, away = time.monotonic(), 0
+    while time.monotonic() - t0 < within:
+        try:
+            with connect(z) as s:
+                s.sendall(STATUS)
+                replies(s, timeout=1.0)
+                return time.monotonic() - t0, away
+        except (AssertionError, ConnectionResetError, BrokenPipeError):
+            away += 1
+            time.sleep(0.002)
+    raise AssertionError(f"no newcomer served within {within} s")
+
+
+def test_faithful_passes_every_byte_on_both_ports(upstream: launch.Launched) -> None:
+    with member(upstream, "faithful") as z, connect(z, 0) as a, connect(z, 1) as b:
+        for i in range(1, len(STATUS)):  # split anywhere
+            a.sendall(STATUS[:i])
+            time.sleep(0.001)
+            a.sendall(STATUS[i:])
+        assert [t.NAME for t in replies(a, len(STATUS) - 1)] == ["CMD_GET_STATUS"] * (len(STATUS) - 1)
+        b.sendall(POSITION + STATUS)
+        assert [t.NAME for t in replies(b, 2)] == ["CMD_GET_POSITION", "CMD_GET_STATUS"]
+
+
+@pytest.mark.parametrize(("name", "how"), [("slow-release", "fin"), ("slow-release-rst", "rst")])
+def test_slow_release_turns_newcomers_away_until_the_window_ends(upstream: launch.Launched, name: str,
+                                                                 how: str) -> None:
+    with member(upstream, name, "--release-ms", "600,600") as z:
+        first = connect(z)
+        first.sendall(STATUS)
+        replies(first)
+        assert newcomer(z) == how  # busy: turned away at once
+        first.close()
+        time.sleep(0.1)  # the client has left; the port is not free before 600 ms
+        assert newcomer(z) == how
+        wait, _ = served(z, within=5.0)
+        assert wait >= 0.3, f"served {wait:.2f} s after the turn-away, inside the 600 ms window"
+
+
+def test_slow_release_defaults_free_the_port_within_milliseconds(upstream: launch.Launched) -> None:
+    with member(upstream, "slow-release") as z:
+        rounds = [served(z, within=3.0) for _ in range(5)]  # each newcomer right after the one before left
+    assert all(wait < 2.0 for wait, _ in rounds), rounds
+    assert sum(away for _, away in rounds) >= 1, f"no newcomer met the release window: {rounds}"
+
+
+def test_accept_once_keeps_a_newcomer_waiting_in_the_backlog(upstream: launch.Launched) -> None:
+    with member(upstream, "accept-once") as z:
+        first = connect(z)
+        first.sendall(STATUS)
+        replies(first)
+        waiting = connect(z)  # the handshake completes: the kernel keeps it in the listen backlog
+        waiting.sendall(STATUS)
+        assert turned_away(waiting, within=0.8) == "", "a newcomer was closed instead of waiting"
+        first.close()
+        assert [t.NAME for t in replies(waiting)] == ["CMD_GET_STATUS"]  # its turn: the request it sent is served
+        waiting.close()
+
+
+def test_slow_link_replies_late(upstream: launch.Launched) -> None:
+    with member(upstream, "slow-link") as z, connect(z) as s:
+        for _ in range(5):
+            t0 = time.monotonic()
+            s.sendall(STATUS)
+            replies(s)
+            assert time.monotonic() - t0 >= 0.05
+
+
+def _capture(port: int, out: Path) -> subprocess.Popen[bytes]:
+    with (out.parent / "dumpcap.log").open("wb") as log:
+        return subprocess.Popen(["dumpcap", "-q", "-i", "lo", "-f", f"tcp src port {port}", "-w", str(out)],
+                                stdout=subprocess.DEVNULL, stderr=log)
+
+
+def test_slow_link_tears_and_coalesces_replies_on_the_wire(upstream: launch.Launched, tmp_path: Path) -> None:
+    if not (shutil.which("dumpcap") and shutil.which("tshark")):
+        pytest.skip("tshark/dumpcap not installed (apt-get install tshark)")
+    pcap = tmp_path / "slow-link.pcapng"
+    with member(upstream, "slow-link", "--seed", "3") as z:
+        cap = _capture(z.ports[0], pcap)
+        time.sleep(1.5)  # dumpcap is listening
+        if cap.poll() is not None:
+            pytest.skip(f"no capture on lo: {(tmp_path / 'dumpcap.log').read_text(errors='replace')[:200]}")
+        with connect(z) as s:
+            s.sendall(STATUS * 6)  # pipelined: six replies in flight at once
+            got = replies(s, 6)
+        time.sleep(0.5)
+        cap.terminate()
+        cap.wait(10)
+    fields = subprocess.run(["tshark", "-r", str(pcap), "-T", "fields", "-e", "tcp.len"], capture_output=True,
+                            text=True, check=True, timeout=60).stdout.split()
+    sizes = [int(n) for n in fields if int(n) > 0]
+    frame = len(encode(got[0]))
+    assert sum(sizes) == 6 * frame
+    assert sizes[0] <= 7 and sum(n <= 7 for n in sizes) >= 8, f"replies not torn into small segments: {sizes}"
+    ends, offsets = {frame * k for k in range(1, 6)}, []
+    pos = 0
+    for n in sizes:
+        offsets.append((pos, pos + n))
+        pos += n
+    crossing = [(a, b) for a, b in offsets if any(a < e < b for e in ends)]
+    assert crossing, f"no TCP segment carries the end of one reply and the start of the next: {sizes}"
+
+
+def test_slow_status_holds_status_replies_only(upstream: launch.Launched) -> None:
+    with member(upstream, "slow-status", "--status-delay", "1.5") as z, connect(z) as s:
+        t0 = time.monotonic()
+        s.sendall(POSITION)
+        replies(s)
+        assert time.monotonic() - t0 < 1.0
+        s.sendall(STATUS + POSITION)
+        got = replies(s, 2, timeout=10.0)
+        assert [t.NAME for t in got] == ["CMD_GET_STATUS", "CMD_GET_POSITION"]  # in order: the position waited
+        assert time.monotonic() - t0 >= 1.5
+
+
+def _prelude(mode: int | None = None) -> bytes:
+    names = ["CMD_CONNECT_TO_PLTF", "CMD_INIT_PLTF"]
+    out = b"".join(encode(build("request", n)) for n in names)
+    if mode is not None:
+        out += encode(build("request", "CMD_SET_MODE", mode=mode))
+    return out + encode(build("request", "CMD_START"))
+
+
+MOVE = encode(build("request", "CMD_MOVE_REL", x=400, y=0, angle=0))
+
+
+def test_crash_after_start_dies_behind_its_prelude_only(upstream: launch.Launched) -> None:
+    with member(upstream, "crash-after-start") as z:
+        with connect(z) as s:
+            s.sendall(MOVE + STATUS)  # no prelude: refused by the target, nothing happens
+            replies(s)
+            s.sendall(_prelude(mode=4) + MOVE + STATUS)  # mode Automatic takes path commands
+            replies(s)
+        assert z.alive()
+        with connect(z) as s:
+            s.sendall(encode(build("request", "CMD_STOP")) + encode(build("request", "CMD_SET_MODE", mode=0))
+                      + encode(build("request", "CMD_START")) + MOVE + STATUS)
+            assert turned_away(s) in ("fin", "rst")  # died: the connection ends without a reply
+        assert z.proc is not None and z.proc.wait(5) == 134
+        assert any("crash: CMD_MOVE_REL in running" in line for line in z.output)
+        with pytest.raises(ConnectionRefusedError):
+            connect(z)
+    assert upstream.alive()  # not the member's: it stays
+
+
+def test_hang_unknown_key_stops_every_port(upstream: launch.Launched) -> None:
+    with member(upstream, "hang-unknown-key", "--hang-seconds", "4") as z, connect(z) as s:
+        s.sendall(encode(build("request", "CMD_SET_PLTF_PARAM", key="IpoTransVel", value="500")) + STATUS)
+        replies(s)
+        s.sendall(encode(build("request", "CMD_SET_PLTF_PARAM", key="NoSuchKey", value="1")) + STATUS)
+        assert turned_away(s, within=1.0) == ""  # no reply, no close: stuck
+        with connect(z, 1) as other:  # the other port: accepted by the kernel, answered by nobody
+            other.sendall(STATUS)
+            assert turned_away(other, within=1.0) == ""
+        assert z.alive()
+        assert z.proc is not None and z.proc.wait(10) == 3
+
+
+def _rss_kib(pid: int) -> int:
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("VmRSS:"):
+            return int(line.split()[1])
+    raise AssertionError("no VmRSS")
+
+
+def test_leak_grows_with_every_request_and_dies_at_its_limit(upstream: launch.Launched) -> None:
+    with member(upstream, "leak", "--leak-kb", "1024", "--leak-limit-mb", "24") as z, connect(z) as s:
+        assert z.pid is not None
+        s.sendall(STATUS)
+        replies(s)
+        before = _rss_kib(z.pid)
+        s.sendall(STATUS * 16)
+        replies(s, 16)
+        grown = _rss_kib(z.pid) - before
+        assert grown >= 12 * 1024, f"RSS grew {grown} KiB over 16 requests of 1 MiB each"
+        s.sendall(STATUS * 10)
+        with pytest.raises(AssertionError, match="closed"):
+            replies(s, 10)
+        assert z.proc is not None and z.proc.wait(5) == 134
+        assert any("out of memory: 24 MiB leaked after 24 requests" in line for line in z.output)
+
+
+def test_the_member_tells_its_ports_and_upstream(upstream: launch.Launched) -> None:
+    with member(upstream, "faithful") as z:
+        assert sum("server started at port" in line for line in z.output) == 2

@@ -1,0 +1,158 @@
+"""``python -m pltf.zoo MEMBER (--serve reference|emulator | --upstream HOST:PORT,PORT) [options]``: run one zoo
+member in front of a PlatformCtrl target; ``--list`` shows the members.
+
+With ``--serve`` the member starts the target behind it itself (ephemeral ports, stopped with the member);
+``--upstream`` puts it in front of a target that runs already. It logs ``zoo MEMBER: server started at port N``
+once per port, in port order (the line every launcher of the toolkit reads). Exit status: 2 for bad arguments or
+a target that cannot be started, 134 when a planted crash fires, 3 after a planted hang.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import dataclasses
+import signal
+import sys
+from collections.abc import Sequence
+from typing import NoReturn
+
+from pltf.zoo import launch
+from pltf.zoo.bugs import Leak
+from pltf.zoo.members import GET_STATUS_ID, MEMBERS, Member, member
+from pltf.zoo.relay import Relay
+from pltf.zoo.schedule import for_ident, jitter
+
+
+def _pair(text: str, what: str, cast: type = int) -> tuple[float, float]:
+    try:
+        lo, hi = (cast(v) for v in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected {what} as LOW,HIGH, got {text!r}") from None
+    if not 0 <= lo <= hi:
+        raise argparse.ArgumentTypeError(f"expected 0 <= LOW <= HIGH, got {text!r}")
+    return lo, hi
+
+
+def _ports(text: str) -> tuple[int, int]:
+    parts = text.split(",")
+    if len(parts) != 2 or not all(p.strip().isdigit() and int(p) < 65536 for p in parts):
+        raise argparse.ArgumentTypeError(f"expected two ports A,B (0: any free port), got {text!r}")
+    return int(parts[0]), int(parts[1])
+
+
+def _upstream(text: str) -> tuple[str, tuple[int, int]]:
+    host, sep, ports = text.rpartition(":")
+    if not sep or not host:
+        raise argparse.ArgumentTypeError(f"expected HOST:PORT,PORT, got {text!r}")
+    a, b = _ports(ports)
+    if not (a and b):
+        raise argparse.ArgumentTypeError(f"expected two upstream ports, got {text!r}")
+    return host, (a, b)
+
+
+def parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="python -m pltf.zoo", description=__doc__.split("\n\n")[0],
+                                formatter_class=argparse.RawDescriptionHelpFormatter,
+                                epilog="members:\n" + "\n".join(f"  {m.name:18} {m.summary}" for m in MEMBERS.values()))
+    p.add_argument("member", nargs="?", help="the member to run (--list shows them)")
+    p.add_argument("--list", action="store_true", help="list the members and exit")
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--serve", choices=("reference", "emulator"), help="start this target behind the member")
+    where.add_argument("--upstream", type=_upstream, metavar="HOST:PORT,PORT", help="a target that runs already")
+    p.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1)")
+    p.add_argument("--ports", type=_ports, default=(0, 0), metavar="A,B", help="ports to listen on (default 0,0: any)")
+    p.add_argument("--seed", type=int, default=1, help="seed of the member's random delays (and of --serve's target)")
+    p.add_argument("--time-scale", type=float, default=1.0, metavar="X", help="time scale of the --serve target")
+    p.add_argument("--release-ms", type=lambda t: _pair(t, "milliseconds"), metavar="LO,HI",
+                   help="turn-away members: the port is free LO-HI ms after its client left")
+    p.add_argument("--turn-away", choices=("fin", "rst"), help="turn-away members: close a newcomer with FIN or RST")
+    p.add_argument("--delay-ms", type=lambda t: _pair(t, "milliseconds"), metavar="LO,HI",
+                   help="every reply LO-HI ms late (jitter)")
+    p.add_argument("--segment", type=int, metavar="N", help="cut the replies into writes of 1..N bytes")
+    p.add_argument("--status-delay", type=float, metavar="S", help="every CMD_GET_STATUS reply S seconds late")
+    p.add_argument("--leak-kb", type=int, metavar="K", help="leak: KiB leaked per request (default 32)")
+    p.add_argument("--leak-limit-mb", type=int, metavar="M", help="leak: the target dies at M MiB (default 64)")
+    p.add_argument("--hang-seconds", type=float, default=600.0, metavar="S",
+                   help="a planted hang lasts S seconds, then the member exits (default 600)")
+    return p
+
+
+def configured(args: argparse.Namespace) -> Member:
+    """The member with the options given on the command line."""
+    m = member(args.member)
+    changes: dict[str, object] = {}
+    if args.release_ms is not None:
+        changes["release"] = (args.release_ms[0] / 1000, args.release_ms[1] / 1000)
+    if args.turn_away is not None:
+        changes["turn_away"] = args.turn_away
+    if args.delay_ms is not None:
+        changes["delay"] = jitter(args.delay_ms[0] / 1000, args.delay_ms[1] / 1000)
+    if args.segment is not None:
+        changes["segment"] = max(0, args.segment)
+    if args.status_delay is not None:
+        changes["delay"] = for_ident(GET_STATUS_ID, args.status_delay)
+    if args.leak_kb is not None or args.leak_limit_mb is not None:
+        kb, limit = args.leak_kb or 32, args.leak_limit_mb or 64
+        changes["bug"] = lambda: Leak(kb=kb, limit_mb=limit)
+    return dataclasses.replace(m, **changes) if changes else m  # type: ignore[arg-type]
+
+
+def _error(message: str) -> NoReturn:
+    print(f"python -m pltf.zoo: error: {message}", file=sys.stderr)
+    raise SystemExit(2)
+
+
+def _terminate(signum: int, frame: object) -> NoReturn:
+    raise SystemExit(128 + signum)  # interrupts even a planted hang; the finally clauses stop the target
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = parser().parse_args(argv)
+    if args.list:
+        for m in MEMBERS.values():
+            print(f"{m.name:18} {'conforming (' + m.profile + ')' if m.conforming else 'planted bug':22} {m.summary}")
+        return 0
+    if not args.member:
+        _error("name a member (--list shows them)")
+    if args.member not in MEMBERS:
+        _error(f"no member {args.member!r} (members: {', '.join(MEMBERS)})")
+    if not (args.serve or args.upstream):
+        _error("give --serve reference|emulator or --upstream HOST:PORT,PORT")
+    m = configured(args)
+    signal.signal(signal.SIGTERM, _terminate)
+    behind: launch.Launched | None = None
+    try:
+        if args.serve:
+            try:
+                behind = launch.target(args.serve, time_scale=args.time_scale, seed=args.seed)
+                behind.new_session = False  # in our process group: stopped with us
+                behind.start()
+            except launch.LaunchError as exc:
+                _error(str(exc))
+            host, ports = "127.0.0.1", behind.ports
+            print(f"zoo {m.name}: {behind.name} behind at {host}:{ports[0]},{ports[1]} (pid {behind.pid})", flush=True)
+        else:
+            host, ports = args.upstream
+        relay = Relay(m, host, list(ports), host=args.host, ports=args.ports, seed=args.seed,
+                      hang_seconds=args.hang_seconds, on_exit=behind.cleanup if behind else lambda: None,
+                      log=lambda line: print(line, flush=True))
+
+        def ready(bound: list[int]) -> None:
+            for port in bound:
+                print(f"zoo {m.name}: server started at port {port}", flush=True)
+
+        try:
+            asyncio.run(relay.serve_forever(ready))
+        except OSError as exc:
+            _error(f"cannot listen on {args.host}: {exc}")
+        except KeyboardInterrupt:
+            pass
+        return 0
+    finally:
+        if behind is not None:
+            behind.cleanup()
+
+
+if __name__ == "__main__":
+    sys.exit(main())

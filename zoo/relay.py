@@ -1,0 +1,232 @@
+"""The zoo's network shell: one listening socket per port of the target behind, the member's rules applied.
+
+Rules:
+- One asyncio loop in one thread. Port i of the relay leads to port i of the upstream; each client admitted
+  gets its own upstream connection, opened when it is admitted and closed when it leaves (members.py: admit).
+- Client -> target: a member without a bug passes the bytes on as they come (a split frame stays split); a
+  member with a bug cuts whole frames first, shows each to the bug, then passes it on - so the bug acts before
+  the target does. A stream out of step is passed on raw (frames.py): the target behind judges it.
+- Target -> client: passed on as it comes, or, for a member that shapes replies, cut into frames, held until
+  due and written coalesced and in segments (schedule.py): with TCP_NODELAY and a gap between them each write
+  is one send(), one segment on the wire.
+- Half-close travels (a client's end-of-stream is passed on and the target may still answer); when the target
+  closes, the client is closed after the replies still held for it.
+- A crash calls ``on_exit`` (the member stops the target it started) and ends the process with status 134; a
+  hang blocks the loop's thread for ``hang_seconds`` and then ends the process the same way with status 3.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import os
+import random
+import socket
+import struct
+import sys
+import time
+from collections.abc import Callable, Coroutine
+from dataclasses import dataclass, field
+from typing import Any
+
+from pltf.zoo.bugs import Bug, Fault
+from pltf.zoo.frames import FrameCutter
+from pltf.zoo.members import Member
+from pltf.zoo.schedule import ReplySchedule, segments
+
+SEGMENT_GAP = 0.001  # s between two writes of one chunk (slow link)
+HALF_CLOSE_WAIT = 15.0  # s the target may take to answer and close after a client's end-of-stream
+
+
+async def _guarded(pump: Coroutine[Any, Any, None]) -> bool:
+    """Run one direction's pump; True when it ended at an end-of-stream, False when a socket failed."""
+    try:
+        await pump
+    except (OSError, ConnectionError):
+        return False
+    return True
+
+
+@dataclass
+class PortState:
+    index: int
+    busy: bool = False
+    free_at: float = 0.0
+    idle: asyncio.Event = field(default_factory=asyncio.Event)
+
+
+class Relay:
+    def __init__(self, member: Member, upstream_host: str, upstream_ports: list[int], *, host: str = "127.0.0.1",
+                 ports: tuple[int, int] = (0, 0), seed: int = 1, hang_seconds: float = 600.0,
+                 on_exit: Callable[[], None] = lambda: None, log: Callable[[str], None] = print) -> None:
+        self.member = member
+        self.upstream = (upstream_host, list(upstream_ports))
+        self.host, self.want = host, ports
+        self.rng = random.Random(seed)
+        self.bug: Bug | None = member.bug() if member.bug is not None else None
+        self.hang_seconds = hang_seconds
+        self.on_exit = on_exit
+        self.log = log
+        self.ports: list[int] = []
+        self.clients = 0
+        self.turned_away = 0
+        self._tasks: set[asyncio.Task[None]] = set()
+
+    # ---- start
+    async def serve_forever(self, ready: Callable[[list[int]], None] = lambda ports: None) -> None:
+        listeners = []
+        for want in self.want:
+            ls = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+            ls.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            ls.bind((self.host, want))
+            ls.listen(16)
+            ls.setblocking(False)
+            listeners.append(ls)
+            self.ports.append(ls.getsockname()[1])
+        ready(self.ports)
+        try:
+            await asyncio.gather(*(self._accept_loop(PortState(i), ls) for i, ls in enumerate(listeners)))
+        finally:
+            for ls in listeners:
+                ls.close()
+
+    async def _accept_loop(self, port: PortState, ls: socket.socket) -> None:
+        loop = asyncio.get_running_loop()
+        port.idle.set()
+        admit = self.member.admit
+        while True:
+            if admit == "backlog":
+                await port.idle.wait()  # the next client stays in the listen backlog until then
+            sock, _ = await loop.sock_accept(ls)
+            if admit == "turn-away" and (port.busy or loop.time() < port.free_at):
+                self._turn_away(sock)
+                continue
+            if admit != "transparent":
+                port.busy = True
+                port.idle.clear()
+            self.clients += 1
+            task = asyncio.create_task(self._client(port, sock))
+            self._tasks.add(task)
+            task.add_done_callback(self._tasks.discard)
+
+    def _turn_away(self, sock: socket.socket) -> None:
+        self.turned_away += 1
+        if self.member.turn_away == "rst":
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+        else:  # FIN first; what the newcomer sent is read away, else the close would reset the connection
+            with contextlib.suppress(OSError):
+                sock.shutdown(socket.SHUT_WR)
+                sock.setblocking(False)
+                while sock.recv(65536):
+                    pass
+        sock.close()
+
+    # ---- one client
+    async def _client(self, port: PortState, sock: socket.socket) -> None:
+        loop = asyncio.get_running_loop()
+        try:
+            sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            c_reader, c_writer = await asyncio.open_connection(sock=sock)
+            try:
+                u_reader, u_writer = await asyncio.open_connection(self.upstream[0], self.upstream[1][port.index])
+            except OSError as exc:
+                self.log(f"upstream port {self.upstream[1][port.index]} unreachable: {exc}")
+                c_writer.close()
+                return
+            u_writer.get_extra_info("socket").setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            up = asyncio.create_task(_guarded(self._to_target(c_reader, u_writer)))
+            down = asyncio.create_task(_guarded(self._to_client(u_reader, c_writer)))
+            done, _ = await asyncio.wait({up, down}, return_when=asyncio.FIRST_COMPLETED)
+            if up in done and up.result():  # the client's end-of-stream: the target may still answer
+                await asyncio.wait({down}, timeout=HALF_CLOSE_WAIT)
+            for task in (up, down):
+                task.cancel()
+            for w in (c_writer, u_writer):
+                with contextlib.suppress(OSError, RuntimeError):
+                    w.close()
+        except OSError:
+            pass
+        finally:
+            with contextlib.suppress(OSError):
+                sock.close()
+            if self.member.admit != "transparent":
+                port.busy = False
+                lo, hi = self.member.release
+                wait = self.rng.uniform(lo, hi) if hi > 0 else 0.0
+                port.free_at = loop.time() + wait
+                loop.call_later(wait, port.idle.set)
+
+    async def _to_target(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+        cutter = FrameCutter() if self.bug is not None else None
+        while data := await reader.read(65536):
+            if cutter is None:
+                writer.write(data)
+            else:
+                for piece in cutter.feed(data):
+                    if piece.frame and self.bug is not None:
+                        fault = self.bug.on_request(piece, time.monotonic())
+                        if fault is not None:
+                            self._fault(fault)
+                    writer.write(piece.data)
+            await writer.drain()
+        if cutter is not None:
+            for piece in cutter.flush():
+                writer.write(piece.data)
+        with contextlib.suppress(OSError):
+            writer.write_eof()
+
+    async def _to_client(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
+        if not self.member.shapes_replies:
+            while data := await reader.read(65536):
+                writer.write(data)
+                await writer.drain()
+            return
+        loop = asyncio.get_running_loop()
+        cutter, schedule = FrameCutter(), ReplySchedule(self.member.delay, self.rng)
+        more = asyncio.Event()
+        ended = False
+
+        async def read() -> None:
+            nonlocal ended
+            try:
+                while data := await reader.read(65536):
+                    for piece in cutter.feed(data):
+                        schedule.push(piece, loop.time())
+                    more.set()
+                for piece in cutter.flush():
+                    schedule.push(piece, loop.time())
+            finally:
+                ended = True
+                more.set()
+
+        reading = asyncio.create_task(read())
+        try:
+            while not (ended and not schedule):
+                due = schedule.next_due
+                if due is None or due > loop.time():
+                    more.clear()
+                    timeout = None if due is None else due - loop.time()
+                    with contextlib.suppress(TimeoutError):
+                        await asyncio.wait_for(more.wait(), timeout)
+                    continue
+                for i, seg in enumerate(segments(schedule.due(loop.time()), self.rng, self.member.segment)):
+                    if i:
+                        await asyncio.sleep(SEGMENT_GAP)  # one TCP segment per write (TCP_NODELAY), apart in time
+                    writer.write(seg)
+                    await writer.drain()
+        finally:
+            reading.cancel()
+
+    # ---- faults
+    def _fault(self, fault: Fault) -> None:
+        self.log(f"zoo {self.member.name}: {fault.kind}: {fault.why}")
+        if fault.kind == "hang":
+            time.sleep(self.hang_seconds)  # the one thread is stuck: nothing is accepted, read or answered
+            self._exit(3)
+        self._exit(134)
+
+    def _exit(self, status: int) -> None:
+        with contextlib.suppress(Exception):
+            self.on_exit()
+        sys.stdout.flush()
+        os._exit(status)
