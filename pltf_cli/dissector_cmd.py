@@ -6,6 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
+from pltf.cli.options import FAILED, CommandError
 from pltf.proxy.dissector import check, render
 
 
@@ -19,14 +20,13 @@ def run_dissector(args: argparse.Namespace) -> int:
     if args.check is not None:
         problem = check(args.check)
         if problem:
-            print(f"pltf: {problem}", file=sys.stderr)
-            return 1
+            print(f"pltf dissector: {problem}", file=sys.stderr)
+            return FAILED
         print(f"{args.check}: up to date")
         return 0
     try:
         args.out.write_text(render(), encoding="utf-8")
     except OSError as exc:
-        print(f"pltf: error: cannot write {args.out}: {exc.strerror}", file=sys.stderr)
-        return 2
+        raise CommandError(f"cannot write {args.out}: {exc.strerror}") from None
     print(f"wrote {args.out} (Wireshark: wireshark -X lua_script:{args.out}, or copy it into the Lua plugins folder)")
     return 0
