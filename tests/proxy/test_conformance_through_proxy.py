@@ -21,9 +21,9 @@ import pytest
 
 from pltf.conformance_tests.catalogue import Case, Tier, Verdict, load_all, select
 from pltf.conformance_tests.context import Config
-from pltf.conformance_tests.launch import ServerProcess
 from pltf.conformance_tests.runner import Runner
 from pltf.proxy.session import read_session
+from pltf.zoo import launch
 
 TIME_SCALE = 10.0
 LISTENING = re.compile(r"proxy listening at [\d.]+:(\d+)")
@@ -59,7 +59,7 @@ def pltf_proxy(target_ports: list[int], record: Path) -> Iterator[list[int]]:
 
 
 def verdicts(cases: list[Case], proxied: bool, record: Path) -> dict[str, Verdict]:
-    with ServerProcess(time_scale=TIME_SCALE) as server:
+    with launch.reference(time_scale=TIME_SCALE) as server:
         if not proxied:
             ports = server.ports
             return _run(ports, cases)

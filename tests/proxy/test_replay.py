@@ -16,7 +16,6 @@ from typing import Any
 import pytest
 
 from pltf.cli.main import main as pltf
-from pltf.conformance_tests.launch import ServerProcess
 from pltf.conformance_tests.readings import canonical
 from pltf.proxy.capture import PcapngWriter
 from pltf.proxy.recorder import Recorder
@@ -24,6 +23,7 @@ from pltf.proxy.replay import Outcome, judge, plan
 from pltf.proxy.session import Route, Session, SessionWriter, read_session
 from pltf.proxy.tap import CLOSE, OPEN, Record, Tap
 from pltf.spec.codec import build, encode
+from pltf.zoo import launch
 from tests.proxy.helpers import ProxyThread
 from tests.proxy.scenarios import all_scenarios
 from tests.proxy.tshark import run_tshark, telegrams
@@ -134,7 +134,7 @@ def _mode(value: int) -> str:
 def recorded(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Path]:
     """The client scenarios through the proxy (in a thread) against the reference server: session + pcapng."""
     out = tmp_path_factory.mktemp("recorded")
-    with ServerProcess(time_scale=TIME_SCALE) as server:
+    with launch.reference(time_scale=TIME_SCALE) as server:
         writer = SessionWriter(out / "session.jsonl")
         recorder = Recorder([], PcapngWriter(out / "session.pcapng"), writer)
         with ProxyThread(server.ports, recorder) as proxy:
@@ -172,7 +172,7 @@ def test_the_pcapng_opens_in_tshark_with_the_dissector(recorded: Path) -> None:
 
 
 def test_the_session_replays_against_the_reference_server_with_no_difference(recorded: Path, tmp_path: Path) -> None:
-    with ServerProcess(time_scale=TIME_SCALE) as server:
+    with launch.reference(time_scale=TIME_SCALE) as server:
         code, out = _replay(recorded, server.ports, "--junit", str(tmp_path / "replay.xml"))
     assert code == 0, out
     assert out.endswith(": no difference\n") and " 0 of " not in out
@@ -181,7 +181,7 @@ def test_the_session_replays_against_the_reference_server_with_no_difference(rec
 
 
 def test_against_a_mutant_the_differences_are_named(recorded: Path, tmp_path: Path) -> None:
-    with ServerProcess(time_scale=TIME_SCALE, mutant="set_mode_anywhere") as server:  # CMD_SET_MODE in Running
+    with launch.reference(time_scale=TIME_SCALE, mutant="set_mode_anywhere") as server:  # CMD_SET_MODE in Running
         code, out = _replay(recorded, server.ports, "--time-scale", "2", "--junit", str(tmp_path / "replay.xml"))
     assert code == 1, out
     assert "CMD_GET_STATUS: " in out
