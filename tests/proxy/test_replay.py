@@ -84,12 +84,12 @@ def test_a_run_of_the_same_request_is_a_wait() -> None:
     assert script.steps[5].wait is None and script.steps[6].wait is None
 
 
-def test_a_connection_waits_for_the_ones_closed_before_it_on_its_port() -> None:
+def test_a_connection_waits_for_the_ones_closed_before_it_opened() -> None:
     s = session(event(0.0, 1, OPEN), event(1.0, 1, CLOSE, "by client (FIN)"),
-                event(0.5, 2, OPEN, port=10002), event(1.5, 3, OPEN), event(3.0, 2, CLOSE, "by client (FIN)", 10002),
+                event(1.2, 2, OPEN, port=10002), event(1.5, 3, OPEN), event(3.0, 2, CLOSE, "by client (FIN)", 10002),
                 event(3.0, 3, CLOSE, "by client (FIN)"))  # fmt: skip
     scripts = {sc.conn: sc for sc in plan(s)}
-    assert scripts[3].after_closes == [1] and scripts[2].after_closes == [] and scripts[2].route == 1
+    assert scripts[3].after_closes == [1] and scripts[2].after_closes == [1] and scripts[2].route == 1
 
 
 # ---------------------------------------------------------------------------------------------- the judgement
