@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from pltf.cli.options import CommandError, exit_status
+from pltf.cli.options import FAILED, CommandError, exit_status
 from pltf.proxy.dissector import check, render
 
 
@@ -23,7 +23,7 @@ def run_dissector(args: argparse.Namespace) -> int:
             raise CommandError(f"{args.check}: no such file")
         problem = check(args.check)
         if problem:
-            raise CommandError(problem, status=1)  # stale: a finding, not a usage error
+            raise CommandError(problem, status=FAILED)  # stale: a finding, not a usage error
         print(f"{args.check}: up to date")
         return 0
     try:
