@@ -15,7 +15,7 @@ Benchmarks:
   grid only the first eight: it takes up to seconds each; a row compares both on exactly those).
 - ``motion.corners``: the wall corners of a ~2800-wall map (``World.set_map`` computes them when the laser first
   looks): ``geometry._corners`` (vectorised) against the endpoint-by-endpoint loop it replaced (``corners_by_loop``,
-  the tests' oracle). The same corners, asserted.
+  benchmarks/corners_loop.py, the tests' oracle). The same corners, asserted.
 - ``motion.scan``: one 541-beam scan against 200 random wall segments: ``raycast.cast_fan`` (C loops; its numpy
   fallback beside) against pymunk's own ``Space.segment_query_first`` per beam (the same segments as static
   shapes). Target <= 0.5 ms.
@@ -383,7 +383,7 @@ def planning(config: Config) -> list[Row]:
 @benchmark()
 def corners(config: Config) -> list[Row]:
     """Wall corners of a big map: vectorised vs the O(n^2) loop."""
-    from tests.reference_server.world.test_corners import corners_by_loop
+    from benchmarks.corners_loop import corners_by_loop
 
     walls = maze(size=50000.0, rooms=5) if config.quick else maze(size=170000.0, rooms=17, stubs=6)
     if not np.array_equal(_corners(walls), corners_by_loop(walls)):

@@ -3,10 +3,9 @@
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
-from pltf.cli.options import FAILED, CommandError
+from pltf.cli.options import FAILED, CommandError, exit_status
 from pltf.proxy.dissector import check, render
 
 
@@ -14,14 +13,17 @@ def add_dissector_arguments(p: argparse.ArgumentParser) -> None:
     where = p.add_mutually_exclusive_group(required=True)
     where.add_argument("--out", type=Path, metavar="FILE", help="write the dissector to FILE (e.g. pltf.lua)")
     where.add_argument("--check", type=Path, metavar="FILE", help="exit 1 if FILE differs from a fresh generation")
+    p.epilog = exit_status(ok="written, or --check: up to date", failed="--check: FILE is stale",
+                           usage="usage error: bad arguments, FILE unreadable or not writable")
 
 
 def run_dissector(args: argparse.Namespace) -> int:
     if args.check is not None:
+        if not args.check.is_file():
+            raise CommandError(f"{args.check}: no such file")
         problem = check(args.check)
         if problem:
-            print(f"pltf dissector: {problem}", file=sys.stderr)
-            return FAILED
+            raise CommandError(problem, status=FAILED)  # stale: a finding, not a usage error
         print(f"{args.check}: up to date")
         return 0
     try:

@@ -15,7 +15,7 @@ import sys
 import time
 from pathlib import Path
 
-from pltf.cli.options import CommandError, target, target_or_zero
+from pltf.cli.options import CommandError, exit_status, target, target_or_zero
 from pltf.proxy.capture import PcapngWriter
 from pltf.proxy.network import ProxyServer, Route
 from pltf.proxy.offload import RecorderPipe
@@ -34,6 +34,8 @@ def port_pair(text: str) -> tuple[int, int]:
 
 
 def add_proxy_arguments(p: argparse.ArgumentParser) -> None:
+    p.epilog = exit_status(ok="stopped by Ctrl-C",
+                           usage="usage error: bad arguments, the listen port in use, an unwritable --record")
     p.add_argument("--listen", type=target_or_zero, required=True, metavar="HOST:PORT",
                    help="where clients connect (port 0: any free port, printed at start)")
     p.add_argument("--target", type=target, required=True, metavar="HOST:PORT", help="the platform (or server)")

@@ -13,7 +13,7 @@ import sys
 import time
 from pathlib import Path
 
-from pltf.cli.options import CommandError, port, positive, target
+from pltf.cli.options import CommandError, exit_status, port, positive, target
 from pltf.proxy.replay import counts, judge, plan
 from pltf.proxy.replay_io import Settings, replay
 from pltf.proxy.report import render, write_junit
@@ -21,6 +21,8 @@ from pltf.proxy.session import SessionError, read_session
 
 
 def add_replay_arguments(p: argparse.ArgumentParser) -> None:
+    p.epilog = exit_status(ok="every reply as recorded (within the volatile table)", failed="a reply differs",
+                           usage="usage or connection error: bad arguments, an unreadable session, no target")
     p.add_argument("session", type=Path, help="a session file written by `pltf proxy --record`")
     p.add_argument("--target", type=target, required=True, metavar="HOST:PORT",
                    help="where to replay the session's first port")

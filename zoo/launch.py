@@ -70,7 +70,12 @@ class Launched:
 
     # ---- life cycle
     def start(self) -> tuple[int, int]:
+        """A fresh instance; its ports once it serves them."""
         self.cleanup()
+        self._spawn()
+        return self._ready()
+
+    def _spawn(self) -> None:
         self._tmp = tempfile.mkdtemp(prefix="pltf-target-")
         self._log = tempfile.NamedTemporaryFile(prefix="pltf-target-", suffix=".log", delete=False)  # noqa: SIM115
         argv = self.command()
@@ -82,6 +87,8 @@ class Launched:
         except OSError as exc:
             self.cleanup()
             raise LaunchError(f"cannot start {self.name} ({shlex.join(argv)}): {exc}") from None
+
+    def _ready(self) -> tuple[int, int]:
         self.starts += 1
         try:
             self.ports = self._await_ports() if 0 in self.want else self._await_listening()
@@ -199,15 +206,50 @@ class Launched:
 
 
 class Launcher(Launched):
-    """The fuzzer's form: a command template (see the module rules) for ``host`` and the two ports."""
+    """The fuzzer's form: a command template (see the module rules) for ``host`` and the two ports.
+
+    Warm spares (``spares = True``, ephemeral ports only): while one instance is in use the next one starts, so a
+    minimiser that wants a fresh instance per test waits for a start only when the spare is not up yet. A spare
+    not taken is stopped with ``no_spares`` or ``cleanup``."""
 
     def __init__(self, template: str, host: str, port: int, second_port: int) -> None:
         super().__init__(host=host, ports=(port, second_port), name=shlex.split(template)[0] if template else "")
         self.template = template
+        self.spares = False
+        self._spare: Launcher | None = None
 
     def command(self) -> list[str]:
         a, b = self.want
         return shlex.split(self.template.format(port=a, second_port=b, ports=f"{a},{b}", tmpdir=self._tmp or ""))
+
+    def start(self) -> tuple[int, int]:
+        spare, self._spare = self._spare, None
+        self.cleanup()
+        if spare is not None and spare.alive():  # adopt it: its process, log and directory are ours now
+            self.proc, self._log, self._tmp = spare.proc, spare._log, spare._tmp
+        else:
+            if spare is not None:
+                spare.cleanup()
+            self._spawn()
+        try:
+            return self._ready()
+        finally:
+            if self.spares and 0 in self.want:
+                self._spare = Launcher(self.template, self.host, *self.want)
+                self._spare._spawn()
+
+    def no_spares(self) -> None:
+        self.spares = False
+        if self._spare is not None:
+            spare, self._spare = self._spare, None
+            spare.cleanup()
+
+    def cleanup(self) -> None:
+        """Stop the instance in use and the spare; remove their logs (``start`` takes the spare out first)."""
+        super().cleanup()
+        if self._spare is not None:
+            self._spare.cleanup()
+            self._spare = None
 
 
 class _DataDirTarget(Launched):
