@@ -19,7 +19,7 @@ from pltf.fuzz.inprocess import InProcessCampaign
 from pltf.fuzz.knowledge import Knowledge
 from pltf.fuzz.minimize import ddmin
 from pltf.fuzz.pcapng import Conversation, write_pcapng
-from pltf.fuzz.preludes import StatePlan
+from pltf.fuzz.preludes import REPORTED, StatePlan, path
 from pltf.fuzz.schedule import BIG_CASE, Scheduler
 from pltf.fuzz.wire import CLOSE, KEEP, PARTIAL, Group, Str, classify, forbidden_ids, frame, frame_lie, pack_fields
 from pltf.spec.codec import REQUESTS, decode_frame, encode
@@ -133,9 +133,14 @@ def test_delivery_chunks_rebuild_the_bytes() -> None:
 def test_state_plan_preludes_decode_and_reach_every_state() -> None:
     plan = StatePlan(allow_motion=True)
     assert {name for name, _ in plan.targets} == {"not_connected", "connected", "ready", "running", "breaked"}
-    for target in plan.targets:
-        for f in plan.prelude(target):
-            decode_frame(f, "request")
+    for k, target in enumerate(plan.targets):
+        plan.index = k
+        assert plan.current == target
+        frames = plan.prelude(None, None, frozenset())  # state unknown: the full way there, documents first
+        assert frames[-len(StatePlan.full(target)):] == StatePlan.full(target)
+        for state in (None, *REPORTED):
+            for f in [*frames, *path(state, None, target, frozenset())]:
+                decode_frame(f, "request")
     assert {name for name, _ in StatePlan(allow_motion=False).targets} == {"not_connected", "connected", "ready"}
 
 

@@ -151,7 +151,9 @@ def gateway(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Gateway]:
         gw.stop()
 
 
-@pytest.fixture(scope="session")
+# Package scope: Playwright's sync API keeps an asyncio loop marked running in the main thread while it is open,
+# so later packages' ``asyncio.run`` (pltf replay, pltf proxy) would refuse to start if it stayed open.
+@pytest.fixture(scope="package")
 def browser() -> Iterator[Any]:
     _need_browser()
     with playwright_sync.sync_playwright() as pw:
