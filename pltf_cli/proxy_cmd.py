@@ -15,6 +15,7 @@ import sys
 import time
 from pathlib import Path
 
+from pltf.cli.options import CommandError, count, exit_status, target, target_or_zero
 from pltf.proxy.capture import PcapngWriter
 from pltf.proxy.network import ProxyServer, Route
 from pltf.proxy.offload import RecorderPipe
@@ -24,30 +25,20 @@ from pltf.proxy.view import Selection, View
 from pltf.spec.codec import DEFAULT_MAX_LENGTH
 
 
-def _fail(message: str) -> int:
-    print(f"pltf: error: {message}", file=sys.stderr)
-    return 2
-
-
-def host_port(text: str) -> tuple[str, int]:
-    host, sep, port = text.rpartition(":")
-    if not sep or not host or not port.isdigit() or not 0 <= int(port) < 65536:
-        raise argparse.ArgumentTypeError(f"expected HOST:PORT, got {text!r}")
-    return host.strip("[]"), int(port)
-
-
 def port_pair(text: str) -> tuple[int, int]:
     """``--second LISTEN_PORT[:TARGET_PORT]``: the second port, on the hosts of --listen and --target."""
     parts = text.split(":")
-    if len(parts) not in (1, 2) or not all(p.isdigit() and int(p) < 65536 for p in parts):
-        raise argparse.ArgumentTypeError(f"expected PORT or LISTEN_PORT:TARGET_PORT, got {text!r}")
+    if len(parts) not in (1, 2) or not all(p.isascii() and p.isdigit() and int(p) < 65536 for p in parts) \
+            or int(parts[-1]) == 0:
+        raise argparse.ArgumentTypeError(f"expected PORT or LISTEN_PORT:TARGET_PORT (0..65535, a target port "
+                                         f"1..65535), got {text!r}")
     return int(parts[0]), int(parts[-1])
 
 
 def add_proxy_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--listen", type=host_port, required=True, metavar="HOST:PORT",
+    p.add_argument("--listen", type=target_or_zero, required=True, metavar="HOST:PORT",
                    help="where clients connect (port 0: any free port, printed at start)")
-    p.add_argument("--target", type=host_port, required=True, metavar="HOST:PORT", help="the platform (or server)")
+    p.add_argument("--target", type=target, required=True, metavar="HOST:PORT", help="the platform (or server)")
     p.add_argument("--second", type=port_pair, metavar="LPORT[:TPORT]",
                    help="also proxy a second port: listen on LPORT, forward to TPORT of the target (guide 6.1: 10002)")
     p.add_argument("--record", type=Path, metavar="FILE",
@@ -59,8 +50,10 @@ def add_proxy_arguments(p: argparse.ArgumentParser) -> None:
                    help="do not show these telegrams (e.g. GET_STATUS when a client polls)")
     p.add_argument("--quiet", action="store_true", help="no live view (recording goes on)")
     p.add_argument("--relative-time", action="store_true", help="times in seconds since the proxy started")
-    p.add_argument("--max-length", type=int, default=DEFAULT_MAX_LENGTH, metavar="BYTES",
+    p.add_argument("--max-length", type=count, default=DEFAULT_MAX_LENGTH, metavar="BYTES",
                    help="frames longer than this are marked FrameTooLarge (default 16 MiB, erratum E-WIRE-004)")
+    p.epilog = exit_status(ok="stopped (Ctrl-C or SIGTERM)",
+                           usage="usage error: bad address, --listen's port in use, the recording not writable")
 
 
 def _names(values: list[str]) -> list[str]:
@@ -86,7 +79,7 @@ def run_proxy(args: argparse.Namespace) -> int:
             try:
                 path.open("wb").close()
             except OSError as exc:
-                return _fail(f"cannot write the recording: {path}: {exc.strerror}")
+                raise CommandError(f"cannot write the recording: {path}: {exc.strerror}") from None
 
     def make() -> Recorder:  # in the recorder process
         sinks: list[Sink] = []
@@ -107,7 +100,7 @@ def run_proxy(args: argparse.Namespace) -> int:
         return asyncio.run(_serve(routes, pipe, started))
     except OSError as exc:
         pipe.close(time.time())
-        return _fail(f"cannot listen on {lhost}: {exc.strerror or exc}")
+        raise CommandError(f"cannot listen on {lhost}: {exc.strerror or exc}") from None
 
 
 async def _serve(routes: list[Route], pipe: RecorderPipe, started: float) -> int:

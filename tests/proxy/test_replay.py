@@ -198,5 +198,5 @@ def test_replay_errors_are_one_line(tmp_path: Path, recorded: Path, capsys: pyte
     assert pltf(["replay", str(recorded), "--target", "127.0.0.1:1"]) == 2  # two ports, --second-port missing
     assert pltf(["replay", str(recorded), "--target", "127.0.0.1:1", "--second-port", "2"]) == 2  # nothing there
     err = capsys.readouterr().err.splitlines()
-    assert len(err) == 3 and all(line.startswith("pltf: error: ") for line in err), err
+    assert len(err) == 3 and all(line.startswith("pltf replay: error: ") for line in err), err
     assert "--second-port" in err[1] and "cannot connect" in err[2]
