@@ -34,7 +34,7 @@ async def serve(target: str, listen: str, ini_path: Path | None = None, open_bro
         await site.start()
     except OSError as exc:
         await runner.cleanup()
-        print(f"pltf gui: cannot listen on {listen}: {exc.strerror or exc}", file=sys.stderr)
+        print(f"pltf gui: error: cannot listen on {listen}: {exc.strerror or exc}", file=sys.stderr)
         return 2
     sockets = getattr(site._server, "sockets", None) or []
     bound = sockets[0].getsockname()[1] if sockets else port

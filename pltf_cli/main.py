@@ -101,7 +101,10 @@ def _chosen(argv: Sequence[str]) -> str | None:
 def main(argv: Sequence[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     chosen = _chosen(argv)
-    parser = make_parser(load=[chosen] if chosen in COMMANDS else [])
+    try:
+        parser = make_parser(load=[chosen] if chosen in COMMANDS else [])
+    except ImportError as exc:  # a partial install, or a dependency the command needs is missing
+        return _fail(f"pltf {chosen}", f"cannot load the command: {exc}", USAGE)
     args, extra = parser.parse_known_args(argv)
     prog = parser.commands[args.command].prog
     if extra:

@@ -57,6 +57,11 @@ def parse_host_port(text: str, lowest: int = 1) -> tuple[str, int]:
     return host, number
 
 
+def format_host_port(host: str, port_number: int) -> str:
+    """(host, port) -> ``HOST:PORT``, an IPv6 host in brackets: what ``parse_host_port`` reads back."""
+    return f"[{host}]:{port_number}" if ":" in host else f"{host}:{port_number}"
+
+
 def target(text: str) -> tuple[str, int]:
     """argparse type of ``--target HOST:PORT`` (port 1..65535)."""
     try:

@@ -15,7 +15,7 @@ import sys
 import time
 from pathlib import Path
 
-from pltf.cli.options import CommandError, exit_status, target, target_or_zero
+from pltf.cli.options import CommandError, count, exit_status, target, target_or_zero
 from pltf.proxy.capture import PcapngWriter
 from pltf.proxy.network import ProxyServer, Route
 from pltf.proxy.offload import RecorderPipe
@@ -28,14 +28,14 @@ from pltf.spec.codec import DEFAULT_MAX_LENGTH
 def port_pair(text: str) -> tuple[int, int]:
     """``--second LISTEN_PORT[:TARGET_PORT]``: the second port, on the hosts of --listen and --target."""
     parts = text.split(":")
-    if len(parts) not in (1, 2) or not all(p.isdigit() and int(p) < 65536 for p in parts):
-        raise argparse.ArgumentTypeError(f"expected PORT or LISTEN_PORT:TARGET_PORT, got {text!r}")
+    if len(parts) not in (1, 2) or not all(p.isascii() and p.isdigit() and int(p) < 65536 for p in parts) \
+            or int(parts[-1]) == 0:
+        raise argparse.ArgumentTypeError(f"expected PORT or LISTEN_PORT:TARGET_PORT (0..65535, a target port "
+                                         f"1..65535), got {text!r}")
     return int(parts[0]), int(parts[-1])
 
 
 def add_proxy_arguments(p: argparse.ArgumentParser) -> None:
-    p.epilog = exit_status(ok="stopped by Ctrl-C",
-                           usage="usage error: bad arguments, the listen port in use, an unwritable --record")
     p.add_argument("--listen", type=target_or_zero, required=True, metavar="HOST:PORT",
                    help="where clients connect (port 0: any free port, printed at start)")
     p.add_argument("--target", type=target, required=True, metavar="HOST:PORT", help="the platform (or server)")
@@ -50,8 +50,10 @@ def add_proxy_arguments(p: argparse.ArgumentParser) -> None:
                    help="do not show these telegrams (e.g. GET_STATUS when a client polls)")
     p.add_argument("--quiet", action="store_true", help="no live view (recording goes on)")
     p.add_argument("--relative-time", action="store_true", help="times in seconds since the proxy started")
-    p.add_argument("--max-length", type=int, default=DEFAULT_MAX_LENGTH, metavar="BYTES",
+    p.add_argument("--max-length", type=count, default=DEFAULT_MAX_LENGTH, metavar="BYTES",
                    help="frames longer than this are marked FrameTooLarge (default 16 MiB, erratum E-WIRE-004)")
+    p.epilog = exit_status(ok="stopped (Ctrl-C or SIGTERM)",
+                           usage="usage error: bad address, --listen's port in use, the recording not writable")
 
 
 def _names(values: list[str]) -> list[str]:
@@ -91,25 +93,21 @@ def run_proxy(args: argparse.Namespace) -> int:
         pcapng = PcapngWriter(pcapng_path) if pcapng_path is not None else None
         return Recorder(sinks, pcapng, session, max_length=args.max_length, flushes=flushes)
 
-    pipe = None
-    if not (args.quiet and pcapng_path is None):  # nothing to show or keep: forwarding only, no recorder process
-        pipe = RecorderPipe(make, _summary)
-        sys.stdout.flush()
-        pipe.start()
+    pipe = RecorderPipe(make, _summary)
+    sys.stdout.flush()
+    pipe.start()
     try:
         return asyncio.run(_serve(routes, pipe, started))
     except OSError as exc:
-        if pipe is not None:
-            pipe.close(time.time())
+        pipe.close(time.time())
         raise CommandError(f"cannot listen on {lhost}: {exc.strerror or exc}") from None
 
 
-async def _serve(routes: list[Route], pipe: RecorderPipe | None, started: float) -> int:
+async def _serve(routes: list[Route], pipe: RecorderPipe, started: float) -> int:
     proxy = ProxyServer(routes, pipe)
     listening = await proxy.start()
-    if pipe is not None:
-        pipe.session_start([(f"{h}:{p}", f"{r.target_host}:{r.target_port}")
-                            for r, (h, p) in zip(routes, listening, strict=True)], started)  # fmt: skip
+    pipe.session_start([(f"{h}:{p}", f"{r.target_host}:{r.target_port}")
+                        for r, (h, p) in zip(routes, listening, strict=True)], started)  # fmt: skip
     for route, (host, port) in zip(routes, listening, strict=True):
         print(f"proxy listening at {host}:{port} -> {route.target_host}:{route.target_port}", flush=True)
     loop = asyncio.get_running_loop()
@@ -119,6 +117,4 @@ async def _serve(routes: list[Route], pipe: RecorderPipe | None, started: float)
         await proxy.wait_stopped()
     finally:
         await proxy.close()
-    if pipe is None:
-        print("proxy stopped", file=sys.stderr)
     return 0

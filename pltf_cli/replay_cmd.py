@@ -13,7 +13,7 @@ import sys
 import time
 from pathlib import Path
 
-from pltf.cli.options import CommandError, exit_status, port, positive, target
+from pltf.cli.options import FAILED, CommandError, exit_status, port, positive, target
 from pltf.proxy.replay import counts, judge, plan
 from pltf.proxy.replay_io import Settings, replay
 from pltf.proxy.report import render, write_junit
@@ -21,8 +21,6 @@ from pltf.proxy.session import SessionError, read_session
 
 
 def add_replay_arguments(p: argparse.ArgumentParser) -> None:
-    p.epilog = exit_status(ok="every reply as recorded (within the volatile table)", failed="a reply differs",
-                           usage="usage or connection error: bad arguments, an unreadable session, no target")
     p.add_argument("session", type=Path, help="a session file written by `pltf proxy --record`")
     p.add_argument("--target", type=target, required=True, metavar="HOST:PORT",
                    help="where to replay the session's first port")
@@ -31,6 +29,9 @@ def add_replay_arguments(p: argparse.ArgumentParser) -> None:
                    help="replay X times as fast as recorded (default 1: the recorded timing)")
     p.add_argument("--reply-timeout", type=positive, default=3.0, metavar="S", help="seconds to wait for a reply")
     p.add_argument("--junit", type=Path, metavar="FILE", help="write a JUnit XML report")
+    p.epilog = exit_status(ok="the target answered as recorded", failed="a reply differs from the recorded one",
+                           usage="usage or connection error: an unreadable session file, bad arguments, the "
+                                 "target unreachable")
 
 
 def run_replay(args: argparse.Namespace) -> int:
@@ -41,13 +42,13 @@ def run_replay(args: argparse.Namespace) -> int:
     scripts = plan(session)
     if not scripts:
         raise CommandError(f"{args.session}: no connection to replay")
-    host, first = args.target
-    ports = [first]
+    host, port = args.target
+    ports = [port]
     if len(session.routes) > 1:
         used = {s.route for s in scripts}
         if 1 in used and args.second_port is None:
             raise CommandError(f"the session used two ports ({session.routes[1].target} too): give --second-port")
-        ports.append(args.second_port or first)
+        ports.append(args.second_port or port)
     settings = Settings(host, ports, args.time_scale, args.reply_timeout)
     t0 = time.monotonic()
     outcomes = asyncio.run(replay(scripts, settings))
@@ -61,4 +62,4 @@ def run_replay(args: argparse.Namespace) -> int:
             write_junit(args.junit, differences, scripts, seconds)
         except OSError as exc:
             raise CommandError(f"cannot write {args.junit}: {exc.strerror}") from None
-    return 1 if differences else 0
+    return FAILED if differences else 0

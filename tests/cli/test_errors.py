@@ -1,13 +1,15 @@
 """Every command's error paths, as a table: one line on stderr, ``pltf CMD: error: ...``, the documented status.
 
 Rows run in this process through ``pltf.cli.main.main`` (what the ``pltf`` script calls), except the ``serve``
-rows that get past the parser (a port in use, a data dir that is a file): they would start a server if the
-error were missed, so they run as a subprocess with a timeout; ``serve`` logs to stderr, so there the error is
-its last line and its only error line. Two rows also run through the installed ``pltf`` script itself.
+rows that get past the parser (a port in use, a data dir that is a file), and ``gui``'s and ``proxy``'s with a
+port in use: they would serve if the error were missed, so they run as a subprocess with a timeout; these
+commands log to stderr, so there the error is the last line and the only error line. Two rows also run through
+the installed ``pltf`` script itself.
 """
 
 from __future__ import annotations
 
+import json
 import shlex
 import socket
 import subprocess
@@ -39,10 +41,21 @@ def busy_port() -> Iterator[int]:
         yield int(s.getsockname()[1])
 
 
+SESSION = [  # a pltf proxy recording (proxy/session.py): one connection, one GET_STATUS request
+    {"format": "pltf-session", "version": 1, "started": 0.0,
+     "routes": [{"listen": "127.0.0.1:1", "target": "127.0.0.1:2"}]},
+    {"time": 0.0, "conn": 1, "port": 0, "kind": "open", "detail": ""},
+    {"time": 0.01, "conn": 1, "port": 0, "kind": "frame", "direction": "request", "hex": "ff01fe020000000112"},
+    {"time": 0.02, "conn": 1, "port": 0, "kind": "close", "detail": ""},
+]
+
+
 @pytest.fixture
 def files(tmp_path: Path) -> Path:
     (tmp_path / "bad.xml").write_text("<program><task", encoding="utf-8")
     (tmp_path / "a-file").write_text("not a folder\n", encoding="utf-8")
+    (tmp_path / "bad.jsonl").write_text('{"format": "pltf-session", "version": 1,\n', encoding="utf-8")
+    (tmp_path / "session.jsonl").write_text("".join(json.dumps(line) + "\n" for line in SESSION), encoding="utf-8")
     return tmp_path
 
 
@@ -93,10 +106,30 @@ ROWS = [
     ("serve/port-out-of-range", "serve --ports 70000 --data-dir {tmp}/d", USAGE, "ports must be 0..65535"),
     ("serve/three-ports", "serve --ports 0,0,0 --data-dir {tmp}/d", USAGE, "one or two ports"),
     ("serve/control-port-out-of-range", "serve --control-port 65536 --data-dir {tmp}/d", USAGE, "0..65535"),
+    ("gui/port-out-of-range", "gui --target 127.0.0.1:99999", USAGE, "PORT 1..65535, got '127.0.0.1:99999'"),
+    ("gui/bad-listen", "gui --target 127.0.0.1:{dead} --listen nowhere", USAGE, "got 'nowhere'"),
+    ("gui/bad-reply-timeout", "gui --target 127.0.0.1:{dead} --reply-timeout -1", USAGE, "number > 0"),
+    ("proxy/port-out-of-range", "proxy --listen 127.0.0.1:0 --target 127.0.0.1:99999", USAGE,
+     "PORT 1..65535, got '127.0.0.1:99999'"),
+    ("proxy/bad-second", "proxy --listen 127.0.0.1:0 --target 127.0.0.1:{dead} --second 70000", USAGE,
+     "got '70000'"),
+    ("proxy/unwritable-recording", "proxy --listen 127.0.0.1:0 --target 127.0.0.1:{dead} --record {tmp}/no/s.jsonl",
+     USAGE, "cannot write the recording"),
+    ("replay/unreadable-file", "replay {tmp}/missing.jsonl --target 127.0.0.1:{dead}", USAGE,
+     "No such file or directory"),
+    ("replay/bad-json", "replay {tmp}/bad.jsonl --target 127.0.0.1:{dead}", USAGE, "bad.jsonl:1"),
+    ("replay/nothing-listening", "replay {tmp}/session.jsonl --target 127.0.0.1:{dead} --reply-timeout 2", USAGE,
+     "{dead}"),
+    ("replay/port-out-of-range", "replay {tmp}/session.jsonl --target 127.0.0.1:99999", USAGE, "PORT 1..65535"),
+    ("dissector/unwritable", "dissector --out {tmp}/no/such/pltf.lua", USAGE, "cannot write"),
+    ("dissector/check-missing", "dissector --check {tmp}/missing.lua", USAGE, "no such file"),
 ]
 SERVE_ROWS = [
     ("serve/port-in-use", "serve --ports {busy} --data-dir {tmp}/d --no-hardware", USAGE, "cannot listen"),
     ("serve/data-dir-is-a-file", "serve --ports 0 --data-dir {tmp}/a-file", USAGE, "data dir"),
+    ("gui/listen-port-in-use", "gui --target 127.0.0.1:1 --listen 127.0.0.1:{busy}", USAGE, "cannot listen"),
+    ("proxy/listen-port-in-use", "proxy --listen 127.0.0.1:{busy} --target 127.0.0.1:1 --quiet", USAGE,
+     "cannot listen"),
 ]
 
 
@@ -131,10 +164,10 @@ def test_error_paths(row: str, template: str, status: int, want: str, dead_port:
 
 
 @pytest.mark.parametrize(("row", "template", "status", "want"), SERVE_ROWS, ids=[r[0] for r in SERVE_ROWS])
-def test_serve_error_paths(row: str, template: str, status: int, want: str, busy_port: int, files: Path) -> None:
+def test_server_error_paths(row: str, template: str, status: int, want: str, busy_port: int, files: Path) -> None:
     done = subprocess.run([str(PLTF), *_argv(template, 0, busy_port, files)], cwd=files, capture_output=True,
                           text=True, timeout=120, check=False)
-    _check("serve", status, want, done.returncode, done.stderr, log_before=True)
+    _check(row.partition("/")[0], status, want, done.returncode, done.stderr, log_before=True)
 
 
 @pytest.mark.parametrize("argv", [["fuzz", "--target", "127.0.0.1:99999"], ["decode", "zz"]], ids=["fuzz", "decode"])

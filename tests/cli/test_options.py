@@ -7,7 +7,16 @@ import socket
 
 import pytest
 
-from pltf.cli.options import CommandError, check_listening, count, exit_status, parse_host_port, port, positive
+from pltf.cli.options import (
+    CommandError,
+    check_listening,
+    count,
+    exit_status,
+    format_host_port,
+    parse_host_port,
+    port,
+    positive,
+)
 
 GOOD = [
     ("127.0.0.1:10000", 1, ("127.0.0.1", 10000)),
@@ -61,3 +70,8 @@ def test_check_listening() -> None:
     with pytest.raises(CommandError, match=f"nothing listening on 127.0.0.1:{number}") as info:
         check_listening("127.0.0.1", number, 5.0)
     assert info.value.status == 2
+
+
+@pytest.mark.parametrize(("host", "number"), [("127.0.0.1", 10000), ("::1", 10002), ("platform.local", 1)])
+def test_format_host_port_reads_back(host: str, number: int) -> None:
+    assert parse_host_port(format_host_port(host, number)) == (host, number)
