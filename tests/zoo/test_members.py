@@ -58,17 +58,24 @@ def verdict(run: RunResult, case_id: str) -> tuple[Verdict, str]:
 
 # ---- default tier: the fast subset
 
-# the smoke tier; the slow link (every reply 50-200 ms late) the cases of its concern only
-SUBSET = {"slow-link": "6.2/framing/coalesced or 6.2/types or 6.1/ports/both-serve or 6.1/replies or 6.4/*strict*"}
+# the smoke tier, or the cases of a member's concern (the slow link: every reply 50-200 ms late)
+SUBSET: dict[str, tuple[Tier, str | None]] = {
+    "slow-link": (Tier.SMOKE, "6.2/framing/coalesced or 6.2/types or 6.1/ports/both-serve or 6.1/replies or 6.4/*"),
+    "slow-release": (Tier.STANDARD, "6.1/ports or 6.1/replies or 4.2/chart"),
+    "slow-release-rst": (Tier.STANDARD, "6.1/ports or 6.1/replies or 4.2/chart"),
+}
 
 
 @pytest.mark.parametrize("member", CONFORMING)
 def test_a_conforming_member_passes_the_smoke_tier(member: str) -> None:
     m = MEMBERS[member]
-    run, died = conform(f"zoo:{member}@{BACKEND}", tier=Tier.SMOKE, profile=m.profile, keyword=SUBSET.get(member))
+    tier, keyword = SUBSET.get(member, (Tier.SMOKE, None))
+    run, died = conform(f"zoo:{member}@{BACKEND}", tier=tier, profile=m.profile, keyword=keyword)
     assert not bad(run), "\n".join(bad(run))
     assert run.exit_code == 0 and died is None
     assert run.duration < FIVE_MINUTES
+    if member.startswith("slow-release"):  # turned away with FIN or RST: the decision of E-WIRE-007, strictly
+        assert verdict(run, "6.1/ports/second-client-turned-away")[0] is Verdict.PASS
 
 
 def test_accept_once_reads_as_the_backlog_alternative_never_as_a_failure() -> None:
