@@ -20,7 +20,9 @@ from pltf.conformance_tests.runner import Runner, RunResult
 from pltf.zoo import launch
 from pltf.zoo.members import MEMBERS
 
-SCALE = 10.0
+# the emulator's ideal drive is exact at any time scale; the reference server's motion cases need the machine's
+# attention (a stop must land inside a 600 mm move): a loaded 2-core machine keeps up at 5, not always at 10
+SCALE = {"emulator": 10.0, "reference": 5.0}
 FIVE_MINUTES = 300.0
 BACKEND = "emulator" if launch.emulator_binary() is not None else "reference"
 CONFORMING = [m.name for m in MEMBERS.values() if m.conforming]
@@ -34,11 +36,13 @@ def conform(kind: str, *, tier: Tier = Tier.STANDARD, profile: str = "strict", k
     status when it died during the run (None when it was still alive)."""
     if kind.startswith("zoo:"):
         member, _, upstream = kind[4:].partition("@")
-        target = launch.zoo(member, upstream=upstream or "reference", time_scale=SCALE, extra=extra)
+        scale = SCALE[upstream or "reference"]
+        target = launch.zoo(member, upstream=upstream or "reference", time_scale=scale, extra=extra)
     else:
-        target = launch.target(kind, time_scale=SCALE)
+        scale = SCALE[kind]
+        target = launch.target(kind, time_scale=scale)
     with target:
-        config = Config("127.0.0.1", target.ports[0], target.ports[1], time_scale=SCALE, simulator=True,
+        config = Config("127.0.0.1", target.ports[0], target.ports[1], time_scale=scale, simulator=True,
                         profile=profile, tier=tier)
         config.run_budget = pace.run_budget(config)
         run = Runner(config, select(load_all().values(), tier=tier, keyword=keyword)).run()
