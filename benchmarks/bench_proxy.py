@@ -33,7 +33,7 @@ from pltf.proxy.dissector import OUTPUT as DISSECTOR
 from pltf.spec.codec import REPLIES, REQUESTS, decode_frame, encode
 
 ROOT = Path(__file__).resolve().parents[1]
-DIRECT, PROXIED = "direct", "pltf proxy (recording)"
+DIRECT, PROXIED, FORWARDING = "direct", "pltf proxy (recording)", "pltf proxy --quiet (forwarding only)"
 TSHARK_PLAIN, TSHARK_PLTF = "tshark (TCP only)", "tshark + pltf.lua"
 LATENCY_TARGET = 1.5  # time ratio at p50
 RATE_TARGET = 2.0  # time ratio: >= 50 % of the direct rate
@@ -68,9 +68,9 @@ def _server(tmp: Path) -> Iterator[list[int]]:
 
 
 @contextmanager
-def _proxy(target_port: int, tmp: Path) -> Iterator[int]:
+def _proxy(target_port: int, tmp: Path, record: bool = True) -> Iterator[int]:
     cmd = [sys.executable, "-m", "pltf.cli.main", "proxy", "--listen", "127.0.0.1:0", "--target",
-           f"127.0.0.1:{target_port}", "--quiet", "--record", str(tmp / "session.jsonl")]  # fmt: skip
+           f"127.0.0.1:{target_port}", "--quiet"] + (["--record", str(tmp / "session.jsonl")] if record else [])
     proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
     try:
         assert proc.stdout is not None
@@ -149,15 +149,16 @@ def get_position(config: Config) -> list[Row]:
     """GET_POSITION round trips through `pltf proxy` (recording) vs direct: latency, sequential and pipelined rate."""
     n = 300 if config.quick else 5000
     batches = 5 if config.quick else 100
-    runs: dict[str, list[list[float]]] = {DIRECT: [], PROXIED: []}
-    piped: dict[str, list[float]] = {DIRECT: [], PROXIED: []}
+    runs: dict[str, list[list[float]]] = {DIRECT: [], PROXIED: [], FORWARDING: []}
+    piped: dict[str, list[float]] = {DIRECT: [], PROXIED: [], FORWARDING: []}
     with tempfile.TemporaryDirectory() as tmp_name:
         tmp = Path(tmp_name)
-        with _server(tmp) as ports, _proxy(ports[1], tmp) as proxy_port:
+        with _server(tmp) as ports, _proxy(ports[1], tmp) as proxy_port, _proxy(ports[0], tmp, False) as bare_port:
             with _connect(proxy_port) as sock:  # the proxy passes a real GET_POSITION reply
                 sock.sendall(REQUEST)
                 assert decode_frame(_read(sock, len(REPLY)), "reply").NAME == "CMD_GET_POSITION"
-            port_of = {DIRECT: ports[0], PROXIED: proxy_port}
+            # the forwarding-only proxy shares the first port with the direct connection (one client at a time)
+            port_of = {DIRECT: ports[0], PROXIED: proxy_port, FORWARDING: bare_port}
             for port in port_of.values():  # warm-up
                 _round_trips(port, n // 10)
             for _ in range(config.repeats):
@@ -182,7 +183,11 @@ def get_position(config: Config) -> list[Row]:
         make_row(bench, PROXIED, "pipelined_rate", pip[PROXIED], "telegrams/s", higher_is_better=True,
                  baseline_subject=DIRECT, baseline_value=pip[DIRECT], target=Target("ratio", "<=", RATE_TARGET)),
         make_row(bench, DIRECT, "pipelined_rate", pip[DIRECT], "telegrams/s", higher_is_better=True),
-    ]  # fmt: skip
+    ] + [make_row(bench, FORWARDING, metric, values[FORWARDING], unit, higher_is_better=higher, baseline_subject=DIRECT,
+                  baseline_value=values[DIRECT])
+         for metric, values, unit, higher in (("latency_p50", p50, "ms", False), ("latency_p99", p99, "ms", False),
+                                             ("round_trip_rate", seq, "1/s", True),
+                                             ("pipelined_rate", pip, "telegrams/s", True))]  # fmt: skip
 
 
 # ---------------------------------------------------------------------------------------------- tshark

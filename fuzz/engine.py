@@ -74,7 +74,7 @@ class Options:
     max_findings: int | None = None
     deadline: float = 2.0
     minimize_seconds: float = 60.0
-    probe_every: int = 1  # kept for the command line: every unit opens with the liveness probe now
+    probe_every: int = 4  # after the warm-up, one unit in so many on a port keeps its lead (1: every unit; fuzz.lanes)
     lanes: int = 2  # 2: units run in two lanes, one per port (fuzz.lanes); 1: one at a time on --target's port
     big_share: float = BIG_SHARE  # of the cases over 1 MiB drawn that are kept (fuzz.schedule; 1: natural mix)
     pipeline: bool = True  # a port's next small unit connects while its previous one is in flight (fuzz.gate)
@@ -159,7 +159,8 @@ class Campaign:
         if self.lanes is not None:
             self.not_admitted_before += sum(g.turn_aways for g in self.lanes.gates)
         pipelining = self.o.pipeline and self.o.lanes > 1
-        self.lanes = lanes = Lanes(self.o.host, self.ports, self.o.deadline, pipelining, active=self.o.lanes)
+        self.lanes = lanes = Lanes(self.o.host, self.ports, self.o.deadline, pipelining, active=self.o.lanes,
+                                   lead_every=self.o.probe_every)
         status = Unit([], [])
         for k in range(len(self.ports)):
             for _ in range(MEASURE if k < self.o.lanes else 1):

@@ -62,7 +62,7 @@ FlightFactory = Callable[..., Flight]
 class Lanes:
     def __init__(self, host: str, ports: tuple[int, ...], deadline: float, pipelining: bool = True,
                  patience: float | None = None, connect: FlightFactory = Flight,
-                 active: int | None = None) -> None:  # fmt: skip
+                 active: int | None = None, lead_every: int = LEAD_EVERY) -> None:  # fmt: skip
         """``active``: how many of the ports carry units (the first ones; the others only replays and checks)."""
         self.host, self.ports, self.deadline = host, ports, deadline
         self.connect = connect
@@ -75,6 +75,7 @@ class Lanes:
         self.unled = False  # units that owe nothing may go without the lead (``WARMUP``)
         self.unled_ever_off = False  # a newcomer was turned away: every unit keeps its lead for good
         self.since_lead = [0] * len(ports)
+        self.lead_every = max(1, lead_every)
         self.flights: list[collections.deque[InFlight]] = [collections.deque() for _ in ports]
         self.todo: collections.deque[Unit] = collections.deque()
         self.recent: collections.deque[InFlight] = collections.deque(maxlen=RECENT)
@@ -180,7 +181,7 @@ class Lanes:
         if not fresh:
             return False
         self.since_lead[k] += 1
-        if not self.unled or unit.keep or unit.tries or not unit.whole or self.since_lead[k] >= LEAD_EVERY:
+        if not self.unled or unit.keep or unit.tries or not unit.whole or self.since_lead[k] >= self.lead_every:
             self.since_lead[k] = 0
             return True
         return False

@@ -43,12 +43,14 @@ def add_fuzz_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--minimize-seconds", type=positive, default=60.0, metavar="SECONDS",
                    help="time budget of one delta debugging (default 60)")
     p.add_argument("--probe-every", type=int, default=4, metavar="UNITS",
-                   help="units between GET_STATUS liveness probes on the other port (1: after every unit)")  # fmt: skip
+                   help="every case opens with a request whose answer proves the target served it (the liveness "
+                        "probe); once 256 were served and none turned away, one case in UNITS of those that owe no "
+                        "answer keeps it (1: every case)")  # fmt: skip
     p.add_argument("--lanes", type=int, choices=(1, 2), default=2,
-                   help="2: refused cases run in pairs, one per port; 1: one at a time on --target's port")  # fmt: skip
+                   help="2: cases run on both ports at once; 1: one at a time on --target's port")  # fmt: skip
     p.add_argument("--no-pipeline", action="store_true",
                    help="connect a port's next case only after the target closed the last one (default: up to 3 "
-                        "small cases wait behind it, when the target takes clients back to back)")  # fmt: skip
+                        "small cases wait behind it while the target serves them in turn)")  # fmt: skip
     p.add_argument("--big-share", type=_share, default=None, metavar="FRACTION",
                    help="of the cases over 1 MiB drawn, the share kept (default 0.25; 1: the natural mix)")  # fmt: skip
     p.add_argument("--quiet", action="store_true", help="no live view")

@@ -5,14 +5,16 @@ from __future__ import annotations
 import argparse
 import asyncio
 import logging
-import sys
 from pathlib import Path
 
+from pltf.cli.options import CommandError, exit_status
 from pltf.gui.link import parse_target
 from pltf.gui.serve import parse_listen, serve
 
 
 def add_gui_arguments(p: argparse.ArgumentParser) -> None:
+    p.epilog = exit_status(ok="stopped by Ctrl-C",
+                           usage="usage error: bad --target or --listen, the listen port in use")
     p.add_argument("--target", required=True, metavar="HOST:PORT", help="the platform (one of its two ports)")
     p.add_argument("--listen", default="127.0.0.1:8080", metavar="HOST:PORT",
                    help="where the GUI is served (default 127.0.0.1:8080; port 0: any free port)")
@@ -28,7 +30,6 @@ def run_gui(args: argparse.Namespace) -> int:
         parse_target(args.target)
         parse_listen(args.listen)
     except ValueError as exc:
-        print(f"pltf gui: {exc}", file=sys.stderr)
-        return 2
+        raise CommandError(str(exc)) from None
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)-7s %(message)s")
     return asyncio.run(serve(args.target, args.listen, args.network_ini, args.open, args.reply_timeout))

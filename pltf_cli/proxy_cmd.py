@@ -15,6 +15,7 @@ import sys
 import time
 from pathlib import Path
 
+from pltf.cli.options import CommandError, exit_status, target, target_or_zero
 from pltf.proxy.capture import PcapngWriter
 from pltf.proxy.network import ProxyServer, Route
 from pltf.proxy.offload import RecorderPipe
@@ -22,18 +23,6 @@ from pltf.proxy.recorder import Recorder, Sink
 from pltf.proxy.session import SessionWriter
 from pltf.proxy.view import Selection, View
 from pltf.spec.codec import DEFAULT_MAX_LENGTH
-
-
-def _fail(message: str) -> int:
-    print(f"pltf: error: {message}", file=sys.stderr)
-    return 2
-
-
-def host_port(text: str) -> tuple[str, int]:
-    host, sep, port = text.rpartition(":")
-    if not sep or not host or not port.isdigit() or not 0 <= int(port) < 65536:
-        raise argparse.ArgumentTypeError(f"expected HOST:PORT, got {text!r}")
-    return host.strip("[]"), int(port)
 
 
 def port_pair(text: str) -> tuple[int, int]:
@@ -45,9 +34,11 @@ def port_pair(text: str) -> tuple[int, int]:
 
 
 def add_proxy_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--listen", type=host_port, required=True, metavar="HOST:PORT",
+    p.epilog = exit_status(ok="stopped by Ctrl-C",
+                           usage="usage error: bad arguments, the listen port in use, an unwritable --record")
+    p.add_argument("--listen", type=target_or_zero, required=True, metavar="HOST:PORT",
                    help="where clients connect (port 0: any free port, printed at start)")
-    p.add_argument("--target", type=host_port, required=True, metavar="HOST:PORT", help="the platform (or server)")
+    p.add_argument("--target", type=target, required=True, metavar="HOST:PORT", help="the platform (or server)")
     p.add_argument("--second", type=port_pair, metavar="LPORT[:TPORT]",
                    help="also proxy a second port: listen on LPORT, forward to TPORT of the target (guide 6.1: 10002)")
     p.add_argument("--record", type=Path, metavar="FILE",
@@ -86,7 +77,7 @@ def run_proxy(args: argparse.Namespace) -> int:
             try:
                 path.open("wb").close()
             except OSError as exc:
-                return _fail(f"cannot write the recording: {path}: {exc.strerror}")
+                raise CommandError(f"cannot write the recording: {path}: {exc.strerror}") from None
 
     def make() -> Recorder:  # in the recorder process
         sinks: list[Sink] = []
@@ -100,21 +91,25 @@ def run_proxy(args: argparse.Namespace) -> int:
         pcapng = PcapngWriter(pcapng_path) if pcapng_path is not None else None
         return Recorder(sinks, pcapng, session, max_length=args.max_length, flushes=flushes)
 
-    pipe = RecorderPipe(make, _summary)
-    sys.stdout.flush()
-    pipe.start()
+    pipe = None
+    if not (args.quiet and pcapng_path is None):  # nothing to show or keep: forwarding only, no recorder process
+        pipe = RecorderPipe(make, _summary)
+        sys.stdout.flush()
+        pipe.start()
     try:
         return asyncio.run(_serve(routes, pipe, started))
     except OSError as exc:
-        pipe.close(time.time())
-        return _fail(f"cannot listen on {lhost}: {exc.strerror or exc}")
+        if pipe is not None:
+            pipe.close(time.time())
+        raise CommandError(f"cannot listen on {lhost}: {exc.strerror or exc}") from None
 
 
-async def _serve(routes: list[Route], pipe: RecorderPipe, started: float) -> int:
+async def _serve(routes: list[Route], pipe: RecorderPipe | None, started: float) -> int:
     proxy = ProxyServer(routes, pipe)
     listening = await proxy.start()
-    pipe.session_start([(f"{h}:{p}", f"{r.target_host}:{r.target_port}")
-                        for r, (h, p) in zip(routes, listening, strict=True)], started)  # fmt: skip
+    if pipe is not None:
+        pipe.session_start([(f"{h}:{p}", f"{r.target_host}:{r.target_port}")
+                            for r, (h, p) in zip(routes, listening, strict=True)], started)  # fmt: skip
     for route, (host, port) in zip(routes, listening, strict=True):
         print(f"proxy listening at {host}:{port} -> {route.target_host}:{route.target_port}", flush=True)
     loop = asyncio.get_running_loop()
@@ -124,4 +119,6 @@ async def _serve(routes: list[Route], pipe: RecorderPipe, started: float) -> int
         await proxy.wait_stopped()
     finally:
         await proxy.close()
+    if pipe is None:
+        print("proxy stopped", file=sys.stderr)
     return 0

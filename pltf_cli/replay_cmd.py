@@ -13,42 +13,23 @@ import sys
 import time
 from pathlib import Path
 
-from pltf.cli.proxy_cmd import host_port
+from pltf.cli.options import CommandError, exit_status, port, positive, target
 from pltf.proxy.replay import counts, judge, plan
 from pltf.proxy.replay_io import Settings, replay
 from pltf.proxy.report import render, write_junit
 from pltf.proxy.session import SessionError, read_session
 
 
-def _fail(message: str) -> int:
-    print(f"pltf: error: {message}", file=sys.stderr)
-    return 2
-
-
-def _positive(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not 0 < value < float("inf"):
-        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text!r}")
-    return value
-
-
-def _port(text: str) -> int:
-    if not text.isdigit() or not 0 < int(text) < 65536:
-        raise argparse.ArgumentTypeError(f"expected a port number, got {text!r}")
-    return int(text)
-
-
 def add_replay_arguments(p: argparse.ArgumentParser) -> None:
+    p.epilog = exit_status(ok="every reply as recorded (within the volatile table)", failed="a reply differs",
+                           usage="usage or connection error: bad arguments, an unreadable session, no target")
     p.add_argument("session", type=Path, help="a session file written by `pltf proxy --record`")
-    p.add_argument("--target", type=host_port, required=True, metavar="HOST:PORT",
+    p.add_argument("--target", type=target, required=True, metavar="HOST:PORT",
                    help="where to replay the session's first port")
-    p.add_argument("--second-port", type=_port, metavar="PORT", help="where to replay its second port (if it has one)")
-    p.add_argument("--time-scale", type=_positive, default=1.0, metavar="X",
+    p.add_argument("--second-port", type=port, metavar="PORT", help="where to replay its second port (if it has one)")
+    p.add_argument("--time-scale", type=positive, default=1.0, metavar="X",
                    help="replay X times as fast as recorded (default 1: the recorded timing)")
-    p.add_argument("--reply-timeout", type=_positive, default=3.0, metavar="S", help="seconds to wait for a reply")
+    p.add_argument("--reply-timeout", type=positive, default=3.0, metavar="S", help="seconds to wait for a reply")
     p.add_argument("--junit", type=Path, metavar="FILE", help="write a JUnit XML report")
 
 
@@ -56,28 +37,28 @@ def run_replay(args: argparse.Namespace) -> int:
     try:
         session = read_session(args.session)
     except SessionError as exc:
-        return _fail(str(exc))
+        raise CommandError(str(exc)) from None
     scripts = plan(session)
     if not scripts:
-        return _fail(f"{args.session}: no connection to replay")
-    host, port = args.target
-    ports = [port]
+        raise CommandError(f"{args.session}: no connection to replay")
+    host, first = args.target
+    ports = [first]
     if len(session.routes) > 1:
         used = {s.route for s in scripts}
         if 1 in used and args.second_port is None:
-            return _fail(f"the session used two ports ({session.routes[1].target} too): give --second-port")
-        ports.append(args.second_port or port)
+            raise CommandError(f"the session used two ports ({session.routes[1].target} too): give --second-port")
+        ports.append(args.second_port or first)
     settings = Settings(host, ports, args.time_scale, args.reply_timeout)
     t0 = time.monotonic()
     outcomes = asyncio.run(replay(scripts, settings))
     seconds = time.monotonic() - t0
     if all(o.error is not None for o in outcomes.values()):
-        return _fail(next(iter(outcomes.values())).error or "no connection")
+        raise CommandError(next(iter(outcomes.values())).error or "no connection")
     differences = judge(scripts, outcomes)
     sys.stdout.write(render(differences, counts(scripts, outcomes)))
     if args.junit is not None:
         try:
             write_junit(args.junit, differences, scripts, seconds)
         except OSError as exc:
-            return _fail(f"cannot write {args.junit}: {exc.strerror}")
+            raise CommandError(f"cannot write {args.junit}: {exc.strerror}") from None
     return 1 if differences else 0

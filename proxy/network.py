@@ -12,7 +12,9 @@ Rules:
   (half-close); a reset becomes a reset (SO_LINGER 0). When both directions have ended, or one side is gone,
   both sockets close. A target that cannot be reached closes the client at once.
 - One client connection, one target connection, on the route it arrived on; the proxy adds no policy of its
-  own (a second client on a busy port is the target's to turn away, guide 6.1).
+  own (a second client on a busy port is the target's to turn away, guide 6.1). When the target refuses a
+  connection (its port no longer listens: CMD_EXIT, a restart), the proxy stops listening on that route too
+  and listens again once the target accepts a probe (every ``PROBE_EVERY`` s): a client sees the port as it is.
 - The proxy never dies of what passes through it: the observer is handed bytes after they are forwarded;
   should it fail, the failure is reported once and recording stops while forwarding goes on.
 """
@@ -36,6 +38,7 @@ READ_SIZE = 65536
 HIGH_WATER = 1 << 20  # bytes waiting for a side above which reading from the other side pauses
 LOW_WATER = 1 << 18
 BACKLOG = 100
+PROBE_EVERY = 0.5  # s between probes of a target that refused a connection
 _LINGER_RESET = struct.pack("ii", 1, 0)
 
 
@@ -81,6 +84,8 @@ class _Conn:
                                (r.target_host, r.target_port))  # fmt: skip
             self._end(f"by proxy (target unreachable: {exc.strerror or exc})")
             self._close_all()
+            if isinstance(exc, ConnectionRefusedError):
+                self.proxy.target_refused(r)
             return
         _nodelay(sock)
         self.socks[False] = sock
@@ -232,7 +237,7 @@ class ProxyServer:
         self.conns: set[_Conn] = set()
         self.tasks: set[asyncio.Task[Any]] = set()
         self.listening: list[tuple[str, int]] = []
-        self._listeners: list[socket.socket] = []
+        self._listeners: dict[Route, socket.socket] = {}
         self._numbers = itertools.count(1)
         self._stopped = asyncio.Event()
         self.loop = asyncio.get_running_loop()
@@ -250,14 +255,39 @@ class ProxyServer:
 
     async def start(self) -> list[tuple[str, int]]:
         for route in self.routes:
-            sock = socket.create_server((route.listen_host, route.listen_port), backlog=BACKLOG)
-            sock.setblocking(False)
-            self._listeners.append(sock)
-            self.loop.add_reader(sock, self._accept, sock, route)
-            host, port = sock.getsockname()[:2]
-            self.listening.append((host, port))
+            sock = self._listen(route, route.listen_port)
+            self.listening.append(sock.getsockname()[:2])
         self._spawn(self._flusher())
         return self.listening
+
+    def _listen(self, route: Route, port: int) -> socket.socket:
+        sock = socket.create_server((route.listen_host, port), backlog=BACKLOG)
+        sock.setblocking(False)
+        self._listeners[route] = sock
+        self.loop.add_reader(sock, self._accept, sock, route)
+        return sock
+
+    def target_refused(self, route: Route) -> None:
+        """The target's port does not listen: neither does ours, until a probe finds it listening again."""
+        sock = self._listeners.pop(route, None)
+        if sock is None or self._stopped.is_set():
+            return
+        port = sock.getsockname()[1]
+        self.loop.remove_reader(sock)
+        sock.close()
+        self._spawn(self._relisten(route, port))
+
+    async def _relisten(self, route: Route, port: int) -> None:
+        while not self._stopped.is_set():
+            await asyncio.sleep(PROBE_EVERY)
+            try:
+                _, writer = await asyncio.open_connection(route.target_host, route.target_port)
+            except OSError:
+                continue
+            writer.close()
+            with contextlib.suppress(OSError):
+                self._listen(route, port)
+                return
 
     def _spawn(self, coro: Any) -> None:
         task = self.loop.create_task(coro)
@@ -296,9 +326,11 @@ class ProxyServer:
         self._stopped.set()
 
     async def close(self) -> None:
-        for sock in self._listeners:
+        self._stopped.set()
+        for sock in self._listeners.values():
             self.loop.remove_reader(sock)
             sock.close()
+        self._listeners.clear()
         for conn in list(self.conns):
             conn.stop()
         for task in list(self.tasks):

@@ -4,7 +4,9 @@ Sans-IO: replay_io.py does the sending and hands back an ``Outcome`` per connect
 Rules:
 - A connection is replayed on the route it was recorded on (the order of the session header's routes), as a
   client of its own. It opens at its recorded time (scaled), but never before the connections that had closed
-  on its port before it opened in the recording have closed in the replay (guide 6.1: one client per port).
+  before it opened in the recording have closed in the replay: on its own port because the target takes one
+  client per port (guide 6.1), on the other because both ports drive the same platform (what the one did, the
+  other saw).
 - Requests are sent as recorded, byte for byte (malformed ones too), each frame whole. A request waits for the
   replies that had arrived before it in the recording, then for its recorded gap after the later of those
   replies and the previous request, divided by the time scale: a client that waited for a reply still does.
@@ -79,7 +81,7 @@ class Script:
     route: int  # index of the session's route (0: first port, 1: second)
     port: int  # the recorded target port
     start: float  # recorded seconds since the session began
-    after_closes: list[int] = field(default_factory=list)  # connections that must be closed first
+    after_closes: list[int] = field(default_factory=list)  # connections (either port) that must be closed first
     steps: list[Step] = field(default_factory=list)
     waits: dict[int, Wait] = field(default_factory=dict)
     unsolicited: list[Record] = field(default_factory=list)  # recorded replies no request asked for
@@ -194,7 +196,7 @@ def plan(session: Session) -> list[Script]:
         scripts.append(_script(conn, records, route_of.get(records[0].port, 0), t0))
     scripts.sort(key=lambda s: s.start)
     for s in scripts:
-        s.after_closes = [o.conn for o in scripts if o.route == s.route and o is not s and o.last_time <= s.start]
+        s.after_closes = [o.conn for o in scripts if o is not s and o.last_time <= s.start]
     return scripts
 
 

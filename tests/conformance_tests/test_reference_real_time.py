@@ -11,14 +11,15 @@ import pytest
 
 from pltf.conformance_tests.catalogue import Tier, Verdict, load_all, select
 from pltf.conformance_tests.context import Config
-from pltf.conformance_tests.launch import ServerProcess
 from pltf.conformance_tests.mutants.matrix import NOT_ON_REFERENCE
 from pltf.conformance_tests.runner import Runner, RunResult
+from pltf.zoo import launch
+from pltf.zoo.launch import Launched
 
 pytestmark = pytest.mark.slow
 
 
-def run_against(server: ServerProcess, keyword: str | None = None) -> RunResult:
+def run_against(server: Launched, keyword: str | None = None) -> RunResult:
     """The standard tier (or its cases matching ``keyword``) at time scale 1; the whole tier ends with CMD_EXIT."""
     config = Config("127.0.0.1", server.ports[0], server.ports[1], time_scale=1.0, simulator=True,
                     allow_shutdown=keyword is None, keyword=keyword)  # fmt: skip
@@ -32,7 +33,7 @@ def not_passed(run: RunResult) -> list[str]:
 
 @pytest.mark.timeout(600)
 def test_the_platform_restarted_after_a_shutdown_does_not_move_three_times_in_a_row() -> None:
-    with ServerProcess(time_scale=1.0) as server:
+    with launch.reference(time_scale=1.0) as server:
         for i in range(3):
             run = run_against(server, "CMD_SHUTDOWN_PLTF/halts-motion")
             assert [r.case.id for r in run.results] == ["6.3/CMD_SHUTDOWN_PLTF/halts-motion"]
@@ -41,7 +42,7 @@ def test_the_platform_restarted_after_a_shutdown_does_not_move_three_times_in_a_
 
 @pytest.mark.timeout(1800)
 def test_the_standard_tier_passes_the_reference_server_at_time_scale_1() -> None:
-    with ServerProcess(time_scale=1.0) as server:
+    with launch.reference(time_scale=1.0) as server:
         run = run_against(server)
     assert not not_passed(run), "\n".join(not_passed(run))
     assert run.exit_code == 0 and len(run.results) >= 180

@@ -19,7 +19,8 @@ from pltf.fuzz.inprocess import InProcessCampaign
 from pltf.fuzz.knowledge import Knowledge
 from pltf.fuzz.minimize import ddmin
 from pltf.fuzz.pcapng import Conversation, write_pcapng
-from pltf.fuzz.schedule import BIG_CASE, Scheduler, StatePlan
+from pltf.fuzz.preludes import StatePlan
+from pltf.fuzz.schedule import BIG_CASE, Scheduler
 from pltf.fuzz.wire import CLOSE, KEEP, PARTIAL, Group, Str, classify, forbidden_ids, frame, frame_lie, pack_fields
 from pltf.spec.codec import REQUESTS, decode_frame, encode
 from pltf.spec.documents import validate_document

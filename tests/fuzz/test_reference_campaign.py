@@ -29,15 +29,17 @@ def options(tmp_path: Path, **changes: object) -> Options:
 
 
 def test_short_campaign_reaches_every_state_and_finds_nothing(tmp_path: Path) -> None:
-    c = Campaign(options(tmp_path, duration=8.0))
+    """6,000 cases: 24 windows, four per (state, mode) of the plan, the first five of which are the five states."""
+    c = Campaign(options(tmp_path, duration=120.0, max_cases=6000))
     code = c.run()
     assert code == 0, c.stats.findings
+    assert not c.stats.unconfirmed, c.stats.unconfirmed
     names = {s for s, _ in c.stats.states}
     assert names >= {"not_connected", "connected", "ready", "running", "breaked"}, c.stats.states
-    assert c.stats.cases > 2000
+    assert c.stats.cases >= 6000
     # the reference server reads a leaving client's last bytes before it judges the next (E-WIRE-007): every port
     # takes clients back to back, so the fuzzer pipelines and never has to run a unit again
-    assert c.stats.pipelined > 1000 and (c.stats.retried, c.stats.turn_aways) == (0, 0)
+    assert c.stats.pipelined > 1000 and (c.stats.not_admitted, c.stats.turn_aways) == (0, 0)
 
 
 def free_ports() -> tuple[int, int]:

@@ -28,4 +28,4 @@ def test_pltf_gui_refuses_a_bad_target_in_one_line() -> None:
     out = subprocess.run([sys.executable, "-m", "pltf.cli.main", "gui", "--target", "nowhere"],
                          capture_output=True, text=True, check=False, cwd=REPO, timeout=60)  # fmt: skip
     assert out.returncode == 2
-    assert out.stderr.strip() == "pltf gui: expected HOST:PORT with a port 1..65535, got 'nowhere'"
+    assert out.stderr.strip() == "pltf gui: error: expected HOST:PORT with a port 1..65535, got 'nowhere'"

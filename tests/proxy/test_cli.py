@@ -31,5 +31,5 @@ def test_user_errors_are_one_line(args: list[str], message: str) -> None:
 def test_a_port_in_use_is_one_line() -> None:
     with socket.create_server(("127.0.0.1", 0)) as busy:
         proc = _pltf("proxy", "--listen", f"127.0.0.1:{busy.getsockname()[1]}", "--target", "127.0.0.1:1", "--quiet")
-    assert proc.returncode == 2 and "pltf: error: cannot listen on 127.0.0.1" in proc.stderr, proc.stderr
+    assert proc.returncode == 2 and "pltf proxy: error: cannot listen on 127.0.0.1" in proc.stderr, proc.stderr
     assert "Traceback" not in proc.stderr

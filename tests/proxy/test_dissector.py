@@ -93,7 +93,7 @@ def test_check_names_a_stale_copy(tmp_path: Path, capsys: pytest.CaptureFixture[
     assert pltf(["dissector", "--check", str(out)]) == 0
     assert pltf(["dissector", "--out", str(tmp_path / "no" / "such" / "dir.lua")]) == 2
     err = capsys.readouterr().err
-    assert err.startswith("pltf: error: cannot write") and err.count("\n") == 1
+    assert err.startswith("pltf dissector: error: cannot write") and err.count("\n") == 1
 
 
 def test_field_names_are_unique_and_cover_every_field() -> None:

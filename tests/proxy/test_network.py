@@ -153,3 +153,41 @@ def test_garbage_and_abrupt_clients_do_not_stop_the_proxy() -> None:
     assert sum(r.kind == OPEN for r in recs) == 61
     assert any(r.error and r.error.startswith("FrameTooLarge") for r in recs)
     assert [r.name for r in recs if r.kind == FRAME and r.direction == "request"][-1] == "CMD_STOP"
+
+
+def _refused(port: int, within: float) -> bool:
+    deadline = time.monotonic() + within
+    while time.monotonic() < deadline:
+        try:
+            socket.create_connection(("127.0.0.1", port), timeout=1).close()
+        except ConnectionRefusedError:
+            return True
+        time.sleep(0.05)
+    return False
+
+
+def test_while_the_target_does_not_listen_neither_does_the_proxy() -> None:
+    """CMD_EXIT: 'the ports stop listening' - seen through the proxy too; and it listens again with the target."""
+    s = socket.create_server(("127.0.0.1", 0))
+    port = s.getsockname()[1]
+    s.close()
+    with ProxyThread([port]) as proxy:
+        assert _refused(proxy.ports[0], 5.0), "the proxy still takes connections for a target that refuses them"
+        back = socket.create_server(("127.0.0.1", port))
+        back.settimeout(5)
+        deadline = time.monotonic() + 5
+        while True:
+            try:
+                c = socket.create_connection(("127.0.0.1", proxy.ports[0]), timeout=1)
+                break
+            except ConnectionRefusedError:
+                assert time.monotonic() < deadline, "the proxy did not listen again"
+                time.sleep(0.1)
+        with c:
+            conn, _ = back.accept()  # the proxy's probe first, then the client's own connection
+            conn.close()
+            conn, _ = back.accept()
+            c.sendall(STOP)
+            assert read_exactly(conn, len(STOP)) == STOP
+            conn.close()
+        back.close()
