@@ -183,7 +183,7 @@ class Runner:
             budget = self.config.run_budget
             for c in self.cases:
                 self._emit("on_case_start", c)
-                if budget is not None and time.monotonic() - t0 > budget:
+                if budget is not None and time.monotonic() - t0 > budget and not self._gate(c):
                     result = CaseResult(c, Verdict.INCONCLUSIVE, f"not run: the run's budget of {budget:g} s is spent "
                                                                  "(--budget)")
                 else:

@@ -20,7 +20,7 @@ import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 import can
 import pytest
@@ -39,6 +39,10 @@ from pltf.spec.telegram import Telegram
 from tests.reference_server.helpers import REPO, wait_for
 
 TIME_SCALE = 20.0
+S = TypeVar("S", bound="ServerThread")
+
+if TYPE_CHECKING:  # the scenario servers import this module (at run time the fixtures import them)
+    from tests.reference_server.world.scenarios import SteppedServer, WorldServer
 
 
 class ServerThread:
@@ -192,6 +196,39 @@ def data_dir(tmp_path: Path) -> Path:
 @pytest.fixture
 def server(data_dir: Path) -> Iterator[ServerThread]:
     srv = ServerThread(data_dir).start()
+    try:
+        yield srv
+    finally:
+        srv.stop()
+
+
+# ---- the scenario tests' servers (test_scenarios_*.py): the world as motion model, over real TCP
+@pytest.fixture
+def world_server(data_dir: Path) -> Iterator[WorldServer]:
+    """Free running at the scenarios' accelerated time scale."""
+    from tests.reference_server.world.scenarios import WorldServer
+
+    yield from _running(WorldServer(data_dir))
+
+
+@pytest.fixture
+def stepped_server(data_dir: Path) -> Iterator[SteppedServer]:
+    """Simulated time moves only when the test advances it (control periods)."""
+    from tests.reference_server.world.scenarios import SteppedServer
+
+    yield from _running(SteppedServer(data_dir))
+
+
+@pytest.fixture
+def hardware_server(data_dir: Path) -> Iterator[SteppedServer]:
+    """Stepped, with the fake hardware (CAN boards) between the platform and its wheels."""
+    from tests.reference_server.world.scenarios import SteppedServer
+
+    yield from _running(SteppedServer(data_dir, hardware=True))
+
+
+def _running(srv: S) -> Iterator[S]:
+    srv.start()
     try:
         yield srv
     finally:

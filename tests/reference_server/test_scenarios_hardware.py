@@ -7,7 +7,6 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Iterator
-from pathlib import Path
 from typing import Any
 
 import pytest
@@ -30,18 +29,8 @@ BRAKE = 5000.0  # mm/s^2: a motor board without power brakes (MotorParams.brake_
 
 
 @pytest.fixture
-def hw_server(tmp_path: Path) -> Iterator[SteppedServer]:
-    srv = SteppedServer(tmp_path / "data", hardware=True)
-    srv.start()
-    try:
-        yield srv
-    finally:
-        srv.stop()
-
-
-@pytest.fixture
-def hw_client(hw_server: SteppedServer) -> Iterator[Client]:
-    with Client(hw_server.ports[0]) as c:
+def hw_client(hardware_server: SteppedServer) -> Iterator[Client]:
+    with Client(hardware_server.ports[0]) as c:
         yield c
 
 
@@ -50,26 +39,26 @@ def stopping_distance(v: float, decel: float) -> float:
     return v * v / (2.0 * decel) + v * 2 * PERIOD
 
 
-def test_a_move_reaches_its_target_through_the_motor_boards(hw_server: SteppedServer, hw_client: Client) -> None:
-    running_stepped(hw_server, hw_client, MotionMode.MODE_MOTION_AUTOMATIC)
+def test_a_move_reaches_its_target_through_the_motor_boards(hardware_server: SteppedServer, hw_client: Client) -> None:
+    running_stepped(hardware_server, hw_client, MotionMode.MODE_MOTION_AUTOMATIC)
     command(hw_client, R.CMD_MOVE_ABS(x=5000, y=12200, angle=90000))  # into the kitchen, through its door
     goal = (5000.0, 12200.0, math.pi / 2)
-    trace = stepped_poll(hw_server, hw_client, 30.0, until=settled_at(goal, pos=40.0, angle_deg=2.5))
+    trace = stepped_poll(hardware_server, hw_client, 30.0, until=settled_at(goal, pos=40.0, angle_deg=2.5))
     assert settled_at(goal, pos=40.0, angle_deg=2.5)(trace[-1]), trace[-1]
 
 
 def test_break_freezes_the_command_at_once_and_the_boards_ramp_down(
-    hw_server: SteppedServer, hw_client: Client
+    hardware_server: SteppedServer, hw_client: Client
 ) -> None:
     c = hw_client
-    running_stepped(hw_server, c, MotionMode.MODE_MOTION_AUTOMATIC)
+    running_stepped(hardware_server, c, MotionMode.MODE_MOTION_AUTOMATIC)
     command(c, R.CMD_MOVE_ABS(x=9000, y=10000, angle=0))
-    stepped_poll(hw_server, c, 8.0, until=lambda s: s.vel_trans >= 900)
+    stepped_poll(hardware_server, c, 8.0, until=lambda s: s.vel_trans >= 900)
     before = c.status()
     command(c, R.CMD_BREAK())
     after: list[Any] = []
     for _ in range(round(1.0 / PERIOD)):
-        hw_server.advance(PERIOD)
+        hardware_server.advance(PERIOD)
         after.append(c.status())
     assert after[0].operation_state == OperationState.ST_OP_BREAKED
     assert len({(s.cmd_x, s.cmd_y) for s in after}) == 1  # the commanded frame stands from the first cycle on
@@ -84,33 +73,33 @@ def test_break_freezes_the_command_at_once_and_the_boards_ramp_down(
     assert after[-1].est_x - before.est_x <= stopping_distance(v0, RAMP) + 30
     command(c, R.CMD_CONTINUE())
     goal = (9000.0, 10000.0, 0.0)
-    trace = stepped_poll(hw_server, c, 20.0, until=settled_at(goal, pos=40.0, angle_deg=2.5))
+    trace = stepped_poll(hardware_server, c, 20.0, until=settled_at(goal, pos=40.0, angle_deg=2.5))
     assert settled_at(goal, pos=40.0, angle_deg=2.5)(trace[-1])
 
 
-def test_the_emergency_circuit_brakes_the_wheels(hw_server: SteppedServer, hw_client: Client) -> None:
+def test_the_emergency_circuit_brakes_the_wheels(hardware_server: SteppedServer, hw_client: Client) -> None:
     c = hw_client
-    running_stepped(hw_server, c, MotionMode.MODE_MOTION_VEL)
+    running_stepped(hardware_server, c, MotionMode.MODE_MOTION_VEL)
     for _ in range(15):
         command(c, R.CMD_MOVE_VEL(vel_trans=800, vel_rot=0))
-        hw_server.advance(0.1)
+        hardware_server.advance(0.1)
     before = c.status()
     assert before.vel_trans >= 750
 
     def press() -> None:
-        link = hw_server.platform.hardware
+        link = hardware_server.platform.hardware
         assert link is not None
         link.hw.circuit.press()  # the button on the platform: the circuit opens, the motors lose power
 
-    hw_server.call(press)
+    hardware_server.call(press)
     after: list[Any] = []
     for _ in range(round(0.6 / PERIOD)):
-        hw_server.advance(PERIOD)
+        hardware_server.advance(PERIOD)
         after.append(c.status())
     assert after[0].emergency_state == 1 and after[0].operation_state == OperationState.ST_OP_READY
     stopped = [s for s in after if s.vel_trans == 0]
     assert stopped and stopped[0].timestamp / 1000.0 - before.timestamp / 1000.0 <= 800 / BRAKE + 5 * PERIOD
     assert after[-1].est_x - before.est_x <= stopping_distance(800, BRAKE) + 30
     command(c, R.CMD_MOVE_VEL(vel_trans=800, vel_rot=0))  # refused while the stop is active
-    hw_server.advance(1.0)
+    hardware_server.advance(1.0)
     assert c.status().vel_trans == 0

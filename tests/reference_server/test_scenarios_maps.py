@@ -5,10 +5,6 @@ there is no way (guide 4.3 PlanningEnabled, 6.4 PlannerState, 6.5 Map; errata E-
 from __future__ import annotations
 
 import math
-from collections.abc import Iterator
-from pathlib import Path
-
-import pytest
 
 from tests.reference_server.conftest import Client
 from tests.reference_server.world.scenarios import (
@@ -45,18 +41,8 @@ Zone = list[tuple[float, float]]
 GAP_ZONE: Zone = [(3500.0, 12500.0), (5500.0, 12500.0), (5500.0, 15000.0), (3500.0, 15000.0)]
 
 
-@pytest.fixture
-def srv(tmp_path: Path) -> Iterator[WorldServer]:
-    server = WorldServer(tmp_path / "data")
-    server.start()
-    try:
-        yield server
-    finally:
-        server.stop()
-
-
-def start_on(srv: WorldServer, walls: Walls, *setup: object, prohibit: Zone | None = None) -> Client:
-    c = Client(srv.ports[0])
+def start_on(world_server: WorldServer, walls: Walls, *setup: object, prohibit: Zone | None = None) -> Client:
+    c = Client(world_server.ports[0])
     running(c, MotionMode.MODE_MOTION_AUTOMATIC, R.CMD_SET_MAP(name="test", xml=map_xml(walls, prohibit)), *setup)
     return c
 
@@ -67,8 +53,8 @@ def stands_still(c: Client, seconds: float = 2.0) -> None:
     assert all(math.dist((s.x, s.y), (before.x, before.y)) <= 3 and s.vel_trans == 0 for s in trace), trace[-1]
 
 
-def test_planning_winds_through_an_s_and_never_through_a_wall(srv: WorldServer) -> None:
-    with start_on(srv, HALL + S_WALLS) as c:
+def test_planning_winds_through_an_s_and_never_through_a_wall(world_server: WorldServer) -> None:
+    with start_on(world_server, HALL + S_WALLS) as c:
         c.send(R.CMD_MOVE_ABS(x=7500, y=10000, angle=0))
         trace = poll(c, settled_at((7500, 10000, 0.0), pos=40.0, angle_deg=2.5), TIMEOUT)
         assert_clear(trace, wall_array(HALL + S_WALLS))
@@ -77,16 +63,16 @@ def test_planning_winds_through_an_s_and_never_through_a_wall(srv: WorldServer) 
         assert trace[-1].planner_state in (PlannerState.PLANNER_PATH_FOUND, PlannerState.PLANNER_STANDBY)
 
 
-def test_enclosed_start_is_no_path_and_no_motion(srv: WorldServer) -> None:
-    with start_on(srv, HALL + BOX) as c:
+def test_enclosed_start_is_no_path_and_no_motion(world_server: WorldServer) -> None:
+    with start_on(world_server, HALL + BOX) as c:
         c.send(R.CMD_MOVE_ABS(x=6000, y=10000, angle=0))
         poll(c, lambda s: s.planner_state == PlannerState.PLANNER_NO_PATH, TIMEOUT)
         stands_still(c)
         assert not sample(c).target_reached
 
 
-def test_a_prohibited_gap_is_no_path_and_without_it_the_way_leads_through(srv: WorldServer) -> None:
-    with start_on(srv, HALL + DIVIDER, prohibit=GAP_ZONE) as c:
+def test_a_prohibited_gap_is_no_path_and_without_it_the_way_leads_through(world_server: WorldServer) -> None:
+    with start_on(world_server, HALL + DIVIDER, prohibit=GAP_ZONE) as c:
         c.send(R.CMD_MOVE_ABS(x=7000, y=10000, angle=0))
         poll(c, lambda s: s.planner_state == PlannerState.PLANNER_NO_PATH, TIMEOUT)
         stands_still(c)
@@ -96,16 +82,16 @@ def test_a_prohibited_gap_is_no_path_and_without_it_the_way_leads_through(srv: W
         assert max(s.y for s in trace) > 12500  # through the gap
 
 
-def test_a_target_in_a_prohibited_area_is_a_collision_at_the_target(srv: WorldServer) -> None:
-    with start_on(srv, HALL + DIVIDER, prohibit=GAP_ZONE) as c:
+def test_a_target_in_a_prohibited_area_is_a_collision_at_the_target(world_server: WorldServer) -> None:
+    with start_on(world_server, HALL + DIVIDER, prohibit=GAP_ZONE) as c:
         c.send(R.CMD_MOVE_ABS(x=4500, y=14000, angle=0))
         poll(c, lambda s: s.planner_state == PlannerState.PLANNER_COLLISION_TARGET, TIMEOUT)
         stands_still(c)
 
 
-def test_without_planning_the_direct_path_stops_in_front_of_a_wall(srv: WorldServer) -> None:
+def test_without_planning_the_direct_path_stops_in_front_of_a_wall(world_server: WorldServer) -> None:
     wall: Walls = [(4000, 8000, 4000, 12000)]
-    with start_on(srv, HALL + wall, param("PlanningEnabled", False)) as c:
+    with start_on(world_server, HALL + wall, param("PlanningEnabled", False)) as c:
         c.send(R.CMD_MOVE_ABS(x=6000, y=10000, angle=0))  # straight through the wall
         trace = poll(c, lambda s: s.x > 2500, TIMEOUT)
         before = trace[-1]
@@ -122,8 +108,8 @@ def test_without_planning_the_direct_path_stops_in_front_of_a_wall(srv: WorldSer
         assert all(4000 - 325 - 600 <= s.x <= 4000 - 325 - 300 for s in held)
 
 
-def test_a_new_map_takes_effect_at_once(srv: WorldServer) -> None:
-    with start_on(srv, HALL) as c:
+def test_a_new_map_takes_effect_at_once(world_server: WorldServer) -> None:
+    with start_on(world_server, HALL) as c:
         c.send(R.CMD_MOVE_ABS(x=6000, y=10000, angle=0))
         trace = poll(c, settled_at((6000, 10000, 0.0), pos=40.0, angle_deg=2.5), TIMEOUT)
         assert max(abs(s.y - START[1]) for s in trace) <= 50  # straight: nothing in the way

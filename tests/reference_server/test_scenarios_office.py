@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -35,18 +34,8 @@ TIMEOUT = 20.0  # wall s: the longest move here is ~40 s simulated, 1.6 s at 25x
 
 
 @pytest.fixture
-def office_server(tmp_path: Path) -> Iterator[WorldServer]:
-    srv = WorldServer(tmp_path / "data")
-    srv.start()
-    try:
-        yield srv
-    finally:
-        srv.stop()
-
-
-@pytest.fixture
-def auto(office_server: WorldServer) -> Iterator[Client]:
-    with Client(office_server.ports[0]) as c:
+def auto(world_server: WorldServer) -> Iterator[Client]:
+    with Client(world_server.ports[0]) as c:
         running(c, MotionMode.MODE_MOTION_AUTOMATIC)
         yield c
 

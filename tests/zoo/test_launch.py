@@ -4,6 +4,7 @@ form with a fresh directory per start and warm spares, clear errors, and no targ
 from __future__ import annotations
 
 import os
+import shutil
 import signal
 import socket
 import subprocess
@@ -94,14 +95,17 @@ def test_stop_ends_the_whole_process_group(tmp_path: Path) -> None:
 def test_a_target_dies_with_the_harness_that_started_it(tmp_path: Path) -> None:
     harness = subprocess.Popen(
         [sys.executable, "-c", "import sys,time\nfrom pltf.zoo import launch\n"
-         "t = launch.Launcher(sys.argv[1], '127.0.0.1', 0, 0); t.start(); print(t.pid, flush=True); time.sleep(60)",
+         "t = launch.Launcher(sys.argv[1], '127.0.0.1', 0, 0); t.start()\n"
+         "print(t.pid, t.tmpdir, t._log.name, flush=True); time.sleep(60)",
          tiny(tmp_path)], stdout=subprocess.PIPE, text=True)
     assert harness.stdout is not None
-    pid = int(harness.stdout.readline())
+    pid, tmpdir, log = harness.stdout.readline().split()
     harness.send_signal(signal.SIGKILL)  # no clean-up runs in the harness
     harness.wait(5)
     harness.stdout.close()
-    assert gone(pid), "the target outlived a harness killed with SIGKILL"
+    assert gone(int(pid)), "the target outlived a harness killed with SIGKILL"
+    shutil.rmtree(tmpdir, ignore_errors=True)  # what the harness would have removed
+    Path(log).unlink(missing_ok=True)
 
 
 def test_a_target_that_fails_to_start_is_one_clear_error(tmp_path: Path) -> None:

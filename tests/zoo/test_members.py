@@ -20,7 +20,9 @@ from pltf.conformance_tests.runner import Runner, RunResult
 from pltf.zoo import launch
 from pltf.zoo.members import MEMBERS
 
-SCALE = 10.0
+# the emulator's ideal drive is exact at any time scale; the reference server's motion cases need the machine's
+# attention (a stop must land inside a 600 mm move): a loaded 2-core machine keeps up at 5, not always at 10
+SCALE = {"emulator": 10.0, "reference": 5.0}
 FIVE_MINUTES = 300.0
 BACKEND = "emulator" if launch.emulator_binary() is not None else "reference"
 CONFORMING = [m.name for m in MEMBERS.values() if m.conforming]
@@ -34,11 +36,13 @@ def conform(kind: str, *, tier: Tier = Tier.STANDARD, profile: str = "strict", k
     status when it died during the run (None when it was still alive)."""
     if kind.startswith("zoo:"):
         member, _, upstream = kind[4:].partition("@")
-        target = launch.zoo(member, upstream=upstream or "reference", time_scale=SCALE, extra=extra)
+        scale = SCALE[upstream or "reference"]
+        target = launch.zoo(member, upstream=upstream or "reference", time_scale=scale, extra=extra)
     else:
-        target = launch.target(kind, time_scale=SCALE)
+        scale = SCALE[kind]
+        target = launch.target(kind, time_scale=scale)
     with target:
-        config = Config("127.0.0.1", target.ports[0], target.ports[1], time_scale=SCALE, simulator=True,
+        config = Config("127.0.0.1", target.ports[0], target.ports[1], time_scale=scale, simulator=True,
                         profile=profile, tier=tier)
         config.run_budget = pace.run_budget(config)
         run = Runner(config, select(load_all().values(), tier=tier, keyword=keyword)).run()
@@ -58,17 +62,24 @@ def verdict(run: RunResult, case_id: str) -> tuple[Verdict, str]:
 
 # ---- default tier: the fast subset
 
-# the smoke tier; the slow link (every reply 50-200 ms late) the cases of its concern only
-SUBSET = {"slow-link": "6.2/framing/coalesced or 6.2/types or 6.1/ports/both-serve or 6.1/replies or 6.4/*strict*"}
+# the smoke tier, or the cases of a member's concern (the slow link: every reply 50-200 ms late)
+SUBSET: dict[str, tuple[Tier, str | None]] = {
+    "slow-link": (Tier.SMOKE, "6.2/framing/coalesced or 6.2/types or 6.1/ports/both-serve or 6.1/replies or 6.4/*"),
+    "slow-release": (Tier.STANDARD, "6.1/ports or 6.1/replies or 4.2/chart"),
+    "slow-release-rst": (Tier.STANDARD, "6.1/ports or 6.1/replies or 4.2/chart"),
+}
 
 
 @pytest.mark.parametrize("member", CONFORMING)
 def test_a_conforming_member_passes_the_smoke_tier(member: str) -> None:
     m = MEMBERS[member]
-    run, died = conform(f"zoo:{member}@{BACKEND}", tier=Tier.SMOKE, profile=m.profile, keyword=SUBSET.get(member))
+    tier, keyword = SUBSET.get(member, (Tier.SMOKE, None))
+    run, died = conform(f"zoo:{member}@{BACKEND}", tier=tier, profile=m.profile, keyword=keyword)
     assert not bad(run), "\n".join(bad(run))
     assert run.exit_code == 0 and died is None
     assert run.duration < FIVE_MINUTES
+    if member.startswith("slow-release"):  # turned away with FIN or RST: the decision of E-WIRE-007, strictly
+        assert verdict(run, "6.1/ports/second-client-turned-away")[0] is Verdict.PASS
 
 
 def test_accept_once_reads_as_the_backlog_alternative_never_as_a_failure() -> None:
