@@ -179,6 +179,7 @@ class Server:
     async def run(self) -> int:
         """Boot the platform, run the control loop until ``stop``, then close everything."""
         self.platform.boot(self.clock.begin())
+        self.clock.begin()  # the boot took its time (documents, the world): the first tick is one period after it
         sim = asyncio.create_task(self._simulate())
         try:
             await self._stopped.wait()
