@@ -12,11 +12,13 @@ Rules:
   at time scale 20 a wake-up 10 ms late - ten periods - let a command land on a state ten periods old, and
   the periods it skipped ran after it with the command already in force: the outcome depended on the load
   and the time scale.)
-- One reading runs at most ``burst`` ticks, so a reply never waits for more than that much simulation. A
-  backlog beyond it (the loop was blocked a moment, or the machine cannot keep up) is worked off over the next
-  readings, the shell's I/O in between; meanwhile ``now`` is the time of the last tick (the platform's own
-  time, a little behind the clock), so a command still meets the state of its own time and the ticks after it
-  stay after it. A timer late by less than ``burst`` periods (25 ms at time scale 20) changes nothing at all.
+- The shell's timer works the ticks off, at most ``burst`` a reading (``now(wall)``), so its I/O is served
+  between two bursts. A reading for a telegram (``now(wall, burst=0)``) runs the ticks due itself only when they
+  are a burst or fewer (a late timer); a longer backlog (the loop was blocked a moment, or the machine cannot
+  keep up) is the timer's, and the telegram takes the time of the last tick - the platform's own time, a
+  little behind the clock: it still meets the state of its own time and the ticks after it stay after it, and
+  a reply never waits for the backlog. A timer late by less than ``burst`` periods (25 ms at time scale 20)
+  changes nothing at all.
 - A shell that fell more than ``max_catch_up`` periods behind (blocked for long, or a time scale beyond what
   this machine can simulate) neither hands the platform a longer step nor works off that backlog: the
   simulated time stands still for the part that could not be simulated (the wall-clock origin moves on by it,
@@ -86,9 +88,9 @@ class ControlLoop:
         """The simulated time of the next tick."""
         return (self.ticks + 1) * self.period
 
-    def now(self, wall: float) -> float:
-        """The simulated time at ``wall``, with the platform ticked up to it; behind by more than ``burst`` ticks,
-        ``burst`` ticks on and the time of the last one."""
+    def now(self, wall: float, burst: int | None = None) -> float:
+        """The simulated time at ``wall``, with the platform ticked up to it. Behind by more than ``self.burst``
+        ticks: ``burst`` ticks on (default ``self.burst``; 0 for a telegram) and the time of the last tick."""
         sim = self.sim(wall)
         due = int(sim / self.period) - self.ticks
         if due > self.max_catch_up:
@@ -101,10 +103,11 @@ class ControlLoop:
                 self._warned_at = self.ticks * self.period
                 log.warning("control loop %.1f s (simulated) behind: the simulated time was held (%.1f s in all)",
                             hold, self.held)  # fmt: skip
-        for _ in range(min(due, self.burst)):
+        n = due if due <= self.burst else min(due, self.burst if burst is None else burst)
+        for _ in range(n):
             self.ticks += 1
             self.platform.tick(self.ticks * self.period)
-        return sim if due <= self.burst else self.ticks * self.period
+        return sim if n == due else self.ticks * self.period
 
     def advance(self, sim: float) -> None:
         """Tick the platform up to the simulated time ``sim`` (a clock of the caller's own: a stepped test)."""

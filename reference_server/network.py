@@ -19,10 +19,10 @@ Rules:
   connection sends what it owes before it closes. Per-connection log lines are formatted only when enabled.
 - The platform is ticked at 50 Hz simulated time by the rules of reference_server/control_loop.py: every
   tick one period, at whole periods, at every time scale. The clock (``SimClock``) reads the loop's monotonic
-  clock through the ``ControlLoop``, so reading it runs the ticks due: the timer reads it every period, and
-  the telegrams of one read are handed to the platform at one fresh reading (they arrived together), never on
-  a state left behind by a late timer. A loop that falls too far behind holds the simulated time instead of
-  skipping it.
+  clock through the ``ControlLoop``: the timer works the ticks off every period (``SimClock.work``, a burst at
+  most between two looks at the sockets), and the telegrams of one read are handed to the platform at one fresh
+  reading (they arrived together) that first runs the ticks a late timer left, never on a state left behind.
+  A loop that falls too far behind holds the simulated time instead of skipping it.
 - The stall timeout of a partial frame is in wall seconds at every time scale: it guards the connection (a TCP
   peer pauses in wall time), not the platform, and no telegram's meaning depends on it.
 - ``serve`` returns 0 after CMD_EXIT, SIGINT or SIGTERM, having closed every listener and connection.
@@ -75,7 +75,13 @@ class SimClock:
         return self.control.begin(self.loop.time())
 
     def now(self) -> float:
-        return self.control.now(self.loop.time())
+        """The simulated time for what the platform is handed now (a telegram, a control request): the ticks due
+        run first unless they are a backlog, which is the timer's (``work``)."""
+        return self.control.now(self.loop.time(), burst=0)
+
+    def work(self) -> None:
+        """The timer: run the ticks due, a burst at most."""
+        self.control.now(self.loop.time())
 
     def wall_at(self, sim: float) -> float:
         """The loop time at which the simulated clock reads ``sim``."""
@@ -179,6 +185,7 @@ class Server:
     async def run(self) -> int:
         """Boot the platform, run the control loop until ``stop``, then close everything."""
         self.platform.boot(self.clock.begin())
+        self.clock.begin()  # the boot took its time (documents, the world): the first tick is one period after it
         sim = asyncio.create_task(self._simulate())
         try:
             await self._stopped.wait()
@@ -196,7 +203,7 @@ class Server:
     async def _simulate(self) -> None:
         clock, loop = self.clock, asyncio.get_running_loop()
         while True:
-            clock.now()  # runs the ticks due
+            clock.work()
             await asyncio.sleep(max(0.0, clock.wall_at(self.control.next_tick) - loop.time()))
 
     # ---- connections

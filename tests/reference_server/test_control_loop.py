@@ -51,6 +51,17 @@ def test_a_reading_between_two_timer_wake_ups_runs_the_ticks_due_first() -> None
     assert loop.wall_at(loop.next_tick) == pytest.approx(0.011)
 
 
+def test_a_telegram_runs_a_late_timers_ticks_but_leaves_a_backlog_to_the_timer() -> None:
+    ticked = Ticks()
+    loop = ControlLoop(ticked, 20.0, wall=0.0)
+    assert loop.now(0.0101, burst=0) == pytest.approx(0.202)  # ten periods due: a late timer, run at once
+    assert len(ticked.times) == 10
+    assert loop.now(0.1, burst=0) == pytest.approx(0.2)  # 90 due: the timer's; the time of the last tick
+    assert len(ticked.times) == 10
+    assert loop.now(0.1) == pytest.approx(0.2 + BURST * CONTROL_PERIOD)  # the timer: a burst
+    assert len(ticked.times) == 10 + BURST and consecutive(ticked.times) and loop.held == 0.0
+
+
 def test_a_backlog_is_worked_off_a_burst_per_reading_without_holding_the_time() -> None:
     ticked = Ticks()
     loop = ControlLoop(ticked, 1.0, wall=0.0)

@@ -148,7 +148,8 @@ def test_restarted_after_the_stopping_time_the_platform_stands_at_every_client_s
 
 class Shell:
     """reference_server/network.py's use of the control loop on a virtual wall clock: a timer that wakes up to
-    ``late`` wall s after each tick is due (seeded), and telegrams handed to the platform at the clock's reading
+    ``late`` wall s after each tick is due (seeded, ``SimClock.work``), and telegrams handed to the platform at the
+    clock's reading (``SimClock.now``)
     (``stale``: at the simulated time without running the ticks due - the shell before the control loop's rule)."""
 
     def __init__(self, p: Platform, scale: float, late: float = 0.015, stale: bool = False) -> None:
@@ -162,7 +163,7 @@ class Shell:
         while self.timer <= wall:
             self.loop.now(self.timer)
             self.timer = self.loop.wall_at(self.loop.next_tick) + self.rng.uniform(0.0, self.late)
-        now = self.loop.sim(wall) if self.stale else self.loop.now(wall)
+        now = self.loop.sim(wall) if self.stale else self.loop.now(wall, burst=0)  # network.SimClock.now
         return self.p.handle(telegram, now)
 
 
