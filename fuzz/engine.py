@@ -41,7 +41,7 @@ from pltf.fuzz.preludes import STATEFUL, StatePlan, chart_last
 from pltf.fuzz.schedule import BIG_CASE, BIG_SHARE, Scheduler
 from pltf.fuzz.target import GET_STATUS, Session
 from pltf.fuzz.unit import BATCH_BYTES, BATCH_CASES, Unit, batchable
-from pltf.fuzz.verdict import TIMED_OUT, Verdict, confirm, confirmed
+from pltf.fuzz.verdict import NEEDED, REPLAYS, TIMED_OUT, Verdict, confirm, confirmed
 
 WINDOW = 256  # cases drawn at a time
 MEASURE = 6  # status-only clients per port at the start: does it answer, what does a connection cost
@@ -370,13 +370,14 @@ class Campaign:
             got = e.verdict.kind
             return "stall" if got == TIMED_OUT else got
 
-        seen = confirm(kind, replay, *((1, 1) if kind == "stall" else ()))  # a stall holds the port it stalls
+        replays, needed = (1, 1) if kind == "stall" else (REPLAYS, NEEDED)  # a stall holds the port it stalls
+        seen = confirm(kind, replay, replays, needed)
         if len(seen) < 2 and self.lanes.live.failing:  # a replay was not served: is the target still there?
             gone = self._cross_check()
             if gone is not None:
                 self.gone(gone, culprit=s.unit)
                 return
-        ok = confirmed(kind, seen)
+        ok = confirmed(kind, seen, needed)
         self.failure(kind, reason, [s.unit], ok, {"replays": seen, "port": self.ports[s.port]})
         if not ok:
             self._count(s.unit.cases, "closed")

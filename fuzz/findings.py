@@ -155,14 +155,13 @@ class FindingWriter:
             largest = sorted(sessions_of, key=lambda p: -len(p[1].data))[:3]
             for candidate in [*([p, s] for p, s in largest), [sessions_of[-1][0], *(s for _, s in sessions_of)]]:
                 if self.reproduce(candidate, repeat=REPEAT_MAX, seconds=REPEAT_SECONDS)[0] == kind:
-                    got["sessions"], got["repeat"] = candidate, self.rounds
+                    got["sessions"], got["repeat"] = candidate, 2 * self.rounds  # a margin for a fresh instance
                     break
         if got["sessions"] is not None and got["repeat"] == 1:
             got["sessions"], got["tests"] = self._minimize(kind, got["sessions"])
             got["minimized"] = True
         if got["sessions"] is not None:
-            rounds = got["repeat"] * 2 if got["repeat"] > 1 else 1
-            verdict, got["outcomes"] = self.reproduce(got["sessions"], record=True, repeat=rounds,
+            verdict, got["outcomes"] = self.reproduce(got["sessions"], record=True, repeat=got["repeat"],
                                                       seconds=4 * REPEAT_SECONDS)  # fmt: skip
             got["reproduced"] = verdict == kind
         return got

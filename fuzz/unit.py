@@ -50,7 +50,9 @@ class Unit:
 
     @property
     def keep(self) -> bool:
-        return all(c.expect == KEEP for c in self.cases)
+        """Every case accepted by the strict codec (a unit without cases - a lead alone - is not: it owes only
+        the lead's reply)."""
+        return bool(self.cases) and all(c.expect == KEEP for c in self.cases)
 
     @property
     def batch(self) -> bool:

@@ -55,8 +55,9 @@ def test_a_unit_that_runs_again_is_gated_and_a_kept_connection_has_no_lead() -> 
     assert kept.frames == [POSITION] and not kept.half_close and kept.sync and not kept.led
 
 
-def test_a_status_only_unit_proves_a_port_serves() -> None:
+def test_a_lead_alone_proves_a_port_serves() -> None:
     unit = Unit([])
     s = unit.session()
-    assert s.frames == [LEAD] and s.sync and unit.keep and not unit.batch
+    assert s.frames == [LEAD] and not s.sync and s.half_close and not unit.keep and not unit.batch
+    assert unit.owed(s, 1) == 1  # the lead's reply, nothing else (a GET_STATUS may be slow on a target)
     assert survey(s.data) == (KEEP, [POSITION_ID]) and survey(frame(b"\xfe"))[0] == CLOSE
