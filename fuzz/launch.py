@@ -7,9 +7,10 @@ Rules:
   port order (the reference server's convention); we read them from its merged stdout/stderr.
 - Every wait is bounded; ``stop`` ends only the process we started (terminate, then kill).
 - The target's output goes to a log file (a pipe would cost us a reader thread); ``output`` is its tail.
-- Warm spares (``spares = True``, ephemeral ports only): while one instance is in use the next one starts, so
-  that delta debugging, which wants a fresh instance per test, waits for a start only when the spare is not yet
-  up. A spare that is not taken is stopped with the launcher.
+- The toolkit's launcher is ``pltf.zoo.launch``; this one adds warm spares for the minimiser and raises its
+  ``LaunchError``. Warm spares (``spares = True``, ephemeral ports only): while one instance is in use the next
+  one starts, so that delta debugging, which wants a fresh instance per test, waits for a start only when the
+  spare is not yet up. A spare that is not taken is stopped with the launcher.
 """
 
 from __future__ import annotations
@@ -24,12 +25,10 @@ import time
 from pathlib import Path
 from typing import IO
 
+from pltf.zoo.launch import LaunchError  # the toolkit's one error for a target that could not be started
+
 STARTED = re.compile(r"server started at port (\d+)")
 START_TIMEOUT = 20.0
-
-
-class LaunchError(RuntimeError):
-    """The target could not be started (the harness's problem: exit status 2)."""
 
 
 class Instance:
