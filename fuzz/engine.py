@@ -25,8 +25,7 @@ import collections
 import sys
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
-from pathlib import Path
+from dataclasses import dataclass
 from typing import Any
 
 from pltf.fuzz import preludes, safety
@@ -36,11 +35,12 @@ from pltf.fuzz.findings import FindingWriter
 from pltf.fuzz.knowledge import Knowledge
 from pltf.fuzz.lanes import DONE, STOPPED, InFlight, Lanes
 from pltf.fuzz.launch import Launcher
+from pltf.fuzz.options import Options, Stats
 from pltf.fuzz.prefetch import Prefetcher
-from pltf.fuzz.preludes import STATEFUL, StatePlan, chart_last
-from pltf.fuzz.schedule import BIG_CASE, BIG_SHARE, Scheduler
-from pltf.fuzz.target import GET_STATUS, Session
-from pltf.fuzz.unit import BATCH_BYTES, BATCH_CASES, Unit, batchable
+from pltf.fuzz.preludes import STATEFUL, StatePlan
+from pltf.fuzz.schedule import BIG_CASE, Scheduler
+from pltf.fuzz.target import Session
+from pltf.fuzz.unit import Unit, window_units
 from pltf.fuzz.verdict import NEEDED, REPLAYS, TIMED_OUT, Verdict, confirm, confirmed
 
 WINDOW = 256  # cases drawn at a time
@@ -57,68 +57,6 @@ STOPS = ("dead", "hang", "deaf", "stall")  # without --launch, the campaign ends
 
 class HarnessError(RuntimeError):
     """The fuzzer itself cannot go on (target unreachable at the start, launch failure): exit status 2."""
-
-
-@dataclass
-class Options:
-    host: str
-    port: int
-    second_port: int
-    duration: float
-    seed: int
-    out: Path
-    corpus: Path | None = None
-    allow_motion: bool = False
-    launch: str | None = None
-    max_cases: int | None = None
-    max_findings: int | None = None
-    deadline: float = 2.0
-    minimize_seconds: float = 60.0
-    probe_every: int = 4  # after the warm-up, one unit in so many on a port keeps its lead (1: every unit; fuzz.lanes)
-    lanes: int = 2  # 2: units run in two lanes, one per port (fuzz.lanes); 1: one at a time on --target's port
-    big_share: float = BIG_SHARE  # of the cases over 1 MiB drawn that are kept (fuzz.schedule; 1: natural mix)
-    pipeline: bool = True  # a port's next small unit connects while its previous one is in flight (fuzz.gate)
-    command: str = "pltf fuzz"
-
-
-@dataclass
-class Stats:
-    started: float = field(default_factory=time.monotonic)
-    cases: int = 0
-    units: int = 0
-    batches: int = 0
-    singles: int = 0
-    probes: int = 0  # units whose lead was answered (each one a liveness probe)
-    restarts: int = 0
-    cut_replies: int = 0
-    dropped_unsafe: int = 0
-    skipped: int = 0  # singles skipped on a dear target (fresh connections are what it has least of)
-    not_admitted: int = 0  # connections the target did not serve (turned away, backlog): run again
-    replays: int = 0  # replays of suspicions
-    pipelined: int = 0
-    turn_aways: int = 0  # ports on which pipelining stopped: the target turned pipelined newcomers away
-    turned_away: list[str] = field(default_factory=list)  # the cases of the unit that showed it
-    release_ms: list[float] = field(default_factory=list)  # per port: mean wait for a fresh connection
-    dear: bool = False
-    duplicates: int = 0
-    origins: collections.Counter[str] = field(default_factory=collections.Counter)
-    telegrams: set[str] = field(default_factory=set)
-    states: set[tuple[str, int | None]] = field(default_factory=set)
-    state_targets: int = 0
-    findings: list[dict[str, Any]] = field(default_factory=list)
-    unconfirmed: list[dict[str, Any]] = field(default_factory=list)
-
-    @property
-    def elapsed(self) -> float:
-        return time.monotonic() - self.started
-
-    @property
-    def rate(self) -> float:
-        return self.cases / self.elapsed if self.elapsed > 0 else 0.0
-
-    @property
-    def retried(self) -> int:
-        return self.not_admitted
 
 
 @dataclass
@@ -272,32 +210,20 @@ class Campaign:
                 return
 
     def units(self, cases: list[Case]) -> list[Unit]:
-        """Batches (accepted cases, whole, at most ``BATCH_CASES``/``BATCH_BYTES``) spread among the singles;
-        the first batch and the singles about a chart or motion command carry the state prelude."""
-        batches: list[list[Case]] = [[]]
-        size = 0
-        singles: list[Unit] = []
+        """The window's units (``pltf.fuzz.unit.window_units``): the first batch behind the state prelude, and
+        one single in ``STATEFUL_EVERY`` about an operation or motion command."""
         state, mode = self.kb.operation_state, self.kb.motion_mode
         target = self.plan.current
-        for c in cases:
-            if not batchable(c):
-                prelude = []
-                if c.telegram in STATEFUL:
-                    self.stateful += 1
-                    if self.stateful % STATEFUL_EVERY == 0:  # a prelude costs a target as much as a few cases
-                        prelude = preludes.path(state, mode, target, self.forbidden)
-                singles.append(Unit([c], prelude, target if prelude else None))
-                continue
-            if len(batches[-1]) >= BATCH_CASES or size + c.size > BATCH_BYTES:
-                batches.append([])
-                size = 0
-            batches[-1].append(c)
-            size += c.size
-        units = [Unit(chart_last(b)) for b in batches if b]
-        if units:
-            units[0].prelude = self.plan.prelude(state, mode, self.forbidden)
-            units[0].target = target
-        return _interleave(units, singles)
+
+        def single_prelude(c: Case) -> list[bytes]:
+            if c.telegram not in STATEFUL:
+                return []
+            self.stateful += 1
+            if self.stateful % STATEFUL_EVERY:  # a prelude costs a target as much as a few cases
+                return []
+            return preludes.path(state, mode, target, self.forbidden)
+
+        return window_units(cases, lambda: self.plan.prelude(state, mode, self.forbidden), target, single_prelude)
 
     # ------------------------------------------------------------------ the oracle of an admitted unit
     def judge_unit(self, e: InFlight, v: Verdict) -> bool:
@@ -434,17 +360,5 @@ class Campaign:
             self.stop = True  # a target we cannot restart is gone (or its port is)
 
 
-def _interleave(batches: list[Unit], singles: list[Unit]) -> list[Unit]:
-    """The batches spread evenly among the singles: while the target works through a batch on one port, the
-    other port carries singles."""
-    if not batches:
-        return singles
-    out: list[Unit] = []
-    step = len(singles) / len(batches)
-    for i, batch in enumerate(batches):
-        out.extend(singles[round(i * step) : round((i + 1) * step)])
-        out.append(batch)
-    return out
 
-
-__all__ = ["GET_STATUS", "Campaign", "HarnessError", "Options", "Stats"]
+__all__ = ["Campaign", "HarnessError", "Options", "Stats"]
