@@ -134,7 +134,7 @@ def test_state_plan_preludes_decode_and_reach_every_state() -> None:
     plan = StatePlan(allow_motion=True)
     assert {name for name, _ in plan.targets} == {"not_connected", "connected", "ready", "running", "breaked"}
     for target in plan.targets:
-        for f in plan.prelude(target):
+        for f in plan.full(target):
             decode_frame(f, "request")
     assert {name for name, _ in StatePlan(allow_motion=False).targets} == {"not_connected", "connected", "ready"}
 
