@@ -13,7 +13,8 @@ Rules:
   (counted): fresh connections are what such a target has least of.
 - A suspicion (``pltf.fuzz.verdict``) stops the lanes; once the ports are free its unit is replayed alone: a
   finding when it fails again the same way, else reported apart as unconfirmed (``stats.unconfirmed``), which
-  never sets the exit status. A unit that timed out is a stall when another port still serves us, else a hang.
+  never sets the exit status. A unit that timed out is a stall when another port still serves us, else a hang;
+  a stall is replayed once, on the port that serves, with ``STALL_PATIENCE`` times the deadline.
 - When no port serves us any more (``Lanes.gone``) the target is dead (or hung, or deaf): one finding names the
   units sent last; with ``--launch`` it is reproduced and minimised against fresh instances, the target
   restarted and the campaign goes on, without it the campaign stops.
@@ -50,6 +51,7 @@ STATEFUL_EVERY = 4  # one single about an operation or motion command in so many
 # Where the case generator runs in a thread (no fork), the main thread, back from a socket wait, can queue
 # behind it for milliseconds per unit with the default 5 ms GIL switch interval; a short one keeps it low.
 SWITCH_INTERVAL = 0.0002  # s
+STALL_PATIENCE = 3  # a stall is replayed with this many times the deadline: a slow target is not a stalled one
 SAVE_EVERY = 30.0  # s between saves of the corpus progress (a killed run resumes from there)
 HISTORY = 64  # sessions kept for a finding that needs more than its last unit
 STOPS = ("dead", "hang", "deaf", "stall")  # without --launch, the campaign ends with such a finding
@@ -287,9 +289,12 @@ class Campaign:
             kind, port = "stall", other  # the unit's port may still be held by the stalled connection
             reason = f"{reason} within the deadline; the other port still answers"
 
+        patient = self.o.deadline * STALL_PATIENCE if kind == "stall" else None
+
         def replay() -> str | None:
             self.stats.replays += 1
-            e = self.lanes.alone(port, Unit(s.unit.cases, s.unit.prelude, s.unit.target))  # type: ignore[union-attr]
+            again = Unit(s.unit.cases, s.unit.prelude, s.unit.target)
+            e = self.lanes.alone(port, again, deadline=patient)  # type: ignore[union-attr]
             if e is None or e.verdict is None:
                 return None
             self._learn(e.flight.out.replies)
@@ -322,6 +327,11 @@ class Campaign:
         showed it, last of all)."""
         assert self.lanes is not None
         lanes = self.lanes
+        if self.launcher is not None and kind in ("hang", "deaf"):  # a dying process may still hold its ports
+            for _ in range(20):
+                if not self.launcher.alive():
+                    break
+                time.sleep(0.05)
         if self.launcher is not None and not self.launcher.alive():
             kind = "dead"
         last = [u for u in dict.fromkeys(e.unit for e in lanes.recent) if u is not culprit and u.cases]

@@ -86,9 +86,13 @@ def campaign(tmp_path: Path, launch: str, duration: float, **changes: object) ->
 
 
 def finds_nothing(tmp_path: Path, launch: str, duration: float) -> Campaign:
-    c = campaign(tmp_path, launch, duration)
+    """No finding, exit 0. Unconfirmed suspicions are reported apart and never set the exit status; the only ones
+    allowed here are units that timed out once and replayed clean (a machine loaded beyond the deadline)."""
+    c = campaign(tmp_path, launch, duration, deadline=5.0)
     assert c.run() == 0, c.stats.findings
-    assert not c.stats.findings and not c.stats.unconfirmed, c.stats.unconfirmed
+    assert not c.stats.findings
+    load = [u for u in c.stats.unconfirmed if u["kind"] == "stall" and set(u["evidence"]["replays"]) == {"ok"}]
+    assert len(load) == len(c.stats.unconfirmed) <= 2, c.stats.unconfirmed
     assert c.stats.cases > (100 if "slow-link" in launch else 300)  # slow-link: each reply 50-200 ms late
     return c
 
