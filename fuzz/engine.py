@@ -99,8 +99,9 @@ class Campaign:
         if self.lanes is not None:
             self.not_admitted_before += sum(g.turn_aways for g in self.lanes.gates)
         pipelining = self.o.pipeline and self.o.lanes > 1
-        self.lanes = lanes = Lanes(self.o.host, self.ports, self.o.deadline, pipelining, active=self.o.lanes,
-                                   lead_every=self.o.probe_every)
+        self.lanes = lanes = Lanes(
+            self.o.host, self.ports, self.o.deadline, pipelining, active=self.o.lanes, lead_every=self.o.probe_every
+        )
         status = Unit([], [])
         for k in range(len(self.ports)):
             for _ in range(MEASURE if k < self.o.lanes else 1):
@@ -241,8 +242,11 @@ class Campaign:
         at = None if unit.check_at is None else unit.check_at - (not e.led)
         if at is not None and unit.target is not None and len(out.replies) > at:
             check = out.replies[at]
-            if check.NAME == "CMD_GET_STATUS" and self.plan.check(unit.target, check.operation_state,  # type: ignore[attr-defined]
-                                                                  check.motion_mode):  # type: ignore[attr-defined]
+            if check.NAME == "CMD_GET_STATUS" and self.plan.check(
+                unit.target,
+                check.operation_state,  # type: ignore[attr-defined]
+                check.motion_mode,
+            ):  # type: ignore[attr-defined]
                 st.states.add(unit.target)
         if v.suspicious:
             self.suspicions.append(Suspicion(unit, e.port, v))
@@ -338,13 +342,16 @@ class Campaign:
         last += [culprit] if culprit is not None else []
         lanes.drain()
         lanes.todo.clear()
-        why = reason or {
-            "dead": "no port of the target takes a connection any more: it died",
-            "hang": "the target takes connections but answers none within the deadline on any port: it hangs",
-            "deaf": "the target closes every connection without answering on every port",
-            "stall": f"port {self.ports[lanes.stuck or 0]} has not served a client for {lanes.patience:g} s "
-            "while the other port still does",
-        }[kind]
+        why = (
+            reason
+            or {
+                "dead": "no port of the target takes a connection any more: it died",
+                "hang": "the target takes connections but answers none within the deadline on any port: it hangs",
+                "deaf": "the target closes every connection without answering on every port",
+                "stall": f"port {self.ports[lanes.stuck or 0]} has not served a client for {lanes.patience:g} s "
+                "while the other port still does",
+            }[kind]
+        )
         self.failure(kind, why, last, True, {"units_sent_last": [u.describe() for u in last[-8:]]})
 
     def failure(self, kind: str, reason: str, units: list[Unit], ok: bool, evidence: dict[str, Any]) -> None:
@@ -368,7 +375,6 @@ class Campaign:
             self.plan.documents_due = True
         elif kind in STOPS:
             self.stop = True  # a target we cannot restart is gone (or its port is)
-
 
 
 __all__ = ["Campaign", "HarnessError", "Options", "Stats"]
