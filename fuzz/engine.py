@@ -242,7 +242,9 @@ class Campaign:
         at = None if unit.check_at is None else unit.check_at - (not e.led)
         if at is not None and unit.target is not None and len(out.replies) > at:
             check: Any = out.replies[at]  # a CMD_GET_STATUS reply (its fields are built from the spec at import)
-            if check.NAME == "CMD_GET_STATUS" and self.plan.check(unit.target, check.operation_state, check.motion_mode):
+            if check.NAME == "CMD_GET_STATUS" and self.plan.check(
+                unit.target, check.operation_state, check.motion_mode
+            ):
                 st.states.add(unit.target)
         if v.suspicious:
             self.suspicions.append(Suspicion(unit, e.port, v))
