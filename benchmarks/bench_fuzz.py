@@ -60,8 +60,9 @@ BOOFUZZ_NOMINAL = "boofuzz, as it counts"
 FALSE = "pltf fuzz false findings"
 RATE_TARGET = 3000.0
 SPEEDUP_TARGET = 10.0
-REFERENCE = (f"{sys.executable} -m pltf.reference_server --ports {{ports}} --data-dir {{tmpdir}} --seed 1 "
-             "--log-level ERROR")
+REFERENCE = (
+    f"{sys.executable} -m pltf.reference_server --ports {{ports}} --data-dir {{tmpdir}} --seed 1 --log-level ERROR"
+)
 # The foreign targets are the fuzzer's test targets (tests/fuzz/foreign.py), run as a program, not imported.
 FOREIGN = Path(__file__).resolve().parents[1] / "tests" / "fuzz" / "foreign.py"
 TARGETS = {

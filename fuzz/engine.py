@@ -13,7 +13,8 @@ Rules:
   (counted): fresh connections are what such a target has least of.
 - A suspicion (``pltf.fuzz.verdict``) stops the lanes; once the ports are free its unit is replayed alone: a
   finding when it fails again the same way, else reported apart as unconfirmed (``stats.unconfirmed``), which
-  never sets the exit status. A unit that timed out is a stall when another port still serves us, else a hang.
+  never sets the exit status. A unit that timed out is a stall when another port still serves us, else a hang;
+  a stall is replayed once, on the port that serves, with ``STALL_PATIENCE`` times the deadline.
 - When no port serves us any more (``Lanes.gone``) the target is dead (or hung, or deaf): one finding names the
   units sent last; with ``--launch`` it is reproduced and minimised against fresh instances, the target
   restarted and the campaign goes on, without it the campaign stops.
@@ -25,8 +26,7 @@ import collections
 import sys
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, field
-from pathlib import Path
+from dataclasses import dataclass
 from typing import Any
 
 from pltf.fuzz import preludes, safety
@@ -36,12 +36,13 @@ from pltf.fuzz.findings import FindingWriter
 from pltf.fuzz.knowledge import Knowledge
 from pltf.fuzz.lanes import DONE, STOPPED, InFlight, Lanes
 from pltf.fuzz.launch import Launcher
+from pltf.fuzz.options import Options, Stats
 from pltf.fuzz.prefetch import Prefetcher
-from pltf.fuzz.preludes import STATEFUL, StatePlan, chart_last
-from pltf.fuzz.schedule import BIG_CASE, BIG_SHARE, Scheduler
-from pltf.fuzz.target import GET_STATUS, Session
-from pltf.fuzz.unit import BATCH_BYTES, BATCH_CASES, Unit, batchable
-from pltf.fuzz.verdict import TIMED_OUT, Verdict, confirm, confirmed
+from pltf.fuzz.preludes import STATEFUL, StatePlan
+from pltf.fuzz.schedule import BIG_CASE, Scheduler
+from pltf.fuzz.target import Session
+from pltf.fuzz.unit import Unit, window_units
+from pltf.fuzz.verdict import NEEDED, REPLAYS, TIMED_OUT, Verdict, confirm, confirmed
 
 WINDOW = 256  # cases drawn at a time
 MEASURE = 6  # status-only clients per port at the start: does it answer, what does a connection cost
@@ -50,6 +51,7 @@ STATEFUL_EVERY = 4  # one single about an operation or motion command in so many
 # Where the case generator runs in a thread (no fork), the main thread, back from a socket wait, can queue
 # behind it for milliseconds per unit with the default 5 ms GIL switch interval; a short one keeps it low.
 SWITCH_INTERVAL = 0.0002  # s
+STALL_PATIENCE = 3  # a stall is replayed with this many times the deadline: a slow target is not a stalled one
 SAVE_EVERY = 30.0  # s between saves of the corpus progress (a killed run resumes from there)
 HISTORY = 64  # sessions kept for a finding that needs more than its last unit
 STOPS = ("dead", "hang", "deaf", "stall")  # without --launch, the campaign ends with such a finding
@@ -57,68 +59,6 @@ STOPS = ("dead", "hang", "deaf", "stall")  # without --launch, the campaign ends
 
 class HarnessError(RuntimeError):
     """The fuzzer itself cannot go on (target unreachable at the start, launch failure): exit status 2."""
-
-
-@dataclass
-class Options:
-    host: str
-    port: int
-    second_port: int
-    duration: float
-    seed: int
-    out: Path
-    corpus: Path | None = None
-    allow_motion: bool = False
-    launch: str | None = None
-    max_cases: int | None = None
-    max_findings: int | None = None
-    deadline: float = 2.0
-    minimize_seconds: float = 60.0
-    probe_every: int = 4  # after the warm-up, one unit in so many on a port keeps its lead (1: every unit; fuzz.lanes)
-    lanes: int = 2  # 2: units run in two lanes, one per port (fuzz.lanes); 1: one at a time on --target's port
-    big_share: float = BIG_SHARE  # of the cases over 1 MiB drawn that are kept (fuzz.schedule; 1: natural mix)
-    pipeline: bool = True  # a port's next small unit connects while its previous one is in flight (fuzz.gate)
-    command: str = "pltf fuzz"
-
-
-@dataclass
-class Stats:
-    started: float = field(default_factory=time.monotonic)
-    cases: int = 0
-    units: int = 0
-    batches: int = 0
-    singles: int = 0
-    probes: int = 0  # units whose lead was answered (each one a liveness probe)
-    restarts: int = 0
-    cut_replies: int = 0
-    dropped_unsafe: int = 0
-    skipped: int = 0  # singles skipped on a dear target (fresh connections are what it has least of)
-    not_admitted: int = 0  # connections the target did not serve (turned away, backlog): run again
-    replays: int = 0  # replays of suspicions
-    pipelined: int = 0
-    turn_aways: int = 0  # ports on which pipelining stopped: the target turned pipelined newcomers away
-    turned_away: list[str] = field(default_factory=list)  # the cases of the unit that showed it
-    release_ms: list[float] = field(default_factory=list)  # per port: mean wait for a fresh connection
-    dear: bool = False
-    duplicates: int = 0
-    origins: collections.Counter[str] = field(default_factory=collections.Counter)
-    telegrams: set[str] = field(default_factory=set)
-    states: set[tuple[str, int | None]] = field(default_factory=set)
-    state_targets: int = 0
-    findings: list[dict[str, Any]] = field(default_factory=list)
-    unconfirmed: list[dict[str, Any]] = field(default_factory=list)
-
-    @property
-    def elapsed(self) -> float:
-        return time.monotonic() - self.started
-
-    @property
-    def rate(self) -> float:
-        return self.cases / self.elapsed if self.elapsed > 0 else 0.0
-
-    @property
-    def retried(self) -> int:
-        return self.not_admitted
 
 
 @dataclass
@@ -159,8 +99,9 @@ class Campaign:
         if self.lanes is not None:
             self.not_admitted_before += sum(g.turn_aways for g in self.lanes.gates)
         pipelining = self.o.pipeline and self.o.lanes > 1
-        self.lanes = lanes = Lanes(self.o.host, self.ports, self.o.deadline, pipelining, active=self.o.lanes,
-                                   lead_every=self.o.probe_every)
+        self.lanes = lanes = Lanes(
+            self.o.host, self.ports, self.o.deadline, pipelining, active=self.o.lanes, lead_every=self.o.probe_every
+        )
         status = Unit([], [])
         for k in range(len(self.ports)):
             for _ in range(MEASURE if k < self.o.lanes else 1):
@@ -272,32 +213,20 @@ class Campaign:
                 return
 
     def units(self, cases: list[Case]) -> list[Unit]:
-        """Batches (accepted cases, whole, at most ``BATCH_CASES``/``BATCH_BYTES``) spread among the singles;
-        the first batch and the singles about a chart or motion command carry the state prelude."""
-        batches: list[list[Case]] = [[]]
-        size = 0
-        singles: list[Unit] = []
+        """The window's units (``pltf.fuzz.unit.window_units``): the first batch behind the state prelude, and
+        one single in ``STATEFUL_EVERY`` about an operation or motion command."""
         state, mode = self.kb.operation_state, self.kb.motion_mode
         target = self.plan.current
-        for c in cases:
-            if not batchable(c):
-                prelude = []
-                if c.telegram in STATEFUL:
-                    self.stateful += 1
-                    if self.stateful % STATEFUL_EVERY == 0:  # a prelude costs a target as much as a few cases
-                        prelude = preludes.path(state, mode, target, self.forbidden)
-                singles.append(Unit([c], prelude, target if prelude else None))
-                continue
-            if len(batches[-1]) >= BATCH_CASES or size + c.size > BATCH_BYTES:
-                batches.append([])
-                size = 0
-            batches[-1].append(c)
-            size += c.size
-        units = [Unit(chart_last(b)) for b in batches if b]
-        if units:
-            units[0].prelude = self.plan.prelude(state, mode, self.forbidden)
-            units[0].target = target
-        return _interleave(units, singles)
+
+        def single_prelude(c: Case) -> list[bytes]:
+            if c.telegram not in STATEFUL:
+                return []
+            self.stateful += 1
+            if self.stateful % STATEFUL_EVERY:  # a prelude costs a target as much as a few cases
+                return []
+            return preludes.path(state, mode, target, self.forbidden)
+
+        return window_units(cases, lambda: self.plan.prelude(state, mode, self.forbidden), target, single_prelude)
 
     # ------------------------------------------------------------------ the oracle of an admitted unit
     def judge_unit(self, e: InFlight, v: Verdict) -> bool:
@@ -312,9 +241,10 @@ class Campaign:
         self._learn(out.replies)
         at = None if unit.check_at is None else unit.check_at - (not e.led)
         if at is not None and unit.target is not None and len(out.replies) > at:
-            check = out.replies[at]
-            if check.NAME == "CMD_GET_STATUS" and self.plan.check(unit.target, check.operation_state,  # type: ignore[attr-defined]
-                                                                  check.motion_mode):  # type: ignore[attr-defined]
+            check: Any = out.replies[at]  # a CMD_GET_STATUS reply (its fields are built from the spec at import)
+            if check.NAME == "CMD_GET_STATUS" and self.plan.check(
+                unit.target, check.operation_state, check.motion_mode
+            ):
                 st.states.add(unit.target)
         if v.suspicious:
             self.suspicions.append(Suspicion(unit, e.port, v))
@@ -361,22 +291,26 @@ class Campaign:
             kind, port = "stall", other  # the unit's port may still be held by the stalled connection
             reason = f"{reason} within the deadline; the other port still answers"
 
+        patient = self.o.deadline * STALL_PATIENCE if kind == "stall" else None
+
         def replay() -> str | None:
             self.stats.replays += 1
-            e = self.lanes.alone(port, Unit(s.unit.cases, s.unit.prelude, s.unit.target))  # type: ignore[union-attr]
+            again = Unit(s.unit.cases, s.unit.prelude, s.unit.target)
+            e = self.lanes.alone(port, again, deadline=patient)  # type: ignore[union-attr]
             if e is None or e.verdict is None:
                 return None
             self._learn(e.flight.out.replies)
             got = e.verdict.kind
             return "stall" if got == TIMED_OUT else got
 
-        seen = confirm(kind, replay, *((1, 1) if kind == "stall" else ()))  # a stall holds the port it stalls
+        replays, needed = (1, 1) if kind == "stall" else (REPLAYS, NEEDED)  # a stall holds the port it stalls
+        seen = confirm(kind, replay, replays, needed)
         if len(seen) < 2 and self.lanes.live.failing:  # a replay was not served: is the target still there?
             gone = self._cross_check()
             if gone is not None:
                 self.gone(gone, culprit=s.unit)
                 return
-        ok = confirmed(kind, seen)
+        ok = confirmed(kind, seen, needed)
         self.failure(kind, reason, [s.unit], ok, {"replays": seen, "port": self.ports[s.port]})
         if not ok:
             self._count(s.unit.cases, "closed")
@@ -395,19 +329,27 @@ class Campaign:
         showed it, last of all)."""
         assert self.lanes is not None
         lanes = self.lanes
+        if self.launcher is not None and kind in ("hang", "deaf"):  # a dying process may still hold its ports
+            for _ in range(20):
+                if not self.launcher.alive():
+                    break
+                time.sleep(0.05)
         if self.launcher is not None and not self.launcher.alive():
             kind = "dead"
         last = [u for u in dict.fromkeys(e.unit for e in lanes.recent) if u is not culprit and u.cases]
         last += [culprit] if culprit is not None else []
         lanes.drain()
         lanes.todo.clear()
-        why = reason or {
-            "dead": "no port of the target takes a connection any more: it died",
-            "hang": "the target takes connections but answers none within the deadline on any port: it hangs",
-            "deaf": "the target closes every connection without answering on every port",
-            "stall": f"port {self.ports[lanes.stuck or 0]} has not served a client for {lanes.patience:g} s "
-            "while the other port still does",
-        }[kind]
+        why = (
+            reason
+            or {
+                "dead": "no port of the target takes a connection any more: it died",
+                "hang": "the target takes connections but answers none within the deadline on any port: it hangs",
+                "deaf": "the target closes every connection without answering on every port",
+                "stall": f"port {self.ports[lanes.stuck or 0]} has not served a client for {lanes.patience:g} s "
+                "while the other port still does",
+            }[kind]
+        )
         self.failure(kind, why, last, True, {"units_sent_last": [u.describe() for u in last[-8:]]})
 
     def failure(self, kind: str, reason: str, units: list[Unit], ok: bool, evidence: dict[str, Any]) -> None:
@@ -433,17 +375,4 @@ class Campaign:
             self.stop = True  # a target we cannot restart is gone (or its port is)
 
 
-def _interleave(batches: list[Unit], singles: list[Unit]) -> list[Unit]:
-    """The batches spread evenly among the singles: while the target works through a batch on one port, the
-    other port carries singles."""
-    if not batches:
-        return singles
-    out: list[Unit] = []
-    step = len(singles) / len(batches)
-    for i, batch in enumerate(batches):
-        out.extend(singles[round(i * step) : round((i + 1) * step)])
-        out.append(batch)
-    return out
-
-
-__all__ = ["GET_STATUS", "Campaign", "HarnessError", "Options", "Stats"]
+__all__ = ["Campaign", "HarnessError", "Options", "Stats"]

@@ -6,8 +6,8 @@ Rules:
   a believed failure is a finding; the rest is written under ``unconfirmed/`` and never sets the exit status.
 - With ``--launch`` a believed failure is reproduced on fresh instances: each unit alone after the full state
   prelude of its target (the last first), then the units together, then everything since the last restart;
-  for a death none of those causes (a leak: the target dies of what piles up), each of the largest units is
-  repeated until the instance dies (``REPEAT_MAX`` rounds, ``REPEAT_SECONDS``), then all of them. ddmin
+  for a death none of those causes (a leak: the target dies of what piles up), the units are repeated until the
+  instance dies (``REPEAT_MAX`` rounds, ``REPEAT_SECONDS``): all of them, then the biggest and the busiest alone. ddmin
   (``pltf.fuzz.minimize``) then removes frames across sessions, the lead of each kept: it tells a
   newcomer turned away from one served (``pltf.fuzz.verdict``); every replay waits for the port as the lanes do.
 - The signature (kind and the ids of the minimal frames) deduplicates findings within a run and, through the
@@ -32,8 +32,8 @@ from pltf.spec.codec import REQUESTS
 if TYPE_CHECKING:
     from pltf.fuzz.engine import Campaign
 
-REPEAT_MAX = 400  # rounds of a repeated candidate at most
-REPEAT_SECONDS = 20.0  # s a repeated candidate may take
+REPEAT_MAX = 2000  # rounds of a repeated candidate at most
+REPEAT_SECONDS = 30.0  # s a repeated candidate may take
 GONE = ("dead", "hang", "deaf")
 
 
@@ -151,18 +151,19 @@ class FindingWriter:
             if self.reproduce(candidate)[0] == kind:
                 got["sessions"] = candidate
                 break
-        if got["sessions"] is None and kind in GONE:
-            largest = sorted(sessions_of, key=lambda p: -len(p[1].data))[:3]
-            for candidate in [*([p, s] for p, s in largest), [sessions_of[-1][0], *(s for _, s in sessions_of)]]:
+        if got["sessions"] is None and kind in GONE:  # what piles up: the units repeated, all, then the biggest
+            biggest = sorted(sessions_of, key=lambda p: -len(p[1].data))[:2]
+            busiest = sorted(sessions_of, key=lambda p: -len(p[1].frames))[:2]
+            every = [sessions_of[-1][0], *(s for _, s in sessions_of)]
+            for candidate in [every, *([p, s] for p, s in dict.fromkeys([*biggest, *busiest]))]:
                 if self.reproduce(candidate, repeat=REPEAT_MAX, seconds=REPEAT_SECONDS)[0] == kind:
-                    got["sessions"], got["repeat"] = candidate, self.rounds
+                    got["sessions"], got["repeat"] = candidate, 2 * self.rounds  # a margin for a fresh instance
                     break
         if got["sessions"] is not None and got["repeat"] == 1:
             got["sessions"], got["tests"] = self._minimize(kind, got["sessions"])
             got["minimized"] = True
         if got["sessions"] is not None:
-            rounds = got["repeat"] * 2 if got["repeat"] > 1 else 1
-            verdict, got["outcomes"] = self.reproduce(got["sessions"], record=True, repeat=rounds,
+            verdict, got["outcomes"] = self.reproduce(got["sessions"], record=True, repeat=got["repeat"],
                                                       seconds=4 * REPEAT_SECONDS)  # fmt: skip
             got["reproduced"] = verdict == kind
         return got

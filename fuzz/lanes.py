@@ -269,9 +269,11 @@ class Lanes:
         self.gone = self.live.verdict(time.monotonic() + self.patience) or "hang"
 
     # ------------------------------------------------------------------ alone, outside the lanes
-    def alone(self, k: int, unit: Unit, patience: float | None = None) -> InFlight | None:
+    def alone(self, k: int, unit: Unit, patience: float | None = None,
+              deadline: float | None = None) -> InFlight | None:  # fmt: skip
         """Run ``unit`` alone on port ``k`` once the port is free (a replay, a check): turned away, it runs again
-        after the backoff; None when the port did not admit it within ``patience``."""
+        after the backoff; None when the port did not admit it within ``patience``. ``deadline``: the reply
+        deadline of this run (default: the campaign's)."""
         self.release()
         end = time.monotonic() + (self.patience if patience is None else patience)
         gate = self.gates[k]
@@ -279,7 +281,7 @@ class Lanes:
             now = time.monotonic()
             if now < gate.retry_at:
                 time.sleep(gate.retry_at - now)
-            flight = self.connect(self.host, self.ports[k], unit.session(), self.deadline, sock=None)
+            flight = self.connect(self.host, self.ports[k], unit.session(), deadline or self.deadline, sock=None)
             e = InFlight(flight, unit, k, False, False, True, flight.started)
             fly([flight])
             v = judge(flight.out, unit.owed(flight.session, len(flight.expected)), True, unit.keep)

@@ -149,7 +149,6 @@ def _find_path(state: int | None, mode: int | None, target: Target, forbidden: f
     return [*(_enc(c) for c in to_ready), _enc("CMD_SET_MODE", mode=want), *(_enc(c) for c in onwards)]
 
 
-
 def matches(target: Target, operation_state: int | None, motion_mode: int | None) -> bool:
     name, mode = target
     return operation_state == STATES[name][0] and (mode is None or motion_mode == mode)

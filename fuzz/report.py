@@ -25,9 +25,9 @@ Found by: {command}
 Usage: python {name} --target HOST:PORT [--second-port PORT] [--deadline SECONDS]
 Exit status: 1 when the failure happened again ({kind}), 0 when the target survived, 2 on a usage error.
 Standard library only; it replays {n_frames} frame(s) on {n_sessions} connection(s) ({repeat} round(s)), then
-probes liveness with CMD_GET_STATUS on --second-port (or the same port). Each connection opens with a
-CMD_GET_STATUS: one that gets nothing back was not served (a target turns newcomers away, or leaves them in its
-listen backlog, while a port is busy) and runs again after a short pause.
+probes liveness with CMD_GET_POSITION on --second-port (or the same port). Each connection opens with a
+request the target answers (its lead): one that gets nothing back was not served (a target turns newcomers
+away, or leaves them in its listen backlog, while a port is busy) and runs again after a short pause.
 """
 
 import argparse
@@ -39,7 +39,8 @@ KIND = {kind!r}
 SESSIONS = {sessions}
 REPEAT = {repeat}  # rounds of the sessions (a failure that piles up, such as a leak, needs several)
 GET_STATUS = bytes.fromhex("ff01fe020000000112")
-PROBE = {{"frames": GET_STATUS.hex(), "delivery": ["whole", 1, 0.0], "half_close": True, "sync": False, "led": True,
+LEAD = bytes.fromhex("ff01fe02000000014a")  # CMD_GET_POSITION: the cheapest request a server answers
+PROBE = {{"frames": LEAD.hex(), "delivery": ["whole", 1, 0.0], "half_close": True, "sync": False, "led": True,
          "gate": 0, "replies": 1}}
 HEADER = bytes.fromhex("ff01fe02")
 try:  # strict reply checks when the pltf toolkit is importable; framing checks only otherwise
@@ -121,7 +122,7 @@ def play(host, port, session, deadline_s):
         data = bytes.fromhex(session["frames"])
         gate, got = session["gate"], 0
         try:
-            if gate:  # the lead GET_STATUS alone; the rest once it is answered
+            if gate:  # the lead alone; the rest once it is answered
                 sock.sendall(data[:gate])
                 frames, problem, timed_out, got = read_frames(sock, 1, deadline)
                 if not frames:
@@ -164,8 +165,8 @@ def play_served(host, port, session, deadline_s, patience):
 
 
 def probe(host, port, deadline_s, patience):
-    """None when a GET_STATUS is answered (waiting for the port as `play_served` does), else 'dead', 'hang' or
-    'deaf'."""
+    """None when the lead (CMD_GET_POSITION) is answered (waiting for the port as `play_served` does), else
+    'dead', 'hang' or 'deaf'."""
     verdict = play_served(host, port, PROBE, deadline_s, patience)
     if verdict is None:
         return None

@@ -269,7 +269,12 @@ def served(out: Outcome, session: Session) -> bool:
 
 
 def play_admitted(
-    host: str, port: int, session: Session, deadline_s: float, patience: float, record: bool = False,
+    host: str,
+    port: int,
+    session: Session,
+    deadline_s: float,
+    patience: float,
+    record: bool = False,
     alive: Callable[[], bool] | None = None,
 ) -> tuple[Outcome, bool]:
     """``play`` again, after a growing pause, while the target turns the connection away (``pltf.fuzz.gate``), for

@@ -20,10 +20,11 @@ Rules:
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from pltf.fuzz.case import WHOLE, Case
-from pltf.fuzz.preludes import Target
+from pltf.fuzz.preludes import Target, chart_last
 from pltf.fuzz.target import GET_STATUS, LEAD, Session
 from pltf.fuzz.wire import KEEP, answered_ids
 from pltf.spec.codec import REQUESTS
@@ -50,7 +51,9 @@ class Unit:
 
     @property
     def keep(self) -> bool:
-        return all(c.expect == KEEP for c in self.cases)
+        """Every case accepted by the strict codec (a unit without cases - a lead alone - is not: it owes only
+        the lead's reply)."""
+        return bool(self.cases) and all(c.expect == KEEP for c in self.cases)
 
     @property
     def batch(self) -> bool:
@@ -101,3 +104,37 @@ class Unit:
 
     def describe(self) -> list[str]:
         return [f"{c.telegram} ({c.origin}{': ' + c.note if c.note else ''})" for c in self.cases[:3]]
+
+
+def window_units(cases: list[Case], head: Callable[[], list[bytes]], target: Target,
+                 single_prelude: Callable[[Case], list[bytes]]) -> list[Unit]:  # fmt: skip
+    """A window of cases as units: batches of the ``batchable`` ones (at most ``BATCH_CASES`` cases and
+    ``BATCH_BYTES``; chart commands last, ``pltf.fuzz.preludes.chart_last``), the first one behind ``head()``, the
+    state prelude to ``target`` (asked for only when there is a batch); a single per other case, behind
+    ``single_prelude(case)``; the batches spread evenly among the singles (while the target works through a batch
+    on one port, the other carries singles)."""
+    batches: list[list[Case]] = [[]]
+    size = 0
+    singles: list[Unit] = []
+    for c in cases:
+        if not batchable(c):
+            prelude = single_prelude(c)
+            singles.append(Unit([c], prelude, target if prelude else None))
+            continue
+        if len(batches[-1]) >= BATCH_CASES or size + c.size > BATCH_BYTES:
+            batches.append([])
+            size = 0
+        batches[-1].append(c)
+        size += c.size
+    units = [Unit(chart_last(b)) for b in batches if b]
+    if units:
+        units[0].prelude = head()
+        units[0].target = target if units[0].prelude else None
+    if not units:
+        return singles
+    out: list[Unit] = []
+    step = len(singles) / len(units)
+    for i, batch in enumerate(units):
+        out.extend(singles[round(i * step) : round((i + 1) * step)])
+        out.append(batch)
+    return out

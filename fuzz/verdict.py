@@ -115,7 +115,7 @@ class Liveness:
         self.failing_since.pop(port, None)
 
     def turned_away(self, port: int, how: str, now: float) -> None:
-        self.failing[port] = how
+        self.failing[port] = "refused" if self.failing.get(port) == "refused" else how  # refused once: gone
         self.failing_since.setdefault(port, now)
 
     def stuck(self, now: float) -> int | None:

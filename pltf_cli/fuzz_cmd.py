@@ -153,7 +153,7 @@ def _summary(out: Path, stats: object) -> None:
         "pipelining": {k: getattr(s, k, None) for k in ("pipelined", "turn_aways", "turned_away")},
         "connections": {
             "not_admitted": getattr(s, "not_admitted", None),  # turned away or left in a backlog: run again
-            "release_ms": getattr(s, "release_ms", None),  # per port: mean wait for a fresh connection
+            "release_ms": getattr(s, "release_ms", None),  # per port: median wait for a fresh connection
             "dear": getattr(s, "dear", None),  # batches on a kept connection, singles skipped beyond a queue
             "singles_skipped": getattr(s, "skipped", None),
         },

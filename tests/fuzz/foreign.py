@@ -47,8 +47,9 @@ HEADER = b"\xff\x01\xfe\x02"
 HANG_SECONDS = 60.0
 READ = 1 << 16
 HIGH_WATER = 4 << 20  # bytes buffered one way before reading that side pauses
-REFERENCE = (f"{sys.executable} -m pltf.reference_server --ports {{ports}} --data-dir {{tmpdir}} --seed 1 "
-             "--log-level ERROR")
+REFERENCE = (
+    f"{sys.executable} -m pltf.reference_server --ports {{ports}} --data-dir {{tmpdir}} --seed 1 --log-level ERROR"
+)
 # guide 6.3 ids of the chart commands and the bugs' telegrams (spec/telegrams.yaml)
 CONNECT, SHUTDOWN, INIT, START, BREAK, CONTINUE, STOP, SET_MODE = 0, 1, 2, 11, 12, 13, 14, 15
 MOVE_REL, MOVE_VEL_WHEEL, SET_PLTF_PARAM, DOCUMENTS = 22, 23, 37, frozenset({25, 32, 40})

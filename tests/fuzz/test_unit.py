@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pltf.fuzz.case import Case, Delivery
 from pltf.fuzz.target import GET_STATUS, LEAD
-from pltf.fuzz.unit import PIPELINE_BYTES, Unit
+from pltf.fuzz.unit import PIPELINE_BYTES, Unit, window_units
 from pltf.fuzz.wire import CLOSE, KEEP, frame, survey
 from pltf.spec.codec import REQUESTS, encode
 
@@ -55,8 +55,28 @@ def test_a_unit_that_runs_again_is_gated_and_a_kept_connection_has_no_lead() -> 
     assert kept.frames == [POSITION] and not kept.half_close and kept.sync and not kept.led
 
 
-def test_a_status_only_unit_proves_a_port_serves() -> None:
+def test_a_lead_alone_proves_a_port_serves() -> None:
     unit = Unit([])
     s = unit.session()
-    assert s.frames == [LEAD] and s.sync and unit.keep and not unit.batch
+    assert s.frames == [LEAD] and not s.sync and s.half_close and not unit.keep and not unit.batch
+    assert unit.owed(s, 1) == 1  # the lead's reply, nothing else (a GET_STATUS may be slow on a target)
     assert survey(s.data) == (KEEP, [POSITION_ID]) and survey(frame(b"\xfe"))[0] == CLOSE
+
+
+def test_a_window_becomes_batches_among_singles_the_first_batch_behind_the_prelude() -> None:
+    accepted = [case(POSITION) for _ in range(300)]
+    refused = [case(frame(b"\xfe")) for _ in range(10)]
+    start = encode(REQUESTS.CMD_START())
+    cases = [c for pair in zip(accepted[:10], refused, strict=True) for c in pair] + accepted[10:]
+    units = window_units(cases, lambda: [start], ("running", 0), lambda c: [start] if c is refused[3] else [])
+    batches = [u for u in units if u.batch]
+    assert [len(u.cases) for u in batches] == [128, 128, 44]  # BATCH_CASES at most
+    assert batches[0].prelude == [start] and batches[0].target == ("running", 0)
+    assert not batches[1].prelude and not batches[2].prelude
+    singles = [u for u in units if not u.batch]
+    assert [u.cases[0] for u in singles] == refused  # in their order
+    assert [bool(u.prelude) for u in singles] == [k == 3 for k in range(10)]
+    assert units.index(batches[0]) > 0 and units[-1] is batches[-1]  # spread among the singles
+    asked: list[int] = []
+    only = window_units(refused, lambda: asked.append(1) or [start], ("ready", 0), lambda c: [])  # type: ignore[func-returns-value]
+    assert len(only) == 10 and not any(u.batch or u.prelude for u in only) and not asked  # no batch: it waits

@@ -86,6 +86,11 @@ def test_liveness_dead_hang_deaf_and_a_stuck_port() -> None:
     assert live.verdict(0.9) is None  # not yet for long enough
     assert live.verdict(1.1) == "dead"
     live = Liveness(ports=2, patience=1.0, now=0.0)
+    live.turned_away(0, "refused", 0.5)
+    live.turned_away(0, "closed", 0.6)  # refused once: a dying process resets its last connections, then is gone
+    live.turned_away(1, "closed", 0.6)
+    assert live.verdict(2.0) == "dead"
+    live = Liveness(ports=2, patience=1.0, now=0.0)
     live.turned_away(0, "timed-out", 0.5)
     live.turned_away(1, "timed-out", 0.5)
     assert live.verdict(2.0) == "hang"
