@@ -53,6 +53,7 @@ chromium:
 
 test: $(STAMP) $(GUI_BUILT) chromium tshark
 	$(BIN)/ruff check .
+	$(BIN)/ruff format --check .
 	$(BIN)/mypy
 	$(BIN)/python -m pltf.spec.docgen --check
 	$(BIN)/python -m pltf.gui.specgen --check
@@ -65,6 +66,7 @@ test-slow: $(STAMP) tshark
 
 lint: $(STAMP)
 	$(BIN)/ruff check .
+	$(BIN)/ruff format --check .
 
 typecheck: $(STAMP)
 	$(BIN)/mypy

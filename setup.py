@@ -61,8 +61,12 @@ class OptionalBuildExt(build_ext):
 
 FLAGS = ["-O2", "-ffp-contract=off"]
 EXTENSIONS = [
-    Extension(f"pltf.reference_server.world.{name}", [f"reference_server/world/{name}.c"], extra_compile_args=FLAGS,
-              optional=True)
+    Extension(
+        f"pltf.reference_server.world.{name}",
+        [f"reference_server/world/{name}.c"],
+        extra_compile_args=FLAGS,
+        optional=True,
+    )
     for name in ("_raycast", "_geometry")
 ]
 

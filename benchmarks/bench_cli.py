@@ -77,8 +77,10 @@ def measure(config: Config) -> dict[str, tuple[float, float]]:
         for _ in range(config.repeats):
             for name, argv in cmds.items():
                 samples[name].append(_run(argv, env))
-    return {name: (statistics.median(w for w, _ in runs), statistics.median(c for _, c in runs))
-            for name, runs in samples.items()}
+    return {
+        name: (statistics.median(w for w, _ in runs), statistics.median(c for _, c in runs))
+        for name, runs in samples.items()
+    }
 
 
 @benchmark()
@@ -90,14 +92,51 @@ def startup(config: Config) -> list[Row]:
     for name, (wall, cpu) in got.items():
         target = Target("value", "<=", CLI_TARGET_S) if name.startswith("pltf ") else None
         baseline = None if name == BASELINE else BASELINE
-        rows.append(make_row("cli.startup", name, "wall_seconds", wall, "s", higher_is_better=False,
-                             baseline_subject=baseline, baseline_value=None if baseline is None else base_wall,
-                             target=target))
-        rows.append(make_row("cli.startup", name, "cpu_seconds", cpu, "s", higher_is_better=False,
-                             baseline_subject=baseline, baseline_value=None if baseline is None else base_cpu))
+        rows.append(
+            make_row(
+                "cli.startup",
+                name,
+                "wall_seconds",
+                wall,
+                "s",
+                higher_is_better=False,
+                baseline_subject=baseline,
+                baseline_value=None if baseline is None else base_wall,
+                target=target,
+            )
+        )
+        rows.append(
+            make_row(
+                "cli.startup",
+                name,
+                "cpu_seconds",
+                cpu,
+                "s",
+                higher_is_better=False,
+                baseline_subject=baseline,
+                baseline_value=None if baseline is None else base_cpu,
+            )
+        )
     wall, cpu = got[IMPORT]
-    rows.append(make_row("cli.startup", "import pltf.client, minus python -c pass", "wall_seconds", wall - base_wall,
-                         "s", higher_is_better=False, target=Target("value", "<=", IMPORT_TARGET_S)))
-    rows.append(make_row("cli.startup", "import pltf.client, minus python -c pass", "cpu_seconds", cpu - base_cpu,
-                         "s", higher_is_better=False))
+    rows.append(
+        make_row(
+            "cli.startup",
+            "import pltf.client, minus python -c pass",
+            "wall_seconds",
+            wall - base_wall,
+            "s",
+            higher_is_better=False,
+            target=Target("value", "<=", IMPORT_TARGET_S),
+        )
+    )
+    rows.append(
+        make_row(
+            "cli.startup",
+            "import pltf.client, minus python -c pass",
+            "cpu_seconds",
+            cpu - base_cpu,
+            "s",
+            higher_is_better=False,
+        )
+    )
     return rows

@@ -101,8 +101,18 @@ def ours(launch: str, seconds: float, pipeline: bool = True, big_share: float = 
     """(cases per second, findings and unconfirmed suspicions) of a campaign of ``seconds``."""
     a, b = free_ports()
     with tempfile.TemporaryDirectory() as out:
-        opts = Options(host="127.0.0.1", port=a, second_port=b, duration=seconds, seed=1, out=Path(out),
-                       allow_motion=True, launch=launch, pipeline=pipeline, big_share=big_share)  # fmt: skip
+        opts = Options(
+            host="127.0.0.1",
+            port=a,
+            second_port=b,
+            duration=seconds,
+            seed=1,
+            out=Path(out),
+            allow_motion=True,
+            launch=launch,
+            pipeline=pipeline,
+            big_share=big_share,
+        )
         campaign = Campaign(opts)
         campaign.run()
         return campaign.stats.rate, len(campaign.stats.findings) + len(campaign.stats.unconfirmed)
@@ -241,23 +251,60 @@ def cases_per_second(config: Config) -> list[Row]:
                 add(target, BOOFUZZ_NOMINAL, nominal)
     rates = {k: statistics.median(v) for k, v in samples.items()}
     name = "fuzz.cases_per_second"
-    rows = [make_row(name, f"{OURS} ({DIRECT})", "cases_per_second", rates[DIRECT, OURS], "cases/s",
-                     higher_is_better=True, target=Target("value", ">=", RATE_TARGET))]  # fmt: skip
+    rows = [
+        make_row(
+            name,
+            f"{OURS} ({DIRECT})",
+            "cases_per_second",
+            rates[DIRECT, OURS],
+            "cases/s",
+            higher_is_better=True,
+            target=Target("value", ">=", RATE_TARGET),
+        )
+    ]
     for target in TARGETS:
         subjects = [s for t, s in rates if t == target]
         for subject in subjects:
             base = BOOFUZZ if subject != BOOFUZZ else None
             goal = Target("ratio", "<=", 1 / SPEEDUP_TARGET) if subject == OURS else None
-            rows.append(make_row(name, f"{subject} ({target})", "cases_per_second", rates[target, subject], "cases/s",
-                                 higher_is_better=True, baseline_subject=base and f"{base} ({target})",
-                                 baseline_value=base and rates[target, base], target=goal))  # fmt: skip
-        rows.append(make_row(name, f"{FALSE} ({target})", "findings", false[target], "findings",
-                             higher_is_better=False, target=Target("value", "<=", 0)))  # fmt: skip
+            rows.append(
+                make_row(
+                    name,
+                    f"{subject} ({target})",
+                    "cases_per_second",
+                    rates[target, subject],
+                    "cases/s",
+                    higher_is_better=True,
+                    baseline_subject=base and f"{base} ({target})",
+                    baseline_value=base and rates[target, base],
+                    target=goal,
+                )
+            )
+        rows.append(
+            make_row(
+                name,
+                f"{FALSE} ({target})",
+                "findings",
+                false[target],
+                "findings",
+                higher_is_better=False,
+                target=Target("value", "<=", 0),
+            )
+        )
     for target in TARGETS:
         if target != DIRECT:  # through a foreign target against the reference server directly
-            rows.append(make_row(name, f"{OURS} ({target})", "cases_per_second", rates[target, OURS], "cases/s",
-                                 higher_is_better=True, baseline_subject=f"{OURS} ({DIRECT})",
-                                 baseline_value=rates[DIRECT, OURS]))  # fmt: skip
+            rows.append(
+                make_row(
+                    name,
+                    f"{OURS} ({target})",
+                    "cases_per_second",
+                    rates[target, OURS],
+                    "cases/s",
+                    higher_is_better=True,
+                    baseline_subject=f"{OURS} ({DIRECT})",
+                    baseline_value=rates[DIRECT, OURS],
+                )
+            )
     return rows
 
 

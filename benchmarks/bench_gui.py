@@ -44,8 +44,15 @@ from pltf.zoo import launch
 
 ROOT = Path(__file__).resolve().parents[1]
 CHROMIUM = "/usr/bin/chromium"
-ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
-        "--disable-component-update", "--disable-sync", "--no-first-run"]  # fmt: skip
+ARGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--no-first-run",
+]
 VIEWPORT = {"width": 1400, "height": 900}
 FRAME_TARGET_MS = 16.0
 LATENCY_TARGET_MS = 100.0
@@ -65,10 +72,23 @@ def _percentile(xs: list[float], q: float) -> float:
 def gateway() -> Iterator[str]:
     with tempfile.TemporaryDirectory(prefix="pltf-bench-gui-") as tmp:
         proc = subprocess.Popen(
-            [sys.executable, "-m", "pltf.cli.main", "gui", "--target", "127.0.0.1:1", "--listen", "127.0.0.1:0",
-             "--network-ini", str(Path(tmp) / "Network.ini")],
-            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, cwd=ROOT,
-        )  # fmt: skip
+            [
+                sys.executable,
+                "-m",
+                "pltf.cli.main",
+                "gui",
+                "--target",
+                "127.0.0.1:1",
+                "--listen",
+                "127.0.0.1:0",
+                "--network-ini",
+                str(Path(tmp) / "Network.ini"),
+            ],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.DEVNULL,
+            text=True,
+            cwd=ROOT,
+        )
         assert proc.stdout is not None
         m = re.search(r"gui serving at (http://[^/]+)/", proc.stdout.readline())
         try:
@@ -101,8 +121,10 @@ def big_map(n: int = 50_000, size: float = 250_000.0, seed: int = 1) -> str:
     for _ in range(n):
         x, y = rng.uniform(0, size), rng.uniform(0, size)
         a, length = rng.uniform(0, math.pi), rng.uniform(300, 3000)
-        lines.append(f'<line><point x="{x:.0f}" y="{y:.0f}"/>'
-                     f'<point x="{x + length * math.cos(a):.0f}" y="{y + length * math.sin(a):.0f}"/></line>')
+        lines.append(
+            f'<line><point x="{x:.0f}" y="{y:.0f}"/>'
+            f'<point x="{x + length * math.cos(a):.0f}" y="{y + length * math.sin(a):.0f}"/></line>'
+        )
     return '<?xml version="1.0"?><map Version="1.0"><layer index="0">' + "".join(lines) + "</layer></map>"
 
 
@@ -189,16 +211,40 @@ def pan_zoom(config: Config) -> list[Row]:
     frame_target = Target("value", "<=", FRAME_TARGET_MS)
     for kind in ("pan", "zoom"):
         for metric, q in (("p50", 0.5), ("p95", 0.95)):
-            rows.append(make_row("gui.pan_zoom", f"{kind}: layer worker + culling", f"frame_{metric}",
-                                 _percentile(ours[kind], q), "ms", higher_is_better=False,
-                                 baseline_subject=f"{kind}: drawn on the page per frame",
-                                 baseline_value=_percentile(plain[kind], q),
-                                 target=frame_target if metric == "p95" else None))  # fmt: skip
-        rows.append(make_row("gui.pan_zoom", f"{kind}: layer worker + culling", "frame_max", max(ours[kind]),
-                             "ms", higher_is_better=False))  # fmt: skip
+            rows.append(
+                make_row(
+                    "gui.pan_zoom",
+                    f"{kind}: layer worker + culling",
+                    f"frame_{metric}",
+                    _percentile(ours[kind], q),
+                    "ms",
+                    higher_is_better=False,
+                    baseline_subject=f"{kind}: drawn on the page per frame",
+                    baseline_value=_percentile(plain[kind], q),
+                    target=frame_target if metric == "p95" else None,
+                )
+            )
+        rows.append(
+            make_row(
+                "gui.pan_zoom",
+                f"{kind}: layer worker + culling",
+                "frame_max",
+                max(ours[kind]),
+                "ms",
+                higher_is_better=False,
+            )
+        )
     if ours["layer"]:
-        rows.append(make_row("gui.pan_zoom", "layer worker (off the page's thread)", "layer_p50",
-                             _percentile(ours["layer"], 0.5), "ms", higher_is_better=False))  # fmt: skip
+        rows.append(
+            make_row(
+                "gui.pan_zoom",
+                "layer worker (off the page's thread)",
+                "layer_p50",
+                _percentile(ours["layer"], 0.5),
+                "ms",
+                higher_is_better=False,
+            )
+        )
     return rows
 
 
@@ -217,8 +263,11 @@ def status_latency(config: Config) -> list[Row]:
     n = 8 if config.quick else 60
     gui: list[float] = []
     tight: list[float] = []
-    with (launch.reference(time_scale=1.0) as server, gateway() as base,
-          page(base, f"127.0.0.1:{server.ports[0]}") as pg):
+    with (
+        launch.reference(time_scale=1.0) as server,
+        gateway() as base,
+        page(base, f"127.0.0.1:{server.ports[0]}") as pg,
+    ):
         pg.evaluate(OBSERVE_JS)
         with PlatformClient("127.0.0.1", server.ports[1], timeout=5.0) as other:
             for i in range(n):
@@ -227,7 +276,8 @@ def status_latency(config: Config) -> list[Row]:
                 t0 = time.time()
                 other.set_frm_pltf(x, 9000, 0)
                 shown = pg.wait_for_function(
-                    f"() => window.__changes.find(([t, s]) => s.startsWith('x {x} mm'))", timeout=5000).json_value()
+                    f"() => window.__changes.find(([t, s]) => s.startsWith('x {x} mm'))", timeout=5000
+                ).json_value()
                 gui.append(shown[0] - t0 * 1000)
             for i in range(n):  # the baseline apart: a client polling back to back loads the server
                 x = 5000 + 10 * i
@@ -238,12 +288,19 @@ def status_latency(config: Config) -> list[Row]:
                     pass
                 tight.append((time.time() - t0) * 1000)
     return [
-        make_row("gui.status_latency", f"{GUI_TAG}, GET_STATUS at 20 Hz", metric, _percentile(gui, q), "ms",
-                 higher_is_better=False, baseline_subject="GET_STATUS back to back (other port)",
-                 baseline_value=_percentile(tight, q),
-                 target=Target("value", "<=", LATENCY_TARGET_MS) if metric == "p95" else None)
+        make_row(
+            "gui.status_latency",
+            f"{GUI_TAG}, GET_STATUS at 20 Hz",
+            metric,
+            _percentile(gui, q),
+            "ms",
+            higher_is_better=False,
+            baseline_subject="GET_STATUS back to back (other port)",
+            baseline_value=_percentile(tight, q),
+            target=Target("value", "<=", LATENCY_TARGET_MS) if metric == "p95" else None,
+        )
         for metric, q in (("p50", 0.5), ("p95", 0.95))
-    ]  # fmt: skip
+    ]
 
 
 # ---------------------------------------------------------------------------------------------- server cost
@@ -271,12 +328,26 @@ def polling_cost(config: Config) -> list[Row]:
             time.sleep(2.0)
             polled = _cpu_share(pid, window)
     return [
-        make_row("gui.polling_cost", "server CPU caused by the GUI (GET_STATUS 20 Hz, GET_DEBUG_DATA 1 Hz)",
-                 "cpu_share", polled - idle, "% of a core", higher_is_better=False,
-                 target=Target("value", "<=", CPU_TARGET_PCT)),
-        make_row("gui.polling_cost", "server with the GUI", "cpu_share", polled, "% of a core",
-                 higher_is_better=False, baseline_subject="server idle, no client", baseline_value=idle),
-    ]  # fmt: skip
+        make_row(
+            "gui.polling_cost",
+            "server CPU caused by the GUI (GET_STATUS 20 Hz, GET_DEBUG_DATA 1 Hz)",
+            "cpu_share",
+            polled - idle,
+            "% of a core",
+            higher_is_better=False,
+            target=Target("value", "<=", CPU_TARGET_PCT),
+        ),
+        make_row(
+            "gui.polling_cost",
+            "server with the GUI",
+            "cpu_share",
+            polled,
+            "% of a core",
+            higher_is_better=False,
+            baseline_subject="server idle, no client",
+            baseline_value=idle,
+        ),
+    ]
 
 
 # ---------------------------------------------------------------------------------------------- heap
@@ -284,8 +355,11 @@ def polling_cost(config: Config) -> list[Row]:
 def heap_growth(config: Config) -> list[Row]:
     """JS heap growth over a window of live updates (the issue's 10 minutes: PLTF_GUI_HEAP_SECONDS=600)."""
     seconds = 5.0 if config.quick else float(os.environ.get("PLTF_GUI_HEAP_SECONDS", "60"))
-    with (launch.reference(time_scale=1.0) as server, gateway() as base,
-          page(base, f"127.0.0.1:{server.ports[0]}") as pg):
+    with (
+        launch.reference(time_scale=1.0) as server,
+        gateway() as base,
+        page(base, f"127.0.0.1:{server.ports[0]}") as pg,
+    ):
         cdp = pg.context.new_cdp_session(pg)
 
         def heap_mb() -> float:
@@ -309,7 +383,15 @@ def heap_growth(config: Config) -> list[Row]:
             other.move_vel(0, 0)
             after = heap_mb()
     target = Target("value", "<=", HEAP_TARGET_MB) if seconds >= 600 else None
-    return [make_row("gui.heap_growth", f"JS heap over {seconds:g} s of live updates", "growth", after - before, "MB",
-                     higher_is_better=False, target=target),
-            make_row("gui.heap_growth", "JS heap after the window", "used", after, "MB", higher_is_better=False)]
-
+    return [
+        make_row(
+            "gui.heap_growth",
+            f"JS heap over {seconds:g} s of live updates",
+            "growth",
+            after - before,
+            "MB",
+            higher_is_better=False,
+            target=target,
+        ),
+        make_row("gui.heap_growth", "JS heap after the window", "used", after, "MB", higher_is_better=False),
+    ]

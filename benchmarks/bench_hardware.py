@@ -135,13 +135,33 @@ def can_throughput(config: Config) -> list[Row]:
     times = median_times(subjects, config, number=1)
     rates = {name: frames / t for name, t in times.items()}
     return [
-        make_row("hardware.can_throughput", SIM_BUS, "controller_rx_rate", rates[SIM_BUS], "frames/s",
-                 higher_is_better=True, baseline_subject=PLAIN_BUS, baseline_value=rates[PLAIN_BUS]),
-        make_row("hardware.can_throughput", PLAIN_BUS, "controller_rx_rate", rates[PLAIN_BUS], "frames/s",
-                 higher_is_better=True),
-        make_row("hardware.can_throughput", "simulated bus load", "controller_rx_rate", frames / seconds,
-                 "frames/sim-s", higher_is_better=True),
-    ]  # fmt: skip
+        make_row(
+            "hardware.can_throughput",
+            SIM_BUS,
+            "controller_rx_rate",
+            rates[SIM_BUS],
+            "frames/s",
+            higher_is_better=True,
+            baseline_subject=PLAIN_BUS,
+            baseline_value=rates[PLAIN_BUS],
+        ),
+        make_row(
+            "hardware.can_throughput",
+            PLAIN_BUS,
+            "controller_rx_rate",
+            rates[PLAIN_BUS],
+            "frames/s",
+            higher_is_better=True,
+        ),
+        make_row(
+            "hardware.can_throughput",
+            "simulated bus load",
+            "controller_rx_rate",
+            frames / seconds,
+            "frames/sim-s",
+            higher_is_better=True,
+        ),
+    ]
 
 
 @benchmark()
@@ -155,9 +175,18 @@ def realtime_factor(config: Config) -> list[Row]:
     times = median_times(subjects, config, number=1)
     rtf = {name: seconds / t for name, t in times.items()}
     return [
-        make_row("hardware.realtime_factor", BOARDS_ON, "realtime_factor", rtf[BOARDS_ON], "sim-s/s",
-                 higher_is_better=True, baseline_subject=BOARDS_OFF, baseline_value=rtf[BOARDS_OFF],
-                 target=Target("value", ">=", RTF_TARGET)),
-        make_row("hardware.realtime_factor", BOARDS_OFF, "realtime_factor", rtf[BOARDS_OFF], "sim-s/s",
-                 higher_is_better=True),
-    ]  # fmt: skip
+        make_row(
+            "hardware.realtime_factor",
+            BOARDS_ON,
+            "realtime_factor",
+            rtf[BOARDS_ON],
+            "sim-s/s",
+            higher_is_better=True,
+            baseline_subject=BOARDS_OFF,
+            baseline_value=rtf[BOARDS_OFF],
+            target=Target("value", ">=", RTF_TARGET),
+        ),
+        make_row(
+            "hardware.realtime_factor", BOARDS_OFF, "realtime_factor", rtf[BOARDS_OFF], "sim-s/s", higher_is_better=True
+        ),
+    ]

@@ -169,8 +169,9 @@ def hardware_run(seconds: float) -> Run:
 
     scan = [5000.0] * LASER_FAN.count
     echoes: list[float | None] = [2000.0] * 16
-    hw = build_platform_hardware(params=ParameterStore().get, rng=random.Random(1), scan_source=lambda now: scan,
-                                 us_source=lambda now: echoes)  # fmt: skip
+    hw = build_platform_hardware(
+        params=ParameterStore().get, rng=random.Random(1), scan_source=lambda now: scan, us_source=lambda now: echoes
+    )
     assert hw.connect(0.0).ok and hw.init(0.0).ok
     if hw.scanner is not None:
         hw.scanner.period = 0.1
@@ -224,19 +225,46 @@ def timed_runs(builders: dict[str, Callable[[], Run]], repeats: int) -> dict[str
 def realtime_factor(config: Config) -> list[Row]:
     """Simulated seconds per wall second: the world alone, and with the CAN boards and the S300 in the loop."""
     seconds = 5.0 if config.quick else 60.0
-    builders = {WORLD: lambda: world_run(seconds), WORLD_CAN: lambda: world_can_run(seconds),
-                HARDWARE: lambda: hardware_run(seconds)}  # fmt: skip
+    builders = {
+        WORLD: lambda: world_run(seconds),
+        WORLD_CAN: lambda: world_can_run(seconds),
+        HARDWARE: lambda: hardware_run(seconds),
+    }
     times = timed_runs(builders, min(config.repeats, 5))
     rtf = {name: seconds / t for name, t in times.items()}
     target = Target("value", ">=", RTF_TARGET)
     return [
-        make_row("motion.realtime_factor", WORLD, "realtime_factor", rtf[WORLD], "sim-s/s", higher_is_better=True,
-                 target=target),
-        make_row("motion.realtime_factor", WORLD_CAN, "realtime_factor", rtf[WORLD_CAN], "sim-s/s",
-                 higher_is_better=True, baseline_subject=WORLD, baseline_value=rtf[WORLD], target=target),
-        make_row("motion.realtime_factor", HARDWARE, "realtime_factor", rtf[HARDWARE], "sim-s/s",
-                 higher_is_better=True, baseline_subject=WORLD_CAN, baseline_value=rtf[WORLD_CAN]),
-    ]  # fmt: skip
+        make_row(
+            "motion.realtime_factor",
+            WORLD,
+            "realtime_factor",
+            rtf[WORLD],
+            "sim-s/s",
+            higher_is_better=True,
+            target=target,
+        ),
+        make_row(
+            "motion.realtime_factor",
+            WORLD_CAN,
+            "realtime_factor",
+            rtf[WORLD_CAN],
+            "sim-s/s",
+            higher_is_better=True,
+            baseline_subject=WORLD,
+            baseline_value=rtf[WORLD],
+            target=target,
+        ),
+        make_row(
+            "motion.realtime_factor",
+            HARDWARE,
+            "realtime_factor",
+            rtf[HARDWARE],
+            "sim-s/s",
+            higher_is_better=True,
+            baseline_subject=WORLD_CAN,
+            baseline_value=rtf[WORLD_CAN],
+        ),
+    ]
 
 
 # ---------------------------------------------------------------------------------------------- (b) planning
@@ -361,19 +389,52 @@ def planning(config: Config) -> list[Row]:
             longer.append(length / path_length(planner.plan(start, goal).points))
     target = Target("value", "<=", PLAN_P95_TARGET)
     rows = [
-        make_row("motion.planning", VISIBILITY, "p95_query_time", _p95(ours), "s", higher_is_better=False,
-                 baseline_subject=GRID, baseline_value=_p95(grid), target=target),
-        make_row("motion.planning", VISIBILITY, "median_query_time", statistics.median(ours), "s",
-                 higher_is_better=False, baseline_subject=GRID, baseline_value=statistics.median(grid)),
-        make_row("motion.planning", VISIBILITY, "median_query_time_grid_queries", statistics.median(ours[:n_grid]),
-                 "s", higher_is_better=False, baseline_subject=GRID, baseline_value=statistics.median(grid)),
+        make_row(
+            "motion.planning",
+            VISIBILITY,
+            "p95_query_time",
+            _p95(ours),
+            "s",
+            higher_is_better=False,
+            baseline_subject=GRID,
+            baseline_value=_p95(grid),
+            target=target,
+        ),
+        make_row(
+            "motion.planning",
+            VISIBILITY,
+            "median_query_time",
+            statistics.median(ours),
+            "s",
+            higher_is_better=False,
+            baseline_subject=GRID,
+            baseline_value=statistics.median(grid),
+        ),
+        make_row(
+            "motion.planning",
+            VISIBILITY,
+            "median_query_time_grid_queries",
+            statistics.median(ours[:n_grid]),
+            "s",
+            higher_is_better=False,
+            baseline_subject=GRID,
+            baseline_value=statistics.median(grid),
+        ),
         make_row("motion.planning", GRID, "p95_query_time", _p95(grid), "s", higher_is_better=False),
         make_row("motion.planning", GRID, "median_query_time", statistics.median(grid), "s", higher_is_better=False),
         make_row("motion.planning", LOOKUP, "build_time", build, "s", higher_is_better=False),
-    ]  # fmt: skip
+    ]
     if longer:
-        rows.append(make_row("motion.planning", GRID, "path_length_vs_visibility", statistics.median(longer), "x",
-                             higher_is_better=False))  # fmt: skip
+        rows.append(
+            make_row(
+                "motion.planning",
+                GRID,
+                "path_length_vs_visibility",
+                statistics.median(longer),
+                "x",
+                higher_is_better=False,
+            )
+        )
     return rows
 
 
@@ -388,14 +449,26 @@ def corners(config: Config) -> list[Row]:
     walls = maze(size=50000.0, rooms=5) if config.quick else maze(size=170000.0, rooms=17, stubs=6)
     if not np.array_equal(_corners(walls), corners_by_loop(walls)):
         raise AssertionError("the vectorised corners differ from the loop's")
-    times = median_times({VECTOR_CORNERS: lambda: _corners(walls), LOOP_CORNERS: lambda: corners_by_loop(walls)},
-                         Config(config.quick, min(config.repeats, 3), 0.0), number=1)  # fmt: skip
+    times = median_times(
+        {VECTOR_CORNERS: lambda: _corners(walls), LOOP_CORNERS: lambda: corners_by_loop(walls)},
+        Config(config.quick, min(config.repeats, 3), 0.0),
+        number=1,
+    )
     return [
-        make_row("motion.corners", VECTOR_CORNERS, f"time_{len(walls)}_walls", times[VECTOR_CORNERS], "s",
-                 higher_is_better=False, baseline_subject=LOOP_CORNERS, baseline_value=times[LOOP_CORNERS]),
-        make_row("motion.corners", LOOP_CORNERS, f"time_{len(walls)}_walls", times[LOOP_CORNERS], "s",
-                 higher_is_better=False),
-    ]  # fmt: skip
+        make_row(
+            "motion.corners",
+            VECTOR_CORNERS,
+            f"time_{len(walls)}_walls",
+            times[VECTOR_CORNERS],
+            "s",
+            higher_is_better=False,
+            baseline_subject=LOOP_CORNERS,
+            baseline_value=times[LOOP_CORNERS],
+        ),
+        make_row(
+            "motion.corners", LOOP_CORNERS, f"time_{len(walls)}_walls", times[LOOP_CORNERS], "s", higher_is_better=False
+        ),
+    ]
 
 
 # ---------------------------------------------------------------------------------------------- (c) one scan
@@ -406,8 +479,9 @@ def scan_scene(seed: int = 1, n: int = 200) -> F64:
     c = rng.uniform(0, 50000, (n, 2))
     a = rng.uniform(0, math.pi, n)
     half = rng.uniform(500, 5000, n) / 2
-    return np.column_stack([c[:, 0] - half * np.cos(a), c[:, 1] - half * np.sin(a),
-                            c[:, 0] + half * np.cos(a), c[:, 1] + half * np.sin(a)])  # fmt: skip
+    return np.column_stack(
+        [c[:, 0] - half * np.cos(a), c[:, 1] - half * np.sin(a), c[:, 0] + half * np.cos(a), c[:, 1] + half * np.sin(a)]
+    )
 
 
 def pymunk_scan(space: pymunk.Space, x: float, y: float, heading: float) -> list[float]:
@@ -435,15 +509,35 @@ def scan(config: Config) -> list[Row]:
     if not np.allclose(np.nan_to_num(ours, posinf=-1), np.nan_to_num(theirs, posinf=-1), atol=0.01):
         raise AssertionError("the two ray casters disagree")
     times = median_times(
-        {OURS_SCAN: lambda: cast_fan(*pose, scene, LASER_FAN),
-         NUMPY_SCAN: lambda: cast_fan_numpy(*pose, scene, LASER_FAN),
-         PYMUNK_SCAN: lambda: pymunk_scan(space, *pose)}, config,
-    )  # fmt: skip
+        {
+            OURS_SCAN: lambda: cast_fan(*pose, scene, LASER_FAN),
+            NUMPY_SCAN: lambda: cast_fan_numpy(*pose, scene, LASER_FAN),
+            PYMUNK_SCAN: lambda: pymunk_scan(space, *pose),
+        },
+        config,
+    )
     target = Target("value", "<=", SCAN_TARGET)
     return [
-        make_row("motion.scan", OURS_SCAN, "scan_time", times[OURS_SCAN], "s", higher_is_better=False,
-                 baseline_subject=PYMUNK_SCAN, baseline_value=times[PYMUNK_SCAN], target=target),
-        make_row("motion.scan", NUMPY_SCAN, "scan_time", times[NUMPY_SCAN], "s", higher_is_better=False,
-                 baseline_subject=PYMUNK_SCAN, baseline_value=times[PYMUNK_SCAN]),
+        make_row(
+            "motion.scan",
+            OURS_SCAN,
+            "scan_time",
+            times[OURS_SCAN],
+            "s",
+            higher_is_better=False,
+            baseline_subject=PYMUNK_SCAN,
+            baseline_value=times[PYMUNK_SCAN],
+            target=target,
+        ),
+        make_row(
+            "motion.scan",
+            NUMPY_SCAN,
+            "scan_time",
+            times[NUMPY_SCAN],
+            "s",
+            higher_is_better=False,
+            baseline_subject=PYMUNK_SCAN,
+            baseline_value=times[PYMUNK_SCAN],
+        ),
         make_row("motion.scan", PYMUNK_SCAN, "scan_time", times[PYMUNK_SCAN], "s", higher_is_better=False),
-    ]  # fmt: skip
+    ]

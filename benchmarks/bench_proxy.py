@@ -51,8 +51,17 @@ LISTENING = re.compile(r"proxy listening at [\d.]+:(\d+)")
 @contextmanager
 def _server(tmp: Path) -> Iterator[list[int]]:
     log = tmp / "server.log"
-    cmd = [sys.executable, "-m", "pltf.reference_server", "--ports", "0,0", "--data-dir", str(tmp / "data"),
-           "--time-scale", "1"]  # fmt: skip
+    cmd = [
+        sys.executable,
+        "-m",
+        "pltf.reference_server",
+        "--ports",
+        "0,0",
+        "--data-dir",
+        str(tmp / "data"),
+        "--time-scale",
+        "1",
+    ]
     with log.open("wb") as out:
         proc = subprocess.Popen(cmd, cwd=ROOT, stdout=out, stderr=subprocess.STDOUT)
     try:
@@ -69,8 +78,17 @@ def _server(tmp: Path) -> Iterator[list[int]]:
 
 @contextmanager
 def _proxy(target_port: int, tmp: Path, record: bool = True) -> Iterator[int]:
-    cmd = [sys.executable, "-m", "pltf.cli.main", "proxy", "--listen", "127.0.0.1:0", "--target",
-           f"127.0.0.1:{target_port}", "--quiet"] + (["--record", str(tmp / "session.jsonl")] if record else [])
+    cmd = [
+        sys.executable,
+        "-m",
+        "pltf.cli.main",
+        "proxy",
+        "--listen",
+        "127.0.0.1:0",
+        "--target",
+        f"127.0.0.1:{target_port}",
+        "--quiet",
+    ] + (["--record", str(tmp / "session.jsonl")] if record else [])
     proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
     try:
         assert proc.stdout is not None
@@ -171,23 +189,71 @@ def get_position(config: Config) -> list[Row]:
     seq = {s: statistics.median(len(t) / sum(t) for t in r) for s, r in runs.items()}
     pip = {s: statistics.median(r) for s, r in piped.items()}
     return [
-        make_row(bench, PROXIED, "latency_p50", p50[PROXIED], "ms", higher_is_better=False, baseline_subject=DIRECT,
-                 baseline_value=p50[DIRECT], target=Target("ratio", "<=", LATENCY_TARGET)),
+        make_row(
+            bench,
+            PROXIED,
+            "latency_p50",
+            p50[PROXIED],
+            "ms",
+            higher_is_better=False,
+            baseline_subject=DIRECT,
+            baseline_value=p50[DIRECT],
+            target=Target("ratio", "<=", LATENCY_TARGET),
+        ),
         make_row(bench, DIRECT, "latency_p50", p50[DIRECT], "ms", higher_is_better=False),
-        make_row(bench, PROXIED, "latency_p99", p99[PROXIED], "ms", higher_is_better=False, baseline_subject=DIRECT,
-                 baseline_value=p99[DIRECT]),
+        make_row(
+            bench,
+            PROXIED,
+            "latency_p99",
+            p99[PROXIED],
+            "ms",
+            higher_is_better=False,
+            baseline_subject=DIRECT,
+            baseline_value=p99[DIRECT],
+        ),
         make_row(bench, DIRECT, "latency_p99", p99[DIRECT], "ms", higher_is_better=False),
-        make_row(bench, PROXIED, "round_trip_rate", seq[PROXIED], "1/s", higher_is_better=True,
-                 baseline_subject=DIRECT, baseline_value=seq[DIRECT], target=Target("ratio", "<=", RATE_TARGET)),
+        make_row(
+            bench,
+            PROXIED,
+            "round_trip_rate",
+            seq[PROXIED],
+            "1/s",
+            higher_is_better=True,
+            baseline_subject=DIRECT,
+            baseline_value=seq[DIRECT],
+            target=Target("ratio", "<=", RATE_TARGET),
+        ),
         make_row(bench, DIRECT, "round_trip_rate", seq[DIRECT], "1/s", higher_is_better=True),
-        make_row(bench, PROXIED, "pipelined_rate", pip[PROXIED], "telegrams/s", higher_is_better=True,
-                 baseline_subject=DIRECT, baseline_value=pip[DIRECT], target=Target("ratio", "<=", RATE_TARGET)),
+        make_row(
+            bench,
+            PROXIED,
+            "pipelined_rate",
+            pip[PROXIED],
+            "telegrams/s",
+            higher_is_better=True,
+            baseline_subject=DIRECT,
+            baseline_value=pip[DIRECT],
+            target=Target("ratio", "<=", RATE_TARGET),
+        ),
         make_row(bench, DIRECT, "pipelined_rate", pip[DIRECT], "telegrams/s", higher_is_better=True),
-    ] + [make_row(bench, FORWARDING, metric, values[FORWARDING], unit, higher_is_better=higher, baseline_subject=DIRECT,
-                  baseline_value=values[DIRECT])
-         for metric, values, unit, higher in (("latency_p50", p50, "ms", False), ("latency_p99", p99, "ms", False),
-                                             ("round_trip_rate", seq, "1/s", True),
-                                             ("pipelined_rate", pip, "telegrams/s", True))]  # fmt: skip
+    ] + [
+        make_row(
+            bench,
+            FORWARDING,
+            metric,
+            values[FORWARDING],
+            unit,
+            higher_is_better=higher,
+            baseline_subject=DIRECT,
+            baseline_value=values[DIRECT],
+        )
+        for metric, values, unit, higher in (
+            ("latency_p50", p50, "ms", False),
+            ("latency_p99", p99, "ms", False),
+            ("round_trip_rate", seq, "1/s", True),
+            ("pipelined_rate", pip, "telegrams/s", True),
+        )
+    ]
 
 
 # ---------------------------------------------------------------------------------------------- tshark
@@ -235,10 +301,20 @@ def tshark(config: Config) -> list[Row]:
     bench = "proxy.tshark"
     secs = {s: statistics.median(t) for s, t in times.items()}
     return [
-        make_row(bench, TSHARK_PLTF, "seconds", secs[TSHARK_PLTF], f"s for {telegrams:,} telegrams",
-                 higher_is_better=False, baseline_subject=TSHARK_PLAIN, baseline_value=secs[TSHARK_PLAIN]),
-        make_row(bench, TSHARK_PLAIN, "seconds", secs[TSHARK_PLAIN], f"s for {telegrams:,} telegrams",
-                 higher_is_better=False),
-        make_row(bench, TSHARK_PLTF, "telegram_rate", telegrams / secs[TSHARK_PLTF], "telegrams/s",
-                 higher_is_better=True),
-    ]  # fmt: skip
+        make_row(
+            bench,
+            TSHARK_PLTF,
+            "seconds",
+            secs[TSHARK_PLTF],
+            f"s for {telegrams:,} telegrams",
+            higher_is_better=False,
+            baseline_subject=TSHARK_PLAIN,
+            baseline_value=secs[TSHARK_PLAIN],
+        ),
+        make_row(
+            bench, TSHARK_PLAIN, "seconds", secs[TSHARK_PLAIN], f"s for {telegrams:,} telegrams", higher_is_better=False
+        ),
+        make_row(
+            bench, TSHARK_PLTF, "telegram_rate", telegrams / secs[TSHARK_PLTF], "telegrams/s", higher_is_better=True
+        ),
+    ]

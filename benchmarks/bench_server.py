@@ -147,8 +147,16 @@ def get_position(config: Config) -> list[Row]:
     samples: dict[str, list[list[float]]] = {SERVER: [], ECHO: []}
     with tempfile.TemporaryDirectory() as tmp_name:
         tmp = Path(tmp_name)
-        server_args = ["-m", "pltf.reference_server", "--ports", "0,0", "--data-dir", str(tmp / "data"),
-                       "--time-scale", "1"]
+        server_args = [
+            "-m",
+            "pltf.reference_server",
+            "--ports",
+            "0,0",
+            "--data-dir",
+            str(tmp / "data"),
+            "--time-scale",
+            "1",
+        ]
         with (
             _process(server_args, tmp / "server.log", 2) as ports,
             _process(_helper("--echo"), tmp / "echo.log", 1) as (echo_port,),

@@ -52,19 +52,68 @@ Button = namedtuple("Button", "pressed")
 Status = namedtuple(
     "Status",
     [
-        "cmd_x", "cmd_y", "cmd_angle", "est_x", "est_y", "est_angle",
-        "cov_major", "cov_minor", "cov_angle", "cov_axis_angle",
-        "scan", "reflectors", "lines", "circles", "corners", "path", "joystick_buttons",
-        "vel_trans", "vel_rot", "relay_digital_in", "relay_status", "relay_analog_in", "relay_opto_distance",
-        "io_battery_voltage", "io_digital_in", "io_digital_out", "io_status", "io_analog_in",
-        "motor_right_status", "motor_left_status", "motor_right_temp", "motor_left_temp",
-        "us_distance", "us_analog_in", "us_status", "radar_velocity", "radar_status",
-        "gps_latitude", "gps_longitude", "gyro_accel", "gyro_angle", "gyro_temp", "gyro_status",
-        "initialized", "target_reached", "motion_mode", "operation_state", "emergency_state",
-        "application_mode", "planner_state", "timestamp", "app_error", "docked", "localization_lost",
-        "collision", "lookup_percent", "ir_active", "siren", "flashlight", "head_position",
+        "cmd_x",
+        "cmd_y",
+        "cmd_angle",
+        "est_x",
+        "est_y",
+        "est_angle",
+        "cov_major",
+        "cov_minor",
+        "cov_angle",
+        "cov_axis_angle",
+        "scan",
+        "reflectors",
+        "lines",
+        "circles",
+        "corners",
+        "path",
+        "joystick_buttons",
+        "vel_trans",
+        "vel_rot",
+        "relay_digital_in",
+        "relay_status",
+        "relay_analog_in",
+        "relay_opto_distance",
+        "io_battery_voltage",
+        "io_digital_in",
+        "io_digital_out",
+        "io_status",
+        "io_analog_in",
+        "motor_right_status",
+        "motor_left_status",
+        "motor_right_temp",
+        "motor_left_temp",
+        "us_distance",
+        "us_analog_in",
+        "us_status",
+        "radar_velocity",
+        "radar_status",
+        "gps_latitude",
+        "gps_longitude",
+        "gyro_accel",
+        "gyro_angle",
+        "gyro_temp",
+        "gyro_status",
+        "initialized",
+        "target_reached",
+        "motion_mode",
+        "operation_state",
+        "emergency_state",
+        "application_mode",
+        "planner_state",
+        "timestamp",
+        "app_error",
+        "docked",
+        "localization_lost",
+        "collision",
+        "lookup_percent",
+        "ir_active",
+        "siren",
+        "flashlight",
+        "head_position",
     ],
-)  # fmt: skip
+)
 
 
 # ---------------------------------------------------------------------------------------------- framing
@@ -229,16 +278,30 @@ def decode_status(buf: Any, start: int, end: int) -> Status:
     return Status._make(
         (
             *head[1:],
-            scan, reflectors, lines, circles, corners, path, buttons,
-            *v[0:4], v[4:12], v[12:16],  # velocities, relay board
-            *v[16:20], v[20:28],  # io board
+            scan,
+            reflectors,
+            lines,
+            circles,
+            corners,
+            path,
+            buttons,
+            *v[0:4],
+            v[4:12],
+            v[12:16],  # velocities, relay board
+            *v[16:20],
+            v[20:28],  # io board
             *v[28:32],  # motors
-            v[32:48], v[48:56], v[56],  # ultrasonic
-            v[57:61], *v[61:64],  # radar, gps
-            v[64:67], *v[67:83],  # gyro, state bytes up to lookup_percent
-            v[83:87], *v[87:90],  # ir_active, siren, flashlight, head_position
+            v[32:48],
+            v[48:56],
+            v[56],  # ultrasonic
+            v[57:61],
+            *v[61:64],  # radar, gps
+            v[64:67],
+            *v[67:83],  # gyro, state bytes up to lookup_percent
+            v[83:87],
+            *v[87:90],  # ir_active, siren, flashlight, head_position
         )
-    )  # fmt: skip
+    )
 
 
 def decode_status_frame(frame: bytes) -> Status:
@@ -281,15 +344,23 @@ def encode_status(t: Status) -> bytes:
         _pack_group(parts, t[16], _BUTTON)
         parts.append(
             _STATUS_TAIL.pack(
-                *t[17:21], *t[21], *t[22],  # velocities, relay board
-                *t[23:27], *t[27],  # io board
+                *t[17:21],
+                *t[21],
+                *t[22],  # velocities, relay board
+                *t[23:27],
+                *t[27],  # io board
                 *t[28:32],  # motors
-                *t[32], *t[33], t[34],  # ultrasonic
-                *t[35], *t[36:39],  # radar, gps
-                *t[39], *t[40:56],  # gyro, state fields up to lookup_percent
-                *t[56], *t[57:60],  # ir_active, siren, flashlight, head_position
+                *t[32],
+                *t[33],
+                t[34],  # ultrasonic
+                *t[35],
+                *t[36:39],  # radar, gps
+                *t[39],
+                *t[40:56],  # gyro, state fields up to lookup_percent
+                *t[56],
+                *t[57:60],  # ir_active, siren, flashlight, head_position
             )
-        )  # fmt: skip
+        )
     except (struct.error, TypeError) as exc:
         raise EncodeError(str(exc)) from None
     return _framed(b"".join(parts))

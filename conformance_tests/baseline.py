@@ -71,8 +71,10 @@ class Baseline:
             if result is None or result.verdict is Verdict.SKIPPED:
                 continue
             if result.verdict not in expected:
-                out.append(f"{case_id}: expected {'/'.join(sorted(expected))}, got {result.verdict} - "
-                           "remove or update the entry")
+                out.append(
+                    f"{case_id}: expected {'/'.join(sorted(expected))}, got {result.verdict} - "
+                    "remove or update the entry"
+                )
         return out
 
     @staticmethod

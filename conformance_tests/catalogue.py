@@ -118,10 +118,20 @@ def case(
 
     def register(func: Callable[[Any], None]) -> Callable[[Any], None]:
         add(
-            case_id, func, requirement=requirement, tier=tier, level=level, errata=errata, group=group,
-            moves_platform=moves_platform, switches_outputs=switches_outputs, destructive=destructive,
-            abuse=abuse, timing=timing, telegrams=telegrams,
-        )  # fmt: skip
+            case_id,
+            func,
+            requirement=requirement,
+            tier=tier,
+            level=level,
+            errata=errata,
+            group=group,
+            moves_platform=moves_platform,
+            switches_outputs=switches_outputs,
+            destructive=destructive,
+            abuse=abuse,
+            timing=timing,
+            telegrams=telegrams,
+        )
         return func
 
     return register
@@ -143,9 +153,15 @@ def add(case_id: str, func: Callable[[Any], None], **kw: Any) -> Case:
         level = known[errata[0]].level if errata else Level.MUST
     group = kw.pop("group", None) or func.__module__.rsplit(".", 1)[-1]
     c = Case(
-        id=case_id, func=func, level=Level(level), tier=Tier(kw.pop("tier", Tier.STANDARD)), group=group,
-        errata=errata, telegrams=tuple(kw.pop("telegrams", ())), **kw,
-    )  # fmt: skip
+        id=case_id,
+        func=func,
+        level=Level(level),
+        tier=Tier(kw.pop("tier", Tier.STANDARD)),
+        group=group,
+        errata=errata,
+        telegrams=tuple(kw.pop("telegrams", ())),
+        **kw,
+    )
     REGISTRY[case_id] = c
     return c
 
@@ -187,9 +203,7 @@ def matches(c: Case, expr: str) -> bool:
         raise ValueError(f"bad -k expression {expr!r}") from None
 
 
-def select(
-    cases: Iterable[Case], *, tier: Tier = Tier.STANDARD, keyword: str | None = None
-) -> list[Case]:
+def select(cases: Iterable[Case], *, tier: Tier = Tier.STANDARD, keyword: str | None = None) -> list[Case]:
     """The cases of ``tier`` and below that match ``keyword``, in run order: by group (cases.GROUP_ORDER), then
     as registered; destructive ones last."""
     from pltf.conformance_tests.cases import GROUP_ORDER

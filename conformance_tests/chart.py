@@ -41,9 +41,15 @@ REPORTED: dict[St, int] = {
 INITIALIZED: dict[St, int] = {s: int(s in (St.READY, St.RUNNING, St.BREAKED)) for s in St}
 
 CHART_COMMANDS = (
-    "CMD_CONNECT_TO_PLTF", "CMD_INIT_PLTF", "CMD_SHUTDOWN_PLTF",
-    "CMD_START", "CMD_BREAK", "CMD_CONTINUE", "CMD_STOP", "CMD_SET_MODE",
-)  # fmt: skip
+    "CMD_CONNECT_TO_PLTF",
+    "CMD_INIT_PLTF",
+    "CMD_SHUTDOWN_PLTF",
+    "CMD_START",
+    "CMD_BREAK",
+    "CMD_CONTINUE",
+    "CMD_STOP",
+    "CMD_SET_MODE",
+)
 
 _NC, _CO, _RD, _RU, _BR = St.NOT_CONNECTED, St.CONNECTED, St.READY, St.RUNNING, St.BREAKED
 
@@ -69,13 +75,23 @@ TRANSITIONS: dict[tuple[St, str], St] = {
 
 # Cells the guide states in words (the rest are project decisions on figure 2, which the text version lacks).
 GUIDE: set[tuple[St, str]] = {
-    (_NC, "CMD_CONNECT_TO_PLTF"), (_CO, "CMD_INIT_PLTF"), (_RD, "CMD_START"), (_RU, "CMD_BREAK"),
-    (_BR, "CMD_CONTINUE"), (_RU, "CMD_STOP"), (_BR, "CMD_STOP"), (_RD, "CMD_SET_MODE"),
+    (_NC, "CMD_CONNECT_TO_PLTF"),
+    (_CO, "CMD_INIT_PLTF"),
+    (_RD, "CMD_START"),
+    (_RU, "CMD_BREAK"),
+    (_BR, "CMD_CONTINUE"),
+    (_RU, "CMD_STOP"),
+    (_BR, "CMD_STOP"),
+    (_RD, "CMD_SET_MODE"),
     # SET_MODE outside Ready: "has to be in 'Ready'"
-    (_NC, "CMD_SET_MODE"), (_CO, "CMD_SET_MODE"), (_RU, "CMD_SET_MODE"), (_BR, "CMD_SET_MODE"),
+    (_NC, "CMD_SET_MODE"),
+    (_CO, "CMD_SET_MODE"),
+    (_RU, "CMD_SET_MODE"),
+    (_BR, "CMD_SET_MODE"),
     # CMD_START before initialization: 4.2 "In the state 'Initialized' the platform can be started"
-    (_NC, "CMD_START"), (_CO, "CMD_START"),
-}  # fmt: skip
+    (_NC, "CMD_START"),
+    (_CO, "CMD_START"),
+}
 
 
 # The erratum (spec/errata/server.yaml) that decides each cell the guide does not state.

@@ -92,22 +92,40 @@ class Target:
             return self.config.second_port
         return self.config.port
 
-    def connect(self, label: str, log: WireLog, observer: Any, *, probe: bool = True, window: float | None = None,
-                probe_timeout: float | None = None) -> Session:
+    def connect(
+        self,
+        label: str,
+        log: WireLog,
+        observer: Any,
+        *,
+        probe: bool = True,
+        window: float | None = None,
+        probe_timeout: float | None = None,
+    ) -> Session:
         """A new session on the port of ``label``, probed with GET_STATUS and retried (see the module rules)."""
         cfg = self.config
         window = cfg.connect_window if window is None else window
         deadline = time.monotonic() + window
         delay, last = 0.01, "no attempt"
         while True:
-            s = Session(cfg.host, self.port_of(label), label=label, log=log, timeout=cfg.reply_timeout,
-                        observer=observer, profile=cfg.profile, budget=self.budget)
+            s = Session(
+                cfg.host,
+                self.port_of(label),
+                label=label,
+                log=log,
+                timeout=cfg.reply_timeout,
+                observer=observer,
+                profile=cfg.profile,
+                budget=self.budget,
+            )
             try:
                 s.connect()
                 if not probe:
                     return s
-                s.request(build("request", "CMD_GET_STATUS"),
-                          timeout=probe_timeout or min(cfg.reply_timeout, cfg.probe_timeout))
+                s.request(
+                    build("request", "CMD_GET_STATUS"),
+                    timeout=probe_timeout or min(cfg.reply_timeout, cfg.probe_timeout),
+                )
                 return s
             except Unreachable as exc:
                 if "refused" in str(exc).lower():
@@ -118,8 +136,10 @@ class Target:
                 last = str(exc)
                 s.close()
             if time.monotonic() + delay > deadline:
-                raise Unreachable(f"port {label} ({cfg.host}:{self.port_of(label)}): no working connection "
-                                  f"within {window:.0f} s: {last}")
+                raise Unreachable(
+                    f"port {label} ({cfg.host}:{self.port_of(label)}): no working connection "
+                    f"within {window:.0f} s: {last}"
+                )
             self.budget.check()
             time.sleep(delay)
             delay = min(delay * 2, 0.2)
@@ -225,8 +245,16 @@ class CaseContext:
 
     def extra(self, label: str) -> Session:
         """An additional raw connection (no probe, no retry) - e.g. a second client on a busy port."""
-        s = Session(self.config.host, self.target.port_of(label), label=label, log=self.log,
-                    timeout=self.config.reply_timeout, observer=self, profile=self.profile, budget=self.target.budget)
+        s = Session(
+            self.config.host,
+            self.target.port_of(label),
+            label=label,
+            log=self.log,
+            timeout=self.config.reply_timeout,
+            observer=self,
+            profile=self.profile,
+            budget=self.target.budget,
+        )
         try:
             s.connect()
         except Unreachable as exc:
@@ -262,8 +290,7 @@ class CaseContext:
         """Fail when the target sends anything unasked within the time (guide 6.1, erratum E-CMD-013)."""
         got = self.session(label).silence(self.wall(sim_seconds))
         if got:
-            raise Fail(f"the target sent {len(got)} bytes nobody asked for: {got[:24].hex()}",
-                       erratum="E-CMD-013")
+            raise Fail(f"the target sent {len(got)} bytes nobody asked for: {got[:24].hex()}", erratum="E-CMD-013")
 
     def poll(self, fn: Callable[[], T], until: Callable[[T], bool], within: float, every: float = 0.05) -> T:
         """Call ``fn`` until ``until(result)`` or ``within`` simulated seconds passed; the last result."""
@@ -291,8 +318,10 @@ class CaseContext:
             self.send("CMD_SET_MODE", mode=mode)
             s = self.poll(self.status, lambda x: x.mode == mode, within=5.0)
             if s.mode != mode:
-                raise Fail(f"precondition: CMD_SET_MODE({MotionMode(mode).name}) in Ready left {s.describe()}",
-                           precondition=True)
+                raise Fail(
+                    f"precondition: CMD_SET_MODE({MotionMode(mode).name}) in Ready left {s.describe()}",
+                    precondition=True,
+                )
         for cmd in chart.PATH_FROM_READY[state]:
             self.send(cmd)
         if chart.PATH_FROM_READY[state]:
@@ -316,8 +345,10 @@ class CaseContext:
     def _await_op(self, op: int, how: str, within: float) -> Status:
         s = self.poll(self.status, lambda x: x.op == op, within=within)
         if s.op != op:
-            raise Fail(f"precondition: {how} did not bring the target to {OperationState(op).name} "
-                       f"(status: {s.describe()})", precondition=True)
+            raise Fail(
+                f"precondition: {how} did not bring the target to {OperationState(op).name} (status: {s.describe()})",
+                precondition=True,
+            )
         return s
 
     def ready(self, mode: int = MotionMode.MODE_MOTION_NO) -> Status:
@@ -354,4 +385,3 @@ class CaseContext:
 
         self.on_exit(f"restore the active {kind}", restore)
         return xml, name
-

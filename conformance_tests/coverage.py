@@ -141,9 +141,7 @@ class Coverage:
 
     def document(self, kind: str, root: etree._Element) -> None:
         with self._lock:
-            self.elements.setdefault(kind, set()).update(
-                e.tag for e in root.iter() if isinstance(e.tag, str)
-            )
+            self.elements.setdefault(kind, set()).update(e.tag for e in root.iter() if isinstance(e.tag, str))
 
     def transition(self, source: chart.St, command: str, dest: chart.St) -> None:
         with self._lock:
@@ -154,10 +152,12 @@ class Coverage:
         req_names = [c.NAME for c in REQUESTS]
         rep_names = [c.NAME for c in REPLIES if c.DEF.answered]
         enums = load_enums()
-        req_enum = [(e, n, v) for e, dirs in enum_fields().items() if "request" in dirs
-                    for n, v in enums[e].values.items()]
-        rep_only = [(e, n, v) for e, dirs in enum_fields().items() if dirs == {"reply"}
-                    for n, v in enums[e].values.items()]
+        req_enum = [
+            (e, n, v) for e, dirs in enum_fields().items() if "request" in dirs for n, v in enums[e].values.items()
+        ]
+        rep_only = [
+            (e, n, v) for e, dirs in enum_fields().items() if dirs == {"reply"} for n, v in enums[e].values.items()
+        ]
         seen = {e: self.enum_values.get(e, set()) | self.reply_enum_values.get(e, set()) for e in enums}
         cells = [(s.value, c, d.value) for s, c, d in chart.every_transition()]
         els = [(k, n) for k, names in xsd_elements().items() if k != "task" for n in sorted(names)]
@@ -173,22 +173,40 @@ class Coverage:
             metric("reply telegrams received", rep_names, self.received_names),
             metric("request fields", req_fields, self.fields),
             metric("reply fields", rep_fields, self.fields, enforced=False),
-            metric("request enum values", [f"{e}.{n}" for e, n, _ in req_enum],
-                   {f"{e}.{n}" for e, n, v in req_enum if v in seen[e]}),
-            metric("reply-only enum values observed", [f"{e}.{n}" for e, n, _ in rep_only],
-                   {f"{e}.{n}" for e, n, v in rep_only if v in seen[e]}, enforced=False),
-            metric("XSD elements sent", [f"{k}:{n}" for k, n in els],
-                   {f"{k}:{n}" for k, n in els if n in self.elements.get(k, set())}),
-            metric("state-chart cells", [f"{s} --{c}--> {d}" for s, c, d in cells],
-                   {f"{s} --{c}--> {d}" for s, c, d in self.transitions}),
-        ]  # fmt: skip
+            metric(
+                "request enum values",
+                [f"{e}.{n}" for e, n, _ in req_enum],
+                {f"{e}.{n}" for e, n, v in req_enum if v in seen[e]},
+            ),
+            metric(
+                "reply-only enum values observed",
+                [f"{e}.{n}" for e, n, _ in rep_only],
+                {f"{e}.{n}" for e, n, v in rep_only if v in seen[e]},
+                enforced=False,
+            ),
+            metric(
+                "XSD elements sent",
+                [f"{k}:{n}" for k, n in els],
+                {f"{k}:{n}" for k, n in els if n in self.elements.get(k, set())},
+            ),
+            metric(
+                "state-chart cells",
+                [f"{s} --{c}--> {d}" for s, c, d in cells],
+                {f"{s} --{c}--> {d}" for s, c, d in self.transitions},
+            ),
+        ]
 
     def below(self, threshold: float) -> list[Metric]:
         return [m for m in self.metrics() if m.enforced and m.percent < threshold]
 
     def as_dict(self) -> dict[str, object]:
         return {
-            m.name: {"covered": m.covered, "total": m.total, "percent": round(m.percent, 1),
-                     "enforced": m.enforced, "missing": m.missing}
+            m.name: {
+                "covered": m.covered,
+                "total": m.total,
+                "percent": round(m.percent, 1),
+                "enforced": m.enforced,
+                "missing": m.missing,
+            }
             for m in self.metrics()
         }

@@ -55,8 +55,16 @@ def _send(telegram: str, /, **fields: Any) -> Step:
     return Step("send", telegram, tuple(fields.items()))
 
 
-GETS = ("CMD_GET_STATUS", "CMD_GET_POSITION", "CMD_GET_MAP", "CMD_GET_ROADMAP", "CMD_GET_PROGRAM",
-        "CMD_GET_PLTF_PARAM_VEC", "CMD_GET_CAMERA", "CMD_GET_DEBUG_DATA")
+GETS = (
+    "CMD_GET_STATUS",
+    "CMD_GET_POSITION",
+    "CMD_GET_MAP",
+    "CMD_GET_ROADMAP",
+    "CMD_GET_PROGRAM",
+    "CMD_GET_PLTF_PARAM_VEC",
+    "CMD_GET_CAMERA",
+    "CMD_GET_DEBUG_DATA",
+)
 
 
 def script(motion: bool) -> list[Step]:
@@ -64,8 +72,12 @@ def script(motion: bool) -> list[Step]:
     if motion:  # first, on each side's own map: the world a simulator moves in is its active map
         steps += [Step("state", St.RUNNING.value, (("mode", MotionMode.MODE_MOTION_AUTOMATIC),))]
         for x, y, a in ((400, 0, 0), (0, 0, 90000), (300, -200, -45000)):
-            steps += [_send("CMD_MOVE_REL", x=x, y=y, angle=a), Step("rest"), _get("CMD_GET_POSITION"),
-                      _get("CMD_GET_STATUS")]
+            steps += [
+                _send("CMD_MOVE_REL", x=x, y=y, angle=a),
+                Step("rest"),
+                _get("CMD_GET_POSITION"),
+                _get("CMD_GET_STATUS"),
+            ]
         steps += [_send("CMD_STOP"), _get("CMD_GET_STATUS")]
     steps.append(Step("documents"))  # from here on both sides hold the suite's documents
     for state in (St.NOT_CONNECTED, St.CONNECTED, St.READY, St.RUNNING, St.BREAKED):
@@ -81,15 +93,23 @@ def script(motion: bool) -> list[Step]:
     for mode in sorted(MotionMode._value2member_map_):
         steps += [_send("CMD_SET_MODE", mode=mode), _get("CMD_GET_STATUS")]
     steps += [_send("CMD_SET_MODE", mode=0)]
-    for key, value in (("IpoTransVel", "800"), ("IpoRotVel", "0.5"), ("EndTurnEnabled", "false"),
-                       ("IpoTransVel", "99999"), ("NoSuchParameter", "1")):
+    for key, value in (
+        ("IpoTransVel", "800"),
+        ("IpoRotVel", "0.5"),
+        ("EndTurnEnabled", "false"),
+        ("IpoTransVel", "99999"),
+        ("NoSuchParameter", "1"),
+    ):
         steps += [_send("CMD_SET_PLTF_PARAM", key=key, value=value), _get("CMD_GET_PLTF_PARAM", key=key)]
     steps.append(_get("CMD_GET_PLTF_PARAM_VEC"))
     for kind in ("map", "roadmap"):
         up = kind.upper()
-        steps += [_send(f"CMD_SET_{up}", name="diff", xml=docdata.variant(kind).decode()), _get(f"CMD_GET_{up}"),
-                  _send(f"CMD_SET_{up}", name="diff", xml=docdata.invalid(kind)[3][1].decode("latin-1")),
-                  _get(f"CMD_GET_{up}")]
+        steps += [
+            _send(f"CMD_SET_{up}", name="diff", xml=docdata.variant(kind).decode()),
+            _get(f"CMD_GET_{up}"),
+            _send(f"CMD_SET_{up}", name="diff", xml=docdata.invalid(kind)[3][1].decode("latin-1")),
+            _get(f"CMD_GET_{up}"),
+        ]
     steps += [_send("CMD_SET_PROGRAM", xml=docdata.variant("program").decode()), _get("CMD_GET_PROGRAM")]
     return steps
 
@@ -157,8 +177,14 @@ def diff_replies(step: int, request: str, ref: Telegram, tgt: Telegram) -> list[
     return out
 
 
-_CASE = Case(id="6.4/differential/session", func=lambda ctx: None, requirement="differential session",
-             level=Level.MUST, tier=Tier.EXHAUSTIVE, group="replies")
+_CASE = Case(
+    id="6.4/differential/session",
+    func=lambda ctx: None,
+    requirement="differential session",
+    level=Level.MUST,
+    tier=Tier.EXHAUSTIVE,
+    group="replies",
+)
 
 
 def play(config: Config, steps: list[Step]) -> list[Telegram | None]:

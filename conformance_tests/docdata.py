@@ -16,8 +16,7 @@ from pathlib import Path
 from lxml import etree
 
 DATA = Path(__file__).resolve().parent / "data"
-FILES = {"map": "map_every_element.map", "roadmap": "roadmap_every_element.rm",
-         "program": "program_every_element.xml"}
+FILES = {"map": "map_every_element.map", "roadmap": "roadmap_every_element.rm", "program": "program_every_element.xml"}
 
 
 @functools.cache
@@ -31,7 +30,8 @@ def variant(kind: str) -> bytes:
     if kind == "program":
         return doc.replace(b'message="every element, once"', b'message="every element, variant"')
     return doc.replace(b'<point x="2000" y="0"/>', b'<point x="2100" y="0"/>').replace(
-        b'<circle><center x="3000" y="3000"/>', b'<circle><center x="3100" y="3000"/>')
+        b'<circle><center x="3000" y="3000"/>', b'<circle><center x="3100" y="3000"/>'
+    )
 
 
 _BILLION_LAUGHS = b"""<?xml version="1.0" encoding="UTF-8"?>
@@ -59,10 +59,17 @@ def invalid(kind: str) -> list[tuple[str, bytes]]:
     ]
     specific: dict[str, list[tuple[str, bytes]]] = {
         "map": [
-            ("wrong root element <roadmap>",
-             b'<?xml version="1.0"?><roadmap Version="1.0"><stations/><edges/></roadmap>'),
-            ("a <line> with one point", doc.replace(b'<line><point x="-5000" y="-5000"/><point x="5000" y="-5000"/>',
-                                                    b'<line><point x="-5000" y="-5000"/>')),
+            (
+                "wrong root element <roadmap>",
+                b'<?xml version="1.0"?><roadmap Version="1.0"><stations/><edges/></roadmap>',
+            ),
+            (
+                "a <line> with one point",
+                doc.replace(
+                    b'<line><point x="-5000" y="-5000"/><point x="5000" y="-5000"/>',
+                    b'<line><point x="-5000" y="-5000"/>',
+                ),
+            ),
             ("a coordinate that is not a number", doc.replace(b'<center x="3000"', b'<center x="three"')),
             ("billion laughs (entity declarations)", _BILLION_LAUGHS),
             ("XXE (an external entity)", _XXE),
@@ -74,7 +81,7 @@ def invalid(kind: str) -> list[tuple[str, bytes]]:
         ],
         "program": [
             ("an unknown task command <fly>", doc.replace(b'<label name="start"/>', b'<label name="start"/><fly/>')),
-            ("digitalout D3=\"2\"", doc.replace(b'D3="-1"', b'D3="2"', 1)),
+            ('digitalout D3="2"', doc.replace(b'D3="-1"', b'D3="2"', 1)),
             ("wrong root element <map>", b'<?xml version="1.0"?><map Version="1.0"/>'),
         ],
     }
@@ -84,8 +91,14 @@ def invalid(kind: str) -> list[tuple[str, bytes]]:
 def parse(data: bytes | str) -> etree._Element | None:
     """The root element of a document, or None when it is not one (safe parser: no entities, no network)."""
     raw = data.encode("latin-1", "replace") if isinstance(data, str) else data
-    parser = etree.XMLParser(resolve_entities=False, no_network=True, load_dtd=False, remove_comments=True,
-                             remove_blank_text=True, remove_pis=True)
+    parser = etree.XMLParser(
+        resolve_entities=False,
+        no_network=True,
+        load_dtd=False,
+        remove_comments=True,
+        remove_blank_text=True,
+        remove_pis=True,
+    )
     try:
         root = etree.fromstring(raw, parser)
     except (etree.XMLSyntaxError, ValueError):
@@ -121,8 +134,11 @@ def with_doctype(kind: str) -> bytes:
 
 
 def lower_case_version(kind: str) -> bytes:
-    return valid(kind).replace(b'<map Version="1.0">', b'<map version="1.0">').replace(
-        b'<roadmap Version="1.0">', b'<roadmap version="1.0">')
+    return (
+        valid(kind)
+        .replace(b'<map Version="1.0">', b'<map version="1.0">')
+        .replace(b'<roadmap Version="1.0">', b'<roadmap version="1.0">')
+    )
 
 
 def oversize_map(size: int) -> bytes:

@@ -85,8 +85,10 @@ class Deviation:
 
     def accepted_by_original(self) -> bool:
         e = load_errata()[self.erratum]
-        return self.reading is not None and self.reading < len(e.alternatives) and (
-            e.alternatives[self.reading].accepted_by_original_profile
+        return (
+            self.reading is not None
+            and self.reading < len(e.alternatives)
+            and (e.alternatives[self.reading].accepted_by_original_profile)
         )
 
     def describe(self) -> str:

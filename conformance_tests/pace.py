@@ -49,8 +49,10 @@ class Pace:
             return f"the target did not answer CMD_GET_STATUS within {PATIENCE:g} s at the start ({self.error})"
         text = f"the target answers CMD_GET_STATUS in {self.reply * 1000:.0f} ms"
         if self.reply > config.reply_timeout:
-            text += (f", over the reply timeout of {config.reply_timeout:g} s (--reply-timeout): every case that "
-                     "reads the status will fail on it")
+            text += (
+                f", over the reply timeout of {config.reply_timeout:g} s (--reply-timeout): every case that "
+                "reads the status will fail on it"
+            )
         elif self.reply > MAX_SCALED:
             text += f"; the waits are not scaled beyond {MAX_SCALED:g} s"
         return text
@@ -141,8 +143,10 @@ class Watch:
                 self.silent_run, self.stuck_since = 0, ""
                 return ""
             self.why = problem
-        return (f"not run: the target stopped answering at {self.stuck_since} and still does not "
-                f"({self.why}){'; ' + self.pace if self.pace else ''}")
+        return (
+            f"not run: the target stopped answering at {self.stuck_since} and still does not "
+            f"({self.why}){'; ' + self.pace if self.pace else ''}"
+        )
 
 
 def health(target: Target) -> str:
@@ -150,8 +154,9 @@ def health(target: Target) -> str:
     cfg = target.config
     target.close()  # one client per port: our own sessions would keep the port busy
     try:
-        target.connect("A", WireLog(max_entries=50), _Quiet(), window=min(cfg.connect_window, 2.0),
-                       probe_timeout=cfg.reply_timeout).close()
+        target.connect(
+            "A", WireLog(max_entries=50), _Quiet(), window=min(cfg.connect_window, 2.0), probe_timeout=cfg.reply_timeout
+        ).close()
     except Unreachable as exc:
         return str(exc)
     return ""

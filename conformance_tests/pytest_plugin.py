@@ -50,12 +50,17 @@ def _config(config: pytest.Config) -> Config | None:
     if not target:
         return None
     host, _, port = str(target).rpartition(":")
-    return Config(host=host, port=int(port), second_port=config.getoption("--pltf-second-port"),
-                  time_scale=config.getoption("--pltf-time-scale"), profile=config.getoption("--pltf-profile"),
-                  tier=Tier[config.getoption("--pltf-tier").upper()],
-                  allow_motion=config.getoption("--pltf-allow-motion"),
-                  simulator=config.getoption("--pltf-simulator"),
-                  allow_shutdown=config.getoption("--pltf-allow-shutdown"))
+    return Config(
+        host=host,
+        port=int(port),
+        second_port=config.getoption("--pltf-second-port"),
+        time_scale=config.getoption("--pltf-time-scale"),
+        profile=config.getoption("--pltf-profile"),
+        tier=Tier[config.getoption("--pltf-tier").upper()],
+        allow_motion=config.getoption("--pltf-allow-motion"),
+        simulator=config.getoption("--pltf-simulator"),
+        allow_shutdown=config.getoption("--pltf-allow-shutdown"),
+    )
 
 
 class Catalogue(pytest.Collector):
@@ -90,7 +95,8 @@ class CaseItem(pytest.Item):
         lines = [str(excinfo.value), f"requirement: {self.case.requirement}"]
         if self.result is not None:
             lines += ["wire log (last 20 entries):"] + [
-                f"  {e.t:8.4f} {e.port:>3} {e.direction} {e.note:<28} {e.hex()[:96]}" for e in self.result.wire[-20:]]
+                f"  {e.t:8.4f} {e.port:>3} {e.direction} {e.note:<28} {e.hex()[:96]}" for e in self.result.wire[-20:]
+            ]
         return "\n".join(lines)
 
     def reportinfo(self) -> tuple[str, int, str]:
@@ -148,4 +154,3 @@ class _Quiet:
 
     def on_unsolicited(self, port: str, data: bytes) -> None:
         pass
-

@@ -35,8 +35,9 @@ Layout = tuple[FieldDef, ...]
 
 
 def _retype(name: str, new_type: str) -> Callable[[Layout], Layout]:
-    return lambda layout: tuple(dataclasses.replace(f, type=new_type, enum=None) if f.name == name else f
-                                for f in layout)
+    return lambda layout: tuple(
+        dataclasses.replace(f, type=new_type, enum=None) if f.name == name else f for f in layout
+    )
 
 
 def _resize(name: str, repeat: int) -> Callable[[Layout], Layout]:
@@ -60,8 +61,9 @@ def _insert_before(name: str, new: FieldDef) -> Callable[[Layout], Layout]:
 
 
 def _in_group(group: str, inner: Callable[[Layout], Layout]) -> Callable[[Layout], Layout]:
-    return lambda layout: tuple(dataclasses.replace(f, fields=inner(f.fields)) if f.name == group else f
-                                for f in layout)
+    return lambda layout: tuple(
+        dataclasses.replace(f, fields=inner(f.fields)) if f.name == group else f for f in layout
+    )
 
 
 def _field(name: str, type_: str, description: str = "alternative reading") -> FieldDef:
@@ -150,33 +152,88 @@ def _double_bounds(name: str) -> Callable[[bytes], Telegram]:
 
 
 READINGS: tuple[Reading, ...] = (
-    Reading("E-REP-001", 0, "CMD_GET_CAN_MESSAGES", "a DLC BYTE precedes the 8 data bytes of each CAN message",
-            transform=_in_group("messages", _insert_before("data", _field("dlc", "BYTE")))),
+    Reading(
+        "E-REP-001",
+        0,
+        "CMD_GET_CAN_MESSAGES",
+        "a DLC BYTE precedes the 8 data bytes of each CAN message",
+        transform=_in_group("messages", _insert_before("data", _field("dlc", "BYTE"))),
+    ),
     Reading("E-REP-002", 0, "CMD_GET_STATUS", "further fields follow the head drive position", trailing=True),
-    Reading("E-REP-007", 0, "CMD_GET_STATUS", "the ultrasonic board's analogue inputs are 4 INTs, not 8",
-            transform=_resize("us_analog_in", 4)),
-    Reading("E-REP-009", 0, "CMD_GET_STATUS", "the emergency state is a BYTE, not an INT",
-            transform=_retype("emergency_state", "BYTE")),
-    Reading("E-REP-011", 0, "CMD_GET_STATUS", "the head drive position is a BYTE, not an INT",
-            transform=_retype("head_position", "BYTE")),
-    Reading("E-REP-004", 0, "CMD_GET_PLTF_PARAM", "min/max are DOUBLE for DOUBLE parameters",
-            decoder=_double_bounds("CMD_GET_PLTF_PARAM")),
-    Reading("E-REP-004", 0, "CMD_GET_PLTF_PARAM_VEC", "min/max are DOUBLE for DOUBLE parameters",
-            decoder=_double_bounds("CMD_GET_PLTF_PARAM_VEC")),
-    Reading("E-REP-013", 0, "CMD_GET_MAP", "a BYTE 'number of characters' precedes the XML",
-            transform=lambda layout: (_field("chars", "BYTE"), *layout)),
-    Reading("E-REP-013", 0, "CMD_GET_ROADMAP", "a BYTE 'number of characters' precedes the XML",
-            transform=lambda layout: (_field("chars", "BYTE"), *layout)),
-    Reading("E-REP-015", 0, "CMD_GET_DEBUG_DATA", "the validation gate size counts INT values, not points",
-            transform=lambda layout: tuple(
-                dataclasses.replace(f, fields=(_field("v", "INT"),)) if f.name == "validation_gate" else f
-                for f in layout),
-            post=_pairs_from_ints),
-    Reading("E-REP-017", 0, "CMD_GET_DEBUG_DATA", "no 'INT 0' row follows the graphical objects",
-            transform=_drop("reserved")),
-    Reading("E-REP-019", 0, "CMD_GET_DEBUG_DATA", "an extra INT precedes the person clusters",
-            transform=_insert_before("person_clusters", _field("extra", "INT"))),
-)  # fmt: skip
+    Reading(
+        "E-REP-007",
+        0,
+        "CMD_GET_STATUS",
+        "the ultrasonic board's analogue inputs are 4 INTs, not 8",
+        transform=_resize("us_analog_in", 4),
+    ),
+    Reading(
+        "E-REP-009",
+        0,
+        "CMD_GET_STATUS",
+        "the emergency state is a BYTE, not an INT",
+        transform=_retype("emergency_state", "BYTE"),
+    ),
+    Reading(
+        "E-REP-011",
+        0,
+        "CMD_GET_STATUS",
+        "the head drive position is a BYTE, not an INT",
+        transform=_retype("head_position", "BYTE"),
+    ),
+    Reading(
+        "E-REP-004",
+        0,
+        "CMD_GET_PLTF_PARAM",
+        "min/max are DOUBLE for DOUBLE parameters",
+        decoder=_double_bounds("CMD_GET_PLTF_PARAM"),
+    ),
+    Reading(
+        "E-REP-004",
+        0,
+        "CMD_GET_PLTF_PARAM_VEC",
+        "min/max are DOUBLE for DOUBLE parameters",
+        decoder=_double_bounds("CMD_GET_PLTF_PARAM_VEC"),
+    ),
+    Reading(
+        "E-REP-013",
+        0,
+        "CMD_GET_MAP",
+        "a BYTE 'number of characters' precedes the XML",
+        transform=lambda layout: (_field("chars", "BYTE"), *layout),
+    ),
+    Reading(
+        "E-REP-013",
+        0,
+        "CMD_GET_ROADMAP",
+        "a BYTE 'number of characters' precedes the XML",
+        transform=lambda layout: (_field("chars", "BYTE"), *layout),
+    ),
+    Reading(
+        "E-REP-015",
+        0,
+        "CMD_GET_DEBUG_DATA",
+        "the validation gate size counts INT values, not points",
+        transform=lambda layout: tuple(
+            dataclasses.replace(f, fields=(_field("v", "INT"),)) if f.name == "validation_gate" else f for f in layout
+        ),
+        post=_pairs_from_ints,
+    ),
+    Reading(
+        "E-REP-017",
+        0,
+        "CMD_GET_DEBUG_DATA",
+        "no 'INT 0' row follows the graphical objects",
+        transform=_drop("reserved"),
+    ),
+    Reading(
+        "E-REP-019",
+        0,
+        "CMD_GET_DEBUG_DATA",
+        "an extra INT precedes the person clusters",
+        transform=_insert_before("person_clusters", _field("extra", "INT")),
+    ),
+)
 
 
 def readings_for(name: str) -> list[Reading]:

@@ -93,9 +93,7 @@ class CaseResult:
         """Does this result fail the run (exit status 1)?"""
         if self.expected_failure:
             return False
-        return self.verdict is Verdict.FAIL or (
-            self.verdict is Verdict.INCONCLUSIVE and self.case.level is Level.MUST
-        )
+        return self.verdict is Verdict.FAIL or (self.verdict is Verdict.INCONCLUSIVE and self.case.level is Level.MUST)
 
 
 @dataclass
@@ -135,25 +133,38 @@ def gate_notice(config: Config) -> list[str]:
     """What the safety gate lets through, in plain words (shown at start)."""
     lines = []
     if config.simulator:
-        lines.append("The target is declared a simulator (--target-is-simulator): cases that MOVE the platform "
-                     "and SWITCH outputs will run.")
+        lines.append(
+            "The target is declared a simulator (--target-is-simulator): cases that MOVE the platform "
+            "and SWITCH outputs will run."
+        )
     elif config.allow_motion:
-        lines.append("--allow-motion: cases will MOVE THE PLATFORM (up to 0.6 m from where it stands, turns on "
-                     "the spot) and SWITCH OUTPUTS (digital outputs, brakes, head drive, CAN frames). Keep the "
-                     "area clear and the emergency stop at hand.")
+        lines.append(
+            "--allow-motion: cases will MOVE THE PLATFORM (up to 0.6 m from where it stands, turns on "
+            "the spot) and SWITCH OUTPUTS (digital outputs, brakes, head drive, CAN frames). Keep the "
+            "area clear and the emergency stop at hand."
+        )
     else:
-        lines.append("Safety gate closed: cases that move the platform or switch outputs are SKIPPED "
-                     "(use --allow-motion on a real platform, or --target-is-simulator).")
+        lines.append(
+            "Safety gate closed: cases that move the platform or switch outputs are SKIPPED "
+            "(use --allow-motion on a real platform, or --target-is-simulator)."
+        )
     if config.allow_shutdown:
         lines.append("--allow-shutdown: the last case sends CMD_EXIT; the target will stop.")
-    lines.append("The suite changes parameters, documents and the estimated pose and restores them after each "
-                 "case; CMD_SAVE_* cases rewrite the stored files with the content they had.")
+    lines.append(
+        "The suite changes parameters, documents and the estimated pose and restores them after each "
+        "case; CMD_SAVE_* cases rewrite the stored files with the content they had."
+    )
     return lines
 
 
 class Runner:
-    def __init__(self, config: Config, cases: Sequence[Case], reporters: Sequence[Reporter] = (),
-                 baseline: Baseline | None = None) -> None:
+    def __init__(
+        self,
+        config: Config,
+        cases: Sequence[Case],
+        reporters: Sequence[Reporter] = (),
+        baseline: Baseline | None = None,
+    ) -> None:
         self.config = config
         self.cases = list(cases)
         self.reporters = list(reporters)
@@ -184,8 +195,9 @@ class Runner:
             for c in self.cases:
                 self._emit("on_case_start", c)
                 if budget is not None and time.monotonic() - t0 > budget and not self._gate(c):
-                    result = CaseResult(c, Verdict.INCONCLUSIVE, f"not run: the run's budget of {budget:g} s is spent "
-                                                                 "(--budget)")
+                    result = CaseResult(
+                        c, Verdict.INCONCLUSIVE, f"not run: the run's budget of {budget:g} s is spent (--budget)"
+                    )
                 else:
                     if c.group != group:
                         group = c.group
@@ -198,8 +210,9 @@ class Runner:
         stale = self.baseline.stale(ran)
         for r in results:
             r.expected_failure = self.baseline.expects(r)
-        run = RunResult(self.config, results, self.target, started, time.monotonic() - t0, stale, harness_error,
-                        self.notes)
+        run = RunResult(
+            self.config, results, self.target, started, time.monotonic() - t0, stale, harness_error, self.notes
+        )
         self._emit("on_finish", run)
         return run
 
@@ -256,8 +269,10 @@ class Runner:
             # a SHOULD or MAY case, but the target answers nobody any more: serving on is a MUST
             problem = pace.health(self.target)
             if problem:
-                verdict, message = Verdict.FAIL, (f"the target stopped answering during this case: {problem} "
-                                                  f"(the case: {first_line(message)})")
+                verdict, message = (
+                    Verdict.FAIL,
+                    (f"the target stopped answering during this case: {problem} (the case: {first_line(message)})"),
+                )
         self.watch.record(c.id, last.silent, first_line(last.message))
         return CaseResult(c, verdict, message, attempts)
 
@@ -305,8 +320,17 @@ class Runner:
                 ctx.note(f"informative: {dev.describe()}")
         if ctx.unsolicited:
             ctx.note(f"{len(ctx.unsolicited)} unsolicited frame(s) received (guide 6.1, erratum E-CMD-013)")
-        return Attempt(verdict, message, time.monotonic() - t0, list(ctx.log.entries), list(ctx.deviations),
-                       list(ctx.notes), pre, silent, final=silent and verdict is Verdict.INCONCLUSIVE)
+        return Attempt(
+            verdict,
+            message,
+            time.monotonic() - t0,
+            list(ctx.log.entries),
+            list(ctx.deviations),
+            list(ctx.notes),
+            pre,
+            silent,
+            final=silent and verdict is Verdict.INCONCLUSIVE,
+        )
 
 
 def _fail_verdict(c: Case, exc: Fail) -> Verdict:
@@ -323,8 +347,10 @@ def _liveness(ctx: CaseContext, before: Status | None) -> str:
         except Exception as exc:
             return f"liveness after abuse: port {label} no longer serves a new client ({exc})"
         if before is not None and (s.op, s.mode) != (before.op, before.mode):
-            return (f"liveness after abuse: the state changed from {before.describe()} to {s.describe()} "
-                    "(malformed input must change nothing, erratum E-WIRE-006)")
+            return (
+                f"liveness after abuse: the state changed from {before.describe()} to {s.describe()} "
+                "(malformed input must change nothing, erratum E-WIRE-006)"
+            )
     return ""
 
 
@@ -336,8 +362,10 @@ def _resolve(attempts: list[Attempt]) -> tuple[Verdict, str]:
         return Verdict.INCONCLUSIVE, last.message
     if Verdict.PASS in definite and any(v in (Verdict.FAIL, Verdict.NON_STRICT) for v in definite):
         bad = next(a for a in attempts if a.verdict in (Verdict.FAIL, Verdict.NON_STRICT))
-        return Verdict.INCONCLUSIVE, (f"flaky: {verdicts.count(Verdict.PASS)} of {len(attempts)} attempts "
-                                      f"passed; a failing attempt said: {bad.message}")
+        return Verdict.INCONCLUSIVE, (
+            f"flaky: {verdicts.count(Verdict.PASS)} of {len(attempts)} attempts "
+            f"passed; a failing attempt said: {bad.message}"
+        )
     final = definite[-1]
     msg = next(a.message for a in reversed(attempts) if a.verdict is final)
     if len(attempts) > 1 and final is Verdict.PASS:
@@ -361,7 +389,7 @@ class _NullCtx:
         pass
 
 
-
-def run(config: Config, cases: Sequence[Case], reporters: Sequence[Reporter] = (),
-        baseline: Baseline | None = None) -> RunResult:
+def run(
+    config: Config, cases: Sequence[Case], reporters: Sequence[Reporter] = (), baseline: Baseline | None = None
+) -> RunResult:
     return Runner(config, cases, reporters, baseline).run()

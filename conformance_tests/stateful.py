@@ -145,8 +145,10 @@ class PlatformMachine(RuleBasedStateMachine):
                 self.mode = fields["mode"]
         self._expect()
 
-    @rule(command=st.sampled_from(chart.CHART_COMMANDS),
-          mode=st.sampled_from([m for m in MODES if m != MotionMode.MODE_MOTION_PROGRAM]))
+    @rule(
+        command=st.sampled_from(chart.CHART_COMMANDS),
+        mode=st.sampled_from([m for m in MODES if m != MotionMode.MODE_MOTION_PROGRAM]),
+    )
     def chart_command(self, command: str, mode: int) -> None:
         """One command of the chart (the mode is used by CMD_SET_MODE only)."""
         self._chart(command, **({"mode": mode} if command == "CMD_SET_MODE" else {}))
@@ -194,19 +196,33 @@ def _connect(cfg: Config) -> Session:
 
 
 def machine_for(config: Config, out_dir: Path) -> type[PlatformMachine]:
-    return type("PlatformMachineFor", (PlatformMachine,), {"config": config, "out_dir": out_dir,
-                                                           "script_path": None})
+    return type("PlatformMachineFor", (PlatformMachine,), {"config": config, "out_dir": out_dir, "script_path": None})
 
 
-def run_stateful(config: Config, examples: int, out_dir: Path, console: Console | None = None,
-                 steps: int = 25, derandomize: bool = False) -> int:
+def run_stateful(
+    config: Config,
+    examples: int,
+    out_dir: Path,
+    console: Console | None = None,
+    steps: int = 25,
+    derandomize: bool = False,
+) -> int:
     """Run ``examples`` random programs against the target; 0 when all pass, 1 (and a replay script) if not."""
     console = console or Console()
     machine = machine_for(config, out_dir)
     try:
-        run_state_machine_as_test(machine, settings=settings(
-            max_examples=examples, stateful_step_count=steps, deadline=None, database=None, derandomize=derandomize,
-            suppress_health_check=list(HealthCheck), print_blob=False))
+        run_state_machine_as_test(
+            machine,
+            settings=settings(
+                max_examples=examples,
+                stateful_step_count=steps,
+                deadline=None,
+                database=None,
+                derandomize=derandomize,
+                suppress_health_check=list(HealthCheck),
+                print_blob=False,
+            ),
+        )
     except AssertionError as exc:
         console.print(f"[bold red]stateful test failed:[/] {str(exc).splitlines()[0]}")
         console.print(f"replay script (shrunk): {machine.script_path}")
@@ -311,8 +327,8 @@ def write_replay(rec: Recorder, out_dir: Path, message: str) -> Path:
     path = out_dir / "replay_stateful.py"
     head, groups, tail = _status_layout()
     steps = [(n, f, {k: (list(v) if isinstance(v, tuple) else v) for k, v in e.items()}) for n, f, e in rec.steps]
-    text = _TEMPLATE.format(message=textwrap.shorten(message, 300), name=path.name, steps=steps, head=head,
-                            groups=groups, tail=tail)
+    text = _TEMPLATE.format(
+        message=textwrap.shorten(message, 300), name=path.name, steps=steps, head=head, groups=groups, tail=tail
+    )
     path.write_text(text, encoding="utf-8")
     return path
-

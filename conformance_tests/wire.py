@@ -105,8 +105,9 @@ class CaseBudget:
 
     def check(self) -> None:
         if self.deadline is not None and time.monotonic() >= self.deadline:
-            raise BudgetSpent(f"case budget of {self.seconds:.0f} s spent: the target is too slow to finish this "
-                              "case in it")
+            raise BudgetSpent(
+                f"case budget of {self.seconds:.0f} s spent: the target is too slow to finish this case in it"
+            )
 
 
 class Session:
@@ -248,8 +249,10 @@ class Session:
             if not ok:
                 if self._rx:
                     self.log.add(self.label, "rx", bytes(self._rx), f"incomplete {what}")
-                raise ReplyTimeout(f"port {self.label}: no complete {what} within {self.timeout:.1f} s "
-                                   f"({len(self._rx)} of {n} bytes received)")
+                raise ReplyTimeout(
+                    f"port {self.label}: no complete {what} within {self.timeout:.1f} s "
+                    f"({len(self._rx)} of {n} bytes received)"
+                )
 
     def read_frame(self, timeout: float | None = None, expect_id: int | None = None) -> tuple[bytes, bool]:
         """The data of the next frame (identifier first) and whether it came without a header."""
@@ -265,11 +268,14 @@ class Session:
             plausible = 0 < length <= DEFAULT_MAX_LENGTH and (expect_id is None or self._rx[4] == expect_id)
             if not plausible:
                 self.log.add(self.label, "rx", bytes(self._rx[:64]), "bad reply header")
-                raise BadReply(f"port {self.label}: reply does not start with the header ff01fe02 (got {head.hex()})",
-                               erratum="E-WIRE-001")
+                raise BadReply(
+                    f"port {self.label}: reply does not start with the header ff01fe02 (got {head.hex()})",
+                    erratum="E-WIRE-001",
+                )
         if length > DEFAULT_MAX_LENGTH:
-            raise BadReply(f"port {self.label}: reply frame length {length} over {DEFAULT_MAX_LENGTH}",
-                           erratum="E-WIRE-004")
+            raise BadReply(
+                f"port {self.label}: reply frame length {length} over {DEFAULT_MAX_LENGTH}", erratum="E-WIRE-004"
+            )
         if length == 0:
             self.log.add(self.label, "rx", bytes(self._rx[:start]), "empty reply frame")
             raise BadReply(f"port {self.label}: reply frame with length 0 (no telegram identifier)")
@@ -290,9 +296,7 @@ class Session:
                 self.observer.on_unsolicited(self.label, data)
                 continue
             if headerless:
-                self.observer.on_deviation(
-                    Deviation("E-WIRE-001", 0, f"{name} reply came without the header ff01fe02")
-                )
+                self.observer.on_deviation(Deviation("E-WIRE-001", 0, f"{name} reply came without the header ff01fe02"))
             telegram, deviations = readings.decode_reply(data, name)
             for dev in deviations:
                 self.observer.on_deviation(dev)

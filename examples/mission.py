@@ -31,8 +31,11 @@ from pltf.reference_server.tasks.remote import RemoteMachine
 from pltf.spec.documents import DocumentError, DocumentKind, validate_document
 
 TOOLKIT = Path(__file__).resolve().parents[1]  # the defaults: the toolkit's office and this example's mission
-DEFAULTS = {"map": TOOLKIT / "fixtures/maps/office.map", "roadmap": TOOLKIT / "fixtures/roadmaps/office.rm",
-            "program": TOOLKIT / "examples/mission/mission.xml"}  # fmt: skip
+DEFAULTS = {
+    "map": TOOLKIT / "fixtures/maps/office.map",
+    "roadmap": TOOLKIT / "fixtures/roadmaps/office.rm",
+    "program": TOOLKIT / "examples/mission/mission.xml",
+}
 READY, RUNNING = OperationState.ST_OP_READY, OperationState.ST_OP_RUNNING
 
 
@@ -113,8 +116,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--target", type=target, default=("127.0.0.1", 10002), help="HOST:PORT of PlatformCtrl")
     for kind, path in DEFAULTS.items():
         parser.add_argument(f"--{kind}", type=Path, default=path, help=f"the {kind} document (default: {path.name})")
-    parser.add_argument("--time-scale", type=float, default=1.0,
-                        help="the target's simulated seconds per wall second (default 1: a real platform)")  # fmt: skip
+    parser.add_argument(
+        "--time-scale",
+        type=float,
+        default=1.0,
+        help="the target's simulated seconds per wall second (default 1: a real platform)",
+    )
     parser.add_argument("--period", type=float, default=0.05, help="wall seconds between two ticks (default 0.05)")
     parser.add_argument("--timeout", type=float, help="give up after this many simulated seconds")
     args = parser.parse_args(argv)

@@ -24,8 +24,19 @@ from typing import TextIO
 
 from pltf.client import ConnectionClosed, PlatformClient, PlatformError, Status, Timeout
 
-COLUMNS = ["time", "platform_ms", "state", "mode", "emergency", "x_mm", "y_mm", "angle_deg", "target_reached",
-           "planner", "battery_mv"]  # fmt: skip
+COLUMNS = [
+    "time",
+    "platform_ms",
+    "state",
+    "mode",
+    "emergency",
+    "x_mm",
+    "y_mm",
+    "angle_deg",
+    "target_reached",
+    "planner",
+    "battery_mv",
+]
 
 
 def target(text: str) -> tuple[str, int]:
@@ -37,10 +48,19 @@ def target(text: str) -> tuple[str, int]:
 
 def row(status: Status) -> list[object]:
     x, y, angle = status.pose
-    return [datetime.datetime.now().isoformat(timespec="milliseconds"), status.timestamp_ms,
-            status.operation_state.name, status.motion_mode.name, status.emergency_state.name, f"{x:.0f}", f"{y:.0f}",
-            f"{angle:.2f}", int(status.target_reached), status.planner_state.name,
-            status.io_battery_voltage_mv]  # fmt: skip
+    return [
+        datetime.datetime.now().isoformat(timespec="milliseconds"),
+        status.timestamp_ms,
+        status.operation_state.name,
+        status.motion_mode.name,
+        status.emergency_state.name,
+        f"{x:.0f}",
+        f"{y:.0f}",
+        f"{angle:.2f}",
+        int(status.target_reached),
+        status.planner_state.name,
+        status.io_battery_voltage_mv,
+    ]
 
 
 def monitor(args: argparse.Namespace, out: TextIO) -> int:

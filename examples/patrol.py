@@ -57,8 +57,9 @@ def stations_of(roadmap_xml: bytes) -> dict[str, Station]:
         if point is None:
             continue
         name = st.get("name") or st.get("id") or ""
-        out[name] = Station(name, int(float(point.get("x", "0"))), int(float(point.get("y", "0"))),
-                            float(st.get("angle", "0")))  # fmt: skip
+        out[name] = Station(
+            name, int(float(point.get("x", "0"))), int(float(point.get("y", "0"))), float(st.get("angle", "0"))
+        )
     return out
 
 
@@ -112,8 +113,10 @@ def patrol(pltf: PlatformClient, args: argparse.Namespace) -> int:
     names = args.stations.split(",") if args.stations else list(known)
     missing = [n for n in names if n not in known]
     if missing or not names:
-        print(f"patrol: error: no station {', '.join(missing)} in the roadmap (it has: {', '.join(known)})",
-              file=sys.stderr)  # fmt: skip
+        print(
+            f"patrol: error: no station {', '.join(missing)} in the roadmap (it has: {', '.join(known)})",
+            file=sys.stderr,
+        )
         return 2
     # target reached means within TargetReachedTolPos of the goal (toolkit erratum E-PAR-021); allow it twice
     tolerance = 2.0 * float(pltf.get_pltf_param("TargetReachedTolPos").typed_value)

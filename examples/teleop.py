@@ -33,8 +33,16 @@ from pltf.client import MotionMode, OperationState, PlatformClient, PlatformErro
 
 READY, RUNNING = OperationState.ST_OP_READY, OperationState.ST_OP_RUNNING
 # key -> (translation sign, rotation sign); arrows arrive as ESC [ A..D
-KEYS = {"w": (1, 0), "s": (-1, 0), "a": (0, 1), "d": (0, -1), "\x1b[A": (1, 0), "\x1b[B": (-1, 0),
-        "\x1b[D": (0, 1), "\x1b[C": (0, -1)}  # fmt: skip
+KEYS = {
+    "w": (1, 0),
+    "s": (-1, 0),
+    "a": (0, 1),
+    "d": (0, -1),
+    "\x1b[A": (1, 0),
+    "\x1b[B": (-1, 0),
+    "\x1b[D": (0, 1),
+    "\x1b[C": (0, -1),
+}
 
 
 def target(text: str) -> tuple[str, int]:
@@ -138,8 +146,11 @@ def drive(pltf: PlatformClient, args: argparse.Namespace) -> int:
     refresh = watchdog_ms / 3000.0 / args.time_scale  # wall seconds between two CMD_MOVE_VEL while a key is held
     teleop = Teleop(pltf, args, refresh)
     fd = sys.stdin.fileno()
-    print(f"ready: w/a/s/d or arrows drive, space stops, q quits (watchdog {watchdog_ms:g} ms, refresh "
-          f"{refresh * 1000:.0f} ms)", flush=True)  # fmt: skip
+    print(
+        f"ready: w/a/s/d or arrows drive, space stops, q quits (watchdog {watchdog_ms:g} ms, refresh "
+        f"{refresh * 1000:.0f} ms)",
+        flush=True,
+    )
     try:
         with keyboard(fd):
             running = True
@@ -166,10 +177,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--target", type=target, default=("127.0.0.1", 10002), help="HOST:PORT of PlatformCtrl")
     parser.add_argument("--speed", type=int, default=300, help="translation while a key is held, mm/s (default 300)")
     parser.add_argument("--turn", type=int, default=600, help="rotation while a key is held, mrad/s (default 600)")
-    parser.add_argument("--release-ms", type=float, default=250.0,
-                        help="no key repeat for this long means released (default 250 ms)")  # fmt: skip
-    parser.add_argument("--time-scale", type=float, default=1.0,
-                        help="the target's simulated seconds per wall second (default 1: a real platform)")  # fmt: skip
+    parser.add_argument(
+        "--release-ms", type=float, default=250.0, help="no key repeat for this long means released (default 250 ms)"
+    )
+    parser.add_argument(
+        "--time-scale",
+        type=float,
+        default=1.0,
+        help="the target's simulated seconds per wall second (default 1: a real platform)",
+    )
     args = parser.parse_args(argv)
     if not args.time_scale > 0 or not args.release_ms > 0:
         parser.error("--time-scale and --release-ms must be > 0")

@@ -122,8 +122,18 @@ class FrameCodec:
     call into cantools per signal. Frames are remembered both ways while that pays: a message whose frames do
     not repeat (a counter, a timestamp) stops being looked up after ``CACHE`` frames with few hits."""
 
-    __slots__ = ("_cached", "_decode", "_decoded", "_encode", "_encoded", "_hits", "fields", "frame_id", "length",
-                 "names")
+    __slots__ = (
+        "_cached",
+        "_decode",
+        "_decoded",
+        "_encode",
+        "_encoded",
+        "_hits",
+        "fields",
+        "frame_id",
+        "length",
+        "names",
+    )
     CACHE = 256  # frames remembered per message each way: status and analogue frames repeat, counters do not
 
     def __init__(self, msg: Message) -> None:
@@ -132,11 +142,17 @@ class FrameCodec:
         self.frame_id = msg.frame_id
         self.length = msg.length
         self.fields = tuple(
-            (s.name, s.start, (1 << s.length) - 1, (1 << (s.length - 1)) if s.is_signed else 0, *_converters(s),
-             float(s.minimum) if s.minimum is not None else -math.inf,
-             float(s.maximum) if s.maximum is not None else math.inf)
+            (
+                s.name,
+                s.start,
+                (1 << s.length) - 1,
+                (1 << (s.length - 1)) if s.is_signed else 0,
+                *_converters(s),
+                float(s.minimum) if s.minimum is not None else -math.inf,
+                float(s.maximum) if s.maximum is not None else math.inf,
+            )
             for s in msg.signals
-        )  # fmt: skip
+        )
         self.names = tuple(f[0] for f in self.fields)
         self._encoded: dict[tuple[Any, ...], bytes] = {}
         self._decoded: dict[bytes, dict[str, Any]] = {}
@@ -212,8 +228,9 @@ def codec(msg: Message) -> FrameCodec:
 
 def build(msg: Message, signals: Signals, now: float) -> can.Message:
     """A frame of ``msg`` stamped with simulated time ``now``; values are clamped to the signals' ranges."""
-    return can.Message(arbitration_id=msg.frame_id, data=codec(msg).encode(signals), is_extended_id=False,
-                       timestamp=now)  # fmt: skip
+    return can.Message(
+        arbitration_id=msg.frame_id, data=codec(msg).encode(signals), is_extended_id=False, timestamp=now
+    )
 
 
 def decode(msg: Message, frame: can.Message) -> dict[str, Any] | None:

@@ -24,14 +24,24 @@ if TYPE_CHECKING:
 
 MAX_LINE = 4096
 ALIASES: dict[str, Node] = {
-    "io": Node.IOBOARD, "ioboard": Node.IOBOARD,
-    "motor-right": Node.MOTOR_RIGHT, "right": Node.MOTOR_RIGHT, "motor_right": Node.MOTOR_RIGHT,
-    "motor-left": Node.MOTOR_LEFT, "left": Node.MOTOR_LEFT, "motor_left": Node.MOTOR_LEFT,
-    "us": Node.USBOARD, "usboard": Node.USBOARD, "ultrasonic": Node.USBOARD,
-    "relay": Node.RELAYBOARD, "relayboard": Node.RELAYBOARD,
-    "radar": Node.RADARBOARD, "radarboard": Node.RADARBOARD,
-    "gyro": Node.GYROBOARD, "gyroboard": Node.GYROBOARD,
-}  # fmt: skip
+    "io": Node.IOBOARD,
+    "ioboard": Node.IOBOARD,
+    "motor-right": Node.MOTOR_RIGHT,
+    "right": Node.MOTOR_RIGHT,
+    "motor_right": Node.MOTOR_RIGHT,
+    "motor-left": Node.MOTOR_LEFT,
+    "left": Node.MOTOR_LEFT,
+    "motor_left": Node.MOTOR_LEFT,
+    "us": Node.USBOARD,
+    "usboard": Node.USBOARD,
+    "ultrasonic": Node.USBOARD,
+    "relay": Node.RELAYBOARD,
+    "relayboard": Node.RELAYBOARD,
+    "radar": Node.RADARBOARD,
+    "radarboard": Node.RADARBOARD,
+    "gyro": Node.GYROBOARD,
+    "gyroboard": Node.GYROBOARD,
+}
 
 
 class CommandError(ValueError):
@@ -275,8 +285,12 @@ def _help(hw: Hardware, now: float) -> dict[str, Any]:
 
 
 def _nodes(hw: Hardware, now: float) -> dict[str, Any]:
-    return {"nodes": [{"name": n.name, "id": int(n), "fitted": n in hw.boards,
-                       "connected": n in hw.controller.connected} for n in Node]}  # fmt: skip
+    return {
+        "nodes": [
+            {"name": n.name, "id": int(n), "fitted": n in hw.boards, "connected": n in hw.controller.connected}
+            for n in Node
+        ]
+    }
 
 
 def _faults(hw: Hardware, now: float) -> dict[str, Any]:

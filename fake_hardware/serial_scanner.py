@@ -76,9 +76,7 @@ class Scan(NamedTuple):
         ]
 
 
-def encode_telegram(
-    ranges_mm: Ranges, scan_number: int, telegram_number: int, address: int = ADDRESS
-) -> bytes:
+def encode_telegram(ranges_mm: Ranges, scan_number: int, telegram_number: int, address: int = ADDRESS) -> bytes:
     """One distance telegram; a range of None, inf or beyond the 13-bit maximum reads as the maximum."""
     size = (TELEGRAM_BYTES - 4) // 2
     head = _HEAD.pack(0, size, 0xFF, address, 2, 1, 0, scan_number & 0xFFFFFFFF, telegram_number & 0xFFFF)

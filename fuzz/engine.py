@@ -108,8 +108,7 @@ class Campaign:
                 e = lanes.alone(k, status)
                 if e is None or e.verdict is None or e.verdict.suspicious or not e.flight.out.replies:
                     why = e.verdict.reason if e is not None and e.verdict is not None else "no client admitted"
-                    raise HarnessError(f"the target does not answer on {self.o.host}:{self.ports[k]}: "
-                                       f"{why}")  # fmt: skip
+                    raise HarnessError(f"the target does not answer on {self.o.host}:{self.ports[k]}: {why}")
                 self._learn(e.flight.out.replies)
         lanes.dear = self.o.lanes > 1 and any(g.dear for g in lanes.gates[: self.o.lanes])
         self._gate_stats()

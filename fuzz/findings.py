@@ -59,8 +59,9 @@ class FindingWriter:
         self.used_launcher = False  # the last ``handle`` started fresh targets (the campaign's is gone)
 
     # ------------------------------------------------------------------ replay against a fresh target
-    def reproduce(self, sessions: list[Session], record: bool = False, repeat: int = 1,
-                  seconds: float | None = None) -> tuple[str | None, list[Outcome]]:  # fmt: skip
+    def reproduce(
+        self, sessions: list[Session], record: bool = False, repeat: int = 1, seconds: float | None = None
+    ) -> tuple[str | None, list[Outcome]]:
         """Start a fresh target, replay ``sessions`` (``repeat`` rounds, until it dies), name the failure."""
         launcher, o = self.c.launcher, self.c.o
         assert launcher is not None
@@ -96,8 +97,7 @@ class FindingWriter:
         assert launcher is not None
         if not launcher.alive():
             return "dead"
-        out, served = play_admitted(o.host, second, Session([LEAD], half_close=True, led=True), o.deadline,
-                                    patience)  # fmt: skip
+        out, served = play_admitted(o.host, second, Session([LEAD], half_close=True, led=True), o.deadline, patience)
         if served and out.replies:
             return None
         if not launcher.alive() or out.refused:
@@ -112,8 +112,10 @@ class FindingWriter:
             keep: dict[int, list[bytes]] = {}
             for k, j in items:
                 keep.setdefault(k, sessions[k].frames[:1] if sessions[k].led else []).append(sessions[k].frames[j])
-            return [replace(sessions[k].with_frames(fr), gate=sessions[k].gate and len(fr) > 1)
-                    for k, fr in sorted(keep.items())]  # fmt: skip
+            return [
+                replace(sessions[k].with_frames(fr), gate=sessions[k].gate and len(fr) > 1)
+                for k, fr in sorted(keep.items())
+            ]
 
         end = time.monotonic() + self.c.o.minimize_seconds
 
@@ -163,14 +165,22 @@ class FindingWriter:
             got["sessions"], got["tests"] = self._minimize(kind, got["sessions"])
             got["minimized"] = True
         if got["sessions"] is not None:
-            verdict, got["outcomes"] = self.reproduce(got["sessions"], record=True, repeat=got["repeat"],
-                                                      seconds=4 * REPEAT_SECONDS)  # fmt: skip
+            verdict, got["outcomes"] = self.reproduce(
+                got["sessions"], record=True, repeat=got["repeat"], seconds=4 * REPEAT_SECONDS
+            )
             got["reproduced"] = verdict == kind
         return got
 
     # ------------------------------------------------------------------ a failure
-    def handle(self, kind: str, reason: str, units: list[Unit], history: list[Session], believed: bool,
-               evidence: dict[str, Any]) -> dict[str, Any] | None:  # fmt: skip
+    def handle(
+        self,
+        kind: str,
+        reason: str,
+        units: list[Unit],
+        history: list[Session],
+        believed: bool,
+        evidence: dict[str, Any],
+    ) -> dict[str, Any] | None:
         """Write the failure; None for a duplicate. ``believed``: a finding (replays confirmed it, or no port
         serves us any more); else it goes under ``unconfirmed/``."""
         c = self.c
@@ -210,8 +220,7 @@ class FindingWriter:
             "command": c.o.command,
             "seed": c.o.seed,
             "case_index_before": c.index,
-            "state": {"target": list(target), "operation_state": c.kb.operation_state,
-                      "motion_mode": c.kb.motion_mode},
+            "state": {"target": list(target), "operation_state": c.kb.operation_state, "motion_mode": c.kb.motion_mode},
             "culprit": culprit.to_json() | {"frames": len(culprit.frames)} if culprit else None,
             "confirmed": believed,
             "found_after_s": found_after,
@@ -221,13 +230,29 @@ class FindingWriter:
             "minimized": fresh.get("minimized", False),
             "minimize_tests": fresh.get("tests", 0),
             "target_output_tail": tail,
-        }  # fmt: skip
+        }
         where = c.o.out if believed else c.o.out / "unconfirmed"
-        directory = write_finding(where / name, kind, reason, sessions, description, fresh.get("outcomes", []),
-                                  c.ports[0], c.o.deadline, repeat=fresh.get("repeat", 1))  # fmt: skip
-        return {"kind": kind, "reason": reason, "dir": str(directory), "confirmed": believed, "signature": signature,
-                "reproduced": fresh.get("reproduced", False), "evidence": evidence,
-                "found_after_s": description["found_after_s"]}  # fmt: skip
+        directory = write_finding(
+            where / name,
+            kind,
+            reason,
+            sessions,
+            description,
+            fresh.get("outcomes", []),
+            c.ports[0],
+            c.o.deadline,
+            repeat=fresh.get("repeat", 1),
+        )
+        return {
+            "kind": kind,
+            "reason": reason,
+            "dir": str(directory),
+            "confirmed": believed,
+            "signature": signature,
+            "reproduced": fresh.get("reproduced", False),
+            "evidence": evidence,
+            "found_after_s": description["found_after_s"],
+        }
 
 
 def _telegram(frame: bytes) -> str:

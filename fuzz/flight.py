@@ -30,8 +30,9 @@ _RESET = (errno.ECONNRESET, errno.EPIPE)
 
 
 class Flight:
-    def __init__(self, host: str, port: int, session: Session, deadline_s: float,
-                 sock: socket.socket | None = None) -> None:  # fmt: skip
+    def __init__(
+        self, host: str, port: int, session: Session, deadline_s: float, sock: socket.socket | None = None
+    ) -> None:
         """``sock``: a connection kept from the flight before (``keep``), already served by the target."""
         self.session = session
         self.out = Outcome()

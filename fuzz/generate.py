@@ -79,11 +79,25 @@ def request_defs(forbidden: frozenset[int] = frozenset()) -> tuple[TelegramDef, 
 # Telegrams whose handling costs a server milliseconds (documents: parse, validate, file I/O; big replies).
 # They get ``HEAVY_WEIGHT`` of a plain telegram's share, so a campaign's cases/s is not set by them alone (the
 # usual fuzzing trade: favour fast inputs). Static, so the case stream stays a function of the seed.
-HEAVY = frozenset({
-    "CMD_SET_MAP", "CMD_SET_ROADMAP", "CMD_SET_PROGRAM", "CMD_LOAD_MAP", "CMD_LOAD_ROADMAP", "CMD_LOAD_PROGRAM",
-    "CMD_SAVE_MAP", "CMD_SAVE_ROADMAP", "CMD_SAVE_PROGRAM", "CMD_GET_MAP", "CMD_GET_ROADMAP", "CMD_GET_PROGRAM",
-    "CMD_GET_PLTF_PARAM_VEC", "CMD_GET_DEBUG_DATA", "CMD_GET_STATUS",
-})  # fmt: skip
+HEAVY = frozenset(
+    {
+        "CMD_SET_MAP",
+        "CMD_SET_ROADMAP",
+        "CMD_SET_PROGRAM",
+        "CMD_LOAD_MAP",
+        "CMD_LOAD_ROADMAP",
+        "CMD_LOAD_PROGRAM",
+        "CMD_SAVE_MAP",
+        "CMD_SAVE_ROADMAP",
+        "CMD_SAVE_PROGRAM",
+        "CMD_GET_MAP",
+        "CMD_GET_ROADMAP",
+        "CMD_GET_PROGRAM",
+        "CMD_GET_PLTF_PARAM_VEC",
+        "CMD_GET_DEBUG_DATA",
+        "CMD_GET_STATUS",
+    }
+)
 HEAVY_WEIGHT = 0.1
 
 

@@ -89,8 +89,9 @@ def _alarm(signum: int, frame: Any) -> None:
 
 
 class InProcessCampaign:
-    def __init__(self, seed: int, duration: float, out: Path, max_cases: int | None, deadline: float,
-                 command: str) -> None:  # fmt: skip
+    def __init__(
+        self, seed: int, duration: float, out: Path, max_cases: int | None, deadline: float, command: str
+    ) -> None:
         self.seed, self.duration, self.out = seed, duration, out
         self.max_cases, self.deadline, self.command = max_cases, deadline, command
         self.stats = Stats()
@@ -135,8 +136,12 @@ class InProcessCampaign:
         case = self.sched.case(i)
         rng = random.Random(f"{self.seed}:{i}:ip")
         data = b"".join(case.frames[:MAX_FRAMES])  # a flood's thousand copies add nothing in-process
-        self._check("decode_frame:request", data, lambda: self._decode_stream(data, rng, "request"),
-                    (errors.RemoteProtocolError,))  # fmt: skip
+        self._check(
+            "decode_frame:request",
+            data,
+            lambda: self._decode_stream(data, rng, "request"),
+            (errors.RemoteProtocolError,),
+        )
         self._check("decode_frame:request", data, lambda: decode_frame(data, "request"), (errors.RemoteProtocolError,))
         r = rng.random()
         if r < 0.3:
@@ -145,8 +150,12 @@ class InProcessCampaign:
             if name not in ("mut.bytewise", "mut.slow", "mut.half_close"):
                 reply = mutate.MUTATORS[name][1](reply, rng)
             rdata = reply.data
-            self._check("decode_frame:reply", rdata, lambda: self._decode_stream(rdata, rng, "reply"),
-                        (errors.RemoteProtocolError,))  # fmt: skip
+            self._check(
+                "decode_frame:reply",
+                rdata,
+                lambda: self._decode_stream(rdata, rng, "reply"),
+                (errors.RemoteProtocolError,),
+            )
         if r > 1 - XML_SHARE:
             kind = rng.choice(("map", "roadmap", "program"))
             _, doc = xml_attacks.attack(kind, rng)
@@ -156,8 +165,9 @@ class InProcessCampaign:
                 if (kind, id(doc)) in self._seen_docs:
                     doc = doc[: 1 << 12]
                 self._seen_docs.add((kind, id(doc)))
-            self._check(f"validate_document:{kind}", doc, lambda: validate_document(DocumentKind(kind), doc),
-                        (DocumentError,))  # fmt: skip
+            self._check(
+                f"validate_document:{kind}", doc, lambda: validate_document(DocumentKind(kind), doc), (DocumentError,)
+            )
         self.stats.cases += 1
         self.stats.origins[case.origin] += 1
         self.stats.telegrams.add(case.telegram)
@@ -186,10 +196,19 @@ class InProcessCampaign:
         d = self.out / f"finding-{len(self.stats.findings) + 1:03d}-inprocess-{slug(kind)}-{slug(target)}"
         d.mkdir(parents=True, exist_ok=True)
         (d / "input.hex").write_text(data.hex() + "\n")
-        (d / "repro.py").write_text(_SCRIPT.format(what=f"{kind} in {target}", name="repro.py", data=data.hex(),
-                                                   target=target, deadline=self.deadline))  # fmt: skip
-        desc = {"kind": kind, "target": target, "detail": detail, "bytes": len(data), "seed": self.seed,
-                "command": self.command}  # fmt: skip
+        (d / "repro.py").write_text(
+            _SCRIPT.format(
+                what=f"{kind} in {target}", name="repro.py", data=data.hex(), target=target, deadline=self.deadline
+            )
+        )
+        desc = {
+            "kind": kind,
+            "target": target,
+            "detail": detail,
+            "bytes": len(data),
+            "seed": self.seed,
+            "command": self.command,
+        }
         (d / "finding.json").write_text(json.dumps(desc, indent=2) + "\n")
         self.stats.findings.append({"kind": kind, "reason": detail[-200:], "dir": str(d), "signature": signature})
 

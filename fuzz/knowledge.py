@@ -13,8 +13,16 @@ from typing import Any
 from pltf.spec.telegram import Telegram
 
 MAX_ITEMS = 256
-_LEARNT = frozenset(("CMD_GET_STATUS", "CMD_GET_PLTF_PARAM_VEC", "CMD_GET_PLTF_PARAM", "CMD_GET_ROADMAP", "CMD_GET_MAP",
-                     "CMD_GET_PROGRAM"))  # fmt: skip
+_LEARNT = frozenset(
+    (
+        "CMD_GET_STATUS",
+        "CMD_GET_PLTF_PARAM_VEC",
+        "CMD_GET_PLTF_PARAM",
+        "CMD_GET_ROADMAP",
+        "CMD_GET_MAP",
+        "CMD_GET_PROGRAM",
+    )
+)
 LIGHT = ("param_keys", "param_values", "stations", "pose", "operation_state", "motion_mode")
 _STATION = re.compile(rb'<station\b[^>]*\bname="([^"]{1,64})"')
 _STATION_ID = re.compile(rb'<station\b[^>]*\bid="([^"]{1,64})"')

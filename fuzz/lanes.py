@@ -60,9 +60,17 @@ FlightFactory = Callable[..., Flight]
 
 
 class Lanes:
-    def __init__(self, host: str, ports: tuple[int, ...], deadline: float, pipelining: bool = True,
-                 patience: float | None = None, connect: FlightFactory = Flight,
-                 active: int | None = None, lead_every: int = LEAD_EVERY) -> None:  # fmt: skip
+    def __init__(
+        self,
+        host: str,
+        ports: tuple[int, ...],
+        deadline: float,
+        pipelining: bool = True,
+        patience: float | None = None,
+        connect: FlightFactory = Flight,
+        active: int | None = None,
+        lead_every: int = LEAD_EVERY,
+    ) -> None:
         """``active``: how many of the ports carry units (the first ones; the others only replays and checks)."""
         self.host, self.ports, self.deadline = host, ports, deadline
         self.connect = connect
@@ -170,8 +178,13 @@ class Lanes:
         if not gate.pipelining or unit.tries or len(q) >= DEPTH or not unit.whole:
             return False
         f = q[-1].flight
-        return (f.connected and not f.sending and f.session.half_close and len(f.data) <= PIPELINE_BYTES
-                and all(i in LEAD_IDS for i in f.expected))  # fmt: skip
+        return (
+            f.connected
+            and not f.sending
+            and f.session.half_close
+            and len(f.data) <= PIPELINE_BYTES
+            and all(i in LEAD_IDS for i in f.expected)
+        )
 
     def _led(self, k: int, unit: Unit, fresh: bool) -> bool:
         """Whether a unit on a fresh connection opens with the lead: always, until ``WARMUP`` units were served
@@ -269,8 +282,9 @@ class Lanes:
         self.gone = self.live.verdict(time.monotonic() + self.patience) or "hang"
 
     # ------------------------------------------------------------------ alone, outside the lanes
-    def alone(self, k: int, unit: Unit, patience: float | None = None,
-              deadline: float | None = None) -> InFlight | None:  # fmt: skip
+    def alone(
+        self, k: int, unit: Unit, patience: float | None = None, deadline: float | None = None
+    ) -> InFlight | None:
         """Run ``unit`` alone on port ``k`` once the port is free (a replay, a check): turned away, it runs again
         after the backoff; None when the port did not admit it within ``patience``. ``deadline``: the reply
         deadline of this run (default: the campaign's)."""

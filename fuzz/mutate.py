@@ -90,8 +90,9 @@ def truncate(case: Case, rng: random.Random) -> Case:
     data = case.data
     cut = rng.randrange(1, len(data)) if len(data) > 1 else 0
     pieces = tuple(split_frames(data[:cut])) or (b"",)
-    return replace(case, frames=pieces, origin="mut.truncate", note=f"cut at byte {cut} of {len(data)}",
-                   half_close=True, expect="")  # fmt: skip
+    return replace(
+        case, frames=pieces, origin="mut.truncate", note=f"cut at byte {cut} of {len(data)}", half_close=True, expect=""
+    )
 
 
 def insert_delete(case: Case, rng: random.Random) -> Case:
@@ -120,27 +121,44 @@ def splice(case: Case, rng: random.Random) -> Case:
     data = case.data + case.data
     a = rng.randrange(1, len(case.data) + 1)
     b = rng.randrange(a, len(data) + 1)
-    return replace(case, frames=(data[:a], data[b:]), origin="mut.splice", note=f"bytes [{a}:{b}] removed",
-                   expect="")  # fmt: skip
+    return replace(case, frames=(data[:a], data[b:]), origin="mut.splice", note=f"bytes [{a}:{b}] removed", expect="")
 
 
 def bytewise(case: Case, rng: random.Random) -> Case:
     if case.size > BYTEWISE_MAX:
         return slow(case, rng)
-    return replace(case, frames=(*case.frames, GET_STATUS), delivery=Delivery("bytewise"), origin="mut.bytewise",
-                   note="one write per byte", expect="")  # fmt: skip
+    return replace(
+        case,
+        frames=(*case.frames, GET_STATUS),
+        delivery=Delivery("bytewise"),
+        origin="mut.bytewise",
+        note="one write per byte",
+        expect="",
+    )
 
 
 def slow(case: Case, rng: random.Random) -> Case:
     pieces = rng.choice((2, 3, 4))
-    return replace(case, frames=(*case.frames, GET_STATUS), delivery=Delivery("slow", pieces, 0.001),
-                   origin="mut.slow", note=f"{pieces} writes 1 ms apart", expect="")  # fmt: skip
+    return replace(
+        case,
+        frames=(*case.frames, GET_STATUS),
+        delivery=Delivery("slow", pieces, 0.001),
+        origin="mut.slow",
+        note=f"{pieces} writes 1 ms apart",
+        expect="",
+    )
 
 
 def half_close(case: Case, rng: random.Random) -> Case:
     """Valid frames, a GET_STATUS, then end-of-stream: the reply is still owed."""
-    return replace(case, frames=(*case.frames, GET_STATUS), half_close=True, origin="mut.half_close",
-                   note="write side shut after the frames", expect="")  # fmt: skip
+    return replace(
+        case,
+        frames=(*case.frames, GET_STATUS),
+        half_close=True,
+        origin="mut.half_close",
+        note="write side shut after the frames",
+        expect="",
+    )
 
 
 def flood(case: Case, rng: random.Random) -> Case:

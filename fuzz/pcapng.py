@@ -46,8 +46,18 @@ def _checksum(data: bytes) -> int:
     return int(~total & 0xFFFF)
 
 
-def _packet(src_ip: bytes, dst_ip: bytes, sport: int, dport: int, seq: int, ack: int, flags: int, payload: bytes,
-            ident: int, c2s: bool) -> bytes:  # fmt: skip
+def _packet(
+    src_ip: bytes,
+    dst_ip: bytes,
+    sport: int,
+    dport: int,
+    seq: int,
+    ack: int,
+    flags: int,
+    payload: bytes,
+    ident: int,
+    c2s: bool,
+) -> bytes:
     tcp = struct.pack("!HHIIBBHHH", sport, dport, seq & 0xFFFFFFFF, ack & 0xFFFFFFFF, 5 << 4, flags, 65535, 0, 0)
     pseudo = src_ip + dst_ip + struct.pack("!BBH", 0, 6, len(tcp) + len(payload))
     csum = _checksum(pseudo + tcp + payload)
@@ -82,8 +92,15 @@ class TcpFlow:
     ``ident`` numbers the IP datagrams; conversations written to one file share it.
     """
 
-    def __init__(self, client_port: int, server_port: int, ident: Iterator[int] | None = None, *,
-                 client_ip: bytes = CLIENT_IP, server_ip: bytes = SERVER_IP) -> None:  # fmt: skip
+    def __init__(
+        self,
+        client_port: int,
+        server_port: int,
+        ident: Iterator[int] | None = None,
+        *,
+        client_ip: bytes = CLIENT_IP,
+        server_ip: bytes = SERVER_IP,
+    ) -> None:
         self.client = (client_ip, client_port)
         self.server = (server_ip, server_port)
         self.ident = ident if ident is not None else itertools.count(1)

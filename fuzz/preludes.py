@@ -52,8 +52,12 @@ STATES: dict[str, tuple[int, list[bytes], bool]] = {
     "running": (OP.ST_OP_RUNNING, _READY, True),
     "breaked": (OP.ST_OP_BREAKED, _READY, True),
 }
-REPORTED = {OP.ST_OP_READY: "ready", OP.ST_OP_RUNNING: "running", OP.ST_OP_BREAKED: "breaked",
-            OP.ST_OP_NOT_INITIALIZED: "not_connected"}  # fmt: skip
+REPORTED = {
+    OP.ST_OP_READY: "ready",
+    OP.ST_OP_RUNNING: "running",
+    OP.ST_OP_BREAKED: "breaked",
+    OP.ST_OP_NOT_INITIALIZED: "not_connected",
+}
 CHART: dict[tuple[str, str], str] = {
     # guide 4.2: "The initialization process starts with the command CMD_CONNECT_CAN" (= CMD_CONNECT_TO_PLTF, E-CMD-002)
     ("not_connected", "CMD_CONNECT_TO_PLTF"): "connected",
@@ -83,15 +87,25 @@ TINY = {
     "</program>",
 }
 DOCUMENT_RESET = [
-    _enc("CMD_SET_MAP", name="fuzz.map", xml=TINY["map"]), _enc("CMD_SAVE_MAP"),
-    _enc("CMD_SET_ROADMAP", name="fuzz.rm", xml=TINY["roadmap"]), _enc("CMD_SAVE_ROADMAP"),
-    _enc("CMD_SET_PROGRAM", xml=TINY["program"]), _enc("CMD_SAVE_PROGRAM"),
-]  # fmt: skip
+    _enc("CMD_SET_MAP", name="fuzz.map", xml=TINY["map"]),
+    _enc("CMD_SAVE_MAP"),
+    _enc("CMD_SET_ROADMAP", name="fuzz.rm", xml=TINY["roadmap"]),
+    _enc("CMD_SAVE_ROADMAP"),
+    _enc("CMD_SET_PROGRAM", xml=TINY["program"]),
+    _enc("CMD_SAVE_PROGRAM"),
+]
 HARVEST = [
     _enc(n)
-    for n in ("CMD_GET_PLTF_PARAM_VEC", "CMD_GET_ROADMAP", "CMD_GET_MAP", "CMD_GET_PROGRAM", "CMD_GET_POSITION",
-              "CMD_GET_CAMERA", "CMD_GET_DEBUG_DATA")
-]  # fmt: skip
+    for n in (
+        "CMD_GET_PLTF_PARAM_VEC",
+        "CMD_GET_ROADMAP",
+        "CMD_GET_MAP",
+        "CMD_GET_PROGRAM",
+        "CMD_GET_POSITION",
+        "CMD_GET_CAMERA",
+        "CMD_GET_DEBUG_DATA",
+    )
+]
 
 
 def full(target: Target) -> list[bytes]:

@@ -36,9 +36,13 @@ def _enc(telegram: str, **fields: Any) -> bytes:
 
 class Scheduler:
     def __init__(
-        self, seed: int, forbidden: frozenset[int], kb: Knowledge, pool: list[Case] | None = None,
+        self,
+        seed: int,
+        forbidden: frozenset[int],
+        kb: Knowledge,
+        pool: list[Case] | None = None,
         big_share: float = BIG_SHARE,
-    ) -> None:  # fmt: skip
+    ) -> None:
         self.seed, self.forbidden, self.kb, self.big_share = seed, forbidden, kb, big_share
         self.pool: list[Case] = list(pool or [])
         self.dropped = 0

@@ -71,9 +71,14 @@ class Session:
 
     def to_json(self) -> dict[str, object]:
         d = self.delivery
-        return {"frames": [f.hex() for f in self.frames], "delivery": {"mode": d.mode, "pieces": d.pieces,
-                "pause": d.pause}, "half_close": self.half_close, "sync": self.sync, "gate": self.gate,
-                "led": self.led}  # fmt: skip
+        return {
+            "frames": [f.hex() for f in self.frames],
+            "delivery": {"mode": d.mode, "pieces": d.pieces, "pause": d.pause},
+            "half_close": self.half_close,
+            "sync": self.sync,
+            "gate": self.gate,
+            "led": self.led,
+        }
 
 
 @dataclass

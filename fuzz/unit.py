@@ -106,8 +106,9 @@ class Unit:
         return [f"{c.telegram} ({c.origin}{': ' + c.note if c.note else ''})" for c in self.cases[:3]]
 
 
-def window_units(cases: list[Case], head: Callable[[], list[bytes]], target: Target,
-                 single_prelude: Callable[[Case], list[bytes]]) -> list[Unit]:  # fmt: skip
+def window_units(
+    cases: list[Case], head: Callable[[], list[bytes]], target: Target, single_prelude: Callable[[Case], list[bytes]]
+) -> list[Unit]:
     """A window of cases as units: batches of the ``batchable`` ones (at most ``BATCH_CASES`` cases and
     ``BATCH_BYTES``; chart commands last, ``pltf.fuzz.preludes.chart_last``), the first one behind ``head()``, the
     state prelude to ``target`` (asked for only when there is a batch); a single per other case, behind

@@ -21,8 +21,9 @@ def render(stats: Any, title: str) -> Table:
     table.add_row("elapsed", f"{stats.elapsed:,.1f} s")
     table.add_row("cases", f"{stats.cases:,}  ({stats.rate:,.0f}/s)")
     batches, singles = getattr(stats, "batches", 0), getattr(stats, "singles", 0)
-    table.add_row("units", f"{stats.units:,} ({batches:,} batches, {singles:,} "
-                  f"single, {getattr(stats, 'probes', 0):,} probes)")  # fmt: skip
+    table.add_row(
+        "units", f"{stats.units:,} ({batches:,} batches, {singles:,} single, {getattr(stats, 'probes', 0):,} probes)"
+    )
     if hasattr(stats, "pipelined"):
         off = " - off on a port: the target turned pipelined clients away" if stats.turn_aways else ""
         table.add_row("pipelined", f"{stats.pipelined:,} units{off}")
@@ -35,12 +36,18 @@ def render(stats: Any, title: str) -> Table:
     top = ", ".join(f"{k} {v:,}" for k, v in stats.origins.most_common(6))
     table.add_row("origins", top)
     style = "bold red" if stats.findings else "green"
-    table.add_row("findings", f"[{style}]{len(stats.findings)}[/{style}]"
-                  + "".join(f"\n{f['kind']}: {f['dir']}" for f in stats.findings[-5:]))  # fmt: skip
+    table.add_row(
+        "findings",
+        f"[{style}]{len(stats.findings)}[/{style}]"
+        + "".join(f"\n{f['kind']}: {f['dir']}" for f in stats.findings[-5:]),
+    )
     unconfirmed = getattr(stats, "unconfirmed", [])
     if unconfirmed:
-        table.add_row("unconfirmed", f"[yellow]{len(unconfirmed)}[/yellow] (did not happen again when replayed; "
-                      "not findings)" + "".join(f"\n{f['kind']}: {f['dir']}" for f in unconfirmed[-3:]))  # fmt: skip
+        table.add_row(
+            "unconfirmed",
+            f"[yellow]{len(unconfirmed)}[/yellow] (did not happen again when replayed; "
+            "not findings)" + "".join(f"\n{f['kind']}: {f['dir']}" for f in unconfirmed[-3:]),
+        )
     return table
 
 
@@ -68,9 +75,11 @@ class LiveView:
             self.live.update(render(stats, self.title))
         elif not self.quiet and stats.elapsed - self._last_line >= 5.0:
             self._last_line = stats.elapsed
-            self.console.print(f"{stats.elapsed:6.1f} s  {stats.cases:,} cases ({stats.rate:,.0f}/s)  "
-                               f"{len(stats.findings)} findings, {len(getattr(stats, 'unconfirmed', []))} "
-                               "unconfirmed")  # fmt: skip
+            self.console.print(
+                f"{stats.elapsed:6.1f} s  {stats.cases:,} cases ({stats.rate:,.0f}/s)  "
+                f"{len(stats.findings)} findings, {len(getattr(stats, 'unconfirmed', []))} "
+                "unconfirmed"
+            )
 
     def final(self, stats: Any) -> None:
         if not self.quiet:

@@ -111,7 +111,7 @@ async def targets(request: web.Request) -> web.Response:
             body = await request.json()
             ini.add(str(body["target"]))
         except (ValueError, KeyError, TypeError) as exc:
-            raise web.HTTPBadRequest(text=f"expected {{\"target\": \"HOST:PORT\"}}: {exc}") from None
+            raise web.HTTPBadRequest(text=f'expected {{"target": "HOST:PORT"}}: {exc}') from None
     default = request.app[CONFIG]["target"]
     known = [default, *(t for t in ini.targets() if t != default)]
     return web.json_response({"default": default, "targets": known})
@@ -129,8 +129,9 @@ async def _shutdown(app: web.Application) -> None:
         link.close("gateway stopped")
 
 
-def make_app(target: str, ini: NetworkIni, *, reply_timeout: float | None = None,
-             backoff: tuple[float, ...] | None = None) -> web.Application:  # fmt: skip
+def make_app(
+    target: str, ini: NetworkIni, *, reply_timeout: float | None = None, backoff: tuple[float, ...] | None = None
+) -> web.Application:
     app = web.Application()
     link_options: dict[str, Any] = {}
     if reply_timeout is not None:

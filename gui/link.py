@@ -71,8 +71,14 @@ def parse_target(text: str) -> tuple[str, int]:
 class PlatformLink:
     """The connection to one target and the tabs attached to it."""
 
-    def __init__(self, target: str, *, reply_timeout: float = REPLY_TIMEOUT, backoff: tuple[float, ...] = BACKOFF,
-                 on_idle: Callable[[PlatformLink], None] | None = None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        target: str,
+        *,
+        reply_timeout: float = REPLY_TIMEOUT,
+        backoff: tuple[float, ...] = BACKOFF,
+        on_idle: Callable[[PlatformLink], None] | None = None,
+    ) -> None:
         self.target = target
         self.host, self.port = parse_target(target)
         self.reply_timeout = reply_timeout
@@ -221,8 +227,11 @@ class PlatformLink:
                 return received > 0
             if not data:
                 if received == 0:
-                    self._fail("turned_away", f"{self.target} closed the connection at once: its port already "
-                               "has a client (one client per port, guide 4.2)")  # fmt: skip
+                    self._fail(
+                        "turned_away",
+                        f"{self.target} closed the connection at once: its port already "
+                        "has a client (one client per port, guide 4.2)",
+                    )
                     return False
                 self._fail("dropped", f"{self.target} closed the connection")
                 return True

@@ -23,8 +23,13 @@ from pltf.gui.network_ini import NetworkIni, default_path
 log = logging.getLogger("pltf.gui")
 
 
-async def serve(target: str, listen: str, ini_path: Path | None = None, open_browser: bool = False,
-                reply_timeout: float | None = None) -> int:  # fmt: skip
+async def serve(
+    target: str,
+    listen: str,
+    ini_path: Path | None = None,
+    open_browser: bool = False,
+    reply_timeout: float | None = None,
+) -> int:
     host, port = parse_listen(listen)
     app = make_app(target, NetworkIni(ini_path or default_path()), reply_timeout=reply_timeout)
     runner = web.AppRunner(app, access_log=None, handle_signals=False)

@@ -18,8 +18,10 @@ from pltf.spec.jsonio import fields_to_telegram, telegram_to_json
 def add_decode_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("hex", help="frames as hex (spaces allowed), or - to read hex from stdin")
     p.add_argument("--reply", action="store_true", help="decode reply telegrams (default: requests)")
-    p.epilog = exit_status(ok="every frame decoded (one JSON object per telegram on stdout)",
-                           usage="usage error: not hex, no frame, a malformed frame or an unknown telegram id")
+    p.epilog = exit_status(
+        ok="every frame decoded (one JSON object per telegram on stdout)",
+        usage="usage error: not hex, no frame, a malformed frame or an unknown telegram id",
+    )
 
 
 def run_decode(args: argparse.Namespace) -> int:
@@ -54,9 +56,10 @@ def add_encode_arguments(p: argparse.ArgumentParser) -> None:
     completes(name, _telegram_names)
     p.add_argument("fields", nargs="?", default="{}", help="the fields object as JSON (as decode prints it)")
     p.add_argument("--reply", action="store_true", help="encode a reply telegram (default: request)")
-    p.epilog = exit_status(ok="encoded (the frame as hex on stdout)",
-                           usage="usage error: unknown telegram, fields not JSON, a field missing, unknown or out "
-                                 "of range")
+    p.epilog = exit_status(
+        ok="encoded (the frame as hex on stdout)",
+        usage="usage error: unknown telegram, fields not JSON, a field missing, unknown or out of range",
+    )
 
 
 def run_encode(args: argparse.Namespace) -> int:

@@ -86,8 +86,11 @@ def _command(name: str, parser: argparse.ArgumentParser, help_text: str) -> Comm
         if action.option_strings:
             options.append(Option(tuple(action.option_strings), _help(action), value))
         else:
-            positionals.append(Positional(action.dest, _help(action), value or NOTHING, action.nargs in ("?", "*"),
-                                          action.nargs in ("*", "+")))
+            positionals.append(
+                Positional(
+                    action.dest, _help(action), value or NOTHING, action.nargs in ("?", "*"), action.nargs in ("*", "+")
+                )
+            )
     return Command(name, help_text, tuple(options), tuple(positionals))
 
 
@@ -110,19 +113,32 @@ def _bash_value(value: Completion) -> str:
 def _bash_command(cmd: Command) -> list[str]:
     valued = [o for o in cmd.options if o.value is not None]
     flags = " ".join(f for o in cmd.options for f in o.flags)
-    out = [f"_pltf_{cmd.name.replace('-', '_')}() {{  # {cmd.name}; $1: the index of the word after it",
-           "    case $prev in"]
+    out = [
+        f"_pltf_{cmd.name.replace('-', '_')}() {{  # {cmd.name}; $1: the index of the word after it",
+        "    case $prev in",
+    ]
     by_action: dict[str, list[str]] = {}
     for o in valued:
         if o.value is not None:
             by_action.setdefault(_bash_value(o.value), []).extend(o.flags)
     out += [f"        {'|'.join(flags)}) {action}; return ;;" for action, flags in by_action.items()]
-    out += ["    esac", f"    if [[ $cur == -* ]]; then _pltf_words {shlex.quote(flags)}; return; fi",
-            "    local n=0 j=$1", "    while (( j < cword )); do", "        case ${w[j]} in"]
+    out += [
+        "    esac",
+        f"    if [[ $cur == -* ]]; then _pltf_words {shlex.quote(flags)}; return; fi",
+        "    local n=0 j=$1",
+        "    while (( j < cword )); do",
+        "        case ${w[j]} in",
+    ]
     if valued:
         out.append(f"            {'|'.join(f for o in valued for f in o.flags)}) (( j++ )) ;;")
-    out += ["            -*) ;;", "            *) (( n++ )) ;;", "        esac", "        (( j++ ))", "    done",
-            "    case $n in"]
+    out += [
+        "            -*) ;;",
+        "            *) (( n++ )) ;;",
+        "        esac",
+        "        (( j++ ))",
+        "    done",
+        "    case $n in",
+    ]
     for i, pos in enumerate(cmd.positionals):
         last = pos.repeated and i == len(cmd.positionals) - 1
         out.append(f"        {'*' if last else i}) {_bash_value(pos.value)} ;;")
@@ -136,14 +152,14 @@ def render_bash(parser: argparse.ArgumentParser) -> str:
         "# bash completion of pltf, generated from its argument parser by `pltf completion bash`.",
         "# Use: source <(pltf completion bash)   or save it as ~/.local/share/bash-completion/completions/pltf",
         "# The words before the cursor are split at blanks only (COMP_LINE), so a HOST:PORT stays one word.",
-        "_pltf_words() { COMPREPLY=($(compgen -W \"$1\" -- \"$cur\")); }",
-        "_pltf_files() { compopt -o filenames 2>/dev/null; COMPREPLY=($(compgen -f -- \"$cur\")); }",
-        "_pltf_dirs() { compopt -o filenames 2>/dev/null; COMPREPLY=($(compgen -d -- \"$cur\")); }",
+        '_pltf_words() { COMPREPLY=($(compgen -W "$1" -- "$cur")); }',
+        '_pltf_files() { compopt -o filenames 2>/dev/null; COMPREPLY=($(compgen -f -- "$cur")); }',
+        '_pltf_dirs() { compopt -o filenames 2>/dev/null; COMPREPLY=($(compgen -d -- "$cur")); }',
         "_pltf() {",
         "    local line=${COMP_LINE:0:COMP_POINT} cur=${COMP_WORDS[COMP_CWORD]} cmd= i=1",
         "    local -a w; local IFS=$' \\t\\n'",
-        "    read -ra w <<< \"$line\"",
-        "    [[ $line == *[[:space:]] || ${#w[@]} -eq 0 ]] && w+=(\"\")",
+        '    read -ra w <<< "$line"',
+        '    [[ $line == *[[:space:]] || ${#w[@]} -eq 0 ]] && w+=("")',
         "    local cword=$(( ${#w[@]} - 1 ))",
         "    local prev=${w[cword-1]}",
         "    while (( i < cword )); do",
@@ -156,7 +172,7 @@ def render_bash(parser: argparse.ArgumentParser) -> str:
         "        return 0",
         "    fi",
         "    local func=_pltf_${cmd//-/_}",
-        "    if declare -F \"$func\" >/dev/null; then \"$func\" $((i + 1)); fi",
+        '    if declare -F "$func" >/dev/null; then "$func" $((i + 1)); fi',
         "    return 0",
         "}",
     ]
@@ -187,8 +203,9 @@ def _zsh_specs(cmd: Command) -> list[str]:
             if o.value is None:
                 specs.append(f"{flag}[{_zsh_text(o.help)}]")
             else:
-                specs.append(f"{flag}=[{_zsh_text(o.help)}]:{_zsh_text(o.flags[-1].lstrip('-'))}:"
-                             f"{_zsh_action(o.value)}")
+                specs.append(
+                    f"{flag}=[{_zsh_text(o.help)}]:{_zsh_text(o.flags[-1].lstrip('-'))}:{_zsh_action(o.value)}"
+                )
     for i, pos in enumerate(cmd.positionals, 1):
         where = "*" if pos.repeated else str(i)
         optional = ":" if pos.optional and not pos.repeated else ""
@@ -205,7 +222,8 @@ def render_zsh(parser: argparse.ArgumentParser) -> str:
         "_pltf() {",
         "    local curcontext=$curcontext state line ret=1",
         "    typeset -A opt_args",
-        "    _arguments -C " + " ".join(_zsh_quote(s) for s in _zsh_specs(top))
+        "    _arguments -C "
+        + " ".join(_zsh_quote(s) for s in _zsh_specs(top))
         + " '1: :->command' '*:: :->args' && ret=0",
         "    case $state in",
         "        command)",
@@ -216,10 +234,19 @@ def render_zsh(parser: argparse.ArgumentParser) -> str:
         "            case $words[1] in",
     ]
     for cmd in commands:
-        lines.append(f"                {cmd.name}) _arguments " + " ".join(_zsh_quote(s) for s in _zsh_specs(cmd))
-                     + " && ret=0 ;;")
-    lines += ["            esac ;;", "    esac", "    return ret", "}",
-              "if [[ $zsh_eval_context[-1] == loadautofunc ]]; then _pltf \"$@\"; else compdef _pltf pltf; fi", ""]
+        lines.append(
+            f"                {cmd.name}) _arguments "
+            + " ".join(_zsh_quote(s) for s in _zsh_specs(cmd))
+            + " && ret=0 ;;"
+        )
+    lines += [
+        "            esac ;;",
+        "    esac",
+        "    return ret",
+        "}",
+        'if [[ $zsh_eval_context[-1] == loadautofunc ]]; then _pltf "$@"; else compdef _pltf pltf; fi',
+        "",
+    ]
     return "\n".join(lines)
 
 
@@ -228,8 +255,11 @@ RENDER = {"bash": render_bash, "zsh": render_zsh}
 
 def add_completion_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("shell", choices=SHELLS, help="the shell the script is for")
-    p.epilog = exit_status(ok="the script is on stdout (bash: source <(pltf completion bash); zsh: the same, or "
-                              "save it as _pltf in a directory of $fpath)", usage="usage error: an unknown shell")
+    p.epilog = exit_status(
+        ok="the script is on stdout (bash: source <(pltf completion bash); zsh: the same, or "
+        "save it as _pltf in a directory of $fpath)",
+        usage="usage error: an unknown shell",
+    )
 
 
 def run_completion(args: argparse.Namespace) -> int:

@@ -24,46 +24,89 @@ from pltf.conformance_tests.pace import run_budget
 def add_conform_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--target", type=target, required=True, metavar="HOST:PORT", help="the server to check")
     p.add_argument("--second-port", type=port, metavar="PORT", help="the target's second port (guide 6.1: 10002)")
-    p.add_argument("--time-scale", type=positive, default=1.0, metavar="X",
-                   help="the target's simulated seconds per wall second (default 1: a real platform)")
-    p.add_argument("--profile", choices=("strict", "original"), default="strict",
-                   help="original: accept the alternative readings the errata register marks 'accept'")
-    p.add_argument("--tier", choices=[t.name.lower() for t in Tier], default="standard",
-                   help="how many cases: smoke < standard < exhaustive (default standard)")
+    p.add_argument(
+        "--time-scale",
+        type=positive,
+        default=1.0,
+        metavar="X",
+        help="the target's simulated seconds per wall second (default 1: a real platform)",
+    )
+    p.add_argument(
+        "--profile",
+        choices=("strict", "original"),
+        default="strict",
+        help="original: accept the alternative readings the errata register marks 'accept'",
+    )
+    p.add_argument(
+        "--tier",
+        choices=[t.name.lower() for t in Tier],
+        default="standard",
+        help="how many cases: smoke < standard < exhaustive (default standard)",
+    )
     p.add_argument("-k", dest="keyword", metavar="EXPR", help="select cases: and/or/not over id substrings or globs")
     p.add_argument("--junit", metavar="FILE", help="write a JUnit XML report")
     p.add_argument("--json", metavar="FILE", help="write a JSON report (with wire logs and coverage)")
     p.add_argument("--html", metavar="FILE", help="write a self-contained HTML report")
     gate = p.add_argument_group("safety gate")
-    gate.add_argument("--allow-motion", action="store_true",
-                      help="run the cases that move the platform and switch outputs (real platform: keep clear)")
-    gate.add_argument("--target-is-simulator", action="store_true",
-                      help="declare the target a simulator: motion and output cases run")
+    gate.add_argument(
+        "--allow-motion",
+        action="store_true",
+        help="run the cases that move the platform and switch outputs (real platform: keep clear)",
+    )
+    gate.add_argument(
+        "--target-is-simulator", action="store_true", help="declare the target a simulator: motion and output cases run"
+    )
     gate.add_argument("--allow-shutdown", action="store_true", help="end with CMD_EXIT (the target stops)")
     p.add_argument("--baseline", metavar="FILE", help="known failures; a stale entry fails the run")
     p.add_argument("--write-baseline", metavar="FILE", help="write the failures of this run as a baseline")
-    p.add_argument("--coverage-threshold", type=float, metavar="PCT",
-                   help="exit 1 when an enforced coverage metric is below PCT percent")
+    p.add_argument(
+        "--coverage-threshold",
+        type=float,
+        metavar="PCT",
+        help="exit 1 when an enforced coverage metric is below PCT percent",
+    )
     p.add_argument("--reruns", type=count, default=2, metavar="N", help="re-runs of an inconclusive case (default 2)")
     p.add_argument("--reply-timeout", type=positive, default=3.0, metavar="S", help="wall seconds per reply")
-    p.add_argument("--budget", type=positive, metavar="S",
-                   help="wall seconds for the whole run; the cases left then are INCONCLUSIVE 'not run' (default for "
-                        "the smoke and standard tiers: 280, or 80 + 600 / time scale when more; exhaustive: none)")
-    p.add_argument("--case-budget", type=positive, metavar="S",
-                   help="wall seconds one case may take (default 30 + 240 / time scale); a case still running then "
-                        "is INCONCLUSIVE 'case budget spent'")
+    p.add_argument(
+        "--budget",
+        type=positive,
+        metavar="S",
+        help="wall seconds for the whole run; the cases left then are INCONCLUSIVE 'not run' (default for "
+        "the smoke and standard tiers: 280, or 80 + 600 / time scale when more; exhaustive: none)",
+    )
+    p.add_argument(
+        "--case-budget",
+        type=positive,
+        metavar="S",
+        help="wall seconds one case may take (default 30 + 240 / time scale); a case still running then "
+        "is INCONCLUSIVE 'case budget spent'",
+    )
     p.add_argument("--list", action="store_true", help="list the selected cases and exit")
     p.add_argument("--verbose", action="store_true", help="print every verdict, not only the non-PASS ones")
-    p.add_argument("--differential", action="store_true",
-                   help="also replay a session against a reference server started for it and diff the replies")
-    p.add_argument("--stateful", type=count, default=0, metavar="N",
-                   help="also run N stateful (Hypothesis) examples; a failure is saved as a replay script")
-    p.add_argument("--stateful-out", default="conform-failures", metavar="DIR",
-                   help="where stateful failures are saved (default conform-failures/)")
-    p.epilog = exit_status(ok="every selected MUST case passed (--list: listed)",
-                           failed="a case failed, a baseline entry is stale or coverage is below the threshold",
-                           usage="usage or connection error: bad arguments, an unreadable baseline, no case "
-                                 "selected, the target unreachable, a harness error")
+    p.add_argument(
+        "--differential",
+        action="store_true",
+        help="also replay a session against a reference server started for it and diff the replies",
+    )
+    p.add_argument(
+        "--stateful",
+        type=count,
+        default=0,
+        metavar="N",
+        help="also run N stateful (Hypothesis) examples; a failure is saved as a replay script",
+    )
+    p.add_argument(
+        "--stateful-out",
+        default="conform-failures",
+        metavar="DIR",
+        help="where stateful failures are saved (default conform-failures/)",
+    )
+    p.epilog = exit_status(
+        ok="every selected MUST case passed (--list: listed)",
+        failed="a case failed, a baseline entry is stale or coverage is below the threshold",
+        usage="usage or connection error: bad arguments, an unreadable baseline, no case "
+        "selected, the target unreachable, a harness error",
+    )
 
 
 def run_conform(args: argparse.Namespace) -> int:
@@ -73,11 +116,21 @@ def run_conform(args: argparse.Namespace) -> int:
     from pltf.conformance_tests.runner import Runner
 
     host, number = args.target
-    config = Config(host=host, port=number, second_port=args.second_port, time_scale=args.time_scale,
-                    profile=args.profile, tier=Tier[args.tier.upper()], keyword=args.keyword,
-                    allow_motion=args.allow_motion, simulator=args.target_is_simulator,
-                    allow_shutdown=args.allow_shutdown, reruns=max(0, args.reruns), reply_timeout=args.reply_timeout,
-                    case_budget=args.case_budget)
+    config = Config(
+        host=host,
+        port=number,
+        second_port=args.second_port,
+        time_scale=args.time_scale,
+        profile=args.profile,
+        tier=Tier[args.tier.upper()],
+        keyword=args.keyword,
+        allow_motion=args.allow_motion,
+        simulator=args.target_is_simulator,
+        allow_shutdown=args.allow_shutdown,
+        reruns=max(0, args.reruns),
+        reply_timeout=args.reply_timeout,
+        case_budget=args.case_budget,
+    )
     if args.budget is not None:
         config.run_budget = args.budget
     elif config.tier is not Tier.EXHAUSTIVE:  # a standard run ends within 5 minutes whatever the target does
@@ -90,8 +143,7 @@ def run_conform(args: argparse.Namespace) -> int:
     console = Console(width=None if sys.stdout.isatty() else 140)
     if args.list:
         for c in cases:
-            flags = " ".join(f for f in ("moves_platform", "switches_outputs", "destructive", "abuse")
-                             if getattr(c, f))
+            flags = " ".join(f for f in ("moves_platform", "switches_outputs", "destructive", "abuse") if getattr(c, f))
             console.print(f"{c.id}  [dim]{c.level} {c.tier.name.lower()} {flags}[/]", highlight=False)
         console.print(f"{len(cases)} cases")
         return 0
@@ -108,8 +160,10 @@ def run_conform(args: argparse.Namespace) -> int:
     if args.coverage_threshold is not None and code != 2:
         below = run.target.coverage.below(args.coverage_threshold)
         for m in below:
-            console.print(f"[bold red]coverage below {args.coverage_threshold:g}%:[/] {m.name} {m.percent:.1f}% "
-                          f"(missing: {', '.join(m.missing[:5])})")
+            console.print(
+                f"[bold red]coverage below {args.coverage_threshold:g}%:[/] {m.name} {m.percent:.1f}% "
+                f"(missing: {', '.join(m.missing[:5])})"
+            )
         code = max(code, 1 if below else 0)
     if code != 2 and args.differential:
         code = max(code, _differential(config, console))

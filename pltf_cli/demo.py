@@ -22,8 +22,19 @@ REPORT = Path("demo-report.html")
 def start_server(data_dir: str, time_scale: float) -> tuple[subprocess.Popen[bytes], list[int], Path]:
     """Start the server with its log in a file (a pipe nobody drains would block it once full)."""
     log = Path(data_dir) / "server.log"
-    cmd = [sys.executable, "-m", "pltf.reference_server", "--ports", "0,0", "--data-dir", str(Path(data_dir) / "disk"),
-           "--time-scale", str(time_scale), "--seed", "1"]
+    cmd = [
+        sys.executable,
+        "-m",
+        "pltf.reference_server",
+        "--ports",
+        "0,0",
+        "--data-dir",
+        str(Path(data_dir) / "disk"),
+        "--time-scale",
+        str(time_scale),
+        "--seed",
+        "1",
+    ]
     with log.open("wb") as sink:
         proc = subprocess.Popen(cmd, stdout=sink, stderr=subprocess.STDOUT)
     deadline = time.monotonic() + 30
@@ -46,11 +57,24 @@ def main() -> int:
         proc, (port_a, port_b), log = start_server(data_dir, time_scale)
         try:
             print(f"\nRunning the conformance suite (standard tier) against 127.0.0.1:{port_a} / {port_b} ...\n")
-            status = pltf([
-                "conform", "--target", f"127.0.0.1:{port_a}", "--second-port", str(port_b),
-                "--time-scale", str(time_scale), "--tier", "standard", "--allow-motion",
-                "--html", str(REPORT), "--json", "demo-report.json",
-            ])
+            status = pltf(
+                [
+                    "conform",
+                    "--target",
+                    f"127.0.0.1:{port_a}",
+                    "--second-port",
+                    str(port_b),
+                    "--time-scale",
+                    str(time_scale),
+                    "--tier",
+                    "standard",
+                    "--allow-motion",
+                    "--html",
+                    str(REPORT),
+                    "--json",
+                    "demo-report.json",
+                ]
+            )
         finally:
             proc.terminate()
             try:
@@ -62,9 +86,11 @@ def main() -> int:
                 print(f"  server | {line}")
     print(f"\nReport: {REPORT.resolve()} (open it in a browser); JSON: demo-report.json")
     # issue 19: the GUI on a reference server (the demo's own server was busy with the suite on both its ports)
-    print("\nTo watch and drive a reference server in the browser (PlatformCtrlGUI, guide ch. 5):\n"
-          "  .venv/bin/pltf serve --ports 10000,10002 &\n"
-          "  .venv/bin/pltf gui --target 127.0.0.1:10000 --open   # http://127.0.0.1:8080/?target=127.0.0.1:10000")
+    print(
+        "\nTo watch and drive a reference server in the browser (PlatformCtrlGUI, guide ch. 5):\n"
+        "  .venv/bin/pltf serve --ports 10000,10002 &\n"
+        "  .venv/bin/pltf gui --target 127.0.0.1:10000 --open   # http://127.0.0.1:8080/?target=127.0.0.1:10000"
+    )
     return status
 
 

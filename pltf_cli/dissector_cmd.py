@@ -14,8 +14,11 @@ def add_dissector_arguments(p: argparse.ArgumentParser) -> None:
     where = p.add_mutually_exclusive_group(required=True)
     where.add_argument("--out", type=Path, metavar="FILE", help="write the dissector to FILE (e.g. pltf.lua)")
     where.add_argument("--check", type=Path, metavar="FILE", help="exit 1 if FILE differs from a fresh generation")
-    p.epilog = exit_status(ok="written (--check: up to date)", failed="--check: FILE differs from a fresh generation",
-                           usage="usage error: --out not writable, --check FILE unreadable")
+    p.epilog = exit_status(
+        ok="written (--check: up to date)",
+        failed="--check: FILE differs from a fresh generation",
+        usage="usage error: --out not writable, --check FILE unreadable",
+    )
 
 
 def run_dissector(args: argparse.Namespace) -> int:

@@ -18,14 +18,22 @@ from pltf.cli.options import CommandError, check_listening, count, exit_status, 
 
 
 def add_fuzz_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--target", type=target_or_zero, metavar="HOST:PORT", help="the port to fuzz (port 0 with --launch: "
-                   "ephemeral ports read from the target's 'server started at port N' lines)")  # fmt: skip
     p.add_argument(
-        "--second-port", type=port, metavar="PORT",
+        "--target",
+        type=target_or_zero,
+        metavar="HOST:PORT",
+        help="the port to fuzz (port 0 with --launch: "
+        "ephemeral ports read from the target's 'server started at port N' lines)",
+    )
+    p.add_argument(
+        "--second-port",
+        type=port,
+        metavar="PORT",
         help="port of the liveness probe (default: PORT+2, guide 6.1 10000/10002)",
     )
-    p.add_argument("--duration", type=positive, default=60.0, metavar="SECONDS",
-                   help="wall seconds to fuzz (default 60)")
+    p.add_argument(
+        "--duration", type=positive, default=60.0, metavar="SECONDS", help="wall seconds to fuzz (default 60)"
+    )
     p.add_argument("--seed", type=int, default=0, help="seed of the case generator (default 0): same seed, same cases")
     p.add_argument("--out", type=Path, default=Path("fuzz-findings"), metavar="DIR", help="findings are written here")
     p.add_argument("--corpus", type=Path, metavar="DIR", help="resume from / save progress and interesting inputs")
@@ -35,28 +43,58 @@ def add_fuzz_arguments(p: argparse.ArgumentParser) -> None:
         help="also send the telegrams that make a platform move, and fuzz in Running/Breaked",
     )
     p.add_argument("--in-process", action="store_true", help="fuzz spec.codec and the XML validation directly")
-    p.add_argument("--launch", metavar="CMD", help="start (and restart) the target with CMD; {port} {second_port} "
-                   "{ports} {tmpdir} are replaced. Needed to minimize deaths and hangs.")  # fmt: skip
+    p.add_argument(
+        "--launch",
+        metavar="CMD",
+        help="start (and restart) the target with CMD; {port} {second_port} "
+        "{ports} {tmpdir} are replaced. Needed to minimize deaths and hangs.",
+    )
     p.add_argument("--deadline", type=positive, default=2.0, metavar="SECONDS", help="liveness and reply deadline")
     p.add_argument("--max-cases", type=count, metavar="N", help="stop after this many cases")
     p.add_argument("--max-findings", type=count, metavar="N", help="stop after this many findings")
-    p.add_argument("--minimize-seconds", type=positive, default=60.0, metavar="SECONDS",
-                   help="time budget of one delta debugging (default 60)")
-    p.add_argument("--probe-every", type=int, default=4, metavar="UNITS",
-                   help="every case opens with a request whose answer proves the target served it (the liveness "
-                        "probe); once 256 were served and none turned away, one case in UNITS of those that owe no "
-                        "answer keeps it (1: every case)")  # fmt: skip
-    p.add_argument("--lanes", type=int, choices=(1, 2), default=2,
-                   help="2: cases run on both ports at once; 1: one at a time on --target's port")  # fmt: skip
-    p.add_argument("--no-pipeline", action="store_true",
-                   help="connect a port's next case only after the target closed the last one (default: up to 3 "
-                        "small cases wait behind it while the target serves them in turn)")  # fmt: skip
-    p.add_argument("--big-share", type=_share, default=None, metavar="FRACTION",
-                   help="of the cases over 1 MiB drawn, the share kept (default 0.25; 1: the natural mix)")  # fmt: skip
+    p.add_argument(
+        "--minimize-seconds",
+        type=positive,
+        default=60.0,
+        metavar="SECONDS",
+        help="time budget of one delta debugging (default 60)",
+    )
+    p.add_argument(
+        "--probe-every",
+        type=int,
+        default=4,
+        metavar="UNITS",
+        help="every case opens with a request whose answer proves the target served it (the liveness "
+        "probe); once 256 were served and none turned away, one case in UNITS of those that owe no "
+        "answer keeps it (1: every case)",
+    )
+    p.add_argument(
+        "--lanes",
+        type=int,
+        choices=(1, 2),
+        default=2,
+        help="2: cases run on both ports at once; 1: one at a time on --target's port",
+    )
+    p.add_argument(
+        "--no-pipeline",
+        action="store_true",
+        help="connect a port's next case only after the target closed the last one (default: up to 3 "
+        "small cases wait behind it while the target serves them in turn)",
+    )
+    p.add_argument(
+        "--big-share",
+        type=_share,
+        default=None,
+        metavar="FRACTION",
+        help="of the cases over 1 MiB drawn, the share kept (default 0.25; 1: the natural mix)",
+    )
     p.add_argument("--quiet", action="store_true", help="no live view")
-    p.epilog = exit_status(ok="nothing found", failed="findings written to --out",
-                           usage="usage or connection error: bad arguments, nothing listening on --target or the "
-                                 "probe port, the launch command failed")
+    p.epilog = exit_status(
+        ok="nothing found",
+        failed="findings written to --out",
+        usage="usage or connection error: bad arguments, nothing listening on --target or the "
+        "probe port, the launch command failed",
+    )
 
 
 def _share(text: str) -> float:
@@ -99,11 +137,24 @@ def run_fuzz(args: argparse.Namespace) -> int:
     from pltf.zoo.launch import LaunchError
 
     opts = Options(
-        host=host, port=port, second_port=second, duration=args.duration, seed=args.seed, out=args.out,
-        corpus=args.corpus, allow_motion=args.allow_motion, launch=args.launch, max_cases=args.max_cases,
-        max_findings=args.max_findings, deadline=args.deadline, minimize_seconds=args.minimize_seconds,
-        command=command, probe_every=max(1, args.probe_every), lanes=args.lanes, pipeline=not args.no_pipeline,
-    )  # fmt: skip
+        host=host,
+        port=port,
+        second_port=second,
+        duration=args.duration,
+        seed=args.seed,
+        out=args.out,
+        corpus=args.corpus,
+        allow_motion=args.allow_motion,
+        launch=args.launch,
+        max_cases=args.max_cases,
+        max_findings=args.max_findings,
+        deadline=args.deadline,
+        minimize_seconds=args.minimize_seconds,
+        command=command,
+        probe_every=max(1, args.probe_every),
+        lanes=args.lanes,
+        pipeline=not args.no_pipeline,
+    )
     if args.big_share is not None:
         opts.big_share = args.big_share
     campaign = Campaign(opts)

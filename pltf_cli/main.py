@@ -78,8 +78,9 @@ def _hook(name: str, kind: str) -> str:
 def make_parser(load: Collection[str] = ()) -> Parser:
     """The parser of every command; only the commands in ``load`` get their arguments (their module imported)."""
     formatter = argparse.RawDescriptionHelpFormatter
-    parser = Parser(prog="pltf", description="Neobotix PlatformCtrl protocol toolkit", epilog=EPILOG,
-                    formatter_class=formatter)
+    parser = Parser(
+        prog="pltf", description="Neobotix PlatformCtrl protocol toolkit", epilog=EPILOG, formatter_class=formatter
+    )
     parser.add_argument("--version", action=_Version, help="print the toolkit's version and exit")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     parser.commands = {}
@@ -124,8 +125,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except Exception as exc:
         if os.environ.get("PLTF_TRACEBACK"):
             raise
-        return _fail(prog, f"internal error, a bug in pltf: {type(exc).__name__}: {exc} "
-                           "(PLTF_TRACEBACK=1 shows where)", INTERNAL)
+        return _fail(
+            prog, f"internal error, a bug in pltf: {type(exc).__name__}: {exc} (PLTF_TRACEBACK=1 shows where)", INTERNAL
+        )
 
 
 def _fail(prog: str, message: str, status: int) -> int:

@@ -28,32 +28,66 @@ from pltf.spec.codec import DEFAULT_MAX_LENGTH
 def port_pair(text: str) -> tuple[int, int]:
     """``--second LISTEN_PORT[:TARGET_PORT]``: the second port, on the hosts of --listen and --target."""
     parts = text.split(":")
-    if len(parts) not in (1, 2) or not all(p.isascii() and p.isdigit() and int(p) < 65536 for p in parts) \
-            or int(parts[-1]) == 0:
-        raise argparse.ArgumentTypeError(f"expected PORT or LISTEN_PORT:TARGET_PORT (0..65535, a target port "
-                                         f"1..65535), got {text!r}")
+    if (
+        len(parts) not in (1, 2)
+        or not all(p.isascii() and p.isdigit() and int(p) < 65536 for p in parts)
+        or int(parts[-1]) == 0
+    ):
+        raise argparse.ArgumentTypeError(
+            f"expected PORT or LISTEN_PORT:TARGET_PORT (0..65535, a target port 1..65535), got {text!r}"
+        )
     return int(parts[0]), int(parts[-1])
 
 
 def add_proxy_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--listen", type=target_or_zero, required=True, metavar="HOST:PORT",
-                   help="where clients connect (port 0: any free port, printed at start)")
+    p.add_argument(
+        "--listen",
+        type=target_or_zero,
+        required=True,
+        metavar="HOST:PORT",
+        help="where clients connect (port 0: any free port, printed at start)",
+    )
     p.add_argument("--target", type=target, required=True, metavar="HOST:PORT", help="the platform (or server)")
-    p.add_argument("--second", type=port_pair, metavar="LPORT[:TPORT]",
-                   help="also proxy a second port: listen on LPORT, forward to TPORT of the target (guide 6.1: 10002)")
-    p.add_argument("--record", type=Path, metavar="FILE",
-                   help="write the session to FILE (JSON lines) and the traffic to FILE with suffix .pcapng")
+    p.add_argument(
+        "--second",
+        type=port_pair,
+        metavar="LPORT[:TPORT]",
+        help="also proxy a second port: listen on LPORT, forward to TPORT of the target (guide 6.1: 10002)",
+    )
+    p.add_argument(
+        "--record",
+        type=Path,
+        metavar="FILE",
+        help="write the session to FILE (JSON lines) and the traffic to FILE with suffix .pcapng",
+    )
     p.add_argument("--pcapng", type=Path, metavar="FILE", help="the pcapng file (default: beside --record)")
-    p.add_argument("--filter", action="append", default=[], metavar="NAMES",
-                   help="show only these telegrams (names or globs, comma-separated, CMD_ optional; repeatable)")
-    p.add_argument("--hide", action="append", default=[], metavar="NAMES",
-                   help="do not show these telegrams (e.g. GET_STATUS when a client polls)")
+    p.add_argument(
+        "--filter",
+        action="append",
+        default=[],
+        metavar="NAMES",
+        help="show only these telegrams (names or globs, comma-separated, CMD_ optional; repeatable)",
+    )
+    p.add_argument(
+        "--hide",
+        action="append",
+        default=[],
+        metavar="NAMES",
+        help="do not show these telegrams (e.g. GET_STATUS when a client polls)",
+    )
     p.add_argument("--quiet", action="store_true", help="no live view (recording goes on)")
     p.add_argument("--relative-time", action="store_true", help="times in seconds since the proxy started")
-    p.add_argument("--max-length", type=count, default=DEFAULT_MAX_LENGTH, metavar="BYTES",
-                   help="frames longer than this are marked FrameTooLarge (default 16 MiB, erratum E-WIRE-004)")
-    p.epilog = exit_status(ok="stopped (Ctrl-C or SIGTERM)",
-                           usage="usage error: bad address, --listen's port in use, the recording not writable")
+    p.add_argument(
+        "--max-length",
+        type=count,
+        default=DEFAULT_MAX_LENGTH,
+        metavar="BYTES",
+        help="frames longer than this are marked FrameTooLarge (default 16 MiB, erratum E-WIRE-004)",
+    )
+    p.epilog = exit_status(
+        ok="stopped (Ctrl-C or SIGTERM)",
+        usage="usage error: bad address, --listen's port in use, the recording not writable",
+    )
 
 
 def _names(values: list[str]) -> list[str]:
@@ -85,8 +119,12 @@ def run_proxy(args: argparse.Namespace) -> int:
         sinks: list[Sink] = []
         flushes = []
         if not args.quiet:
-            view = View(sys.stdout, Selection(_names(args.filter), _names(args.hide)), color=sys.stdout.isatty(),
-                        t0=started if args.relative_time else None)  # fmt: skip
+            view = View(
+                sys.stdout,
+                Selection(_names(args.filter), _names(args.hide)),
+                color=sys.stdout.isatty(),
+                t0=started if args.relative_time else None,
+            )
             sinks.append(view.show)
             flushes.append(view.flush)
         session = SessionWriter(args.record) if args.record is not None else None
@@ -106,8 +144,9 @@ def run_proxy(args: argparse.Namespace) -> int:
 async def _serve(routes: list[Route], pipe: RecorderPipe, started: float) -> int:
     proxy = ProxyServer(routes, pipe)
     listening = await proxy.start()
-    pipe.session_start([(f"{h}:{p}", f"{r.target_host}:{r.target_port}")
-                        for r, (h, p) in zip(routes, listening, strict=True)], started)  # fmt: skip
+    pipe.session_start(
+        [(f"{h}:{p}", f"{r.target_host}:{r.target_port}") for r, (h, p) in zip(routes, listening, strict=True)], started
+    )
     for route, (host, port) in zip(routes, listening, strict=True):
         print(f"proxy listening at {host}:{port} -> {route.target_host}:{route.target_port}", flush=True)
     loop = asyncio.get_running_loop()

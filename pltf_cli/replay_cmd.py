@@ -22,16 +22,24 @@ from pltf.proxy.session import SessionError, read_session
 
 def add_replay_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("session", type=Path, help="a session file written by `pltf proxy --record`")
-    p.add_argument("--target", type=target, required=True, metavar="HOST:PORT",
-                   help="where to replay the session's first port")
+    p.add_argument(
+        "--target", type=target, required=True, metavar="HOST:PORT", help="where to replay the session's first port"
+    )
     p.add_argument("--second-port", type=port, metavar="PORT", help="where to replay its second port (if it has one)")
-    p.add_argument("--time-scale", type=positive, default=1.0, metavar="X",
-                   help="replay X times as fast as recorded (default 1: the recorded timing)")
+    p.add_argument(
+        "--time-scale",
+        type=positive,
+        default=1.0,
+        metavar="X",
+        help="replay X times as fast as recorded (default 1: the recorded timing)",
+    )
     p.add_argument("--reply-timeout", type=positive, default=3.0, metavar="S", help="seconds to wait for a reply")
     p.add_argument("--junit", type=Path, metavar="FILE", help="write a JUnit XML report")
-    p.epilog = exit_status(ok="the target answered as recorded", failed="a reply differs from the recorded one",
-                           usage="usage or connection error: an unreadable session file, bad arguments, the "
-                                 "target unreachable")
+    p.epilog = exit_status(
+        ok="the target answered as recorded",
+        failed="a reply differs from the recorded one",
+        usage="usage or connection error: an unreadable session file, bad arguments, the target unreachable",
+    )
 
 
 def run_replay(args: argparse.Namespace) -> int:

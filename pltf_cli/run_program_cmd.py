@@ -75,11 +75,12 @@ def add_run_program_arguments(p: argparse.ArgumentParser) -> None:
         action="store_true",
         help="raise user events from standard input: one id per line (E-TASK-012)",
     )
-    p.add_argument("--plain", action="store_true", help="print log lines instead of the live view")  # fmt: skip
-    p.epilog = exit_status(ok="every task ended without error",
-                           failed="a task failed, or --timeout expired (the platform is stopped)",
-                           usage="usage or connection error: an unreadable or invalid program, the target "
-                                 "unreachable or lost")
+    p.add_argument("--plain", action="store_true", help="print log lines instead of the live view")
+    p.epilog = exit_status(
+        ok="every task ended without error",
+        failed="a task failed, or --timeout expired (the platform is stopped)",
+        usage="usage or connection error: an unreadable or invalid program, the target unreachable or lost",
+    )
 
 
 @dataclass
@@ -161,8 +162,14 @@ class View:
             for run in self.interp.runs:
                 cmd = run.current
                 wait = run.pending.describe(self.interp.t) if run.pending is not None else ""
-                tasks.add_row(run.task.title, str(run.task.priority), run.state.value,
-                              str(cmd.line) if cmd else "", cmd.tag if cmd else "", wait)  # fmt: skip
+                tasks.add_row(
+                    run.task.title,
+                    str(run.task.priority),
+                    run.state.value,
+                    str(cmd.line) if cmd else "",
+                    cmd.tag if cmd else "",
+                    wait,
+                )
         lines = "\n".join(_line(r) for r in self.log) or "(nothing yet)"
         return Group(tasks, Panel(lines, title="log"))
 
@@ -216,8 +223,15 @@ def run_run_program(args: argparse.Namespace) -> int:
                     for r in records:
                         out.print(_line(r), markup=False, highlight=False)
 
-                result = run_remote(program, machine, time_scale=args.time_scale, seed=args.seed,
-                                    period=args.period, timeout=args.timeout, on_tick=on_tick)  # fmt: skip
+                result = run_remote(
+                    program,
+                    machine,
+                    time_scale=args.time_scale,
+                    seed=args.seed,
+                    period=args.period,
+                    timeout=args.timeout,
+                    on_tick=on_tick,
+                )
             else:
                 with Live(view.render(), console=out, refresh_per_second=8) as live:
 
@@ -225,8 +239,15 @@ def run_run_program(args: argparse.Namespace) -> int:
                         view.update(interp, records, now)
                         live.update(view.render())
 
-                    result = run_remote(program, machine, time_scale=args.time_scale, seed=args.seed,
-                                        period=args.period, timeout=args.timeout, on_tick=on_live)  # fmt: skip
+                    result = run_remote(
+                        program,
+                        machine,
+                        time_scale=args.time_scale,
+                        seed=args.seed,
+                        period=args.period,
+                        timeout=args.timeout,
+                        on_tick=on_live,
+                    )
     except KeyboardInterrupt:
         _stop_quietly(client)
         return 130
@@ -235,6 +256,7 @@ def run_run_program(args: argparse.Namespace) -> int:
     if result.failed:
         err.print(f"pltf run-program: task(s) failed: {', '.join(result.failed)}", markup=False)
     if not result.finished:
-        err.print(f"pltf run-program: program still running after {result.elapsed:.1f} s simulated: stopped",
-                  markup=False)
+        err.print(
+            f"pltf run-program: program still running after {result.elapsed:.1f} s simulated: stopped", markup=False
+        )
     return 0 if result.finished and not result.failed else 1

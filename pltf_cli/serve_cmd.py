@@ -10,8 +10,10 @@ from pltf.reference_server import cli
 
 def add_serve_arguments(p: argparse.ArgumentParser) -> None:
     cli.add_arguments(p)
-    p.epilog = exit_status(ok="stopped by CMD_EXIT or a signal",
-                           usage="usage error: bad options, an unusable data dir or CAN interface, a port in use")
+    p.epilog = exit_status(
+        ok="stopped by CMD_EXIT or a signal",
+        usage="usage error: bad options, an unusable data dir or CAN interface, a port in use",
+    )
 
 
 def run_serve(args: argparse.Namespace) -> int:

@@ -15,8 +15,11 @@ def add_stubs_arguments(p: argparse.ArgumentParser) -> None:
     where = p.add_mutually_exclusive_group(required=True)
     where.add_argument("--out", metavar="DIR", help="write the client into DIR (files are overwritten)")
     where.add_argument("--check", metavar="DIR", help="compare DIR with a fresh generation; exit 1 if stale")
-    p.epilog = exit_status(ok="written (--check: up to date)", failed="--check: DIR differs from a fresh generation",
-                           usage="usage error: bad options, --out not writable, --check DIR not a directory")
+    p.epilog = exit_status(
+        ok="written (--check: up to date)",
+        failed="--check: DIR differs from a fresh generation",
+        usage="usage error: bad options, --out not writable, --check DIR not a directory",
+    )
 
 
 def run_stubs(args: argparse.Namespace) -> int:
@@ -27,8 +30,11 @@ def run_stubs(args: argparse.Namespace) -> int:
         for problem in problems:
             print(f"{args.check}: {problem}", file=sys.stderr)
         if problems:
-            print(f"pltf stubs: {args.lang} stubs in {args.check} are stale; run "
-                  f"`pltf stubs --lang {args.lang} --out {args.check}`", file=sys.stderr)
+            print(
+                f"pltf stubs: {args.lang} stubs in {args.check} are stale; run "
+                f"`pltf stubs --lang {args.lang} --out {args.check}`",
+                file=sys.stderr,
+            )
             return FAILED
         print(f"{args.check}: up to date")
         return 0

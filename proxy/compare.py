@@ -41,8 +41,10 @@ def _strings(a: str, b: str) -> tuple[str, str]:
         return _show(a), _show(b)
     k = next((i for i, (x, y) in enumerate(zip(a, b, strict=False)) if x != y), min(len(a), len(b)))
     lo = max(0, k - 20)
-    return (f"...{a[lo : k + 30]!r}... ({len(a)} characters, differs at {k})",
-            f"...{b[lo : k + 30]!r}... ({len(b)} characters)")  # fmt: skip
+    return (
+        f"...{a[lo : k + 30]!r}... ({len(a)} characters, differs at {k})",
+        f"...{b[lo : k + 30]!r}... ({len(b)} characters)",
+    )
 
 
 def diff_telegrams(recorded: Telegram, replayed: Telegram) -> list[FieldDiff]:
@@ -67,8 +69,11 @@ def diff_telegrams(recorded: Telegram, replayed: Telegram) -> list[FieldDiff]:
                 for sub, x in ia.items():
                     if values_differ(x, ib[sub], r.tolerance):
                         key = f"{field}/{i}/{sub}"
-                        out.append(FieldDiff(f"{field}[{i}].{sub}", _show(x, names_a.get(key)),
-                                             _show(ib[sub], names_b.get(key))))  # fmt: skip
+                        out.append(
+                            FieldDiff(
+                                f"{field}[{i}].{sub}", _show(x, names_a.get(key)), _show(ib[sub], names_b.get(key))
+                            )
+                        )
         elif isinstance(va, list):
             for i, (x, y) in enumerate(zip(va, vb, strict=True)):
                 if values_differ(x, y, r.tolerance):

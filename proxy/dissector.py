@@ -55,8 +55,12 @@ def lua_str(text: str) -> str:
 
 
 def _field(f: FieldDef, prefix: str, indent: str) -> list[str]:
-    parts = [f"name = {lua_str(f.name)}", f"type = {lua_str(f.type)}", f"abbr = {lua_str(prefix + f.name)}",
-             f"desc = {lua_str(f.description)}"]  # fmt: skip
+    parts = [
+        f"name = {lua_str(f.name)}",
+        f"type = {lua_str(f.type)}",
+        f"abbr = {lua_str(prefix + f.name)}",
+        f"desc = {lua_str(f.description)}",
+    ]
     for key, value in (("unit", f.unit), ("enum", f.enum), ("item", f.item)):
         if value is not None:
             parts.append(f"{key} = {lua_str(value)}")
@@ -90,8 +94,13 @@ def _in_direction(t: TelegramDef, direction: Direction) -> bool:
 
 
 def render() -> str:
-    lines = [BANNER, f"local MAX_LENGTH = {DEFAULT_MAX_LENGTH} -- erratum E-WIRE-004",
-             "local PORTS = { " + ", ".join(f"[{p}] = true" for p in PORTS) + " }", "", "local ENUMS = {"]  # fmt: skip
+    lines = [
+        BANNER,
+        f"local MAX_LENGTH = {DEFAULT_MAX_LENGTH} -- erratum E-WIRE-004",
+        "local PORTS = { " + ", ".join(f"[{p}] = true" for p in PORTS) + " }",
+        "",
+        "local ENUMS = {",
+    ]
     for name, e in load_enums().items():
         values = ", ".join(f"[{v}] = {lua_str(k)}" for k, v in sorted(e.values.items(), key=lambda kv: kv[1]))
         lines.append(f"  {name} = {{ {values} }},")

@@ -80,8 +80,9 @@ class _Conn:
                 sock.close()
                 raise
         except OSError as exc:
-            self.proxy.observe("opened", self.number, time.time(), r.target_port, self.peer,
-                               (r.target_host, r.target_port))  # fmt: skip
+            self.proxy.observe(
+                "opened", self.number, time.time(), r.target_port, self.peer, (r.target_host, r.target_port)
+            )
             self._end(f"by proxy (target unreachable: {exc.strerror or exc})")
             self._close_all()
             if isinstance(exc, ConnectionRefusedError):
@@ -249,8 +250,11 @@ class ProxyServer:
         try:
             getattr(self.observer, what)(*args)
         except Exception:  # the proxy never dies of what passes through it
-            print("pltf proxy: internal error while recording; recording stopped, forwarding goes on:\n"
-                  + traceback.format_exc(limit=3), file=sys.stderr)  # fmt: skip
+            print(
+                "pltf proxy: internal error while recording; recording stopped, forwarding goes on:\n"
+                + traceback.format_exc(limit=3),
+                file=sys.stderr,
+            )
             self.observer = None
 
     async def start(self) -> list[tuple[str, int]]:

@@ -28,8 +28,14 @@ class _Conn:
 
 
 class Recorder:
-    def __init__(self, sinks: list[Sink], pcapng: PcapngWriter | None = None, session: SessionWriter | None = None,
-                 max_length: int | None = None, flushes: list[Callable[[], None]] | None = None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        sinks: list[Sink],
+        pcapng: PcapngWriter | None = None,
+        session: SessionWriter | None = None,
+        max_length: int | None = None,
+        flushes: list[Callable[[], None]] | None = None,
+    ) -> None:
         self.sinks = list(sinks)
         self.flushes = list(flushes or [])  # e.g. the view's output
         self.pcapng, self.session = pcapng, session

@@ -221,8 +221,11 @@ def _describe(rec: Record | None) -> str:
 
 def _compare(script: Script, step: Step, got: Record | None, note: str = "") -> list[Difference]:
     rec = step.reply
-    name = rec.telegram.NAME if rec is not None and rec.telegram is not None else (
-        step.request.telegram.NAME if step.request.telegram is not None else "(malformed)")  # fmt: skip
+    name = (
+        rec.telegram.NAME
+        if rec is not None and rec.telegram is not None
+        else (step.request.telegram.NAME if step.request.telegram is not None else "(malformed)")
+    )
 
     def d(path: str, a: str, b: str) -> Difference:
         return Difference(name, script.conn, script.port, step.at, step.label + note, path, a, b)
@@ -254,20 +257,35 @@ def judge(scripts: list[Script], outcomes: dict[int, Outcome]) -> list[Differenc
             if wait is not None:
                 if i == wait.final:
                     polls = o.polls.get(wait.id, 0)
-                    out += _compare(s, step, o.wait_final.get(wait.id), f" (a wait: {len(wait.steps)} polls "
-                                    f"recorded, {polls} replayed; its final reply)")  # fmt: skip
+                    out += _compare(
+                        s,
+                        step,
+                        o.wait_final.get(wait.id),
+                        f" (a wait: {len(wait.steps)} polls recorded, {polls} replayed; its final reply)",
+                    )
                 continue
             if step.answered or step.reply is not None or i in o.replies:
                 out += _compare(s, step, o.replies.get(i))
         if o.sent < len(s.steps):
             step = s.steps[o.sent]
-            out.append(conn_diff("requests", f"{len(s.steps)} sent",
-                                 f"{o.sent} sent: the target closed the connection before {step.label}",
-                                 when=step.at))  # fmt: skip
+            out.append(
+                conn_diff(
+                    "requests",
+                    f"{len(s.steps)} sent",
+                    f"{o.sent} sent: the target closed the connection before {step.label}",
+                    when=step.at,
+                )
+            )
         if len(o.extra) != len(s.unsolicited) or any(
-                _describe(a) != _describe(b) for a, b in zip(s.unsolicited, o.extra, strict=False)):
-            out.append(conn_diff("replies nobody asked for", ", ".join(map(_describe, s.unsolicited)) or "none",
-                                 ", ".join(map(_describe, o.extra)) or "none"))  # fmt: skip
+            _describe(a) != _describe(b) for a, b in zip(s.unsolicited, o.extra, strict=False)
+        ):
+            out.append(
+                conn_diff(
+                    "replies nobody asked for",
+                    ", ".join(map(_describe, s.unsolicited)) or "none",
+                    ", ".join(map(_describe, o.extra)) or "none",
+                )
+            )
         target_closed = o.closed_by_target_after is not None
         if s.closed_by == "target" and not target_closed:
             out.append(conn_diff("end", "closed by the target", "kept open by the target", when=s.last_time))
@@ -287,8 +305,16 @@ def group(differences: list[Difference]) -> dict[str, list[Difference]]:
 def counts(scripts: list[Script], outcomes: dict[int, Outcome]) -> dict[str, int]:
     """How much was replayed: connections, requests sent, replies compared, waits."""
     sent = sum(outcomes[s.conn].sent for s in scripts if s.conn in outcomes)
-    compared = sum(1 for s in scripts for i, st in enumerate(s.steps) if st.answered and (
-        st.wait is None or i == s.waits[st.wait].final))  # fmt: skip
-    return {"connections": len(scripts), "requests": sum(len(s.steps) for s in scripts), "sent": sent,
-            "replies compared": compared, "waits": sum(len(s.waits) for s in scripts)}  # fmt: skip
-
+    compared = sum(
+        1
+        for s in scripts
+        for i, st in enumerate(s.steps)
+        if st.answered and (st.wait is None or i == s.waits[st.wait].final)
+    )
+    return {
+        "connections": len(scripts),
+        "requests": sum(len(s.steps) for s in scripts),
+        "sent": sent,
+        "replies compared": compared,
+        "waits": sum(len(s.waits) for s in scripts),
+    }

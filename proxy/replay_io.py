@@ -193,8 +193,9 @@ class _Conn:
                     await asyncio.wait_for(self.closed[other].wait(), cfg.connect_timeout)
             await self._sleep_until(self.t0 + s.start / cfg.time_scale)
             try:
-                reader, writer = await asyncio.wait_for(asyncio.open_connection(cfg.host, self.port),
-                                                        cfg.connect_timeout)  # fmt: skip
+                reader, writer = await asyncio.wait_for(
+                    asyncio.open_connection(cfg.host, self.port), cfg.connect_timeout
+                )
             except (OSError, TimeoutError) as exc:
                 self.out.error = f"cannot connect to {cfg.host}:{self.port}: {getattr(exc, 'strerror', None) or exc}"
                 return self.out

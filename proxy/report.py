@@ -18,13 +18,17 @@ SHOWN = 20
 
 
 def line(d: Difference) -> str:
-    return (f"  #{d.conn} :{d.port} {d.at:8.3f} s  {d.request}\n"
-            f"      {d.path}: recorded {d.recorded}, replayed {d.replayed}")  # fmt: skip
+    return (
+        f"  #{d.conn} :{d.port} {d.at:8.3f} s  {d.request}\n"
+        f"      {d.path}: recorded {d.recorded}, replayed {d.replayed}"
+    )
 
 
 def render(differences: list[Difference], counts: dict[str, int]) -> str:
-    head = (f"replayed {counts['sent']} of {counts['requests']} requests on {counts['connections']} connections "
-            f"({counts['replies compared']} replies compared, {counts['waits']} waits)")  # fmt: skip
+    head = (
+        f"replayed {counts['sent']} of {counts['requests']} requests on {counts['connections']} connections "
+        f"({counts['replies compared']} replies compared, {counts['waits']} waits)"
+    )
     if not differences:
         return f"{head}: no difference\n"
     blocks = [head + ":"]
@@ -53,8 +57,9 @@ def write_junit(path: Path, differences: list[Difference], scripts: list[Script]
     names += [n for n in by_name if n not in names and n != "(connection)"]
     names.append("(connection)")
     failures = sum(1 for n in names if n in by_name)
-    suites = ET.Element("testsuites", name="pltf replay", tests=str(len(names)), failures=str(failures),
-                        time=f"{seconds:.3f}")  # fmt: skip
+    suites = ET.Element(
+        "testsuites", name="pltf replay", tests=str(len(names)), failures=str(failures), time=f"{seconds:.3f}"
+    )
     suite = ET.SubElement(suites, "testsuite", name="replay", tests=str(len(names)), failures=str(failures))
     for name in names:
         case = ET.SubElement(suite, "testcase", classname="replay", name=name)

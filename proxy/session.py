@@ -79,8 +79,12 @@ class SessionWriter:
         self.lines = 0
 
     def start(self, routes: list[Route], started: float) -> None:
-        header = {"format": FORMAT, "version": VERSION, "started": round(started, 6),
-                  "routes": [{"listen": r.listen, "target": r.target} for r in routes]}  # fmt: skip
+        header = {
+            "format": FORMAT,
+            "version": VERSION,
+            "started": round(started, 6),
+            "routes": [{"listen": r.listen, "target": r.target} for r in routes],
+        }
         self._fh.write(json.dumps(header) + "\n")
 
     def write(self, rec: Record) -> None:
@@ -145,7 +149,7 @@ def read_session(path: Path) -> Session:
             obj = json.loads(line)
             if header is None:
                 if not isinstance(obj, dict) or obj.get("format") != FORMAT:
-                    raise ValueError(f"not a {FORMAT} file (its first line has no \"format\": \"{FORMAT}\")")
+                    raise ValueError(f'not a {FORMAT} file (its first line has no "format": "{FORMAT}")')
                 if obj.get("version") != VERSION:
                     raise ValueError(f"version {obj.get('version')!r}, this pltf reads version {VERSION}")
                 header = obj

@@ -70,8 +70,9 @@ class Tap:
         self.out_of_sync: str | None = None  # the framing error that lost the boundaries
         self.frames = 0
 
-    def _record(self, now: float, raw: bytes, telegram: Telegram | None = None, error: str | None = None,
-                kind: str = FRAME) -> Record:  # fmt: skip
+    def _record(
+        self, now: float, raw: bytes, telegram: Telegram | None = None, error: str | None = None, kind: str = FRAME
+    ) -> Record:
         return Record(now, self.conn, self.port, kind, self.direction, raw, telegram, error)
 
     def feed(self, data: bytes, now: float) -> list[Record]:
@@ -119,8 +120,9 @@ class Tap:
             return None
         (length,) = _LENGTH.unpack_from(buf, pos + 4)
         if length > self.max_length:
-            return self._lose_sync(now, errors.FrameTooLarge(
-                f"frame length {length} over the maximum {self.max_length}"))  # fmt: skip
+            return self._lose_sync(
+                now, errors.FrameTooLarge(f"frame length {length} over the maximum {self.max_length}")
+            )
         if avail < FRAME_OVERHEAD + length:
             return None
         end = pos + FRAME_OVERHEAD + length

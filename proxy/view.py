@@ -49,8 +49,9 @@ def _value(v: Any) -> str:
         return repr(v if len(v) <= STRING_CUT else v[:STRING_CUT] + "...")
     if isinstance(v, list):
         if v and isinstance(v[0], dict):
-            head = ", ".join("{" + " ".join(f"{k}={_value(x)}" for k, x in item.items()) + "}"
-                             for item in v[:ITEMS_SHOWN])  # fmt: skip
+            head = ", ".join(
+                "{" + " ".join(f"{k}={_value(x)}" for k, x in item.items()) + "}" for item in v[:ITEMS_SHOWN]
+            )
             return f"[{len(v)}: {head}{', ...' if len(v) > ITEMS_SHOWN else ''}]"
         return "[" + ",".join(_value(x) for x in v) + "]"
     return repr(v)
@@ -83,8 +84,15 @@ def format_record(rec: Record, t0: float | None = None) -> tuple[str, str]:
 
 
 class View:
-    def __init__(self, out: TextIO, selection: Selection | None = None, *, color: bool = False, width: int = 160,
-                 t0: float | None = None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        out: TextIO,
+        selection: Selection | None = None,
+        *,
+        color: bool = False,
+        width: int = 160,
+        t0: float | None = None,
+    ) -> None:
         self.out, self.selection = out, selection or Selection()
         self.color, self.width, self.t0 = color, width, t0
         self.shown = 0

@@ -157,8 +157,14 @@ def run(args: argparse.Namespace, prog: str = "pltf serve") -> int:
         print(f"{prog}: error: --control-port needs the fake hardware (drop --no-hardware)", file=sys.stderr)
         return 2
     try:
-        platform = build_platform(storage, args.seed, motion=args.motion, hardware=not args.no_hardware,
-                                  can_interface=args.can_interface, can_channel=args.can_channel)  # fmt: skip
+        platform = build_platform(
+            storage,
+            args.seed,
+            motion=args.motion,
+            hardware=not args.no_hardware,
+            can_interface=args.can_interface,
+            can_channel=args.can_channel,
+        )
     except (OSError, ValueError, ImportError) as exc:  # python-can: an unknown interface, a missing channel
         print(f"{prog}: error: CAN interface {args.can_interface} {args.can_channel or ''}: {exc}", file=sys.stderr)
         return 2
@@ -183,7 +189,8 @@ def run(args: argparse.Namespace, prog: str = "pltf serve") -> int:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(prog="python -m pltf.reference_server",
-                                     description="PlatformCtrl reference server")
+    parser = argparse.ArgumentParser(
+        prog="python -m pltf.reference_server", description="PlatformCtrl reference server"
+    )
     add_arguments(parser)
     return run(parser.parse_args(argv), parser.prog)

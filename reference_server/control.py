@@ -91,8 +91,9 @@ class ControlServer:
         return {"time": now, "true": [true.x, true.y, true.angle], "estimate": [est.x, est.y, est.angle]}
 
 
-def start_control(platform: Platform, port: int, started: Callable[[ControlServer], None] | None = None
-                  ) -> Callable[[Server], None]:  # fmt: skip
+def start_control(
+    platform: Platform, port: int, started: Callable[[ControlServer], None] | None = None
+) -> Callable[[Server], None]:
     """A ``ready`` callback for ``network.serve`` that starts the control channel on the server's loop."""
 
     def ready(server: Server) -> None:

@@ -101,8 +101,11 @@ class ControlLoop:
             due = 1
             if self.ticks * self.period - self._warned_at >= HELD_WARNING_EVERY:
                 self._warned_at = self.ticks * self.period
-                log.warning("control loop %.1f s (simulated) behind: the simulated time was held (%.1f s in all)",
-                            hold, self.held)  # fmt: skip
+                log.warning(
+                    "control loop %.1f s (simulated) behind: the simulated time was held (%.1f s in all)",
+                    hold,
+                    self.held,
+                )
         n = due if due <= self.burst else min(due, self.burst if burst is None else burst)
         for _ in range(n):
             self.ticks += 1

@@ -58,12 +58,17 @@ def factory(
         motion = p.motion
         link = scanner if scanner != AUTO else ("sim://" if isinstance(motion, WorldFeatures) else None)
         hw = build_platform_hardware(
-            interface, channel, p.params.get, random.Random(p.random.getrandbits(64)),
-            nodes=fitted, expected=probed, scanner=link,
+            interface,
+            channel,
+            p.params.get,
+            random.Random(p.random.getrandbits(64)),
+            nodes=fitted,
+            expected=probed,
+            scanner=link,
             scan_source=lambda now: _ranges(motion.scan_ranges(now), POINTS),
             us_source=lambda now: _ranges(motion.us_ranges(now), 16),
             motion_source=motion.imu,
-        )  # fmt: skip
+        )
         return HardwareLink(hw, motion)
 
     return build

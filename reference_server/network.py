@@ -217,8 +217,9 @@ class Server:
             except OSError as exc:
                 if exc.errno not in _ACCEPT_ERRORS:
                     raise
-                log.error("port %d: cannot accept a connection: %s; retrying in %g s", self.ports[index], exc,
-                          ACCEPT_RETRY)  # fmt: skip
+                log.error(
+                    "port %d: cannot accept a connection: %s; retrying in %g s", self.ports[index], exc, ACCEPT_RETRY
+                )
                 self._pause_accepting(listener, index)
                 return
             if not _DONTWAIT:
@@ -267,8 +268,23 @@ class Server:
 class _Connection:
     """One client: read, decode, let the platform handle each telegram, write the replies back."""
 
-    __slots__ = ("closing", "decoder", "fd", "index", "loop", "nodelay", "out", "peer", "port", "reading", "server",
-                 "sock", "stall_at", "stall_timer", "writing")  # fmt: skip
+    __slots__ = (
+        "closing",
+        "decoder",
+        "fd",
+        "index",
+        "loop",
+        "nodelay",
+        "out",
+        "peer",
+        "port",
+        "reading",
+        "server",
+        "sock",
+        "stall_at",
+        "stall_timer",
+        "writing",
+    )
 
     def __init__(self, server: Server, sock: socket.socket, peer: _Peer, index: int) -> None:
         self.server, self.sock, self.peer, self.index = server, sock, peer, index
@@ -370,8 +386,9 @@ class _Connection:
             self.stall_timer = self.loop.call_at(self.stall_at, self._stall_check)
             return
         timeout = self.server.stall_timeout
-        self._end(logging.INFO, "partial frame stalled for %g s (%d bytes); connection closed", timeout,
-                  self.decoder.pending)  # fmt: skip
+        self._end(
+            logging.INFO, "partial frame stalled for %g s (%d bytes); connection closed", timeout, self.decoder.pending
+        )
 
     # ---- writing
     def _write(self, replies: list[bytes]) -> None:

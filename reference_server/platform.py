@@ -52,10 +52,19 @@ log = logging.getLogger("pltf.server")
 
 PROTOCOL_QUEUE_LENGTH = 32  # log lines kept for CMD_GET_DEBUG_DATA
 OPERATING = (State.RUNNING, State.BREAKED)
-QUERIES = frozenset({
-    "CMD_GET_STATUS", "CMD_GET_POSITION", "CMD_GET_PLTF_PARAM", "CMD_GET_PLTF_PARAM_VEC", "CMD_GET_MAP",
-    "CMD_GET_ROADMAP", "CMD_GET_PROGRAM", "CMD_GET_DEBUG_DATA", "CMD_GET_CAMERA",
-})  # fmt: skip
+QUERIES = frozenset(
+    {
+        "CMD_GET_STATUS",
+        "CMD_GET_POSITION",
+        "CMD_GET_PLTF_PARAM",
+        "CMD_GET_PLTF_PARAM_VEC",
+        "CMD_GET_MAP",
+        "CMD_GET_ROADMAP",
+        "CMD_GET_PROGRAM",
+        "CMD_GET_DEBUG_DATA",
+        "CMD_GET_CAMERA",
+    }
+)
 
 
 class Platform:
@@ -107,8 +116,14 @@ class Platform:
         try:
             pose = self.storage.read_start_pose()
             self.motion.place(Frame(pose.x, pose.y, pose.angle))
-            self.log(logging.INFO, "init pose read from %s, x:%g y:%g a:%g", self.storage.root / "StartupPosition.dat",
-                     pose.x, pose.y, pose.angle)  # fmt: skip
+            self.log(
+                logging.INFO,
+                "init pose read from %s, x:%g y:%g a:%g",
+                self.storage.root / "StartupPosition.dat",
+                pose.x,
+                pose.y,
+                pose.angle,
+            )
         except StorageError as exc:
             self.log(logging.WARNING, "init pose not read: %s; starting at x:0 y:0 a:0", exc)
         for kind in DOCUMENT_OF.values():

@@ -112,21 +112,50 @@ def _status_fields(p: Platform) -> dict[str, Any]:
     pose = p.motion.pose
     flag = int
     fields: dict[str, Any] = dict(  # noqa: C408 - the telegram's field names, as keywords
-        cmd_x=_i32(cmd.x), cmd_y=_i32(cmd.y), cmd_angle=_milli_deg(cmd.angle),
-        est_x=_i32(pose.x), est_y=_i32(pose.y), est_angle=_milli_deg(pose.angle),
+        cmd_x=_i32(cmd.x),
+        cmd_y=_i32(cmd.y),
+        cmd_angle=_milli_deg(cmd.angle),
+        est_x=_i32(pose.x),
+        est_y=_i32(pose.y),
+        est_angle=_milli_deg(pose.angle),
         # without a world (kinematics.Drive): no localization, the estimate is exact, its deviations 0
-        cov_major=0, cov_minor=0, cov_angle=0, cov_axis_angle=0,
-        scan=(), reflectors=(), lines=(), circles=(), corners=(),  # without a world: no laser scanner
+        cov_major=0,
+        cov_minor=0,
+        cov_angle=0,
+        cov_axis_angle=0,
+        scan=(),
+        reflectors=(),
+        lines=(),
+        circles=(),
+        corners=(),  # without a world: no laser scanner
         path=_i32_points(p.motion.path_xy()),
         joystick_buttons=(),  # no joystick
-        vel_trans=_i32(p.motion.v), vel_rot=_i32(p.motion.w * 1000.0),
-        relay_digital_in=0, relay_status=ABSENT, relay_analog_in=(0,) * 8, relay_opto_distance=(0,) * 4,
-        io_battery_voltage=0, io_digital_in=0, io_digital_out=0, io_status=ABSENT, io_analog_in=(0,) * 8,
-        motor_right_status=ABSENT, motor_left_status=ABSENT, motor_right_temp=0, motor_left_temp=0,
-        us_distance=(0,) * 16, us_analog_in=(0,) * 8, us_status=ABSENT,
-        radar_velocity=(0,) * 4, radar_status=ABSENT,
-        gps_latitude=0.0, gps_longitude=0.0,  # no GPS receiver (the section has no status field)
-        gyro_accel=(0,) * 3, gyro_angle=0, gyro_temp=0, gyro_status=ABSENT,
+        vel_trans=_i32(p.motion.v),
+        vel_rot=_i32(p.motion.w * 1000.0),
+        relay_digital_in=0,
+        relay_status=ABSENT,
+        relay_analog_in=(0,) * 8,
+        relay_opto_distance=(0,) * 4,
+        io_battery_voltage=0,
+        io_digital_in=0,
+        io_digital_out=0,
+        io_status=ABSENT,
+        io_analog_in=(0,) * 8,
+        motor_right_status=ABSENT,
+        motor_left_status=ABSENT,
+        motor_right_temp=0,
+        motor_left_temp=0,
+        us_distance=(0,) * 16,
+        us_analog_in=(0,) * 8,
+        us_status=ABSENT,
+        radar_velocity=(0,) * 4,
+        radar_status=ABSENT,
+        gps_latitude=0.0,
+        gps_longitude=0.0,  # no GPS receiver (the section has no status field)
+        gyro_accel=(0,) * 3,
+        gyro_angle=0,
+        gyro_temp=0,
+        gyro_status=ABSENT,
         initialized=flag(p.chart.initialized),
         target_reached=flag(p.motion.target_reached),
         motion_mode=p.motion_mode,
@@ -135,12 +164,15 @@ def _status_fields(p: Platform) -> dict[str, Any]:
         application_mode=0,  # guide: "not used at the moment"
         planner_state=p.planner_state,
         app_error=AppError.APP_ERR_NONE,
-        docked=0, localization_lost=0, collision=0, lookup_percent=0,
+        docked=0,
+        localization_lost=0,
+        collision=0,
+        lookup_percent=0,
         ir_active=(0,) * 4,  # no IR sensors
         siren=flag(bool(p.params.get("SirenEnabled"))),
         flashlight=flag(bool(p.params.get("FlashlightEnabled"))),
         head_position=p.head_position,  # erratum E-TASK-017
-    )  # fmt: skip
+    )
     if p.world is not None:  # localization, observations, collision (errata E-MOT-003, E-MOT-004, E-MOT-006)
         fields.update(p.world.status_fields())
     if p.hardware is not None:
@@ -178,8 +210,15 @@ def param_reply(store: ParameterStore, key: str) -> Telegram:
     except ParameterError:
         fields = (key, "", 0, 0, 0, 0)
     key, value, category, data_type, minimum, maximum = fields
-    return reply("CMD_GET_PLTF_PARAM", key=key, value=value, category=category, data_type=data_type,
-                 minimum=minimum, maximum=maximum)  # fmt: skip
+    return reply(
+        "CMD_GET_PLTF_PARAM",
+        key=key,
+        value=value,
+        category=category,
+        data_type=data_type,
+        minimum=minimum,
+        maximum=maximum,
+    )
 
 
 def param_vec_reply(store: ParameterStore) -> Telegram:
@@ -190,17 +229,37 @@ def debug_reply(p: Platform) -> Telegram:
     safe = _i32(float(p.params.get("MaxTransVel")))  # no sensor restricts the velocity
     return reply(
         "CMD_GET_DEBUG_DATA",
-        validation_gate=(), mapping_mode=int(p.mapping), mapped_segments=(), explored_segments=(),
-        global_localization=(), visible_lines=(), global_validation_gate=(), debug_path=(), graphics=(),
-        variables=(), moving_clusters=(), person_clusters=(), ball_clusters=(),
+        validation_gate=(),
+        mapping_mode=int(p.mapping),
+        mapped_segments=(),
+        explored_segments=(),
+        global_localization=(),
+        visible_lines=(),
+        global_validation_gate=(),
+        debug_path=(),
+        graphics=(),
+        variables=(),
+        moving_clusters=(),
+        person_clusters=(),
+        ball_clusters=(),
         protocol_queue=tuple((entry,) for entry in p.protocol_queue),
         # TCP statistics are not measured (the network shell keeps none yet)
-        tcp_avg_receive_time=0, tcp_receive_time_percent=0, tcp_avg_send_time=0, tcp_send_time_percent=0,
-        tcp_received_bytes_per_s=0, tcp_sent_bytes_per_s=0, tcp_received_telegrams_per_s=0,
-        tcp_sent_telegrams_per_s=0, tcp_avg_wait_time=0, tcp_wait_time_percent=0,
-        safe_vel_laser_forward=safe, safe_vel_laser_backward=safe, safe_vel_us_forward=safe,
-        safe_vel_us_backward=safe, safe_vel_optocoupler=safe,
-    )  # fmt: skip
+        tcp_avg_receive_time=0,
+        tcp_receive_time_percent=0,
+        tcp_avg_send_time=0,
+        tcp_send_time_percent=0,
+        tcp_received_bytes_per_s=0,
+        tcp_sent_bytes_per_s=0,
+        tcp_received_telegrams_per_s=0,
+        tcp_sent_telegrams_per_s=0,
+        tcp_avg_wait_time=0,
+        tcp_wait_time_percent=0,
+        safe_vel_laser_forward=safe,
+        safe_vel_laser_backward=safe,
+        safe_vel_us_forward=safe,
+        safe_vel_us_backward=safe,
+        safe_vel_optocoupler=safe,
+    )
 
 
 def camera_reply() -> Telegram:

@@ -185,9 +185,11 @@ class TelegramDecoder:
     """
 
     def __init__(
-        self, direction: Direction, max_length: int = DEFAULT_MAX_LENGTH,
+        self,
+        direction: Direction,
+        max_length: int = DEFAULT_MAX_LENGTH,
         decode_data: Callable[[bytes], Telegram] | None = None,
-    ) -> None:  # fmt: skip
+    ) -> None:
         self._set = _SETS[direction]
         # decode_data: one telegram's data (identifier first) -> the telegram; a caller may memoize it
         self._decode_data = decode_data or self._set.decode_data
@@ -233,7 +235,7 @@ class TelegramDecoder:
         avail = len(buf) - pos
         if avail < FRAME_OVERHEAD:
             if avail and not HEADER.startswith(bytes(buf[pos : pos + min(avail, 4)])):
-                raise errors.BadHeader(f"bad header {bytes(buf[pos:pos + 4]).hex()} (expected ff01fe02)")
+                raise errors.BadHeader(f"bad header {bytes(buf[pos : pos + 4]).hex()} (expected ff01fe02)")
             if self._eof and avail:
                 raise errors.Truncated(f"stream ended inside a frame header ({avail} bytes)")
             return None

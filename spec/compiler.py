@@ -209,8 +209,11 @@ def _emit_decode(src: _Source, depth: int, fields: tuple[FieldDef, ...], where: 
                 expr = f"{vals}[{k}:{k + f.repeat}]" if f.repeat else f"{vals}[{k}]"
                 k += f.repeat or 1
                 if f.const is not None:
-                    src.emit(depth, f"if {expr} != {f.const}: raise errors.FieldOutOfRange("
-                                    f"f'{where}.{f.name}: {{{expr}!r}}, the guide fixes it at {f.const}')")
+                    src.emit(
+                        depth,
+                        f"if {expr} != {f.const}: raise errors.FieldOutOfRange("
+                        f"f'{where}.{f.name}: {{{expr}!r}}, the guide fixes it at {f.const}')",
+                    )
                     continue
                 var = src.name(f.name)
                 src.emit(depth, f"{var} = {expr}")
@@ -224,8 +227,11 @@ def _emit_decode(src: _Source, depth: int, fields: tuple[FieldDef, ...], where: 
         if f.is_group:
             item_cls = src.const("C", make_item_class(f.item or f.name, f.fields))
             item_min = sum(min_size(g) for g in f.fields)
-            src.emit(depth, f"if {n} < 0 or {n} * {item_min} > end - pos: raise errors.LengthMismatch("
-                            f"f'{where}.{f.name}: count {{{n}}} but only {{end - pos}} bytes remain')")
+            src.emit(
+                depth,
+                f"if {n} < 0 or {n} * {item_min} > end - pos: raise errors.LengthMismatch("
+                f"f'{where}.{f.name}: count {{{n}}} but only {{end - pos}} bytes remain')",
+            )
             sizes = [fixed_size(g) for g in f.fields]
             simple = all(s is not None for s in sizes) and not any(g.repeat or _needs_checks(g) for g in f.fields)
             if simple:
@@ -242,8 +248,11 @@ def _emit_decode(src: _Source, depth: int, fields: tuple[FieldDef, ...], where: 
                 src.emit(depth + 1, f"{items}.append({item_cls}._make(({', '.join(sub)},)))")
                 src.emit(depth, f"{var} = _tuple({items})")
         else:
-            src.emit(depth, f"if {n} < 0 or {n} > end - pos: raise errors.LengthMismatch("
-                            f"f'{where}.{f.name}: length {{{n}}} but only {{end - pos}} bytes remain')")
+            src.emit(
+                depth,
+                f"if {n} < 0 or {n} > end - pos: raise errors.LengthMismatch("
+                f"f'{where}.{f.name}: length {{{n}}} but only {{end - pos}} bytes remain')",
+            )
             src.emit(depth, f"{var} = buf[pos:pos + {n}].decode('latin-1')")
             src.emit(depth, f"pos += {n}")
         out.append(var)

@@ -121,16 +121,20 @@ def generated(output: Path) -> dict[Path, str]:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--check", action="store_true",
-                        help="exit 1 if a generated file is stale or the spec data breaks its schemas")
+    parser.add_argument(
+        "--check", action="store_true", help="exit 1 if a generated file is stale or the spec data breaks its schemas"
+    )
     parser.add_argument("--output", type=Path, default=OUTPUT, help="where the reference goes (docs/protocol.md)")
     args = parser.parse_args(argv)
     if args.check:
         invalid = check_spec()
         for line in invalid:
             print(f"spec: {line}", file=sys.stderr)
-        stale = [path for path, text in generated(args.output).items()
-                 if not path.exists() or path.read_text(encoding="utf-8") != text]
+        stale = [
+            path
+            for path, text in generated(args.output).items()
+            if not path.exists() or path.read_text(encoding="utf-8") != text
+        ]
         for path in stale:
             print(f"{path} is stale: run `python -m pltf.spec.docgen`", file=sys.stderr)
         return 1 if invalid or stale else 0

@@ -59,9 +59,7 @@ def _entries(path: Path, validator: jsonschema.Draft202012Validator) -> list[Err
             problem=e["problem"],
             decision=e["decision"],
             reason=e["reason"],
-            alternatives=tuple(
-                Alternative(a["reading"], a["original_profile"] == "accept") for a in e["alternatives"]
-            ),
+            alternatives=tuple(Alternative(a["reading"], a["original_profile"] == "accept") for a in e["alternatives"]),
             level=e["level"],
             applies_to=tuple(e.get("applies_to", ())),
         )

@@ -73,7 +73,7 @@ def fields_to_telegram(direction: Direction, name: str, fields: dict[str, Any]) 
     if not tdef.layout_known or tdef.layout(direction) is None:
         payload = fields.get("payload", "")
         if set(fields) - {"payload"} or not isinstance(payload, str):
-            raise errors.FieldValueError(f"{name}: layout unknown; give {{\"payload\": HEX}}")
+            raise errors.FieldValueError(f'{name}: layout unknown; give {{"payload": HEX}}')
         try:
             return build(direction, name, payload=bytes.fromhex(payload))
         except ValueError as exc:

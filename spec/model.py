@@ -173,8 +173,7 @@ def _check_names(tdef: TelegramDef, enums: dict[str, EnumDef]) -> None:
 def load_enums() -> dict[str, EnumDef]:
     raw = load_data("enums.yaml")
     return {
-        name: EnumDef(name, body["section"], body["description"], dict(body["values"]))
-        for name, body in raw.items()
+        name: EnumDef(name, body["section"], body["description"], dict(body["values"])) for name, body in raw.items()
     }
 
 

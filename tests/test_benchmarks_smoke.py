@@ -215,12 +215,19 @@ def test_handwritten_status_checks_enums_like_ours() -> None:
 def test_cli_startup_benchmark_runs_every_subject(tmp_path: Path) -> None:
     """benchmarks/bench_cli.py: every subject exits 0 (the benchmark raises otherwise), each with both metrics."""
     out = tmp_path / "cli.json"
-    proc = subprocess.run([sys.executable, "-m", "benchmarks", "--quick", "--only", "cli", "--json", str(out)],
-                          cwd=ROOT, capture_output=True, text=True, timeout=600, check=False)
+    proc = subprocess.run(
+        [sys.executable, "-m", "benchmarks", "--quick", "--only", "cli", "--json", str(out)],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=600,
+        check=False,
+    )
     assert proc.returncode == 0, proc.stdout + proc.stderr
     rows = json.loads(out.read_text())["rows"]
     subjects = {r["subject"] for r in rows}
     assert {"python -c pass", "pltf --help", "pltf decode", "pltf encode"} <= subjects
-    assert {(s, m) for s in subjects for m in ("wall_seconds", "cpu_seconds")} == {(r["subject"], r["metric"])
-                                                                                   for r in rows}
+    assert {(s, m) for s in subjects for m in ("wall_seconds", "cpu_seconds")} == {
+        (r["subject"], r["metric"]) for r in rows
+    }
     assert all(r["value"] > 0 for r in rows if r["subject"].startswith(("python", "pltf")))

@@ -52,9 +52,12 @@ def _upstream(text: str) -> tuple[str, tuple[int, int]]:
 
 
 def parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="python -m pltf.zoo", description=__doc__.split("\n\n")[0],
-                                formatter_class=argparse.RawDescriptionHelpFormatter,
-                                epilog="members:\n" + "\n".join(f"  {m.name:18} {m.summary}" for m in MEMBERS.values()))
+    p = argparse.ArgumentParser(
+        prog="python -m pltf.zoo",
+        description=__doc__.split("\n\n")[0],
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+        epilog="members:\n" + "\n".join(f"  {m.name:18} {m.summary}" for m in MEMBERS.values()),
+    )
     p.add_argument("member", nargs="?", help="the member to run (--list shows them)")
     p.add_argument("--list", action="store_true", help="list the members and exit")
     where = p.add_mutually_exclusive_group()
@@ -64,17 +67,30 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--ports", type=_ports, default=(0, 0), metavar="A,B", help="ports to listen on (default 0,0: any)")
     p.add_argument("--seed", type=int, default=1, help="seed of the member's random delays (and of --serve's target)")
     p.add_argument("--time-scale", type=float, default=1.0, metavar="X", help="time scale of the --serve target")
-    p.add_argument("--release-ms", type=lambda t: _pair(t, "milliseconds"), metavar="LO,HI",
-                   help="turn-away members: the port is free LO-HI ms after its client left")
+    p.add_argument(
+        "--release-ms",
+        type=lambda t: _pair(t, "milliseconds"),
+        metavar="LO,HI",
+        help="turn-away members: the port is free LO-HI ms after its client left",
+    )
     p.add_argument("--turn-away", choices=("fin", "rst"), help="turn-away members: close a newcomer with FIN or RST")
-    p.add_argument("--delay-ms", type=lambda t: _pair(t, "milliseconds"), metavar="LO,HI",
-                   help="every reply LO-HI ms late (jitter)")
+    p.add_argument(
+        "--delay-ms",
+        type=lambda t: _pair(t, "milliseconds"),
+        metavar="LO,HI",
+        help="every reply LO-HI ms late (jitter)",
+    )
     p.add_argument("--segment", type=int, metavar="N", help="cut the replies into writes of 1..N bytes")
     p.add_argument("--status-delay", type=float, metavar="S", help="every CMD_GET_STATUS reply S seconds late")
     p.add_argument("--leak-kb", type=int, metavar="K", help="leak: KiB leaked per request (default 32)")
     p.add_argument("--leak-limit-mb", type=int, metavar="M", help="leak: the target dies at M MiB (default 64)")
-    p.add_argument("--hang-seconds", type=float, default=600.0, metavar="S",
-                   help="a planted hang lasts S seconds, then the member exits (default 600)")
+    p.add_argument(
+        "--hang-seconds",
+        type=float,
+        default=600.0,
+        metavar="S",
+        help="a planted hang lasts S seconds, then the member exits (default 600)",
+    )
     return p
 
 
@@ -134,9 +150,17 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(f"zoo {m.name}: {behind.name} behind at {host}:{ports[0]},{ports[1]} (pid {behind.pid})", flush=True)
         else:
             host, ports = args.upstream
-        relay = Relay(m, host, list(ports), host=args.host, ports=args.ports, seed=args.seed,
-                      hang_seconds=args.hang_seconds, on_exit=behind.cleanup if behind else lambda: None,
-                      log=lambda line: print(line, flush=True))
+        relay = Relay(
+            m,
+            host,
+            list(ports),
+            host=args.host,
+            ports=args.ports,
+            seed=args.seed,
+            hang_seconds=args.hang_seconds,
+            on_exit=behind.cleanup if behind else lambda: None,
+            log=lambda line: print(line, flush=True),
+        )
 
         def ready(bound: list[int]) -> None:
             for port in bound:

@@ -47,9 +47,17 @@ class LaunchError(RuntimeError):
 class Launched:
     """One target process; ``start`` may be called again after ``stop`` (a fresh instance each time)."""
 
-    def __init__(self, argv: Sequence[str] = (), *, host: str = "127.0.0.1", ports: tuple[int, int] = (0, 0),
-                 name: str = "", env: dict[str, str] | None = None, start_timeout: float = START_TIMEOUT,
-                 new_session: bool = True) -> None:
+    def __init__(
+        self,
+        argv: Sequence[str] = (),
+        *,
+        host: str = "127.0.0.1",
+        ports: tuple[int, int] = (0, 0),
+        name: str = "",
+        env: dict[str, str] | None = None,
+        start_timeout: float = START_TIMEOUT,
+        new_session: bool = True,
+    ) -> None:
         self.argv = list(argv)
         self.host = host
         self.want = ports
@@ -81,9 +89,15 @@ class Launched:
         argv = self.command()
         env = dict(os.environ, PYTHONUNBUFFERED="1", **(self.env or {}))
         try:
-            self.proc = subprocess.Popen(argv, stdout=self._log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
-                                         env=env, start_new_session=self.new_session,
-                                         preexec_fn=_die_with_parent)  # noqa: PLW1509 (see _pdeathsig)
+            self.proc = subprocess.Popen(
+                argv,
+                stdout=self._log,
+                stderr=subprocess.STDOUT,
+                stdin=subprocess.DEVNULL,
+                env=env,
+                start_new_session=self.new_session,
+                preexec_fn=_die_with_parent,  # noqa: PLW1509 (see _pdeathsig)
+            )
         except OSError as exc:
             self.cleanup()
             raise LaunchError(f"cannot start {self.name} ({shlex.join(argv)}): {exc}") from None
@@ -107,8 +121,10 @@ class Launched:
             seen = [int(m) for m in STARTED.findall(self._read_log())]
         if len(seen) < 2:
             why = "exited" if not self.alive() else f"did not report two ports within {self.start_timeout:g} s"
-            raise LaunchError(f"{self.name} {why} ('server started at port N' expected; "
-                              f"{shlex.join(self.command_line)}): {' | '.join(self.output[-8:])}")
+            raise LaunchError(
+                f"{self.name} {why} ('server started at port N' expected; "
+                f"{shlex.join(self.command_line)}): {' | '.join(self.output[-8:])}"
+            )
         return seen[0], seen[1]
 
     def _await_listening(self) -> tuple[int, int]:
@@ -291,14 +307,36 @@ def python(module: str, *args: str) -> list[str]:
     return [sys.executable, "-m", module, *args]
 
 
-def reference(*, time_scale: float = 10.0, seed: int = 1, data_dir: str | Path | None = None,
-              extra: Sequence[str] = (), mutant: str | None = None, ports: tuple[int, int] = (0, 0),
-              log_level: str = "INFO", start_timeout: float = START_TIMEOUT) -> _DataDirTarget:
+def reference(
+    *,
+    time_scale: float = 10.0,
+    seed: int = 1,
+    data_dir: str | Path | None = None,
+    extra: Sequence[str] = (),
+    mutant: str | None = None,
+    ports: tuple[int, int] = (0, 0),
+    log_level: str = "INFO",
+    start_timeout: float = START_TIMEOUT,
+) -> _DataDirTarget:
     """The reference server (or a model mutant of it: conformance_tests/mutants/patches.py)."""
-    args = ["--ports", f"{ports[0]},{ports[1]}", "--data-dir", "{data}", "--time-scale", f"{time_scale:g}",
-            "--seed", str(seed), "--log-level", log_level, *extra]
-    argv = (python("pltf.conformance_tests.mutants.serve", mutant, *args) if mutant
-            else python("pltf.reference_server", *args))
+    args = [
+        "--ports",
+        f"{ports[0]},{ports[1]}",
+        "--data-dir",
+        "{data}",
+        "--time-scale",
+        f"{time_scale:g}",
+        "--seed",
+        str(seed),
+        "--log-level",
+        log_level,
+        *extra,
+    ]
+    argv = (
+        python("pltf.conformance_tests.mutants.serve", mutant, *args)
+        if mutant
+        else python("pltf.reference_server", *args)
+    )
     target = _DataDirTarget(argv, data_dir, ports=ports, name=f"mutant {mutant}" if mutant else "reference server")
     target.start_timeout = start_timeout
     return target
@@ -341,22 +379,56 @@ class _Emulator(_DataDirTarget):
         return super().command()
 
 
-def emulator(*, time_scale: float = 10.0, seed: int = 1, data_dir: str | Path | None = None,
-             extra: Sequence[str] = (), ports: tuple[int, int] = (0, 0)) -> _DataDirTarget:
+def emulator(
+    *,
+    time_scale: float = 10.0,
+    seed: int = 1,
+    data_dir: str | Path | None = None,
+    extra: Sequence[str] = (),
+    ports: tuple[int, int] = (0, 0),
+) -> _DataDirTarget:
     """The Go emulator (emulator/, issue 17); LaunchError when it is not there (``why_no_emulator``)."""
     binary = emulator_binary()
     if binary is None:
         raise LaunchError(f"the emulator is not available: {why_no_emulator()}")
-    argv = [str(binary), "--ports", f"{ports[0]},{ports[1]}", "--data-dir", "{data}", "--time-scale",
-            f"{time_scale:g}", "--seed", str(seed), *extra]
+    argv = [
+        str(binary),
+        "--ports",
+        f"{ports[0]},{ports[1]}",
+        "--data-dir",
+        "{data}",
+        "--time-scale",
+        f"{time_scale:g}",
+        "--seed",
+        str(seed),
+        *extra,
+    ]
     return _Emulator(argv, data_dir, ports=ports, name="emulator")
 
 
-def zoo(member: str, *, upstream: str = "reference", time_scale: float = 10.0, seed: int = 1,
-        extra: Sequence[str] = (), ports: tuple[int, int] = (0, 0)) -> Launched:
+def zoo(
+    member: str,
+    *,
+    upstream: str = "reference",
+    time_scale: float = 10.0,
+    seed: int = 1,
+    extra: Sequence[str] = (),
+    ports: tuple[int, int] = (0, 0),
+) -> Launched:
     """A zoo member (``python -m pltf.zoo``) in front of the reference server or the emulator it starts."""
-    argv = python("pltf.zoo", member, "--serve", upstream, "--ports", f"{ports[0]},{ports[1]}",
-                  "--time-scale", f"{time_scale:g}", "--seed", str(seed), *extra)
+    argv = python(
+        "pltf.zoo",
+        member,
+        "--serve",
+        upstream,
+        "--ports",
+        f"{ports[0]},{ports[1]}",
+        "--time-scale",
+        f"{time_scale:g}",
+        "--seed",
+        str(seed),
+        *extra,
+    )
     return Launched(argv, ports=ports, name=f"zoo {member} ({upstream})")
 
 

@@ -41,26 +41,71 @@ class Member:
         return self.delay is not no_delay or self.segment > 0
 
 
-MEMBERS: dict[str, Member] = {m.name: m for m in (
-    Member("faithful", "a plain relay: every byte passed on as it comes (the control)", True),
-    Member("slow-release", "one client per port; the port is free 5-50 ms after its client left, newcomers are "
-           "turned away (accepted and closed, FIN) until then", True, admit="turn-away", release=(0.005, 0.05)),
-    Member("slow-release-rst", "as slow-release, but a newcomer is turned away with a reset (RST)", True,
-           admit="turn-away", turn_away="rst", release=(0.005, 0.05)),
-    Member("slow-link", "replies 50-200 ms late with jitter, several replies that fall due together coalesced "
-           "into one write, every write cut into segments of 1-7 bytes", True, delay=jitter(0.05, 0.2), segment=7),
-    Member("accept-once", "one client per port; a newcomer waits in the listen backlog until the client before it "
-           "has left (erratum E-WIRE-007, first alternative reading)", True, profile="original", admit="backlog"),
-    Member("crash-after-start", "planted bug: in Running, a path command (MOVE_ABS/REL/PATH/TO_STATION) while the "
-           "motion mode is not Automatic kills the target (needs CONNECT, INIT, START first)", False,
-           bug=CrashAfterStart),
-    Member("hang-unknown-key", "planted bug: CMD_SET_PLTF_PARAM with an unknown key hangs the whole target: no "
-           "port answers any more, newcomers wait in the backlog", False, bug=HangOnUnknownKey),
-    Member("leak", "planted bug: every request leaks 32 KiB; at 64 MiB (2,048 requests) the target runs out of "
-           "memory and dies", False, bug=Leak),
-    Member("slow-status", "planted bug: every CMD_GET_STATUS reply comes 12 s late (the replies behind it wait)",
-           False, delay=for_ident(GET_STATUS_ID, 12.0)),
-)}  # fmt: skip
+MEMBERS: dict[str, Member] = {
+    m.name: m
+    for m in (
+        Member("faithful", "a plain relay: every byte passed on as it comes (the control)", True),
+        Member(
+            "slow-release",
+            "one client per port; the port is free 5-50 ms after its client left, newcomers are "
+            "turned away (accepted and closed, FIN) until then",
+            True,
+            admit="turn-away",
+            release=(0.005, 0.05),
+        ),
+        Member(
+            "slow-release-rst",
+            "as slow-release, but a newcomer is turned away with a reset (RST)",
+            True,
+            admit="turn-away",
+            turn_away="rst",
+            release=(0.005, 0.05),
+        ),
+        Member(
+            "slow-link",
+            "replies 50-200 ms late with jitter, several replies that fall due together coalesced "
+            "into one write, every write cut into segments of 1-7 bytes",
+            True,
+            delay=jitter(0.05, 0.2),
+            segment=7,
+        ),
+        Member(
+            "accept-once",
+            "one client per port; a newcomer waits in the listen backlog until the client before it "
+            "has left (erratum E-WIRE-007, first alternative reading)",
+            True,
+            profile="original",
+            admit="backlog",
+        ),
+        Member(
+            "crash-after-start",
+            "planted bug: in Running, a path command (MOVE_ABS/REL/PATH/TO_STATION) while the "
+            "motion mode is not Automatic kills the target (needs CONNECT, INIT, START first)",
+            False,
+            bug=CrashAfterStart,
+        ),
+        Member(
+            "hang-unknown-key",
+            "planted bug: CMD_SET_PLTF_PARAM with an unknown key hangs the whole target: no "
+            "port answers any more, newcomers wait in the backlog",
+            False,
+            bug=HangOnUnknownKey,
+        ),
+        Member(
+            "leak",
+            "planted bug: every request leaks 32 KiB; at 64 MiB (2,048 requests) the target runs out of "
+            "memory and dies",
+            False,
+            bug=Leak,
+        ),
+        Member(
+            "slow-status",
+            "planted bug: every CMD_GET_STATUS reply comes 12 s late (the replies behind it wait)",
+            False,
+            delay=for_ident(GET_STATUS_ID, 12.0),
+        ),
+    )
+}
 
 
 def member(name: str) -> Member:

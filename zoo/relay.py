@@ -56,9 +56,19 @@ class PortState:
 
 
 class Relay:
-    def __init__(self, member: Member, upstream_host: str, upstream_ports: list[int], *, host: str = "127.0.0.1",
-                 ports: tuple[int, int] = (0, 0), seed: int = 1, hang_seconds: float = 600.0,
-                 on_exit: Callable[[], None] = lambda: None, log: Callable[[str], None] = print) -> None:
+    def __init__(
+        self,
+        member: Member,
+        upstream_host: str,
+        upstream_ports: list[int],
+        *,
+        host: str = "127.0.0.1",
+        ports: tuple[int, int] = (0, 0),
+        seed: int = 1,
+        hang_seconds: float = 600.0,
+        on_exit: Callable[[], None] = lambda: None,
+        log: Callable[[str], None] = print,
+    ) -> None:
         self.member = member
         self.upstream = (upstream_host, list(upstream_ports))
         self.host, self.want = host, ports

@@ -158,8 +158,9 @@ class ModeWait(Judge):
                 f"can only change in state Ready (guide 6.3 CMD_SET_MODE), the state is "
                 f"{status.operation_state.name}",
             )
-        return Timeout(f"motion mode {self.want.name} not reached within {self.timeout:g} s: it is "
-                       f"{status.motion_mode.name}")  # fmt: skip
+        return Timeout(
+            f"motion mode {self.want.name} not reached within {self.timeout:g} s: it is {status.motion_mode.name}"
+        )
 
 
 def stamp_after(later: int, earlier: int) -> int:

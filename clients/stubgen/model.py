@@ -39,8 +39,9 @@ ERRORS: tuple[tuple[str, str | None, str], ...] = (
     ("FieldOutOfRange", "RemoteProtocolError", "A decoded field is outside its enum, its range or its constant."),
     ("LengthMismatch", "RemoteProtocolError", "A length or count is negative or larger than the bytes left."),
 )
-LEAF_ERRORS = tuple(name for name, _, _ in ERRORS if name not in {"ProtocolError", "LocalProtocolError",
-                                                                    "RemoteProtocolError"})
+LEAF_ERRORS = tuple(
+    name for name, _, _ in ERRORS if name not in {"ProtocolError", "LocalProtocolError", "RemoteProtocolError"}
+)
 
 
 @dataclass(frozen=True)
@@ -146,11 +147,24 @@ def _convert(defs: tuple[FieldDef, ...]) -> tuple[Field, ...]:
                 if size is None:
                     break
                 run += size
-        out.append(Field(
-            name=f.name, type=f.type, description=f.description, unit=f.unit, enum=f.enum, repeat=f.repeat or 0,
-            const=f.const, min=f.min, max=f.max, allowed=_allowed(f), item=f.item, fields=_convert(f.fields),
-            run=run, item_min=sum(_min_size(g) for g in f.fields) if f.is_group else 0,
-        ))
+        out.append(
+            Field(
+                name=f.name,
+                type=f.type,
+                description=f.description,
+                unit=f.unit,
+                enum=f.enum,
+                repeat=f.repeat or 0,
+                const=f.const,
+                min=f.min,
+                max=f.max,
+                allowed=_allowed(f),
+                item=f.item,
+                fields=_convert(f.fields),
+                run=run,
+                item_min=sum(_min_size(g) for g in f.fields) if f.is_group else 0,
+            )
+        )
     return tuple(out)
 
 

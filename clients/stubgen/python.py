@@ -9,20 +9,41 @@ from pltf.stubgen.model import Field, Message, doc_line, enum_doc, enums, field_
 from pltf.stubgen.renderer import Spelling, arguments, error_classes, methods, protocol, scripts, static
 
 KEYWORDS = frozenset(keyword.kwlist) | frozenset(("send", "receive", "request", "close"))
-PY_TYPE = {"BYTE": "int", "BOOL": "bool", "INT16": "int", "INT": "int", "DOUBLE": "float", "STRING": "str",
-           "XML": "str"}
+PY_TYPE = {
+    "BYTE": "int",
+    "BOOL": "bool",
+    "INT16": "int",
+    "INT": "int",
+    "DOUBLE": "float",
+    "STRING": "str",
+    "XML": "str",
+}
 HEAD = banner("# ")
 METHOD = (
     '    def {name}({params}) -> None:\n        """{docs}"""\n        self.send({call})\n',
     '    def {name}({params}) -> tg.{reply}:\n        """{docs}"""\n        return self.request({call}, tg.{reply})\n',
 )
 SPELLING = Spelling(
-    scalars=PY_TYPE, group="tuple[{item}, ...]", array="tuple[{base}, ...]",
-    head="{f.name!r}, {f.type}", wrap=("F(", ")"),
-    attrs={"repeat": "repeat={f.repeat}", "const": "const={f.const}", "min": "min={f.min}", "max": "max={f.max}",
-           "allowed": "allowed=frozenset({allowed_repr})", "group": "fields=_{item}_FIELDS, item_min={f.item_min}, "
-           "convert={item}", "convert": "convert={convert}", "run": "run={f.run}"},
-    empty="()", open="(", close="{indent})", step="    ", member='    {name}: {type}\n    """{doc}"""',
+    scalars=PY_TYPE,
+    group="tuple[{item}, ...]",
+    array="tuple[{base}, ...]",
+    head="{f.name!r}, {f.type}",
+    wrap=("F(", ")"),
+    attrs={
+        "repeat": "repeat={f.repeat}",
+        "const": "const={f.const}",
+        "min": "min={f.min}",
+        "max": "max={f.max}",
+        "allowed": "allowed=frozenset({allowed_repr})",
+        "group": "fields=_{item}_FIELDS, item_min={f.item_min}, convert={item}",
+        "convert": "convert={convert}",
+        "run": "run={f.run}",
+    },
+    empty="()",
+    open="(",
+    close="{indent})",
+    step="    ",
+    member='    {name}: {type}\n    """{doc}"""',
 )
 
 
@@ -41,8 +62,11 @@ def _telegram(m: Message) -> str:
         f'    DIRECTION: ClassVar[str] = "{m.direction}"',
     ]
     if m.opaque:
-        lines += ["    OPAQUE: ClassVar[bool] = True", "    payload: bytes = b\"\"",
-                  '    """The telegram\'s bytes after the identifier (layout unknown)."""']
+        lines += [
+            "    OPAQUE: ClassVar[bool] = True",
+            '    payload: bytes = b""',
+            '    """The telegram\'s bytes after the identifier (layout unknown)."""',
+        ]
     else:
         lines.append(f"    FIELDS: ClassVar[tuple[F, ...]] = {SPELLING.table(m.fields, '    ')}")
         assert not KEYWORDS & {f.name for f in m.user_fields}, f"{m.name}: a field named as a Python keyword"
@@ -66,10 +90,15 @@ def _registry(direction: str, telegrams: tuple[Message, ...]) -> str:
 
 
 def _telegrams() -> str:
-    head = [HEAD, '"""Enums, group items and telegram classes of the PlatformCtrl protocol (guide 6.3, 6.4)."""\n',
-            "from __future__ import annotations\n", "import enum", "from dataclasses import dataclass",
-            "from typing import ClassVar, NamedTuple\n",
-            "from .wire import BOOL, BYTE, DOUBLE, GROUP, INT, INT16, STRING, XML, F, Telegram  # noqa: F401\n\n"]
+    head = [
+        HEAD,
+        '"""Enums, group items and telegram classes of the PlatformCtrl protocol (guide 6.3, 6.4)."""\n',
+        "from __future__ import annotations\n",
+        "import enum",
+        "from dataclasses import dataclass",
+        "from typing import ClassVar, NamedTuple\n",
+        "from .wire import BOOL, BYTE, DOUBLE, GROUP, INT, INT16, STRING, XML, F, Telegram  # noqa: F401\n\n",
+    ]
     return protocol(head, _enum, _item, lambda m: _telegram(m) + "\n", _registry)
 
 
@@ -78,13 +107,18 @@ def method_name(m: Message) -> str:
 
 
 def _method(m: Message) -> dict[str, str]:
-    params, args = arguments(m, ('payload: bytes = b""', "payload"),
-                             lambda f: (f"{f.name}: {SPELLING.type(f, 'tg.')}", f.name))
+    params, args = arguments(
+        m, ('payload: bytes = b""', "payload"), lambda f: (f"{f.name}: {SPELLING.type(f, 'tg.')}", f.name)
+    )
     doc = [f"{m.name} (id {m.id}): {doc_line(m.summary)} [guide {doc_line(m.section)}]"]
     doc += [f"{f.name}: {field_doc(f)}" for f in m.user_fields]
     docs = doc[0] if len(doc) == 1 else doc[0] + "\n\n" + "".join(f"        {d}\n" for d in doc[1:]) + "        "
-    return {"name": method_name(m), "params": ", ".join(["self", *params]), "docs": docs,
-            "call": f"tg.{m.type_name}({', '.join(args)})"}
+    return {
+        "name": method_name(m),
+        "params": ", ".join(["self", *params]),
+        "docs": docs,
+        "call": f"tg.{m.type_name}({', '.join(args)})",
+    }
 
 
 README = readme("python", "Python 3.10+", "byte-compiles with `python3 -m compileall`")
@@ -95,11 +129,24 @@ def render() -> dict[str, str]:
         "README.md": README,
         "platformctrl/wire.py": HEAD + fill(template("python", "wire.py.tmpl"), ERRORS=_errors()),
         "platformctrl/telegrams.py": _telegrams(),
-        "platformctrl/client.py": HEAD + fill(template("python", "client.py.tmpl"),
-                                              METHODS=methods(_method, METHOD, lead="", end="\n")),
-        **static("python", HEAD, {"platformctrl/__init__.py": "__init__.py.tmpl",
-                                  "platformctrl/codec.py": "codec.py.tmpl", "smoke.py": "smoke.py.tmpl",
-                                  "run_vectors.py": "run_vectors.py.tmpl", "pyproject.toml": "pyproject.toml.tmpl"}),
-        **scripts("python", "byte-compile the package and the two programs (python3, or $PYTHON).",
-                  '"${PYTHON:-python3}" smoke.py', '"${PYTHON:-python3}" run_vectors.py', "__pycache__/\nbuild/\n"),
+        "platformctrl/client.py": HEAD
+        + fill(template("python", "client.py.tmpl"), METHODS=methods(_method, METHOD, lead="", end="\n")),
+        **static(
+            "python",
+            HEAD,
+            {
+                "platformctrl/__init__.py": "__init__.py.tmpl",
+                "platformctrl/codec.py": "codec.py.tmpl",
+                "smoke.py": "smoke.py.tmpl",
+                "run_vectors.py": "run_vectors.py.tmpl",
+                "pyproject.toml": "pyproject.toml.tmpl",
+            },
+        ),
+        **scripts(
+            "python",
+            "byte-compile the package and the two programs (python3, or $PYTHON).",
+            '"${PYTHON:-python3}" smoke.py',
+            '"${PYTHON:-python3}" run_vectors.py',
+            "__pycache__/\nbuild/\n",
+        ),
     }

@@ -43,8 +43,13 @@ ATTRIBUTES: dict[str, Callable[[Field], bool]] = {
 }
 
 # The attributes as chained builder calls, spelled alike by the languages that build descriptors that way.
-BUILDER = {"repeat": ".repeat({f.repeat})", "const": ".constant({f.const})", "min": ".min({f.min})",
-           "max": ".max({f.max})", "run": ".run({f.run})"}
+BUILDER = {
+    "repeat": ".repeat({f.repeat})",
+    "const": ".constant({f.const})",
+    "min": ".min({f.min})",
+    "max": ".max({f.max})",
+    "run": ".run({f.run})",
+}
 
 
 @dataclass(frozen=True)
@@ -79,18 +84,25 @@ class Spelling:
         base = f"{prefix}{f.enum}" if f.enum else self.scalars[f.type]
         return self.array.format(base=base, repeat=f.repeat) if f.repeat else base
 
-    def members(self, fields: Sequence[Field], member: str | None = None,
-                default: Callable[[Field], str] = lambda f: "") -> list[str]:
+    def members(
+        self, fields: Sequence[Field], member: str | None = None, default: Callable[[Field], str] = lambda f: ""
+    ) -> list[str]:
         """The declarations of the user fields (``member``: this spelling's by default)."""
         spelled = self.member if member is None else member
-        return [spelled.format(name=self.field_name(f.name), type=self.type(f), doc=field_doc(f), default=default(f))
-                for f in fields if f.user]
+        return [
+            spelled.format(name=self.field_name(f.name), type=self.type(f), doc=field_doc(f), default=default(f))
+            for f in fields
+            if f.user
+        ]
 
     def descriptor(self, f: Field) -> str:
         values = _values(f, self.type_name)
         parts = [self.head.format(**values)]
-        parts += [self.attrs[attr].format(**values) for attr, present in ATTRIBUTES.items()
-                  if attr in self.attrs and present(f)]
+        parts += [
+            self.attrs[attr].format(**values)
+            for attr, present in ATTRIBUTES.items()
+            if attr in self.attrs and present(f)
+        ]
         return self.wrap[0] + self.sep.join(parts) + self.wrap[1]
 
     def table(self, fields: Sequence[Field], indent: str = "") -> str:
@@ -103,9 +115,17 @@ class Spelling:
 
 def _values(f: Field, type_name: Callable[[str], str]) -> dict[str, Any]:
     item = f.item or ""
-    return {"f": f, "type": type_name(f.type), "allowed": ", ".join(map(str, f.allowed or ())),
-            "allowed_repr": repr(f.allowed), "item": item, "item_snake": snake(item), "ITEM": snake(item).upper(),
-            "prop": camel(f.name), "convert": f.enum or "bool"}  # fmt: skip
+    return {
+        "f": f,
+        "type": type_name(f.type),
+        "allowed": ", ".join(map(str, f.allowed or ())),
+        "allowed_repr": repr(f.allowed),
+        "item": item,
+        "item_snake": snake(item),
+        "ITEM": snake(item).upper(),
+        "prop": camel(f.name),
+        "convert": f.enum or "bool",
+    }
 
 
 def kind(f: Field) -> str:
@@ -118,8 +138,18 @@ def kind(f: Field) -> str:
 
 
 # A conversion table falls back from the specific key to the general one (a table lists only what it spells).
-FALLBACK = {"enum_array": "array", "array_BYTE": "array", "array_INT16": "array", "array_INT": "array",
-            "STRING": "text", "XML": "text", "enum": "int", "BYTE": "int", "INT16": "int", "INT": "int"}  # fmt: skip
+FALLBACK = {
+    "enum_array": "array",
+    "array_BYTE": "array",
+    "array_INT16": "array",
+    "array_INT": "array",
+    "STRING": "text",
+    "XML": "text",
+    "enum": "int",
+    "BYTE": "int",
+    "INT16": "int",
+    "INT": "int",
+}
 
 
 def convert(table: Mapping[str, str], f: Field, **values: str) -> str:
@@ -176,13 +206,15 @@ def arguments(
     return [p for p, _ in pairs], [a for _, a in pairs]
 
 
-def methods(parts: Callable[[Message], dict[str, str]], spelled: tuple[str, str], lead: str = "\n",
-            end: str = "") -> str:
+def methods(
+    parts: Callable[[Message], dict[str, str]], spelled: tuple[str, str], lead: str = "\n", end: str = ""
+) -> str:
     """The client's methods, one per command, as one block between ``lead`` and ``end``.
 
     ``spelled``: the templates of a method without reply and with one, formatted with ``m`` (the request),
     ``reply`` (the reply type's name) and ``parts(m)`` (the language's name, parameters, request, doc ...).
     """
+
     def method(c: Command) -> str:
         reply = "" if c.reply is None else c.reply.type_name
         return spelled[c.reply is not None].format(m=c.request, reply=reply, **parts(c.request))
@@ -198,8 +230,9 @@ def scripts(lang: str, build: str, smoke: str, vectors: str, ignore: str) -> dic
     vectors.sh (running the commands ``smoke`` and ``vectors``), and .gitignore (the lines ``ignore``)."""
     head = banner("# ")
     return {
-        "build.sh": fill(template("shell", "build.sh.tmpl"), BANNER=head, WHAT=build,
-                         STEPS=template(lang, "build.sh.tmpl")),
+        "build.sh": fill(
+            template("shell", "build.sh.tmpl"), BANNER=head, WHAT=build, STEPS=template(lang, "build.sh.tmpl")
+        ),
         "smoke.sh": fill(template("shell", "smoke.sh.tmpl"), BANNER=head, RUN=smoke),
         "vectors.sh": fill(template("shell", "vectors.sh.tmpl"), BANNER=head, RUN=vectors),
         ".gitignore": head + ignore,

@@ -6,23 +6,89 @@ from pltf.stubgen import banner, fill, model, readme, template
 from pltf.stubgen.model import Field, Message, camel, doc_line, pascal, snake
 from pltf.stubgen.renderer import Spelling, arguments, error_classes, methods, protocol, scripts, static
 
-RESERVED = frozenset((
-    "break", "case", "catch", "class", "const", "continue", "debugger", "default", "delete", "do", "else", "enum",
-    "export", "extends", "false", "finally", "for", "function", "if", "import", "in", "instanceof", "new", "null",
-    "return", "super", "switch", "this", "throw", "true", "try", "typeof", "var", "void", "while", "with", "let",
-    "static", "yield", "await", "implements", "interface", "package", "private", "protected", "public",
-))
+RESERVED = frozenset(
+    (
+        "break",
+        "case",
+        "catch",
+        "class",
+        "const",
+        "continue",
+        "debugger",
+        "default",
+        "delete",
+        "do",
+        "else",
+        "enum",
+        "export",
+        "extends",
+        "false",
+        "finally",
+        "for",
+        "function",
+        "if",
+        "import",
+        "in",
+        "instanceof",
+        "new",
+        "null",
+        "return",
+        "super",
+        "switch",
+        "this",
+        "throw",
+        "true",
+        "try",
+        "typeof",
+        "var",
+        "void",
+        "while",
+        "with",
+        "let",
+        "static",
+        "yield",
+        "await",
+        "implements",
+        "interface",
+        "package",
+        "private",
+        "protected",
+        "public",
+    )
+)
 CLIENT_NAMES = frozenset(("connect", "close", "send", "receive", "request"))
-TS_TYPE = {"BYTE": "number", "BOOL": "boolean", "INT16": "number", "INT": "number", "DOUBLE": "number",
-           "STRING": "string", "XML": "string"}
+TS_TYPE = {
+    "BYTE": "number",
+    "BOOL": "boolean",
+    "INT16": "number",
+    "INT": "number",
+    "DOUBLE": "number",
+    "STRING": "string",
+    "XML": "string",
+}
 HEAD = banner("// ")
 SPELLING = Spelling(
-    scalars=TS_TYPE, group="{item}[]", array="{base}[]",
-    head='name: "{f.name}", prop: "{prop}", type: FieldType.{type}', type_name=pascal, wrap=("{ ", " }"),
-    attrs={"repeat": "repeat: {f.repeat}", "const": "const: {f.const}", "min": "min: {f.min}", "max": "max: {f.max}",
-           "allowed": "allowed: [{allowed}]", "group": "fields: {ITEM}_FIELDS, itemMin: {f.item_min}",
-           "run": "run: {f.run}"},
-    empty="[]", open="[", close="{indent}]", step="  ", member="  /** {doc} */\n  {name}: {type};", field_name=camel,
+    scalars=TS_TYPE,
+    group="{item}[]",
+    array="{base}[]",
+    head='name: "{f.name}", prop: "{prop}", type: FieldType.{type}',
+    type_name=pascal,
+    wrap=("{ ", " }"),
+    attrs={
+        "repeat": "repeat: {f.repeat}",
+        "const": "const: {f.const}",
+        "min": "min: {f.min}",
+        "max": "max: {f.max}",
+        "allowed": "allowed: [{allowed}]",
+        "group": "fields: {ITEM}_FIELDS, itemMin: {f.item_min}",
+        "run": "run: {f.run}",
+    },
+    empty="[]",
+    open="[",
+    close="{indent}]",
+    step="  ",
+    member="  /** {doc} */\n  {name}: {type};",
+    field_name=camel,
 )
 METHOD = (
     "  /** {m.name} (id {m.id}): {summary} */\n  {name}({params}): Promise<void> {{\n"
@@ -40,8 +106,11 @@ def param(name: str) -> str:
 
 
 def _errors() -> str:
-    return error_classes("/** {doc} */\nexport class {name} extends {base} {{\n  constructor(message: string) {{\n"
-                         '    super(message);\n    this.name = "{name}";\n  }}\n}}\n', "Error")
+    return error_classes(
+        "/** {doc} */\nexport class {name} extends {base} {{\n  constructor(message: string) {{\n"
+        '    super(message);\n    this.name = "{name}";\n  }}\n}}\n',
+        "Error",
+    )
 
 
 def _default(f: Field) -> str:
@@ -57,20 +126,31 @@ def _default(f: Field) -> str:
 def _telegram(m: Message) -> str:
     t = m.type_name
     direction = m.direction
-    lines = [f"/** {m.doc} */",
-             f"export class {t} extends Telegram {{",
-             f"  static readonly ID = {m.id};", f'  static readonly NAME = "{m.name}";',
-             f'  static readonly DIRECTION: Direction = "{direction}";']
+    lines = [
+        f"/** {m.doc} */",
+        f"export class {t} extends Telegram {{",
+        f"  static readonly ID = {m.id};",
+        f'  static readonly NAME = "{m.name}";',
+        f'  static readonly DIRECTION: Direction = "{direction}";',
+    ]
     if m.opaque:
-        lines += ["  static readonly LAYOUT: Layout = { opaque: true, fields: [] };",
-                  "  /** The bytes after the identifier (layout unknown). */",
-                  "  payload: Uint8Array = new Uint8Array(0);"]
+        lines += [
+            "  static readonly LAYOUT: Layout = { opaque: true, fields: [] };",
+            "  /** The bytes after the identifier (layout unknown). */",
+            "  payload: Uint8Array = new Uint8Array(0);",
+        ]
     else:
         table = SPELLING.table(m.fields, "  ")
         lines.append(f"  static readonly LAYOUT: Layout = {{ opaque: false, fields: {table} }};")
         lines += SPELLING.members(m.fields, "  /** {doc} */\n  {name}: {type} = {default};", _default)
-    lines += ["", f"  constructor(init: Partial<{t}> = {{}}) {{", "    super();", "    Object.assign(this, init);",
-              "  }", "}\n"]
+    lines += [
+        "",
+        f"  constructor(init: Partial<{t}> = {{}}) {{",
+        "    super();",
+        "    Object.assign(this, init);",
+        "  }",
+        "}\n",
+    ]
     return "\n".join(lines)
 
 
@@ -80,20 +160,34 @@ def _enum(name: str) -> str:
 
 
 def _item(name: str, fields: tuple[Field, ...]) -> str:
-    return "\n".join([f"/** One item of a repeated group. */\nexport interface {name} {{", *SPELLING.members(fields),
-                      "}\n", f"const {snake(name).upper()}_FIELDS: Field[] = {SPELLING.table(fields)};\n"])
+    return "\n".join(
+        [
+            f"/** One item of a repeated group. */\nexport interface {name} {{",
+            *SPELLING.members(fields),
+            "}\n",
+            f"const {snake(name).upper()}_FIELDS: Field[] = {SPELLING.table(fields)};\n",
+        ]
+    )
 
 
 def _registry(direction: str, telegrams: tuple[Message, ...]) -> str:
     const = "REQUESTS" if direction == "request" else "REPLIES"
-    return "\n".join([f"/** Every {direction} class, by identifier. */",
-                      f"export const {const}: ReadonlyMap<number, TelegramClass> = new Map<number, TelegramClass>([",
-                      *(f"  [{m.id}, {m.type_name}]," for m in telegrams), "]);\n"])
+    return "\n".join(
+        [
+            f"/** Every {direction} class, by identifier. */",
+            f"export const {const}: ReadonlyMap<number, TelegramClass> = new Map<number, TelegramClass>([",
+            *(f"  [{m.id}, {m.type_name}]," for m in telegrams),
+            "]);\n",
+        ]
+    )
 
 
 def _protocol() -> str:
-    head = [HEAD, "/** Enums, group items and telegram classes of the PlatformCtrl protocol (guide 6.3, 6.4). */\n",
-            'import { Direction, Field, FieldType, Layout, Telegram, TelegramClass } from "./wire";\n']
+    head = [
+        HEAD,
+        "/** Enums, group items and telegram classes of the PlatformCtrl protocol (guide 6.3, 6.4). */\n",
+        'import { Direction, Field, FieldType, Layout, Telegram, TelegramClass } from "./wire";\n',
+    ]
     return protocol(head, _enum, _item, _telegram, _registry)
 
 
@@ -108,23 +202,33 @@ def _argument(f: Field) -> tuple[str, str]:
 
 def _method(m: Message) -> dict[str, str]:
     params, inits = arguments(m, ("payload: Uint8Array = new Uint8Array(0)", "payload"), _argument)
-    return {"name": method_name(m), "params": ", ".join(params), "summary": doc_line(m.summary),
-            "req": f"new p.{m.type_name}({{ {', '.join(inits)} }})" if inits else f"new p.{m.type_name}()"}
+    return {
+        "name": method_name(m),
+        "params": ", ".join(params),
+        "summary": doc_line(m.summary),
+        "req": f"new p.{m.type_name}({{ {', '.join(inits)} }})" if inits else f"new p.{m.type_name}()",
+    }
 
 
 def _package() -> str:
     deps = ",\n".join(f'    "{k}": "{v}"' for k, v in DEV_DEPENDENCIES.items())
     note = banner("").strip().replace('"', "'")
-    return ("{\n" f'  "name": "platformctrl",\n  "version": "0.1.0",\n  "private": true,\n'
-            f'  "description": "PlatformCtrl socket protocol client. {note}",\n'
-            '  "main": "dist/index.js",\n  "types": "dist/index.d.ts",\n'
-            '  "scripts": {\n    "build": "tsc -p .",\n    "smoke": "node dist/smoke.js",\n'
-            '    "vectors": "node dist/vectors.js"\n  },\n'
-            f'  "devDependencies": {{\n{deps}\n  }}\n}}\n')
+    return (
+        "{\n"
+        f'  "name": "platformctrl",\n  "version": "0.1.0",\n  "private": true,\n'
+        f'  "description": "PlatformCtrl socket protocol client. {note}",\n'
+        '  "main": "dist/index.js",\n  "types": "dist/index.d.ts",\n'
+        '  "scripts": {\n    "build": "tsc -p .",\n    "smoke": "node dist/smoke.js",\n'
+        '    "vectors": "node dist/vectors.js"\n  },\n'
+        f'  "devDependencies": {{\n{deps}\n  }}\n}}\n'
+    )
 
 
-README = readme("typescript", "TypeScript (Node)",
-                "`npm install` then `tsc`; typescript and @types/node are the only (dev) dependencies")
+README = readme(
+    "typescript",
+    "TypeScript (Node)",
+    "`npm install` then `tsc`; typescript and @types/node are the only (dev) dependencies",
+)
 
 
 def render() -> dict[str, str]:
@@ -134,10 +238,23 @@ def render() -> dict[str, str]:
         "src/wire.ts": HEAD + fill(template("typescript", "wire.ts.tmpl"), ERRORS=_errors()),
         "src/protocol.ts": _protocol(),
         "src/client.ts": HEAD + fill(template("typescript", "client.ts.tmpl"), METHODS=methods(_method, METHOD)),
-        **static("typescript", HEAD, {"tsconfig.json": "tsconfig.json.tmpl", "src/index.ts": "index.ts.tmpl",
-                                      "src/codec.ts": "codec.ts.tmpl", "src/smoke.ts": "smoke.ts.tmpl",
-                                      "src/vectors.ts": "vectors.ts.tmpl", "src/waits.ts": "waits.ts.tmpl"}),
-        **scripts("typescript",
-                  "npm install (typescript, @types/node; from the npm registry when not cached), then tsc.",
-                  "node dist/smoke.js", "node dist/vectors.js", "node_modules/\ndist/\npackage-lock.json\n"),
+        **static(
+            "typescript",
+            HEAD,
+            {
+                "tsconfig.json": "tsconfig.json.tmpl",
+                "src/index.ts": "index.ts.tmpl",
+                "src/codec.ts": "codec.ts.tmpl",
+                "src/smoke.ts": "smoke.ts.tmpl",
+                "src/vectors.ts": "vectors.ts.tmpl",
+                "src/waits.ts": "waits.ts.tmpl",
+            },
+        ),
+        **scripts(
+            "typescript",
+            "npm install (typescript, @types/node; from the npm registry when not cached), then tsc.",
+            "node dist/smoke.js",
+            "node dist/vectors.js",
+            "node_modules/\ndist/\npackage-lock.json\n",
+        ),
     }

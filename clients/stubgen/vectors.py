@@ -54,9 +54,7 @@ def _word(text: str | None) -> str:
 
 
 def lines(entries: list[dict[str, Any]]) -> list[str]:
-    by_name: dict[tuple[str, str], Message] = {
-        (d, m.name): m for d in ("request", "reply") for m in messages(d)
-    }
+    by_name: dict[tuple[str, str], Message] = {(d, m.name): m for d in ("request", "reply") for m in messages(d)}
     for t in load_telegrams():
         for alias in t.aliases:
             for d in ("request", "reply"):
@@ -137,22 +135,38 @@ def sample_entries(seed: int = 9, per_telegram: int = 3) -> list[dict[str, Any]]
                 t = _build(direction, m, fields)
                 data = encode(t)
                 back = telegram_to_json(decode_frame(data, direction))
-                valid.append({"name": f"{m.name}-{i}", "telegram": m.name, "direction": direction,
-                              "hex": data.hex(), "fields": back["fields"]})
+                valid.append(
+                    {
+                        "name": f"{m.name}-{i}",
+                        "telegram": m.name,
+                        "direction": direction,
+                        "hex": data.hex(),
+                        "fields": back["fields"],
+                    }
+                )
                 body = data[8:]
                 flip = bytearray(body)
                 if len(flip) > 1:
                     k = rnd.randrange(1, len(flip))
                     flip[k] ^= rnd.choice((0x80, 0xFF, 0x01))
-                for tag, broken in (("cut", data[:-1]), ("extra", data + b"\x00"), ("short", frame(body[:-1])),
-                                    ("long", frame(body + b"\x01")), ("flip", frame(bytes(flip)))):
+                for tag, broken in (
+                    ("cut", data[:-1]),
+                    ("extra", data + b"\x00"),
+                    ("short", frame(body[:-1])),
+                    ("long", frame(body + b"\x01")),
+                    ("flip", frame(bytes(flip))),
+                ):
                     entry = _expect_error(f"{m.name}-{i}-{tag}", direction, broken)
                     if entry is not None:
                         invalid.append(entry)
-    for name, data in (("bad-header", bytes.fromhex("ff01fe0300000001" "00")), ("bad-first-byte", b"\x00"),
-                       ("empty-data", frame(b"")), ("unknown-id", frame(b"\x41")),
-                       ("too-large", struct.pack(">4sI", b"\xff\x01\xfe\x02", 16 * 1024 * 1024 + 1)),
-                       ("header-only", b"\xff\x01\xfe")):
+    for name, data in (
+        ("bad-header", bytes.fromhex("ff01fe030000000100")),
+        ("bad-first-byte", b"\x00"),
+        ("empty-data", frame(b"")),
+        ("unknown-id", frame(b"\x41")),
+        ("too-large", struct.pack(">4sI", b"\xff\x01\xfe\x02", 16 * 1024 * 1024 + 1)),
+        ("header-only", b"\xff\x01\xfe"),
+    ):
         for direction in ("request", "reply"):
             entry = _expect_error(f"{name}-{direction}", direction, data)
             assert entry is not None, name

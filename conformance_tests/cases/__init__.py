@@ -21,5 +21,17 @@ from pltf.conformance_tests.cases import (  # noqa: F401 - imported for registra
     state,
 )
 
-GROUP_ORDER = ("framing", "ports", "state", "commands", "replies", "parameters", "documents", "can", "special",
-               "motion", "programs", "final")
+GROUP_ORDER = (
+    "framing",
+    "ports",
+    "state",
+    "commands",
+    "replies",
+    "parameters",
+    "documents",
+    "can",
+    "special",
+    "motion",
+    "programs",
+    "final",
+)

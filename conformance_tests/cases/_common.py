@@ -64,15 +64,19 @@ def probe_connected(ctx: CaseContext, how: str) -> None:
     ctx.send("CMD_INIT_PLTF")
     s = ctx.poll(ctx.status, lambda x: x.op == OperationState.ST_OP_READY, within=30.0)
     if s.op != OperationState.ST_OP_READY:
-        raise Fail(f"after {how} the CAN connection was lost: CMD_INIT_PLTF no longer initializes "
-                   f"(status: {s.describe()})")
+        raise Fail(
+            f"after {how} the CAN connection was lost: CMD_INIT_PLTF no longer initializes (status: {s.describe()})"
+        )
 
 
 def no_unsolicited(ctx: CaseContext, what: str) -> None:
     if ctx.unsolicited:
         port, data = ctx.unsolicited[0]
-        raise Fail(f"{what} was answered (port {port}: {data[:16].hex()}...), but only GET_* requests are "
-                   "(guide 6.1 'returns data only on request')", erratum="E-CMD-013")
+        raise Fail(
+            f"{what} was answered (port {port}: {data[:16].hex()}...), but only GET_* requests are "
+            "(guide 6.1 'returns data only on request')",
+            erratum="E-CMD-013",
+        )
 
 
 def near(value: float, target: float, tol: float) -> bool:

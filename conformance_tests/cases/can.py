@@ -18,9 +18,11 @@ from pltf.conformance_tests.outcome import Fail, NotApplicable
 from pltf.spec.codec import build
 
 ALL_IDS = range(2048)
-_BUFFER = ("guide 6.3 CMD_ADD_CAN_LISTENING_ID: \"Add a CAN-ID to the receive list. All messages with CAN-IDs of "
-           "the list will be buffered and sent on request.\"; CMD_GET_CAN_MESSAGES: \"0: The message is kept, "
-           "1: The received message will be deleted\"")
+_BUFFER = (
+    'guide 6.3 CMD_ADD_CAN_LISTENING_ID: "Add a CAN-ID to the receive list. All messages with CAN-IDs of '
+    'the list will be buffered and sent on request."; CMD_GET_CAN_MESSAGES: "0: The message is kept, '
+    '1: The received message will be deleted"'
+)
 
 
 def _listen(ctx: CaseContext, ids: range, add: bool = True) -> None:
@@ -48,8 +50,11 @@ def _traffic(ctx: CaseContext) -> tuple[Any, ...]:
     return msgs
 
 
-@case("6.3/CMD_GET_CAN_MESSAGES/keep-and-delete", requirement=_BUFFER,
-      telegrams=("CMD_ADD_CAN_LISTENING_ID", "CMD_GET_CAN_MESSAGES"))
+@case(
+    "6.3/CMD_GET_CAN_MESSAGES/keep-and-delete",
+    requirement=_BUFFER,
+    telegrams=("CMD_ADD_CAN_LISTENING_ID", "CMD_GET_CAN_MESSAGES"),
+)
 def keep_and_delete(ctx: CaseContext) -> None:
     first = _traffic(ctx)
     second = _messages(ctx, 0)
@@ -70,10 +75,12 @@ def keep_and_delete(ctx: CaseContext) -> None:
         raise Fail(f"{len(stale)} messages returned with 'delete' were returned again")
 
 
-@case("6.3/CMD_REMOVE_CAN_LISTENING_ID/stops-buffering",
-      requirement="guide 6.3 CMD_REMOVE_CAN_LISTENING_ID: \"Removes a CAN-ID from the receive list\" - its messages "
-                  "are no longer buffered",
-      telegrams=("CMD_REMOVE_CAN_LISTENING_ID", "CMD_GET_CAN_MESSAGES"))
+@case(
+    "6.3/CMD_REMOVE_CAN_LISTENING_ID/stops-buffering",
+    requirement='guide 6.3 CMD_REMOVE_CAN_LISTENING_ID: "Removes a CAN-ID from the receive list" - its messages '
+    "are no longer buffered",
+    telegrams=("CMD_REMOVE_CAN_LISTENING_ID", "CMD_GET_CAN_MESSAGES"),
+)
 def stops_buffering(ctx: CaseContext) -> None:
     msgs = _traffic(ctx)
     ids = sorted({m.can_id for m in msgs})
@@ -82,12 +89,17 @@ def stops_buffering(ctx: CaseContext) -> None:
     ctx.sleep(1.0)
     late = _messages(ctx, 0)
     if late:
-        raise Fail(f"{len(late)} messages (ids {sorted({m.can_id for m in late})[:5]}) were buffered after every "
-                   f"id was removed (traffic had been seen on {ids[:5]})")
+        raise Fail(
+            f"{len(late)} messages (ids {sorted({m.can_id for m in late})[:5]}) were buffered after every "
+            f"id was removed (traffic had been seen on {ids[:5]})"
+        )
 
 
-@case("6.3/CMD_GET_CAN_MESSAGES/listened-ids-only", requirement=_BUFFER + " - and only those",
-      telegrams=("CMD_ADD_CAN_LISTENING_ID", "CMD_GET_CAN_MESSAGES"))
+@case(
+    "6.3/CMD_GET_CAN_MESSAGES/listened-ids-only",
+    requirement=_BUFFER + " - and only those",
+    telegrams=("CMD_ADD_CAN_LISTENING_ID", "CMD_GET_CAN_MESSAGES"),
+)
 def listened_only(ctx: CaseContext) -> None:
     msgs = _traffic(ctx)
     busiest = max({m.can_id for m in msgs}, key=lambda i: sum(1 for m in msgs if m.can_id == i))
@@ -103,10 +115,13 @@ def listened_only(ctx: CaseContext) -> None:
         raise NotApplicable(f"id {busiest} carried no message in the second period")
 
 
-@case("6.4/CMD_GET_CAN_MESSAGES/timestamps", errata=("E-REP-001",),
-      requirement="erratum E-REP-001: the time stamp of a CAN message is seconds since the server started; the "
-                  "buffer lists messages in the order received (time stamps never decrease)",
-      telegrams=("CMD_GET_CAN_MESSAGES",))
+@case(
+    "6.4/CMD_GET_CAN_MESSAGES/timestamps",
+    errata=("E-REP-001",),
+    requirement="erratum E-REP-001: the time stamp of a CAN message is seconds since the server started; the "
+    "buffer lists messages in the order received (time stamps never decrease)",
+    telegrams=("CMD_GET_CAN_MESSAGES",),
+)
 def timestamps(ctx: CaseContext) -> None:
     msgs = _traffic(ctx)
     stamps = [m.timestamp for m in msgs]
@@ -118,11 +133,16 @@ def timestamps(ctx: CaseContext) -> None:
         ctx.deviate("E-REP-001", 1, "time stamps look like UNIX epoch seconds")
 
 
-@case("6.3/CMD_SET_DIGOUT/sets-output", level=Level.MAY, switches_outputs=True, errata=("E-CMD-004",),
-      requirement="guide 6.3 CMD_SET_DIGOUT: \"Set one of the digital output channels\"; 6.4 IO-Board 'Digital "
-                  "out'; erratum E-CMD-004: channels are 0-based (bit n = channel n). Optional hardware (guide 5.8: "
-                  "the IO board channels \"are for general purpose and therefore optional\")",
-      telegrams=("CMD_SET_DIGOUT", "CMD_GET_STATUS"))
+@case(
+    "6.3/CMD_SET_DIGOUT/sets-output",
+    level=Level.MAY,
+    switches_outputs=True,
+    errata=("E-CMD-004",),
+    requirement='guide 6.3 CMD_SET_DIGOUT: "Set one of the digital output channels"; 6.4 IO-Board \'Digital '
+    "out'; erratum E-CMD-004: channels are 0-based (bit n = channel n). Optional hardware (guide 5.8: "
+    'the IO board channels "are for general purpose and therefore optional")',
+    telegrams=("CMD_SET_DIGOUT", "CMD_GET_STATUS"),
+)
 def sets_output(ctx: CaseContext) -> None:
     ctx.ready()
     channel = 3
@@ -142,10 +162,14 @@ def sets_output(ctx: CaseContext) -> None:
     raise Fail(f"setting channel {channel} changed digital out from {mask:#06x} to {st:#06x}")
 
 
-@case("6.3/CMD_SET_BRAKE/both-motors", switches_outputs=True, errata=("E-CMD-015",),
-      requirement="guide 6.3 CMD_SET_BRAKE: \"Sets the brakes of the drives\" for CANNODE_MOTORRIGHT = 1 and "
-                  "CANNODE_MOTORLEFT = 2, 0 enabled, 1 disabled - accepted silently in Ready",
-      telegrams=("CMD_SET_BRAKE",))
+@case(
+    "6.3/CMD_SET_BRAKE/both-motors",
+    switches_outputs=True,
+    errata=("E-CMD-015",),
+    requirement='guide 6.3 CMD_SET_BRAKE: "Sets the brakes of the drives" for CANNODE_MOTORRIGHT = 1 and '
+    "CANNODE_MOTORLEFT = 2, 0 enabled, 1 disabled - accepted silently in Ready",
+    telegrams=("CMD_SET_BRAKE",),
+)
 def both_motors(ctx: CaseContext) -> None:
     before = ctx.ready()
     for state in (0, 1):
@@ -157,10 +181,15 @@ def both_motors(ctx: CaseContext) -> None:
     no_unsolicited(ctx, "CMD_SET_BRAKE")
 
 
-@case("6.3/CMD_START_ULTRASONIC/measures", level=Level.MAY, switches_outputs=True, errata=("E-CMD-005",),
-      requirement="guide 6.3 CMD_START_ULTRASONIC: \"Start the ultrasonic sensor measurement\" (erratum E-CMD-005: "
-                  "a bit mask of the active sensors); 6.4 'Measured distances of the ultrasonic sensors'",
-      telegrams=("CMD_START_ULTRASONIC", "CMD_STOP_ULTRASONIC", "CMD_GET_STATUS"))
+@case(
+    "6.3/CMD_START_ULTRASONIC/measures",
+    level=Level.MAY,
+    switches_outputs=True,
+    errata=("E-CMD-005",),
+    requirement='guide 6.3 CMD_START_ULTRASONIC: "Start the ultrasonic sensor measurement" (erratum E-CMD-005: '
+    "a bit mask of the active sensors); 6.4 'Measured distances of the ultrasonic sensors'",
+    telegrams=("CMD_START_ULTRASONIC", "CMD_STOP_ULTRASONIC", "CMD_GET_STATUS"),
+)
 def us_measures(ctx: CaseContext) -> None:
     ctx.ready()
     ctx.send("CMD_STOP_ULTRASONIC")

@@ -75,11 +75,19 @@ COMMANDS: dict[str, tuple[Fields, dict[str, bool]]] = {
 }
 # Identifiers whose layout is unknown (field evidence, erratum E-CMD-012): sent with no payload.
 UNKNOWN_LAYOUT: dict[str, dict[str, bool]] = {
-    "CMD_DEBUG1": {}, "CMD_DEBUG2": {}, "CMD_DEBUG3": {}, "CMD_DEBUG4": {}, "CMD_GET_MAPIMAGE": {},
-    "CMD_ENABLE_EXT_MAPPING": {}, "CMD_DISABLE_EXT_MAPPING": {}, "CMD_EXT_WRITE_MAPPING": {},
-    "CMD_EXT_READ_MAPPING": {}, "CMD_WRITE_LCD": {"switches_outputs": True},
-    "CMD_STOP_MOTIONTHREAD": {"moves_platform": True}, "CMD_RESTART_MOTIONTHREAD": {"moves_platform": True},
-}  # fmt: skip
+    "CMD_DEBUG1": {},
+    "CMD_DEBUG2": {},
+    "CMD_DEBUG3": {},
+    "CMD_DEBUG4": {},
+    "CMD_GET_MAPIMAGE": {},
+    "CMD_ENABLE_EXT_MAPPING": {},
+    "CMD_DISABLE_EXT_MAPPING": {},
+    "CMD_EXT_WRITE_MAPPING": {},
+    "CMD_EXT_READ_MAPPING": {},
+    "CMD_WRITE_LCD": {"switches_outputs": True},
+    "CMD_STOP_MOTIONTHREAD": {"moves_platform": True},
+    "CMD_RESTART_MOTIONTHREAD": {"moves_platform": True},
+}
 
 _AFTER: dict[str, Callable[[CaseContext], None]] = {
     "CMD_MAPPING_START": lambda ctx: ctx.send("CMD_MAPPING_STOP"),
@@ -115,18 +123,32 @@ def _every_state(ctx: CaseContext, name: str, fields: Fields | None) -> None:
     ctx.ready()
 
 
-_RULE = ("guide 4.2: \"All commands ... will cause a state transition depending on the state chart\" - {name} is "
-         "not a command of the chart: in every state it changes neither the operation state nor the motion mode; "
-         "guide 6.1: it is not answered")
+_RULE = (
+    'guide 4.2: "All commands ... will cause a state transition depending on the state chart" - {name} is '
+    "not a command of the chart: in every state it changes neither the operation state nor the motion mode; "
+    "guide 6.1: it is not answered"
+)
 
 for _name, (_fields, _flags) in COMMANDS.items():
-    add(f"6.3/{_name}/every-state", partial(_every_state, name=_name, fields=_fields), group="commands",
-        requirement=_RULE.format(name=_name), telegrams=(_name,), **_flags)
+    add(
+        f"6.3/{_name}/every-state",
+        partial(_every_state, name=_name, fields=_fields),
+        group="commands",
+        requirement=_RULE.format(name=_name),
+        telegrams=(_name,),
+        **_flags,
+    )
 
 for _name, _flags in UNKNOWN_LAYOUT.items():
-    add(f"6.3/{_name}/every-state", partial(_every_state, name=_name, fields=None), group="commands",
-        errata=("E-CMD-012",), level=Level.MUST,
+    add(
+        f"6.3/{_name}/every-state",
+        partial(_every_state, name=_name, fields=None),
+        group="commands",
+        errata=("E-CMD-012",),
+        level=Level.MUST,
         requirement=f"guide 4.2 / 6.1 and erratum E-CMD-012: {_name} (id known from field code, layout unknown) "
-                    "changes no operation state and is not answered, in every state; the decision is that it is "
-                    "accepted and the connection stays open (closing it is an accepted reading)",
-        telegrams=(_name,), **_flags)
+        "changes no operation state and is not answered, in every state; the decision is that it is "
+        "accepted and the connection stays open (closing it is an accepted reading)",
+        telegrams=(_name,),
+        **_flags,
+    )

@@ -39,8 +39,7 @@ def _expect_active(ctx: CaseContext, kind: str, expected: bytes, how: str, name:
     xml, got_name = _get(ctx, kind)
     if docdata.same(xml, expected):
         if name is not None and kind != "program" and got_name != name:
-            raise Fail(f"{how}: CMD_GET_{kind.upper()} returns the document but the name {got_name!r}, "
-                       f"not {name!r}")
+            raise Fail(f"{how}: CMD_GET_{kind.upper()} returns the document but the name {got_name!r}, not {name!r}")
         return
     if kind != "program" and docdata.same(got_name, expected):
         ctx.deviate("E-REP-013", 1, f"CMD_GET_{kind.upper()} sends the name first, then the XML")
@@ -48,8 +47,9 @@ def _expect_active(ctx: CaseContext, kind: str, expected: bytes, how: str, name:
     if kind == "program" and xml and docdata.parse(xml) is None:
         ctx.deviate("E-REP-014", 0, f"CMD_GET_PROGRAM returned {xml[:40]!r}, not the program document")
         return
-    raise Fail(f"{how}: CMD_GET_{kind.upper()} returns {len(xml)} bytes that are not the expected document "
-               f"({xml[:60]!r}...)")
+    raise Fail(
+        f"{how}: CMD_GET_{kind.upper()} returns {len(xml)} bytes that are not the expected document ({xml[:60]!r}...)"
+    )
 
 
 def _round_trip(ctx: CaseContext, kind: str) -> None:
@@ -74,8 +74,10 @@ def _invalid(ctx: CaseContext, kind: str) -> None:
         try:
             _expect_active(ctx, kind, good, f"after an invalid {kind} ({what})", name=_NAME)
         except Fail as exc:
-            raise Fail(f"an invalid {kind} ({what}) was not refused, or the active one was lost: {exc}",
-                       erratum="E-XML-012" if "entit" in what.lower() else None) from None
+            raise Fail(
+                f"an invalid {kind} ({what}) was not refused, or the active one was lost: {exc}",
+                erratum="E-XML-012" if "entit" in what.lower() else None,
+            ) from None
 
 
 def _save_load(ctx: CaseContext, kind: str) -> None:
@@ -124,35 +126,56 @@ def _every_state(ctx: CaseContext, kind: str, command: str) -> None:
 
 for _kind in KINDS:
     _up = _kind.upper()
-    add(f"6.3/CMD_SET_{_up}/round-trip", partial(_round_trip, kind=_kind), group="documents",
-        tier=Tier.SMOKE if _kind == "map" else Tier.STANDARD, errata=("E-REP-013",) if _kind != "program" else (
-            "E-REP-014",), level=Level.MUST,
-        requirement=f"guide 6.3 CMD_SET_{_up}: \"Set ... The {_kind} is specified in an XML-document\"; "
-                    f"CMD_GET_{_up}: \"Request ... to send\" it - a valid document using every element of 6.5 "
-                    "becomes active and is returned with the same content",
-        telegrams=(f"CMD_SET_{_up}", f"CMD_GET_{_up}"))
-    add(f"6.3/CMD_SET_{_up}/invalid-refused", partial(_invalid, kind=_kind), group="documents",
+    add(
+        f"6.3/CMD_SET_{_up}/round-trip",
+        partial(_round_trip, kind=_kind),
+        group="documents",
+        tier=Tier.SMOKE if _kind == "map" else Tier.STANDARD,
+        errata=("E-REP-013",) if _kind != "program" else ("E-REP-014",),
+        level=Level.MUST,
+        requirement=f'guide 6.3 CMD_SET_{_up}: "Set ... The {_kind} is specified in an XML-document"; '
+        f'CMD_GET_{_up}: "Request ... to send" it - a valid document using every element of 6.5 '
+        "becomes active and is returned with the same content",
+        telegrams=(f"CMD_SET_{_up}", f"CMD_GET_{_up}"),
+    )
+    add(
+        f"6.3/CMD_SET_{_up}/invalid-refused",
+        partial(_invalid, kind=_kind),
+        group="documents",
         errata=("E-XML-012",),
         requirement=f"issue and errata E-XML-012/E-XML-021: a {_kind} that is not well-formed, unsafe (entity "
-                    "declarations) or invalid against the schema of guide 6.5 is refused and the active one is "
-                    "kept",
-        telegrams=(f"CMD_SET_{_up}", f"CMD_GET_{_up}"))
-    add(f"6.3/CMD_SAVE_{_up}/load-round-trip", partial(_save_load, kind=_kind), group="documents",
+        "declarations) or invalid against the schema of guide 6.5 is refused and the active one is "
+        "kept",
+        telegrams=(f"CMD_SET_{_up}", f"CMD_GET_{_up}"),
+    )
+    add(
+        f"6.3/CMD_SAVE_{_up}/load-round-trip",
+        partial(_save_load, kind=_kind),
+        group="documents",
         errata=("E-CMD-008",),
-        requirement=f"guide 6.3 CMD_SAVE_{_up}: \"Save ... on the hard disk of the platform\", CMD_LOAD_{_up}: "
-                    "\"Load ... from the hard disk\" - LOAD after SAVE brings back the saved document",
-        telegrams=(f"CMD_SAVE_{_up}", f"CMD_LOAD_{_up}"))
+        requirement=f'guide 6.3 CMD_SAVE_{_up}: "Save ... on the hard disk of the platform", CMD_LOAD_{_up}: '
+        '"Load ... from the hard disk" - LOAD after SAVE brings back the saved document',
+        telegrams=(f"CMD_SAVE_{_up}", f"CMD_LOAD_{_up}"),
+    )
     for _cmd in (f"CMD_SET_{_up}", f"CMD_LOAD_{_up}", f"CMD_SAVE_{_up}"):
-        add(f"6.3/{_cmd}/every-state", partial(_every_state, kind=_kind, command=_cmd), group="documents",
+        add(
+            f"6.3/{_cmd}/every-state",
+            partial(_every_state, kind=_kind, command=_cmd),
+            group="documents",
             requirement=f"guide 4.2: commands cause state transitions only as the state chart says - {_cmd} "
-                        "(a platform data command) changes no operation state, is not answered, and keeps "
-                        "the document in every state",
-            telegrams=(_cmd,))
+            "(a platform data command) changes no operation state, is not answered, and keeps "
+            "the document in every state",
+            telegrams=(_cmd,),
+        )
 
 
-@case("6.5/xml/lower-case-version", group="documents", errata=("E-XML-001",),
-      requirement="erratum E-XML-001: <map> and <roadmap> take Version or version",
-      telegrams=("CMD_SET_MAP", "CMD_SET_ROADMAP"))
+@case(
+    "6.5/xml/lower-case-version",
+    group="documents",
+    errata=("E-XML-001",),
+    requirement="erratum E-XML-001: <map> and <roadmap> take Version or version",
+    telegrams=("CMD_SET_MAP", "CMD_SET_ROADMAP"),
+)
 def lower_case_version(ctx: CaseContext) -> None:
     ctx.ready()
     for kind in ("map", "roadmap"):
@@ -164,10 +187,14 @@ def lower_case_version(ctx: CaseContext) -> None:
             ctx.deviate("E-XML-001", 0, f"a {kind} with version= (lower case) was refused")
 
 
-@case("6.5/xml/declared-encoding", group="documents", errata=("E-XML-011",),
-      requirement="erratum E-XML-011: a document is decoded as its XML declaration says - an ISO-8859-1 map with "
-                  "umlauts is accepted and returned with the same text",
-      telegrams=("CMD_SET_MAP",))
+@case(
+    "6.5/xml/declared-encoding",
+    group="documents",
+    errata=("E-XML-011",),
+    requirement="erratum E-XML-011: a document is decoded as its XML declaration says - an ISO-8859-1 map with "
+    "umlauts is accepted and returned with the same text",
+    telegrams=("CMD_SET_MAP",),
+)
 def declared_encoding(ctx: CaseContext) -> None:
     ctx.ready()
     ctx.preserve_document("map")
@@ -176,10 +203,14 @@ def declared_encoding(ctx: CaseContext) -> None:
     _expect_active(ctx, "map", doc, "an ISO-8859-1 map")
 
 
-@case("6.5/xml/doctype-without-entities", group="documents", errata=("E-XML-012",),
-      requirement="erratum E-XML-012: a DOCTYPE without an internal subset (<!DOCTYPE map SYSTEM \"map.dtd\">) is "
-                  "allowed and ignored, the external DTD never fetched",
-      telegrams=("CMD_SET_MAP",))
+@case(
+    "6.5/xml/doctype-without-entities",
+    group="documents",
+    errata=("E-XML-012",),
+    requirement='erratum E-XML-012: a DOCTYPE without an internal subset (<!DOCTYPE map SYSTEM "map.dtd">) is '
+    "allowed and ignored, the external DTD never fetched",
+    telegrams=("CMD_SET_MAP",),
+)
 def doctype(ctx: CaseContext) -> None:
     ctx.ready()
     ctx.preserve_document("map")
@@ -190,9 +221,14 @@ def doctype(ctx: CaseContext) -> None:
         ctx.deviate("E-XML-012", 0, "a map with a DOCTYPE (no internal subset) was refused")
 
 
-@case("6.5/xml/oversize-refused", group="documents", tier=Tier.EXHAUSTIVE, errata=("E-XML-021",),
-      requirement="erratum E-XML-021: documents over 8 MiB are refused as invalid; the active one stays",
-      telegrams=("CMD_SET_MAP",))
+@case(
+    "6.5/xml/oversize-refused",
+    group="documents",
+    tier=Tier.EXHAUSTIVE,
+    errata=("E-XML-021",),
+    requirement="erratum E-XML-021: documents over 8 MiB are refused as invalid; the active one stays",
+    telegrams=("CMD_SET_MAP",),
+)
 def oversize(ctx: CaseContext) -> None:
     ctx.ready()
     ctx.preserve_document("map")
@@ -204,11 +240,15 @@ def oversize(ctx: CaseContext) -> None:
         ctx.deviate("E-XML-021", 0, "a 9 MiB map was accepted")
 
 
-@case("6.2/framing/large-document", group="documents", tier=Tier.EXHAUSTIVE, level=Level.SHOULD,
-      errata=("E-WIRE-004",),
-      requirement="erratum E-WIRE-004 / E-XML-021: a 4 MiB map (well under both limits) crosses the wire and is "
-                  "accepted",
-      telegrams=("CMD_SET_MAP",))
+@case(
+    "6.2/framing/large-document",
+    group="documents",
+    tier=Tier.EXHAUSTIVE,
+    level=Level.SHOULD,
+    errata=("E-WIRE-004",),
+    requirement="erratum E-WIRE-004 / E-XML-021: a 4 MiB map (well under both limits) crosses the wire and is accepted",
+    telegrams=("CMD_SET_MAP",),
+)
 def large_document(ctx: CaseContext) -> None:
     ctx.ready()
     ctx.preserve_document("map")

@@ -10,10 +10,15 @@ from pltf.conformance_tests.wire import wait_port_closed
 from pltf.spec.codec import build
 
 
-@case("6.3/CMD_SHUTDOWN_HOST/accepted", destructive=True, errata=("E-CMD-012",), level=Level.MAY,
-      requirement="field evidence id 99 CMD_SHUTDOWN_HOST (layout unknown, erratum E-CMD-012): accepted without a "
-                  "reply; a simulator does not shut its host down",
-      telegrams=("CMD_SHUTDOWN_HOST",))
+@case(
+    "6.3/CMD_SHUTDOWN_HOST/accepted",
+    destructive=True,
+    errata=("E-CMD-012",),
+    level=Level.MAY,
+    requirement="field evidence id 99 CMD_SHUTDOWN_HOST (layout unknown, erratum E-CMD-012): accepted without a "
+    "reply; a simulator does not shut its host down",
+    telegrams=("CMD_SHUTDOWN_HOST",),
+)
 def shutdown_host(ctx: CaseContext) -> None:
     s = ctx.session()
     s.send(build("request", "CMD_SHUTDOWN_HOST", payload=b""))
@@ -24,10 +29,12 @@ def shutdown_host(ctx: CaseContext) -> None:
         ctx.reset_session()
 
 
-@case("6.3/CMD_EXIT/shuts-down", destructive=True,
-      requirement="guide 6.3 CMD_EXIT: \"Shut the platform down.\" - the connections close and the ports stop "
-                  "listening",
-      telegrams=("CMD_EXIT",))
+@case(
+    "6.3/CMD_EXIT/shuts-down",
+    destructive=True,
+    requirement='guide 6.3 CMD_EXIT: "Shut the platform down." - the connections close and the ports stop listening',
+    telegrams=("CMD_EXIT",),
+)
 def exit_shuts_down(ctx: CaseContext) -> None:
     s = ctx.session()
     s.send(build("request", "CMD_EXIT"))

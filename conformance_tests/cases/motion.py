@@ -41,8 +41,7 @@ class Pose:
 
     def ahead(self, forward: float, left: float = 0.0, turn_deg: float = 0.0) -> Pose:
         c, s = math.cos(self.th), math.sin(self.th)
-        return Pose(self.x + c * forward - s * left, self.y + s * forward + c * left,
-                    self.th + math.radians(turn_deg))
+        return Pose(self.x + c * forward - s * left, self.y + s * forward + c * left, self.th + math.radians(turn_deg))
 
     def dist(self, other: Pose) -> float:
         return math.hypot(self.x - other.x, self.y - other.y)
@@ -86,22 +85,32 @@ def at_pose(ctx: CaseContext, target: Pose, how: str, *, check_angle: bool = Tru
     limit = target.dist(pose(ctx)) / 100.0 + 15.0
 
     def there(p: Pose) -> bool:
-        return (p.dist(target) <= POS_TOL and (not check_angle or abs(angle_diff(p.th, target.th)) <= ANG_TOL)
-                and abs(p.v) < 3.0 and abs(p.w) < 0.02)
+        return (
+            p.dist(target) <= POS_TOL
+            and (not check_angle or abs(angle_diff(p.th, target.th)) <= ANG_TOL)
+            and abs(p.v) < 3.0
+            and abs(p.w) < 0.02
+        )
 
     p = ctx.poll(lambda: pose(ctx), there, within=limit)
     if not there(p):
-        raise Fail(f"{how}: target {target.describe()} not reached within {limit:.0f} s - the platform is at "
-                   f"{p.describe()} ({p.dist(target):.0f} mm, "
-                   f"{math.degrees(angle_diff(p.th, target.th)):.1f} deg away)")
+        raise Fail(
+            f"{how}: target {target.describe()} not reached within {limit:.0f} s - the platform is at "
+            f"{p.describe()} ({p.dist(target):.0f} mm, "
+            f"{math.degrees(angle_diff(p.th, target.th)):.1f} deg away)"
+        )
     return p
 
 
 def still(ctx: CaseContext, start: Pose, how: str, seconds: float = 1.0) -> None:
     ctx.sleep(seconds)
     p = pose(ctx)
-    if (p.dist(start) > STILL_POS or abs(angle_diff(p.th, start.th)) > STILL_ANG or abs(p.v) > STILL_V
-            or abs(p.w) > STILL_W):
+    if (
+        p.dist(start) > STILL_POS
+        or abs(angle_diff(p.th, start.th)) > STILL_ANG
+        or abs(p.v) > STILL_V
+        or abs(p.w) > STILL_W
+    ):
         raise Fail(f"{how} must not move the platform: it went from {start.describe()} to {p.describe()}")
 
 
@@ -113,8 +122,9 @@ def watchdog(ctx: CaseContext, key: str = "VelWatchdogTime", default: float = 0.
     return default
 
 
-def hold(ctx: CaseContext, name: str, fields: dict[str, Any], seconds: float, period: float = 0.1,
-         limit: float | None = None) -> list[Pose]:
+def hold(
+    ctx: CaseContext, name: str, fields: dict[str, Any], seconds: float, period: float = 0.1, limit: float | None = None
+) -> list[Pose]:
     """Send ``name`` every ``period`` simulated seconds for ``seconds``; the poses sampled in between.
 
     When the suite itself fell behind (the gap between two sends, in simulated time, reached ``limit``: the
@@ -128,8 +138,10 @@ def hold(ctx: CaseContext, name: str, fields: dict[str, Any], seconds: float, pe
         ctx.sleep(period)
         samples.append(pose(ctx))
     if limit is not None and worst_gap >= 0.8 * limit:
-        raise Inconclusive(f"the suite could not resend {name} within the watchdog ({worst_gap:.2f} of {limit:.2f} "
-                           "simulated s): a loaded machine, not the target")
+        raise Inconclusive(
+            f"the suite could not resend {name} within the watchdog ({worst_gap:.2f} of {limit:.2f} "
+            "simulated s): a loaded machine, not the target"
+        )
     return samples
 
 
@@ -160,11 +172,16 @@ def _dist_wheels(ctx: CaseContext) -> float | None:
 _GATE: dict[str, Any] = {"moves_platform": True, "group": "motion"}
 
 
-@case("4.3/MODE_MOTION_VEL/move-vel-wheel", **_GATE, errata=("E-CMD-014",), timing=True,
-      requirement="guide 4.3 Mode Velocity: \"The desired velocities are set to the platform using the commands "
-                  "CMD_MOVE_VEL_WHEEL or CMD_MOVE_VEL. The platform keeps the last set velocity until a new "
-                  "velocity value is set or a watchdog time expired\"; 6.3 CMD_MOVE_VEL_WHEEL [mm/s]",
-      telegrams=("CMD_MOVE_VEL_WHEEL", "CMD_GET_POSITION"))
+@case(
+    "4.3/MODE_MOTION_VEL/move-vel-wheel",
+    **_GATE,
+    errata=("E-CMD-014",),
+    timing=True,
+    requirement='guide 4.3 Mode Velocity: "The desired velocities are set to the platform using the commands '
+    "CMD_MOVE_VEL_WHEEL or CMD_MOVE_VEL. The platform keeps the last set velocity until a new "
+    'velocity value is set or a watchdog time expired"; 6.3 CMD_MOVE_VEL_WHEEL [mm/s]',
+    telegrams=("CMD_MOVE_VEL_WHEEL", "CMD_GET_POSITION"),
+)
 def move_vel_wheel(ctx: CaseContext) -> None:
     start = begin(ctx, VEL)
     wd = watchdog(ctx)
@@ -175,24 +192,33 @@ def move_vel_wheel(ctx: CaseContext) -> None:
     moved = samples[-1].dist(start)
     heading = math.atan2(samples[-1].y - start.y, samples[-1].x - start.x)
     if moved < 100 or abs(angle_diff(heading, start.th)) > math.radians(10):
-        raise Fail(f"wheels at 200 mm/s for 1.5 s: moved {moved:.0f} mm in direction "
-                   f"{math.degrees(heading):.0f} deg (heading {math.degrees(start.th):.0f} deg)")
+        raise Fail(
+            f"wheels at 200 mm/s for 1.5 s: moved {moved:.0f} mm in direction "
+            f"{math.degrees(heading):.0f} deg (heading {math.degrees(start.th):.0f} deg)"
+        )
     dist = _dist_wheels(ctx)
     spin = settled(hold(ctx, "CMD_MOVE_VEL_WHEEL", {"vel_right": 100, "vel_left": -100}, 1.0, limit=wd))
     want = 200.0 / dist if dist else None
     if spin.w <= 0.02 or (want is not None and not _rot_near(spin.w, want)):
-        raise Fail(f"right wheel +100, left -100 mm/s: rotation {spin.w:.3f} rad/s (expected "
-                   f"{'counter-clockwise' if want is None else f'{want:.3f}'})")
+        raise Fail(
+            f"right wheel +100, left -100 mm/s: rotation {spin.w:.3f} rad/s (expected "
+            f"{'counter-clockwise' if want is None else f'{want:.3f}'})"
+        )
     ctx.send("CMD_MOVE_VEL_WHEEL", vel_right=0, vel_left=0)
     rest(ctx)
     no_unsolicited(ctx, "CMD_MOVE_VEL_WHEEL")
 
 
-@case("4.3/MODE_MOTION_VEL/move-vel", **_GATE, errata=("E-REP-005",), timing=True,
-      requirement="guide 4.3 Mode Velocity and 6.3 CMD_MOVE_VEL: translational velocity [mm/s] and rotational "
-                  "velocity in 1000*rad/s (erratum E-REP-005: mrad/s); CMD_GET_STATUS reports the commanded "
-                  "velocities in mm/s and 1/1000 rad/s",
-      telegrams=("CMD_MOVE_VEL", "CMD_GET_STATUS"))
+@case(
+    "4.3/MODE_MOTION_VEL/move-vel",
+    **_GATE,
+    errata=("E-REP-005",),
+    timing=True,
+    requirement="guide 4.3 Mode Velocity and 6.3 CMD_MOVE_VEL: translational velocity [mm/s] and rotational "
+    "velocity in 1000*rad/s (erratum E-REP-005: mrad/s); CMD_GET_STATUS reports the commanded "
+    "velocities in mm/s and 1/1000 rad/s",
+    telegrams=("CMD_MOVE_VEL", "CMD_GET_STATUS"),
+)
 def move_vel(ctx: CaseContext) -> None:
     begin(ctx, VEL)
     wd = watchdog(ctx)
@@ -204,48 +230,74 @@ def move_vel(ctx: CaseContext) -> None:
         raise Fail(f"CMD_MOVE_VEL(rotation 400 mrad/s): rotation {p.w:.3f} rad/s (expected 0.4)", erratum="E-REP-005")
     st = ctx.status().telegram
     if abs(st.vel_rot - 400) > 60 or abs(st.vel_trans) > 30:  # type: ignore[attr-defined]
-        raise Fail(f"CMD_GET_STATUS commanded velocities {st.vel_trans} mm/s, {st.vel_rot} mrad/s "  # type: ignore[attr-defined]
-                   "(expected 0 and 400)", erratum="E-REP-005")
+        raise Fail(
+            f"CMD_GET_STATUS commanded velocities {st.vel_trans} mm/s, {st.vel_rot} mrad/s "  # type: ignore[attr-defined]
+            "(expected 0 and 400)",
+            erratum="E-REP-005",
+        )
     ctx.send("CMD_MOVE_VEL", vel_trans=0, vel_rot=0)
     rest(ctx)
 
 
-def _watchdog(ctx: CaseContext, mode: int, name: str, fields: dict[str, Any], back: dict[str, Any],
-              within: float) -> None:
+def _watchdog(
+    ctx: CaseContext, mode: int, name: str, fields: dict[str, Any], back: dict[str, Any], within: float
+) -> None:
     begin(ctx, mode)
     for f in (fields, back):  # forward, then the same backward: the platform ends near its start
         ctx.send(name, **f)
         moving = ctx.poll(lambda: pose(ctx), lambda p: abs(p.v) > 50, within=2.0)
         if abs(moving.v) <= 50:
-            raise Fail(f"precondition: one {name} did not set the platform moving ({moving.describe()})",
-                       precondition=True)
+            raise Fail(
+                f"precondition: one {name} did not set the platform moving ({moving.describe()})", precondition=True
+            )
         p = ctx.poll(lambda: pose(ctx), lambda q: abs(q.v) < 3.0, within=within)
         if abs(p.v) >= 3.0:
             raise Fail(f"one {name} and no more: still moving at {p.v:.0f} mm/s after {within:g} s")
 
 
-@case("4.3/MODE_MOTION_VEL/watchdog", **_GATE, errata=("E-PAR-018",), timing=True,
-      requirement="guide 4.3 Mode Velocity: \"The platform keeps the last set velocity until ... a watchdog time "
-                  "expired\"; erratum E-PAR-018: the platform stops within 5 s of the last velocity command",
-      telegrams=("CMD_MOVE_VEL_WHEEL",))
+@case(
+    "4.3/MODE_MOTION_VEL/watchdog",
+    **_GATE,
+    errata=("E-PAR-018",),
+    timing=True,
+    requirement='guide 4.3 Mode Velocity: "The platform keeps the last set velocity until ... a watchdog time '
+    'expired"; erratum E-PAR-018: the platform stops within 5 s of the last velocity command',
+    telegrams=("CMD_MOVE_VEL_WHEEL",),
+)
 def vel_watchdog(ctx: CaseContext) -> None:
-    _watchdog(ctx, VEL, "CMD_MOVE_VEL_WHEEL", {"vel_right": 200, "vel_left": 200},
-              {"vel_right": -200, "vel_left": -200}, within=5.0)
+    _watchdog(
+        ctx,
+        VEL,
+        "CMD_MOVE_VEL_WHEEL",
+        {"vel_right": 200, "vel_left": 200},
+        {"vel_right": -200, "vel_left": -200},
+        within=5.0,
+    )
 
 
-@case("4.3/MODE_MOTION_JOYSOFT/decays", **_GATE, errata=("E-PAR-019",), timing=True,
-      requirement="guide 6.3 CMD_MOVE_VEL: \"If no velocity commands are received, the platform will decelerate "
-                  "to zero after few seconds\"; erratum E-PAR-019: at rest within 10 s",
-      telegrams=("CMD_MOVE_VEL",))
+@case(
+    "4.3/MODE_MOTION_JOYSOFT/decays",
+    **_GATE,
+    errata=("E-PAR-019",),
+    timing=True,
+    requirement='guide 6.3 CMD_MOVE_VEL: "If no velocity commands are received, the platform will decelerate '
+    'to zero after few seconds"; erratum E-PAR-019: at rest within 10 s',
+    telegrams=("CMD_MOVE_VEL",),
+)
 def joysoft_decays(ctx: CaseContext) -> None:
-    _watchdog(ctx, JOYSOFT, "CMD_MOVE_VEL", {"vel_trans": 200, "vel_rot": 0}, {"vel_trans": -200, "vel_rot": 0},
-              within=10.0)
+    _watchdog(
+        ctx, JOYSOFT, "CMD_MOVE_VEL", {"vel_trans": 200, "vel_rot": 0}, {"vel_trans": -200, "vel_rot": 0}, within=10.0
+    )
 
 
-@case("4.3/MODE_MOTION_JOYSOFT/move-vel-only", **_GATE, timing=True,
-      requirement="guide 4.3 Mode Joystick (Software): \"The desired translation and rotation velocities are set "
-                  "to the platform using the command CMD MOVE VEL. Other move commands have no effect.\"",
-      telegrams=("CMD_MOVE_VEL", "CMD_MOVE_VEL_WHEEL", "CMD_MOVE_REL"))
+@case(
+    "4.3/MODE_MOTION_JOYSOFT/move-vel-only",
+    **_GATE,
+    timing=True,
+    requirement='guide 4.3 Mode Joystick (Software): "The desired translation and rotation velocities are set '
+    'to the platform using the command CMD MOVE VEL. Other move commands have no effect."',
+    telegrams=("CMD_MOVE_VEL", "CMD_MOVE_VEL_WHEEL", "CMD_MOVE_REL"),
+)
 def joysoft(ctx: CaseContext) -> None:
     begin(ctx, JOYSOFT)
     wd = watchdog(ctx, "JoySoftVelTimeout", 2.0)
@@ -269,10 +321,13 @@ def _auto(ctx: CaseContext, target: Pose, how: str) -> Pose:
     return at_pose(ctx, target, how)
 
 
-@case("4.3/MODE_MOTION_AUTOMATIC/move-abs", **_GATE,
-      requirement="guide 4.3 CMD MOVE ABS: \"The platform drives to a specified frame. ... If the target is "
-                  "reached, the platform stops\"; 6.3: X, Y [mm], angle [1000*deg] in world coordinates",
-      telegrams=("CMD_MOVE_ABS",))
+@case(
+    "4.3/MODE_MOTION_AUTOMATIC/move-abs",
+    **_GATE,
+    requirement='guide 4.3 CMD MOVE ABS: "The platform drives to a specified frame. ... If the target is '
+    'reached, the platform stops"; 6.3: X, Y [mm], angle [1000*deg] in world coordinates',
+    telegrams=("CMD_MOVE_ABS",),
+)
 def move_abs(ctx: CaseContext) -> None:
     start = begin(ctx, AUTO)
     target = start.ahead(400, 300, 30)
@@ -280,20 +335,27 @@ def move_abs(ctx: CaseContext) -> None:
     _auto(ctx, target, "CMD_MOVE_ABS")
 
 
-@case("4.3/MODE_MOTION_AUTOMATIC/move-rel", **_GATE,
-      requirement="guide 6.3 CMD_MOVE_REL: \"The platform moves to a frame according to platform coordinates\" "
-                  "(x forward, y left, angle counter-clockwise: erratum E-PAR-013)",
-      telegrams=("CMD_MOVE_REL",))
+@case(
+    "4.3/MODE_MOTION_AUTOMATIC/move-rel",
+    **_GATE,
+    requirement='guide 6.3 CMD_MOVE_REL: "The platform moves to a frame according to platform coordinates" '
+    "(x forward, y left, angle counter-clockwise: erratum E-PAR-013)",
+    telegrams=("CMD_MOVE_REL",),
+)
 def move_rel(ctx: CaseContext) -> None:
     start = begin(ctx, AUTO)
     ctx.send("CMD_MOVE_REL", x=400, y=-200, angle=-45000)
     _auto(ctx, start.ahead(400, -200, -45), "CMD_MOVE_REL(400, -200, -45 deg)")
 
 
-@case("4.3/MODE_MOTION_AUTOMATIC/move-path", **_GATE, errata=("E-CMD-007",),
-      requirement="guide 4.3 CMD_MOVE_PATH: \"The platform drives on a specified path to the target ... and turns "
-                  "to the specified end orientation\"; erratum E-CMD-007: a count and that many frames",
-      telegrams=("CMD_MOVE_PATH",))
+@case(
+    "4.3/MODE_MOTION_AUTOMATIC/move-path",
+    **_GATE,
+    errata=("E-CMD-007",),
+    requirement='guide 4.3 CMD_MOVE_PATH: "The platform drives on a specified path to the target ... and turns '
+    'to the specified end orientation"; erratum E-CMD-007: a count and that many frames',
+    telegrams=("CMD_MOVE_PATH",),
+)
 def move_path(ctx: CaseContext) -> None:
     start = begin(ctx, AUTO)
     frames = [start.ahead(300), start.ahead(300, 300), start.ahead(0, 300, 90)]
@@ -320,10 +382,13 @@ def _local_roadmap(start: Pose) -> bytes:
     return doc.encode()
 
 
-@case("4.3/MODE_MOTION_AUTOMATIC/move-to-station", **_GATE,
-      requirement="guide 4.3 CMD_MOVE_TO_STATION: \"The shortest path on the roadmap from the current platform "
-                  "position to the target station is calculated. Following the command CMD_MOVE_PATH is executed\"",
-      telegrams=("CMD_MOVE_TO_STATION", "CMD_SET_ROADMAP"))
+@case(
+    "4.3/MODE_MOTION_AUTOMATIC/move-to-station",
+    **_GATE,
+    requirement='guide 4.3 CMD_MOVE_TO_STATION: "The shortest path on the roadmap from the current platform '
+    'position to the target station is calculated. Following the command CMD_MOVE_PATH is executed"',
+    telegrams=("CMD_MOVE_TO_STATION", "CMD_SET_ROADMAP"),
+)
 def move_to_station(ctx: CaseContext) -> None:
     ctx.preserve_document("roadmap")
     start = begin(ctx, AUTO)
@@ -336,10 +401,13 @@ def move_to_station(ctx: CaseContext) -> None:
     _auto(ctx, start.ahead(500, 400, 90), "CMD_MOVE_TO_STATION(ConfC)")
 
 
-@case("4.3/MODE_MOTION_AUTOMATIC/new-command-preempts", **_GATE,
-      requirement="guide 4.3 Mode Automatic: \"If a new move command is set while the platform is moving, the "
-                  "execution of the old command will be stopped immediately and the new command will be started.\"",
-      telegrams=("CMD_MOVE_ABS",))
+@case(
+    "4.3/MODE_MOTION_AUTOMATIC/new-command-preempts",
+    **_GATE,
+    requirement='guide 4.3 Mode Automatic: "If a new move command is set while the platform is moving, the '
+    'execution of the old command will be stopped immediately and the new command will be started."',
+    telegrams=("CMD_MOVE_ABS",),
+)
 def preempts(ctx: CaseContext) -> None:
     start = begin(ctx, AUTO)
     far = start.ahead(600)
@@ -356,16 +424,20 @@ def _moving(ctx: CaseContext, start: Pose) -> Pose:
     ctx.send("CMD_MOVE_ABS", x=round(far.x), y=round(far.y), angle=_milli(start.th))
     p = ctx.poll(lambda: pose(ctx), lambda q: q.dist(start) > 100 and abs(q.v) > 50, within=10.0)
     if p.dist(start) <= 100:
-        raise Fail(f"precondition: CMD_MOVE_ABS 600 mm ahead did not start the platform ({p.describe()})",
-                   precondition=True)
+        raise Fail(
+            f"precondition: CMD_MOVE_ABS 600 mm ahead did not start the platform ({p.describe()})", precondition=True
+        )
     return far
 
 
-@case("6.3/CMD_BREAK/halts-and-continues", **_GATE,
-      requirement="guide 6.3 CMD_BREAK: \"Break a platform motion mode\"; CMD_CONTINUE: \"Continue the execution "
-                  "of a platform motion mode\" - the platform stops in Breaked and completes the move after "
-                  "CMD_CONTINUE",
-      telegrams=("CMD_BREAK", "CMD_CONTINUE", "CMD_MOVE_ABS"))
+@case(
+    "6.3/CMD_BREAK/halts-and-continues",
+    **_GATE,
+    requirement='guide 6.3 CMD_BREAK: "Break a platform motion mode"; CMD_CONTINUE: "Continue the execution '
+    'of a platform motion mode" - the platform stops in Breaked and completes the move after '
+    "CMD_CONTINUE",
+    telegrams=("CMD_BREAK", "CMD_CONTINUE", "CMD_MOVE_ABS"),
+)
 def break_continue(ctx: CaseContext) -> None:
     start = begin(ctx, AUTO)
     far = _moving(ctx, start)
@@ -405,26 +477,38 @@ def _halts(ctx: CaseContext, command: str, state: St, *, blind: bool = False) ->
     short_of(pose(ctx), far, f"CMD_START after {command}")
 
 
-@case("6.3/CMD_STOP/halts-motion", **_GATE,
-      requirement="guide 6.3 CMD_STOP: \"Stop the motion of the platform. The operation state changes into the "
-                  "state 'Ready' and waits for the next command.\"",
-      telegrams=("CMD_STOP", "CMD_MOVE_ABS"))
+@case(
+    "6.3/CMD_STOP/halts-motion",
+    **_GATE,
+    requirement='guide 6.3 CMD_STOP: "Stop the motion of the platform. The operation state changes into the '
+    "state 'Ready' and waits for the next command.\"",
+    telegrams=("CMD_STOP", "CMD_MOVE_ABS"),
+)
 def stop_halts(ctx: CaseContext) -> None:
     _halts(ctx, "CMD_STOP", St.READY)
 
 
-@case("6.3/CMD_SHUTDOWN_PLTF/halts-motion", **_GATE, level=Level.SHOULD,
-      requirement="guide 6.3 CMD_SHUTDOWN_PLTF: \"Used to shutdown the CAN communication\" - without CAN the drives "
-                  "cannot move: the platform stops",
-      telegrams=("CMD_SHUTDOWN_PLTF", "CMD_MOVE_ABS"))
+@case(
+    "6.3/CMD_SHUTDOWN_PLTF/halts-motion",
+    **_GATE,
+    level=Level.SHOULD,
+    requirement='guide 6.3 CMD_SHUTDOWN_PLTF: "Used to shutdown the CAN communication" - without CAN the drives '
+    "cannot move: the platform stops",
+    telegrams=("CMD_SHUTDOWN_PLTF", "CMD_MOVE_ABS"),
+)
 def shutdown_halts(ctx: CaseContext) -> None:
     _halts(ctx, "CMD_SHUTDOWN_PLTF", St.NOT_CONNECTED, blind=True)
 
 
-@case("6.4/CMD_GET_STATUS/target-reached", **_GATE, level=Level.SHOULD, errata=("E-PAR-021",),
-      requirement="guide 6.4 CMD_GET_STATUS 'Platform target reached 0: Target not reached 1: Target reached' - 0 "
-                  "while a move is under way, 1 once its target is reached",
-      telegrams=("CMD_GET_STATUS", "CMD_MOVE_REL"))
+@case(
+    "6.4/CMD_GET_STATUS/target-reached",
+    **_GATE,
+    level=Level.SHOULD,
+    errata=("E-PAR-021",),
+    requirement="guide 6.4 CMD_GET_STATUS 'Platform target reached 0: Target not reached 1: Target reached' - 0 "
+    "while a move is under way, 1 once its target is reached",
+    telegrams=("CMD_GET_STATUS", "CMD_MOVE_REL"),
+)
 def target_reached(ctx: CaseContext) -> None:
     start = begin(ctx, AUTO)
     ctx.send("CMD_MOVE_REL", x=500, y=0, angle=0)

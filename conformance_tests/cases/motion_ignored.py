@@ -62,28 +62,47 @@ def _mode_ignores(ctx: CaseContext, mode: int, names: tuple[str, ...]) -> None:
 
 
 for _name in _MOVES:
-    add(f"6.3/{_name}/only-in-running", partial(_only_in_running, name=_name), **_GATE,
+    add(
+        f"6.3/{_name}/only-in-running",
+        partial(_only_in_running, name=_name),
+        **_GATE,
         requirement=f"guide 4.2: \"A movement of the platform is only possible in the state 'Running'\" - {_name} "
-                    "(in its motion mode) moves nothing in Not connected, Connected, Ready or Breaked, nor after "
-                    "a CMD_CONTINUE",
-        telegrams=(_name,))
+        "(in its motion mode) moves nothing in Not connected, Connected, Ready or Breaked, nor after "
+        "a CMD_CONTINUE",
+        telegrams=(_name,),
+    )
 
-add("4.3/MODE_MOTION_NO/moves-ignored", partial(_mode_ignores, mode=NO, names=tuple(_MOVES)), **_GATE,
-    requirement="guide 4.3 Mode No Motion: \"All move commands have no effects.\"", telegrams=tuple(_MOVES))
-add("4.3/MODE_MOTION_AUTOMATIC/velocity-commands-ignored",
-    partial(_mode_ignores, mode=AUTO, names=("CMD_MOVE_VEL", "CMD_MOVE_VEL_WHEEL")), **_GATE, level=Level.SHOULD,
+add(
+    "4.3/MODE_MOTION_NO/moves-ignored",
+    partial(_mode_ignores, mode=NO, names=tuple(_MOVES)),
+    **_GATE,
+    requirement='guide 4.3 Mode No Motion: "All move commands have no effects."',
+    telegrams=tuple(_MOVES),
+)
+add(
+    "4.3/MODE_MOTION_AUTOMATIC/velocity-commands-ignored",
+    partial(_mode_ignores, mode=AUTO, names=("CMD_MOVE_VEL", "CMD_MOVE_VEL_WHEEL")),
+    **_GATE,
+    level=Level.SHOULD,
     requirement="guide 4.3: velocities are set with CMD_MOVE_VEL_WHEEL / CMD_MOVE_VEL in the modes Velocity and "
-                "Joystick (Software); in Automatic \"several move commands are executed\" - not these",
-    telegrams=("CMD_MOVE_VEL", "CMD_MOVE_VEL_WHEEL"))
-add("4.3/MODE_MOTION_VEL/path-commands-ignored",
-    partial(_mode_ignores, mode=VEL, names=("CMD_MOVE_ABS", "CMD_MOVE_REL", "CMD_MOVE_PATH")), **_GATE,
+    'Joystick (Software); in Automatic "several move commands are executed" - not these',
+    telegrams=("CMD_MOVE_VEL", "CMD_MOVE_VEL_WHEEL"),
+)
+add(
+    "4.3/MODE_MOTION_VEL/path-commands-ignored",
+    partial(_mode_ignores, mode=VEL, names=("CMD_MOVE_ABS", "CMD_MOVE_REL", "CMD_MOVE_PATH")),
+    **_GATE,
     level=Level.SHOULD,
-    requirement="guide 4.3 Mode Velocity: \"The desired velocities are set to the platform using the commands "
-                "CMD_MOVE_VEL_WHEEL or CMD_MOVE_VEL\" - path commands belong to mode Automatic",
-    telegrams=("CMD_MOVE_ABS", "CMD_MOVE_REL", "CMD_MOVE_PATH"))
-add("4.3/MODE_MOTION_JOYHARD/socket-moves-ignored",
-    partial(_mode_ignores, mode=JOYHARD, names=("CMD_MOVE_VEL", "CMD_MOVE_VEL_WHEEL", "CMD_MOVE_REL")), **_GATE,
+    requirement='guide 4.3 Mode Velocity: "The desired velocities are set to the platform using the commands '
+    'CMD_MOVE_VEL_WHEEL or CMD_MOVE_VEL" - path commands belong to mode Automatic',
+    telegrams=("CMD_MOVE_ABS", "CMD_MOVE_REL", "CMD_MOVE_PATH"),
+)
+add(
+    "4.3/MODE_MOTION_JOYHARD/socket-moves-ignored",
+    partial(_mode_ignores, mode=JOYHARD, names=("CMD_MOVE_VEL", "CMD_MOVE_VEL_WHEEL", "CMD_MOVE_REL")),
+    **_GATE,
     level=Level.SHOULD,
-    requirement="guide 4.3 Mode Joystick (Hardware): \"The platform is controlled with a wireless remote "
-                "controller\" - not by socket move commands",
-    telegrams=("CMD_MOVE_VEL", "CMD_MOVE_VEL_WHEEL", "CMD_MOVE_REL"))
+    requirement='guide 4.3 Mode Joystick (Hardware): "The platform is controlled with a wireless remote '
+    'controller" - not by socket move commands',
+    telegrams=("CMD_MOVE_VEL", "CMD_MOVE_VEL_WHEEL", "CMD_MOVE_REL"),
+)

@@ -19,7 +19,7 @@ from pltf.spec.parameters import Category, DataType, Parameter, load_parameters
 
 SPEC = load_parameters()
 _UNSAFE = {Category.GEOM, Category.USONIC, Category.COLLISION}
-_PARAM_TEXT = "guide 6.3 CMD_SET_PLTF_PARAM: \"Change the value of a parameter.\"; 6.4 CMD_GET_PLTF_PARAM"
+_PARAM_TEXT = 'guide 6.3 CMD_SET_PLTF_PARAM: "Change the value of a parameter."; 6.4 CMD_GET_PLTF_PARAM'
 
 
 def _safe(names: list[str], *, outputs: bool = False) -> list[Parameter]:
@@ -70,11 +70,15 @@ def _other_value(p: Parameter, current: str) -> str:
     return repr(x if x <= p.maximum else (v or 0.0) - step)
 
 
-@case("5.9/parameters/guide-properties-listed", level=Level.SHOULD, errata=("E-PAR-001", "E-PAR-002"),
-      requirement="guide 5.9 lists the properties of each tab and 6.4 CMD_GET_PLTF_PARAM_VEC \"Request the list of "
-                  "all supported parameters\": every property of 5.9 is listed, under its key (errata E-PAR-001 "
-                  "PlanningEnabled, E-PAR-002 IpoRotVel), category and data type",
-      telegrams=("CMD_GET_PLTF_PARAM_VEC",))
+@case(
+    "5.9/parameters/guide-properties-listed",
+    level=Level.SHOULD,
+    errata=("E-PAR-001", "E-PAR-002"),
+    requirement='guide 5.9 lists the properties of each tab and 6.4 CMD_GET_PLTF_PARAM_VEC "Request the list of '
+    'all supported parameters": every property of 5.9 is listed, under its key (errata E-PAR-001 '
+    "PlanningEnabled, E-PAR-002 IpoRotVel), category and data type",
+    telegrams=("CMD_GET_PLTF_PARAM_VEC",),
+)
 def guide_properties_listed(ctx: CaseContext) -> None:
     table = param_table(ctx)
     missing, wrong = [], []
@@ -95,10 +99,14 @@ def guide_properties_listed(ctx: CaseContext) -> None:
         raise Fail("; ".join(([f"not listed: {', '.join(missing)}"] if missing else []) + wrong))
 
 
-@case("5.9/parameters/errata-parameters", level=Level.MAY, errata=("E-PAR-024",),
-      requirement="errata E-PAR-008/009/018..023: the parameters the project added (ultrasonic geometry, "
-                  "InfraRedEnabled, watchdog and acceleration limits) are listed (informative)",
-      telegrams=("CMD_GET_PLTF_PARAM_VEC",))
+@case(
+    "5.9/parameters/errata-parameters",
+    level=Level.MAY,
+    errata=("E-PAR-024",),
+    requirement="errata E-PAR-008/009/018..023: the parameters the project added (ultrasonic geometry, "
+    "InfraRedEnabled, watchdog and acceleration limits) are listed (informative)",
+    telegrams=("CMD_GET_PLTF_PARAM_VEC",),
+)
 def errata_parameters(ctx: CaseContext) -> None:
     table = param_table(ctx)
     missing = [p.name for p in SPEC.values() if p.name not in table]
@@ -106,11 +114,15 @@ def errata_parameters(ctx: CaseContext) -> None:
         raise NotApplicable(f"{len(missing)} parameters of the project's table are not listed, e.g. {missing[:4]}")
 
 
-@case("6.4/CMD_GET_PLTF_PARAM_VEC/entries-well-formed", level=Level.SHOULD, errata=("E-PAR-006", "E-PAR-027"),
-      requirement="guide 6.4 CMD_GET_PLTF_PARAM_VEC: each entry has a key, its value, category, data type and "
-                  "min/max; errata E-PAR-005/006/027: the value text reads as its data type (booleans as "
-                  "'true'/'false') and lies within min..max",
-      telegrams=("CMD_GET_PLTF_PARAM_VEC",))
+@case(
+    "6.4/CMD_GET_PLTF_PARAM_VEC/entries-well-formed",
+    level=Level.SHOULD,
+    errata=("E-PAR-006", "E-PAR-027"),
+    requirement="guide 6.4 CMD_GET_PLTF_PARAM_VEC: each entry has a key, its value, category, data type and "
+    "min/max; errata E-PAR-005/006/027: the value text reads as its data type (booleans as "
+    "'true'/'false') and lies within min..max",
+    telegrams=("CMD_GET_PLTF_PARAM_VEC",),
+)
 def entries_well_formed(ctx: CaseContext) -> None:
     problems = []
     for key, e in param_table(ctx).items():
@@ -128,10 +140,13 @@ def entries_well_formed(ctx: CaseContext) -> None:
         raise Fail("; ".join(problems[:8]))
 
 
-@case("6.3/CMD_GET_PLTF_PARAM/every-parameter", tier=Tier.SMOKE,
-      requirement="guide 6.3 CMD_GET_PLTF_PARAM: \"Request the value of a single parameter\" - for every key of "
-                  "CMD_GET_PLTF_PARAM_VEC the single reply carries the same key, value, category, type and bounds",
-      telegrams=("CMD_GET_PLTF_PARAM", "CMD_GET_PLTF_PARAM_VEC"))
+@case(
+    "6.3/CMD_GET_PLTF_PARAM/every-parameter",
+    tier=Tier.SMOKE,
+    requirement='guide 6.3 CMD_GET_PLTF_PARAM: "Request the value of a single parameter" - for every key of '
+    "CMD_GET_PLTF_PARAM_VEC the single reply carries the same key, value, category, type and bounds",
+    telegrams=("CMD_GET_PLTF_PARAM", "CMD_GET_PLTF_PARAM_VEC"),
+)
 def every_parameter(ctx: CaseContext) -> None:
     table = param_table(ctx)
     if not table:
@@ -165,22 +180,36 @@ def _round_trip(ctx: CaseContext, params: list[Parameter]) -> None:
             raise Fail(f"{p.name}: set back to {old!r}, read back {back!r}")
 
 
-@case("6.3/CMD_SET_PLTF_PARAM/round-trip", tier=Tier.SMOKE, requirement=_PARAM_TEXT + " - every writable "
-      "parameter that is safe to change on a standing platform reads back what was set, and then its old value",
-      telegrams=("CMD_SET_PLTF_PARAM", "CMD_GET_PLTF_PARAM"))
+@case(
+    "6.3/CMD_SET_PLTF_PARAM/round-trip",
+    tier=Tier.SMOKE,
+    requirement=_PARAM_TEXT + " - every writable "
+    "parameter that is safe to change on a standing platform reads back what was set, and then its old value",
+    telegrams=("CMD_SET_PLTF_PARAM", "CMD_GET_PLTF_PARAM"),
+)
 def round_trip(ctx: CaseContext) -> None:
     _round_trip(ctx, _safe(list(SPEC)))
 
 
-@case("6.3/CMD_SET_PLTF_PARAM/round-trip-surveillance", switches_outputs=True,
-      requirement=_PARAM_TEXT + " - the Surveillance switches (flashlight, siren, PIR and radar sensors, "
-      "surveillance mode) read back what was set", telegrams=("CMD_SET_PLTF_PARAM",))
+@case(
+    "6.3/CMD_SET_PLTF_PARAM/round-trip-surveillance",
+    switches_outputs=True,
+    requirement=_PARAM_TEXT + " - the Surveillance switches (flashlight, siren, PIR and radar sensors, "
+    "surveillance mode) read back what was set",
+    telegrams=("CMD_SET_PLTF_PARAM",),
+)
 def round_trip_outputs(ctx: CaseContext) -> None:
     _round_trip(ctx, _safe(list(SPEC), outputs=True))
 
 
-def _refused(ctx: CaseContext, p: Parameter, text: str, what: str, erratum: str = "E-PAR-007",
-             readings: dict[str, int] | None = None) -> None:
+def _refused(
+    ctx: CaseContext,
+    p: Parameter,
+    text: str,
+    what: str,
+    erratum: str = "E-PAR-007",
+    readings: dict[str, int] | None = None,
+) -> None:
     """SET ``text`` must be refused with the old value kept; ``readings`` maps an observed value to the
     alternative of ``erratum`` it shows."""
     old = _value(ctx, p.name)
@@ -193,14 +222,16 @@ def _refused(ctx: CaseContext, p: Parameter, text: str, what: str, erratum: str 
         if _same(got, value, p):
             ctx.deviate(erratum, index, f"{p.name} = {text!r} ({what}) became {got!r}")
             return
-    raise Fail(f"{p.name} = {text!r} ({what}): the old value {old!r} was not kept, it reads {got!r}",
-               erratum=erratum)
+    raise Fail(f"{p.name} = {text!r} ({what}): the old value {old!r} was not kept, it reads {got!r}", erratum=erratum)
 
 
-@case("6.3/CMD_SET_PLTF_PARAM/out-of-range-refused", errata=("E-PAR-007",),
-      requirement="erratum E-PAR-007: a CMD_SET_PLTF_PARAM with a value outside the parameter's range is refused "
-                  "as a whole - the old value stays and a later GET shows it",
-      telegrams=("CMD_SET_PLTF_PARAM", "CMD_GET_PLTF_PARAM"))
+@case(
+    "6.3/CMD_SET_PLTF_PARAM/out-of-range-refused",
+    errata=("E-PAR-007",),
+    requirement="erratum E-PAR-007: a CMD_SET_PLTF_PARAM with a value outside the parameter's range is refused "
+    "as a whole - the old value stays and a later GET shows it",
+    telegrams=("CMD_SET_PLTF_PARAM", "CMD_GET_PLTF_PARAM"),
+)
 def out_of_range(ctx: CaseContext) -> None:
     table = param_table(ctx)
     numeric = [p for p in _safe(list(table)) if p.type is not DataType.BOOLEAN]
@@ -215,10 +246,13 @@ def out_of_range(ctx: CaseContext) -> None:
             _refused(ctx, p, text, "out of range", readings={str(bound): 0, text: 1})
 
 
-@case("6.3/CMD_SET_PLTF_PARAM/malformed-refused", errata=("E-PAR-006",),
-      requirement="errata E-PAR-006/007: INTEGER is [+-]digits, DOUBLE a decimal number with '.' - any other text "
-                  "is refused and the old value stays",
-      telegrams=("CMD_SET_PLTF_PARAM", "CMD_GET_PLTF_PARAM"))
+@case(
+    "6.3/CMD_SET_PLTF_PARAM/malformed-refused",
+    errata=("E-PAR-006",),
+    requirement="errata E-PAR-006/007: INTEGER is [+-]digits, DOUBLE a decimal number with '.' - any other text "
+    "is refused and the old value stays",
+    telegrams=("CMD_SET_PLTF_PARAM", "CMD_GET_PLTF_PARAM"),
+)
 def malformed(ctx: CaseContext) -> None:
     table = param_table(ctx)
     safe = _safe(list(table))
@@ -243,10 +277,13 @@ def malformed(ctx: CaseContext) -> None:
             _refused(ctx, p, text, "not a finite number", erratum="E-PAR-006")
 
 
-@case("6.3/CMD_SET_PLTF_PARAM/boolean-spellings", errata=("E-PAR-005",),
-      requirement="erratum E-PAR-005: a server MUST accept lower-case true and false; the project also accepts 1/0 "
-                  "and any letter case, and refuses other words such as 'on' or 'maybe' (old value kept)",
-      telegrams=("CMD_SET_PLTF_PARAM",))
+@case(
+    "6.3/CMD_SET_PLTF_PARAM/boolean-spellings",
+    errata=("E-PAR-005",),
+    requirement="erratum E-PAR-005: a server MUST accept lower-case true and false; the project also accepts 1/0 "
+    "and any letter case, and refuses other words such as 'on' or 'maybe' (old value kept)",
+    telegrams=("CMD_SET_PLTF_PARAM",),
+)
 def boolean_spellings(ctx: CaseContext) -> None:
     table = param_table(ctx)
     bools = [p for p in _safe(list(table)) if p.type is DataType.BOOLEAN]
@@ -268,10 +305,13 @@ def boolean_spellings(ctx: CaseContext) -> None:
         _refused(ctx, p, text, "not a boolean word", erratum="E-PAR-005", readings={"false": 1})
 
 
-@case("6.3/CMD_SET_PLTF_PARAM/unknown-key", errata=("E-PAR-007",),
-      requirement="erratum E-PAR-007: a CMD_SET_PLTF_PARAM with an unknown key is refused - no parameter appears or "
-                  "changes, and nothing is answered",
-      telegrams=("CMD_SET_PLTF_PARAM", "CMD_GET_PLTF_PARAM_VEC"))
+@case(
+    "6.3/CMD_SET_PLTF_PARAM/unknown-key",
+    errata=("E-PAR-007",),
+    requirement="erratum E-PAR-007: a CMD_SET_PLTF_PARAM with an unknown key is refused - no parameter appears or "
+    "changes, and nothing is answered",
+    telegrams=("CMD_SET_PLTF_PARAM", "CMD_GET_PLTF_PARAM_VEC"),
+)
 def unknown_key(ctx: CaseContext) -> None:
     before = param_table(ctx)
     ctx.send("CMD_SET_PLTF_PARAM", key="NoSuchParameterConformance", value="1")
@@ -284,9 +324,12 @@ def unknown_key(ctx: CaseContext) -> None:
         raise Fail(f"parameters changed: {changed[:5]}")
 
 
-@case("6.3/CMD_GET_PLTF_PARAM/exact-keys", errata=("E-PAR-003",),
-      requirement="erratum E-PAR-003: keys are compared exactly (case-sensitive); a wrong-case key is unknown",
-      telegrams=("CMD_GET_PLTF_PARAM",))
+@case(
+    "6.3/CMD_GET_PLTF_PARAM/exact-keys",
+    errata=("E-PAR-003",),
+    requirement="erratum E-PAR-003: keys are compared exactly (case-sensitive); a wrong-case key is unknown",
+    telegrams=("CMD_GET_PLTF_PARAM",),
+)
 def exact_keys(ctx: CaseContext) -> None:
     table = param_table(ctx)
     key = next((k for k in table if k.lower() != k), None)
@@ -297,10 +340,13 @@ def exact_keys(ctx: CaseContext) -> None:
         ctx.deviate("E-PAR-003", 0, f"{key.lower()!r} was answered like {key!r}")
 
 
-@case("6.3/CMD_SET_PLTF_PARAM/read-only-refused", errata=("E-PAR-024",),
-      requirement="erratum E-PAR-024: the parameter-file values the project added (VelWatchdogTime, MaxTransVel, "
-                  "...) are read-only over the socket: a SET is refused and the value stays",
-      telegrams=("CMD_SET_PLTF_PARAM", "CMD_GET_PLTF_PARAM"))
+@case(
+    "6.3/CMD_SET_PLTF_PARAM/read-only-refused",
+    errata=("E-PAR-024",),
+    requirement="erratum E-PAR-024: the parameter-file values the project added (VelWatchdogTime, MaxTransVel, "
+    "...) are read-only over the socket: a SET is refused and the value stays",
+    telegrams=("CMD_SET_PLTF_PARAM", "CMD_GET_PLTF_PARAM"),
+)
 def read_only(ctx: CaseContext) -> None:
     table = param_table(ctx)
     ro = [p for p in SPEC.values() if not p.writable and p.name in table]

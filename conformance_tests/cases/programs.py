@@ -14,14 +14,18 @@ from pltf.conformance_tests.outcome import Fail, NotApplicable
 
 PROGRAM = MotionMode.MODE_MOTION_PROGRAM
 KEY = "ViewPlanObstEnabled"
-_RUN = ("guide 4.5: \"A task is a list of commands, which define actions or behaviours of the platform\"; 6.5 "
-        "<parameter><set key value/> \"Used to set a platform parameter\", <wait><delay amount/> \"Makes the "
-        "task wait for a specified time\"; MODE_MOTION_PROGRAM = 5: CMD_START runs the program")
+_RUN = (
+    'guide 4.5: "A task is a list of commands, which define actions or behaviours of the platform"; 6.5 '
+    '<parameter><set key value/> "Used to set a platform parameter", <wait><delay amount/> "Makes the '
+    'task wait for a specified time"; MODE_MOTION_PROGRAM = 5: CMD_START runs the program'
+)
 
 
 def _program(steps: str) -> str:
-    return (f'<?xml version="1.0" encoding="UTF-8"?>\n<program version="1.0">\n'
-            f'  <task name="conformance" id="1" priority="1" version="1.0">\n{steps}  </task>\n</program>\n')
+    return (
+        f'<?xml version="1.0" encoding="UTF-8"?>\n<program version="1.0">\n'
+        f'  <task name="conformance" id="1" priority="1" version="1.0">\n{steps}  </task>\n</program>\n'
+    )
 
 
 def _set(value: str) -> str:
@@ -56,8 +60,14 @@ def _until(ctx: CaseContext, value: str, within: float) -> bool:
     return ctx.poll(lambda: _value(ctx), lambda v: v.strip().lower() == value, within=within).strip().lower() == value
 
 
-@case("4.5/program/runs-on-start", level=Level.MAY, group="programs", timing=True, requirement=_RUN,
-      telegrams=("CMD_SET_PROGRAM", "CMD_START"))
+@case(
+    "4.5/program/runs-on-start",
+    level=Level.MAY,
+    group="programs",
+    timing=True,
+    requirement=_RUN,
+    telegrams=("CMD_SET_PROGRAM", "CMD_START"),
+)
 def runs_on_start(ctx: CaseContext) -> None:
     old, new = _prepare(ctx, _set("{new}") + _delay(1500) + _set("{old}"))
     ctx.send("CMD_START")
@@ -65,13 +75,19 @@ def runs_on_start(ctx: CaseContext) -> None:
         raise NotApplicable("CMD_START in MODE_MOTION_PROGRAM did not run the program (no parameter changed)")
     ctx.sleep(0.8)  # exactly 0.8 simulated s: a poll's wall-time floor would outlast the delay at a high time scale
     if _value(ctx).strip().lower() != new:
-        raise Fail("the program's <delay amount=\"1500\"/> did not delay the next step")
+        raise Fail('the program\'s <delay amount="1500"/> did not delay the next step')
     if not _until(ctx, old.strip().lower(), 5.0):
         raise Fail("the program did not go on after its delay")
 
 
-@case("4.5/program/stop-aborts", level=Level.SHOULD, group="programs", timing=True,
-      requirement=_RUN + "; CMD_STOP aborts the running program (issue 6)", telegrams=("CMD_STOP",))
+@case(
+    "4.5/program/stop-aborts",
+    level=Level.SHOULD,
+    group="programs",
+    timing=True,
+    requirement=_RUN + "; CMD_STOP aborts the running program (issue 6)",
+    telegrams=("CMD_STOP",),
+)
 def stop_aborts(ctx: CaseContext) -> None:
     _, new = _prepare(ctx, _set("{new}") + _delay(2000) + _set("{old}"))
     ctx.send("CMD_START")
@@ -83,9 +99,14 @@ def stop_aborts(ctx: CaseContext) -> None:
         raise Fail("the program went on after CMD_STOP")
 
 
-@case("4.5/program/break-pauses", level=Level.SHOULD, group="programs", timing=True,
-      requirement=_RUN + "; CMD_BREAK pauses the program and CMD_CONTINUE resumes it (issue 6)",
-      telegrams=("CMD_BREAK", "CMD_CONTINUE"))
+@case(
+    "4.5/program/break-pauses",
+    level=Level.SHOULD,
+    group="programs",
+    timing=True,
+    requirement=_RUN + "; CMD_BREAK pauses the program and CMD_CONTINUE resumes it (issue 6)",
+    telegrams=("CMD_BREAK", "CMD_CONTINUE"),
+)
 def break_pauses(ctx: CaseContext) -> None:
     _, new = _prepare(ctx, _delay(1500) + _set("{new}"))
     ctx.send("CMD_START")

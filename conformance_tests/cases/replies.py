@@ -51,10 +51,12 @@ for _name in ANSWERED:
     add(
         f"6.4/{_name}/strict-decode",
         partial(_strict, name=_name),
-        requirement=(f"guide 6.4 '{_name}': the reply telegram has exactly the layout of its table - no trailing "
-                     "bytes, counts consistent with the data, enum values and constants as printed - in every "
-                     "operation state (guide 6.1: data are returned on request)"
-                     + (f"; errata {', '.join(_errata)} decide the garbled rows" if _errata else "")),
+        requirement=(
+            f"guide 6.4 '{_name}': the reply telegram has exactly the layout of its table - no trailing "
+            "bytes, counts consistent with the data, enum values and constants as printed - in every "
+            "operation state (guide 6.1: data are returned on request)"
+            + (f"; errata {', '.join(_errata)} decide the garbled rows" if _errata else "")
+        ),
         level=Level.MUST,
         tier=Tier.SMOKE if _name in _SMOKE else Tier.STANDARD,
         errata=_errata,
@@ -63,10 +65,13 @@ for _name in ANSWERED:
     )
 
 
-@case("6.4/CMD_GET_POSITION/agrees-with-status", errata=("E-REP-012",),
-      requirement="guide 6.4: CMD_GET_POSITION's estimated position and angle are the estimated platform frame of "
-                  "CMD_GET_STATUS (erratum E-REP-012: mm, angle in rad; the status angle is [deg*1000])",
-      telegrams=("CMD_GET_POSITION", "CMD_GET_STATUS"))
+@case(
+    "6.4/CMD_GET_POSITION/agrees-with-status",
+    errata=("E-REP-012",),
+    requirement="guide 6.4: CMD_GET_POSITION's estimated position and angle are the estimated platform frame of "
+    "CMD_GET_STATUS (erratum E-REP-012: mm, angle in rad; the status angle is [deg*1000])",
+    telegrams=("CMD_GET_POSITION", "CMD_GET_STATUS"),
+)
 def position_agrees(ctx: CaseContext) -> None:
     ctx.ready()
     p0 = ctx.preserve_pose()
@@ -87,9 +92,13 @@ def position_agrees(ctx: CaseContext) -> None:
     raise Fail(f"GET_POSITION angle {pos.angle} rad does not match the status angle {deg} deg")  # type: ignore[attr-defined]
 
 
-@case("6.4/CMD_GET_STATUS/timestamp-advances", errata=("E-REP-010",), timing=True,
-      requirement="guide 6.4 CMD_GET_STATUS 'INT Message time stamp'; erratum E-REP-010: milliseconds since start",
-      telegrams=("CMD_GET_STATUS",))
+@case(
+    "6.4/CMD_GET_STATUS/timestamp-advances",
+    errata=("E-REP-010",),
+    timing=True,
+    requirement="guide 6.4 CMD_GET_STATUS 'INT Message time stamp'; erratum E-REP-010: milliseconds since start",
+    telegrams=("CMD_GET_STATUS",),
+)
 def timestamp_advances(ctx: CaseContext) -> None:
     import time
 
@@ -105,14 +114,17 @@ def timestamp_advances(ctx: CaseContext) -> None:
         return
     if abs((t2 - t1) - elapsed * 1000) <= 0.5 * elapsed * 1000 + 100:  # a loaded machine, or a slow clock?
         raise Inconclusive(f"the time stamp advanced by {t2 - t1} ms in {elapsed:.2f} simulated s")
-    raise Fail(f"the time stamp advanced by {t2 - t1} in {elapsed:.2f} simulated s (expected about "
-               f"{elapsed * 1000:.0f} ms)")
+    raise Fail(
+        f"the time stamp advanced by {t2 - t1} in {elapsed:.2f} simulated s (expected about {elapsed * 1000:.0f} ms)"
+    )
 
 
-@case("6.4/CMD_GET_STATUS/at-rest", level=Level.SHOULD,
-      requirement="guide 6.4: in Ready the 'current commanded velocities' are 0 and CMD_GET_POSITION reports no "
-                  "motion",
-      telegrams=("CMD_GET_STATUS", "CMD_GET_POSITION"))
+@case(
+    "6.4/CMD_GET_STATUS/at-rest",
+    level=Level.SHOULD,
+    requirement="guide 6.4: in Ready the 'current commanded velocities' are 0 and CMD_GET_POSITION reports no motion",
+    telegrams=("CMD_GET_STATUS", "CMD_GET_POSITION"),
+)
 def at_rest(ctx: CaseContext) -> None:
     ctx.ready()
     ctx.sleep(1.0)

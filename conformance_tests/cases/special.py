@@ -13,10 +13,14 @@ from pltf.spec.model import enum_classes
 _E = enum_classes()
 
 
-@case("6.3/CMD_SET_FRM_PLTF/sets-estimate", tier=Tier.SMOKE, errata=("E-WIRE-005",),
-      requirement="guide 6.3 CMD_SET_FRM_PLTF: \"Set the estimated frame of the mobile platform to a desired frame "
-                  "in global coordinates\" (X, Y [mm], angle [1000*deg]); GET_POSITION and GET_STATUS report it",
-      telegrams=("CMD_SET_FRM_PLTF", "CMD_GET_POSITION", "CMD_GET_STATUS"))
+@case(
+    "6.3/CMD_SET_FRM_PLTF/sets-estimate",
+    tier=Tier.SMOKE,
+    errata=("E-WIRE-005",),
+    requirement='guide 6.3 CMD_SET_FRM_PLTF: "Set the estimated frame of the mobile platform to a desired frame '
+    'in global coordinates" (X, Y [mm], angle [1000*deg]); GET_POSITION and GET_STATUS report it',
+    telegrams=("CMD_SET_FRM_PLTF", "CMD_GET_POSITION", "CMD_GET_STATUS"),
+)
 def sets_estimate(ctx: CaseContext) -> None:
     ctx.ready()
     p0 = ctx.preserve_pose()
@@ -27,17 +31,22 @@ def sets_estimate(ctx: CaseContext) -> None:
         d = math.degrees(got.angle) - milli_deg / 1000.0  # type: ignore[attr-defined]
         d = (d + 180.0) % 360.0 - 180.0
         if abs(got.x - x) > 20 or abs(got.y - y) > 20 or abs(d) > 1.0:  # type: ignore[attr-defined]
-            raise Fail(f"CMD_SET_FRM_PLTF({x}, {y}, {milli_deg}): GET_POSITION reports ({got.x}, {got.y}, "  # type: ignore[attr-defined]
-                       f"{math.degrees(got.angle):.2f} deg)")  # type: ignore[attr-defined]
+            raise Fail(
+                f"CMD_SET_FRM_PLTF({x}, {y}, {milli_deg}): GET_POSITION reports ({got.x}, {got.y}, "  # type: ignore[attr-defined]
+                f"{math.degrees(got.angle):.2f} deg)"
+            )  # type: ignore[attr-defined]
         st = ctx.status().telegram
         if abs(st.est_x - x) > 20 or abs(st.est_y - y) > 20:  # type: ignore[attr-defined]
             raise Fail(f"CMD_SET_FRM_PLTF({x}, {y}): GET_STATUS estimate ({st.est_x}, {st.est_y})")  # type: ignore[attr-defined]
 
 
-@case("6.3/CMD_MAPPING_START/debug-mapping-mode", level=Level.SHOULD,
-      requirement="guide 6.3 CMD_MAPPING_START \"Start mapping mode\", CMD_MAPPING_STOP \"Stop mapping mode\"; 6.4 "
-                  "CMD_GET_DEBUG_DATA 'Mapping mode: Indicates if the platform is in the mapping mode'",
-      telegrams=("CMD_MAPPING_START", "CMD_MAPPING_STOP", "CMD_MAPPING_RESET", "CMD_GET_DEBUG_DATA"))
+@case(
+    "6.3/CMD_MAPPING_START/debug-mapping-mode",
+    level=Level.SHOULD,
+    requirement='guide 6.3 CMD_MAPPING_START "Start mapping mode", CMD_MAPPING_STOP "Stop mapping mode"; 6.4 '
+    "CMD_GET_DEBUG_DATA 'Mapping mode: Indicates if the platform is in the mapping mode'",
+    telegrams=("CMD_MAPPING_START", "CMD_MAPPING_STOP", "CMD_MAPPING_RESET", "CMD_GET_DEBUG_DATA"),
+)
 def mapping_mode(ctx: CaseContext) -> None:
     ctx.ready()
     ctx.preserve_document("map")
@@ -51,10 +60,14 @@ def mapping_mode(ctx: CaseContext) -> None:
             raise Fail(f"after CMD_MAPPING_RESET {len(got.mapped_segments)} mapped segments remain")  # type: ignore[attr-defined]
 
 
-@case("6.3/CMD_SET_POS_HEAD_DRIVE/turns-head", level=Level.MAY, switches_outputs=True,
-      requirement="guide 6.3 CMD_SET_POS_HEAD_DRIVE \"Set the position of the head drive\" [deg]; 6.4 'Position of "
-                  "head drive' (optional hardware)",
-      telegrams=("CMD_SET_POS_HEAD_DRIVE", "CMD_SET_VEL_HEAD_DRIVE"))
+@case(
+    "6.3/CMD_SET_POS_HEAD_DRIVE/turns-head",
+    level=Level.MAY,
+    switches_outputs=True,
+    requirement='guide 6.3 CMD_SET_POS_HEAD_DRIVE "Set the position of the head drive" [deg]; 6.4 \'Position of '
+    "head drive' (optional hardware)",
+    telegrams=("CMD_SET_POS_HEAD_DRIVE", "CMD_SET_VEL_HEAD_DRIVE"),
+)
 def turns_head(ctx: CaseContext) -> None:
     ctx.ready()
     old = ctx.status().telegram.head_position  # type: ignore[attr-defined]
@@ -69,10 +82,13 @@ def turns_head(ctx: CaseContext) -> None:
         raise Fail(f"head drive set to {target} deg, reports {got} deg")
 
 
-@case("6.3/CMD_SET_EVENT/every-event", moves_platform=True,
-      requirement="guide 6.3 CMD_SET_EVENT: post-process recording and replay events 1..6 - accepted silently, no "
-                  "operation state change (replay may move the platform, hence the gate)",
-      telegrams=("CMD_SET_EVENT",))
+@case(
+    "6.3/CMD_SET_EVENT/every-event",
+    moves_platform=True,
+    requirement="guide 6.3 CMD_SET_EVENT: post-process recording and replay events 1..6 - accepted silently, no "
+    "operation state change (replay may move the platform, hence the gate)",
+    telegrams=("CMD_SET_EVENT",),
+)
 def every_event(ctx: CaseContext) -> None:
     before = ctx.ready()
     for value in sorted(_E["Event"]._value2member_map_):
@@ -85,10 +101,12 @@ def every_event(ctx: CaseContext) -> None:
     no_unsolicited(ctx, "CMD_SET_EVENT")
 
 
-@case("6.3/CMD_MOUSE_MOVE/both-buttons",
-      requirement="guide 6.3 CMD_MOUSE_MOVE \"Set the mouse obstacle\" with EV_MOUSE_RBUTTON_DOWN = 2 and "
-                  "EV_MOUSE_RBUTTON_UP = 5 - accepted silently",
-      telegrams=("CMD_MOUSE_MOVE",))
+@case(
+    "6.3/CMD_MOUSE_MOVE/both-buttons",
+    requirement='guide 6.3 CMD_MOUSE_MOVE "Set the mouse obstacle" with EV_MOUSE_RBUTTON_DOWN = 2 and '
+    "EV_MOUSE_RBUTTON_UP = 5 - accepted silently",
+    telegrams=("CMD_MOUSE_MOVE",),
+)
 def mouse(ctx: CaseContext) -> None:
     before = ctx.ready()
     p = ctx.position()

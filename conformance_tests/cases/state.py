@@ -21,21 +21,21 @@ from pltf.conformance_tests.outcome import Fail, NotApplicable
 from pltf.spec.codec import build
 
 _GUIDE_TEXT = {
-    "CMD_CONNECT_TO_PLTF": "guide 4.2: \"The initialization process starts with the command CMD_CONNECT_CAN\" "
-                           "(= CMD_CONNECT_TO_PLTF, erratum E-CMD-002)",
-    "CMD_INIT_PLTF": "guide 4.2: \"The command CMD_INIT_CAN initializes all hardware components and executes a "
-                     "platform self test\" (= CMD_INIT_PLTF, erratum E-CMD-002)",
-    "CMD_SHUTDOWN_PLTF": "guide 6.3 CMD_SHUTDOWN_PLTF: \"Used to shutdown the CAN communication.\"",
-    "CMD_START": "guide 6.3 CMD_START: \"Start a platform motion mode. The operation state changes into the state "
-                 "'Moving'.\"; 4.2: \"In the state 'Initialized' the platform can be started\"",
-    "CMD_BREAK": "guide 6.3 CMD_BREAK: \"Break a platform motion mode. The operation state changes into the state "
-                 "'Break'.\"",
-    "CMD_CONTINUE": "guide 6.3 CMD_CONTINUE: \"Continue the execution of a platform motion mode. The operation state "
-                    "changes into the state 'Moving'.\"",
-    "CMD_STOP": "guide 6.3 CMD_STOP: \"Stop the motion of the platform. The operation state changes into the state "
-                "'Ready'\"",
+    "CMD_CONNECT_TO_PLTF": 'guide 4.2: "The initialization process starts with the command CMD_CONNECT_CAN" '
+    "(= CMD_CONNECT_TO_PLTF, erratum E-CMD-002)",
+    "CMD_INIT_PLTF": 'guide 4.2: "The command CMD_INIT_CAN initializes all hardware components and executes a '
+    'platform self test" (= CMD_INIT_PLTF, erratum E-CMD-002)',
+    "CMD_SHUTDOWN_PLTF": 'guide 6.3 CMD_SHUTDOWN_PLTF: "Used to shutdown the CAN communication."',
+    "CMD_START": 'guide 6.3 CMD_START: "Start a platform motion mode. The operation state changes into the state '
+    "'Moving'.\"; 4.2: \"In the state 'Initialized' the platform can be started\"",
+    "CMD_BREAK": 'guide 6.3 CMD_BREAK: "Break a platform motion mode. The operation state changes into the state '
+    "'Break'.\"",
+    "CMD_CONTINUE": 'guide 6.3 CMD_CONTINUE: "Continue the execution of a platform motion mode. The operation state '
+    "changes into the state 'Moving'.\"",
+    "CMD_STOP": 'guide 6.3 CMD_STOP: "Stop the motion of the platform. The operation state changes into the state '
+    "'Ready'\"",
     "CMD_SET_MODE": "guide 6.3 CMD_SET_MODE: \"The operation state has to be in 'Ready' before changing to another "
-                    "motion mode.\"",
+    'motion mode."',
 }
 _DECISION = "; the project's state chart (figure 2 is lost in the text guide, erratum {erratum}): {what}"
 
@@ -87,10 +87,14 @@ for _command in chart.CHART_COMMANDS:
         )
 
 
-@case("4.2/chart/full-cycle", tier=Tier.SMOKE, group="state",
-      requirement="guide 4.2 and 6.3: connect, initialize, start, break, continue, stop and shut down walk the "
-                  "state chart, each change visible in CMD_GET_STATUS",
-      telegrams=chart.CHART_COMMANDS)
+@case(
+    "4.2/chart/full-cycle",
+    tier=Tier.SMOKE,
+    group="state",
+    requirement="guide 4.2 and 6.3: connect, initialize, start, break, continue, stop and shut down walk the "
+    "state chart, each change visible in CMD_GET_STATUS",
+    telegrams=chart.CHART_COMMANDS,
+)
 def full_cycle(ctx: CaseContext) -> None:
     ctx.ensure(St.NOT_CONNECTED)
     walk = [
@@ -109,10 +113,14 @@ def full_cycle(ctx: CaseContext) -> None:
     ctx.ready()
 
 
-@case("6.3/CMD_SET_MODE/every-mode", tier=Tier.SMOKE, group="state",
-      requirement="guide 6.3 CMD_SET_MODE: \"Set the motion mode of the platform\" - MODE_MOTION_NO, JOYSOFT, VEL and "
-                  "AUTOMATIC (4.3) are set in Ready and reported in CMD_GET_STATUS 'Active motion mode'",
-      telegrams=("CMD_SET_MODE",))
+@case(
+    "6.3/CMD_SET_MODE/every-mode",
+    tier=Tier.SMOKE,
+    group="state",
+    requirement='guide 6.3 CMD_SET_MODE: "Set the motion mode of the platform" - MODE_MOTION_NO, JOYSOFT, VEL and '
+    "AUTOMATIC (4.3) are set in Ready and reported in CMD_GET_STATUS 'Active motion mode'",
+    telegrams=("CMD_SET_MODE",),
+)
 def every_mode(ctx: CaseContext) -> None:
     ctx.ready()
     for mode in (MotionMode.MODE_MOTION_VEL, MotionMode.MODE_MOTION_JOYSOFT, MotionMode.MODE_MOTION_AUTOMATIC, NO):
@@ -120,16 +128,23 @@ def every_mode(ctx: CaseContext) -> None:
         expect_state(ctx, St.READY, f"CMD_SET_MODE({MotionMode(mode).name})", mode=mode, within=5.0)
 
 
-@case("6.3/CMD_SET_MODE/optional-modes", level=Level.MAY, group="state",
-      requirement="guide 6.3 CMD_SET_MODE lists MODE_MOTION_JOYHARD = 1, MODE_MOTION_PROGRAM = 5 and "
-                  "MODE_MOTION_POST_PROCESS_REPLAY = 6; a platform without a hardware joystick, task interpreter or "
-                  "replay may refuse them",
-      telegrams=("CMD_SET_MODE",))
+@case(
+    "6.3/CMD_SET_MODE/optional-modes",
+    level=Level.MAY,
+    group="state",
+    requirement="guide 6.3 CMD_SET_MODE lists MODE_MOTION_JOYHARD = 1, MODE_MOTION_PROGRAM = 5 and "
+    "MODE_MOTION_POST_PROCESS_REPLAY = 6; a platform without a hardware joystick, task interpreter or "
+    "replay may refuse them",
+    telegrams=("CMD_SET_MODE",),
+)
 def optional_modes(ctx: CaseContext) -> None:
     ctx.ready()
     missing = []
-    for mode in (MotionMode.MODE_MOTION_JOYHARD, MotionMode.MODE_MOTION_PROGRAM,
-                 MotionMode.MODE_MOTION_POST_PROCESS_REPLAY):
+    for mode in (
+        MotionMode.MODE_MOTION_JOYHARD,
+        MotionMode.MODE_MOTION_PROGRAM,
+        MotionMode.MODE_MOTION_POST_PROCESS_REPLAY,
+    ):
         ctx.send("CMD_SET_MODE", mode=mode)
         s = ctx.poll(ctx.status, lambda x, m=mode: x.mode == m, within=5.0)
         if s.mode != mode:
@@ -139,10 +154,14 @@ def optional_modes(ctx: CaseContext) -> None:
         raise NotApplicable(f"the target did not take {', '.join(missing)}")
 
 
-@case("6.3/CMD_SET_MODE/kept-over-start-stop", level=Level.SHOULD, group="state",
-      requirement="guide 4.3 / 5.6: a motion mode is selected in Ready and then started; CMD_START and CMD_STOP do "
-                  "not change the selected mode",
-      telegrams=("CMD_SET_MODE", "CMD_START", "CMD_STOP"))
+@case(
+    "6.3/CMD_SET_MODE/kept-over-start-stop",
+    level=Level.SHOULD,
+    group="state",
+    requirement="guide 4.3 / 5.6: a motion mode is selected in Ready and then started; CMD_START and CMD_STOP do "
+    "not change the selected mode",
+    telegrams=("CMD_SET_MODE", "CMD_START", "CMD_STOP"),
+)
 def mode_kept(ctx: CaseContext) -> None:
     ctx.ready(MotionMode.MODE_MOTION_JOYSOFT)
     for command, state in (("CMD_START", St.RUNNING), ("CMD_BREAK", St.BREAKED), ("CMD_STOP", St.READY)):
@@ -150,11 +169,16 @@ def mode_kept(ctx: CaseContext) -> None:
         expect_state(ctx, state, command, mode=MotionMode.MODE_MOTION_JOYSOFT, within=10.0)
 
 
-@case("6.3/CMD_SET_MODE/out-of-range-changes-nothing", level=Level.SHOULD, abuse=True, group="state",
-      errata=("E-WIRE-006",),
-      requirement="guide 6.3 CMD_SET_MODE codes the modes 0..6; erratum E-WIRE-006: a telegram with a field out of "
-                  "its range is malformed input - it changes nothing (the connection may be closed)",
-      telegrams=("CMD_SET_MODE",))
+@case(
+    "6.3/CMD_SET_MODE/out-of-range-changes-nothing",
+    level=Level.SHOULD,
+    abuse=True,
+    group="state",
+    errata=("E-WIRE-006",),
+    requirement="guide 6.3 CMD_SET_MODE codes the modes 0..6; erratum E-WIRE-006: a telegram with a field out of "
+    "its range is malformed input - it changes nothing (the connection may be closed)",
+    telegrams=("CMD_SET_MODE",),
+)
 def mode_out_of_range(ctx: CaseContext) -> None:
     ctx.ready()
     before = ctx.before_abuse()
@@ -167,10 +191,13 @@ def mode_out_of_range(ctx: CaseContext) -> None:
         ctx.deviate("E-WIRE-006", 1, "CMD_SET_MODE(99) was ignored and the connection kept open")
 
 
-@case("6.4/CMD_GET_STATUS/initialized-flag", group="state",
-      requirement="guide 6.4 CMD_GET_STATUS 'Platform initialization 0: Not initialized 1: Initialized' agrees with "
-                  "'Active operation state' (ST_OP_NOT_INITIALIZED <=> 0)",
-      telegrams=("CMD_GET_STATUS",))
+@case(
+    "6.4/CMD_GET_STATUS/initialized-flag",
+    group="state",
+    requirement="guide 6.4 CMD_GET_STATUS 'Platform initialization 0: Not initialized 1: Initialized' agrees with "
+    "'Active operation state' (ST_OP_NOT_INITIALIZED <=> 0)",
+    telegrams=("CMD_GET_STATUS",),
+)
 def initialized_flag(ctx: CaseContext) -> None:
     for state in (St.NOT_CONNECTED, St.READY, St.RUNNING, St.BREAKED):
         s = ctx.ensure(state)

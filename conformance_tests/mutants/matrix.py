@@ -126,8 +126,9 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--time-scale", type=float, default=10.0)
     args = p.parse_args(argv)
     bench = Bench(args.time_scale)
-    cases = [c for c in select(load_all().values(), tier=Tier.STANDARD, keyword=args.keyword)
-             if c.id not in NOT_ON_REFERENCE]
+    cases = [
+        c for c in select(load_all().values(), tier=Tier.STANDARD, keyword=args.keyword) if c.id not in NOT_ON_REFERENCE
+    ]
     survivors = 0
     for c in cases:
         t0 = time.monotonic()
@@ -135,8 +136,11 @@ def main(argv: list[str] | None = None) -> int:
         if m is None:
             survivors += 1
         verdict = r.verdict if r is not None else "-"
-        print(f"{'killed  ' if m else 'SURVIVED'} {c.id:58} by {m.id if m else '-':40} {verdict:11} "
-              f"({time.monotonic() - t0:.1f} s)", flush=True)
+        print(
+            f"{'killed  ' if m else 'SURVIVED'} {c.id:58} by {m.id if m else '-':40} {verdict:11} "
+            f"({time.monotonic() - t0:.1f} s)",
+            flush=True,
+        )
     return 1 if survivors else 0
 
 

@@ -41,8 +41,12 @@ def parameter_range_unchecked() -> None:
     parameters.Parameter._in_range = lambda self, value: value  # type: ignore[method-assign]
     original = parameters.Parameter.format
     parameters.Parameter.format = lambda self, value: (  # type: ignore[method-assign]
-        original(self, value) if self.minimum <= value <= self.maximum else repr(value) if isinstance(value, float)
-        else str(value))
+        original(self, value)
+        if self.minimum <= value <= self.maximum
+        else repr(value)
+        if isinstance(value, float)
+        else str(value)
+    )
 
 
 def documents_unvalidated() -> None:
@@ -144,9 +148,15 @@ def parameter_text_lenient() -> None:
     def boolean(text: str) -> bool:
         return text.strip().lower() == "true"
 
-    parameters._PARSERS = {parameters.DataType.BOOLEAN: boolean, parameters.DataType.INTEGER: integer,  # type: ignore[attr-defined]
-                           parameters.DataType.DOUBLE: double}
+    parameters._PARSERS = {
+        parameters.DataType.BOOLEAN: boolean,
+        parameters.DataType.INTEGER: integer,  # type: ignore[attr-defined]
+        parameters.DataType.DOUBLE: double,
+    }
 
 
-PATCHES = {name: fn for name, fn in globals().items() if callable(fn) and not name.startswith("_")
-           and fn.__module__ == __name__}
+PATCHES = {
+    name: fn
+    for name, fn in globals().items()
+    if callable(fn) and not name.startswith("_") and fn.__module__ == __name__
+}

@@ -176,8 +176,10 @@ class FrameProxy:
             for frame in split_frames(buf):
                 m.client_frame(self, conn, frame)
             conn.state["chunks"] = 1 if buf else 0
-            if buf and (buf[: min(4, len(buf))] != HEADER[: min(4, len(buf))] or (
-                    len(buf) >= 8 and _LEN.unpack_from(buf, 4)[0] > DEFAULT_MAX_LENGTH)):
+            if buf and (
+                buf[: min(4, len(buf))] != HEADER[: min(4, len(buf))]
+                or (len(buf) >= 8 and _LEN.unpack_from(buf, 4)[0] > DEFAULT_MAX_LENGTH)
+            ):
                 raw = not m.malformed(self, conn, bytes(buf))
                 if raw:
                     conn.to_server(bytes(buf))

@@ -25,8 +25,17 @@ KILLED = (Verdict.FAIL, Verdict.NON_STRICT)
 
 
 def config_for(ports: list[int], time_scale: float) -> Config:
-    return Config("127.0.0.1", ports[0], ports[1], time_scale=time_scale, simulator=True, allow_shutdown=True, reruns=0,
-                  reply_timeout=1.5, connect_window=1.5)
+    return Config(
+        "127.0.0.1",
+        ports[0],
+        ports[1],
+        time_scale=time_scale,
+        simulator=True,
+        allow_shutdown=True,
+        reruns=0,
+        reply_timeout=1.5,
+        connect_window=1.5,
+    )
 
 
 class Bench:
@@ -79,8 +88,10 @@ def main(argv: list[str] | None = None) -> int:
             failing = [r.case.id for r in results if r.verdict in KILLED]
             ok = killer.verdict in KILLED
             survivors += not ok
-            print(f"{'killed  ' if ok else 'SURVIVED'} {m.id:32} {killer.verdict:11} {m.killer}  "
-                  f"({time.monotonic() - t0:.1f} s{f', {len(failing)} cases fail' if args.all_cases else ''})")
+            print(
+                f"{'killed  ' if ok else 'SURVIVED'} {m.id:32} {killer.verdict:11} {m.killer}  "
+                f"({time.monotonic() - t0:.1f} s{f', {len(failing)} cases fail' if args.all_cases else ''})"
+            )
             print(f"         {killer.message.splitlines()[0][:150] if killer.message else ''}")
     return 1 if survivors else 0
 

@@ -16,8 +16,10 @@ def main(argv: list[str]) -> int:
 
         return serve(argv[1:])
     if not argv or argv[0] not in PATCHES:
-        print(f"usage: python -m pltf.conformance_tests.mutants.serve PATCH [options]; patches: {', '.join(PATCHES)}",
-              file=sys.stderr)
+        print(
+            f"usage: python -m pltf.conformance_tests.mutants.serve PATCH [options]; patches: {', '.join(PATCHES)}",
+            file=sys.stderr,
+        )
         return 2
     PATCHES[argv[0]]()
     from pltf.reference_server.cli import main as serve

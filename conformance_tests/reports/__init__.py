@@ -11,8 +11,15 @@ from dataclasses import dataclass, field
 
 from pltf.conformance_tests.catalogue import SECTIONS, Verdict
 
-ORDER = [Verdict.PASS, Verdict.FAIL, Verdict.NON_STRICT, Verdict.NA, Verdict.INCONCLUSIVE, Verdict.ERROR,
-         Verdict.SKIPPED]
+ORDER = [
+    Verdict.PASS,
+    Verdict.FAIL,
+    Verdict.NON_STRICT,
+    Verdict.NA,
+    Verdict.INCONCLUSIVE,
+    Verdict.ERROR,
+    Verdict.SKIPPED,
+]
 
 
 @dataclass

@@ -15,9 +15,14 @@ from pltf.conformance_tests.reports import ORDER, first_line, summary_rows
 from pltf.conformance_tests.runner import CaseResult, RunResult
 
 STYLE = {
-    Verdict.PASS: "green", Verdict.FAIL: "bold red", Verdict.NON_STRICT: "yellow", Verdict.NA: "cyan",
-    Verdict.INCONCLUSIVE: "magenta", Verdict.ERROR: "bold white on red", Verdict.SKIPPED: "dim",
-}  # fmt: skip
+    Verdict.PASS: "green",
+    Verdict.FAIL: "bold red",
+    Verdict.NON_STRICT: "yellow",
+    Verdict.NA: "cyan",
+    Verdict.INCONCLUSIVE: "magenta",
+    Verdict.ERROR: "bold white on red",
+    Verdict.SKIPPED: "dim",
+}
 
 
 class ConsoleReporter:
@@ -30,14 +35,22 @@ class ConsoleReporter:
 
     def on_start(self, config: Config, cases: Sequence[Case], gate: list[str]) -> None:
         c = self.console
-        c.print(f"[bold]pltf conform[/] {config.host}:{config.port}"
-                + (f" (+{config.second_port})" if config.second_port else "")
-                + f"  profile {config.profile}, tier {config.tier.name.lower()}, time scale {config.time_scale:g}, "
-                f"{len(cases)} cases")
+        c.print(
+            f"[bold]pltf conform[/] {config.host}:{config.port}"
+            + (f" (+{config.second_port})" if config.second_port else "")
+            + f"  profile {config.profile}, tier {config.tier.name.lower()}, time scale {config.time_scale:g}, "
+            f"{len(cases)} cases"
+        )
         for line in gate:
             c.print(f"[bold yellow]![/] {line}")
-        self._progress = Progress(TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(),
-                                  TimeElapsedColumn(), console=c, transient=True)
+        self._progress = Progress(
+            TextColumn("{task.description}"),
+            BarColumn(),
+            MofNCompleteColumn(),
+            TimeElapsedColumn(),
+            console=c,
+            transient=True,
+        )
         self._progress.start()
         self._task = self._progress.add_task("starting", total=len(cases))
 
@@ -51,8 +64,10 @@ class ConsoleReporter:
         if result.verdict is not Verdict.PASS or self.verbose:
             style = STYLE[result.verdict]
             msg = first_line(result.message)
-            self.console.print(f"[{style}]{result.verdict:>12}[/] {result.case.id} [dim]({result.case.level})[/] "
-                               f"{msg[:160]}", highlight=False)
+            self.console.print(
+                f"[{style}]{result.verdict:>12}[/] {result.case.id} [dim]({result.case.level})[/] {msg[:160]}",
+                highlight=False,
+            )
 
     def on_finish(self, run: RunResult) -> None:
         if self._progress is not None:
@@ -68,16 +83,26 @@ class ConsoleReporter:
             table.add_column(v.value, justify="right", style=STYLE[v])
         table.add_column("cases", justify="right")
         for row in summary_rows(run.results):
-            table.add_row(row.section, row.title, *(str(row.counts[v] or "") for v in ORDER), str(row.total),
-                          end_section=row.section == "all")
+            table.add_row(
+                row.section,
+                row.title,
+                *(str(row.counts[v] or "") for v in ORDER),
+                str(row.total),
+                end_section=row.section == "all",
+            )
         c.print(table)
         if self.show_coverage:
             cov = Table(title="Spec coverage")
             for col in ("metric", "covered", "total", "%", "missing (first)"):
                 cov.add_column(col)
             for m in run.target.coverage.metrics():
-                cov.add_row(m.name + ("" if m.enforced else " (informative)"), str(m.covered), str(m.total),
-                            f"{m.percent:.1f}", ", ".join(m.missing[:3]))
+                cov.add_row(
+                    m.name + ("" if m.enforced else " (informative)"),
+                    str(m.covered),
+                    str(m.total),
+                    f"{m.percent:.1f}",
+                    ", ".join(m.missing[:3]),
+                )
             c.print(cov)
         expected = [r for r in run.results if r.expected_failure]
         if expected:

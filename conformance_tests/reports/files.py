@@ -19,32 +19,51 @@ def wire_lines(result: CaseResult) -> list[str]:
 def case_dict(r: CaseResult) -> dict[str, Any]:
     c = r.case
     return {
-        "id": c.id, "section": c.section, "group": c.group, "level": c.level.value, "tier": c.tier.name.lower(),
-        "requirement": c.requirement, "errata": list(c.errata), "telegrams": list(c.telegrams),
-        "flags": [f for f in ("moves_platform", "switches_outputs", "destructive", "abuse", "timing")
-                  if getattr(c, f)],
-        "verdict": r.verdict.value, "message": r.message, "duration": round(r.duration, 4),
+        "id": c.id,
+        "section": c.section,
+        "group": c.group,
+        "level": c.level.value,
+        "tier": c.tier.name.lower(),
+        "requirement": c.requirement,
+        "errata": list(c.errata),
+        "telegrams": list(c.telegrams),
+        "flags": [f for f in ("moves_platform", "switches_outputs", "destructive", "abuse", "timing") if getattr(c, f)],
+        "verdict": r.verdict.value,
+        "message": r.message,
+        "duration": round(r.duration, 4),
         "expected_failure": r.expected_failure,
-        "attempts": [{"verdict": a.verdict.value, "message": a.message, "duration": round(a.duration, 4)}
-                     for a in r.attempts],
-        "deviations": [{"erratum": d.erratum, "reading": d.reading, "reading_text": d.reading_text,
-                        "detail": d.detail} for d in r.deviations],
+        "attempts": [
+            {"verdict": a.verdict.value, "message": a.message, "duration": round(a.duration, 4)} for a in r.attempts
+        ],
+        "deviations": [
+            {"erratum": d.erratum, "reading": d.reading, "reading_text": d.reading_text, "detail": d.detail}
+            for d in r.deviations
+        ],
         "notes": list(r.notes),
-        "wire": [{"t": round(e.t, 5), "port": e.port, "dir": e.direction, "note": e.note, "hex": e.hex()}
-                 for e in r.wire],
-    }  # fmt: skip
+        "wire": [
+            {"t": round(e.t, 5), "port": e.port, "dir": e.direction, "note": e.note, "hex": e.hex()} for e in r.wire
+        ],
+    }
 
 
 def run_dict(run: RunResult) -> dict[str, Any]:
     cfg = run.config
     return {
-        "target": f"{cfg.host}:{cfg.port}", "second_port": cfg.second_port, "profile": cfg.profile,
-        "tier": cfg.tier.name.lower(), "time_scale": cfg.time_scale, "started": run.started,
-        "duration": round(run.duration, 3), "exit_code": run.exit_code, "harness_error": run.harness_error,
-        "counts": {v.value: n for v, n in run.counts().items()}, "stale_baseline": run.stale,
+        "target": f"{cfg.host}:{cfg.port}",
+        "second_port": cfg.second_port,
+        "profile": cfg.profile,
+        "tier": cfg.tier.name.lower(),
+        "time_scale": cfg.time_scale,
+        "started": run.started,
+        "duration": round(run.duration, 3),
+        "exit_code": run.exit_code,
+        "harness_error": run.harness_error,
+        "counts": {v.value: n for v, n in run.counts().items()},
+        "stale_baseline": run.stale,
         "notes": list(run.notes),
-        "coverage": run.target.coverage.as_dict(), "cases": [case_dict(r) for r in run.results],
-    }  # fmt: skip
+        "coverage": run.target.coverage.as_dict(),
+        "cases": [case_dict(r) for r in run.results],
+    }
 
 
 def write_json(run: RunResult, path: str | Path) -> None:
@@ -67,8 +86,7 @@ def _outcome(r: CaseResult) -> tuple[str, str] | None:
 
 
 def write_junit(run: RunResult, path: str | Path) -> None:
-    suites = ET.Element("testsuites", name="pltf conform", tests=str(len(run.results)),
-                        time=f"{run.duration:.3f}")
+    suites = ET.Element("testsuites", name="pltf conform", tests=str(len(run.results)), time=f"{run.duration:.3f}")
     by_section: dict[str, list[CaseResult]] = {}
     for r in run.results:
         by_section.setdefault(r.case.section, []).append(r)
@@ -77,16 +95,26 @@ def write_junit(run: RunResult, path: str | Path) -> None:
         outcomes = [_outcome(r) for r in results]
         tags = [o[0] for o in outcomes if o is not None]
         suite = ET.SubElement(
-            suites, "testsuite", name=f"guide {section} {SECTIONS.get(section, '')}".strip(), tests=str(len(results)),
-            failures=str(tags.count("failure")), errors=str(tags.count("error")), skipped=str(tags.count("skipped")),
+            suites,
+            "testsuite",
+            name=f"guide {section} {SECTIONS.get(section, '')}".strip(),
+            tests=str(len(results)),
+            failures=str(tags.count("failure")),
+            errors=str(tags.count("error")),
+            skipped=str(tags.count("skipped")),
             time=f"{sum(r.duration for r in results):.3f}",
         )
         for r, outcome in zip(results, outcomes, strict=True):
-            tc = ET.SubElement(suite, "testcase", classname=f"guide.{section}.{r.case.group}", name=r.case.id,
-                               time=f"{r.duration:.3f}")
+            tc = ET.SubElement(
+                suite, "testcase", classname=f"guide.{section}.{r.case.group}", name=r.case.id, time=f"{r.duration:.3f}"
+            )
             props = ET.SubElement(tc, "properties")
-            for name, value in (("level", r.case.level.value), ("verdict", r.verdict.value),
-                                ("requirement", r.case.requirement), ("errata", " ".join(r.case.errata))):
+            for name, value in (
+                ("level", r.case.level.value),
+                ("verdict", r.verdict.value),
+                ("requirement", r.case.requirement),
+                ("errata", " ".join(r.case.errata)),
+            ):
                 ET.SubElement(props, "property", name=name, value=value)
             if outcome is not None:
                 tag, msg = outcome

@@ -15,9 +15,14 @@ from pltf.conformance_tests.reports import ORDER, first_line, summary_rows
 from pltf.conformance_tests.runner import CaseResult, RunResult
 
 _COLOURS = {
-    Verdict.PASS: "#2e7d32", Verdict.FAIL: "#c62828", Verdict.NON_STRICT: "#ef6c00", Verdict.NA: "#00838f",
-    Verdict.INCONCLUSIVE: "#6a1b9a", Verdict.ERROR: "#000", Verdict.SKIPPED: "#757575",
-}  # fmt: skip
+    Verdict.PASS: "#2e7d32",
+    Verdict.FAIL: "#c62828",
+    Verdict.NON_STRICT: "#ef6c00",
+    Verdict.NA: "#00838f",
+    Verdict.INCONCLUSIVE: "#6a1b9a",
+    Verdict.ERROR: "#000",
+    Verdict.SKIPPED: "#757575",
+}
 
 _CSS = """
 body{font:14px/1.4 system-ui,sans-serif;margin:1.5em;color:#222}
@@ -75,15 +80,17 @@ def _case(r: CaseResult) -> str:
 def render(run: RunResult) -> str:
     cfg = run.config
     when = datetime.datetime.fromtimestamp(run.started).isoformat(timespec="seconds")
-    head = ("<tr><th>section</th><th></th>" + "".join(f"<th>{escape(v.value)}</th>" for v in ORDER)
-            + "<th>cases</th></tr>")
+    head = (
+        "<tr><th>section</th><th></th>" + "".join(f"<th>{escape(v.value)}</th>" for v in ORDER) + "<th>cases</th></tr>"
+    )
     body = "".join(
         f'<tr><td>{escape(row.section)}</td><td class="l">{escape(row.title)}</td>'
-        + "".join(f"<td>{row.counts[v] or ''}</td>" for v in ORDER) + f"<td>{row.total}</td></tr>"
+        + "".join(f"<td>{row.counts[v] or ''}</td>" for v in ORDER)
+        + f"<td>{row.total}</td></tr>"
         for row in summary_rows(run.results)
     )
     cov = "".join(
-        f'<tr><td>{escape(m.name)}{"" if m.enforced else " (informative)"}</td><td>{m.covered}</td>'
+        f"<tr><td>{escape(m.name)}{'' if m.enforced else ' (informative)'}</td><td>{m.covered}</td>"
         f'<td>{m.total}</td><td>{m.percent:.1f}</td><td class="l">{escape(", ".join(m.missing[:12]))}</td></tr>'
         for m in run.target.coverage.metrics()
     )

@@ -153,8 +153,9 @@ def can_listen(p: Platform, t: Any, now: float) -> Outcome:
     if p.hardware is not None:
         c = p.hardware.controller
         (c.add_listening_id if add else c.remove_listening_id)(t.can_id)
-    p.log(logging.INFO, f"CAN listening id 0x{t.can_id:03X} {'added' if add else 'removed'} "
-                        f"({len(p.can_listening)} ids)")  # fmt: skip
+    p.log(
+        logging.INFO, f"CAN listening id 0x{t.can_id:03X} {'added' if add else 'removed'} ({len(p.can_listening)} ids)"
+    )
     return ACCEPTED
 
 

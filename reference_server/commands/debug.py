@@ -41,18 +41,25 @@ def unused(p: Platform, t: Any, now: float) -> Outcome:
 # guide 6.3 CMD_SET_EVENT: the replay's events; erratum E-MOT-010: they act in motion mode POST_PROCESS_REPLAY
 # and state Running only (recording works in every mode)
 _REPLAY_EVENTS = frozenset(
-    Event[name] for name in ("EV_START_POST_PROCESS_REPLAY", "EV_STOP_POST_PROCESS_REPLAY",
-                             "EV_BREAK_POST_PROCESS_REPLAY", "EV_CONTINUE_POST_PROCESS_REPLAY")
-)  # fmt: skip
+    Event[name]
+    for name in (
+        "EV_START_POST_PROCESS_REPLAY",
+        "EV_STOP_POST_PROCESS_REPLAY",
+        "EV_BREAK_POST_PROCESS_REPLAY",
+        "EV_CONTINUE_POST_PROCESS_REPLAY",
+    )
+)
 
 
 @handles("CMD_SET_EVENT")
 def set_event(p: Platform, t: Any, now: float) -> Outcome:
     replaying = p.motion_mode == MotionMode.MODE_MOTION_POST_PROCESS_REPLAY and p.chart.state is State.RUNNING
     if t.event in _REPLAY_EVENTS and not replaying:
-        return p._ignore(f"{t.NAME} {Event(t.event).name}: a replay runs in motion mode "
-                         f"MODE_MOTION_POST_PROCESS_REPLAY and state Running only, not {p._mode_name()} in "
-                         f"{p.chart.state.value} (erratum E-MOT-010)")  # fmt: skip
+        return p._ignore(
+            f"{t.NAME} {Event(t.event).name}: a replay runs in motion mode "
+            f"MODE_MOTION_POST_PROCESS_REPLAY and state Running only, not {p._mode_name()} in "
+            f"{p.chart.state.value} (erratum E-MOT-010)"
+        )
     if p.world is not None:  # guide 6.3: post-process recording and replay (errata E-MOT-006, E-MOT-010)
         p.log(logging.INFO, f"{t.NAME} {Event(t.event).name}: {p.world.event(t.event, now)}")
         return ACCEPTED
@@ -60,9 +67,19 @@ def set_event(p: Platform, t: Any, now: float) -> Outcome:
 
 
 @handles(
-    "CMD_DEBUG1", "CMD_DEBUG2", "CMD_DEBUG3", "CMD_DEBUG4", "CMD_GET_MAPIMAGE", "CMD_ENABLE_EXT_MAPPING",
-    "CMD_DISABLE_EXT_MAPPING", "CMD_EXT_WRITE_MAPPING", "CMD_EXT_READ_MAPPING", "CMD_WRITE_LCD",
-    "CMD_STOP_MOTIONTHREAD", "CMD_RESTART_MOTIONTHREAD", "CMD_SHUTDOWN_HOST",
-)  # fmt: skip
+    "CMD_DEBUG1",
+    "CMD_DEBUG2",
+    "CMD_DEBUG3",
+    "CMD_DEBUG4",
+    "CMD_GET_MAPIMAGE",
+    "CMD_ENABLE_EXT_MAPPING",
+    "CMD_DISABLE_EXT_MAPPING",
+    "CMD_EXT_WRITE_MAPPING",
+    "CMD_EXT_READ_MAPPING",
+    "CMD_WRITE_LCD",
+    "CMD_STOP_MOTIONTHREAD",
+    "CMD_RESTART_MOTIONTHREAD",
+    "CMD_SHUTDOWN_HOST",
+)
 def layout_unknown(p: Platform, t: Any, now: float) -> Outcome:
     return p._ignore(f"{t.NAME}: layout unknown, command not supported")

@@ -53,8 +53,15 @@ def render_jpeg(points: Sequence[Point]) -> bytes:
     return out.getvalue()
 
 
-def write_grab(folder: Path, filename: str, scan: bool, image: bool, points: Sequence[Point],
-               pose: tuple[float, float, float], now: float) -> list[str]:  # fmt: skip
+def write_grab(
+    folder: Path,
+    filename: str,
+    scan: bool,
+    image: bool,
+    points: Sequence[Point],
+    pose: tuple[float, float, float],
+    now: float,
+) -> list[str]:
     """Write the requested files into ``folder``; returns their paths. OSError when the disk refuses."""
     folder.mkdir(parents=True, exist_ok=True)
     written = []

@@ -172,8 +172,9 @@ class Interpreter:
             run.pending = None
             label = p.wait.timeout_label
             run.pc = run.task.labels[label] if label is not None else run.pc + 1
-            self._emit(run, "wait", f"wait timed out after {p.wait.timeout_ms:g} ms" +
-                       (f": goto {label}" if label else ""))  # fmt: skip
+            self._emit(
+                run, "wait", f"wait timed out after {p.wait.timeout_ms:g} ms" + (f": goto {label}" if label else "")
+            )
             return True
         return False
 
@@ -206,8 +207,9 @@ class Interpreter:
         if isinstance(cmd, m.Goto):
             if conditions.evaluate(cmd.condition, self.machine):
                 run.pc = run.task.labels[cmd.label]
-                self._emit(run, "command", f"goto {cmd.label}" + ("" if cmd.condition == "true" else
-                                                                   f" ({cmd.condition})"))  # fmt: skip
+                self._emit(
+                    run, "command", f"goto {cmd.label}" + ("" if cmd.condition == "true" else f" ({cmd.condition})")
+                )
                 return
         elif isinstance(cmd, m.MoveTo):
             if not self._move_to(run, cmd):
@@ -338,7 +340,16 @@ def _turnhead(mc: Machine, c: m.TurnHead) -> str:
 
 
 _ACTIONS: dict[type[m.Command], Callable[[Machine, Any], str]] = {
-    m.DigitalOut: _digital_out, m.Load: _load, m.Log: _log, m.Stop: _stop, m.MoveCoord: _coord,
-    m.MoveStation: _station, m.SetParameter: _parameter, m.Grab: _grab, m.MoveCamera: _camera, m.Speak: _speak,
-    m.Play: _play, m.TurnHead: _turnhead,
-}  # fmt: skip
+    m.DigitalOut: _digital_out,
+    m.Load: _load,
+    m.Log: _log,
+    m.Stop: _stop,
+    m.MoveCoord: _coord,
+    m.MoveStation: _station,
+    m.SetParameter: _parameter,
+    m.Grab: _grab,
+    m.MoveCamera: _camera,
+    m.Speak: _speak,
+    m.Play: _play,
+    m.TurnHead: _turnhead,
+}

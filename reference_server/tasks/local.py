@@ -50,8 +50,9 @@ _LEVELS = {"error": logging.ERROR, "warning": logging.WARNING, "warn": logging.W
 
 
 class LocalMachine(StatusSensors):
-    FIELDS = StatusFields(x="est_x", y="est_y", angle="est_angle", radar_velocity="radar_velocity",
-                          battery="io_battery_voltage")  # fmt: skip
+    FIELDS = StatusFields(
+        x="est_x", y="est_y", angle="est_angle", radar_velocity="radar_velocity", battery="io_battery_voltage"
+    )
 
     def __init__(self, platform: Platform, epoch: datetime.datetime = EPOCH) -> None:
         self.p = platform

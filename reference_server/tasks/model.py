@@ -33,10 +33,18 @@ class Direction(enum.IntEnum):
 
 
 DIRECTIONS: dict[str, Direction | None] = {
-    "front": Direction.FRONT, "1": Direction.FRONT, "back": Direction.BACK, "rear": Direction.BACK,
-    "2": Direction.BACK, "left": Direction.LEFT, "3": Direction.LEFT, "right": Direction.RIGHT,
-    "4": Direction.RIGHT, "any": None, "all": None,
-}  # fmt: skip
+    "front": Direction.FRONT,
+    "1": Direction.FRONT,
+    "back": Direction.BACK,
+    "rear": Direction.BACK,
+    "2": Direction.BACK,
+    "left": Direction.LEFT,
+    "3": Direction.LEFT,
+    "right": Direction.RIGHT,
+    "4": Direction.RIGHT,
+    "any": None,
+    "all": None,
+}
 
 
 class Detection(enum.Enum):
@@ -208,9 +216,18 @@ class BatteryCharge:
 
 
 WaitEvent = (
-    Collision | Detected | LostLocalization | TargetReached | Infrared | Radar | Date | Delay | UserEvent | Random
+    Collision
+    | Detected
+    | LostLocalization
+    | TargetReached
+    | Infrared
+    | Radar
+    | Date
+    | Delay
+    | UserEvent
+    | Random
     | BatteryCharge
-)  # fmt: skip
+)
 
 
 @dataclass(frozen=True)
@@ -221,11 +238,23 @@ class Wait(Command):
 
 
 TAGS: dict[type[Command], str] = {
-    DigitalOut: "ioevent", Load: "load", Log: "log", Stop: "motion stop", MoveCoord: "motion settarget coord",
-    MoveStation: "motion settarget station", MoveTo: "motion moveto", SetParameter: "parameter set",
-    Grab: "surveillance grab", MoveCamera: "surveillance movecamera", Speak: "audio speak", Play: "audio play",
-    TurnHead: "turnhead", Label: "label", Goto: "goto", Wait: "wait",
-}  # fmt: skip
+    DigitalOut: "ioevent",
+    Load: "load",
+    Log: "log",
+    Stop: "motion stop",
+    MoveCoord: "motion settarget coord",
+    MoveStation: "motion settarget station",
+    MoveTo: "motion moveto",
+    SetParameter: "parameter set",
+    Grab: "surveillance grab",
+    MoveCamera: "surveillance movecamera",
+    Speak: "audio speak",
+    Play: "audio play",
+    TurnHead: "turnhead",
+    Label: "label",
+    Goto: "goto",
+    Wait: "wait",
+}
 
 
 @dataclass(frozen=True, eq=False)  # identity: two tasks with equal text are still two tasks

@@ -137,8 +137,13 @@ def _parameter(el: Any) -> m.Command:
 def _surveillance(el: Any) -> m.Command:
     grab = el.find("grab")
     if grab is not None:
-        return m.Grab(el.sourceline, grab.get("filename").strip(), _flag(grab, "grabscan"), _flag(grab, "grabimage"),
-                      _flag(grab, "autoobservation"))  # fmt: skip
+        return m.Grab(
+            el.sourceline,
+            grab.get("filename").strip(),
+            _flag(grab, "grabscan"),
+            _flag(grab, "grabimage"),
+            _flag(grab, "autoobservation"),
+        )
     return m.MoveCamera(el.sourceline, el.find("movecamera").get("position"))
 
 
@@ -201,6 +206,15 @@ def _wait(el: Any) -> m.Command:
 
 
 _COMMANDS: dict[str, Callable[[Any], m.Command]] = {
-    "ioevent": _ioevent, "goto": _goto, "label": _label, "load": _load, "log": _log, "motion": _motion,
-    "parameter": _parameter, "surveillance": _surveillance, "audio": _audio, "turnhead": _turnhead, "wait": _wait,
-}  # fmt: skip
+    "ioevent": _ioevent,
+    "goto": _goto,
+    "label": _label,
+    "load": _load,
+    "log": _log,
+    "motion": _motion,
+    "parameter": _parameter,
+    "surveillance": _surveillance,
+    "audio": _audio,
+    "turnhead": _turnhead,
+    "wait": _wait,
+}

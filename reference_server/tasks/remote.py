@@ -33,11 +33,21 @@ log = logging.getLogger("pltf.tasks.remote")
 
 
 class RemoteMachine(StatusSensors):
-    FIELDS = StatusFields(x="est_x_mm", y="est_y_mm", angle="est_angle_mdeg", radar_velocity="radar_velocity_mm_s",
-                          battery="io_battery_voltage_mv")  # fmt: skip
+    FIELDS = StatusFields(
+        x="est_x_mm",
+        y="est_y_mm",
+        angle="est_angle_mdeg",
+        radar_velocity="radar_velocity_mm_s",
+        battery="io_battery_voltage_mv",
+    )
 
-    def __init__(self, client: PlatformClient, data_dir: Path, epoch: datetime.datetime,
-                 on_log: Callable[[str, str], None] | None = None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        client: PlatformClient,
+        data_dir: Path,
+        epoch: datetime.datetime,
+        on_log: Callable[[str, str], None] | None = None,
+    ) -> None:
         self.client = client
         self.data_dir = data_dir
         self.epoch = epoch

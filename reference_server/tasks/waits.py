@@ -96,8 +96,14 @@ def timed_out(p: PendingWait, t: float) -> bool:
 
 
 def _matches(d: m.Date, at: datetime.datetime) -> bool:
-    pairs = ((d.year, at.year), (d.month, at.month), (d.day, at.day), (d.hour, at.hour), (d.minute, at.minute),
-             (d.second, at.second))  # fmt: skip
+    pairs = (
+        (d.year, at.year),
+        (d.month, at.month),
+        (d.day, at.day),
+        (d.hour, at.hour),
+        (d.minute, at.minute),
+        (d.second, at.second),
+    )
     return all(want is None or want == have for want, have in pairs)
 
 

@@ -200,8 +200,9 @@ class AutoJob:
         err = wrap(self.goal[2] - pose[2])
         if abs(err) <= math.radians(float(p("TargetReachedTolAngle"))):
             self.reached, self.phase = True, "done"
-            self.events.append(f"target reached where the platform stands: x {pose[0]:.0f} mm, y {pose[1]:.0f} mm, "
-                               f"a {pose[2]:.3f} rad")  # fmt: skip
+            self.events.append(
+                f"target reached where the platform stands: x {pose[0]:.0f} mm, y {pose[1]:.0f} mm, a {pose[2]:.3f} rad"
+            )
         else:
             self.ipo, self.phase = Interpolator([Turn(pose[0], pose[1], pose[2], pose[2] + err)]), "drive"
         return True
@@ -245,8 +246,12 @@ class AutoJob:
             return None
         pts = seen.world
         reach = nav.half_width + CORRIDOR
-        box = ((pts[:, 0] >= xs.min() - reach) & (pts[:, 0] <= xs.max() + reach)
-               & (pts[:, 1] >= ys.min() - reach) & (pts[:, 1] <= ys.max() + reach))  # fmt: skip
+        box = (
+            (pts[:, 0] >= xs.min() - reach)
+            & (pts[:, 0] <= xs.max() + reach)
+            & (pts[:, 1] >= ys.min() - reach)
+            & (pts[:, 1] <= ys.max() + reach)
+        )
         pts = pts[box]
         if len(pts) == 0:
             return None

@@ -322,8 +322,9 @@ def segments_clear(q: F64, segs: F64, circ: F64, radius: float | F64) -> BOOL:
     rad = np.ascontiguousarray(np.broadcast_to(np.asarray(radius, dtype=np.float64), (len(q),)))
     ok = np.ones(len(q), dtype=bool)
     f64 = np.float64
-    _geometry.segments_clear(q, np.ascontiguousarray(segs, f64).reshape(-1, 4),
-                             np.ascontiguousarray(circ, f64).reshape(-1, 3), rad, ok)  # fmt: skip
+    _geometry.segments_clear(
+        q, np.ascontiguousarray(segs, f64).reshape(-1, 4), np.ascontiguousarray(circ, f64).reshape(-1, 3), rad, ok
+    )
     return ok
 
 
@@ -340,11 +341,15 @@ def segments_clear_numpy(q: F64, segs: F64, circ: F64, radius: float | F64) -> B
         cx, cy, dx, dy = (segs[:, k][None, :] for k in range(4))
         ux, uy, vx, vy = bx - ax, by - ay, dx - cx, dy - cy
         d2 = np.minimum(
-            np.minimum(_point_seg_d2(ax, ay, cx, cy, vx, vy, vx * vx + vy * vy),
-                       _point_seg_d2(bx, by, cx, cy, vx, vy, vx * vx + vy * vy)),
-            np.minimum(_point_seg_d2(cx, cy, ax, ay, ux, uy, ux * ux + uy * uy),
-                       _point_seg_d2(dx, dy, ax, ay, ux, uy, ux * ux + uy * uy)),
-        )  # fmt: skip
+            np.minimum(
+                _point_seg_d2(ax, ay, cx, cy, vx, vy, vx * vx + vy * vy),
+                _point_seg_d2(bx, by, cx, cy, vx, vy, vx * vx + vy * vy),
+            ),
+            np.minimum(
+                _point_seg_d2(cx, cy, ax, ay, ux, uy, ux * ux + uy * uy),
+                _point_seg_d2(dx, dy, ax, ay, ux, uy, ux * ux + uy * uy),
+            ),
+        )
         o1 = ux * (cy - ay) - uy * (cx - ax)
         o2 = ux * (dy - ay) - uy * (dx - ax)
         o3 = vx * (ay - cy) - vy * (ax - cx)

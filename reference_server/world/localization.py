@@ -99,8 +99,11 @@ class Localization:
             if self.misfits >= LOST_AFTER and not self.lost:
                 self.lost, self.lost_since = True, now
             if self.lost and global_on and self.lost_since is not None and now - self.lost_since >= GLOBAL_DELAY:
-                self.set_estimate(truth[0] + rng.gauss(0, MEAS_POS), truth[1] + rng.gauss(0, MEAS_POS),
-                                  truth[2] + rng.gauss(0, MEAS_ANGLE))  # fmt: skip
+                self.set_estimate(
+                    truth[0] + rng.gauss(0, MEAS_POS),
+                    truth[1] + rng.gauss(0, MEAS_POS),
+                    truth[2] + rng.gauss(0, MEAS_ANGLE),
+                )
             return
         self.misfits, self.lost, self.lost_since = 0, False, None
         if self.moved < 1.0 and math.sqrt(max(self.cov[0, 0], self.cov[1, 1])) < STILL_SIGMA:

@@ -116,8 +116,12 @@ def bezier(p0: Point, h0: float, p3: Point, h3: float) -> Drive | None:
     p2 = (p3[0] - d * math.cos(h3), p3[1] - d * math.sin(h3))
     n = max(8, min(MAX_SAMPLES, math.ceil(3.0 * d / DS) * 2 + 1))
     t = np.linspace(0.0, 1.0, n)[:, None]
-    pts = ((1 - t) ** 3 * np.array(p0) + 3 * (1 - t) ** 2 * t * np.array(p1) + 3 * (1 - t) * t**2 * np.array(p2)
-           + t**3 * np.array(p3))  # fmt: skip
+    pts = (
+        (1 - t) ** 3 * np.array(p0)
+        + 3 * (1 - t) ** 2 * t * np.array(p1)
+        + 3 * (1 - t) * t**2 * np.array(p2)
+        + t**3 * np.array(p3)
+    )
     return _sampled(pts[:, 0], pts[:, 1])
 
 

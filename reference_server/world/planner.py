@@ -68,8 +68,12 @@ def _octagons(segs: F64, circs: F64, radius: float) -> tuple[F64, F64, F64]:
     if len(circs):
         rc = (radius + circs[:, 2]) / _COS * _PUSH
         ang = np.radians(22.5 + 45.0 * np.arange(_K))[None, :]
-        polys.append(np.stack([circs[:, 0][:, None] + rc[:, None] * np.cos(ang),
-                               circs[:, 1][:, None] + rc[:, None] * np.sin(ang)], axis=-1))  # fmt: skip
+        polys.append(
+            np.stack(
+                [circs[:, 0][:, None] + rc[:, None] * np.cos(ang), circs[:, 1][:, None] + rc[:, None] * np.sin(ang)],
+                axis=-1,
+            )
+        )
     if not polys:
         empty = np.zeros((0, 2))
         return empty, empty, empty

@@ -101,8 +101,21 @@ def cast_fan(x: float, y: float, heading: float, scene: Scene, fan: Fan, want_hi
     ranges = np.full(fan.count, np.inf)
     hits = np.full(fan.count, -1, dtype=np.int64)
     cb, sb = beam_offsets(fan)
-    _raycast.fan(x, y, heading + fan.start, heading, fan.step, fan.max_range, fan.count, scene.segs, scene.circs,
-                 cb, sb, ranges, hits)  # fmt: skip
+    _raycast.fan(
+        x,
+        y,
+        heading + fan.start,
+        heading,
+        fan.step,
+        fan.max_range,
+        fan.count,
+        scene.segs,
+        scene.circs,
+        cb,
+        sb,
+        ranges,
+        hits,
+    )
     return ranges, hits
 
 
@@ -176,8 +189,17 @@ def cast_rays(ox: F64, oy: F64, angles: F64, scene: Scene, max_range: float) -> 
     ranges = np.empty(n)
     hits = np.empty(n, dtype=np.int64)
     f64 = np.float64
-    _raycast.rays(np.ascontiguousarray(ox, f64), np.ascontiguousarray(oy, f64), np.cos(angles), np.sin(angles),
-                  scene.segs, scene.circs, max_range, ranges, hits)  # fmt: skip
+    _raycast.rays(
+        np.ascontiguousarray(ox, f64),
+        np.ascontiguousarray(oy, f64),
+        np.cos(angles),
+        np.sin(angles),
+        scene.segs,
+        scene.circs,
+        max_range,
+        ranges,
+        hits,
+    )
     return ranges, hits
 
 

@@ -220,8 +220,12 @@ def ultrasonic(pose: tuple[float, float, float], mounts: F64, scene: Scene, eps:
 def _near(scene: Scene, x: float, y: float, radius: float) -> Scene:
     """The part of the scene whose bounding boxes come within ``radius`` of (x, y)."""
     s = scene.segs
-    keep = ((np.minimum(s[:, 0], s[:, 2]) <= x + radius) & (np.maximum(s[:, 0], s[:, 2]) >= x - radius)
-            & (np.minimum(s[:, 1], s[:, 3]) <= y + radius) & (np.maximum(s[:, 1], s[:, 3]) >= y - radius))  # fmt: skip
+    keep = (
+        (np.minimum(s[:, 0], s[:, 2]) <= x + radius)
+        & (np.maximum(s[:, 0], s[:, 2]) >= x - radius)
+        & (np.minimum(s[:, 1], s[:, 3]) <= y + radius)
+        & (np.maximum(s[:, 1], s[:, 3]) >= y - radius)
+    )
     c = scene.circs
     keep_c = np.hypot(c[:, 0] - x, c[:, 1] - y) - c[:, 2] <= radius
     return Scene.make(s[keep], c[keep_c])

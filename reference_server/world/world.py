@@ -204,8 +204,10 @@ class World:
         self._true_vel = (d / dt, da / dt) if dt > 0 else (0.0, 0.0)
         dr, dl = d + 0.5 * self.track * da, d - 0.5 * self.track * da
         nr, nl = self._odo_noise.pair()
-        return (dr * self.scale[0] + nr * math.sqrt(ODO_NOISE * abs(dr)),
-                dl * self.scale[1] + nl * math.sqrt(ODO_NOISE * abs(dl)))  # fmt: skip
+        return (
+            dr * self.scale[0] + nr * math.sqrt(ODO_NOISE * abs(dr)),
+            dl * self.scale[1] + nl * math.sqrt(ODO_NOISE * abs(dl)),
+        )
 
     def odometry(self, right: float, left: float, dt: float) -> None:
         """Estimation: the measured wheel travel (mm) of the last period."""
@@ -265,9 +267,14 @@ class World:
             g = self.geometry or MapGeometry()
             min_line = float(self.params("MinLineLenAux"))
             self._observation = sensors.observe(
-                self.last_scan, self._scan_pose, self.footprint.front, self.scene, g.reflectors,
-                self._wall_corners(), min_line,
-            )  # fmt: skip
+                self.last_scan,
+                self._scan_pose,
+                self.footprint.front,
+                self.scene,
+                g.reflectors,
+                self._wall_corners(),
+                min_line,
+            )
         return self._observation
 
     @property

@@ -72,14 +72,26 @@ def _answers(stdout: str) -> list[list[str]]:
 
 
 def _bash(script: Path, lines: list[str], cwd: Path) -> list[list[str]]:
-    done = subprocess.run(["bash", "--norc", "--noprofile", "-c", BASH_DRIVER, "bash", str(script), *lines], cwd=cwd,
-                          capture_output=True, text=True, timeout=60, check=True)
+    done = subprocess.run(
+        ["bash", "--norc", "--noprofile", "-c", BASH_DRIVER, "bash", str(script), *lines],
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=True,
+    )
     return _answers(done.stdout)
 
 
 def _zsh(script: Path, lines: list[str], cwd: Path) -> list[list[str]]:
-    done = subprocess.run(["zsh", "-f", str(CAPTURE), str(script), *lines], cwd=cwd, capture_output=True, text=True,
-                          timeout=120, check=True)
+    done = subprocess.run(
+        ["zsh", "-f", str(CAPTURE), str(script), *lines],
+        cwd=cwd,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=True,
+    )
     return _answers(done.stdout)
 
 

@@ -42,8 +42,12 @@ def busy_port() -> Iterator[int]:
 
 
 SESSION = [  # a pltf proxy recording (proxy/session.py): one connection, one GET_STATUS request
-    {"format": "pltf-session", "version": 1, "started": 0.0,
-     "routes": [{"listen": "127.0.0.1:1", "target": "127.0.0.1:2"}]},
+    {
+        "format": "pltf-session",
+        "version": 1,
+        "started": 0.0,
+        "routes": [{"listen": "127.0.0.1:1", "target": "127.0.0.1:2"}],
+    },
     {"time": 0.0, "conn": 1, "port": 0, "kind": "open", "detail": ""},
     {"time": 0.01, "conn": 1, "port": 0, "kind": "frame", "direction": "request", "hex": "ff01fe020000000112"},
     {"time": 0.02, "conn": 1, "port": 0, "kind": "close", "detail": ""},
@@ -64,10 +68,18 @@ ROWS = [
     ("conform/nothing-listening", "conform --target 127.0.0.1:{dead}", USAGE, "target unreachable"),
     ("conform/port-out-of-range", "conform --target 127.0.0.1:99999", USAGE, "PORT 1..65535, got '127.0.0.1:99999'"),
     ("conform/no-port", "conform --target localhost", USAGE, "expected HOST:PORT"),
-    ("conform/second-port-out-of-range", "conform --target 127.0.0.1:{dead} --second-port 0", USAGE,
-     "port number 1..65535"),
-    ("conform/unreadable-baseline", "conform --target 127.0.0.1:{dead} --baseline {tmp}/missing.txt", USAGE,
-     "missing.txt"),
+    (
+        "conform/second-port-out-of-range",
+        "conform --target 127.0.0.1:{dead} --second-port 0",
+        USAGE,
+        "port number 1..65535",
+    ),
+    (
+        "conform/unreadable-baseline",
+        "conform --target 127.0.0.1:{dead} --baseline {tmp}/missing.txt",
+        USAGE,
+        "missing.txt",
+    ),
     ("conform/no-case", "conform --target 127.0.0.1:{dead} -k no-such-case-anywhere", USAGE, "no case"),
     ("decode/bad-hex", "decode ff01zz", USAGE, "not hex"),
     ("decode/unknown-telegram", "decode ff01fe0200000001fa", USAGE, "UnknownTelegram: unknown request identifier 250"),
@@ -77,18 +89,30 @@ ROWS = [
     ("encode/unknown-telegram", "encode CMD_NO_SUCH_THING", USAGE, "no request telegram named 'CMD_NO_SUCH_THING'"),
     ("encode/out-of-range", """encode CMD_SET_MODE '{{"mode": 99}}'""", USAGE, "99 is not a valid MotionMode"),
     ("encode/missing-field", "encode CMD_SET_MODE '{{}}'", USAGE, "missing fields ['mode']"),
-    ("fuzz/nothing-listening", "fuzz --target 127.0.0.1:{dead} --duration 1 --quiet --out {tmp}/out", USAGE,
-     "nothing listening on 127.0.0.1:{dead}"),
+    (
+        "fuzz/nothing-listening",
+        "fuzz --target 127.0.0.1:{dead} --duration 1 --quiet --out {tmp}/out",
+        USAGE,
+        "nothing listening on 127.0.0.1:{dead}",
+    ),
     ("fuzz/port-out-of-range", "fuzz --target 127.0.0.1:99999 --out {tmp}/out", USAGE, "got '127.0.0.1:99999'"),
     ("fuzz/second-port-past-65535", "fuzz --target 127.0.0.1:65534 --out {tmp}/out", USAGE, "PORT+2 = 65536"),
     ("fuzz/port-0-without-launch", "fuzz --target 127.0.0.1:0 --out {tmp}/out", USAGE, "needs --launch"),
     ("fuzz/out-is-a-file", "fuzz --target 127.0.0.1:{dead} --out {tmp}/a-file", USAGE, "not a directory"),
     ("fuzz/no-target", "fuzz --out {tmp}/out", USAGE, "--target HOST:PORT is required"),
-    ("run-program/unreadable-file", "run-program {tmp}/missing.xml --target 127.0.0.1:{dead}", USAGE,
-     "No such file or directory"),
+    (
+        "run-program/unreadable-file",
+        "run-program {tmp}/missing.xml --target 127.0.0.1:{dead}",
+        USAGE,
+        "No such file or directory",
+    ),
     ("run-program/bad-xml", "run-program {tmp}/bad.xml --target 127.0.0.1:{dead}", USAGE, "bad.xml"),
-    ("run-program/nothing-listening", "run-program " + str(Path(__file__).parents[2] / "fixtures/programs/patrol.xml")
-     + " --target 127.0.0.1:{dead}", USAGE, "{dead}"),
+    (
+        "run-program/nothing-listening",
+        "run-program " + str(Path(__file__).parents[2] / "fixtures/programs/patrol.xml") + " --target 127.0.0.1:{dead}",
+        USAGE,
+        "{dead}",
+    ),
     ("run-program/port-out-of-range", "run-program {tmp}/bad.xml --target 127.0.0.1:65536", USAGE, "PORT 1..65535"),
     ("stubs/check-not-a-folder", "stubs --lang go --check {tmp}/missing", USAGE, "not a directory"),
     ("stubs/out-is-a-file", "stubs --lang go --out {tmp}/a-file", USAGE, "not a directory"),
@@ -96,8 +120,12 @@ ROWS = [
     ("completion/unknown-shell", "completion fish", USAGE, "invalid choice: 'fish'"),
     ("gui/port-out-of-range", "gui --target 127.0.0.1:99999", USAGE, "got '127.0.0.1:99999'"),
     ("gui/listen-out-of-range", "gui --target 127.0.0.1:{dead} --listen 127.0.0.1:70000", USAGE, "'127.0.0.1:70000'"),
-    ("proxy/listen-out-of-range", "proxy --listen 127.0.0.1:99999 --target 127.0.0.1:{dead}", USAGE,
-     "got '127.0.0.1:99999'"),
+    (
+        "proxy/listen-out-of-range",
+        "proxy --listen 127.0.0.1:99999 --target 127.0.0.1:{dead}",
+        USAGE,
+        "got '127.0.0.1:99999'",
+    ),
     ("proxy/no-port", "proxy --listen 127.0.0.1:0 --target localhost", USAGE, "expected HOST:PORT"),
     ("replay/unreadable-session", "replay {tmp}/missing.jsonl --target 127.0.0.1:{dead}", USAGE, "missing.jsonl"),
     ("replay/bad-json", "replay {tmp}/bad.xml --target 127.0.0.1:{dead}", USAGE, "bad.xml:1"),
@@ -109,17 +137,32 @@ ROWS = [
     ("gui/port-out-of-range", "gui --target 127.0.0.1:99999", USAGE, "PORT 1..65535, got '127.0.0.1:99999'"),
     ("gui/bad-listen", "gui --target 127.0.0.1:{dead} --listen nowhere", USAGE, "got 'nowhere'"),
     ("gui/bad-reply-timeout", "gui --target 127.0.0.1:{dead} --reply-timeout -1", USAGE, "number > 0"),
-    ("proxy/port-out-of-range", "proxy --listen 127.0.0.1:0 --target 127.0.0.1:99999", USAGE,
-     "PORT 1..65535, got '127.0.0.1:99999'"),
-    ("proxy/bad-second", "proxy --listen 127.0.0.1:0 --target 127.0.0.1:{dead} --second 70000", USAGE,
-     "got '70000'"),
-    ("proxy/unwritable-recording", "proxy --listen 127.0.0.1:0 --target 127.0.0.1:{dead} --record {tmp}/no/s.jsonl",
-     USAGE, "cannot write the recording"),
-    ("replay/unreadable-file", "replay {tmp}/missing.jsonl --target 127.0.0.1:{dead}", USAGE,
-     "No such file or directory"),
+    (
+        "proxy/port-out-of-range",
+        "proxy --listen 127.0.0.1:0 --target 127.0.0.1:99999",
+        USAGE,
+        "PORT 1..65535, got '127.0.0.1:99999'",
+    ),
+    ("proxy/bad-second", "proxy --listen 127.0.0.1:0 --target 127.0.0.1:{dead} --second 70000", USAGE, "got '70000'"),
+    (
+        "proxy/unwritable-recording",
+        "proxy --listen 127.0.0.1:0 --target 127.0.0.1:{dead} --record {tmp}/no/s.jsonl",
+        USAGE,
+        "cannot write the recording",
+    ),
+    (
+        "replay/unreadable-file",
+        "replay {tmp}/missing.jsonl --target 127.0.0.1:{dead}",
+        USAGE,
+        "No such file or directory",
+    ),
     ("replay/bad-json", "replay {tmp}/bad.jsonl --target 127.0.0.1:{dead}", USAGE, "bad.jsonl:1"),
-    ("replay/nothing-listening", "replay {tmp}/session.jsonl --target 127.0.0.1:{dead} --reply-timeout 2", USAGE,
-     "{dead}"),
+    (
+        "replay/nothing-listening",
+        "replay {tmp}/session.jsonl --target 127.0.0.1:{dead} --reply-timeout 2",
+        USAGE,
+        "{dead}",
+    ),
     ("replay/port-out-of-range", "replay {tmp}/session.jsonl --target 127.0.0.1:99999", USAGE, "PORT 1..65535"),
     ("dissector/unwritable", "dissector --out {tmp}/no/such/pltf.lua", USAGE, "cannot write"),
     ("dissector/check-missing", "dissector --check {tmp}/missing.lua", USAGE, "no such file"),
@@ -128,8 +171,12 @@ SERVE_ROWS = [
     ("serve/port-in-use", "serve --ports {busy} --data-dir {tmp}/d --no-hardware", USAGE, "cannot listen"),
     ("serve/data-dir-is-a-file", "serve --ports 0 --data-dir {tmp}/a-file", USAGE, "data dir"),
     ("gui/listen-port-in-use", "gui --target 127.0.0.1:1 --listen 127.0.0.1:{busy}", USAGE, "cannot listen"),
-    ("proxy/listen-port-in-use", "proxy --listen 127.0.0.1:{busy} --target 127.0.0.1:1 --quiet", USAGE,
-     "cannot listen"),
+    (
+        "proxy/listen-port-in-use",
+        "proxy --listen 127.0.0.1:{busy} --target 127.0.0.1:1 --quiet",
+        USAGE,
+        "cannot listen",
+    ),
 ]
 
 
@@ -150,8 +197,16 @@ def _check(command: str, status: int, want: str, got: int, err: str, log_before:
 
 
 @pytest.mark.parametrize(("row", "template", "status", "want"), ROWS, ids=[r[0] for r in ROWS])
-def test_error_paths(row: str, template: str, status: int, want: str, dead_port: int, files: Path,
-                     capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch) -> None:
+def test_error_paths(
+    row: str,
+    template: str,
+    status: int,
+    want: str,
+    dead_port: int,
+    files: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
     monkeypatch.chdir(files)
     capsys.readouterr()
     argv = _argv(template, dead_port, 0, files)
@@ -165,8 +220,14 @@ def test_error_paths(row: str, template: str, status: int, want: str, dead_port:
 
 @pytest.mark.parametrize(("row", "template", "status", "want"), SERVE_ROWS, ids=[r[0] for r in SERVE_ROWS])
 def test_server_error_paths(row: str, template: str, status: int, want: str, busy_port: int, files: Path) -> None:
-    done = subprocess.run([str(PLTF), *_argv(template, 0, busy_port, files)], cwd=files, capture_output=True,
-                          text=True, timeout=120, check=False)
+    done = subprocess.run(
+        [str(PLTF), *_argv(template, 0, busy_port, files)],
+        cwd=files,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
     _check(row.partition("/")[0], status, want, done.returncode, done.stderr, log_before=True)
 
 
@@ -178,10 +239,26 @@ def test_the_installed_script_prints_the_same_line(argv: list[str], dead_port: i
     assert list(tmp_path.iterdir()) == []  # ./fuzz-findings/ is not created for a refused --target
 
 
-def test_a_dead_fuzz_target_is_named_by_its_port_not_the_probes(dead_port: int, tmp_path: Path,
-                                                                 capsys: pytest.CaptureFixture[str]) -> None:
-    assert main(["fuzz", "--target", f"127.0.0.1:{dead_port}", "--second-port", str(dead_port), "--duration", "1",
-                 "--quiet", "--out", str(tmp_path / "out")]) == USAGE
+def test_a_dead_fuzz_target_is_named_by_its_port_not_the_probes(
+    dead_port: int, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert (
+        main(
+            [
+                "fuzz",
+                "--target",
+                f"127.0.0.1:{dead_port}",
+                "--second-port",
+                str(dead_port),
+                "--duration",
+                "1",
+                "--quiet",
+                "--out",
+                str(tmp_path / "out"),
+            ]
+        )
+        == USAGE
+    )
     err = capsys.readouterr().err
     assert f"nothing listening on 127.0.0.1:{dead_port}" in err
 

@@ -16,18 +16,41 @@ from pltf.cli.main import COMMANDS, EPILOG, main, make_parser
 
 PLTF = Path(sys.executable).with_name("pltf")
 SUBCOMMAND_MODULES = {module for module, _ in COMMANDS.values()}
-HEAVY = {"rich", "numpy", "scipy", "pymunk", "can", "cantools", "lxml", "jsonschema", "yaml", "asyncio",
-         "pltf.reference_server", "pltf.conformance_tests", "pltf.fuzz", "pltf.client", "pltf.stubgen"}
+HEAVY = {
+    "rich",
+    "numpy",
+    "scipy",
+    "pymunk",
+    "can",
+    "cantools",
+    "lxml",
+    "jsonschema",
+    "yaml",
+    "asyncio",
+    "pltf.reference_server",
+    "pltf.conformance_tests",
+    "pltf.fuzz",
+    "pltf.client",
+    "pltf.stubgen",
+}
 
 
 def _modules_after(argv: list[str], stdin: str = "") -> set[str]:
     """sys.modules after ``pltf ARGV`` ran in a fresh interpreter (its output discarded)."""
-    code = ("import contextlib, io, json, sys\nfrom pltf.cli.main import main\n"
-            "with contextlib.redirect_stdout(io.StringIO()):\n"
-            "    try:\n        main(json.loads(sys.argv[1]))\n    except SystemExit:\n        pass\n"
-            "print(json.dumps(sorted(sys.modules)))")
-    done = subprocess.run([sys.executable, "-c", code, json.dumps(argv)], input=stdin, capture_output=True,
-                          text=True, timeout=120, check=True)
+    code = (
+        "import contextlib, io, json, sys\nfrom pltf.cli.main import main\n"
+        "with contextlib.redirect_stdout(io.StringIO()):\n"
+        "    try:\n        main(json.loads(sys.argv[1]))\n    except SystemExit:\n        pass\n"
+        "print(json.dumps(sorted(sys.modules)))"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", code, json.dumps(argv)],
+        input=stdin,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=True,
+    )
     return set(json.loads(done.stdout.splitlines()[-1]))
 
 
@@ -41,8 +64,11 @@ def test_help_imports_no_subcommand_module() -> None:
     assert _under(modules, HEAVY | {"pltf.spec"}) == set()
 
 
-@pytest.mark.parametrize("argv", [["decode", "ff01fe02000000050f00000003"], ["encode", "CMD_SET_MODE", '{"mode": 3}'],
-                                  ["decode", "--help"]], ids=["decode", "encode", "decode-help"])
+@pytest.mark.parametrize(
+    "argv",
+    [["decode", "ff01fe02000000050f00000003"], ["encode", "CMD_SET_MODE", '{"mode": 3}'], ["decode", "--help"]],
+    ids=["decode", "encode", "decode-help"],
+)
 def test_decode_and_encode_import_only_the_codec(argv: list[str]) -> None:
     modules = _modules_after(argv)
     assert modules & SUBCOMMAND_MODULES == {"pltf.cli.codec_cmds"}
@@ -76,8 +102,9 @@ def test_version(capsys: pytest.CaptureFixture[str]) -> None:
     assert capsys.readouterr().out.startswith("pltf 0.")
 
 
-def test_a_bug_is_one_line_with_status_3_and_its_traceback_on_request(monkeypatch: pytest.MonkeyPatch,
-                                                                      capsys: pytest.CaptureFixture[str]) -> None:
+def test_a_bug_is_one_line_with_status_3_and_its_traceback_on_request(
+    monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
     def broken(args: argparse.Namespace) -> int:
         raise ZeroDivisionError("division by zero")
 
@@ -93,8 +120,9 @@ def test_a_bug_is_one_line_with_status_3_and_its_traceback_on_request(monkeypatc
 
 def test_a_reader_that_leaves_early_is_no_error(tmp_path: Path) -> None:
     frames = "ff01fe02000000050f00000003\n" * 20_000  # ~1.5 MB of JSON: more than a pipe holds
-    with subprocess.Popen([str(PLTF), "decode", "-"], stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                          stderr=subprocess.PIPE, text=True) as proc:
+    with subprocess.Popen(
+        [str(PLTF), "decode", "-"], stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    ) as proc:
         assert proc.stdin is not None and proc.stdout is not None and proc.stderr is not None
         proc.stdin.write(frames)
         proc.stdin.close()

@@ -25,9 +25,20 @@ GOOD = [
     ("platform.local:65535", 1, ("platform.local", 65535)),
     ("127.0.0.1:0", 0, ("127.0.0.1", 0)),
 ]
-BAD = [("127.0.0.1:99999", 1), ("127.0.0.1:65536", 0), ("127.0.0.1:0", 1), ("127.0.0.1", 1), ("127.0.0.1:", 1),
-       (":10000", 1), ("::1:10000", 1), ("[]:10000", 1), ("host:-1", 0), ("host:1e3", 1), ("host:\u0661\u0662", 1),
-       ("", 1)]
+BAD = [
+    ("127.0.0.1:99999", 1),
+    ("127.0.0.1:65536", 0),
+    ("127.0.0.1:0", 1),
+    ("127.0.0.1", 1),
+    ("127.0.0.1:", 1),
+    (":10000", 1),
+    ("::1:10000", 1),
+    ("[]:10000", 1),
+    ("host:-1", 0),
+    ("host:1e3", 1),
+    ("host:\u0661\u0662", 1),
+    ("", 1),
+]
 
 
 @pytest.mark.parametrize(("text", "lowest", "want"), GOOD)
@@ -42,9 +53,21 @@ def test_host_port_refused_with_the_text_in_the_message(text: str, lowest: int) 
     assert repr(text) in str(info.value)
 
 
-@pytest.mark.parametrize(("func", "text"), [(port, "0"), (port, "65536"), (port, "http"), (positive, "0"),
-                                            (positive, "-1"), (positive, "inf"), (positive, "nan"), (positive, "x"),
-                                            (count, "-1"), (count, "1.5")])
+@pytest.mark.parametrize(
+    ("func", "text"),
+    [
+        (port, "0"),
+        (port, "65536"),
+        (port, "http"),
+        (positive, "0"),
+        (positive, "-1"),
+        (positive, "inf"),
+        (positive, "nan"),
+        (positive, "x"),
+        (count, "-1"),
+        (count, "1.5"),
+    ],
+)
 def test_numbers_refused(func: object, text: str) -> None:
     with pytest.raises(argparse.ArgumentTypeError, match=repr(text)):
         func(text)  # type: ignore[operator]
@@ -56,8 +79,13 @@ def test_numbers_accepted() -> None:
 
 def test_exit_status_epilog() -> None:
     text = exit_status(ok="fine", failed="findings", usage="bad input")
-    assert text.splitlines() == ["exit status:", "  0    fine", "  1    findings", "  2    bad input",
-                                 "  130  interrupted (Ctrl-C)"]
+    assert text.splitlines() == [
+        "exit status:",
+        "  0    fine",
+        "  1    findings",
+        "  2    bad input",
+        "  130  interrupted (Ctrl-C)",
+    ]
     assert "  1 " not in exit_status(ok="fine", usage="bad input")
 
 

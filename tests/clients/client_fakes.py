@@ -166,18 +166,30 @@ class FakePlatform:
             self.target, self.countdown, self._taken_up = (x, y, a), self.arrive_after, False
         elif name == "CMD_GET_POSITION":
             x, y, a = self.pose
-            return build("reply", "CMD_GET_POSITION", x=x, y=y, angle=math.radians(a / 1000), vel_trans=0.0,
-                         vel_rot=0.0)  # fmt: skip
+            return build(
+                "reply", "CMD_GET_POSITION", x=x, y=y, angle=math.radians(a / 1000), vel_trans=0.0, vel_rot=0.0
+            )
         elif name == "CMD_GET_STATUS":
             self._control_period()
             reported = NOT_INIT if self.state == "connected" else self.state
             x, y, a = self.pose
             return status_telegram(
-                est_x=x, est_y=y, est_angle=a, cmd_x=x, cmd_y=y, cmd_angle=a, operation_state=int(reported),
-                motion_mode=int(self.mode), target_reached=int(self.target_reached), planner_state=int(self.planner),
-                emergency_state=int(self.emergency), initialized=int(reported != NOT_INIT), scan=((10, -20), (30, 40)),
-                ir_active=(0, 1, 0, 1), timestamp=self.stamp,
-            )  # fmt: skip
+                est_x=x,
+                est_y=y,
+                est_angle=a,
+                cmd_x=x,
+                cmd_y=y,
+                cmd_angle=a,
+                operation_state=int(reported),
+                motion_mode=int(self.mode),
+                target_reached=int(self.target_reached),
+                planner_state=int(self.planner),
+                emergency_state=int(self.emergency),
+                initialized=int(reported != NOT_INIT),
+                scan=((10, -20), (30, 40)),
+                ir_active=(0, 1, 0, 1),
+                timestamp=self.stamp,
+            )
         return None
 
     def _control_period(self) -> None:
@@ -227,8 +239,20 @@ class LiveServer:
         self.log_path = log_path
         self.time_scale = time_scale
         self._log = log_path.open("wb")
-        cmd = [sys.executable, "-m", "pltf.reference_server", "--ports", "0,0", "--data-dir", str(data_dir),
-               "--time-scale", f"{time_scale:g}", "--seed", "1", *args]  # fmt: skip
+        cmd = [
+            sys.executable,
+            "-m",
+            "pltf.reference_server",
+            "--ports",
+            "0,0",
+            "--data-dir",
+            str(data_dir),
+            "--time-scale",
+            f"{time_scale:g}",
+            "--seed",
+            "1",
+            *args,
+        ]
         self.proc = subprocess.Popen(cmd, cwd=REPO, stdout=self._log, stderr=subprocess.STDOUT)
         deadline = time.monotonic() + 30
         while len(ports := STARTED.findall(self.log())) < 2 or "system state" not in self.log():

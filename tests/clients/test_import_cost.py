@@ -11,9 +11,27 @@ import json
 import subprocess
 import sys
 
-NOT_FOR_THE_CLIENT = {"jsonschema", "asyncio", "yaml", "numpy", "scipy", "pymunk", "cantools", "lxml", "xmlschema",
-                      "rich", "can", "hypothesis", "pltf.reference_server", "pltf.conformance_tests", "pltf.fuzz",
-                      "pltf.spec.parameters", "pltf.spec.documents", "pltf.spec.errata", "pltf.spec.check"}
+NOT_FOR_THE_CLIENT = {
+    "jsonschema",
+    "asyncio",
+    "yaml",
+    "numpy",
+    "scipy",
+    "pymunk",
+    "cantools",
+    "lxml",
+    "xmlschema",
+    "rich",
+    "can",
+    "hypothesis",
+    "pltf.reference_server",
+    "pltf.conformance_tests",
+    "pltf.fuzz",
+    "pltf.spec.parameters",
+    "pltf.spec.documents",
+    "pltf.spec.errata",
+    "pltf.spec.check",
+}
 
 
 def _modules_after(code: str) -> set[str]:
@@ -32,9 +50,11 @@ def test_import_pltf_client_loads_neither_jsonschema_nor_asyncio_nor_the_toolkit
 
 
 def test_a_blocking_session_needs_none_of_them_either() -> None:
-    code = ("from pltf.client import PlatformClient, Status, MotionMode\n"
-            "from pltf.spec.codec import REQUESTS, encode, decode_frame\n"
-            "decode_frame(encode(REQUESTS.CMD_SET_MODE(mode=MotionMode.MODE_MOTION_VEL)), 'request')")
+    code = (
+        "from pltf.client import PlatformClient, Status, MotionMode\n"
+        "from pltf.spec.codec import REQUESTS, encode, decode_frame\n"
+        "decode_frame(encode(REQUESTS.CMD_SET_MODE(mode=MotionMode.MODE_MOTION_VEL)), 'request')"
+    )
     assert _loaded(_modules_after(code), NOT_FOR_THE_CLIENT) == set()
 
 

@@ -50,8 +50,15 @@ def _missing(lang: str) -> list[str]:
 
 def _env() -> dict[str, str]:
     env = dict(os.environ)
-    env.update(PYTHON=sys.executable, GOTOOLCHAIN="local", GOFLAGS="-mod=mod", CARGO_TERM_COLOR="never",
-               npm_config_update_notifier="false", npm_config_fund="false", npm_config_audit="false")
+    env.update(
+        PYTHON=sys.executable,
+        GOTOOLCHAIN="local",
+        GOFLAGS="-mod=mod",
+        CARGO_TERM_COLOR="never",
+        npm_config_update_notifier="false",
+        npm_config_fund="false",
+        npm_config_audit="false",
+    )
     return env
 
 
@@ -186,8 +193,11 @@ class FakeServer:
         names: list[str] = []
         self.seen.append(names)
         decoder = TelegramDecoder("request")
-        reply = encode(REPLIES.CMD_GET_POSITION(x=POSITION["x"], y=POSITION["y"], angle=POSITION["angle"],
-                                                vel_trans=0.0, vel_rot=0.0))
+        reply = encode(
+            REPLIES.CMD_GET_POSITION(
+                x=POSITION["x"], y=POSITION["y"], angle=POSITION["angle"], vel_trans=0.0, vel_rot=0.0
+            )
+        )
         try:
             while data := await reader.read(65536):
                 decoder.receive_data(data)
@@ -259,8 +269,9 @@ def _position_by_python_codec(host: str, port: int) -> dict[str, object]:
 
 
 @pytest.mark.parametrize("lang", LANGS)
-def test_smoke_against_live_reference_server(lang: str, stub_builds: dict[str, Future[Path]],
-                                             live_server: tuple[str, int]) -> None:
+def test_smoke_against_live_reference_server(
+    lang: str, stub_builds: dict[str, Future[Path]], live_server: tuple[str, int]
+) -> None:
     """The same smoke run against the reference server (issue 9 "against a live reference server")."""
     out = _built(lang, stub_builds)
     host, port = live_server
@@ -277,8 +288,13 @@ def test_runner_reports_failures(lang: str, stub_builds: dict[str, Future[Path]]
     """A runner that cannot fail proves nothing: a wrong dump, a wrong error class and a wrong name all fail."""
     out = _built(lang, stub_builds)
     good = "V request CMD_SET_MODE ff01fe02000000050f00000003 mode=3"
-    lines = [good, good.replace("mode=3", "mode=4"), "E request bad ff01fe0300000001 Truncated",
-             good.replace("CMD_SET_MODE", "CMD_START"), "E reply cut ff01fe02000000 Truncated"]
+    lines = [
+        good,
+        good.replace("mode=3", "mode=4"),
+        "E request bad ff01fe0300000001 Truncated",
+        good.replace("CMD_SET_MODE", "CMD_START"),
+        "E reply cut ff01fe02000000 Truncated",
+    ]
     path = tmp_path / "broken.txt"
     path.write_text("\n".join(lines) + "\n", encoding="ascii")
     proc = _run(["sh", "vectors.sh", str(path)], out, 300)
@@ -302,6 +318,9 @@ def test_rust_is_rustfmt_clean(tmp_path: Path) -> None:
     if shutil.which("rustfmt") is None:
         pytest.skip("TOOLCHAIN MISSING for rust: rustfmt not on PATH")
     generate("rust", tmp_path)
-    proc = _run(["rustfmt", "--check", "--edition", "2021", "src/lib.rs", "src/bin/smoke.rs", "src/bin/vectors.rs"],
-                tmp_path, 60)
+    proc = _run(
+        ["rustfmt", "--check", "--edition", "2021", "src/lib.rs", "src/bin/smoke.rs", "src/bin/vectors.rs"],
+        tmp_path,
+        60,
+    )
     assert proc.returncode == 0, _tail(proc)

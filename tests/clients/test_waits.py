@@ -21,8 +21,14 @@ STANDBY = PlannerState.PLANNER_STANDBY
 
 
 def status(stamp: int, planner: PlannerState = STANDBY, reached: bool = False, **more: Any) -> Status:
-    fields = {"operation_state": int(RUNNING), "motion_mode": int(AUTOMATIC), "timestamp": stamp,
-              "planner_state": int(planner), "target_reached": int(reached), **more}  # fmt: skip
+    fields = {
+        "operation_state": int(RUNNING),
+        "motion_mode": int(AUTOMATIC),
+        "timestamp": stamp,
+        "planner_state": int(planner),
+        "target_reached": int(reached),
+        **more,
+    }
     return Status.from_telegram(status_telegram(**fields))
 
 

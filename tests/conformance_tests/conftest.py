@@ -33,5 +33,6 @@ def tiny() -> Iterator[TinyTarget]:
 
 @pytest.fixture
 def tiny_config(tiny: TinyTarget) -> Config:
-    return Config("127.0.0.1", tiny.ports[0], tiny.ports[1], time_scale=10.0, reply_timeout=1.0,
-                  connect_window=1.0, min_wall=0.05)
+    return Config(
+        "127.0.0.1", tiny.ports[0], tiny.ports[1], time_scale=10.0, reply_timeout=1.0, connect_window=1.0, min_wall=0.05
+    )

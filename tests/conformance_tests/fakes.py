@@ -109,8 +109,11 @@ class TinyTarget(ScriptedServer):
         with self.lock:
             self.commands.append(t.NAME)
             if t.NAME == "CMD_GET_STATUS":
-                return self.status.replace(operation_state=chart.REPORTED[self.state],
-                                           initialized=chart.INITIALIZED[self.state], motion_mode=self.mode)
+                return self.status.replace(
+                    operation_state=chart.REPORTED[self.state],
+                    initialized=chart.INITIALIZED[self.state],
+                    motion_mode=self.mode,
+                )
             if t.NAME == "CMD_GET_POSITION":
                 return REPLIES.CMD_GET_POSITION(x=0, y=0, angle=0.0, vel_trans=0.0, vel_rot=0.0)
             if t.NAME in chart.CHART_COMMANDS and chart.allowed(self.state, t.NAME):
@@ -181,9 +184,14 @@ class HardwareTarget(TinyTarget):
     def _extra(self, t: Any) -> Any:
         name = t.NAME
         if name == "CMD_GET_STATUS":
-            return self.status.replace(operation_state=chart.REPORTED[self.state], motion_mode=self.mode,
-                                       initialized=chart.INITIALIZED[self.state], io_digital_out=self.dout,
-                                       us_distance=tuple(self.us), head_position=self.head)
+            return self.status.replace(
+                operation_state=chart.REPORTED[self.state],
+                motion_mode=self.mode,
+                initialized=chart.INITIALIZED[self.state],
+                io_digital_out=self.dout,
+                us_distance=tuple(self.us),
+                head_position=self.head,
+            )
         if name == "CMD_ADD_CAN_LISTENING_ID":
             self.listening.add(t.can_id)
         elif name == "CMD_REMOVE_CAN_LISTENING_ID" and "can-ignores-remove" not in self.broken:
@@ -209,12 +217,21 @@ class HardwareTarget(TinyTarget):
         elif name == "CMD_GET_PLTF_PARAM":
             row = self.params.parameter(t.key)
             lo, hi = row.wire_bounds()
-            return REPLIES.CMD_GET_PLTF_PARAM(key=t.key, value=self.params.get_text(t.key), category=row.category,
-                                              data_type=row.type, minimum=lo, maximum=hi)
+            return REPLIES.CMD_GET_PLTF_PARAM(
+                key=t.key,
+                value=self.params.get_text(t.key),
+                category=row.category,
+                data_type=row.type,
+                minimum=lo,
+                maximum=hi,
+            )
         elif name == "CMD_GET_PLTF_PARAM_VEC":
-            return REPLIES.CMD_GET_PLTF_PARAM_VEC(parameters=tuple(
-                (row.name, self.params.get_text(row.name), row.category, row.type, *row.wire_bounds())
-                for row, _ in self.params.items()))
+            return REPLIES.CMD_GET_PLTF_PARAM_VEC(
+                parameters=tuple(
+                    (row.name, self.params.get_text(row.name), row.category, row.type, *row.wire_bounds())
+                    for row, _ in self.params.items()
+                )
+            )
         elif name in ("CMD_SET_MAP", "CMD_SET_ROADMAP", "CMD_SET_PROGRAM"):
             kind = name.split("_", 2)[2].lower()
             self.docs[kind] = (t.xml, getattr(t, "name", ""))

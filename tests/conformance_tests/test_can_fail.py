@@ -11,10 +11,17 @@ from pltf.conformance_tests.mutants.run import Bench
 
 RUNNABLE = [c for c in select(load_all().values(), tier=Tier.STANDARD) if c.id not in NOT_ON_REFERENCE]
 # one case of every group, and the cases whose killer is not a generic fault
-SAMPLE_IDS = list(dict.fromkeys(
-    [next(c.id for c in RUNNABLE if c.group == g) for g in dict.fromkeys(c.group for c in RUNNABLE)]
-    + ["6.3/CMD_START/in-breaked", "6.3/CMD_SET_PLTF_PARAM/malformed-refused",
-       "6.2/framing/half-close-partial", "6.3/CMD_MOVE_VEL/only-in-running"]))
+SAMPLE_IDS = list(
+    dict.fromkeys(
+        [next(c.id for c in RUNNABLE if c.group == g) for g in dict.fromkeys(c.group for c in RUNNABLE)]
+        + [
+            "6.3/CMD_START/in-breaked",
+            "6.3/CMD_SET_PLTF_PARAM/malformed-refused",
+            "6.2/framing/half-close-partial",
+            "6.3/CMD_MOVE_VEL/only-in-running",
+        ]
+    )
+)
 
 
 def test_every_runnable_case_has_candidates() -> None:

@@ -65,15 +65,18 @@ def test_every_mutant_names_a_case_of_the_catalogue() -> None:
         assert (m.wire is None) != (m.patch is None), m.id
 
 
-@pytest.mark.parametrize(("expr", "case_id", "hit"), [
-    ("framing", "6.2/framing/coalesced", True),
-    ("framing and not coalesced", "6.2/framing/coalesced", False),
-    ("CMD_SET_MODE or CMD_START", "6.3/CMD_START/in-ready", True),
-    ("6.3/CMD_SET_*/every-state", "6.3/CMD_SET_MAP/every-state", True),
-    ("6.3/CMD_SET_*/every-state", "6.3/CMD_SET_MAP/round-trip", False),
-    ("moves_platform", "4.3/MODE_MOTION_AUTOMATIC/move-abs", True),
-    ("(should or may) and 6.2", "6.2/framing/bad-header", True),
-])
+@pytest.mark.parametrize(
+    ("expr", "case_id", "hit"),
+    [
+        ("framing", "6.2/framing/coalesced", True),
+        ("framing and not coalesced", "6.2/framing/coalesced", False),
+        ("CMD_SET_MODE or CMD_START", "6.3/CMD_START/in-ready", True),
+        ("6.3/CMD_SET_*/every-state", "6.3/CMD_SET_MAP/every-state", True),
+        ("6.3/CMD_SET_*/every-state", "6.3/CMD_SET_MAP/round-trip", False),
+        ("moves_platform", "4.3/MODE_MOTION_AUTOMATIC/move-abs", True),
+        ("(should or may) and 6.2", "6.2/framing/bad-header", True),
+    ],
+)
 def test_keyword_selection(expr: str, case_id: str, hit: bool) -> None:
     assert matches(CASES[case_id], expr) is hit
 

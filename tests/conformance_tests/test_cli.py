@@ -14,14 +14,35 @@ from tests.conformance_tests.fakes import ScriptedServer
 
 
 def _args(server: launch.Launched, *extra: str) -> list[str]:
-    return ["conform", "--target", f"127.0.0.1:{server.ports[0]}", "--second-port", str(server.ports[1]),
-            "--time-scale", "10", "--target-is-simulator", *extra]
+    return [
+        "conform",
+        "--target",
+        f"127.0.0.1:{server.ports[0]}",
+        "--second-port",
+        str(server.ports[1]),
+        "--time-scale",
+        "10",
+        "--target-is-simulator",
+        *extra,
+    ]
 
 
-def test_passing_selection_exits_0_and_writes_reports(reference: launch.Launched, tmp_path: Path,
-                                                      capsys: pytest.CaptureFixture[str]) -> None:
-    code = main(_args(reference, "-k", "6.3/CMD_SET_MODE/* or 6.2/framing/coalesced", "--json",
-                      str(tmp_path / "r.json"), "--junit", str(tmp_path / "r.xml"), "--html", str(tmp_path / "r.html")))
+def test_passing_selection_exits_0_and_writes_reports(
+    reference: launch.Launched, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    code = main(
+        _args(
+            reference,
+            "-k",
+            "6.3/CMD_SET_MODE/* or 6.2/framing/coalesced",
+            "--json",
+            str(tmp_path / "r.json"),
+            "--junit",
+            str(tmp_path / "r.xml"),
+            "--html",
+            str(tmp_path / "r.html"),
+        )
+    )
     assert code == 0
     out = capsys.readouterr().out
     assert "Results by guide section" in out and "exit status 0" in out
@@ -43,8 +64,9 @@ def test_coverage_below_the_threshold_exits_1(reference: launch.Launched) -> Non
 
 def test_a_failing_case_exits_1(tmp_path: Path) -> None:
     with launch.reference(time_scale=10.0, mutant="set_mode_anywhere") as broken:
-        assert main(_args(broken, "-k", "6.3/CMD_SET_MODE/in-running", "--write-baseline",
-                          str(tmp_path / "b.txt"))) == 1
+        assert (
+            main(_args(broken, "-k", "6.3/CMD_SET_MODE/in-running", "--write-baseline", str(tmp_path / "b.txt"))) == 1
+        )
     assert "6.3/CMD_SET_MODE/in-running  FAIL" in (tmp_path / "b.txt").read_text()
 
 
@@ -68,10 +90,21 @@ def test_list(capsys: pytest.CaptureFixture[str]) -> None:
     assert "6.2/framing/header-and-length" in out and "cases" in out
 
 
-def test_differential_and_stateful_from_the_command_line(reference: launch.Launched, tmp_path: Path,
-                                                         capsys: pytest.CaptureFixture[str]) -> None:
-    code = main(_args(reference, "-k", "6.1/ports/reconnect", "--differential", "--stateful", "5",
-                      "--stateful-out", str(tmp_path / "st")))
+def test_differential_and_stateful_from_the_command_line(
+    reference: launch.Launched, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    code = main(
+        _args(
+            reference,
+            "-k",
+            "6.1/ports/reconnect",
+            "--differential",
+            "--stateful",
+            "5",
+            "--stateful-out",
+            str(tmp_path / "st"),
+        )
+    )
     out = capsys.readouterr().out
     assert code == 0, out
     assert "differential: the target answered like the reference server" in out
@@ -79,10 +112,23 @@ def test_differential_and_stateful_from_the_command_line(reference: launch.Launc
 
 
 def test_a_target_that_hangs_up_during_the_differential_run_fails_it_without_a_traceback(
-        capsys: pytest.CaptureFixture[str]) -> None:
+    capsys: pytest.CaptureFixture[str],
+) -> None:
     with ScriptedServer(lambda conn: None, ports=2) as target:  # accepts, then closes every connection
-        code = main(["conform", "--target", f"127.0.0.1:{target.ports[0]}", "--second-port", str(target.ports[1]),
-                     "--time-scale", "10", "-k", "6.1/ports/reconnect", "--differential"])
+        code = main(
+            [
+                "conform",
+                "--target",
+                f"127.0.0.1:{target.ports[0]}",
+                "--second-port",
+                str(target.ports[1]),
+                "--time-scale",
+                "10",
+                "-k",
+                "6.1/ports/reconnect",
+                "--differential",
+            ]
+        )
     out = capsys.readouterr()
     assert code == 1
     assert "differential run aborted: FAIL" in out.out

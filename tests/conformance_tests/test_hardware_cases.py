@@ -29,8 +29,16 @@ FAULTS = {
 
 def run(case_id: str, broken: frozenset[str] = frozenset()) -> CaseResult:
     with HardwareTarget(broken) as target:
-        config = Config("127.0.0.1", target.ports[0], target.ports[1], time_scale=10.0, simulator=True, reruns=0,
-                        reply_timeout=1.0, connect_window=1.0)
+        config = Config(
+            "127.0.0.1",
+            target.ports[0],
+            target.ports[1],
+            time_scale=10.0,
+            simulator=True,
+            reruns=0,
+            reply_timeout=1.0,
+            connect_window=1.0,
+        )
         (result,) = Runner(config, [load_all()[case_id]]).run().results
         return result
 

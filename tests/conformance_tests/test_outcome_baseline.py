@@ -21,13 +21,16 @@ def test_levels_map_to_verdicts() -> None:
     assert worst(Verdict.PASS, Verdict.NA, Verdict.FAIL, Verdict.NON_STRICT) is Verdict.FAIL
 
 
-@pytest.mark.parametrize(("erratum", "reading", "strict", "original"), [
-    ("E-REP-009", 0, Verdict.FAIL, Verdict.NON_STRICT),  # MUST, alternative accepted by the original profile
-    ("E-WIRE-001", 1, Verdict.FAIL, Verdict.FAIL),  # MUST, alternative rejected
-    ("E-WIRE-007", 0, Verdict.NON_STRICT, Verdict.NON_STRICT),  # SHOULD
-    ("E-REP-010", 0, Verdict.PASS, Verdict.NON_STRICT),  # MAY: informative under strict
-    ("E-WIRE-006", None, Verdict.NON_STRICT, Verdict.NON_STRICT),  # a reading the register does not list
-])
+@pytest.mark.parametrize(
+    ("erratum", "reading", "strict", "original"),
+    [
+        ("E-REP-009", 0, Verdict.FAIL, Verdict.NON_STRICT),  # MUST, alternative accepted by the original profile
+        ("E-WIRE-001", 1, Verdict.FAIL, Verdict.FAIL),  # MUST, alternative rejected
+        ("E-WIRE-007", 0, Verdict.NON_STRICT, Verdict.NON_STRICT),  # SHOULD
+        ("E-REP-010", 0, Verdict.PASS, Verdict.NON_STRICT),  # MAY: informative under strict
+        ("E-WIRE-006", None, Verdict.NON_STRICT, Verdict.NON_STRICT),  # a reading the register does not list
+    ],
+)
 def test_deviations_by_profile(erratum: str, reading: int | None, strict: Verdict, original: Verdict) -> None:
     dev = Deviation(erratum, reading, "observed")
     assert deviation_verdict(dev, "strict") is strict

@@ -46,8 +46,17 @@ def config(target: TinyTarget, **kw: Any) -> Config:
 
 
 def cases(n: int, func: Callable[[CaseContext], None] = lambda ctx: ctx.status()) -> list[Case]:
-    return [Case(id=f"6.1/pace/c{i:02}", func=func, requirement="a test case of the pace", level=Level.MUST,
-                 tier=Tier.SMOKE, group="state") for i in range(n)]
+    return [
+        Case(
+            id=f"6.1/pace/c{i:02}",
+            func=func,
+            requirement="a test case of the pace",
+            level=Level.MUST,
+            tier=Tier.SMOKE,
+            group="state",
+        )
+        for i in range(n)
+    ]
 
 
 def run(cfg: Config, chosen: list[Case]) -> RunResult:
@@ -82,8 +91,8 @@ def test_a_target_that_stops_answering_ends_the_run_soon_and_says_why(slow: Slow
     result = run(config(slow), chosen)
     verdicts = [r.verdict for r in result.results]
     assert verdicts[0] is Verdict.PASS
-    assert verdicts[1:1 + pace.STUCK_AFTER] == [Verdict.FAIL] * pace.STUCK_AFTER  # the target's own failures
-    rest = result.results[1 + pace.STUCK_AFTER:]
+    assert verdicts[1 : 1 + pace.STUCK_AFTER] == [Verdict.FAIL] * pace.STUCK_AFTER  # the target's own failures
+    rest = result.results[1 + pace.STUCK_AFTER :]
     assert rest and all(r.verdict is Verdict.INCONCLUSIVE for r in rest)
     assert all(r.message.startswith("not run: the target stopped answering at 6.1/pace/c01") for r in rest)
     assert result.exit_code == 1
@@ -111,8 +120,8 @@ def test_cases_run_again_when_the_target_answers_again(slow: SlowTarget, monkeyp
     verdicts = [r.verdict for r in result.results]
     assert Verdict.INCONCLUSIVE in verdicts and verdicts[-1] is Verdict.PASS, verdicts
     back = verdicts.index(Verdict.PASS, 1)
-    assert verdicts[1:1 + pace.STUCK_AFTER] == [Verdict.FAIL] * pace.STUCK_AFTER
-    assert all(v is Verdict.INCONCLUSIVE for v in verdicts[1 + pace.STUCK_AFTER:back])
+    assert verdicts[1 : 1 + pace.STUCK_AFTER] == [Verdict.FAIL] * pace.STUCK_AFTER
+    assert all(v is Verdict.INCONCLUSIVE for v in verdicts[1 + pace.STUCK_AFTER : back])
     assert all(v is Verdict.PASS for v in verdicts[back:])
 
 

@@ -11,8 +11,22 @@ from pltf.zoo import launch
 
 def _pytest(tmp_path: Path, port: int, *args: str) -> subprocess.CompletedProcess[str]:
     (tmp_path / "pytest.ini").write_text("[pytest]\n")
-    cmd = [sys.executable, "-m", "pytest", "-p", "pltf.conformance_tests.pytest_plugin", "-p", "no:cacheprovider",
-           "--pltf-target", f"127.0.0.1:{port}", "--pltf-time-scale", "10", "--pltf-simulator", "-q", *args]
+    cmd = [
+        sys.executable,
+        "-m",
+        "pytest",
+        "-p",
+        "pltf.conformance_tests.pytest_plugin",
+        "-p",
+        "no:cacheprovider",
+        "--pltf-target",
+        f"127.0.0.1:{port}",
+        "--pltf-time-scale",
+        "10",
+        "--pltf-simulator",
+        "-q",
+        *args,
+    ]
     return subprocess.run(cmd, cwd=tmp_path, capture_output=True, text=True, timeout=120, check=False)
 
 

@@ -96,8 +96,12 @@ def _param(key: str, value: str, data_type: int, bounds: bytes) -> bytes:
 
 
 def test_double_bounds_of_double_parameters_are_e_rep_004() -> None:
-    body = (bytes([39]) + struct.pack(">i", 2) + _param("IpoRotVel", "0.6", 2, struct.pack(">dd", 0.05, 1.5))
-            + _param("IpoTransVel", "1000", 1, struct.pack(">ii", 50, 1500)))
+    body = (
+        bytes([39])
+        + struct.pack(">i", 2)
+        + _param("IpoRotVel", "0.6", 2, struct.pack(">dd", 0.05, 1.5))
+        + _param("IpoTransVel", "1000", 1, struct.pack(">ii", 50, 1500))
+    )
     got, devs = readings.decode_reply(body, "CMD_GET_PLTF_PARAM_VEC")
     assert [(p.key, p.minimum, p.maximum) for p in got.parameters] == [("IpoRotVel", 0, 2), ("IpoTransVel", 50, 1500)]
     assert devs[0].erratum == "E-REP-004"

@@ -25,8 +25,15 @@ MAY_BE_NA = NOT_ON_REFERENCE  # N/A there (each with its reason), never FAIL; th
 
 def standard_run(**kw: object) -> RunResult:
     with launch.reference(time_scale=TIME_SCALE) as server:
-        config = Config("127.0.0.1", server.ports[0], server.ports[1], time_scale=TIME_SCALE, simulator=True,
-                        allow_shutdown=True, **kw)  # type: ignore[arg-type]
+        config = Config(
+            "127.0.0.1",
+            server.ports[0],
+            server.ports[1],
+            time_scale=TIME_SCALE,
+            simulator=True,
+            allow_shutdown=True,
+            **kw,
+        )  # type: ignore[arg-type]
         return Runner(config, select(load_all().values(), tier=Tier.STANDARD)).run()
 
 
@@ -39,8 +46,11 @@ def run() -> Iterator[RunResult]:
 
 
 def test_the_standard_tier_passes_the_reference_server(run: RunResult) -> None:
-    bad = [f"{r.case.id}: {r.verdict} {r.message}" for r in run.results
-           if r.verdict not in (Verdict.PASS, Verdict.NA) or (r.verdict is Verdict.NA and r.case.id not in MAY_BE_NA)]
+    bad = [
+        f"{r.case.id}: {r.verdict} {r.message}"
+        for r in run.results
+        if r.verdict not in (Verdict.PASS, Verdict.NA) or (r.verdict is Verdict.NA and r.case.id not in MAY_BE_NA)
+    ]
     assert not bad, "\n".join(bad)
     stale = [r.case.id for r in run.results if r.case.id in MAY_BE_NA and r.verdict is Verdict.PASS]
     assert not stale, f"passes on the reference server now, remove it from NOT_ON_REFERENCE: {stale}"
@@ -75,8 +85,7 @@ def test_reports(run: RunResult, tmp_path: Path) -> None:
     assert c["requirement"] and c["wire"] and c["wire"][1]["dir"] == "tx"
     html = (tmp_path / "r.html").read_text()
     assert html.count('<details class="case"') == len(run.results)
-    assert "<script src" not in html and "<link" not in html and "http://" not in html.replace(
-        "http://www.w3.org", "")
+    assert "<script src" not in html and "<link" not in html and "http://" not in html.replace("http://www.w3.org", "")
 
 
 @pytest.mark.slow
@@ -86,8 +95,11 @@ def test_twenty_standard_runs_in_a_row_have_no_flake() -> None:
     for i in range(20):
         result = standard_run()
         verdicts = {r.case.id: r.verdict for r in result.results}
-        bad = [f"{r.case.id} {r.verdict} {r.message}" for r in result.results
-               if r.verdict not in (Verdict.PASS, Verdict.NA)]
+        bad = [
+            f"{r.case.id} {r.verdict} {r.message}"
+            for r in result.results
+            if r.verdict not in (Verdict.PASS, Verdict.NA)
+        ]
         assert result.exit_code == 0, f"run {i}: " + "; ".join(bad)
         assert not any(len(r.attempts) > 1 for r in result.results), f"run {i} needed re-runs"
         assert result.duration <= 60.0

@@ -21,14 +21,24 @@ pytestmark = pytest.mark.slow
 
 def run_against(server: Launched, keyword: str | None = None) -> RunResult:
     """The standard tier (or its cases matching ``keyword``) at time scale 1; the whole tier ends with CMD_EXIT."""
-    config = Config("127.0.0.1", server.ports[0], server.ports[1], time_scale=1.0, simulator=True,
-                    allow_shutdown=keyword is None, keyword=keyword)  # fmt: skip
+    config = Config(
+        "127.0.0.1",
+        server.ports[0],
+        server.ports[1],
+        time_scale=1.0,
+        simulator=True,
+        allow_shutdown=keyword is None,
+        keyword=keyword,
+    )
     return Runner(config, select(load_all().values(), tier=Tier.STANDARD, keyword=keyword)).run()
 
 
 def not_passed(run: RunResult) -> list[str]:
-    return [f"{r.case.id}: {r.verdict} {r.message}" for r in run.results
-            if r.verdict is not Verdict.PASS and not (r.verdict is Verdict.NA and r.case.id in NOT_ON_REFERENCE)]
+    return [
+        f"{r.case.id}: {r.verdict} {r.message}"
+        for r in run.results
+        if r.verdict is not Verdict.PASS and not (r.verdict is Verdict.NA and r.case.id in NOT_ON_REFERENCE)
+    ]
 
 
 @pytest.mark.timeout(600)

@@ -16,8 +16,9 @@ from tests.conformance_tests.fakes import TinyTarget
 
 def make(case_id: str, func: Callable[[Any], None], **kw: Any) -> Case:
     kw.setdefault("level", Level.MUST)
-    return Case(id=case_id, func=func, requirement="a test requirement of the runner", tier=Tier.SMOKE,
-                group="state", **kw)
+    return Case(
+        id=case_id, func=func, requirement="a test requirement of the runner", tier=Tier.SMOKE, group="state", **kw
+    )
 
 
 def run(config: Config, *cases: Case, **kw: Any) -> dict[str, Any]:
@@ -36,11 +37,22 @@ def test_outcomes_become_verdicts_by_level(tiny_config: Config) -> None:
     def bug(ctx: CaseContext) -> None:
         raise KeyError("oops")
 
-    out = run(tiny_config, make("6.1/t/pass", lambda ctx: ctx.status()), make("6.1/t/must", fail),
-              make("6.1/t/should", fail, level=Level.SHOULD), make("6.1/t/may", fail, level=Level.MAY),
-              make("6.1/t/na", na), make("6.1/t/bug", bug))
+    out = run(
+        tiny_config,
+        make("6.1/t/pass", lambda ctx: ctx.status()),
+        make("6.1/t/must", fail),
+        make("6.1/t/should", fail, level=Level.SHOULD),
+        make("6.1/t/may", fail, level=Level.MAY),
+        make("6.1/t/na", na),
+        make("6.1/t/bug", bug),
+    )
     assert [out[k].verdict for k in ("6.1/t/pass", "6.1/t/must", "6.1/t/should", "6.1/t/may", "6.1/t/na")] == [
-        Verdict.PASS, Verdict.FAIL, Verdict.NON_STRICT, Verdict.NA, Verdict.NA]
+        Verdict.PASS,
+        Verdict.FAIL,
+        Verdict.NON_STRICT,
+        Verdict.NA,
+        Verdict.NA,
+    ]
     assert out["6.1/t/bug"].verdict is Verdict.ERROR and "KeyError" in out["6.1/t/bug"].message
     assert out["6.1/t/must"].wire and out["6.1/t/must"].message == "broken"
     assert out["run"].exit_code == 2
@@ -79,8 +91,10 @@ def test_inconclusive_is_rerun_and_a_flake_is_reported(tiny_config: Config) -> N
 
 def test_the_safety_gate_skips_motion_outputs_and_shutdown(tiny_config: Config) -> None:
     ran: list[str] = []
-    cases = [make(f"4.3/t/{n}", lambda ctx, n=n: ran.append(n), **{n: True})
-             for n in ("moves_platform", "switches_outputs", "destructive")]
+    cases = [
+        make(f"4.3/t/{n}", lambda ctx, n=n: ran.append(n), **{n: True})
+        for n in ("moves_platform", "switches_outputs", "destructive")
+    ]
     out = run(tiny_config, *cases)
     assert ran == [] and all(out[c.id].verdict is Verdict.SKIPPED for c in cases)
     assert "allow-motion" in out["4.3/t/moves_platform"].message
@@ -126,8 +140,9 @@ def test_baseline_expected_and_stale(tiny_config: Config) -> None:
     c = make("6.1/ports/reconnect", fail)
     out = run(tiny_config, c, baseline=Baseline.parse("6.1/ports/reconnect FAIL"))
     assert out["6.1/ports/reconnect"].expected_failure and out["run"].exit_code == 0
-    out = run(tiny_config, make("6.1/ports/reconnect", lambda ctx: None),
-              baseline=Baseline.parse("6.1/ports/reconnect FAIL"))
+    out = run(
+        tiny_config, make("6.1/ports/reconnect", lambda ctx: None), baseline=Baseline.parse("6.1/ports/reconnect FAIL")
+    )
     assert out["run"].exit_code == 1 and out["run"].stale
 
 

@@ -13,18 +13,28 @@ from pltf.zoo import launch
 
 
 def _replay(script: Path, port: int) -> subprocess.CompletedProcess[str]:
-    return subprocess.run([sys.executable, "-I", str(script), "127.0.0.1", str(port)], capture_output=True,
-                          text=True, timeout=60, check=False)
+    return subprocess.run(
+        [sys.executable, "-I", str(script), "127.0.0.1", str(port)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
 
 
 def test_stateful_machine_passes_the_reference_and_shrinks_a_broken_chart(tmp_path: Path) -> None:
     with launch.reference(time_scale=10.0) as ref:
-        assert run_stateful(Config("127.0.0.1", ref.ports[0], time_scale=10.0), 30, tmp_path / "ok",
-                            derandomize=True) == 0
+        assert (
+            run_stateful(Config("127.0.0.1", ref.ports[0], time_scale=10.0), 30, tmp_path / "ok", derandomize=True) == 0
+        )
         assert not (tmp_path / "ok").exists()
         with launch.reference(time_scale=10.0, mutant="set_mode_anywhere") as broken:
-            assert run_stateful(Config("127.0.0.1", broken.ports[0], time_scale=10.0), 150, tmp_path / "bad",
-                                derandomize=True) == 1
+            assert (
+                run_stateful(
+                    Config("127.0.0.1", broken.ports[0], time_scale=10.0), 150, tmp_path / "bad", derandomize=True
+                )
+                == 1
+            )
             script = tmp_path / "bad" / "replay_stateful.py"
             text = script.read_text()
             assert "import socket" in text and "conformance_tests" not in text.split('"""', 2)[2]

@@ -66,10 +66,16 @@ def build(kind: str) -> Build:
     work = out.with_name(f"{out.name}.tmp{os.getpid()}")
     shutil.rmtree(work, ignore_errors=True)
     shutil.copytree(EXAMPLES / kind, work, ignore=shutil.ignore_patterns(*SKIP_DIRS))
-    env = {**os.environ, "PLATFORMCTRL": str(REPO / "clients" / "generated" / kind),
-           "npm_config_update_notifier": "false", "npm_config_fund": "false", "npm_config_audit": "false"}  # fmt: skip
-    proc = subprocess.run(["sh", "build.sh"], cwd=work, env=env, capture_output=True, text=True,
-                          timeout=BUILD_TIMEOUT, check=False)  # fmt: skip
+    env = {
+        **os.environ,
+        "PLATFORMCTRL": str(REPO / "clients" / "generated" / kind),
+        "npm_config_update_notifier": "false",
+        "npm_config_fund": "false",
+        "npm_config_audit": "false",
+    }
+    proc = subprocess.run(
+        ["sh", "build.sh"], cwd=work, env=env, capture_output=True, text=True, timeout=BUILD_TIMEOUT, check=False
+    )
     if proc.returncode != 0:
         tail = "\n".join((proc.stdout + proc.stderr).splitlines()[-30:])
         raise AssertionError(f"examples/{kind}: sh build.sh failed ({proc.returncode}):\n{tail}")

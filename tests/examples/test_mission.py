@@ -12,8 +12,14 @@ from tests.clients.client_fakes import LiveServer
 from tests.examples.runner import EXAMPLES, REPO, TIME_SCALE, Example, python_example, target
 
 STEP = re.compile(r"step (\d+\.\d\d) (\S+):(\d+) (\w+) (.*)$")
-COMMANDS = ["settarget station Corridor_01", "settarget station Kitchen", "digitalout D1=1", "digitalout D1=0",
-            "settarget coord x 5000 y 10000 a 180", "goto end"]  # fmt: skip
+COMMANDS = [
+    "settarget station Corridor_01",
+    "settarget station Kitchen",
+    "digitalout D1=1",
+    "digitalout D1=0",
+    "settarget coord x 5000 y 10000 a 180",
+    "goto end",
+]
 
 
 def test_the_mission_loads_its_documents_and_reports_each_step(server: LiveServer) -> None:
@@ -22,8 +28,11 @@ def test_the_mission_loads_its_documents_and_reports_each_step(server: LiveServe
         assert run.finish(timeout=120) == 0, (run.lines, run.stderr())
     sizes = [(REPO / p).stat().st_size for p in ("fixtures/maps/office.map", "fixtures/roadmaps/office.rm")]
     program = (EXAMPLES / "mission/mission.xml").stat().st_size
-    assert run.lines[:3] == [f"loaded map office.map: {sizes[0]} bytes", f"loaded roadmap office.rm: {sizes[1]} bytes",
-                             f"loaded program mission.xml: {program} bytes"]  # fmt: skip
+    assert run.lines[:3] == [
+        f"loaded map office.map: {sizes[0]} bytes",
+        f"loaded roadmap office.rm: {sizes[1]} bytes",
+        f"loaded program mission.xml: {program} bytes",
+    ]
     steps = [m.groups() for line in run.lines if (m := STEP.match(line))]
     assert [s[4] for s in steps if s[3] == "command"] == COMMANDS
     assert [float(s[0]) for s in steps] == sorted(float(s[0]) for s in steps)  # in the program's time order

@@ -14,8 +14,19 @@ from pltf.client import EmergencyState, MotionMode, OperationState, PlannerState
 from tests.clients.client_fakes import LiveServer
 from tests.examples.runner import TIME_SCALE, Example, python_example, target
 
-COLUMNS = ["time", "platform_ms", "state", "mode", "emergency", "x_mm", "y_mm", "angle_deg", "target_reached",
-           "planner", "battery_mv"]  # fmt: skip
+COLUMNS = [
+    "time",
+    "platform_ms",
+    "state",
+    "mode",
+    "emergency",
+    "x_mm",
+    "y_mm",
+    "angle_deg",
+    "target_reached",
+    "planner",
+    "battery_mv",
+]
 
 
 def rows_of(path: Path) -> list[dict[str, str]]:
@@ -55,8 +66,19 @@ def test_one_row_per_interval_with_status_and_battery(server: LiveServer, tmp_pa
 
 def test_a_taken_port_is_waited_out(server: LiveServer, tmp_path: Path) -> None:
     out = tmp_path / "status.csv"
-    cmd = python_example("monitor.py", "--target", target(server), "--count", "3", "--interval", "0.05", "--retry",
-                         "0.2", "--out", str(out))  # fmt: skip
+    cmd = python_example(
+        "monitor.py",
+        "--target",
+        target(server),
+        "--count",
+        "3",
+        "--interval",
+        "0.05",
+        "--retry",
+        "0.2",
+        "--out",
+        str(out),
+    )
     with PlatformClient("127.0.0.1", server.ports[0], timeout=10) as holder:  # the port's one client
         holder.get_status()
         run = Example(cmd)

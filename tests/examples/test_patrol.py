@@ -51,8 +51,7 @@ def test_patrol_visits_the_stations_in_order_and_retries_a_refused_goal(
     cmd = command(kind)
     office = watch.get_map()
     watch.set_map(office.name, blocked(office))
-    run = Example([*cmd, "--target", target(server), "--stations", ROUTE, "--retries", "3",
-                   "--retry-delay", "1"])  # fmt: skip
+    run = Example([*cmd, "--target", target(server), "--stations", ROUTE, "--retries", "3", "--retry-delay", "1"])
     try:
         run.expect("reached Corridor_01")
         refused = run.expect("refused Kitchen attempt 1/4")
@@ -79,8 +78,9 @@ def test_an_unknown_station_is_a_usage_error(server: LiveServer) -> None:
 
 
 def test_patrol_along_the_roadmap(server: LiveServer) -> None:
-    cmd = python_example("patrol.py", "--target", target(server), "--stations", "Corridor_02,Corridor_01",
-                         "--drive", "roadmap")  # fmt: skip
+    cmd = python_example(
+        "patrol.py", "--target", target(server), "--stations", "Corridor_02,Corridor_01", "--drive", "roadmap"
+    )
     with Example(cmd) as run:
         assert run.finish(timeout=60) == 0, (run.lines, run.stderr())
     assert [m.group(1) for line in run.lines if (m := REACHED.match(line))] == ["Corridor_02", "Corridor_01"]

@@ -46,8 +46,17 @@ def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[LiveServer]:
 @pytest.fixture
 def pty_teleop(server: LiveServer) -> Iterator[tuple[Example, int]]:
     master, slave = os.openpty()
-    cmd = python_example("teleop.py", "--target", target(server), "--speed", str(SPEED), "--release-ms",
-                         str(RELEASE_MS), "--time-scale", f"{TIME_SCALE:g}")  # fmt: skip
+    cmd = python_example(
+        "teleop.py",
+        "--target",
+        target(server),
+        "--speed",
+        str(SPEED),
+        "--release-ms",
+        str(RELEASE_MS),
+        "--time-scale",
+        f"{TIME_SCALE:g}",
+    )
     run = Example(cmd, stdin=slave)
     os.close(slave)
     try:
@@ -81,8 +90,9 @@ def test_a_held_key_drives_and_its_release_stops_the_platform(
         run.expect("stop (released)", timeout=5)
         # the teleop said stop within one watchdog period of the release (simulated time; the pipe's delay included)
         assert (time.monotonic() - released_wall) * TIME_SCALE * 1000 <= watchdog_ms
-        still = watch.wait_until(lambda s: watch.get_position().vel_trans_mm_s == 0.0, timeout=5, poll=0.005,
-                                 what="standstill")  # fmt: skip
+        still = watch.wait_until(
+            lambda s: watch.get_position().vel_trans_mm_s == 0.0, timeout=5, poll=0.005, what="standstill"
+        )
         # standing within one watchdog period and the braking ramp (MaxTransAcc) after the release
         braking_ms = SPEED / float(watch.get_pltf_param("MaxTransAcc").typed_value) * 1000
         assert stamp_after(still.timestamp_ms, released.timestamp_ms) <= watchdog_ms + braking_ms

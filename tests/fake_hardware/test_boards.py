@@ -135,8 +135,10 @@ def test_io_board_digital_out_inputs_and_battery(hw: Hardware, sniffer: Sniffer)
     run(hw, 0.0, 0.2)
     decoded = sniffer.decoded()
     assert [s for n, s, _ in decoded if n == "IoBoard_DigOut"] == [
-        {"Channel": 3, "Value": 1}, {"Channel": 15, "Value": 1}, {"Channel": 3, "Value": 0}
-    ]  # fmt: skip
+        {"Channel": 3, "Value": 1},
+        {"Channel": 15, "Value": 1},
+        {"Channel": 3, "Value": 0},
+    ]
     assert last(decoded, "IoBoard_Digital") == {"DigIn": 0x8001, "DigOut": 0x8000, "Status": 0}
     s = hw.controller.board_status()
     assert (s.io_digital_in, s.io_digital_out, s.io_status) == (0x8001, 0x8000, 0)
@@ -200,8 +202,10 @@ def test_ultrasonic_board_measures_the_active_sensors_only(make_hw: Any) -> None
 
 
 def test_radar_and_gyro_boards(make_hw: Any) -> None:
-    hw = make_hw(radar_source=lambda now: [120.0, -35.4, 0.0, 3000.0],
-                 motion_source=lambda now: (0.25, -0.5, 9.81, 0.0 if now < 1.0 else 0.5))  # fmt: skip
+    hw = make_hw(
+        radar_source=lambda now: [120.0, -35.4, 0.0, 3000.0],
+        motion_source=lambda now: (0.25, -0.5, 9.81, 0.0 if now < 1.0 else 0.5),
+    )
     hw.connect(0.0)
     hw.init(0.0)
     sniffer = Sniffer(hw.channel)

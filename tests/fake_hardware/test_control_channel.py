@@ -56,9 +56,23 @@ def test_parse(line: str, verb: str, kind: FaultKind, target: str | None, value:
 
 @pytest.mark.parametrize(
     "line",
-    ["", "bogus", "unplug", "unplug mars", "overtemp io 90", "slip right", "estop twice", "can-loss lots",
-     "serial-silence maybe", "clear nothing", "status now", "at 5 status", "replug us for 2", "unplug us for -1"],
-)  # fmt: skip
+    [
+        "",
+        "bogus",
+        "unplug",
+        "unplug mars",
+        "overtemp io 90",
+        "slip right",
+        "estop twice",
+        "can-loss lots",
+        "serial-silence maybe",
+        "clear nothing",
+        "status now",
+        "at 5 status",
+        "replug us for 2",
+        "unplug us for -1",
+    ],
+)
 def test_parse_errors(line: str) -> None:
     with pytest.raises(CommandError):
         parse(line, 0.0)

@@ -165,8 +165,9 @@ def test_send_can_message_reaches_the_bus_and_acts_on_a_board(hw: Hardware) -> N
         run(hw, 0.0, 0.1)
         frames = [f for f in sniffer.frames() if f.arbitration_id in (0x7AB, 0x111)]
         assert [(f.arbitration_id, bytes(f.data)) for f in frames] == [
-            (0x7AB, b"\xde\xad" + b"\0" * 6), (0x111, b"\0" * 8)
-        ]  # fmt: skip
+            (0x7AB, b"\xde\xad" + b"\0" * 6),
+            (0x111, b"\0" * 8),
+        ]
         assert right.brake_engaged
     finally:
         sniffer.close()

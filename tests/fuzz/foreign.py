@@ -55,10 +55,16 @@ CONNECT, SHUTDOWN, INIT, START, BREAK, CONTINUE, STOP, SET_MODE = 0, 1, 2, 11, 1
 MOVE_REL, MOVE_VEL_WHEEL, SET_PLTF_PARAM, DOCUMENTS = 22, 23, 37, frozenset({25, 32, 40})
 MODE_VEL = 3
 # (state, command) -> next state: the chart of guide 4.2 figure 2 as conformance_tests/chart.py reads it
-CHART = {("not_connected", CONNECT): "connected", ("connected", INIT): "ready", ("ready", START): "running",
-         ("running", BREAK): "breaked", ("breaked", CONTINUE): "running", ("running", STOP): "ready",
-         ("breaked", STOP): "ready", **{(s, SHUTDOWN): "not_connected"
-                                        for s in ("connected", "ready", "running", "breaked")}}  # fmt: skip
+CHART = {
+    ("not_connected", CONNECT): "connected",
+    ("connected", INIT): "ready",
+    ("ready", START): "running",
+    ("running", BREAK): "breaked",
+    ("breaked", CONTINUE): "running",
+    ("running", STOP): "ready",
+    ("breaked", STOP): "ready",
+    **{(s, SHUTDOWN): "not_connected" for s in ("connected", "ready", "running", "breaked")},
+}
 BIG = 1 << 30
 
 
@@ -374,8 +380,12 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--ports", default="0,0", help="the proxy's two ports (0: ephemeral)")
     parser.add_argument("--backend", default=REFERENCE, help="the implementation behind ({ports}, {tmpdir})")
-    parser.add_argument("--release", default="0", metavar="MIN-MAX", help="ms after a client left until the port "
-                        "takes the next (turned away until then)")  # fmt: skip
+    parser.add_argument(
+        "--release",
+        default="0",
+        metavar="MIN-MAX",
+        help="ms after a client left until the port takes the next (turned away until then)",
+    )
     parser.add_argument("--turn-away", choices=("fin", "rst", "refuse"), default="fin")
     parser.add_argument("--accept-once", action="store_true", help="newcomers wait in the backlog")
     parser.add_argument("--bug", default="none", choices=("none", "move-crash", "vel-crash", "hang", "leak"))

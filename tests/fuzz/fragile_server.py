@@ -138,8 +138,13 @@ async def main() -> None:
     parser = argparse.ArgumentParser()
     parser.add_argument("--ports", default="0,0")
     parser.add_argument("--bug", default="none")
-    parser.add_argument("--admit-first", type=int, default=0, metavar="N",
-                        help="the first N clients of a port wait for a busy port instead of being turned away")
+    parser.add_argument(
+        "--admit-first",
+        type=int,
+        default=0,
+        metavar="N",
+        help="the first N clients of a port wait for a busy port instead of being turned away",
+    )
     args = parser.parse_args()
     servers = []
     for p in args.ports.split(","):

@@ -23,8 +23,9 @@ from pltf.fuzz.launch import Launcher
 from pltf.zoo.launch import emulator_binary, why_no_emulator
 
 FOREIGN = Path(__file__).with_name("foreign.py")
-REFERENCE = (f"{sys.executable} -m pltf.reference_server --ports {{ports}} --data-dir {{tmpdir}} --seed 1 "
-             "--log-level INFO")  # fmt: skip
+REFERENCE = (
+    f"{sys.executable} -m pltf.reference_server --ports {{ports}} --data-dir {{tmpdir}} --seed 1 --log-level INFO"
+)
 EMULATOR = "{emulator} --ports {{ports}} --data-dir {{tmpdir}}"
 BUDGET = 60.0  # s of fuzzing in which a planted bug must be found
 
@@ -60,26 +61,55 @@ MINUTE = {  # the slow tier: 60 s each
 }
 # name: (launch, kind, a telegram among the culprit's, frames a fresh target needs before it, fresh exit statuses)
 PLANTED: dict[str, tuple[str, str, tuple[str, ...], tuple[str, ...], tuple[int, ...]]] = {
-    "proxy move-crash": (foreign("--release 5-50 --bug move-crash"), "dead", ("CMD_MOVE_REL",),
-                         ("CMD_CONNECT_TO_PLTF", "CMD_INIT_PLTF", "CMD_START"), (134,)),
-    "proxy vel-crash": (foreign("--release 5-50 --bug vel-crash"), "dead", ("CMD_MOVE_VEL_WHEEL",),
-                        ("CMD_INIT_PLTF", "CMD_SET_MODE(mode=3)", "CMD_START"), (134,)),
+    "proxy move-crash": (
+        foreign("--release 5-50 --bug move-crash"),
+        "dead",
+        ("CMD_MOVE_REL",),
+        ("CMD_CONNECT_TO_PLTF", "CMD_INIT_PLTF", "CMD_START"),
+        (134,),
+    ),
+    "proxy vel-crash": (
+        foreign("--release 5-50 --bug vel-crash"),
+        "dead",
+        ("CMD_MOVE_VEL_WHEEL",),
+        ("CMD_INIT_PLTF", "CMD_SET_MODE(mode=3)", "CMD_START"),
+        (134,),
+    ),
     "proxy hang": (foreign("--release 5-50 --bug hang"), "hang", ("CMD_SET_PLTF_PARAM",), (), ()),
     "proxy leak": (foreign("--release 5-50 --bug leak"), "dead", ("CMD_SET_",), (), (137,)),
-    "zoo crash-after-start": (zoo("crash-after-start"), "dead", ("CMD_MOVE_",),
-                              ("CMD_CONNECT_TO_PLTF", "CMD_INIT_PLTF", "CMD_START"), (134,)),
-    "zoo hang-unknown-key": (zoo("hang-unknown-key", args="--hang-seconds 120"), "hang", ("CMD_SET_PLTF_PARAM",),
-                             (), ()),
+    "zoo crash-after-start": (
+        zoo("crash-after-start"),
+        "dead",
+        ("CMD_MOVE_",),
+        ("CMD_CONNECT_TO_PLTF", "CMD_INIT_PLTF", "CMD_START"),
+        (134,),
+    ),
+    "zoo hang-unknown-key": (
+        zoo("hang-unknown-key", args="--hang-seconds 120"),
+        "hang",
+        ("CMD_SET_PLTF_PARAM",),
+        (),
+        (),
+    ),
     "zoo leak": (zoo("leak"), "dead", ("",), (), (134,)),
     "zoo slow-status": (zoo("slow-status"), "stall", ("",), (), ()),
-}  # fmt: skip
+}
 
 
 def campaign(tmp_path: Path, launch: str, duration: float, **changes: object) -> Campaign:
     if launch == "emulator":
         launch = emulator()
-    opts = Options(host="127.0.0.1", port=0, second_port=0, duration=duration, seed=1, out=tmp_path / "out",
-                   allow_motion=True, launch=launch, deadline=3.0)  # fmt: skip
+    opts = Options(
+        host="127.0.0.1",
+        port=0,
+        second_port=0,
+        duration=duration,
+        seed=1,
+        out=tmp_path / "out",
+        allow_motion=True,
+        launch=launch,
+        deadline=3.0,
+    )
     for k, v in changes.items():
         setattr(opts, k, v)
     return Campaign(opts)
@@ -136,9 +166,22 @@ def reproduces_on_a_fresh_instance(name: str, directory: str) -> None:
     target = Launcher(launch, "127.0.0.1", 0, 0)
     port, second = target.start()
     try:
-        run = subprocess.run([sys.executable, str(Path(directory) / "repro.py"), "--target", f"127.0.0.1:{port}",
-                              "--second-port", str(second), "--deadline", "2"], check=False, capture_output=True,
-                             text=True, timeout=300)  # fmt: skip
+        run = subprocess.run(
+            [
+                sys.executable,
+                str(Path(directory) / "repro.py"),
+                "--target",
+                f"127.0.0.1:{port}",
+                "--second-port",
+                str(second),
+                "--deadline",
+                "2",
+            ],
+            check=False,
+            capture_output=True,
+            text=True,
+            timeout=300,
+        )
         assert run.returncode == 1, run.stdout + run.stderr
         assert f"reproduced: {kind}" in run.stdout
         if statuses:

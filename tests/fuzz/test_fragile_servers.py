@@ -21,9 +21,18 @@ BUDGET = 30.0  # seconds of fuzzing at most; each bug is found in a few
 
 def campaign(tmp_path: Path, bug: str, **changes: object) -> Campaign:
     opts = Options(
-        host="127.0.0.1", port=0, second_port=0, duration=BUDGET, seed=1, out=tmp_path / "out",
-        allow_motion=True, launch=LAUNCH.replace("{bug}", bug), max_findings=1, deadline=0.5, minimize_seconds=20,
-    )  # fmt: skip
+        host="127.0.0.1",
+        port=0,
+        second_port=0,
+        duration=BUDGET,
+        seed=1,
+        out=tmp_path / "out",
+        allow_motion=True,
+        launch=LAUNCH.replace("{bug}", bug),
+        max_findings=1,
+        deadline=0.5,
+        minimize_seconds=20,
+    )
     for k, v in changes.items():
         setattr(opts, k, v)
     return Campaign(opts)
@@ -80,11 +89,21 @@ def test_fuzzer_finds_the_bug_and_the_reproducer_replays_it(
     try:
         port, second = target.ports
         run = subprocess.run(
-            [sys.executable, str(d / "repro.py"), "--target", f"127.0.0.1:{port}", "--second-port", str(second),
-             "--deadline", "0.5"],
+            [
+                sys.executable,
+                str(d / "repro.py"),
+                "--target",
+                f"127.0.0.1:{port}",
+                "--second-port",
+                str(second),
+                "--deadline",
+                "0.5",
+            ],
             check=False,
-            capture_output=True, text=True, timeout=60,
-        )  # fmt: skip
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
         assert run.returncode == 1, run.stdout + run.stderr
         assert f"reproduced: {kind}" in run.stdout
         if kind == "dead":
@@ -99,9 +118,13 @@ def test_reproducer_leaves_a_healthy_server_alive(tmp_path_factory: pytest.TempP
     healthy = fresh("none")
     try:
         port, second = healthy.ports
-        run = subprocess.run([sys.executable, str(d / "repro.py"), "--target", f"127.0.0.1:{port}", "--second-port",
-                              str(second)], check=False,
-            capture_output=True, text=True, timeout=60)  # fmt: skip
+        run = subprocess.run(
+            [sys.executable, str(d / "repro.py"), "--target", f"127.0.0.1:{port}", "--second-port", str(second)],
+            check=False,
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
         assert run.returncode == 0, run.stdout
         assert healthy.alive()
     finally:

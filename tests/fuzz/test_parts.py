@@ -137,7 +137,7 @@ def test_state_plan_preludes_decode_and_reach_every_state() -> None:
         plan.index = k
         assert plan.current == target
         frames = plan.prelude(None, None, frozenset())  # state unknown: the full way there, documents first
-        assert frames[-len(StatePlan.full(target)):] == StatePlan.full(target)
+        assert frames[-len(StatePlan.full(target)) :] == StatePlan.full(target)
         for state in (None, *REPORTED):
             for f in [*frames, *path(state, None, target, frozenset())]:
                 decode_frame(f, "request")
@@ -158,8 +158,9 @@ def test_ddmin_finds_the_minimal_pair() -> None:
 
 def test_pcapng_is_well_formed(tmp_path: Path) -> None:
     request = b"\xff\x01\xfe\x02\x00\x00\x00\x01\x12"
-    conv = Conversation(40000, 10000, [(1.0, "c2s", request), (1.1, "s2c", b"x" * 70_000)],
-                        client_fin=True, server_fin=True)  # fmt: skip
+    conv = Conversation(
+        40000, 10000, [(1.0, "c2s", request), (1.1, "s2c", b"x" * 70_000)], client_fin=True, server_fin=True
+    )
     path = tmp_path / "x.pcapng"
     write_pcapng(path, [conv])
     data = path.read_bytes()
@@ -235,9 +236,14 @@ def test_in_process_finding_and_its_reproducer(tmp_path: Path, monkeypatch: pyte
     d = Path(finding["dir"])
     assert json.loads((d / "finding.json").read_text())["target"] == "decode_frame:request"
     # against the real codec the input is handled: the reproducer says so
-    run = subprocess.run([sys.executable, str(d / "repro.py")], check=False,
-            capture_output=True, text=True, timeout=60,
-                         cwd=Path(__file__).resolve().parents[2])  # fmt: skip
+    run = subprocess.run(
+        [sys.executable, str(d / "repro.py")],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        cwd=Path(__file__).resolve().parents[2],
+    )
     assert run.returncode == 0, run.stdout + run.stderr
 
 
@@ -245,14 +251,42 @@ def test_cli_exit_codes(tmp_path: Path) -> None:
     from pltf.cli.main import main
 
     server = Path(__file__).with_name("fragile_server.py")
-    base = ["fuzz", "--target", "127.0.0.1:0", "--duration", "20", "--seed", "1", "--quiet", "--deadline", "0.5",
-            "--allow-motion", "--max-findings", "1"]  # fmt: skip
+    base = [
+        "fuzz",
+        "--target",
+        "127.0.0.1:0",
+        "--duration",
+        "20",
+        "--seed",
+        "1",
+        "--quiet",
+        "--deadline",
+        "0.5",
+        "--allow-motion",
+        "--max-findings",
+        "1",
+    ]
     launch = f"{sys.executable} {server} --ports {{ports}} --bug "
     assert main([*base, "--out", str(tmp_path / "a"), "--launch", launch + "bad-reply"]) == 1
     assert (tmp_path / "a" / "summary.json").exists()
     assert main([*base, "--duration", "2", "--out", str(tmp_path / "b"), "--launch", launch + "none"]) == 0
-    assert main(["fuzz", "--target", "127.0.0.1:1", "--second-port", "1", "--duration", "1", "--quiet", "--out",
-                 str(tmp_path / "c")]) == 2  # fmt: skip
+    assert (
+        main(
+            [
+                "fuzz",
+                "--target",
+                "127.0.0.1:1",
+                "--second-port",
+                "1",
+                "--duration",
+                "1",
+                "--quiet",
+                "--out",
+                str(tmp_path / "c"),
+            ]
+        )
+        == 2
+    )
 
 
 def test_shortest_failing_prefix_bisects() -> None:

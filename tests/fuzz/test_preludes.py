@@ -23,10 +23,18 @@ def names(frames: list[bytes]) -> list[str]:
 @pytest.mark.parametrize(
     ("state", "mode", "target", "expected"),
     [
-        (None, None, ("running", 3), ["CMD_STOP", "CMD_SHUTDOWN_PLTF", "CMD_CONNECT_TO_PLTF", "CMD_INIT_PLTF",
-                                      "CMD_SET_MODE(3)", "CMD_START"]),  # unknown: from anywhere
-        (OP.ST_OP_NOT_INITIALIZED, 0, ("running", 3), ["CMD_CONNECT_TO_PLTF", "CMD_INIT_PLTF", "CMD_SET_MODE(3)",
-                                                        "CMD_START"]),
+        (
+            None,
+            None,
+            ("running", 3),
+            ["CMD_STOP", "CMD_SHUTDOWN_PLTF", "CMD_CONNECT_TO_PLTF", "CMD_INIT_PLTF", "CMD_SET_MODE(3)", "CMD_START"],
+        ),  # unknown: from anywhere
+        (
+            OP.ST_OP_NOT_INITIALIZED,
+            0,
+            ("running", 3),
+            ["CMD_CONNECT_TO_PLTF", "CMD_INIT_PLTF", "CMD_SET_MODE(3)", "CMD_START"],
+        ),
         (OP.ST_OP_RUNNING, 3, ("running", 3), []),  # there already
         (OP.ST_OP_RUNNING, 2, ("running", 3), ["CMD_STOP", "CMD_SET_MODE(3)", "CMD_START"]),  # another mode
         (OP.ST_OP_BREAKED, 3, ("running", 3), ["CMD_CONTINUE"]),
@@ -35,7 +43,7 @@ def names(frames: list[bytes]) -> list[str]:
         (OP.ST_OP_READY, 1, ("connected", None), ["CMD_SHUTDOWN_PLTF", "CMD_CONNECT_TO_PLTF"]),
         (OP.ST_OP_RUNNING, 1, ("not_connected", None), ["CMD_SHUTDOWN_PLTF"]),
     ],
-)  # fmt: skip
+)
 def test_the_shortest_way_over_the_chart(
     state: int | None, mode: int | None, target: tuple[str, int | None], expected: list[str]
 ) -> None:
@@ -51,8 +59,15 @@ def test_without_motion_no_path_starts_the_platform() -> None:
 
 
 def test_the_full_prelude_reaches_a_state_from_anywhere() -> None:
-    assert names(full(("breaked", 2))) == ["CMD_STOP", "CMD_SHUTDOWN_PLTF", "CMD_CONNECT_TO_PLTF", "CMD_INIT_PLTF",
-                                           "CMD_SET_MODE(2)", "CMD_START", "CMD_BREAK"]  # fmt: skip
+    assert names(full(("breaked", 2))) == [
+        "CMD_STOP",
+        "CMD_SHUTDOWN_PLTF",
+        "CMD_CONNECT_TO_PLTF",
+        "CMD_INIT_PLTF",
+        "CMD_SET_MODE(2)",
+        "CMD_START",
+        "CMD_BREAK",
+    ]
     assert names(full(("not_connected", None))) == ["CMD_STOP", "CMD_SHUTDOWN_PLTF"]
 
 
@@ -60,10 +75,20 @@ def test_chart_commands_go_last_in_a_batch_and_the_rest_keeps_its_order() -> Non
     def case(name: str, **fields: object) -> Case:
         return Case((encode(REQUESTS[name](**fields)),), "gen.boundary", name)
 
-    cases = [case("CMD_STOP"), case("CMD_MOVE_REL", x=1, y=2, angle=3), case("CMD_SHUTDOWN_PLTF"),
-             case("CMD_GET_POSITION"), case("CMD_SET_MODE", mode=1)]  # fmt: skip
-    assert [c.telegram for c in chart_last(cases)] == ["CMD_MOVE_REL", "CMD_GET_POSITION", "CMD_STOP",
-                                                       "CMD_SHUTDOWN_PLTF", "CMD_SET_MODE"]  # fmt: skip
+    cases = [
+        case("CMD_STOP"),
+        case("CMD_MOVE_REL", x=1, y=2, angle=3),
+        case("CMD_SHUTDOWN_PLTF"),
+        case("CMD_GET_POSITION"),
+        case("CMD_SET_MODE", mode=1),
+    ]
+    assert [c.telegram for c in chart_last(cases)] == [
+        "CMD_MOVE_REL",
+        "CMD_GET_POSITION",
+        "CMD_STOP",
+        "CMD_SHUTDOWN_PLTF",
+        "CMD_SET_MODE",
+    ]
 
 
 def test_the_plan_visits_every_state_and_resets_the_documents_at_each_switch() -> None:

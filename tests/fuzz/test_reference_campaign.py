@@ -21,8 +21,17 @@ LAUNCH = f"{sys.executable} -m pltf.reference_server --ports {{ports}} --data-di
 
 
 def options(tmp_path: Path, **changes: object) -> Options:
-    opts = Options(host="127.0.0.1", port=0, second_port=0, duration=6.0, seed=1, out=tmp_path / "out",
-                   allow_motion=True, launch=LAUNCH, deadline=5.0)  # fmt: skip
+    opts = Options(
+        host="127.0.0.1",
+        port=0,
+        second_port=0,
+        duration=6.0,
+        seed=1,
+        out=tmp_path / "out",
+        allow_motion=True,
+        launch=LAUNCH,
+        deadline=5.0,
+    )
     for k, v in changes.items():
         setattr(opts, k, v)
     return opts
@@ -58,8 +67,9 @@ def test_million_case_campaign_finds_nothing(tmp_path: Path) -> None:
     cases = int(os.environ.get("PLTF_FUZZ_CASES", "1000000"))
     a, b = free_ports()  # fixed ports let the server log at ERROR only (port 0 needs its INFO start-up line)
     quiet = LAUNCH.replace("--log-level INFO", "--log-level ERROR")
-    opts = options(tmp_path, port=a, second_port=b, launch=quiet, duration=3 * 3600.0, max_cases=cases,
-                   corpus=tmp_path / "corpus")  # fmt: skip
+    opts = options(
+        tmp_path, port=a, second_port=b, launch=quiet, duration=3 * 3600.0, max_cases=cases, corpus=tmp_path / "corpus"
+    )
     c = Campaign(opts)
     code = c.run()
     assert c.stats.cases >= cases

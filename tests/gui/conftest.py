@@ -27,9 +27,14 @@ from pltf.zoo import launch
 REPO = Path(__file__).resolve().parents[2]
 CHROMIUM = "/usr/bin/chromium"
 CHROMIUM_ARGS = [
-    "--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking", "--disable-component-update",
-    "--disable-sync", "--no-first-run",
-]  # fmt: skip
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+    "--no-first-run",
+]
 VIEWPORT = {"width": 1400, "height": 900}
 
 playwright_sync = pytest.importorskip("playwright.sync_api")
@@ -78,8 +83,11 @@ class Platform:
     def __init__(self, server: launch.Launched) -> None:
         self.server = server
         self.ports = server.ports
-        found = wait_for(lambda: re.findall(r"control channel started at port (\d+)", "\n".join(server.log_lines)),
-                         timeout=10, what="the control channel")  # fmt: skip
+        found = wait_for(
+            lambda: re.findall(r"control channel started at port (\d+)", "\n".join(server.log_lines)),
+            timeout=10,
+            what="the control channel",
+        )
         self.control = Control(int(found[0]))
         self._other: PlatformClient | None = None
 
@@ -115,10 +123,26 @@ class Gateway:
         self.ini = ini
         env = dict(os.environ, PYTHONUNBUFFERED="1")
         self.proc = subprocess.Popen(
-            [sys.executable, "-m", "pltf.cli.main", "gui", "--target", "127.0.0.1:1", "--listen", "127.0.0.1:0",
-             "--network-ini", str(ini), "--reply-timeout", str(reply_timeout)],
-            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, cwd=REPO, env=env,
-        )  # fmt: skip
+            [
+                sys.executable,
+                "-m",
+                "pltf.cli.main",
+                "gui",
+                "--target",
+                "127.0.0.1:1",
+                "--listen",
+                "127.0.0.1:0",
+                "--network-ini",
+                str(ini),
+                "--reply-timeout",
+                str(reply_timeout),
+            ],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+            cwd=REPO,
+            env=env,
+        )
         assert self.proc.stdout is not None
         line = self.proc.stdout.readline()
         m = re.search(r"gui serving at (http://[^/]+)/", line)

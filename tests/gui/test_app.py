@@ -46,8 +46,10 @@ def to_screen(page: Any, x: float, y: float) -> tuple[float, float]:
     canvas = page.get_by_role("img", name="Map")
     cam = json.loads(canvas.get_attribute("data-camera"))
     box = canvas.bounding_box()
-    return (box["x"] + (x - cam["cx"]) * cam["scale"] + cam["width"] / 2,
-            box["y"] + (cam["cy"] - y) * cam["scale"] + cam["height"] / 2)  # fmt: skip
+    return (
+        box["x"] + (x - cam["cx"]) * cam["scale"] + cam["width"] / 2,
+        box["y"] + (cam["cy"] - y) * cam["scale"] + cam["height"] / 2,
+    )
 
 
 def pose(client: PlatformClient) -> tuple[int, int, float]:
@@ -55,8 +57,9 @@ def pose(client: PlatformClient) -> tuple[int, int, float]:
     return s.est_x_mm, s.est_y_mm, s.est_angle_mdeg / 1000
 
 
-def test_open_socket_then_init_and_start_from_the_buttons(page: Any, gateway: Gateway, platform: Platform,
-                                                          artifacts: Path) -> None:  # fmt: skip
+def test_open_socket_then_init_and_start_from_the_buttons(
+    page: Any, gateway: Gateway, platform: Platform, artifacts: Path
+) -> None:
     page.goto(gateway.url(platform.target))
     expect_text(readout(page, "Connection"), f"connected to {platform.target}")
     # Close Socket, then Socket -> Open Socket again (guide 5.2)
@@ -113,20 +116,27 @@ def test_automatic_and_a_dragged_target_flag_bring_the_platform_there(
     fx, fy, _ = (float(v) for v in canvas.get_attribute("data-flag").split(","))
     tolerance = 2 / float(json.loads(canvas.get_attribute("data-camera"))["scale"])  # two pixels of the drag
     assert math.hypot(fx - goal[0], fy - goal[1]) <= tolerance
-    wait_for(lambda: math.hypot(pose(platform.other)[0] - fx, pose(platform.other)[1] - fy) < 100,
-             timeout=30, what="the platform at the flag (over the other port)")  # fmt: skip
+    wait_for(
+        lambda: math.hypot(pose(platform.other)[0] - fx, pose(platform.other)[1] - fy) < 100,
+        timeout=30,
+        what="the platform at the flag (over the other port)",
+    )
     page.screenshot(path=str(artifacts / "automatic-flag.png"))
 
 
-def test_velocity_mode_from_the_keyboard_moves_and_releasing_stops(page: Any, gateway: Gateway,
-                                                                   platform: Platform) -> None:  # fmt: skip
+def test_velocity_mode_from_the_keyboard_moves_and_releasing_stops(
+    page: Any, gateway: Gateway, platform: Platform
+) -> None:
     open_gui(page, gateway, platform.target)
     init_and_start(page, platform, "Velocity")
     x0, y0, _ = pose(platform.other)
     page.get_by_role("img", name="Map").focus()
     page.keyboard.down("ArrowUp")
-    wait_for(lambda: math.hypot(pose(platform.other)[0] - x0, pose(platform.other)[1] - y0) > 300,
-             timeout=15, what="the platform moving forward")  # fmt: skip
+    wait_for(
+        lambda: math.hypot(pose(platform.other)[0] - x0, pose(platform.other)[1] - y0) > 300,
+        timeout=15,
+        what="the platform moving forward",
+    )
     page.keyboard.up("ArrowUp")
     wait_for(lambda: platform.other.get_status().vel_trans_mm_s == 0, timeout=10, what="the commanded velocity 0")
     time.sleep(0.3)
@@ -136,8 +146,9 @@ def test_velocity_mode_from_the_keyboard_moves_and_releasing_stops(page: Any, ga
     assert math.hypot(b[0] - a[0], b[1] - a[1]) < 5, (a, b)
 
 
-def test_an_emergency_stop_shows_within_a_second(page: Any, gateway: Gateway, platform: Platform,
-                                                 artifacts: Path) -> None:  # fmt: skip
+def test_an_emergency_stop_shows_within_a_second(
+    page: Any, gateway: Gateway, platform: Platform, artifacts: Path
+) -> None:
     open_gui(page, gateway, platform.target)
     button(page, "Init").click()
     expect_text(readout(page, "System state"), "Ready")
@@ -150,8 +161,9 @@ def test_an_emergency_stop_shows_within_a_second(page: Any, gateway: Gateway, pl
     expect_text(readout(page, "Emergency state"), re.compile("reset|not active"))
 
 
-def test_a_parameter_set_in_the_window_reads_back_over_the_socket(page: Any, gateway: Gateway, platform: Platform,
-                                                                  artifacts: Path) -> None:  # fmt: skip
+def test_a_parameter_set_in_the_window_reads_back_over_the_socket(
+    page: Any, gateway: Gateway, platform: Platform, artifacts: Path
+) -> None:
     open_gui(page, gateway, platform.target)
     page.get_by_role("menuitem", name="Parameter", exact=True).click()
     page.get_by_role("menuitem", name="Platform parameters", exact=True).click()
@@ -217,8 +229,9 @@ def test_every_map_object_of_get_map_is_drawn(page: Any, gateway: Gateway, platf
     assert "Lines: 20/20" in summary and "Stations: 18/18" in summary
 
 
-def test_switching_the_language_changes_the_labels(page: Any, gateway: Gateway, platform: Platform,
-                                                   artifacts: Path) -> None:  # fmt: skip
+def test_switching_the_language_changes_the_labels(
+    page: Any, gateway: Gateway, platform: Platform, artifacts: Path
+) -> None:
     open_gui(page, gateway, platform.target)
     page.get_by_role("menuitem", name="View", exact=True).click()
     page.get_by_role("menuitem", name="View Options", exact=True).click()
@@ -235,8 +248,9 @@ def test_switching_the_language_changes_the_labels(page: Any, gateway: Gateway, 
     expect_text(page.get_by_role("status", name="System state"), "Not initialized")
 
 
-def test_each_fault_shows_its_message_and_the_gui_keeps_running(page: Any, gateway: Gateway,
-                                                               platform: Platform) -> None:  # fmt: skip
+def test_each_fault_shows_its_message_and_the_gui_keeps_running(
+    page: Any, gateway: Gateway, platform: Platform
+) -> None:
     status = readout(page, "Connection")
     cases = [
         (f"127.0.0.1:{free_port()}", "refused the connection"),
@@ -261,8 +275,9 @@ def test_each_fault_shows_its_message_and_the_gui_keeps_running(page: Any, gatew
     expect_text(readout(page, "System state"), "Not initialized")
 
 
-def test_two_tabs_share_the_one_connection_and_the_second_port_stays_free(browser: Any, page: Any, gateway: Gateway,
-                                                                           platform: Platform) -> None:  # fmt: skip
+def test_two_tabs_share_the_one_connection_and_the_second_port_stays_free(
+    browser: Any, page: Any, gateway: Gateway, platform: Platform
+) -> None:
     open_gui(page, gateway, platform.target)
     second = browser.new_page()
     try:
@@ -274,8 +289,9 @@ def test_two_tabs_share_the_one_connection_and_the_second_port_stays_free(browse
         second.close()
 
 
-def test_shifting_the_platform_by_drag_and_drop_sets_the_estimate(page: Any, gateway: Gateway,
-                                                                   platform: Platform) -> None:  # fmt: skip
+def test_shifting_the_platform_by_drag_and_drop_sets_the_estimate(
+    page: Any, gateway: Gateway, platform: Platform
+) -> None:
     open_gui(page, gateway, platform.target)
     x0, y0, _ = pose(platform.other)
     button(page, "Shift platform").click()
@@ -287,6 +303,7 @@ def test_shifting_the_platform_by_drag_and_drop_sets_the_estimate(page: Any, gat
     page.mouse.up()
     expect_text(page.get_by_role("status", name="Map messages"), "CMD_SET_FRM_PLTF sent")
     scale = float(json.loads(page.get_by_role("img", name="Map").get_attribute("data-camera"))["scale"])
+
     def off() -> float:
         x, y, _ = pose(platform.other)
         return math.hypot(x - (x0 + 1000), y - (y0 - 400))
@@ -294,8 +311,9 @@ def test_shifting_the_platform_by_drag_and_drop_sets_the_estimate(page: Any, gat
     wait_for(lambda: off() <= 2 / scale, what="the estimate where the platform was dropped (over the other port)")
 
 
-def test_open_socket_at_lists_the_known_addresses_and_keeps_a_new_one(page: Any, gateway: Gateway,
-                                                                      platform: Platform) -> None:  # fmt: skip
+def test_open_socket_at_lists_the_known_addresses_and_keeps_a_new_one(
+    page: Any, gateway: Gateway, platform: Platform
+) -> None:
     open_gui(page, gateway, f"127.0.0.1:{free_port()}", connected=False)
     page.get_by_role("menuitem", name="Socket", exact=True).click()
     page.get_by_role("menuitem", name="Open Socket At", exact=True).click()

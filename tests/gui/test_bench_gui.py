@@ -17,8 +17,12 @@ def test_the_status_latency_benchmark_runs_and_writes_its_rows(tmp_path: Path) -
     out = tmp_path / "bench.json"
     proc = subprocess.run(
         [sys.executable, "-m", "benchmarks", "--quick", "--only", "gui.status_latency", "--json", str(out)],
-        cwd=REPO, capture_output=True, text=True, timeout=300, check=False,
-    )  # fmt: skip
+        cwd=REPO,
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
     assert proc.returncode == 0, proc.stdout + proc.stderr
     rows = json.loads(out.read_text())["rows"]
     assert {(r["metric"], r["target"]) for r in rows} == {("p50", None), ("p95", "value <= 100")}

@@ -12,8 +12,11 @@ from tests.gui.conftest import Gateway, Platform, expect_text, open_gui, wait_fo
 
 def _objects(xml: str | bytes) -> list[tuple[str, dict[str, str], list[tuple[str, dict[str, str]]]]]:
     """Every object of a map document: its tag, attributes and children (tag, attributes), in order."""
-    return [(o.tag, dict(o.attrib), [(c.tag, dict(c.attrib)) for c in o])
-            for layer in ET.fromstring(xml).findall("layer") for o in layer]  # fmt: skip
+    return [
+        (o.tag, dict(o.attrib), [(c.tag, dict(c.attrib)) for c in o])
+        for layer in ET.fromstring(xml).findall("layer")
+        for o in layer
+    ]
 
 
 def _open_editor(page: Any, gateway: Gateway, platform: Platform) -> Any:
@@ -71,8 +74,9 @@ def test_round_trip_add_a_line_and_undo(page: Any, gateway: Gateway, platform: P
     wait_for(lambda: state.get_attribute("data-objects") == str(len(objects) + 1), what="redo")
 
 
-def test_trim_against_a_parallel_line_says_why_and_changes_nothing(page: Any, gateway: Gateway,
-                                                                   platform: Platform) -> None:  # fmt: skip
+def test_trim_against_a_parallel_line_says_why_and_changes_nothing(
+    page: Any, gateway: Gateway, platform: Platform
+) -> None:
     objects = _objects(platform.other.get_map().xml)
     state = _open_editor(page, gateway, platform)
     wait_for(lambda: state.get_attribute("data-objects") == str(len(objects)), what="the loaded map")
@@ -88,8 +92,10 @@ def test_trim_against_a_parallel_line_says_why_and_changes_nothing(page: Any, ga
         page.mouse.click(box["x"] + sx, box["y"] + sy)
 
     click(10000, 11200)  # the corridor's north wall (9100,11200)-(18400,11200) ...
-    wait_for(lambda: '"points":[9100,11200,18400,11200]' in (state.get_attribute("data-selected") or ""),
-             what="the first line selected")  # fmt: skip
+    wait_for(
+        lambda: '"points":[9100,11200,18400,11200]' in (state.get_attribute("data-selected") or ""),
+        what="the first line selected",
+    )
     click(12000, 8800)  # ... against its south wall, parallel to it
     expect_text(page.get_by_role("status", name="Messages", exact=True), "the lines are parallel: they never cross")
     assert state.get_attribute("data-objects") == str(len(objects))

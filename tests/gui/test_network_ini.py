@@ -25,8 +25,15 @@ def test_targets_are_read_added_once_and_bad_lines_skipped(tmp_path: Path) -> No
 
 
 def test_pltf_gui_refuses_a_bad_target_in_one_line() -> None:
-    out = subprocess.run([sys.executable, "-m", "pltf.cli.main", "gui", "--target", "nowhere"],
-                         capture_output=True, text=True, check=False, cwd=REPO, timeout=60)  # fmt: skip
+    out = subprocess.run(
+        [sys.executable, "-m", "pltf.cli.main", "gui", "--target", "nowhere"],
+        capture_output=True,
+        text=True,
+        check=False,
+        cwd=REPO,
+        timeout=60,
+    )
     assert out.returncode == 2
-    assert out.stderr.strip() == ("pltf gui: error: argument --target: expected HOST:PORT with PORT 1..65535, "
-                                  "got 'nowhere'")
+    assert out.stderr.strip() == (
+        "pltf gui: error: argument --target: expected HOST:PORT with PORT 1..65535, got 'nowhere'"
+    )

@@ -27,18 +27,32 @@ REPO = Path(__file__).resolve().parents[2]
 SOURCES = {"pltf_spec": "spec", "pltf_client": "clients", "pltf_toolkit": "."}
 # what a build never reads: a copy without it is what a fresh clone holds (and build/ left over from an earlier
 # build would put deleted modules back into a wheel)
-UNTRACKED = shutil.ignore_patterns(".git", ".venv", "build", "dist", "*.egg-info", "__pycache__", "*.so",
-                                   "node_modules", ".mypy_cache", ".ruff_cache", ".pytest_cache", ".hypothesis")
+UNTRACKED = shutil.ignore_patterns(
+    ".git",
+    ".venv",
+    "build",
+    "dist",
+    "*.egg-info",
+    "__pycache__",
+    "*.so",
+    "node_modules",
+    ".mypy_cache",
+    ".ruff_cache",
+    ".pytest_cache",
+    ".hypothesis",
+)
 HEAVY = {"numpy", "scipy", "pymunk", "cantools", "lxml", "jsonschema"}
 STARTED = re.compile(r"server started at port (\d+)")
 # building three distributions and installing numpy, scipy and the rest into fresh environments takes minutes
 pytestmark = pytest.mark.timeout(1800)
 
 
-def _run(*cmd: str | Path, cwd: Path, timeout: float = 600, env: dict[str, str] | None = None
-         ) -> subprocess.CompletedProcess[str]:
-    done = subprocess.run([str(c) for c in cmd], cwd=cwd, capture_output=True, text=True, timeout=timeout,
-                          check=False, env=env)
+def _run(
+    *cmd: str | Path, cwd: Path, timeout: float = 600, env: dict[str, str] | None = None
+) -> subprocess.CompletedProcess[str]:
+    done = subprocess.run(
+        [str(c) for c in cmd], cwd=cwd, capture_output=True, text=True, timeout=timeout, check=False, env=env
+    )
     assert done.returncode == 0, f"{cmd}: {done.stdout[-2000:]}{done.stderr[-2000:]}"
     return done
 
@@ -50,8 +64,19 @@ def dist(tmp_path_factory: pytest.TempPathFactory) -> Path:
     shutil.copytree(REPO, tree, ignore=UNTRACKED)
     no_compiler = dict(os.environ, CC="false", LDSHARED="false")
     for source in SOURCES.values():
-        _run(sys.executable, "-m", "build", "--no-isolation", "--sdist", "--wheel", "--outdir", out, tree / source,
-             cwd=tree / source, env=no_compiler)
+        _run(
+            sys.executable,
+            "-m",
+            "build",
+            "--no-isolation",
+            "--sdist",
+            "--wheel",
+            "--outdir",
+            out,
+            tree / source,
+            cwd=tree / source,
+            env=no_compiler,
+        )
     return out
 
 
@@ -98,12 +123,15 @@ def test_the_client_distribution_alone_is_small_and_typed(dist: Path, tmp_path: 
     py = _venv(tmp_path / "client-env", dist, "pltf-client")
     installed = {line.split("==")[0].lower() for line in _run(py, "-m", "pip", "freeze", cwd=empty).stdout.split()}
     assert not installed & HEAVY, installed
-    probe = "import sys, pltf.client as c; print(c.__version__, sorted(set(sys.modules) & {'numpy', 'scipy', " \
-            "'pymunk', 'cantools', 'lxml', 'jsonschema', 'asyncio', 'yaml'}))"
+    probe = (
+        "import sys, pltf.client as c; print(c.__version__, sorted(set(sys.modules) & {'numpy', 'scipy', "
+        "'pymunk', 'cantools', 'lxml', 'jsonschema', 'asyncio', 'yaml'}))"
+    )
     out = _run(py, "-c", probe, cwd=empty).stdout.split(maxsplit=1)
     assert out[1].strip() == "[]", out
-    site = Path(_run(py, "-c", "import pltf.client, os; print(os.path.dirname(pltf.client.__file__))",
-                     cwd=empty).stdout.strip())
+    site = Path(
+        _run(py, "-c", "import pltf.client, os; print(os.path.dirname(pltf.client.__file__))", cwd=empty).stdout.strip()
+    )
     assert (site / "py.typed").exists()
 
 
@@ -120,9 +148,24 @@ def test_codec_commands_from_an_empty_folder(toolkit: Path, empty: Path) -> None
 
 @pytest.fixture
 def served(toolkit: Path, empty: Path) -> Iterator[list[int]]:
-    proc = subprocess.Popen([toolkit.parent / "pltf", "serve", "--ports", "0,0", "--data-dir", "data",
-                             "--time-scale", "20", "--log-level", "INFO"], cwd=empty, stdout=subprocess.PIPE,
-                            stderr=subprocess.STDOUT, text=True)
+    proc = subprocess.Popen(
+        [
+            toolkit.parent / "pltf",
+            "serve",
+            "--ports",
+            "0,0",
+            "--data-dir",
+            "data",
+            "--time-scale",
+            "20",
+            "--log-level",
+            "INFO",
+        ],
+        cwd=empty,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+    )
     ports: list[int] = []
     deadline = time.monotonic() + 60
     assert proc.stdout is not None
@@ -153,20 +196,72 @@ def test_serve_seeds_the_fixtures_and_the_tools_run_against_it(toolkit: Path, em
     fixtures = Path(_run(toolkit, "-c", "import pltf.fixtures as f; print(f.DIR)", cwd=empty).stdout.strip())
     (empty / "disk" / "Map").mkdir(parents=True)  # remote mode: <load> reads DIR/Map/NAME here, then sends it
     shutil.copy(fixtures / "maps" / "office.map", empty / "disk" / "Map" / "office.map")
-    (empty / "mission.xml").write_text("<?xml version='1.0' encoding='UTF-8'?><program version='1.0'>"
-                                       "<task name='main' priority='0'><load map='office.map'/>"
-                                       "<log message='map sent from the wheel'/></task></program>")
-    ran = _run(pltf, "run-program", "mission.xml", "--target", f"127.0.0.1:{served[1]}", "--data-dir", "disk",
-               "--time-scale", "20", "--plain", cwd=empty)
+    (empty / "mission.xml").write_text(
+        "<?xml version='1.0' encoding='UTF-8'?><program version='1.0'>"
+        "<task name='main' priority='0'><load map='office.map'/>"
+        "<log message='map sent from the wheel'/></task></program>"
+    )
+    ran = _run(
+        pltf,
+        "run-program",
+        "mission.xml",
+        "--target",
+        f"127.0.0.1:{served[1]}",
+        "--data-dir",
+        "disk",
+        "--time-scale",
+        "20",
+        "--plain",
+        cwd=empty,
+    )
     assert "map sent from the wheel" in ran.stdout
-    conform = subprocess.run([pltf, "conform", "--target", target, "--second-port", str(served[1]), "--tier", "smoke",
-                              "--time-scale", "20", "--json", "report.json", "--stateful", "3"], cwd=empty,
-                             capture_output=True, text=True, timeout=600, check=False)
+    conform = subprocess.run(
+        [
+            pltf,
+            "conform",
+            "--target",
+            target,
+            "--second-port",
+            str(served[1]),
+            "--tier",
+            "smoke",
+            "--time-scale",
+            "20",
+            "--json",
+            "report.json",
+            "--stateful",
+            "3",
+        ],
+        cwd=empty,
+        capture_output=True,
+        text=True,
+        timeout=600,
+        check=False,
+    )
     assert conform.returncode == 0, conform.stdout[:6000] + conform.stderr[-2000:]
     assert json.loads((empty / "report.json").read_text())
-    fuzz = subprocess.run([pltf, "fuzz", "--target", target, "--second-port", str(served[1]), "--duration", "3",
-                           "--seed", "1", "--quiet", "--out", "findings"], cwd=empty, capture_output=True,
-                          text=True, timeout=120, check=False)
+    fuzz = subprocess.run(
+        [
+            pltf,
+            "fuzz",
+            "--target",
+            target,
+            "--second-port",
+            str(served[1]),
+            "--duration",
+            "3",
+            "--seed",
+            "1",
+            "--quiet",
+            "--out",
+            "findings",
+        ],
+        cwd=empty,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
     # the command runs from the wheel; whether a 3 s campaign on a loaded machine judges right is tests/fuzz's
     assert fuzz.returncode in (0, 1), fuzz.stdout[-3000:] + fuzz.stderr[-2000:]
     assert json.loads((empty / "findings" / "summary.json").read_text())["cases"] > 0

@@ -16,19 +16,31 @@ ROOT = Path(__file__).resolve().parents[2]
 
 def test_proxy_benchmarks_run_and_write_their_rows(tmp_path: Path) -> None:
     out = tmp_path / "bench.json"
-    proc = subprocess.run([sys.executable, "-m", "benchmarks", "--quick", "--only", "proxy", "--json", str(out)],
-                          cwd=ROOT, capture_output=True, text=True, timeout=600, check=False)  # fmt: skip
+    proc = subprocess.run(
+        [sys.executable, "-m", "benchmarks", "--quick", "--only", "proxy", "--json", str(out)],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=600,
+        check=False,
+    )
     assert proc.returncode == 0, proc.stdout + proc.stderr
     rows = json.loads(out.read_text())["rows"]
     keys = {(r["benchmark"], r["subject"], r["metric"]) for r in rows}
-    position = {("proxy.get_position", s, m) for s in ("direct", "pltf proxy (recording)")
-                for m in ("latency_p50", "latency_p99", "round_trip_rate", "pipelined_rate")}  # fmt: skip
+    position = {
+        ("proxy.get_position", s, m)
+        for s in ("direct", "pltf proxy (recording)")
+        for m in ("latency_p50", "latency_p99", "round_trip_rate", "pipelined_rate")
+    }
     assert position <= keys
     assert {("proxy.tshark", s, "seconds") for s in ("tshark + pltf.lua", "tshark (TCP only)")} <= keys
     assert all(r["value"] > 0 for r in rows)
     targets = {(r["metric"], r["target"]) for r in rows if r["target"]}
-    assert targets == {("latency_p50", "ratio <= 1.5"), ("round_trip_rate", "ratio <= 2"),
-                       ("pipelined_rate", "ratio <= 2")}
+    assert targets == {
+        ("latency_p50", "ratio <= 1.5"),
+        ("round_trip_rate", "ratio <= 2"),
+        ("pipelined_rate", "ratio <= 2"),
+    }
 
 
 def test_the_capture_holds_the_telegrams_it_says(tmp_path: Path) -> None:

@@ -25,7 +25,8 @@ def test_the_same_reply_has_no_difference_and_volatile_fields_are_ignored() -> N
 def test_tolerances_and_enum_names() -> None:
     assert diff_telegrams(STATUS, STATUS.replace(est_x=STATUS.est_x + 30)) == []
     assert diff_telegrams(STATUS, STATUS.replace(est_x=STATUS.est_x + 31)) == [
-        FieldDiff("est_x", str(STATUS.est_x), str(STATUS.est_x + 31))]
+        FieldDiff("est_x", str(STATUS.est_x), str(STATUS.est_x + 31))
+    ]
     (d,) = diff_telegrams(STATUS.replace(motion_mode=4), STATUS.replace(motion_mode=3))
     assert d == FieldDiff("motion_mode", "MODE_MOTION_AUTOMATIC (4)", "MODE_MOTION_VEL (3)")
 

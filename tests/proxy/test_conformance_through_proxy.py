@@ -32,8 +32,21 @@ LISTENING = re.compile(r"proxy listening at [\d.]+:(\d+)")
 @contextmanager
 def pltf_proxy(target_ports: list[int], record: Path) -> Iterator[list[int]]:
     """``pltf proxy`` in front of both ports, recording; its listening ports; stopped with SIGINT (Ctrl-C)."""
-    cmd = [sys.executable, "-m", "pltf.cli.main", "proxy", "--listen", "127.0.0.1:0", "--target",
-           f"127.0.0.1:{target_ports[0]}", "--second", f"0:{target_ports[1]}", "--quiet", "--record", str(record)]
+    cmd = [
+        sys.executable,
+        "-m",
+        "pltf.cli.main",
+        "proxy",
+        "--listen",
+        "127.0.0.1:0",
+        "--target",
+        f"127.0.0.1:{target_ports[0]}",
+        "--second",
+        f"0:{target_ports[1]}",
+        "--quiet",
+        "--record",
+        str(record),
+    ]
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         ports: list[int] = []
@@ -92,11 +105,21 @@ def _compare(cases: list[Case], tmp_path: Path) -> None:
     assert not differ, differ
 
 
-WIRE_CASES = ("6.2/framing/header-and-length", "6.2/framing/split-every-offset", "6.2/framing/slow-sender",
-              "6.2/framing/coalesced", "6.2/framing/bad-header", "6.2/framing/huge-length",
-              "6.2/framing/half-close-partial", "6.2/framing/half-close-complete", "6.1/ports/both-serve",
-              "6.1/ports/second-client-turned-away", "6.1/ports/reconnect", "6.1/replies/in-order",
-              "6.3/CMD_CLOSE_SOCKET/closes")
+WIRE_CASES = (
+    "6.2/framing/header-and-length",
+    "6.2/framing/split-every-offset",
+    "6.2/framing/slow-sender",
+    "6.2/framing/coalesced",
+    "6.2/framing/bad-header",
+    "6.2/framing/huge-length",
+    "6.2/framing/half-close-partial",
+    "6.2/framing/half-close-complete",
+    "6.1/ports/both-serve",
+    "6.1/ports/second-client-turned-away",
+    "6.1/ports/reconnect",
+    "6.1/replies/in-order",
+    "6.3/CMD_CLOSE_SOCKET/closes",
+)
 
 
 def test_the_cases_a_proxy_could_change_judge_the_same_through_it(tmp_path: Path) -> None:

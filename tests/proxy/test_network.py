@@ -38,7 +38,8 @@ def test_bytes_pass_unchanged_however_they_are_cut() -> None:
     peer.close()
     requests = [r for r in recs if r.direction == "request"]
     assert [r.name for r in requests[:9]] == ["CMD_SET_MODE", "CMD_STOP", "CMD_SET_MODE"] + ["CMD_STOP"] * 5 + [
-        "malformed"]
+        "malformed"
+    ]
     assert requests[8].kind == RAW and requests[8].error and requests[8].error.startswith("BadHeader")
     assert b"".join(r.raw for r in requests) == expected
     replies = [r for r in recs if r.direction == "reply"]

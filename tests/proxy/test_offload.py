@@ -48,8 +48,16 @@ def test_the_recorder_process_writes_what_an_in_process_recorder_writes(tmp_path
     assert (tmp_path / "there.jsonl").read_text() == (tmp_path / "here.jsonl").read_text()
     assert (tmp_path / "there.pcapng").read_bytes() == (tmp_path / "here.pcapng").read_bytes()
     names = [r.name for r in read_session(tmp_path / "there.jsonl").records]
-    assert names == ["open", "CMD_STOP", "CMD_GET_POSITION", "CMD_GET_POSITION", "CMD_GET_POSITION",
-                     "CMD_GET_POSITION", "malformed", "close"]  # fmt: skip
+    assert names == [
+        "open",
+        "CMD_STOP",
+        "CMD_GET_POSITION",
+        "CMD_GET_POSITION",
+        "CMD_GET_POSITION",
+        "CMD_GET_POSITION",
+        "malformed",
+        "close",
+    ]
 
 
 def test_a_dead_recorder_process_stops_recording_not_the_caller(tmp_path: Path) -> None:

@@ -52,7 +52,8 @@ def session(*records: Record) -> Session:
 def test_replies_pair_with_requests_by_identifier_and_timing_is_relative() -> None:
     s = session(
         event(1.0, 1, OPEN),
-        rec(1.0, 1, "request", "CMD_GET_POSITION"), rec(1.0, 1, "request", "CMD_SET_MODE", mode=4),
+        rec(1.0, 1, "request", "CMD_GET_POSITION"),
+        rec(1.0, 1, "request", "CMD_SET_MODE", mode=4),
         rec(1.1, 1, "request", "CMD_GET_STATUS"),
         rec(1.3, 1, "reply", "STATUS"),  # answers out of order: by identifier
         rec(1.4, 1, "reply", "CMD_GET_POSITION", x=1, y=2, angle=0.0, vel_trans=0.0, vel_rot=0.0),
@@ -64,7 +65,11 @@ def test_replies_pair_with_requests_by_identifier_and_timing_is_relative() -> No
     names = [st.request.name for st in script.steps]
     assert names == ["CMD_GET_POSITION", "CMD_SET_MODE", "CMD_GET_STATUS", "CMD_STOP"]
     assert [st.reply.name if st.reply else None for st in script.steps] == [
-        "CMD_GET_POSITION", None, "CMD_GET_STATUS", None]
+        "CMD_GET_POSITION",
+        None,
+        "CMD_GET_STATUS",
+        None,
+    ]
     assert [st.answered for st in script.steps] == [True, False, True, False]
     assert [st.after_replies for st in script.steps] == [0, 0, 0, 3]
     assert script.steps[3].gap == pytest.approx(0.5)  # after the last reply, not after the previous request
@@ -76,8 +81,12 @@ def test_a_run_of_the_same_request_is_a_wait() -> None:
     records = [event(0.0, 1, OPEN)]
     for k in range(4):
         records += [rec(1 + k * 0.1, 1, "request", "CMD_GET_STATUS"), rec(1.05 + k * 0.1, 1, "reply", "STATUS")]
-    records += [rec(2.0, 1, "request", "CMD_GET_STATUS"), rec(2.1, 1, "request", "CMD_STOP"),
-                rec(2.2, 1, "request", "CMD_GET_STATUS"), rec(2.3, 1, "reply", "STATUS")]  # fmt: skip
+    records += [
+        rec(2.0, 1, "request", "CMD_GET_STATUS"),
+        rec(2.1, 1, "request", "CMD_STOP"),
+        rec(2.2, 1, "request", "CMD_GET_STATUS"),
+        rec(2.3, 1, "reply", "STATUS"),
+    ]
     (script,) = plan(session(*records))
     (wait,) = script.waits.values()
     assert wait.steps == [0, 1, 2, 3, 4] and wait.interval == pytest.approx(0.1) and wait.final == 4
@@ -85,9 +94,14 @@ def test_a_run_of_the_same_request_is_a_wait() -> None:
 
 
 def test_a_connection_waits_for_the_ones_closed_before_it_opened() -> None:
-    s = session(event(0.0, 1, OPEN), event(1.0, 1, CLOSE, "by client (FIN)"),
-                event(1.2, 2, OPEN, port=10002), event(1.5, 3, OPEN), event(3.0, 2, CLOSE, "by client (FIN)", 10002),
-                event(3.0, 3, CLOSE, "by client (FIN)"))  # fmt: skip
+    s = session(
+        event(0.0, 1, OPEN),
+        event(1.0, 1, CLOSE, "by client (FIN)"),
+        event(1.2, 2, OPEN, port=10002),
+        event(1.5, 3, OPEN),
+        event(3.0, 2, CLOSE, "by client (FIN)", 10002),
+        event(3.0, 3, CLOSE, "by client (FIN)"),
+    )
     scripts = {sc.conn: sc for sc in plan(s)}
     assert scripts[3].after_closes == [1] and scripts[2].after_closes == [1] and scripts[2].route == 1
 
@@ -98,19 +112,45 @@ def test_a_connection_waits_for_the_ones_closed_before_it_opened() -> None:
 def test_the_judgement_names_each_difference() -> None:
     s = session(
         event(0.0, 1, OPEN),
-        rec(1.0, 1, "request", "CMD_GET_STATUS"), rec(1.1, 1, "reply", "STATUS"),
+        rec(1.0, 1, "request", "CMD_GET_STATUS"),
+        rec(1.1, 1, "reply", "STATUS"),
         rec(2.0, 1, "request", "CMD_GET_PLTF_PARAM", key="IpoTransVel"),
-        rec(2.1, 1, "reply", "CMD_GET_PLTF_PARAM", key="IpoTransVel", value="800", category=2, data_type=1,
-            minimum=50, maximum=1500),
+        rec(
+            2.1,
+            1,
+            "reply",
+            "CMD_GET_PLTF_PARAM",
+            key="IpoTransVel",
+            value="800",
+            category=2,
+            data_type=1,
+            minimum=50,
+            maximum=1500,
+        ),
         rec(3.0, 1, "request", "CMD_GET_CAMERA"),
         event(4.0, 1, CLOSE, "by target (FIN)"),
     )
     (script,) = plan(s)
-    same = Outcome(1, replies={0: script.steps[0].reply, 1: script.steps[1].reply, 2: rec(3.1, 1, "reply",
-                   "CMD_GET_CAMERA", ip="a", camera_id="b")}, sent=3, closed_by_target_after=3)  # type: ignore[dict-item]  # fmt: skip
+    same = Outcome(
+        1,
+        replies={
+            0: script.steps[0].reply,
+            1: script.steps[1].reply,
+            2: rec(3.1, 1, "reply", "CMD_GET_CAMERA", ip="a", camera_id="b"),
+        },
+        sent=3,
+        closed_by_target_after=3,
+    )  # type: ignore[dict-item]
     assert [d.path for d in judge([script], {1: same})] == ["(reply)"]  # the camera was never answered on record
-    other = Outcome(1, replies={0: rec(1.1, 1, "reply", "STATUS").__class__(
-        **{**rec(1.1, 1, "reply", "STATUS").__dict__, "telegram": STATUS.replace(motion_mode=3)})}, sent=3)
+    other = Outcome(
+        1,
+        replies={
+            0: rec(1.1, 1, "reply", "STATUS").__class__(
+                **{**rec(1.1, 1, "reply", "STATUS").__dict__, "telegram": STATUS.replace(motion_mode=3)}
+            )
+        },
+        sent=3,
+    )
     diffs = judge([script], {1: other})
     assert [(d.telegram, d.path, d.recorded, d.replayed) for d in diffs] == [
         ("CMD_GET_STATUS", "motion_mode", f"{_mode(STATUS.motion_mode)}", "MODE_MOTION_VEL (3)"),
@@ -138,8 +178,10 @@ def recorded(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Path]:
         writer = SessionWriter(out / "session.jsonl")
         recorder = Recorder([], PcapngWriter(out / "session.pcapng"), writer)
         with ProxyThread(server.ports, recorder) as proxy:
-            writer.start([Route(f"127.0.0.1:{p}", f"127.0.0.1:{q}") for p, q in zip(proxy.ports, server.ports,
-                                                                                      strict=True)], time.time())
+            writer.start(
+                [Route(f"127.0.0.1:{p}", f"127.0.0.1:{q}") for p, q in zip(proxy.ports, server.ports, strict=True)],
+                time.time(),
+            )
             all_scenarios(proxy.ports)
     yield out / "session.jsonl"
 
@@ -147,8 +189,19 @@ def recorded(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Path]:
 def _replay(path: Path, ports: list[int], *extra: str) -> tuple[int, str]:
     out = io.StringIO()
     with contextlib.redirect_stdout(out):
-        code = pltf(["replay", str(path), "--target", f"127.0.0.1:{ports[0]}", "--second-port", str(ports[1]),
-                     "--reply-timeout", "10", *extra])  # fmt: skip
+        code = pltf(
+            [
+                "replay",
+                str(path),
+                "--target",
+                f"127.0.0.1:{ports[0]}",
+                "--second-port",
+                str(ports[1]),
+                "--reply-timeout",
+                "10",
+                *extra,
+            ]
+        )
     return code, out.getvalue()
 
 
@@ -163,8 +216,11 @@ def test_the_recording_holds_every_exchange(recorded: Path) -> None:
 
 def test_the_pcapng_opens_in_tshark_with_the_dissector(recorded: Path) -> None:
     s = read_session(recorded)
-    shown = telegrams(run_tshark(recorded.with_suffix(".pcapng"), "-d", f"tcp.port=={s.ports[0]},pltf", "-d",
-                                 f"tcp.port=={s.ports[1]},pltf"))  # fmt: skip
+    shown = telegrams(
+        run_tshark(
+            recorded.with_suffix(".pcapng"), "-d", f"tcp.port=={s.ports[0]},pltf", "-d", f"tcp.port=={s.ports[1]},pltf"
+        )
+    )
     in_session = [r for r in s.records if r.kind in ("frame", "raw")]
     assert len(shown) == len(in_session)
     for sh, r in zip(shown, in_session, strict=True):
@@ -186,8 +242,11 @@ def test_against_a_mutant_the_differences_are_named(recorded: Path, tmp_path: Pa
     assert code == 1, out
     assert "CMD_GET_STATUS: " in out
     assert "motion_mode: recorded MODE_MOTION_AUTOMATIC (4), replayed MODE_MOTION_VEL (3)" in out
-    failed = [c.get("name") for c in ET.parse(tmp_path / "replay.xml").getroot().iter("testcase")
-              if c.find("failure") is not None]
+    failed = [
+        c.get("name")
+        for c in ET.parse(tmp_path / "replay.xml").getroot().iter("testcase")
+        if c.find("failure") is not None
+    ]
     assert failed == ["CMD_GET_STATUS"]
 
 

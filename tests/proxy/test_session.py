@@ -16,8 +16,12 @@ BAD = bytes.fromhex("ff01fe02000000050f00000007")
 
 def _records() -> list[Record]:
     tap = Tap("request", 1, 10000)
-    return [Record(1.0, 1, 10000, OPEN, detail="client 127.0.0.1:5000"), *tap.feed(SET_MODE + BAD, 1.5),
-            *tap.feed(b"\x00junk", 1.6), Record(2.0, 1, 10000, CLOSE, detail="by client (FIN)")]
+    return [
+        Record(1.0, 1, 10000, OPEN, detail="client 127.0.0.1:5000"),
+        *tap.feed(SET_MODE + BAD, 1.5),
+        *tap.feed(b"\x00junk", 1.6),
+        Record(2.0, 1, 10000, CLOSE, detail="by client (FIN)"),
+    ]
 
 
 def _write(path: Path, records: list[Record]) -> None:
@@ -36,9 +40,15 @@ def test_round_trip(tmp_path: Path) -> None:
     assert s.started == 0.5 and s.ports == [10000, 10002]
     assert s.records == tuple(records)
     lines = [json.loads(x) for x in path.read_text().splitlines()]
-    assert lines[2] == {"time": 1.5, "conn": 1, "port": 10000, "kind": "frame", "direction": "request",
-                        "hex": SET_MODE.hex(), "telegram": {"telegram": "CMD_SET_MODE", "id": 15,
-                        "fields": {"mode": 3}, "names": {"mode": "MODE_MOTION_VEL"}}}  # fmt: skip
+    assert lines[2] == {
+        "time": 1.5,
+        "conn": 1,
+        "port": 10000,
+        "kind": "frame",
+        "direction": "request",
+        "hex": SET_MODE.hex(),
+        "telegram": {"telegram": "CMD_SET_MODE", "id": 15, "fields": {"mode": 3}, "names": {"mode": "MODE_MOTION_VEL"}},
+    }
     assert lines[3]["error"].startswith("FieldOutOfRange: ") and lines[3]["telegram"] is None
     assert lines[4]["kind"] == "raw" and lines[4]["error"].startswith("BadHeader")
 
@@ -58,18 +68,23 @@ def record_to_json_telegram(raw: bytes) -> object:
     return Tap("request", 1, 1).feed(raw, 0.0)[0].telegram
 
 
-@pytest.mark.parametrize(("content", "message"), [
-    ("", "empty"),
-    ("{}\n", "not a pltf-session file"),
-    ('{"format": "pltf-session", "version": 9, "routes": []}\n', "version 9"),
-    ('{"format": "pltf-session", "version": 1, "routes": []}\nnot json\n', ":2: "),
-    ('{"format": "pltf-session", "version": 1, "routes": []}\n{"kind": "frame"}\n', ":2: missing 'time'"),
-    ('{"format": "pltf-session", "version": 1, "routes": []}\n'
-     '{"time": 1, "conn": 1, "port": 1, "kind": "frame", "direction": "request",'
-     ' "hex": "ff01fe02000000050f00000007"}\n',
-     ":2: a frame without an error mark does not decode"),
-    ('{"format": "pltf-session", "version": 1, "routes": [{"listen": "a"}]}\n', ":1: the header's routes"),
-])  # fmt: skip
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        ("", "empty"),
+        ("{}\n", "not a pltf-session file"),
+        ('{"format": "pltf-session", "version": 9, "routes": []}\n', "version 9"),
+        ('{"format": "pltf-session", "version": 1, "routes": []}\nnot json\n', ":2: "),
+        ('{"format": "pltf-session", "version": 1, "routes": []}\n{"kind": "frame"}\n', ":2: missing 'time'"),
+        (
+            '{"format": "pltf-session", "version": 1, "routes": []}\n'
+            '{"time": 1, "conn": 1, "port": 1, "kind": "frame", "direction": "request",'
+            ' "hex": "ff01fe02000000050f00000007"}\n',
+            ":2: a frame without an error mark does not decode",
+        ),
+        ('{"format": "pltf-session", "version": 1, "routes": [{"listen": "a"}]}\n', ":1: the header's routes"),
+    ],
+)
 def test_not_a_session_is_one_line(tmp_path: Path, content: str, message: str) -> None:
     path = tmp_path / "s.jsonl"
     path.write_text(content)

@@ -69,8 +69,10 @@ def test_a_frame_over_the_maximum_is_refused_before_it_is_buffered() -> None:
     assert rec.error == "FrameTooLarge: frame length 101 over the maximum 100"
 
 
-@given(st.lists(st.sampled_from([v for v in VALID if v["direction"] == "request"]), min_size=1, max_size=6),
-       st.lists(st.integers(1, 400), max_size=20))
+@given(
+    st.lists(st.sampled_from([v for v in VALID if v["direction"] == "request"]), min_size=1, max_size=6),
+    st.lists(st.integers(1, 400), max_size=20),
+)
 def test_the_tap_agrees_with_the_codecs_stream_decoder(vectors: list[dict[str, str]], cuts: list[int]) -> None:
     stream = b"".join(bytes.fromhex(v["hex"]) for v in vectors)
     chunks, pos = [], 0

@@ -24,8 +24,12 @@ def tshark_path() -> str:
 
 
 def run_tshark(pcapng: Path, *extra: str, dissector: Path = OUTPUT) -> ET.Element:
-    proc = subprocess.run([tshark_path(), "-X", f"lua_script:{dissector}", "-r", str(pcapng), "-T", "pdml", *extra],
-                          capture_output=True, timeout=600, check=False)  # fmt: skip
+    proc = subprocess.run(
+        [tshark_path(), "-X", f"lua_script:{dissector}", "-r", str(pcapng), "-T", "pdml", *extra],
+        capture_output=True,
+        timeout=600,
+        check=False,
+    )
     assert proc.returncode == 0, proc.stderr.decode(errors="replace")[-2000:]
     lua_errors = [line for line in proc.stderr.decode(errors="replace").splitlines() if "Lua" in line]
     assert not lua_errors, lua_errors

@@ -24,8 +24,12 @@ INVALID = load("invalid.json")
 def whole_frame(v: dict[str, Any]) -> bool:
     """The vector is exactly one frame with a good header and length (its error is inside the telegram)."""
     data = bytes.fromhex(v["hex"])
-    return (len(data) >= 8 and data[:4] == b"\xff\x01\xfe\x02"
-            and int.from_bytes(data[4:8], "big") <= 16 << 20 and len(data) == 8 + int.from_bytes(data[4:8], "big"))
+    return (
+        len(data) >= 8
+        and data[:4] == b"\xff\x01\xfe\x02"
+        and int.from_bytes(data[4:8], "big") <= 16 << 20
+        and len(data) == 8 + int.from_bytes(data[4:8], "big")
+    )
 
 
 def stream_error(v: dict[str, Any]) -> str:

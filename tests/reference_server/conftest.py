@@ -80,9 +80,10 @@ class ServerThread:
             self._ready.set()
 
         self.exit_code = asyncio.run(
-            serve(self.platform, "127.0.0.1", [0, 0], self.time_scale, ready=ready, handle_signals=False,
-                  **self.options)
-        )  # fmt: skip
+            serve(
+                self.platform, "127.0.0.1", [0, 0], self.time_scale, ready=ready, handle_signals=False, **self.options
+            )
+        )
         self._ready.set()
 
     def _control_started(self, control: ControlServer) -> None:
@@ -282,8 +283,15 @@ class ServerProcess:
 # ---- the fake hardware from outside (test_hw_*.py): bytes on the socket (spec.codec), frames on the virtual CAN
 # bus decoded with spec/can/pltf.dbc, JSON lines of the control channel's TCP port; no platform object is read.
 
-STATUS_BOARDS = ("relay_status", "io_status", "motor_right_status", "motor_left_status", "us_status",
-                 "radar_status", "gyro_status")  # fmt: skip
+STATUS_BOARDS = (
+    "relay_status",
+    "io_status",
+    "motor_right_status",
+    "motor_left_status",
+    "us_status",
+    "radar_status",
+    "gyro_status",
+)
 MODE_VEL = 3  # MotionMode.MODE_MOTION_VEL
 EM_NOT_ACTIVE, EM_ACTIVE, EM_RESET = 0, 1, 2
 OP_READY, OP_RUNNING, OP_BREAKED, OP_NOT_INIT = 0, 1, 2, 3
@@ -316,8 +324,9 @@ class Sniffer:
         self.collect()
         self._mark = len(self.heard)
 
-    def wait(self, name: str, pred: Callable[[dict[str, Any]], bool] = lambda s: True, timeout: float = 5.0
-             ) -> dict[str, Any]:  # fmt: skip
+    def wait(
+        self, name: str, pred: Callable[[dict[str, Any]], bool] = lambda s: True, timeout: float = 5.0
+    ) -> dict[str, Any]:
         """The signals of the first frame ``name`` since the last ``mark`` for which ``pred`` holds."""
         deadline = time.monotonic() + timeout
         seen = self._mark

@@ -68,9 +68,11 @@ def test_every_command_is_accepted_where_allowed_and_changes_nothing_elsewhere(
             client = clients[i % 2]
             go_to(client, state)
             before = client.status()
-            assert observed(before)[:3] == (REPORTED[state], BASE_MODE if state is not State.NOT_CONNECTED
-                                            and state is not State.CONNECTED else before.motion_mode,
-                                            int(state in (State.READY, State.RUNNING, State.BREAKED)))  # fmt: skip
+            assert observed(before)[:3] == (
+                REPORTED[state],
+                BASE_MODE if state is not State.NOT_CONNECTED and state is not State.CONNECTED else before.motion_mode,
+                int(state in (State.READY, State.RUNNING, State.BREAKED)),
+            )
             telegram = request_for(name)
             if telegram.DEF.answered:
                 assert name == client.request(telegram).NAME
@@ -118,8 +120,11 @@ def test_documents_round_trip(server: ServerThread) -> None:
     program = (REPO / "fixtures" / "programs" / "every_element.xml").read_text(encoding="latin-1")
     with Client(server.ports[1]) as c:
         stored = {n: c.request(R.by_name[f"CMD_GET_{n}"]()) for n in ("MAP", "ROADMAP", "PROGRAM")}
-        c.send(R.CMD_SET_MAP(name="small", xml=small_map), R.CMD_SET_ROADMAP(name="tiny", xml=small_rm),
-               R.CMD_SET_PROGRAM(xml=program))  # fmt: skip
+        c.send(
+            R.CMD_SET_MAP(name="small", xml=small_map),
+            R.CMD_SET_ROADMAP(name="tiny", xml=small_rm),
+            R.CMD_SET_PROGRAM(xml=program),
+        )
         assert tuple(c.request(R.CMD_GET_MAP())) == (small_map, "small")
         assert tuple(c.request(R.CMD_GET_ROADMAP())) == (small_rm, "tiny")
         assert c.request(R.CMD_GET_PROGRAM()).xml == program
@@ -138,9 +143,16 @@ def test_documents_round_trip(server: ServerThread) -> None:
 
 @pytest.mark.parametrize(
     ("kind", "invalid"),
-    [("MAP", "missing_point.map"), ("MAP", "xxe_system.map"), ("MAP", "billion_laughs.map"), ("MAP", "wrong_root.map"),
-     ("ROADMAP", "dangling_edge.rm"), ("ROADMAP", "bad_number.rm"), ("PROGRAM", "unknown_element.xml")],
-)  # fmt: skip
+    [
+        ("MAP", "missing_point.map"),
+        ("MAP", "xxe_system.map"),
+        ("MAP", "billion_laughs.map"),
+        ("MAP", "wrong_root.map"),
+        ("ROADMAP", "dangling_edge.rm"),
+        ("ROADMAP", "bad_number.rm"),
+        ("PROGRAM", "unknown_element.xml"),
+    ],
+)
 def test_invalid_document_is_refused_and_the_active_one_stays(server: ServerThread, kind: str, invalid: str) -> None:
     xml = (REPO / "fixtures" / "invalid" / invalid).read_bytes().decode("latin-1")
     with Client(server.ports[0]) as c:
@@ -409,8 +421,9 @@ def test_replies_the_client_does_not_read_yet_are_all_delivered_in_order(server:
     """Far more reply bytes than the socket buffers hold: reading pauses, then every reply arrives, in order."""
     with Client(server.ports[0]) as c:
         n = 300
-        c.send_raw(b"".join(encode(R.CMD_GET_PLTF_PARAM_VEC()) if i % 2 else encode(R.CMD_GET_STATUS())
-                            for i in range(n)))  # fmt: skip
+        c.send_raw(
+            b"".join(encode(R.CMD_GET_PLTF_PARAM_VEC()) if i % 2 else encode(R.CMD_GET_STATUS()) for i in range(n))
+        )
         time.sleep(0.3)  # the server runs into its high-water mark while we do not read
         names = [c.receive().NAME for _ in range(n)]
         assert names == ["CMD_GET_PLTF_PARAM_VEC" if i % 2 else "CMD_GET_STATUS" for i in range(n)]

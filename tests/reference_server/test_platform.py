@@ -88,8 +88,15 @@ def test_only_get_requests_are_answered(sim: Sim) -> None:
 
 def test_absent_boards_are_reported_absent_never_invented(sim: Sim) -> None:
     s = sim.status()
-    for name in ("relay_status", "io_status", "motor_right_status", "motor_left_status", "us_status",
-                 "radar_status", "gyro_status"):  # fmt: skip
+    for name in (
+        "relay_status",
+        "io_status",
+        "motor_right_status",
+        "motor_left_status",
+        "us_status",
+        "radar_status",
+        "gyro_status",
+    ):
         assert getattr(s, name) == ABSENT
     assert set(s.us_distance) == {0} and set(s.io_analog_in) == {0} and s.io_battery_voltage == 0
     assert s.scan == () and s.joystick_buttons == ()
@@ -143,8 +150,12 @@ def test_move_to_station_and_its_refusals(sim: Sim) -> None:
 
 def test_moves_have_no_effect_in_the_wrong_mode(sim: Sim) -> None:
     sim.to_running(MotionMode.MODE_MOTION_NO)
-    for t in (R.CMD_MOVE_REL(x=500, y=0, angle=0), R.CMD_MOVE_VEL(vel_trans=300, vel_rot=0),
-              R.CMD_MOVE_VEL_WHEEL(vel_right=300, vel_left=300), R.CMD_MOVE_TO_STATION(station="Kitchen")):  # fmt: skip
+    for t in (
+        R.CMD_MOVE_REL(x=500, y=0, angle=0),
+        R.CMD_MOVE_VEL(vel_trans=300, vel_rot=0),
+        R.CMD_MOVE_VEL_WHEEL(vel_right=300, vel_left=300),
+        R.CMD_MOVE_TO_STATION(station="Kitchen"),
+    ):
         outcome = sim(t)
         assert outcome.refused is None and "no effect" in outcome.ignored
     sim.run(1)

@@ -35,8 +35,14 @@ def test_start_up_log_and_exit_status_after_cmd_exit(tmp_path: Path) -> None:
     finally:
         srv.kill()
     log = srv.log()
-    for line in ("server started at port", "init pose read from", "load map: ", "load roadmap: ", "system state: ",
-                 "server stopped"):  # fmt: skip
+    for line in (
+        "server started at port",
+        "init pose read from",
+        "load map: ",
+        "load roadmap: ",
+        "system state: ",
+        "server stopped",
+    ):
         assert line in log, line
     assert len(set(srv.ports)) == 2 and 0 not in srv.ports
 
@@ -56,8 +62,9 @@ def test_signals_exit_cleanly(tmp_path: Path, sig: signal.Signals) -> None:
 
 
 def test_pltf_serve_is_the_same_server(tmp_path: Path) -> None:
-    srv = ServerProcess(tmp_path / "data", tmp_path / "log", "--seed", "7", "--log-level", "DEBUG",
-                        module="pltf.cli.main")  # fmt: skip
+    srv = ServerProcess(
+        tmp_path / "data", tmp_path / "log", "--seed", "7", "--log-level", "DEBUG", module="pltf.cli.main"
+    )
     try:
         with Client(srv.ports[0]) as c:
             assert c.request(R.CMD_GET_MAP()).name == "PltfMap.map"
@@ -69,8 +76,9 @@ def test_pltf_serve_is_the_same_server(tmp_path: Path) -> None:
 
 @pytest.mark.parametrize("args", [["--ports", "10000,x"], ["--ports", "70000"], ["--time-scale", "0"]])
 def test_bad_options_exit_2(args: list[str]) -> None:
-    done = subprocess.run([sys.executable, "-m", "pltf.reference_server", *args], cwd=REPO, capture_output=True,
-                          timeout=20, check=False)  # fmt: skip
+    done = subprocess.run(
+        [sys.executable, "-m", "pltf.reference_server", *args], cwd=REPO, capture_output=True, timeout=20, check=False
+    )
     assert done.returncode == 2
     assert b"error" in done.stderr
 
@@ -82,8 +90,11 @@ def test_a_port_in_use_is_a_one_line_error(tmp_path: Path) -> None:
         port = taken.getsockname()[1]
         done = subprocess.run(
             [sys.executable, "-m", "pltf.reference_server", "--ports", f"0,{port}", "--data-dir", str(tmp_path)],
-            cwd=REPO, capture_output=True, timeout=20, check=False,
-        )  # fmt: skip
+            cwd=REPO,
+            capture_output=True,
+            timeout=20,
+            check=False,
+        )
     assert done.returncode == 2
     assert b"cannot listen" in done.stderr
 

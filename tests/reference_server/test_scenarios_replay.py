@@ -85,8 +85,24 @@ def scripted_run(tmp_path: Path, seed: int) -> list[tuple[Any, ...]]:
                 for _ in range(round(seconds / EVERY)):
                     srv.advance(EVERY)
                     s = c.status()
-                    out.append((s.timestamp, s.est_x, s.est_y, s.est_angle, s.cov_major, s.cov_minor, s.vel_trans,
-                                s.vel_rot, s.cmd_x, s.cmd_y, s.path, s.scan, s.lines, s.corners))  # fmt: skip
+                    out.append(
+                        (
+                            s.timestamp,
+                            s.est_x,
+                            s.est_y,
+                            s.est_angle,
+                            s.cov_major,
+                            s.cov_minor,
+                            s.vel_trans,
+                            s.vel_rot,
+                            s.cmd_x,
+                            s.cmd_y,
+                            s.path,
+                            s.scan,
+                            s.lines,
+                            s.corners,
+                        )
+                    )
 
             srv.advance(0.2)
             running(c, MotionMode.MODE_MOTION_AUTOMATIC)

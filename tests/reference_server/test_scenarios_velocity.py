@@ -107,8 +107,9 @@ def test_joystick_hard_moves_nothing(stepped_server: SteppedServer, client: Clie
     assert (x, y, v) == (START[0], START[1], 0.0)
 
 
-def test_break_stops_within_one_control_cycle_and_continue_resumes(stepped_server: SteppedServer,
-                                                                   client: Client) -> None:
+def test_break_stops_within_one_control_cycle_and_continue_resumes(
+    stepped_server: SteppedServer, client: Client
+) -> None:
     running(client, MotionMode.MODE_MOTION_AUTOMATIC)
     command(client, R.CMD_MOVE_ABS(x=8000, y=10000, angle=0))
     trace = stepped_poll(stepped_server, client, 6.0, until=lambda s: s.vel_trans >= 900)

@@ -19,8 +19,10 @@ def test_path_points_round_half_to_even_and_saturate() -> None:
 
 def test_path_points_equal_the_scalar_conversion() -> None:
     rng = random.Random(4)
-    frames = [(rng.uniform(-3e9, 3e9), rng.choice([rng.uniform(-1e5, 1e5), rng.randrange(-50, 50) + 0.5]), 0.0)
-              for _ in range(2000)]  # fmt: skip
+    frames = [
+        (rng.uniform(-3e9, 3e9), rng.choice([rng.uniform(-1e5, 1e5), rng.randrange(-50, 50) + 0.5]), 0.0)
+        for _ in range(2000)
+    ]
     got = _i32_points(frames)
     assert got == tuple((_i32(x), _i32(y)) for x, y, _ in frames)
     assert all(type(v) is int for pair in got for v in pair)  # the codec's INT fields take Python ints

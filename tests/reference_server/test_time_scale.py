@@ -171,15 +171,21 @@ def scenario() -> list[tuple[float, Any]]:
     """Issue 23's sequence and velocity commands, with GET_STATUS every 50 simulated ms."""
     auto, vel = MotionMode.MODE_MOTION_AUTOMATIC, MotionMode.MODE_MOTION_VEL
     steps: list[tuple[float, Any]] = [
-        (0.0, R.CMD_CONNECT_TO_PLTF()), (0.0, R.CMD_INIT_PLTF()),
-        (1.0, R.CMD_SET_MODE(mode=auto)), (1.0, R.CMD_START()),
+        (0.0, R.CMD_CONNECT_TO_PLTF()),
+        (0.0, R.CMD_INIT_PLTF()),
+        (1.0, R.CMD_SET_MODE(mode=auto)),
+        (1.0, R.CMD_START()),
         (1.5, R.CMD_MOVE_ABS(x=2600, y=10000, angle=0)),
-        (2.107, R.CMD_SHUTDOWN_PLTF()), (2.131, R.CMD_CONNECT_TO_PLTF()), (2.131, R.CMD_INIT_PLTF()),
+        (2.107, R.CMD_SHUTDOWN_PLTF()),
+        (2.131, R.CMD_CONNECT_TO_PLTF()),
+        (2.131, R.CMD_INIT_PLTF()),
         (2.163, R.CMD_START()),
-        (3.5, R.CMD_STOP()), (3.5, R.CMD_SET_MODE(mode=vel)), (3.51, R.CMD_START()),
+        (3.5, R.CMD_STOP()),
+        (3.5, R.CMD_SET_MODE(mode=vel)),
+        (3.51, R.CMD_START()),
         *[(3.6 + 0.1 * k, R.CMD_MOVE_VEL(vel_trans=300, vel_rot=200)) for k in range(10)],
         (4.65, R.CMD_BREAK()),
-    ]  # fmt: skip
+    ]
     steps += [(0.05 * k + 0.001, R.CMD_GET_STATUS()) for k in range(110)]
     # off the control periods' grid: a time on it is a tick's or the next one's by a rounding error
     return sorted(((t + 0.0071, telegram) for t, telegram in steps), key=lambda s: s[0])

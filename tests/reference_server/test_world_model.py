@@ -70,9 +70,11 @@ def test_a_map_beyond_the_telegrams_range_is_refused_and_the_status_still_answer
 def test_walls_as_long_as_the_telegrams_allow_are_observed_without_a_huge_grid() -> None:
     # a fuzzer's map: a wall across the whole int32 range made the corner search ask for 33 TiB
     big = 2147483647
-    lines = (f'<line><point x="-{big}" y="-{big}"/><point x="{big}" y="{big}"/></line>'
-             '<line><point x="0" y="0"/><point x="0" y="-5000"/></line>'  # ends on the long wall: a T
-             f'<line><point x="{big}" y="0"/><point x="-{big}" y="1"/></line>')  # fmt: skip
+    lines = (
+        f'<line><point x="-{big}" y="-{big}"/><point x="{big}" y="{big}"/></line>'
+        '<line><point x="0" y="0"/><point x="0" y="-5000"/></line>'  # ends on the long wall: a T
+        f'<line><point x="{big}" y="0"/><point x="-{big}" y="1"/></line>'
+    )
     tree = validate_document(DocumentKind.MAP, f'<map><layer index="0">{lines}</layer></map>'.encode())
     world = factory(2)(ParameterStore().get)
     world.set_map_tree(tree)

@@ -56,7 +56,8 @@ def test_threads_compiling_at_once_share_one_class_and_can_encode_it(monkeypatch
     assert len(set(got)) == 1
     telegram = got[0](x=1000, y=-5, angle=90)
     assert fresh.encode_data(telegram) == bytes([telegram_def("CMD_MOVE_ABS").id]) + bytes.fromhex(
-        "000003e8fffffffb0000005a")
+        "000003e8fffffffb0000005a"
+    )
 
 
 def test_the_module_sets_encode_and_decode_as_before() -> None:

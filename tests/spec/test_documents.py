@@ -352,13 +352,17 @@ def test_coordinates_are_decimal_numbers(value: str, valid: bool) -> None:  # E-
     ],
 )
 def test_coordinates_and_angles_stay_within_what_the_telegrams_carry(
-        coord: str, angle: str, coord_ok: bool, angle_ok: bool) -> None:  # E-XML-025
-    check(MAP, f'<map><layer><line><point x="{coord}" y="0"/><point x="1" y="1"/></line></layer></map>',
-          valid=coord_ok)
+    coord: str, angle: str, coord_ok: bool, angle_ok: bool
+) -> None:  # E-XML-025
+    check(MAP, f'<map><layer><line><point x="{coord}" y="0"/><point x="1" y="1"/></line></layer></map>', valid=coord_ok)
     station = f'<station id="s" angle="{angle}"><point x="{coord}" y="0"/></station>'
     check(ROADMAP, f"<roadmap><stations>{station}</stations><edges/></roadmap>", valid=coord_ok and angle_ok)
-    check(TASK, f'<task><turnhead angle="{angle}"/><motion><settarget><coord x="{coord}" y="0" angle="0"/>'
-                f'</settarget></motion></task>', valid=coord_ok and angle_ok)  # fmt: skip
+    check(
+        TASK,
+        f'<task><turnhead angle="{angle}"/><motion><settarget><coord x="{coord}" y="0" angle="0"/>'
+        f"</settarget></motion></task>",
+        valid=coord_ok and angle_ok,
+    )
 
 
 @pytest.mark.parametrize(

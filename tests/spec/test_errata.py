@@ -34,9 +34,19 @@ def test_applies_to_names_real_telegrams() -> None:
 
 def test_known_contradictions_of_the_field_evidence_are_decided() -> None:
     # field-evidence.md "Known gaps and contradictions": each has a decision on record.
-    for telegram in ("CMD_GET_STATUS", "CMD_GET_MAP", "CMD_GET_ROADMAP", "CMD_GET_PROGRAM", "CMD_GET_PLTF_PARAM",
-                     "CMD_GET_CAN_MESSAGES", "CMD_SET_LOG_ENABLED", "CMD_SET_POST_PROCESS_FILENAME",
-                     "CMD_GET_DEBUG_DATA", "CMD_MOVE_VEL", "CMD_GET_POSITION"):
+    for telegram in (
+        "CMD_GET_STATUS",
+        "CMD_GET_MAP",
+        "CMD_GET_ROADMAP",
+        "CMD_GET_PROGRAM",
+        "CMD_GET_PLTF_PARAM",
+        "CMD_GET_CAN_MESSAGES",
+        "CMD_SET_LOG_ENABLED",
+        "CMD_SET_POST_PROCESS_FILENAME",
+        "CMD_GET_DEBUG_DATA",
+        "CMD_MOVE_VEL",
+        "CMD_GET_POSITION",
+    ):
         assert errata_for(telegram), telegram
     sections = " ".join(f"{e.section} {e.guide} {e.problem}" for e in load_errata().values())
     for topic in ("Version", "edge", "wait", "layer"):

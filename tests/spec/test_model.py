@@ -40,16 +40,18 @@ def test_a_yaml_edited_after_its_copy_is_read_from_the_yaml(tmp_path: Path, monk
     monkeypatch.setattr(model, "SPEC_DIR", tmp_path)
     assert load_data("enums.yaml") == load_yaml("enums.yaml")
     yaml_path = tmp_path / "enums.yaml"
-    yaml_path.write_text(yaml_path.read_text(encoding="utf-8").replace("MODE_MOTION_VEL", "MODE_MOTION_VELOCITY"),
-                         encoding="utf-8")
+    yaml_path.write_text(
+        yaml_path.read_text(encoding="utf-8").replace("MODE_MOTION_VEL", "MODE_MOTION_VELOCITY"), encoding="utf-8"
+    )
     edited = load_data("enums.yaml")
     assert "MODE_MOTION_VELOCITY" in str(edited) and edited == load_yaml("enums.yaml")
     (tmp_path / "enums.json").write_text("{not json", encoding="utf-8")
     assert load_data("enums.yaml") == edited
 
 
-def test_docgen_check_names_a_stale_copy(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
-                                          capsys: pytest.CaptureFixture[str]) -> None:
+def test_docgen_check_names_a_stale_copy(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
     stale = tmp_path / "telegrams.json"
     stale.write_text("{}", encoding="utf-8")
     monkeypatch.setattr(docgen, "json_copy", lambda name: stale if name == "telegrams.yaml" else json_copy(name))

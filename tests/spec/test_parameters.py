@@ -51,9 +51,16 @@ GUIDE_NAMES = {
     Category.LOCALIZATION: ["GlobalLocalization", "LineExtractMaxCov", "LocalLocalization", "MappingMode"],
 }
 ADDED_NAMES = [
-    "VelWatchdogTime", "JoySoftVelTimeout", "MaxTransVel", "MaxRotVel", "MaxTransAcc", "MaxRotAcc",
-    "TargetReachedTolPos", "TargetReachedTolAngle", "PathObstacleWaitTime",
-]  # fmt: skip
+    "VelWatchdogTime",
+    "JoySoftVelTimeout",
+    "MaxTransVel",
+    "MaxRotVel",
+    "MaxTransAcc",
+    "MaxRotAcc",
+    "TargetReachedTolPos",
+    "TargetReachedTolAngle",
+    "PathObstacleWaitTime",
+]
 
 
 def ids(rows: list[Parameter]) -> list[str]:
@@ -83,10 +90,18 @@ def outside(p: Parameter) -> list[str]:
 # --- enums and table --------------------------------------------------------------------------------
 def test_enums_match_guide_6_4() -> None:
     assert [(c.name, c.value) for c in Category] == [
-        ("GEOM", 0), ("PLANNING", 1), ("IPO", 2), ("LOCALIZATION", 3), ("TRACKING_DETECTION", 4),
-        ("COLLISION", 5), ("SURVEILLANCE", 6), ("MOTION_CTRL", 7), ("MAPPING", 8), ("USONIC", 9),
+        ("GEOM", 0),
+        ("PLANNING", 1),
+        ("IPO", 2),
+        ("LOCALIZATION", 3),
+        ("TRACKING_DETECTION", 4),
+        ("COLLISION", 5),
+        ("SURVEILLANCE", 6),
+        ("MOTION_CTRL", 7),
+        ("MAPPING", 8),
+        ("USONIC", 9),
         ("INFRARED", 10),
-    ]  # fmt: skip
+    ]
     assert [(t.name, t.value) for t in DataType] == [("BOOLEAN", 0), ("INTEGER", 1), ("DOUBLE", 2)]
 
 
@@ -188,9 +203,16 @@ def test_range_refused_just_outside(p: Parameter) -> None:
 
 @pytest.mark.parametrize(
     ("text", "value"),
-    [("true", True), ("false", False), ("TRUE", True), ("False", False), ("1", True), ("0", False),
-     (" true\r\n", True)],
-)  # fmt: skip
+    [
+        ("true", True),
+        ("false", False),
+        ("TRUE", True),
+        ("False", False),
+        ("1", True),
+        ("0", False),
+        (" true\r\n", True),
+    ],
+)
 def test_boolean_text(text: str, value: bool) -> None:
     assert TABLE["CollCheckEnabled"].parse(text) is value
 
@@ -211,9 +233,23 @@ def test_canonical_text() -> None:
 BAD_TEXT = {
     "CollCheckEnabled": ["", "yes", "on", "off", "2", "-1", "t", "truex", "1.0", "tru e"],
     "IpoTransVel": ["", "1000.0", "1e3", "0x3e8", "1_000", "１０００", "10 00", "abc", "--5", "+", "1000mm/s"],
-    "IpoRotVel": ["", "0,6", "nan", "NaN", "inf", "-inf", "1e999", ".", "e1", "0.6.1", "0x1p-1", "0.6rad",
-                  "1_0.0", "٠.٦"],
-}  # fmt: skip
+    "IpoRotVel": [
+        "",
+        "0,6",
+        "nan",
+        "NaN",
+        "inf",
+        "-inf",
+        "1e999",
+        ".",
+        "e1",
+        "0.6.1",
+        "0x1p-1",
+        "0.6rad",
+        "1_0.0",
+        "٠.٦",
+    ],
+}
 
 
 @pytest.mark.parametrize(("name", "text"), [(n, t) for n, texts in BAD_TEXT.items() for t in texts])
@@ -235,9 +271,16 @@ def test_huge_integer_text_refused() -> None:
 
 @pytest.mark.parametrize(
     ("name", "value"),
-    [("CollCheckEnabled", 1), ("IpoTransVel", True), ("IpoTransVel", 1000.0), ("IpoRotVel", math.nan),
-     ("IpoRotVel", "0.6"), ("IpoRotVel", 10**400), ("IpoRotVel", False)],
-)  # fmt: skip
+    [
+        ("CollCheckEnabled", 1),
+        ("IpoTransVel", True),
+        ("IpoTransVel", 1000.0),
+        ("IpoRotVel", math.nan),
+        ("IpoRotVel", "0.6"),
+        ("IpoRotVel", 10**400),
+        ("IpoRotVel", False),
+    ],
+)
 def test_format_refuses_wrong_python_type(name: str, value: Any) -> None:
     with pytest.raises(ParameterError):
         TABLE[name].format(value)
@@ -316,8 +359,9 @@ def test_store_set_and_reset(p: Parameter) -> None:
     assert store.get(p.name) == p.default
 
 
-@pytest.mark.parametrize("name", ["NoSuchParameter", "iporotvel", "IPOROTVEL", "IpoRotvel", "Planning Enabled",
-                                  " IpoRotVel", ""])  # fmt: skip
+@pytest.mark.parametrize(
+    "name", ["NoSuchParameter", "iporotvel", "IPOROTVEL", "IpoRotvel", "Planning Enabled", " IpoRotVel", ""]
+)
 def test_store_unknown_name(name: str) -> None:
     store = ParameterStore()
     for call in (lambda: store.get(name), lambda: store.get_text(name), lambda: store.set_text(name, "1")):

@@ -21,8 +21,15 @@ from pltf.spec.codec import REPLIES, REQUESTS, decode_frame, encode
 from pltf.spec.jsonio import fields_to_telegram, telegram_to_json
 
 VECTORS = Path(__file__).resolve().parents[2] / "fixtures" / "vectors"
-ERROR_NAMES = {"BadHeader", "FrameTooLarge", "Truncated", "TrailingBytes", "UnknownTelegram", "FieldOutOfRange",
-               "LengthMismatch"}
+ERROR_NAMES = {
+    "BadHeader",
+    "FrameTooLarge",
+    "Truncated",
+    "TrailingBytes",
+    "UnknownTelegram",
+    "FieldOutOfRange",
+    "LengthMismatch",
+}
 VALID_KEYS = {"name", "telegram", "id", "direction", "hex", "fields", "source"}
 INVALID_KEYS = {"name", "direction", "hex", "error", "why"}
 
@@ -91,8 +98,12 @@ def test_vector_format() -> None:
 
 def test_the_seven_captures_are_included_verbatim() -> None:
     captured = {
-        "ff01fe020000000100", "ff01fe02000000010e", "ff01fe02000000010d", "ff01fe02000000050f00000003",
-        "ff01fe0200000009170000012c0000012c", "ff01fe020000000917fffffed4fffffed4",
+        "ff01fe020000000100",
+        "ff01fe02000000010e",
+        "ff01fe02000000010d",
+        "ff01fe02000000050f00000003",
+        "ff01fe0200000009170000012c0000012c",
+        "ff01fe020000000917fffffed4fffffed4",
         "ff01fe020000000d16000003e80000000000000000",
     }
     got = {v["hex"] for v in REQUEST_VECTORS if v["source"] == "field-evidence capture"}
@@ -136,8 +147,11 @@ def test_cli_decode_and_encode_agree(vector: dict[str, Any], capsys: pytest.Capt
     lines = out.splitlines()
     assert len(lines) == 1
     printed = json.loads(lines[0])
-    assert (printed["telegram"], printed["id"], printed["fields"]) == (vector["telegram"], vector["id"],
-                                                                       vector["fields"])
+    assert (printed["telegram"], printed["id"], printed["fields"]) == (
+        vector["telegram"],
+        vector["id"],
+        vector["fields"],
+    )
 
     assert pltf(["encode", vector["telegram"], json.dumps(vector["fields"]), *_flag(vector["direction"])]) == 0
     out, err = capsys.readouterr()

@@ -46,8 +46,13 @@ def test_crash_after_start_needs_its_prelude() -> None:
     assert faults[:3] == [None] * 3 and faults[3].kind == "crash" and "MODE_MOTION_NO" in faults[3].why
     auto = [PRELUDE[0], PRELUDE[1], req("CMD_SET_MODE", mode=AUTO), PRELUDE[2], MOVE]
     assert feed(CrashAfterStart(), auto) == [None] * 5  # mode Automatic takes path commands
-    vel = [PRELUDE[0], PRELUDE[1], req("CMD_SET_MODE", mode=VEL), PRELUDE[2], req("CMD_MOVE_VEL", vel_trans=100,
-                                                                                vel_rot=0)]
+    vel = [
+        PRELUDE[0],
+        PRELUDE[1],
+        req("CMD_SET_MODE", mode=VEL),
+        PRELUDE[2],
+        req("CMD_MOVE_VEL", vel_trans=100, vel_rot=0),
+    ]
     assert feed(CrashAfterStart(), vel) == [None] * 5  # a velocity command is not a path command
 
 

@@ -11,8 +11,11 @@ import pytest
 from pltf.zoo.frames import FrameCutter, Piece
 
 VECTORS = Path(__file__).resolve().parents[2] / "fixtures" / "vectors"
-FRAMES = [bytes.fromhex(v["hex"]) for name in ("requests.json", "replies.json")
-          for v in json.loads((VECTORS / name).read_text(encoding="utf-8"))]
+FRAMES = [
+    bytes.fromhex(v["hex"])
+    for name in ("requests.json", "replies.json")
+    for v in json.loads((VECTORS / name).read_text(encoding="utf-8"))
+]
 
 
 def cut(chunks: list[bytes]) -> list[Piece]:

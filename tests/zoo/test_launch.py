@@ -94,10 +94,17 @@ def test_stop_ends_the_whole_process_group(tmp_path: Path) -> None:
 
 def test_a_target_dies_with_the_harness_that_started_it(tmp_path: Path) -> None:
     harness = subprocess.Popen(
-        [sys.executable, "-c", "import sys,time\nfrom pltf.zoo import launch\n"
-         "t = launch.Launcher(sys.argv[1], '127.0.0.1', 0, 0); t.start()\n"
-         "print(t.pid, t.tmpdir, t._log.name, flush=True); time.sleep(60)",
-         tiny(tmp_path)], stdout=subprocess.PIPE, text=True)
+        [
+            sys.executable,
+            "-c",
+            "import sys,time\nfrom pltf.zoo import launch\n"
+            "t = launch.Launcher(sys.argv[1], '127.0.0.1', 0, 0); t.start()\n"
+            "print(t.pid, t.tmpdir, t._log.name, flush=True); time.sleep(60)",
+            tiny(tmp_path),
+        ],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
     assert harness.stdout is not None
     pid, tmpdir, log = harness.stdout.readline().split()
     harness.send_signal(signal.SIGKILL)  # no clean-up runs in the harness

@@ -30,8 +30,14 @@ PLANTED = [m.name for m in MEMBERS.values() if not m.conforming]
 BAD = (Verdict.FAIL, Verdict.ERROR)
 
 
-def conform(kind: str, *, tier: Tier = Tier.STANDARD, profile: str = "strict", keyword: str | None = None,
-            extra: Sequence[str] = ()) -> tuple[RunResult, int | None]:
+def conform(
+    kind: str,
+    *,
+    tier: Tier = Tier.STANDARD,
+    profile: str = "strict",
+    keyword: str | None = None,
+    extra: Sequence[str] = (),
+) -> tuple[RunResult, int | None]:
     """A bounded run (the command line's default budget) against a fresh target; the run and the target's exit
     status when it died during the run (None when it was still alive)."""
     if kind.startswith("zoo:"):
@@ -42,8 +48,9 @@ def conform(kind: str, *, tier: Tier = Tier.STANDARD, profile: str = "strict", k
         scale = SCALE[kind]
         target = launch.target(kind, time_scale=scale)
     with target:
-        config = Config("127.0.0.1", target.ports[0], target.ports[1], time_scale=scale, simulator=True,
-                        profile=profile, tier=tier)
+        config = Config(
+            "127.0.0.1", target.ports[0], target.ports[1], time_scale=scale, simulator=True, profile=profile, tier=tier
+        )
         config.run_budget = pace.run_budget(config)
         run = Runner(config, select(load_all().values(), tier=tier, keyword=keyword)).run()
         died = target.exit_code()
@@ -51,8 +58,11 @@ def conform(kind: str, *, tier: Tier = Tier.STANDARD, profile: str = "strict", k
 
 
 def bad(run: RunResult) -> list[str]:
-    return [f"{r.case.id}: {r.verdict} {r.message[:200]}" for r in run.results
-            if r.verdict in BAD or r.verdict is Verdict.INCONCLUSIVE]
+    return [
+        f"{r.case.id}: {r.verdict} {r.message[:200]}"
+        for r in run.results
+        if r.verdict in BAD or r.verdict is Verdict.INCONCLUSIVE
+    ]
 
 
 def verdict(run: RunResult, case_id: str) -> tuple[Verdict, str]:
@@ -91,9 +101,10 @@ def test_accept_once_reads_as_the_backlog_alternative_never_as_a_failure() -> No
 
 def test_crash_after_start_fails_where_its_prelude_is_reached() -> None:
     # run order: ports, state (the prelude: CONNECT, INIT, START), ..., motion (a path command in mode No), programs
-    run, died = conform(f"zoo:crash-after-start@{BACKEND}",
-                        keyword="6.1/ports/both-serve or 4.2/chart/full-cycle or MODE_MOTION_NO/moves-ignored "
-                                "or 4.5/program/*")
+    run, died = conform(
+        f"zoo:crash-after-start@{BACKEND}",
+        keyword="6.1/ports/both-serve or 4.2/chart/full-cycle or MODE_MOTION_NO/moves-ignored or 4.5/program/*",
+    )
     assert [verdict(run, c)[0] for c in ("6.1/ports/both-serve", "4.2/chart/full-cycle")] == [Verdict.PASS] * 2
     v, message = verdict(run, "4.3/MODE_MOTION_NO/moves-ignored")
     assert v is Verdict.FAIL, message
@@ -104,8 +115,10 @@ def test_crash_after_start_fails_where_its_prelude_is_reached() -> None:
 
 def test_hang_unknown_key_fails_and_the_run_ends() -> None:
     # run order: ..., parameters (the unknown key), documents
-    run, died = conform(f"zoo:hang-unknown-key@{BACKEND}",
-                        keyword="6.1/ports/both-serve or 6.3/CMD_SET_PLTF_PARAM/unknown-key or documents")
+    run, died = conform(
+        f"zoo:hang-unknown-key@{BACKEND}",
+        keyword="6.1/ports/both-serve or 6.3/CMD_SET_PLTF_PARAM/unknown-key or documents",
+    )
     v, message = verdict(run, "6.3/CMD_SET_PLTF_PARAM/unknown-key")  # a SHOULD case, but the target hangs
     assert v is Verdict.FAIL and "stopped answering during this case" in message, message
     not_run = [r for r in run.results if r.message.startswith("not run: the target stopped answering at")]
@@ -159,8 +172,11 @@ def test_the_standard_tier_on_every_member_ends_within_5_minutes(kind: str) -> N
         return
     if kind.startswith(SLOW_LINK_GAP):  # bounded and never wrong: what ran passed, the rest was not run
         assert all(r.verdict not in BAD for r in run.results), "\n".join(bad(run))
-        assert all(r.message.startswith(("not run: the run's budget", "case budget"))
-                   for r in run.results if r.verdict is Verdict.INCONCLUSIVE)
+        assert all(
+            r.message.startswith(("not run: the run's budget", "case budget"))
+            for r in run.results
+            if r.verdict is Verdict.INCONCLUSIVE
+        )
         return
     assert not bad(run), "\n".join(bad(run))
     assert run.exit_code == 0

@@ -33,8 +33,9 @@ def upstream() -> Iterator[launch.Launched]:
 @contextmanager
 def member(upstream: launch.Launched, name: str, *extra: str) -> Iterator[launch.Launched]:
     a, b = upstream.ports
-    with launch.Launched(launch.python("pltf.zoo", name, "--upstream", f"127.0.0.1:{a},{b}", *extra),
-                         name=f"zoo {name}") as z:
+    with launch.Launched(
+        launch.python("pltf.zoo", name, "--upstream", f"127.0.0.1:{a},{b}", *extra), name=f"zoo {name}"
+    ) as z:
         yield z
 
 
@@ -106,8 +107,9 @@ def test_faithful_passes_every_byte_on_both_ports(upstream: launch.Launched) -> 
 
 
 @pytest.mark.parametrize(("name", "how"), [("slow-release", "fin"), ("slow-release-rst", "rst")])
-def test_slow_release_turns_newcomers_away_until_the_window_ends(upstream: launch.Launched, name: str,
-                                                                 how: str) -> None:
+def test_slow_release_turns_newcomers_away_until_the_window_ends(
+    upstream: launch.Launched, name: str, how: str
+) -> None:
     with member(upstream, name, "--release-ms", "600,600") as z:
         first = connect(z)
         first.sendall(STATUS)
@@ -151,8 +153,11 @@ def test_slow_link_replies_late(upstream: launch.Launched) -> None:
 
 def _capture(port: int, out: Path) -> subprocess.Popen[bytes]:
     with (out.parent / "dumpcap.log").open("wb") as log:
-        return subprocess.Popen(["dumpcap", "-q", "-i", "lo", "-f", f"tcp src port {port}", "-w", str(out)],
-                                stdout=subprocess.DEVNULL, stderr=log)
+        return subprocess.Popen(
+            ["dumpcap", "-q", "-i", "lo", "-f", f"tcp src port {port}", "-w", str(out)],
+            stdout=subprocess.DEVNULL,
+            stderr=log,
+        )
 
 
 def test_slow_link_tears_and_coalesces_replies_on_the_wire(upstream: launch.Launched, tmp_path: Path) -> None:
@@ -170,8 +175,13 @@ def test_slow_link_tears_and_coalesces_replies_on_the_wire(upstream: launch.Laun
         time.sleep(0.5)
         cap.terminate()
         cap.wait(10)
-    fields = subprocess.run(["tshark", "-r", str(pcap), "-T", "fields", "-e", "tcp.len"], capture_output=True,
-                            text=True, check=True, timeout=60).stdout.split()
+    fields = subprocess.run(
+        ["tshark", "-r", str(pcap), "-T", "fields", "-e", "tcp.len"],
+        capture_output=True,
+        text=True,
+        check=True,
+        timeout=60,
+    ).stdout.split()
     sizes = [int(n) for n in fields if int(n) > 0]
     frame = len(encode(got[0]))
     assert sum(sizes) == 6 * frame
@@ -217,8 +227,13 @@ def test_crash_after_start_dies_behind_its_prelude_only(upstream: launch.Launche
             replies(s)
         assert z.alive()
         with connect(z) as s:
-            s.sendall(encode(build("request", "CMD_STOP")) + encode(build("request", "CMD_SET_MODE", mode=0))
-                      + encode(build("request", "CMD_START")) + MOVE + STATUS)
+            s.sendall(
+                encode(build("request", "CMD_STOP"))
+                + encode(build("request", "CMD_SET_MODE", mode=0))
+                + encode(build("request", "CMD_START"))
+                + MOVE
+                + STATUS
+            )
             assert turned_away(s) in ("fin", "rst")  # died: the connection ends without a reply
         assert z.proc is not None and z.proc.wait(5) == 134
         assert any("crash: CMD_MOVE_REL in running" in line for line in z.output)

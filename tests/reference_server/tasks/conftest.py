@@ -83,8 +83,9 @@ class Session:
     def run_remote(self, xml: str, data_dir: Path, *, seed: int = 1, timeout: float = 600.0) -> RunResult:
         prepare(self.client)
         machine = RemoteMachine(self.client, data_dir, EPOCH)
-        return run_remote(load_program(xml.encode()), machine, time_scale=SCALE, seed=seed, period=0.005,
-                          timeout=timeout)  # fmt: skip
+        return run_remote(
+            load_program(xml.encode()), machine, time_scale=SCALE, seed=seed, period=0.005, timeout=timeout
+        )
 
     def close(self) -> None:
         self.client.close()

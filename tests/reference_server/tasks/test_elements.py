@@ -20,12 +20,16 @@ def near(session: Session, x: int, y: int, tol: int = TOL) -> bool:
 
 def test_ioevent_digitalout_sets_io_board_outputs_and_minus_one_keeps_them(session: Session) -> None:
     assert session.status().io_status != ABSENT, "the task fixtures run the fake hardware: the IO board answers"
-    session.run_local(program(task(
-        "<ioevent><digitalout D1='1' D3='1' D12='1'/></ioevent>"
-        "<wait><delay amount='200'/></wait>"
-        "<ioevent><digitalout D1='0' D2='-1' D3='-1' D12='0' D5='1'/></ioevent>"
-        "<wait><delay amount='200'/></wait>"
-    )))  # fmt: skip
+    session.run_local(
+        program(
+            task(
+                "<ioevent><digitalout D1='1' D3='1' D12='1'/></ioevent>"
+                "<wait><delay amount='200'/></wait>"
+                "<ioevent><digitalout D1='0' D2='-1' D3='-1' D12='0' D5='1'/></ioevent>"
+                "<wait><delay amount='200'/></wait>"
+            )
+        )
+    )
     out = session.wait_status(lambda s: s.io_digital_out == 0b10100, what="outputs D3 and D5 on").io_digital_out
     assert out == 0b10100
 
@@ -37,27 +41,35 @@ def test_ioevent_digitalout_sends_one_set_digout_per_changed_output(session: Ses
 
 
 def test_goto_jumps_when_its_condition_holds(session: Session) -> None:
-    session.run_local(program(task(
-        "<goto label='a' condition='param:IpoTransVel!=12345'/>"
-        "<parameter><set key='FlashlightEnabled' value='true'/></parameter>"
-        "<label name='a'/><goto label='b' condition='false'/>"
-        "<parameter><set key='IpoTransVel' value='321'/></parameter>"
-        "<label name='b'/><goto label='c'/><parameter><set key='IpoTransVel' value='999'/></parameter>"
-        "<label name='c'/>"
-    )))  # fmt: skip
+    session.run_local(
+        program(
+            task(
+                "<goto label='a' condition='param:IpoTransVel!=12345'/>"
+                "<parameter><set key='FlashlightEnabled' value='true'/></parameter>"
+                "<label name='a'/><goto label='b' condition='false'/>"
+                "<parameter><set key='IpoTransVel' value='321'/></parameter>"
+                "<label name='b'/><goto label='c'/><parameter><set key='IpoTransVel' value='999'/></parameter>"
+                "<label name='c'/>"
+            )
+        )
+    )
     assert session.client.get_pltf_param("IpoTransVel").value == "321"
     assert session.client.get_pltf_param("FlashlightEnabled").value == "false"
 
 
 def test_label_is_the_target_of_a_backward_goto_and_of_a_timeoutlabel(session: Session) -> None:
-    lines = session.run_local(program(task(
-        "<label name='top'/><goto label='second' condition='param:FlashlightEnabled==true'/>"
-        "<parameter><set key='FlashlightEnabled' value='true'/></parameter><log message='first pass'/>"
-        "<goto label='top'/><label name='second'/><log message='second pass'/>"
-        "<wait timeout='100' timeoutlabel='late'><userevent id='never'/></wait>"
-        "<parameter><set key='IpoTransVel' value='111'/></parameter>"
-        "<label name='late'/><log message='label reached'/>"
-    )))  # fmt: skip
+    lines = session.run_local(
+        program(
+            task(
+                "<label name='top'/><goto label='second' condition='param:FlashlightEnabled==true'/>"
+                "<parameter><set key='FlashlightEnabled' value='true'/></parameter><log message='first pass'/>"
+                "<goto label='top'/><label name='second'/><log message='second pass'/>"
+                "<wait timeout='100' timeoutlabel='late'><userevent id='never'/></wait>"
+                "<parameter><set key='IpoTransVel' value='111'/></parameter>"
+                "<label name='late'/><log message='label reached'/>"
+            )
+        )
+    )
     logged = [line.rsplit("] ", 1)[1] for line in lines if "task log [info]" in line and "] task " not in line]
     assert logged == ["first pass", "second pass", "label reached"]
     assert session.client.get_pltf_param("IpoTransVel").value != "111"
@@ -68,10 +80,14 @@ def test_load_activates_the_named_map_and_roadmap_of_the_data_dir(session: Sessi
     rm = (REPO / "fixtures" / "roadmaps" / "office.rm").read_bytes().replace(b'name="Kitchen"', b'name="Pantry"')
     (data / "Roadmap" / "other.rm").write_bytes(rm)
     (data / "Map" / "other.map").write_bytes((REPO / "fixtures" / "maps" / "office.map").read_bytes())
-    session.run_local(program(task(
-        "<load map='other.map' roadmap='other.rm'/>"
-        "<motion><settarget><station name='Pantry'/></settarget></motion><wait timeout='60000'><target/></wait>"
-    )))  # fmt: skip
+    session.run_local(
+        program(
+            task(
+                "<load map='other.map' roadmap='other.rm'/>"
+                "<motion><settarget><station name='Pantry'/></settarget></motion><wait timeout='60000'><target/></wait>"
+            )
+        )
+    )
     assert session.client.get_map().name == "other.map" and session.client.get_roadmap().name == "other.rm"
     assert near(session, 5000, 12200)
 
@@ -88,46 +104,67 @@ def test_log_goes_to_the_protocol_queue_with_its_type(session: Session) -> None:
 
 
 def test_motion_settarget_coord_reaches_the_frame(session: Session) -> None:
-    session.run_local(program(task(
-        "<motion><settarget><coord x='3500' y='10500' angle='90'/></settarget></motion>"
-        "<wait timeout='60000'><target/></wait>"
-    )))  # fmt: skip
+    session.run_local(
+        program(
+            task(
+                "<motion><settarget><coord x='3500' y='10500' angle='90'/></settarget></motion>"
+                "<wait timeout='60000'><target/></wait>"
+            )
+        )
+    )
     st = session.status()
     assert near(session, 3500, 10500) and abs(st.est_angle_mdeg - 90000) < 2000 and st.target_reached
 
 
 def test_motion_settarget_station_drives_over_the_roadmap(session: Session) -> None:
-    session.run_local(program(task(
-        "<motion><settarget><station name='Lab'/></settarget></motion><wait timeout='60000'><target/></wait>"
-    )))  # fmt: skip
+    session.run_local(
+        program(
+            task("<motion><settarget><station name='Lab'/></settarget></motion><wait timeout='60000'><target/></wait>")
+        )
+    )
     assert near(session, 7000, 7800)
 
 
 def test_motion_stop_ends_the_move_short_of_its_target(session: Session) -> None:
-    session.run_local(program(task(
-        "<motion><settarget><coord x='20000' y='10000'/></settarget></motion>"
-        "<wait><delay amount='1500'/></wait><motion stop='1'/><wait><delay amount='3000'/></wait>"
-    )))  # fmt: skip
+    session.run_local(
+        program(
+            task(
+                "<motion><settarget><coord x='20000' y='10000'/></settarget></motion>"
+                "<wait><delay amount='1500'/></wait><motion stop='1'/><wait><delay amount='3000'/></wait>"
+            )
+        )
+    )
     st = session.status()
     assert st.vel_trans_mm_s == 0 and not st.target_reached and 2100 < st.est_x_mm < 10000
     assert st.operation_state == OperationState.ST_OP_RUNNING
 
 
 def test_moveto_charging_station_docks_at_its_frame(session: Session) -> None:
-    session.run_local(program(task(
-        "<parameter><set key='IpoTransVel' value='1000'/></parameter>"
-        "<motion><moveto onErrorTask='none'><chargingstation/></moveto></motion>"
-        "<wait timeout='120000'><target/></wait>", "main"), task("<log message='no station'/>", "none"),
-        ), timeout=30)  # fmt: skip
+    session.run_local(
+        program(
+            task(
+                "<parameter><set key='IpoTransVel' value='1000'/></parameter>"
+                "<motion><moveto onErrorTask='none'><chargingstation/></moveto></motion>"
+                "<wait timeout='120000'><target/></wait>",
+                "main",
+            ),
+            task("<log message='no station'/>", "none"),
+        ),
+        timeout=30,
+    )
     assert near(session, 31200, 10000) and not session.saw("no station")
 
 
 def test_moveto_without_an_entity_runs_on_error_task_then_goes_on(session: Session) -> None:
-    lines = session.run_local(program(
-        task("<motion><moveto onErrorTask='recover'><trackedperson/></moveto></motion>"
-             "<parameter><set key='SirenEnabled' value='true'/></parameter>"),
-        task("<parameter><set key='IpoTransVel' value='222'/></parameter>", "recover", 3),
-    ))  # fmt: skip
+    lines = session.run_local(
+        program(
+            task(
+                "<motion><moveto onErrorTask='recover'><trackedperson/></moveto></motion>"
+                "<parameter><set key='SirenEnabled' value='true'/></parameter>"
+            ),
+            task("<parameter><set key='IpoTransVel' value='222'/></parameter>", "recover", 3),
+        )
+    )
     assert session.client.get_pltf_param("IpoTransVel").value == "222"
     assert session.client.get_pltf_param("SirenEnabled").value == "true"
     assert near(session, 2000, 10000)  # the platform did not move
@@ -142,10 +179,15 @@ def test_parameter_set_changes_the_platform_parameter(session: Session) -> None:
 
 def test_surveillance_grab_writes_scan_and_image_into_the_data_dir(session: Session) -> None:
     data = Path(session.server.platform.storage.root)
-    session.run_local(program(task(
-        "<surveillance><grab filename='round1' grabscan='true' grabimage='true' autoobservation='true'/></surveillance>"
-        "<surveillance><grab filename='scanonly' grabscan='true'/></surveillance>"
-    )))  # fmt: skip
+    session.run_local(
+        program(
+            task(
+                "<surveillance><grab filename='round1' grabscan='true' grabimage='true' autoobservation='true'/>"
+                "</surveillance>"
+                "<surveillance><grab filename='scanonly' grabscan='true'/></surveillance>"
+            )
+        )
+    )
     assert (data / "round1.dat").read_text().startswith("# pltf scan grab")
     assert (data / "round1.jpg").read_bytes()[:3] == b"\xff\xd8\xff"
     assert (data / "scanonly.dat").exists() and not (data / "scanonly.jpg").exists()
@@ -158,9 +200,9 @@ def test_surveillance_movecamera_reaches_the_camera_command(session: Session) ->
 
 
 def test_audio_speak_and_play_are_recorded_with_text_and_file(session: Session) -> None:
-    lines = session.run_local(program(task(
-        "<audio><speak text='Welcome to the lab'/></audio><audio><play filename='chime.wav'/></audio>"
-    )))  # fmt: skip
+    lines = session.run_local(
+        program(task("<audio><speak text='Welcome to the lab'/></audio><audio><play filename='chime.wav'/></audio>"))
+    )
     assert any("Welcome to the lab" in line for line in lines)
     assert any("chime.wav" in line for line in lines)
 

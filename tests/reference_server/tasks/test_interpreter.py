@@ -70,8 +70,10 @@ def test_on_error_task_runs_then_the_caller_goes_on() -> None:
 
 
 def test_moveto_without_handler_ends_the_task_and_others_go_on() -> None:
-    xml = program(task("<motion><moveto><trackedball/></moveto></motion><log message='never'/>"),
-                  task("<log message='other'/>", "other"))  # fmt: skip
+    xml = program(
+        task("<motion><moveto><trackedball/></moveto></motion><log message='never'/>"),
+        task("<log message='other'/>", "other"),
+    )
     _it, fm = run(xml, until=0.0)
     texts = [a[2] for a in fm.of("log")]
     assert "never" not in texts and "other" in texts
@@ -82,8 +84,9 @@ def test_moveto_approaches_a_tracked_entity_and_docks_at_the_charging_station() 
     fm = FakeMachine()
     fm.entities[Entity.PERSON] = Target(3000.0, 4000.0, None)
     fm.entities[Entity.CHARGING_STATION] = Target(100.0, 200.0, 90.0)
-    xml = program(task("<motion><moveto><trackedperson/></moveto></motion>"
-                       "<motion><moveto><chargingstation/></moveto></motion>"))  # fmt: skip
+    xml = program(
+        task("<motion><moveto><trackedperson/></moveto></motion><motion><moveto><chargingstation/></moveto></motion>")
+    )
     run(xml, fm, until=0.0)
     assert fm.of("move") == [("move", 2520, 3360, 53.13), ("move", 100, 200, 90.0)]
 
@@ -91,14 +94,16 @@ def test_moveto_approaches_a_tracked_entity_and_docks_at_the_charging_station() 
 def test_goto_conditions_on_inputs_outputs_and_parameters() -> None:
     fm = FakeMachine()
     fm.inputs[2] = 1
-    xml = program(task(
-        "<goto label='a' condition='DI3==1'/><log message='skipped'/><label name='a'/>"
-        "<ioevent><digitalout D2='1'/></ioevent>"
-        "<goto label='b' condition='DO2!=1'/><log message='DO2 is 1'/><label name='b'/>"
-        "<goto label='c' condition='param:MaxTransVel==600.0'/><log message='skipped too'/><label name='c'/>"
-        "<goto label='d' condition='false'/><log message='false does not jump'/><label name='d'/>"
-        "<goto label='e' condition='param:Unknown==1'/><label name='e'/><log message='never'/>"
-    ))  # fmt: skip
+    xml = program(
+        task(
+            "<goto label='a' condition='DI3==1'/><log message='skipped'/><label name='a'/>"
+            "<ioevent><digitalout D2='1'/></ioevent>"
+            "<goto label='b' condition='DO2!=1'/><log message='DO2 is 1'/><label name='b'/>"
+            "<goto label='c' condition='param:MaxTransVel==600.0'/><log message='skipped too'/><label name='c'/>"
+            "<goto label='d' condition='false'/><log message='false does not jump'/><label name='d'/>"
+            "<goto label='e' condition='param:Unknown==1'/><label name='e'/><log message='never'/>"
+        )
+    )
     run(xml, fm, until=0.0)
     texts = [a[2] for a in fm.of("log")]
     assert texts[:2] == ["DO2 is 1", "false does not jump"]
@@ -147,14 +152,16 @@ def test_infrared_in_another_direction_does_not_end_the_wait() -> None:
 
 
 def test_delay_random_date_and_timeouts_in_simulated_time() -> None:
-    xml = program(task(
-        "<wait><delay amount='300'/></wait><log message='delay'/>"
-        "<wait><random min='100' max='200'/></wait><log message='random'/>"
-        "<wait timeout='250' timeoutlabel='late'><person/></wait><log message='not here'/>"
-        "<label name='late'/><log message='timeout'/>"
-        "<wait timeout='100'><ball/></wait><log message='timeout without label: next'/>"
-        "<wait><date hour='0' minute='0' second='3'/></wait><log message='date'/>"
-    ))  # fmt: skip
+    xml = program(
+        task(
+            "<wait><delay amount='300'/></wait><log message='delay'/>"
+            "<wait><random min='100' max='200'/></wait><log message='random'/>"
+            "<wait timeout='250' timeoutlabel='late'><person/></wait><log message='not here'/>"
+            "<label name='late'/><log message='timeout'/>"
+            "<wait timeout='100'><ball/></wait><log message='timeout without label: next'/>"
+            "<wait><date hour='0' minute='0' second='3'/></wait><log message='date'/>"
+        )
+    )
     _it, fm = run(xml, until=4.0)
     times = {}
     fm2 = FakeMachine()
@@ -209,22 +216,32 @@ def test_pause_freezes_delays_and_stop_ends_every_task() -> None:
 
 def test_every_action_reaches_the_facade() -> None:
     fm = FakeMachine(files={"office.map", "office.rm"})
-    xml = program(task(
-        "<load map='office.map' roadmap='office.rm'/><ioevent><digitalout D1='1' D12='0'/></ioevent>"
-        "<parameter><set key='MaxTransVel' value='400'/></parameter><motion stop='1'/>"
-        "<motion><settarget><coord x='1000.5' y='-20' angle='90'/></settarget></motion>"
-        "<motion><settarget><station name='Kitchen'/></settarget></motion>"
-        "<surveillance><grab filename='g' grabscan='true' grabimage='1'/></surveillance>"
-        "<surveillance><movecamera position='pan=1'/></surveillance><audio><speak text='hi'/></audio>"
-        "<audio><play filename='a.wav'/></audio><turnhead angle='-45'/>"
-    ))  # fmt: skip
+    xml = program(
+        task(
+            "<load map='office.map' roadmap='office.rm'/><ioevent><digitalout D1='1' D12='0'/></ioevent>"
+            "<parameter><set key='MaxTransVel' value='400'/></parameter><motion stop='1'/>"
+            "<motion><settarget><coord x='1000.5' y='-20' angle='90'/></settarget></motion>"
+            "<motion><settarget><station name='Kitchen'/></settarget></motion>"
+            "<surveillance><grab filename='g' grabscan='true' grabimage='1'/></surveillance>"
+            "<surveillance><movecamera position='pan=1'/></surveillance><audio><speak text='hi'/></audio>"
+            "<audio><play filename='a.wav'/></audio><turnhead angle='-45'/>"
+        )
+    )
     run(xml, fm, until=0.0)
     kinds = [a for a in fm.actions if a[0] != "log"]
     assert kinds == [
-        ("load", "office.map", "office.rm"), ("digout", (1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, 0)),
-        ("param", "MaxTransVel", "400"), ("stop",), ("move", 1000, -20, 90.0), ("station", "Kitchen"),
-        ("grab", "g", True, True), ("camera", "pan=1"), ("speak", "hi"), ("play", "a.wav"), ("head", -45.0),
-    ]  # fmt: skip
+        ("load", "office.map", "office.rm"),
+        ("digout", (1, -1, -1, -1, -1, -1, -1, -1, -1, -1, -1, 0)),
+        ("param", "MaxTransVel", "400"),
+        ("stop",),
+        ("move", 1000, -20, 90.0),
+        ("station", "Kitchen"),
+        ("grab", "g", True, True),
+        ("camera", "pan=1"),
+        ("speak", "hi"),
+        ("play", "a.wav"),
+        ("head", -45.0),
+    ]
 
 
 @pytest.mark.parametrize(

@@ -16,17 +16,19 @@ from pltf.spec.documents import DocumentError
 from tests.reference_server.tasks.conftest import SCALE, Session, program, program_server, task
 from tests.reference_server.tasks.test_waits import at
 
-PATROL = program(task(
-    "<parameter><set key='IpoTransVel' value='900'/></parameter>"
-    "<motion><settarget><station name='Kitchen'/></settarget></motion><wait timeout='90000'><target/></wait>"
-    "<wait><random min='500' max='1500'/></wait>"
-    "<motion><settarget><coord x='7000' y='10000' angle='-90'/></settarget></motion>"
-    "<wait timeout='90000'><target/></wait><wait><delay amount='800'/></wait>"
-    "<motion><settarget><station name='Server'/></settarget></motion><wait timeout='90000'><target/></wait>"
-    "<wait><delay amount='800'/></wait>"
-    "<motion><settarget><station name='Corridor_01'/></settarget></motion><wait timeout='90000'><target/></wait>"
-    "<wait><delay amount='800'/></wait>"
-))  # fmt: skip
+PATROL = program(
+    task(
+        "<parameter><set key='IpoTransVel' value='900'/></parameter>"
+        "<motion><settarget><station name='Kitchen'/></settarget></motion><wait timeout='90000'><target/></wait>"
+        "<wait><random min='500' max='1500'/></wait>"
+        "<motion><settarget><coord x='7000' y='10000' angle='-90'/></settarget></motion>"
+        "<wait timeout='90000'><target/></wait><wait><delay amount='800'/></wait>"
+        "<motion><settarget><station name='Server'/></settarget></motion><wait timeout='90000'><target/></wait>"
+        "<wait><delay amount='800'/></wait>"
+        "<motion><settarget><station name='Corridor_01'/></settarget></motion><wait timeout='90000'><target/></wait>"
+        "<wait><delay amount='800'/></wait>"
+    )
+)
 
 
 @pytest.mark.parametrize(
@@ -52,9 +54,9 @@ def test_an_invalid_program_is_refused_and_the_active_one_stays(session: Session
 
 
 def test_break_freezes_the_program_and_continue_resumes_it(session: Session) -> None:
-    session.run_local(program(task(
-        "<log message='A'/><wait><delay amount='3000'/></wait><log message='B'/>"
-    )), wait_finished=False)  # fmt: skip
+    session.run_local(
+        program(task("<log message='A'/><wait><delay amount='3000'/></wait><log message='B'/>")), wait_finished=False
+    )
     session.wait_log("] A")
     session.client.break_()
     session.client.wait_state(OperationState.ST_OP_BREAKED)
@@ -69,10 +71,15 @@ def test_break_freezes_the_program_and_continue_resumes_it(session: Session) -> 
 
 
 def test_stop_aborts_the_program(session: Session) -> None:
-    session.run_local(program(task(
-        "<motion><settarget><coord x='20000' y='10000'/></settarget></motion>"
-        "<wait><delay amount='5000'/></wait><log message='never'/>"
-    )), wait_finished=False)  # fmt: skip
+    session.run_local(
+        program(
+            task(
+                "<motion><settarget><coord x='20000' y='10000'/></settarget></motion>"
+                "<wait><delay amount='5000'/></wait><log message='never'/>"
+            )
+        ),
+        wait_finished=False,
+    )
     time.sleep(1.0 / SCALE)
     session.client.stop()
     session.wait_log("program stopped")
@@ -83,21 +90,28 @@ def test_stop_aborts_the_program(session: Session) -> None:
 
 
 def test_priorities_order_the_tasks_and_handlers_wait_for_their_call(session: Session) -> None:
-    lines = session.run_local(program(
-        task("<log message='low'/>", "low", 1),
-        task("<log message='high'/>", "high", 7),
-        task("<log message='handler'/>", "handler", 9),
-        task("<motion><moveto onErrorTask='handler'><trackedball/></moveto></motion>", "caller", 0),
-    ))  # fmt: skip
+    lines = session.run_local(
+        program(
+            task("<log message='low'/>", "low", 1),
+            task("<log message='high'/>", "high", 7),
+            task("<log message='handler'/>", "handler", 9),
+            task("<motion><moveto onErrorTask='handler'><trackedball/></moveto></motion>", "caller", 0),
+        )
+    )
     order = [line.rsplit("] ", 1)[1] for line in lines if "task log [info]" in line and "] task " not in line]
     assert order == ["high", "low", "handler"]
 
 
 def test_a_user_event_releases_the_waiting_task(session: Session) -> None:
-    session.run_local(program(task(
-        "<log message='A'/><wait timeout='60000' timeoutlabel='late'><userevent id='door_open'/></wait>"
-        "<log message='B'/><label name='late'/>"
-    )), wait_finished=False)  # fmt: skip
+    session.run_local(
+        program(
+            task(
+                "<log message='A'/><wait timeout='60000' timeoutlabel='late'><userevent id='door_open'/></wait>"
+                "<log message='B'/><label name='late'/>"
+            )
+        ),
+        wait_finished=False,
+    )
     session.wait_log("] A")
     released = session.server.call(session.server.platform.program.raise_event, "door_open")
     lines = session.wait_log("program finished")

@@ -13,15 +13,17 @@ from tests.reference_server.tasks.conftest import SCALE, Session, program, task
 
 
 def test_remote_run_moves_sets_outputs_and_parameters(session: Session, tmp_path: Path) -> None:
-    xml = program(task(
-        "<ioevent><digitalout D1='1' D3='1' D12='1'/></ioevent>"
-        "<parameter><set key='IpoTransVel' value='450'/></parameter>"
-        "<motion><settarget><coord x='3500' y='10000' angle='90'/></settarget></motion>"
-        "<wait timeout='60000'><target/></wait>"
-        "<ioevent><digitalout D3='0'/></ioevent>"
-        "<motion><settarget><station name='Kitchen'/></settarget></motion>"
-        "<wait timeout='60000'><target/></wait>"
-    ))  # fmt: skip
+    xml = program(
+        task(
+            "<ioevent><digitalout D1='1' D3='1' D12='1'/></ioevent>"
+            "<parameter><set key='IpoTransVel' value='450'/></parameter>"
+            "<motion><settarget><coord x='3500' y='10000' angle='90'/></settarget></motion>"
+            "<wait timeout='60000'><target/></wait>"
+            "<ioevent><digitalout D3='0'/></ioevent>"
+            "<motion><settarget><station name='Kitchen'/></settarget></motion>"
+            "<wait timeout='60000'><target/></wait>"
+        )
+    )
     result = session.run_remote(xml, tmp_path)
     assert result.finished and not result.failed
     st = session.status()
@@ -35,11 +37,13 @@ def test_remote_load_sends_the_local_files_and_grab_writes_locally(session: Sess
     rm = (REPO / "fixtures" / "roadmaps" / "office.rm").read_bytes().replace(b'name="Kitchen"', b'name="Pantry"')
     (tmp_path / "Roadmap" / "other.rm").write_bytes(rm)
     (tmp_path / "office.map").write_bytes((REPO / "fixtures" / "maps" / "office.map").read_bytes())
-    xml = program(task(
-        "<load map='office.map' roadmap='other.rm'/>"
-        "<motion><settarget><station name='Pantry'/></settarget></motion><wait timeout='60000'><target/></wait>"
-        "<surveillance><grab filename='shot' grabscan='true' grabimage='true'/></surveillance>"
-    ))  # fmt: skip
+    xml = program(
+        task(
+            "<load map='office.map' roadmap='other.rm'/>"
+            "<motion><settarget><station name='Pantry'/></settarget></motion><wait timeout='60000'><target/></wait>"
+            "<surveillance><grab filename='shot' grabscan='true' grabimage='true'/></surveillance>"
+        )
+    )
     result = session.run_remote(xml, tmp_path)
     assert result.finished and not result.failed
     assert session.client.get_roadmap().name == "other.rm" and session.client.get_map().name == "office.map"

@@ -45,26 +45,41 @@ def test_date_waits_for_the_platforms_local_time(session: Session) -> None:
     now = session.status().timestamp_ms / 1000.0  # simulated s since start; local time = 2030-01-01 + now
     second = int(now) + 4
     assert second < 60
-    lines = session.run_local(program(task(f"<wait><date year='2030' month='1' day='1' hour='0' minute='0' "
-                                           f"second='{second}'/></wait><log message='B'/>")))  # fmt: skip
+    lines = session.run_local(
+        program(
+            task(
+                f"<wait><date year='2030' month='1' day='1' hour='0' minute='0' "
+                f"second='{second}'/></wait><log message='B'/>"
+            )
+        )
+    )
     assert at(lines, "B") == pytest.approx(second, abs=PERIOD + 1e-6)
 
 
 def test_target_waits_until_the_platform_stands_at_its_target(session: Session) -> None:
-    lines = session.run_local(program(task(
-        "<motion><settarget><coord x='4000' y='10000'/></settarget></motion><log message='A'/>"
-        "<wait timeout='60000' timeoutlabel='late'><target/></wait><log message='B'/><label name='late'/>"
-    )))  # fmt: skip
+    lines = session.run_local(
+        program(
+            task(
+                "<motion><settarget><coord x='4000' y='10000'/></settarget></motion><log message='A'/>"
+                "<wait timeout='60000' timeoutlabel='late'><target/></wait><log message='B'/><label name='late'/>"
+            )
+        )
+    )
     assert at(lines, "B") - at(lines, "A") > 1.0
     st = session.status()
     assert st.target_reached and abs(st.est_x_mm - 4000) < 60
 
 
 def test_timeout_goes_to_timeoutlabel_or_on(session: Session) -> None:
-    lines = session.run_local(program(task(
-        "<log message='A'/><wait timeout='700' timeoutlabel='t'><userevent id='x'/></wait><log message='skipped'/>"
-        "<label name='t'/><log message='B'/><wait timeout='300'/><log message='C'/>"
-    )))  # fmt: skip
+    lines = session.run_local(
+        program(
+            task(
+                "<log message='A'/><wait timeout='700' timeoutlabel='t'>"
+                "<userevent id='x'/></wait><log message='skipped'/>"
+                "<label name='t'/><log message='B'/><wait timeout='300'/><log message='C'/>"
+            )
+        )
+    )
     assert at(lines, "B") - at(lines, "A") == pytest.approx(0.7, abs=PERIOD + 1e-6)
     assert at(lines, "C") - at(lines, "B") == pytest.approx(0.3, abs=PERIOD + 1e-6)
     assert not any(line.endswith("skipped") for line in lines)
@@ -72,17 +87,31 @@ def test_timeout_goes_to_timeoutlabel_or_on(session: Session) -> None:
 
 @pytest.mark.parametrize(
     "element",
-    ["<collision/>", "<movingobject/>", "<movingobjects/>", "<person/>", "<ball/>", "<lostlocalization/>",
-     "<lostlocalisation/>", "<infrared direction='front'/>", "<radar direction='any'/>",
-     "<batterycharge limit='101'/>"],
-)  # fmt: skip
+    [
+        "<collision/>",
+        "<movingobject/>",
+        "<movingobjects/>",
+        "<person/>",
+        "<ball/>",
+        "<lostlocalization/>",
+        "<lostlocalisation/>",
+        "<infrared direction='front'/>",
+        "<radar direction='any'/>",
+        "<batterycharge limit='101'/>",
+    ],
+)
 def test_sensor_waits_read_the_status_and_time_out_when_nothing_happens(session: Session, element: str) -> None:
     assert between(session, f"<wait timeout='400'>{element}</wait>") == pytest.approx(0.4, abs=PERIOD + 1e-6)
 
 
 def test_batterycharge_ends_when_the_charge_is_at_the_limit(session: Session) -> None:
-    lines = session.run_local(program(task(
-        "<log message='A'/><wait timeout='2000' timeoutlabel='t'><batterycharge limit='0'/></wait><log message='B'/>"
-        "<label name='t'/>"
-    )))  # fmt: skip
+    lines = session.run_local(
+        program(
+            task(
+                "<log message='A'/><wait timeout='2000' timeoutlabel='t'>"
+                "<batterycharge limit='0'/></wait><log message='B'/>"
+                "<label name='t'/>"
+            )
+        )
+    )
     assert at(lines, "B") == at(lines, "A")

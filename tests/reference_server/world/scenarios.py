@@ -46,8 +46,9 @@ START = (2000.0, 10000.0, 0.0)  # fixtures/start_pose.dat: the west end of the o
 
 def world_platform(server: ServerThread, seed: int, hardware: bool = False) -> Platform:
     """The platform of ``pltf serve --motion world --seed <seed> [--no-hardware]`` on the server's data dir."""
-    return Platform(server.platform.storage, seed=seed, motion=factory(seed),
-                    hardware=hardware_link.factory() if hardware else None)  # fmt: skip
+    return Platform(
+        server.platform.storage, seed=seed, motion=factory(seed), hardware=hardware_link.factory() if hardware else None
+    )
 
 
 class WorldServer(ServerThread):
@@ -176,8 +177,16 @@ class Sample:
 
 def sample(c: Client) -> Sample:
     s = c.status()
-    return Sample(s.timestamp / 1000.0, s.est_x, s.est_y, math.radians(s.est_angle / 1000.0), s.vel_trans,
-                  s.target_reached, s.planner_state, s.collision)  # fmt: skip
+    return Sample(
+        s.timestamp / 1000.0,
+        s.est_x,
+        s.est_y,
+        math.radians(s.est_angle / 1000.0),
+        s.vel_trans,
+        s.target_reached,
+        s.planner_state,
+        s.collision,
+    )
 
 
 def poll(c: Client, until: Callable[[Sample], bool], timeout: float, every: float = 0.004) -> list[Sample]:

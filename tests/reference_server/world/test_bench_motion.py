@@ -33,8 +33,11 @@ def test_rows() -> None:
     assert by["motion.scan", OURS_SCAN, "scan_time"]["baseline_subject"] == PYMUNK_SCAN
     assert by["motion.realtime_factor", HARDWARE, "realtime_factor"]["baseline_subject"] == WORLD_CAN
     assert [r["baseline_subject"] for r in rows if r["subject"] == VECTOR_CORNERS] == [LOOP_CORNERS]
-    for key in [("motion.realtime_factor", WORLD, "realtime_factor"), ("motion.planning", VISIBILITY, "p95_query_time"),
-                ("motion.scan", OURS_SCAN, "scan_time")]:  # fmt: skip
+    for key in [
+        ("motion.realtime_factor", WORLD, "realtime_factor"),
+        ("motion.planning", VISIBILITY, "p95_query_time"),
+        ("motion.scan", OURS_SCAN, "scan_time"),
+    ]:
         assert isinstance(by[key]["met"], bool)
 
 

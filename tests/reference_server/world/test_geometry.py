@@ -121,8 +121,9 @@ def test_segments_clear_in_c_equals_numpy(seed: int) -> None:
         walls[: ns // 5, 2:] = walls[: ns // 5, :2]
         circs = np.column_stack([rng.uniform(0, 10000, (nc, 2)), rng.uniform(-300, 600, nc)])
         radius = rng.uniform(0, 900) if k % 2 else rng.uniform(-200, 900, nq)
-        np.testing.assert_array_equal(segments_clear(q, walls, circs, radius),
-                                      segments_clear_numpy(q, walls, circs, radius))  # fmt: skip
+        np.testing.assert_array_equal(
+            segments_clear(q, walls, circs, radius), segments_clear_numpy(q, walls, circs, radius)
+        )
 
 
 def test_segments_clear_in_c_refuses_a_short_radius_buffer() -> None:

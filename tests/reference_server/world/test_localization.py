@@ -36,8 +36,9 @@ def test_localization_keeps_odometry_drift_bounded(office: MapGeometry) -> None:
     on, off = [], []
     for seed in range(1, 5):
         on.append(_drive_corridor(make_sim(office, CORRIDOR_WEST, seed=seed, CollCheckEnabled=False)))
-        off.append(_drive_corridor(make_sim(office, CORRIDOR_WEST, seed=seed, CollCheckEnabled=False,
-                                            LocalLocalization=False)))  # fmt: skip
+        off.append(
+            _drive_corridor(make_sim(office, CORRIDOR_WEST, seed=seed, CollCheckEnabled=False, LocalLocalization=False))
+        )
     assert max(on) < 40.0
     assert sum(off) > 3 * sum(on), (on, off)
 

@@ -16,8 +16,9 @@ def _random_scene(rng: np.random.Generator, n: int = 120) -> Scene:
     c = rng.uniform(0, 20000, (n, 2))
     a = rng.uniform(0, math.pi, n)
     half = rng.uniform(100, 3000, n) / 2
-    segs = np.column_stack([c[:, 0] - half * np.cos(a), c[:, 1] - half * np.sin(a),
-                            c[:, 0] + half * np.cos(a), c[:, 1] + half * np.sin(a)])  # fmt: skip
+    segs = np.column_stack(
+        [c[:, 0] - half * np.cos(a), c[:, 1] - half * np.sin(a), c[:, 0] + half * np.cos(a), c[:, 1] + half * np.sin(a)]
+    )
     circs = np.column_stack([rng.uniform(0, 20000, (15, 2)), rng.uniform(50, 800, 15)])
     return Scene.make(segs, circs)
 
@@ -57,8 +58,9 @@ def test_c_loops_equal_numpy_bit_for_bit(seed: int) -> None:
             np.testing.assert_array_equal(got, want)
         n = int(rng.integers(1, 60))
         ox, oy, ang = rng.uniform(0, 20000, n), rng.uniform(0, 20000, n), rng.uniform(-7, 7, n)
-        for got, want in zip(cast_rays(ox, oy, ang, scene, 8000.0), cast_rays_numpy(ox, oy, ang, scene, 8000.0),
-                             strict=True):  # fmt: skip
+        for got, want in zip(
+            cast_rays(ox, oy, ang, scene, 8000.0), cast_rays_numpy(ox, oy, ang, scene, 8000.0), strict=True
+        ):
             np.testing.assert_array_equal(got, want)
 
 
@@ -68,11 +70,33 @@ def test_the_c_loops_refuse_buffers_shorter_than_the_call() -> None:
 
     scene = Scene.make(np.array([[1000.0, -500, 1000, 500]]))
     with pytest.raises(ValueError, match="oy"):
-        _raycast.rays(np.zeros(8), np.zeros(2), np.ones(8), np.zeros(8), scene.segs, scene.circs, 100.0,
-                      np.empty(8), np.empty(8, dtype=np.int64))  # fmt: skip
+        _raycast.rays(
+            np.zeros(8),
+            np.zeros(2),
+            np.ones(8),
+            np.zeros(8),
+            scene.segs,
+            scene.circs,
+            100.0,
+            np.empty(8),
+            np.empty(8, dtype=np.int64),
+        )
     with pytest.raises(ValueError, match="ranges"):
-        _raycast.fan(0.0, 0.0, -1.0, 0.0, 0.01, 100.0, 200, scene.segs, scene.circs, np.ones(200), np.ones(200),
-                     np.empty(10), np.empty(200, dtype=np.int64))  # fmt: skip
+        _raycast.fan(
+            0.0,
+            0.0,
+            -1.0,
+            0.0,
+            0.01,
+            100.0,
+            200,
+            scene.segs,
+            scene.circs,
+            np.ones(200),
+            np.ones(200),
+            np.empty(10),
+            np.empty(200, dtype=np.int64),
+        )
 
 
 def test_empty_scene_in_c() -> None:

@@ -27,8 +27,12 @@ def test_ranges_in_a_room_with_seeded_noise() -> None:
     # every beam hits a wall in a closed room; the scan points lie on the walls
     pts = w.perception.world
     assert len(pts) == LASER_FAN.count
-    assert np.all((np.abs(pts[:, 0]) < 60) | (np.abs(pts[:, 0] - 10000) < 60) | (np.abs(pts[:, 1]) < 60)
-                  | (np.abs(pts[:, 1] - 8000) < 60))  # fmt: skip
+    assert np.all(
+        (np.abs(pts[:, 0]) < 60)
+        | (np.abs(pts[:, 0] - 10000) < 60)
+        | (np.abs(pts[:, 1]) < 60)
+        | (np.abs(pts[:, 1] - 8000) < 60)
+    )
 
 
 def test_the_same_seed_gives_the_same_scan() -> None:
