@@ -20,6 +20,7 @@ import { motionPanel } from "./panels/motion";
 import { operationPanel } from "./panels/operation";
 import { statusBar } from "./panels/statusbar";
 import { ViewOptions, viewOptionsPanel } from "./panels/viewoptions";
+import { planObstacleSwitch } from "./panels/planobst";
 import { PlatformSession } from "./session/session";
 
 const params = new URLSearchParams(window.location.search);
@@ -42,7 +43,7 @@ const plots = plotsPanel(session);
 const wire = wirePanel(session);
 dock.add("hardware", "menu.hardwareMonitor", hw.root, hw.onShow);
 dock.add("parameters", "menu.platformParameters", paramsWin.root, paramsWin.onShow);
-dock.add("view-options", "menu.viewOptions", viewOptionsPanel(options));
+dock.add("view-options", "menu.viewOptions", viewOptionsPanel(options, planObstacleSwitch(session, options, say)));
 dock.add("plots", "menu.plots", plots.root, plots.onShow);
 dock.add("log", "menu.log", logPanel(session));
 dock.add("wire", "menu.wire", wire.root, wire.onShow);

@@ -203,6 +203,7 @@ export const de: Record<Key, string> = {
   "opt.ultrasonic": "Ultraschallwerte",
   "opt.planning": "Planung",
   "opt.path": "Geplanter und interpolierter Pfad",
+  "opt.planObstacles": "Hindernisse der Planung (ViewPlanObstEnabled)",
   "opt.map": "Karte",
   "opt.language": "Sprache",
   "opt.english": "Englisch",

@@ -201,6 +201,7 @@ export const en = {
   "opt.ultrasonic": "Ultrasonic readings",
   "opt.planning": "Planning",
   "opt.path": "Planned and interpolated path",
+  "opt.planObstacles": "Obstacles used for planning (ViewPlanObstEnabled)",
   "opt.map": "Map",
   "opt.language": "Language",
   "opt.english": "English",

@@ -519,17 +519,18 @@ export class MapView {
       ultrasonic: o.ultrasonic,
       path: o.planning,
       localization: o.localization,
-      planObstacles: o.planning,
+      planObstacles: o.planObstacles,
     };
     if (this.status) {
       const live = drawStatus(ctx, c, this.status, this.footprint, this.usSensors, overlay);
       this.canvas.dataset.drawnScan = String(live.scan);
       this.canvas.dataset.drawnUltrasonic = String(live.ultrasonic);
       this.canvas.dataset.drawnPath = String(live.path);
+      this.canvas.dataset.drawnPlanobst = String(live.planobst);
     }
     if (this.ghost) {
       ctx.globalAlpha = 0.6;
-      drawStatus(ctx, c, Object.assign(new GetStatusReply(), { estX: this.ghost.x, estY: this.ghost.y, estAngle: this.ghost.angle * 1000 }), this.footprint, [], { ...overlay, showDesired: false, scan: false, ultrasonic: false, path: false, localization: false });
+      drawStatus(ctx, c, Object.assign(new GetStatusReply(), { estX: this.ghost.x, estY: this.ghost.y, estAngle: this.ghost.angle * 1000 }), this.footprint, [], { ...overlay, showDesired: false, scan: false, ultrasonic: false, path: false, localization: false, planObstacles: false });
       ctx.globalAlpha = 1;
     }
     if (this.flag && this.tool === "flag") {

@@ -16,13 +16,15 @@ export class ViewOptions {
   localization = true;
   ultrasonic = true;
   planning = true;
+  /** the platform's ViewPlanObstEnabled as last read (planobst.ts, erratum E-GUI-005) */
+  planObstacles = false;
   mapLayers: Record<string, boolean> = Object.fromEntries([...KINDS, "map", "roadmap"].map((k) => [k, true]));
   readonly changed = new Topic<void>();
 }
 
 type Flag = "centerPlatform" | "showDesired" | "showEstimated" | "grid" | "localization" | "ultrasonic" | "planning";
 
-export function viewOptionsPanel(o: ViewOptions): HTMLElement {
+export function viewOptionsPanel(o: ViewOptions, ...planning: HTMLElement[]): HTMLElement {
   const check = (key: Key, get: () => boolean, set: (v: boolean) => void) => {
     const input = h("input", { type: "checkbox" });
     input.checked = get();
@@ -63,7 +65,7 @@ export function viewOptionsPanel(o: ViewOptions): HTMLElement {
     group("opt.platform", flag("opt.centerPlatform", "centerPlatform"), flag("opt.showDesired", "showDesired"), flag("opt.showEstimated", "showEstimated")),
     group("opt.grid", flag("opt.showGrid", "grid")),
     group("opt.localization", flag("opt.scan", "localization"), flag("opt.ultrasonic", "ultrasonic")),
-    group("opt.planning", flag("opt.path", "planning")),
+    group("opt.planning", flag("opt.path", "planning"), ...planning),
     group(
       "opt.map",
       ...["map", "roadmap", ...KINDS].map((k) => check(`kind.${k}` as Key, () => o.mapLayers[k], (v) => (o.mapLayers[k] = v))),

@@ -99,6 +99,29 @@ export function drawFlag(ctx: CanvasRenderingContext2D, cam: Camera, p: Pose): v
   ctx.fill();
 }
 
+/**
+ * The obstacles used for planning (guide 5.9 Planning, ViewPlanObstEnabled: "red lines in the platform GUI"),
+ * erratum E-GUI-005: the lines and circles GET_STATUS reports as observed (platform frame, E-MOT-003), which the
+ * planner passes besides the map's own objects (E-MOT-006), drawn in red in the world frame. Returns the count.
+ */
+export function drawPlanObstacles(ctx: CanvasRenderingContext2D, cam: Camera, s: GetStatusReply, est: Pose): number {
+  ctx.strokeStyle = "#d50000";
+  ctx.lineWidth = 2;
+  ctx.beginPath();
+  for (const l of s.lines) {
+    ctx.moveTo(...toScreen(cam, ...poseToWorld(est, l.sourceX, l.sourceY)));
+    ctx.lineTo(...toScreen(cam, ...poseToWorld(est, l.targetX, l.targetY)));
+  }
+  for (const c of s.circles) {
+    const [cx, cy] = toScreen(cam, ...poseToWorld(est, c.x, c.y));
+    const r = Math.max(2, c.radius * cam.scale);
+    ctx.moveTo(cx + r, cy);
+    ctx.arc(cx, cy, r, 0, 2 * Math.PI);
+  }
+  ctx.stroke();
+  return s.lines.length + s.circles.length;
+}
+
 /** The live data of one status telegram; returns how many scan points and ultrasonic readings it drew. */
 export function drawStatus(
   ctx: CanvasRenderingContext2D,
@@ -107,10 +130,10 @@ export function drawStatus(
   fp: Footprint,
   us: UsSensor[],
   o: OverlayOptions,
-): { scan: number; ultrasonic: number; path: number } {
+): { scan: number; ultrasonic: number; path: number; planobst: number } {
   const est: Pose = { x: s.estX, y: s.estY, angle: s.estAngle / 1000 };
   const des: Pose = { x: s.cmdX, y: s.cmdY, angle: s.cmdAngle / 1000 };
-  const out = { scan: 0, ultrasonic: 0, path: 0 };
+  const out = { scan: 0, ultrasonic: 0, path: 0, planobst: 0 };
   if (o.path && s.path.length > 0) {
     ctx.strokeStyle = "#6a1b9a";
     ctx.lineWidth = 2;
@@ -152,6 +175,10 @@ export function drawStatus(
       ctx.stroke();
       out.ultrasonic++;
     });
+  }
+  if (o.planObstacles) {
+    // over the scan points, which lie on the observed lines
+    out.planobst = drawPlanObstacles(ctx, cam, s, est);
   }
   if (o.localization && (s.covMajor > 0 || s.covMinor > 0)) {
     const [cx, cy] = toScreen(cam, est.x, est.y);

@@ -1,0 +1,86 @@
+"""The map view's optional layers in Debian's chromium against the reference server (issue 19, 5.3 / 5.7): the
+obstacles used for planning while ViewPlanObstEnabled is set (erratum E-GUI-005). What the GUI did to the platform
+is checked over the server's OTHER port; what it drew is read from the canvas (counts and pixels).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+from pltf.client import PlatformClient
+from tests.gui.conftest import Gateway, Platform, open_gui, wait_for
+from tests.gui.test_app import to_screen
+
+
+def red_near(page: Any, x: float, y: float, radius: int = 3) -> bool:
+    """Is a planning-obstacle red pixel within `radius` px of the screen point (page coordinates)?"""
+    return bool(
+        page.evaluate(
+            """([x, y, r]) => {
+              const c = document.querySelector('canvas.map-canvas');
+              const box = c.getBoundingClientRect();
+              const dpr = window.devicePixelRatio || 1;
+              const px = Math.round((x - box.left) * dpr), py = Math.round((y - box.top) * dpr);
+              const d = c.getContext('2d').getImageData(px - r, py - r, 2 * r + 1, 2 * r + 1).data;
+              for (let i = 0; i < d.length; i += 4) {
+                const [r_, g, b] = [d[i], d[i + 1], d[i + 2]];
+                if (r_ > 150 && g < 30 && b < 30) return true;  // #d50000; the scan is #e53935
+              }
+              return false;
+            }""",
+            [x, y, radius],
+        )
+    )
+
+
+def observed_midpoints(client: PlatformClient) -> list[tuple[float, float]]:
+    """The world-frame midpoints of the lines GET_STATUS reports as observed (platform frame, erratum E-MOT-003)."""
+    s = client.get_status()
+    a = math.radians(s.est_angle_mdeg / 1000)
+    out = []
+    for ln in s.lines:
+        mx, my = (ln.source_x_mm + ln.target_x_mm) / 2, (ln.source_y_mm + ln.target_y_mm) / 2
+        out.append((s.est_x_mm + mx * math.cos(a) - my * math.sin(a), s.est_y_mm + mx * math.sin(a) + my * math.cos(a)))
+    return out
+
+
+def test_planning_obstacles_are_drawn_while_view_plan_obst_enabled_is_set(
+    page: Any, gateway: Gateway, platform: Platform
+) -> None:
+    open_gui(page, gateway, platform.target)
+    page.get_by_role("button", name="Zoom all", exact=True).click()
+    canvas = page.get_by_role("img", name="Map")
+    other = platform.other
+    status = other.get_status()
+    assert len(status.lines) > 0
+    wait_for(lambda: canvas.get_attribute("data-drawn-planobst") == "0", what="no planning obstacles while off")
+    page.get_by_role("menuitem", name="View", exact=True).click()
+    page.get_by_role("menuitem", name="View Options", exact=True).click()
+    switch = page.get_by_role("checkbox", name="Obstacles used for planning (ViewPlanObstEnabled)")
+    assert not switch.is_checked()
+    switch.check()
+    wait_for(lambda: other.get_pltf_param("ViewPlanObstEnabled").value == "true", what="the parameter set")
+
+    def drawn_matches() -> bool:
+        s = other.get_status()
+        return canvas.get_attribute("data-drawn-planobst") == str(len(s.lines) + len(s.circles))
+
+    wait_for(drawn_matches, what="one drawn obstacle per observed line and circle")
+    inside = [
+        to_screen(page, x, y)
+        for x, y in observed_midpoints(other)
+        if canvas.bounding_box()["x"]
+        < to_screen(page, x, y)[0]
+        < canvas.bounding_box()["x"] + canvas.bounding_box()["width"]
+        and canvas.bounding_box()["y"]
+        < to_screen(page, x, y)[1]
+        < canvas.bounding_box()["y"] + canvas.bounding_box()["height"]
+    ]
+    assert inside, "no observed line lies in the view"
+    wait_for(lambda: all(red_near(page, *p) for p in inside), what=f"red at the observed lines' midpoints {inside}")
+    # switched off from the GUI: the platform's parameter and the drawing follow
+    switch.uncheck()
+    wait_for(lambda: other.get_pltf_param("ViewPlanObstEnabled").value == "false", what="the parameter cleared")
+    wait_for(lambda: canvas.get_attribute("data-drawn-planobst") == "0", what="no planning obstacles drawn")
+    assert not any(red_near(page, *p) for p in inside)
