@@ -95,7 +95,7 @@ def _command(link: PlatformLink, text: str, send: Any) -> None:
     if op == "open":
         link.open()
     elif op == "close":
-        link.close("socket closed by a viewer")
+        link.close("socket closed by a viewer", by="viewer")
     elif op == "stats":
         send({"event": "stats", "target": link.target, "state": link.state, **link.stats.snapshot()})
     else:
@@ -126,7 +126,7 @@ async def index(request: web.Request) -> web.StreamResponse:
 
 async def _shutdown(app: web.Application) -> None:
     for link in list(app[LINKS].values()):
-        link.close("gateway stopped")
+        link.close("gateway stopped", by="gateway")
 
 
 def make_app(

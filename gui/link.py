@@ -7,6 +7,9 @@ Rules:
 - Connection events are JSON objects ``{"event": ..., "target": ..., "message": ...}`` sent to every tab:
   connecting, connected, unreachable, refused, turned_away, dropped, timeout, malformed, closed, retry.
   Every failure is said in words and followed by a reconnect with backoff while any tab wants the socket open.
+  Besides the English ``message`` an event carries its parts as fields (``detail``: the system's or the codec's
+  own words; ``timeout``, ``attempt``, ``delay``; a retry repeats its failure's ``reason`` and fields), so a tab
+  words it in its own language (web/src/session/connwords.ts).
 - A platform that closes the connection before sending a single byte has turned us away (erratum E-GUI-003;
   E-WIRE-007: a busy port accepts a second client and closes it at once).
 - A request whose reply has not come within ``reply_timeout`` seconds ends the connection (the platform has
@@ -96,6 +99,7 @@ class PlatformLink:
         self._wake = asyncio.Event()
         self._failure = ""  # the last failure in words, repeated while waiting to reconnect
         self._reason = ""
+        self._failure_fields: dict[str, Any] = {}
 
     # ---- tabs
     def attach(self, tab: Hashable, send: Send) -> None:
@@ -114,7 +118,7 @@ class PlatformLink:
     def _close_idle(self) -> None:
         self._idle = None
         if not self.tabs:
-            self.close("no viewer left")
+            self.close("no viewer left", by="idle")
             if self.on_idle is not None:
                 self.on_idle(self)
 
@@ -132,8 +136,9 @@ class PlatformLink:
         else:
             self._wake.set()  # skip the rest of a backoff wait
 
-    def close(self, why: str = "socket closed") -> None:
-        """Close Socket: the connection ends; the platform's operating mode is left alone (guide 5.2)."""
+    def close(self, why: str = "socket closed", by: str = "") -> None:
+        """Close Socket: the connection ends; the platform's operating mode is left alone (guide 5.2).
+        ``by``: "viewer", "gateway" or "" (no viewer left), for the tabs' own wording."""
         self.want_open = False
         if self._task is not None:
             self._task.cancel()
@@ -141,7 +146,7 @@ class PlatformLink:
         self._drop_writer()
         self._fail_pending(why)
         self.state = "closed"
-        self._event("closed", why)
+        self._event("closed", why, by=by)
 
     def _drop_writer(self) -> None:
         if self._writer is not None:
@@ -189,7 +194,9 @@ class PlatformLink:
             delay = self.backoff[min(attempt - 1, len(self.backoff) - 1)]
             self.state = "waiting"
             why = self._failure or "connection lost"
-            self._event("retry", f"{why}; reconnecting in {delay:g} s", delay=delay, reason=self._reason)
+            self._event(
+                "retry", f"{why}; reconnecting in {delay:g} s", delay=delay, reason=self._reason, **self._failure_fields
+            )
             self._wake.clear()
             with contextlib.suppress(TimeoutError):
                 await asyncio.wait_for(self._wake.wait(), delay)
@@ -204,14 +211,19 @@ class PlatformLink:
             self._fail("refused", f"{self.target} refused the connection: nothing listens on that port")
             return False
         except TimeoutError:
-            self._fail("unreachable", f"{self.target} did not answer the connection within {CONNECT_TIMEOUT:g} s")
+            self._fail(
+                "unreachable",
+                f"{self.target} did not answer the connection within {CONNECT_TIMEOUT:g} s",
+                timeout=CONNECT_TIMEOUT,
+            )
             return False
         except OSError as exc:
-            self._fail("unreachable", f"{self.target} cannot be reached: {_reason(exc)}")
+            self._fail("unreachable", f"{self.target} cannot be reached: {_reason(exc)}", detail=_reason(exc))
             return False
         self._writer = writer
         self.state = "connected"
         self._failure = self._reason = ""
+        self._failure_fields = {}
         self._event("connected", f"connected to {self.target}")
         received = 0
         while True:
@@ -219,11 +231,15 @@ class PlatformLink:
                 data = await asyncio.wait_for(reader.read(READ_SIZE), self._read_timeout())
             except TimeoutError:
                 if self._overdue():
-                    self._fail("timeout", f"{self.target} stopped answering: no reply for {self.reply_timeout:g} s")
+                    self._fail(
+                        "timeout",
+                        f"{self.target} stopped answering: no reply for {self.reply_timeout:g} s",
+                        timeout=self.reply_timeout,
+                    )
                     return received > 0
                 continue
             except OSError as exc:
-                self._fail("dropped", f"{self.target} dropped the connection: {_reason(exc)}")
+                self._fail("dropped", f"{self.target} dropped the connection: {_reason(exc)}", detail=_reason(exc))
                 return received > 0
             if not data:
                 if received == 0:
@@ -262,14 +278,14 @@ class PlatformLink:
                     if send is not None:
                         send(frame)
         except (RemoteProtocolError, ValueError) as exc:
-            self._fail("malformed", f"{self.target} sent a malformed reply: {exc}")
+            self._fail("malformed", f"{self.target} sent a malformed reply: {exc}", detail=str(exc))
             return False
         return True
 
-    def _fail(self, event: str, message: str) -> None:
+    def _fail(self, event: str, message: str, **fields: Any) -> None:
         self.stats.errors += 1
-        self._failure, self._reason = message, event
-        self._event(event, message)
+        self._failure, self._reason, self._failure_fields = message, event, fields
+        self._event(event, message, **fields)
 
 
 def _reason(exc: OSError) -> str:

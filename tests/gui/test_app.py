@@ -237,6 +237,7 @@ def test_switching_the_language_changes_the_labels(
     page.get_by_role("menuitem", name="View Options", exact=True).click()
     page.get_by_role("radio", name="German", exact=True).check()
     expect_text(page.get_by_role("status", name="Systemzustand"), "Nicht initialisiert")
+    expect_text(page.get_by_role("status", name="Verbindung"), f"verbunden mit {platform.target}")  # the gateway's
     assert button(page, "Initialisieren").is_enabled()
     page.get_by_role("menuitem", name="Ansicht", exact=True).click()
     assert page.get_by_role("menuitem", name="Ansichtsoptionen", exact=True).is_visible()
@@ -273,6 +274,33 @@ def test_each_fault_shows_its_message_and_the_gui_keeps_running(
     # ... and once the port is free again the GUI reconnects by itself
     expect_text(status, f"connected to {platform.target}", timeout=20_000)
     expect_text(readout(page, "System state"), "Not initialized")
+
+
+def test_the_gateway_s_messages_follow_the_language(page: Any, gateway: Gateway, platform: Platform) -> None:
+    page.goto(gateway.url(f"127.0.0.1:{free_port()}"))
+    page.evaluate("localStorage.setItem('pltf.lang', 'de')")
+    status = page.get_by_role("status", name="Verbindung")
+    refused = f"127.0.0.1:{free_port()}"
+    open_gui(page, gateway, refused, connected=False)
+    expect_text(status, f"{refused} hat die Verbindung abgelehnt")
+    expect_text(status, "neuer Versuch in")  # the retry repeats its failure, in German too
+    for behaviour, text in [
+        ("silent", "antwortet nicht mehr: keine Antwort seit 2 s"),
+        ("garbage", "fehlerhafte Antwort"),
+    ]:
+        with bad_platform(behaviour) as bad:
+            open_gui(page, gateway, bad.target, connected=False)
+            expect_text(status, text)
+    with PlatformClient("127.0.0.1", platform.ports[0], timeout=5.0) as first:
+        first.get_status()
+        open_gui(page, gateway, platform.target, connected=False)
+        expect_text(status, "sein Port hat schon einen Client")
+    expect_text(status, f"verbunden mit {platform.target}", timeout=20_000)
+    # switched back without a reload: the same event in English
+    page.get_by_role("menuitem", name="Ansicht", exact=True).click()
+    page.get_by_role("menuitem", name="Ansichtsoptionen", exact=True).click()
+    page.get_by_role("radio", name="Englisch", exact=True).check()
+    expect_text(readout(page, "Connection"), f"connected to {platform.target}")
 
 
 def test_two_tabs_share_the_one_connection_and_the_second_port_stays_free(

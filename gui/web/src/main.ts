@@ -22,6 +22,7 @@ import { statusBar } from "./panels/statusbar";
 import { ViewOptions, viewOptionsPanel } from "./panels/viewoptions";
 import { planObstacleSwitch } from "./panels/planobst";
 import { PlatformSession } from "./session/session";
+import { connText } from "./session/connwords";
 
 const params = new URLSearchParams(window.location.search);
 const target = params.get("target") ?? localStorage.getItem("pltf.lastTarget") ?? "";
@@ -33,7 +34,7 @@ const options = new ViewOptions();
 const notice = h("p", { class: "notice", role: "status", "aria-live": "polite" });
 bind(notice, "app.messages", { text: false });
 const say = (text: string) => (notice.textContent = text);
-session.notices.subscribe(say);
+session.notices.subscribe((ev) => say(connText(ev)));
 
 const map = new MapView(session, options);
 const dock = new Dock();

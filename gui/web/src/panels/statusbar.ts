@@ -7,6 +7,7 @@ import { h, readout } from "../dom";
 import { type Key, onLanguage, t } from "../i18n/i18n";
 import { EmergencyState, Flag, type GetStatusReply } from "../pltf";
 import type { ConnEvent, PlatformSession } from "../session/session";
+import { connText } from "../session/connwords";
 
 export function poseText(x: number, y: number, angleMilliDeg: number): string {
   return `x ${x} mm, y ${y} mm, ${(angleMilliDeg / 1000).toFixed(1)}°`;
@@ -30,7 +31,7 @@ export function statusBar(session: PlatformSession): HTMLElement {
   let lastConn: ConnEvent | null = null;
   const show = () => {
     const ev = lastConn;
-    conn.value.textContent = ev === null ? t("conn.closed") : ev.message;
+    conn.value.textContent = ev === null ? t("conn.closed") : connText(ev);
     conn.value.dataset.event = ev?.event ?? "closed";
     const s = session.connected ? last : null;
     if (s === null) {

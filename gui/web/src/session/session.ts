@@ -106,8 +106,8 @@ export class PlatformSession {
   readonly replies = new Topic<Telegram>();
   readonly wire = new Topic<WireRecord>();
   readonly gatewayStats = new Topic<Record<string, unknown>>();
-  /** Messages about single requests (not sent, refused by the gateway): shown, but not the connection's state. */
-  readonly notices = new Topic<string>();
+  /** Events about single requests (not sent, refused by the gateway): shown, but not the connection's state. */
+  readonly notices = new Topic<ConnEvent>();
   /** This tab's own traffic (TCP Client tab). */
   readonly traffic = { bytesOut: 0, bytesIn: 0, telegramsOut: 0, telegramsIn: 0, errors: 0, reconnects: 0, rtt: [] as number[] };
 
@@ -187,6 +187,7 @@ export class PlatformSession {
         event: "gateway_lost",
         target: this.target,
         message: `lost the connection to the GUI gateway; retrying in ${delay / 1000} s`,
+        delay: delay / 1000,
       });
       window.setTimeout(() => {
         if (this.ws === null) {
@@ -217,7 +218,7 @@ export class PlatformSession {
       }
       if (ev.event !== "lost") {
         this.traffic.errors++;
-        this.notices.publish(ev.message);
+        this.notices.publish(ev);
       }
       return;
     }
@@ -278,7 +279,8 @@ export class PlatformSession {
       telegram = decodeFrame(bytes, "reply");
     } catch (e) {
       this.traffic.errors++;
-      this.conn.publish({ event: "malformed", target: this.target, message: `a malformed reply: ${(e as ProtocolError).message}` });
+      const detail = (e as ProtocolError).message;
+      this.conn.publish({ event: "malformed", target: this.target, message: `a malformed reply: ${detail}`, detail });
       return;
     }
     const head = this.waiting.shift();
