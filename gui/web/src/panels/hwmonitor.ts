@@ -248,7 +248,9 @@ function canTab(session: PlatformSession, say: (s: string) => void): { root: HTM
   });
   const render = () => {
     const f = filter.value.trim().toLowerCase().replace(/^0x/, "");
-    const shown = frames.filter((m) => f === "" || new RegExp(`^${f.replace(/\./g, "[0-9a-f]")}$`).test(m.canId.toString(16)));
+    // the id as shown, three hex digits: "0x02." matches 0x020 .. 0x02f
+    const pattern = new RegExp(`^${f.replace(/[^0-9a-f.]/g, "").replace(/\./g, "[0-9a-f]")}$`);
+    const shown = frames.filter((m) => f === "" || pattern.test(m.canId.toString(16).padStart(f.length, "0")));
     body.replaceChildren(...shown.slice(-200).reverse().map((m) =>
       h("tr", {}, h("td", {}, m.timestamp.toFixed(3)), h("td", {}, `0x${m.canId.toString(16).padStart(3, "0")}`), h("td", {}, hex(m.data)))));
   };
