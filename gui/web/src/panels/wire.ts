@@ -1,13 +1,42 @@
 /**
  * The wire inspector (beyond the original): every telegram this tab sent or received, decoded by the generated
- * codec (its canonical dump). GET_STATUS polling can be hidden; the view can be paused.
+ * codec and shown for a person: each field by its spec name, texts as text (the codec's canonical dump writes
+ * them in hex), repeated groups by their count and first item. GET_STATUS polling can be hidden; the view can be
+ * paused.
  */
 import { h } from "../dom";
 import { bind } from "../i18n/i18n";
-import { dump } from "../pltf";
+import { dump, type Telegram } from "../pltf";
 import type { PlatformSession, WireRecord } from "../session/session";
 
 export const MAX_RECORDS = 500;
+const MAX_STRING = 80;
+
+function value(v: unknown): string {
+  if (typeof v === "string") {
+    return JSON.stringify(v.length > MAX_STRING ? `${v.slice(0, MAX_STRING)}...` : v);
+  }
+  if (v instanceof Uint8Array) {
+    return Array.from(v.slice(0, 16), (b) => b.toString(16).padStart(2, "0")).join("") + (v.length > 16 ? "..." : "");
+  }
+  if (Array.isArray(v)) {
+    const head = v.slice(0, typeof v[0] === "object" ? 1 : 8).map(value).join(",");
+    return `[${v.length}${v.length > 0 ? `: ${head}${v.length > (typeof v[0] === "object" ? 1 : 8) ? ",..." : ""}` : ""}]`;
+  }
+  if (typeof v === "object" && v !== null) {
+    return `{${Object.entries(v).map(([k, x]) => `${k}=${value(x)}`).join(" ")}}`;
+  }
+  return String(v);
+}
+
+/** A telegram's fields for a person (the opaque ones as the codec dumps them). */
+export function readable(t: Telegram): string {
+  if (t.telegramLayout.opaque) {
+    return dump(t);
+  }
+  const props = t as unknown as Record<string, unknown>;
+  return t.telegramLayout.fields.map((f) => `${f.name}=${value(props[f.prop])}`).join(" ");
+}
 const MAX_TEXT = 300;
 
 /** What the inspector keeps of a telegram: its text, cut short (a decoded status holds ~20 KB of scan points). */
@@ -31,7 +60,7 @@ export function wirePanel(session: PlatformSession): { root: HTMLElement; onShow
   let shown = false;
   let dirty = false;
   const line = (r: WireRecord): Line => {
-    let text = dump(r.telegram);
+    let text = readable(r.telegram);
     if (text.length > MAX_TEXT) {
       text = `${text.slice(0, MAX_TEXT)}... (${r.bytes} bytes)`;
     }
