@@ -5,7 +5,8 @@ Rules:
 - ``GET /ws?target=HOST:PORT`` upgrades to a WebSocket attached to the ``PlatformLink`` of that target (one per
   target, shared by every tab). Binary messages are request frames (tab -> platform) and reply frames
   (platform -> tab), one frame per message; text messages are JSON: ``{"op": "open"}`` / ``{"op": "close"}``
-  from the tab, events (link.py) to it.
+  from the tab, events (link.py) to it. ``{"op": "truth", "control": "HOST:PORT"}`` starts the optional
+  ground-truth reader of the tab (truth.py).
 - ``GET /api/targets`` lists the known addresses (guide 5.2: "Network.ini"), the default target first;
   ``POST /api/targets`` with ``{"target": "HOST:PORT"}`` adds one to the file.
 - A WebSocket from another origin is refused: a page from elsewhere must not drive the platform.
@@ -23,6 +24,7 @@ from aiohttp import WSMsgType, web
 
 from pltf.gui.link import PlatformLink, parse_target
 from pltf.gui.network_ini import NetworkIni
+from pltf.gui.truth import TruthReader
 
 log = logging.getLogger("pltf.gui")
 STATIC = Path(__file__).resolve().parent / "static"
@@ -74,25 +76,31 @@ async def websocket(request: web.Request) -> web.StreamResponse:
                 await ws.send_str(json.dumps(item))
 
     pumping = asyncio.get_running_loop().create_task(pump())
+    truth: list[TruthReader] = []
     try:
         async for msg in ws:
             if msg.type == WSMsgType.BINARY:
                 link.submit(tab, msg.data)
             elif msg.type == WSMsgType.TEXT:
-                _command(link, msg.data, queue.put_nowait)
+                _command(link, msg.data, queue.put_nowait, truth)
     finally:
+        for reader in truth:
+            reader.stop()
         link.detach(tab)
         queue.put_nowait(None)
         await pumping
     return ws
 
 
-def _command(link: PlatformLink, text: str, send: Any) -> None:
+def _command(link: PlatformLink, text: str, send: Any, truth: list[TruthReader]) -> None:
     try:
-        op = json.loads(text).get("op")
+        body = json.loads(text)
+        op = body.get("op")
     except (ValueError, AttributeError):
         op = None
-    if op == "open":
+    if op == "truth":
+        _truth(link, str(body.get("control", "")), send, truth)
+    elif op == "open":
         link.open()
     elif op == "close":
         link.close("socket closed by a viewer", by="viewer")
@@ -100,6 +108,16 @@ def _command(link: PlatformLink, text: str, send: Any) -> None:
         send({"event": "stats", "target": link.target, "state": link.state, **link.stats.snapshot()})
     else:
         send({"event": "bad_request", "target": link.target, "message": f"unknown operation in {text[:80]!r}"})
+
+
+def _truth(link: PlatformLink, control: str, send: Any, truth: list[TruthReader]) -> None:
+    for reader in truth:
+        reader.stop()
+    truth.clear()
+    try:
+        truth.append(TruthReader(control, send))
+    except ValueError as exc:
+        send({"event": "truth_lost", "control": control, "detail": str(exc), "message": str(exc)})
 
 
 async def targets(request: web.Request) -> web.Response:

@@ -1,5 +1,6 @@
 """The map view's optional layers in Debian's chromium against the reference server (issue 19, 5.3 / 5.7): the
-obstacles used for planning while ViewPlanObstEnabled is set (erratum E-GUI-005). What the GUI did to the platform
+obstacles used for planning while ViewPlanObstEnabled is set (erratum E-GUI-005), and the ground truth read from
+the reference server's control channel. What the GUI did to the platform
 is checked over the server's OTHER port; what it drew is read from the canvas (counts and pixels).
 """
 
@@ -9,7 +10,8 @@ import math
 from typing import Any
 
 from pltf.client import PlatformClient
-from tests.gui.conftest import Gateway, Platform, open_gui, wait_for
+from tests.gui.conftest import Gateway, Platform, expect_text, open_gui, wait_for
+from tests.gui.fakes import free_port
 from tests.gui.test_app import to_screen
 
 
@@ -84,3 +86,36 @@ def test_planning_obstacles_are_drawn_while_view_plan_obst_enabled_is_set(
     wait_for(lambda: other.get_pltf_param("ViewPlanObstEnabled").value == "false", what="the parameter cleared")
     wait_for(lambda: canvas.get_attribute("data-drawn-planobst") == "0", what="no planning obstacles drawn")
     assert not any(red_near(page, *p) for p in inside)
+
+
+def test_the_ground_truth_layer_shows_the_true_pose_and_the_injected_faults(
+    page: Any, gateway: Gateway, platform: Platform
+) -> None:
+    """The optional layer (gui/truth.py): ?control=HOST:PORT reads the reference server's control channel."""
+    control = f"127.0.0.1:{platform.control.sock.getpeername()[1]}"
+    page.goto(f"{gateway.url(platform.target)}&control={control}")
+    truth = page.get_by_role("status", name="Ground truth", exact=True)
+    true_pose = platform.control("pose")["true"]
+    expect_text(truth, f"true pose x {round(true_pose[0])} mm, y {round(true_pose[1])} mm")
+    expect_text(truth, "no injected fault")
+    canvas = page.get_by_role("img", name="Map")
+    wait_for(lambda: canvas.get_attribute("data-truth"), what="the true footprint drawn")
+    x, y, _ = (float(v) for v in canvas.get_attribute("data-truth").split(","))
+    assert math.hypot(x - true_pose[0], y - true_pose[1]) < 1
+    # the estimate moved by the socket API, the truth stays: the layer shows both apart
+    platform.other.set_frm_pltf(int(true_pose[0]) + 1500, int(true_pose[1]), 0)
+    wait_for(lambda: platform.control("pose")["estimate"][0] > true_pose[0] + 1000, what="the estimate shifted")
+    x, y, _ = (float(v) for v in canvas.get_attribute("data-truth").split(","))
+    assert math.hypot(x - true_pose[0], y - true_pose[1]) < 1
+    platform.control("overtemp right 90")
+    expect_text(truth, "injected faults: overtemp MOTOR_RIGHT 90")
+    # the view option hides the footprint; the GUI never needs the channel: a wrong address is said and ignored
+    page.get_by_role("menuitem", name="View", exact=True).click()
+    page.get_by_role("menuitem", name="View Options", exact=True).click()
+    page.get_by_role("checkbox", name="Show true pose (control channel)").uncheck()
+    wait_for(lambda: canvas.get_attribute("data-truth") is None, what="the true footprint hidden")
+    page.goto(f"{gateway.url(platform.target)}&control=127.0.0.1:{free_port()}")
+    expect_text(truth, "not read")
+    expect_text(page.get_by_role("status", name="Connection", exact=True), f"connected to {platform.target}")
+    page.goto(f"{gateway.url(platform.target)}&control=192.0.2.1:7000")
+    expect_text(truth, "loopback address only")

@@ -113,6 +113,12 @@ document.addEventListener("keydown", (e) => {
 // Exposed for the browser tests and the benchmark (read-only use).
 (window as unknown as { pltf: unknown }).pltf = { session, map, options, dock };
 
+// The optional ground-truth layer: ?control=HOST:PORT names a reference server's control channel (loopback).
+const control = params.get("control");
+if (control !== null && control !== "") {
+  session.watchTruth(control);
+}
+
 if (target !== "") {
   localStorage.setItem("pltf.lastTarget", target);
   session.open();

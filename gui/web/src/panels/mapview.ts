@@ -15,10 +15,10 @@ import { bind, onLanguage, t, type Key } from "../i18n/i18n";
 import { GetStatusReply, MotionMode, MoveAbsRequest, SetFrmPltfRequest } from "../pltf";
 import { type Bounds, countKinds, KINDS, type MapScene, MapParseError, parseMap, sceneBounds } from "../scene/map";
 import { parseRoadmap, type Roadmap } from "../scene/roadmap";
-import type { PlatformSession } from "../session/session";
+import type { PlatformSession, TruthEvent } from "../session/session";
 import { type Camera, fit, panBy, toWorld, viewBounds, zoomAt } from "../view/camera";
 import { drawStatic, type Layers, prepare, type Prepared } from "../view/maprender";
-import { drawFlag, drawStatus, footprint, type Footprint, type OverlayOptions, type Pose, type UsSensor } from "../view/overlay";
+import { drawFlag, drawPlatform, drawStatus, footprint, type Footprint, type OverlayOptions, type Pose, type UsSensor } from "../view/overlay";
 import type { ViewOptions } from "./viewoptions";
 
 type Tool = "pan" | "zoomArea" | "shift" | "flag" | "edit";
@@ -67,6 +67,9 @@ export class MapView {
   private toolButtons = new Map<Tool, HTMLButtonElement>();
   private fitted = false;
   private message: HTMLElement;
+  /** the optional ground truth (control channel) and its readout, shown only once it has been asked for */
+  truth: TruthEvent | null = null;
+  private truthText: HTMLElement;
   /** set while the map editor is open: the view shows its document and hands it the pointer in tool "edit" */
   editHooks: EditHooks | null = null;
 
@@ -102,11 +105,16 @@ export class MapView {
     toolButton("pan", "map.pan");
     toolButton("shift", "map.shift");
     toolButton("flag", "map.flag");
-    this.root = h("section", { class: "map-view" }, toolbar, h("div", { class: "map-frame" }, this.canvas), this.message, this.summary);
+    this.truthText = h("p", { class: "map-truth", role: "status", hidden: true });
+    bind(this.truthText, "truth.title", { text: false });
+    this.root = h("section", { class: "map-view" }, toolbar, h("div", { class: "map-frame" }, this.canvas), this.message, this.summary, this.truthText);
     bind(this.root, "view.map", { text: false });
     this.startWorker();
     this.wire();
-    onLanguage(() => this.updateSummary());
+    onLanguage(() => {
+      this.updateSummary();
+      this.showTruth();
+    });
   }
 
   private wire(): void {
@@ -145,6 +153,11 @@ export class MapView {
       if (this.options.centerPlatform) {
         this.cam = { ...this.cam, cx: st.estX, cy: st.estY };
       }
+      this.invalidate();
+    });
+    s.truth.subscribe((ev) => {
+      this.truth = ev;
+      this.showTruth();
       this.invalidate();
     });
     this.options.changed.subscribe(() => {
@@ -218,6 +231,23 @@ export class MapView {
       this.inFlight = null;
       this.invalidate();
     };
+  }
+
+  /** The true pose beside the estimate and the injected faults, in words (guide units: mm, degrees). */
+  private showTruth(): void {
+    const ev = this.truth;
+    if (ev === null) {
+      return;
+    }
+    this.truthText.hidden = false;
+    if (ev.event === "truth_lost" || ev.true === undefined) {
+      this.truthText.textContent = t("truth.lost", { control: ev.control, detail: ev.detail ?? "" });
+      return;
+    }
+    const [x, y, a] = ev.true;
+    const faults = (ev.faults ?? []).map((f) => `${f.kind} ${f.target}${f.value == null ? "" : ` ${f.value}`}`);
+    this.truthText.textContent = `${t("truth.pose", { x: Math.round(x), y: Math.round(y), angle: a.toFixed(1) })}; ${
+      faults.length === 0 ? t("truth.noFaults") : t("truth.faults", { list: faults.join(", ") })}`;
   }
 
   private say(text: string): void {
@@ -527,6 +557,14 @@ export class MapView {
       this.canvas.dataset.drawnUltrasonic = String(live.ultrasonic);
       this.canvas.dataset.drawnPath = String(live.path);
       this.canvas.dataset.drawnPlanobst = String(live.planobst);
+    }
+    const tr = this.truth;
+    if (tr?.event === "truth" && tr.true !== undefined && this.options.truth) {
+      const [x, y, angle] = tr.true;
+      drawPlatform(ctx, c, { x, y, angle }, this.footprint, "#757575", true);
+      this.canvas.dataset.truth = `${x},${y},${angle}`;
+    } else {
+      delete this.canvas.dataset.truth;
     }
     if (this.ghost) {
       ctx.globalAlpha = 0.6;

@@ -12,6 +12,8 @@ export class ViewOptions {
   centerPlatform = false;
   showDesired = true;
   showEstimated = true;
+  /** the true pose from the control channel, when the GUI reads one (gui/truth.py) */
+  truth = true;
   grid = true;
   localization = true;
   ultrasonic = true;
@@ -22,7 +24,7 @@ export class ViewOptions {
   readonly changed = new Topic<void>();
 }
 
-type Flag = "centerPlatform" | "showDesired" | "showEstimated" | "grid" | "localization" | "ultrasonic" | "planning";
+type Flag = "centerPlatform" | "showDesired" | "showEstimated" | "truth" | "grid" | "localization" | "ultrasonic" | "planning";
 
 export function viewOptionsPanel(o: ViewOptions, ...planning: HTMLElement[]): HTMLElement {
   const check = (key: Key, get: () => boolean, set: (v: boolean) => void) => {
@@ -62,7 +64,7 @@ export function viewOptionsPanel(o: ViewOptions, ...planning: HTMLElement[]): HT
   const root = h(
     "div",
     { class: "view-options" },
-    group("opt.platform", flag("opt.centerPlatform", "centerPlatform"), flag("opt.showDesired", "showDesired"), flag("opt.showEstimated", "showEstimated")),
+    group("opt.platform", flag("opt.centerPlatform", "centerPlatform"), flag("opt.showDesired", "showDesired"), flag("opt.showEstimated", "showEstimated"), flag("opt.truth", "truth")),
     group("opt.grid", flag("opt.showGrid", "grid")),
     group("opt.localization", flag("opt.scan", "localization"), flag("opt.ultrasonic", "ultrasonic")),
     group("opt.planning", flag("opt.path", "planning"), ...planning),

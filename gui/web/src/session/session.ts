@@ -37,6 +37,15 @@ export interface ConnEvent {
   [key: string]: unknown;
 }
 
+/** gui/truth.py: the true pose and the injected faults, or why the control channel cannot be read. */
+export interface TruthEvent {
+  event: "truth" | "truth_lost";
+  control: string;
+  true?: [number, number, number]; // mm, mm, degrees
+  faults?: Array<{ kind: string; target: string; value?: number | string | null }>;
+  detail?: string;
+}
+
 export interface WireRecord {
   dir: "out" | "in";
   t: number;
@@ -106,6 +115,9 @@ export class PlatformSession {
   readonly replies = new Topic<Telegram>();
   readonly wire = new Topic<WireRecord>();
   readonly gatewayStats = new Topic<Record<string, unknown>>();
+  /** The optional ground truth from the reference server's control channel (gui/truth.py): never needed. */
+  readonly truth = new Topic<TruthEvent>();
+  private control: string | null = null;
   /** Events about single requests (not sent, refused by the gateway): shown, but not the connection's state. */
   readonly notices = new Topic<ConnEvent>();
   /** This tab's own traffic (TCP Client tab). */
@@ -152,6 +164,14 @@ export class PlatformSession {
     }
   }
 
+  /** Read the ground truth from a reference server's control channel (HOST:PORT, loopback); "" stops it. */
+  watchTruth(control: string): void {
+    this.control = control === "" ? null : control;
+    if (this.control !== null && this.ws?.readyState === WebSocket.OPEN) {
+      this.ws.send(JSON.stringify({ op: "truth", control: this.control }));
+    }
+  }
+
   askStats(): void {
     if (this.ws?.readyState === WebSocket.OPEN) {
       this.ws.send(JSON.stringify({ op: "stats" }));
@@ -164,6 +184,9 @@ export class PlatformSession {
     this.ws = ws;
     ws.onopen = () => {
       this.wsRetry = 0;
+      if (this.control !== null) {
+        ws.send(JSON.stringify({ op: "truth", control: this.control }));
+      }
       if (this.wantOpen) {
         ws.send(JSON.stringify({ op: "open" }));
       }
@@ -208,6 +231,10 @@ export class PlatformSession {
   private onEvent(ev: ConnEvent): void {
     if (ev.event === "stats") {
       this.gatewayStats.publish(ev);
+      return;
+    }
+    if (ev.event === "truth" || ev.event === "truth_lost") {
+      this.truth.publish(ev as unknown as TruthEvent);
       return;
     }
     if (ev.event === "lost" || ev.event === "not_sent" || ev.event === "bad_request") {
