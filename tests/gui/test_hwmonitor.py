@@ -5,6 +5,7 @@ is checked over the platform's OTHER port (GET_STATUS), what the tab shows again
 from __future__ import annotations
 
 import re
+from pathlib import Path
 from typing import Any
 
 from playwright import sync_api as playwright_sync
@@ -51,7 +52,9 @@ def test_motor_brakes_engage_and_release_from_the_motor_tab(page: Any, gateway: 
     playwright_sync.expect(pane).not_to_contain_text("brake engaged")
 
 
-def test_can_messages_listen_filter_and_send_a_frame(page: Any, gateway: Gateway, platform: Platform) -> None:
+def test_can_messages_listen_filter_and_send_a_frame(
+    page: Any, gateway: Gateway, platform: Platform, artifacts: Path
+) -> None:
     """guide 5.8 CAN Messages ("not implemented" in the original): live frames of CMD_GET_CAN_MESSAGES for the
     listening ids, an id filter, and a frame sent with CMD_SEND_CAN_MESSAGE (here IoBoard_DigOut, 0x010 of
     spec/can/pltf.dbc, which the IO board obeys: visible in GET_STATUS over the other port)."""
@@ -67,6 +70,7 @@ def test_can_messages_listen_filter_and_send_a_frame(page: Any, gateway: Gateway
     pane.get_by_role("textbox", name="Filter (id, . = any digit)").fill("0x02.")
     expect_text(table, "0x023")
     playwright_sync.expect(table).not_to_contain_text("0x120")
+    page.screenshot(path=str(artifacts / "hardware-monitor-can.png"))
     # a frame to the IO board (IoBoard_DigOut: Channel, Value): channel 2 (output 3) high
     ids.nth(1).fill("0x010")
     pane.get_by_role("textbox", name="Data (8 bytes, hex)").fill("02 01")

@@ -7,6 +7,7 @@ is checked over the server's OTHER port; what it drew is read from the canvas (c
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from typing import Any
 
 from pltf.client import PlatformClient
@@ -48,7 +49,7 @@ def observed_midpoints(client: PlatformClient) -> list[tuple[float, float]]:
 
 
 def test_planning_obstacles_are_drawn_while_view_plan_obst_enabled_is_set(
-    page: Any, gateway: Gateway, platform: Platform
+    page: Any, gateway: Gateway, platform: Platform, artifacts: Path
 ) -> None:
     open_gui(page, gateway, platform.target)
     page.get_by_role("button", name="Zoom all", exact=True).click()
@@ -81,6 +82,7 @@ def test_planning_obstacles_are_drawn_while_view_plan_obst_enabled_is_set(
     ]
     assert inside, "no observed line lies in the view"
     wait_for(lambda: all(red_near(page, *p) for p in inside), what=f"red at the observed lines' midpoints {inside}")
+    page.screenshot(path=str(artifacts / "planning-obstacles.png"))
     # switched off from the GUI: the platform's parameter and the drawing follow
     switch.uncheck()
     wait_for(lambda: other.get_pltf_param("ViewPlanObstEnabled").value == "false", what="the parameter cleared")
@@ -89,7 +91,7 @@ def test_planning_obstacles_are_drawn_while_view_plan_obst_enabled_is_set(
 
 
 def test_the_ground_truth_layer_shows_the_true_pose_and_the_injected_faults(
-    page: Any, gateway: Gateway, platform: Platform
+    page: Any, gateway: Gateway, platform: Platform, artifacts: Path
 ) -> None:
     """The optional layer (gui/truth.py): ?control=HOST:PORT reads the reference server's control channel."""
     control = f"127.0.0.1:{platform.control.sock.getpeername()[1]}"
@@ -109,6 +111,7 @@ def test_the_ground_truth_layer_shows_the_true_pose_and_the_injected_faults(
     assert math.hypot(x - true_pose[0], y - true_pose[1]) < 1
     platform.control("overtemp right 90")
     expect_text(truth, "injected faults: overtemp MOTOR_RIGHT 90")
+    page.screenshot(path=str(artifacts / "ground-truth.png"))
     # the view option hides the footprint; the GUI never needs the channel: a wrong address is said and ignored
     page.get_by_role("menuitem", name="View", exact=True).click()
     page.get_by_role("menuitem", name="View Options", exact=True).click()

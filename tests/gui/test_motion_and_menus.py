@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 import re
+from pathlib import Path
 from typing import Any
 
 from pltf.client import OperationState, PlatformClient
@@ -57,7 +58,9 @@ def test_break_continue_and_stop_follow_the_state_chart(page: Any, gateway: Gate
     assert button(page, "Start").is_enabled() and button(page, "Stop").is_disabled()
 
 
-def test_the_wire_inspector_shows_every_telegram_decoded(page: Any, gateway: Gateway, platform: Platform) -> None:
+def test_the_wire_inspector_shows_every_telegram_decoded(
+    page: Any, gateway: Gateway, platform: Platform, artifacts: Path
+) -> None:
     open_gui(page, gateway, platform.target)
     page.get_by_role("menuitem", name="View", exact=True).click()
     page.get_by_role("menuitem", name="Wire Inspector", exact=True).click()
@@ -70,6 +73,7 @@ def test_the_wire_inspector_shows_every_telegram_decoded(page: Any, gateway: Gat
     expect_text(log, "-> CMD_CONNECT_TO_PLTF")
     expect_text(log, "-> CMD_INIT_PLTF")
     assert "CMD_GET_STATUS" not in log.inner_text()
+    page.screenshot(path=str(artifacts / "wire-inspector.png"))
     # texts for a person: the parameter list's first key as the platform sent it, not in hex
     first = platform.other.get_pltf_param_vec().parameters[0].key
     expect_text(
