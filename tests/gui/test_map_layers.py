@@ -13,7 +13,7 @@ from typing import Any
 from pltf.client import PlatformClient
 from tests.gui.conftest import Gateway, Platform, expect_text, open_gui, wait_for
 from tests.gui.fakes import free_port
-from tests.gui.test_app import to_screen
+from tests.gui.test_app import init_and_start, to_screen
 
 
 def red_near(page: Any, x: float, y: float, radius: int = 3) -> bool:
@@ -122,3 +122,24 @@ def test_the_ground_truth_layer_shows_the_true_pose_and_the_injected_faults(
     expect_text(page.get_by_role("status", name="Connection", exact=True), f"connected to {platform.target}")
     page.goto(f"{gateway.url(platform.target)}&control=192.0.2.1:7000")
     expect_text(truth, "loopback address only")
+
+
+def test_the_live_layer_draws_the_scan_the_ultrasonic_readings_and_the_path(
+    page: Any, gateway: Gateway, platform: Platform
+) -> None:
+    """guide 5.3: the laser scan, the ultrasonic readings and the interpolated path, counted against GET_STATUS
+    over the other port; the motion mode combo box offers the guide's seven modes."""
+    open_gui(page, gateway, platform.target)
+    canvas = page.get_by_role("img", name="Map")
+    other = platform.other
+    wait_for(lambda: canvas.get_attribute("data-drawn-scan") == str(len(other.get_status().scan)), what="scan drawn")
+    assert int(canvas.get_attribute("data-drawn-scan")) > 500
+    assert canvas.get_attribute("data-drawn-ultrasonic") == "0"  # not measuring: nothing to draw
+    modes = page.get_by_role("combobox", name="Motion mode").locator("option").all_inner_texts()
+    assert len(modes) == 7, modes
+    init_and_start(page, platform, "Automatic")
+    other.start_ultrasonic(0xFFFF)
+    wait_for(lambda: canvas.get_attribute("data-drawn-ultrasonic") == "16", what="16 ultrasonic readings drawn")
+    assert canvas.get_attribute("data-drawn-path") == "0"
+    other.move_to_station("Corridor_05")
+    wait_for(lambda: int(canvas.get_attribute("data-drawn-path") or 0) > 1, what="the interpolated path drawn")
