@@ -32,8 +32,9 @@ from pltf.spec.model import enum_classes
 from pltf.spec.telegram import Telegram
 
 T = TypeVar("T")
-MotionMode = enum_classes()["MotionMode"]
-OperationState = enum_classes()["OperationState"]
+# The spec's enums are built at import; mypy sees them as plain IntEnum classes without members.
+MotionMode: Any = enum_classes()["MotionMode"]
+OperationState: Any = enum_classes()["OperationState"]
 
 
 @dataclass

@@ -33,7 +33,8 @@ from pltf.spec.volatile import rule, values_differ, volatile
 from pltf.zoo import launch
 
 __all__ = ["Diff", "Step", "compare", "diff_replies", "play", "relative", "run_differential", "script", "volatile"]
-MotionMode = enum_classes()["MotionMode"]
+# The spec's enums are built at import; mypy sees them as plain IntEnum classes without members.
+MotionMode: Any = enum_classes()["MotionMode"]
 
 
 @dataclass(frozen=True)
