@@ -214,7 +214,7 @@ def play(config: Config, steps: list[Step]) -> list[Telegram | None]:
             elif step.kind == "rest":
                 ctx.sleep(0.5)  # the move has started by now
                 # the move's end: its target reached (guide 6.4), not a pause between driving and the end turn
-                ctx.poll(ctx.status, lambda s: bool(s.telegram.target_reached), within=30.0)
+                ctx.poll(ctx.status, lambda s: bool(s.telegram.target_reached), within=30.0)  # type: ignore[attr-defined]  # a GET_STATUS field, from the spec
                 rest(ctx, within=30.0)
                 replies.append(None)
             elif step.kind == "send":
