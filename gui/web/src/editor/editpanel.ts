@@ -13,6 +13,7 @@ import { toScreen } from "../view/camera";
 import { addObject, deleteObjects, History, invertLine, lineOp, moveObjects } from "./commands";
 import { clean, extend, orthogonal, parallel, snap, type Pt, type Seg, trim } from "./geometry";
 import { newMapDoc, parseMapDoc, writeMapDoc } from "./mapdoc";
+import { objectAtLine, validateDocument } from "./validate";
 
 type EditTool = "select" | "addLine" | "trim" | "extend" | "parallel" | "orthogonal";
 type RefTool = Exclude<EditTool, "select" | "addLine">;
@@ -255,15 +256,31 @@ export function mapEditor(
     run(invertLine(history.doc, selected));
   });
   act("edit.send", () => {
+    const doc = history.doc;
+    let xml: string;
     try {
-      const doc = history.doc;
-      session.send(new SetMapRequest({ name: doc.scene.name || "edited", xml: writeMapDoc(doc) }));
-      history.markSaved();
-      say(t("edit.sent", { n: doc.scene.objects.length }));
-      refresh();
+      xml = writeMapDoc(doc);
     } catch (e) {
       say((e as Error).message);
+      return;
     }
+    // issue 20: checked against spec/schemas/map.xsd first; an invalid document is not sent, the object is selected
+    void validateDocument("map", xml).then((v) => {
+      if (!v.ok) {
+        selected = v.line === null ? null : objectAtLine(doc, xml, v.line);
+        say(t("edit.invalid", { why: v.message }));
+        refresh();
+        return;
+      }
+      try {
+        session.send(new SetMapRequest({ name: doc.scene.name || "edited", xml }));
+        history.markSaved();
+        say(t("edit.sent", { n: doc.scene.objects.length }));
+        refresh();
+      } catch (e) {
+        say((e as Error).message);
+      }
+    });
   });
   document.addEventListener("keydown", (e) => {
     if (!open || !(e.ctrlKey || e.metaKey) || view.tool !== "edit") {
