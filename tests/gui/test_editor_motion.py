@@ -56,37 +56,36 @@ def drive(platform: Platform, goal: tuple[float, float], timeout: float = 60.0) 
         time.sleep(0.01)
 
 
-def crossing_y(trace: Trace, x: float) -> float:
-    """Where the track (joined sample to sample) crosses the vertical x."""
+def crossing_x(trace: Trace, y: float) -> float:
+    """Where the track (joined sample to sample) crosses the horizontal y."""
     for (x0, y0), (x1, y1) in itertools.pairwise(trace):
-        if (x0 - x) * (x1 - x) <= 0 and x0 != x1:
-            return y0 + (y1 - y0) * (x - x0) / (x1 - x0)
-    raise AssertionError(f"the track never crosses x = {x}")
+        if (y0 - y) * (y1 - y) <= 0 and y0 != y1:
+            return x0 + (x1 - x0) * (y - y0) / (y1 - y0)
+    raise AssertionError(f"the track never crosses y = {y}")
 
 
-def test_a_wall_drawn_across_the_corridor_makes_move_abs_plan_around_it(
+def test_a_wall_drawn_across_a_room_makes_move_abs_plan_around_it(
     page: Any, gateway: Gateway, platform: Platform
 ) -> None:
-    # the platform starts at (2000, 10000) facing east in the corridor (y 8800 .. 11200) of fixtures/maps/office.map
+    # fixtures/maps/office.map: the platform starts at (2000, 10000) in the corridor; the lab (x 0 .. 9000,
+    # y 0 .. 8800) has its door at x 6400 .. 7600. Without the wall, MOVE_ABS to (7000, 3000) drives straight
+    # south from the door along x 7000.
     original = platform.other.get_map().xml
     n = len(_objects(original))
     state = _open_editor(page, gateway, platform)
     wait_for(lambda: state.get_attribute("data-objects") == str(n), what="the loaded map")
     page.get_by_role("button", name="Add a line", exact=True).click()
-    # a wall from beyond the corridor's south wall to its centre line: the straight way east is closed,
-    # the northern half (y 10000 .. 11200) stays open
-    drag(page, (4000, 8300), (4000, 10100))
+    drag(page, (9000, 6000), (5000, 6000))  # from the lab's east wall to its middle, across the way south
     wait_for(lambda: state.get_attribute("data-objects") == str(n + 1), what="the drawn wall")
     page.get_by_role("button", name="Send to platform", exact=True).click()
     expect_text(page.get_by_role("status", name="Messages", exact=True), "Map sent to the platform")
     walls = [o for o in _objects(_sent(platform, original)) if o[0] == "line"]
     (_, _, pts) = walls[-1]
     (x0, y0), (x1, y1) = ((float(p["x"]), float(p["y"])) for _, p in pts)
-    assert abs(x0 - 4000) <= 60 and abs(x1 - 4000) <= 60 and y0 <= 8800 and y1 >= 10000, pts
+    assert abs(y0 - 6000) <= 60 and abs(y1 - 6000) <= 60 and x0 >= 8900 and abs(x1 - 5000) <= 60, pts
 
     running_automatic(platform)
-    platform.other.move_abs(6000, 10000, 0)  # straight ahead, 4 m east, behind the wall
-    trace = drive(platform, (6000, 10000))
-    y = crossing_y(trace, (x0 + x1) / 2)
-    assert y >= max(y0, y1) + 250, f"the platform passed the wall's line at y {y:.0f}: through or at the wall"
-    assert y <= 11200 - 250, f"the platform passed at y {y:.0f}: through the corridor's north wall"
+    platform.other.move_abs(7000, 3000, -90000)
+    trace = drive(platform, (7000, 3000))
+    x = crossing_x(trace, (y0 + y1) / 2)
+    assert x <= min(x0, x1) - 250, f"the platform passed the wall's line at x {x:.0f}: through the wall"
