@@ -7,10 +7,11 @@ import itertools
 import json
 import math
 import time
+import xml.etree.ElementTree as ET
 from typing import Any
 
 from pltf.client import MotionMode, OperationState
-from tests.gui.conftest import Gateway, Platform, expect_text, wait_for
+from tests.gui.conftest import Gateway, Platform, expect_text, open_gui, wait_for
 from tests.gui.test_editor import _objects, _open_editor, _sent
 
 Trace = list[tuple[float, float]]
@@ -89,3 +90,76 @@ def test_a_wall_drawn_across_a_room_makes_move_abs_plan_around_it(
     trace = drive(platform, (7000, 3000))
     x = crossing_x(trace, (y0 + y1) / 2)
     assert x <= min(x0, x1) - 250, f"the platform passed the wall's line at x {x:.0f}: through the wall"
+
+
+STATIONS = [("Alpha", 3000, 10000, 0), ("Bravo", 5000, 9400, 0), ("Charlie", 5000, 12500, 90)]
+
+
+def _open_roadmap_editor(page: Any, gateway: Gateway, platform: Platform) -> Any:
+    open_gui(page, gateway, platform.target)
+    page.get_by_role("menuitem", name="Edit", exact=True).click()
+    page.get_by_role("menuitem", name="Edit Roadmap", exact=True).click()
+    return page.locator("output.rm-state")
+
+
+def test_a_three_station_roadmap_built_in_the_editor_is_followed_by_move_to_station(
+    page: Any, gateway: Gateway, platform: Platform
+) -> None:
+    state = _open_roadmap_editor(page, gateway, platform)
+    page.get_by_role("button", name="New roadmap", exact=True).click()
+    page.get_by_role("button", name="Add a station", exact=True).click()
+    for k, (name, x, y, angle) in enumerate(STATIONS):
+        page.get_by_role("textbox", name="Station name").fill(name)
+        page.get_by_role("spinbutton", name="Angle (degrees)").fill(str(angle))
+        page.mouse.click(*screen(page, x + 120, y - 90))  # near the pose; the typed coordinates make it exact
+        wait_for(lambda k=k: state.get_attribute("data-stations") == str(k + 1), what=f"station {name}")
+        page.get_by_role("spinbutton", name="X (mm)").fill(str(x))
+        page.get_by_role("spinbutton", name="Y (mm)").fill(str(y))
+        page.get_by_role("button", name="Apply pose", exact=True).click()
+        want = {"name": name, "x": x, "y": y, "angle": angle}
+        wait_for(
+            lambda want=want: all(
+                json.loads(state.get_attribute("data-selected") or "{}").get(k) == v for k, v in want.items()
+            ),
+            what=f"the typed pose of {name}",
+        )
+    page.get_by_role("button", name="Add an edge", exact=True).click()
+    for a, b in [(0, 1), (1, 2)]:
+        page.mouse.click(*screen(page, *STATIONS[a][1:3]))
+        page.mouse.click(*screen(page, *STATIONS[b][1:3]))
+    wait_for(lambda: state.get_attribute("data-edges") == "2", what="two edges")
+    page.get_by_role("button", name="Undo", exact=True).click()
+    wait_for(lambda: state.get_attribute("data-edges") == "1", what="undo of the second edge")
+    page.get_by_role("button", name="Redo", exact=True).click()
+    wait_for(lambda: state.get_attribute("data-edges") == "2", what="redo of the second edge")
+    page.get_by_role("button", name="Send to platform", exact=True).click()
+    expect_text(page.get_by_role("status", name="Messages", exact=True), "Roadmap sent to the platform")
+
+    # over the other port: the platform's roadmap is the one built, exactly
+    def sent() -> Any:
+        root = ET.fromstring(platform.other.get_roadmap().xml)
+        return len(root.findall("stations/station")) == 3 and root
+
+    root = wait_for(sent, what="the roadmap sent")
+    ids = {}
+    for st, (name, x, y, angle) in zip(root.findall("stations/station"), STATIONS, strict=True):
+        p = st.find("point")
+        assert p is not None
+        assert (st.get("name"), float(p.get("x", "")), float(p.get("y", "")), float(st.get("angle", ""))) == (
+            name,
+            x,
+            y,
+            angle,
+        )
+        ids[st.get("id")] = name
+    assert [(ids[e.get("startstation")], ids[e.get("endstation")]) for e in root.findall("edges/edge")] == [
+        ("Alpha", "Bravo"),
+        ("Bravo", "Charlie"),
+    ]
+
+    running_automatic(platform)
+    platform.other.move_to_station("Charlie")
+    trace = drive(platform, (5000, 12500))
+    # along the roadmap: through Bravo, 600 mm south of the corridor's centre line, which no planned way passes
+    near_bravo = min(math.dist(p, (5000, 9400)) for p in trace)
+    assert near_bravo <= 150, f"the platform kept {near_bravo:.0f} mm from station Bravo: it did not follow the roadmap"
