@@ -13,6 +13,7 @@ import { toScreen } from "../view/camera";
 import { addObject, deleteObjects, History, invertLine, lineOp, moveObjects } from "./commands";
 import { clean, extend, orthogonal, parallel, snap, type Pt, type Seg, trim } from "./geometry";
 import { newMapDoc, parseMapDoc, writeMapDoc } from "./mapdoc";
+import { MAX_XML_CHARS } from "./xml";
 import { objectAtLine, validateDocument } from "./validate";
 
 type EditTool = "select" | "addLine" | "trim" | "extend" | "parallel" | "orthogonal";
@@ -221,6 +222,34 @@ export function mapEditor(
       })
       .catch((e: Error) => say(e.message));
   });
+  // guide 5.4 "Load a map file from the hard disk of the PC": a malformed file or another kind of document is
+  // refused with its reason and the editor keeps its content
+  const file = h("input", { type: "file", accept: ".map,.xml,application/xml,text/xml" });
+  bind(file, "edit.open", { text: false });
+  file.addEventListener("change", () => {
+    const f = file.files?.[0];
+    file.value = "";
+    if (f === undefined) {
+      return;
+    }
+    if (f.size > MAX_XML_CHARS) {
+      say(t("edit.openFailed", { file: f.name, why: `${f.size} bytes is over ${MAX_XML_CHARS}` }));
+      return;
+    }
+    void f.text().then((text) => {
+      try {
+        history = new History(parseMapDoc(text, f.name.replace(/\.[^.]*$/, "")));
+      } catch (e) {
+        say(t("edit.openFailed", { file: f.name, why: (e as Error).message }));
+        return;
+      }
+      selected = null;
+      say(t("edit.opened", { file: f.name, n: history.doc.scene.objects.length }));
+      refresh();
+      view.zoomAll();
+    });
+  });
+  bar.append(file);
   act("edit.new", () => {
     history = new History(newMapDoc());
     selected = null;

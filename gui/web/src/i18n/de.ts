@@ -258,4 +258,7 @@ export const de: Record<Key, string> = {
   "rm.loaded": "Roadmap in den Editor geladen: {n} Stationen, {e} Kanten",
   "rm.sent": "Roadmap an die Plattform gesendet (CMD_SET_ROADMAP): {n} Stationen, {e} Kanten",
   "rm.invalid": "Nicht gesendet: die Roadmap ist ungültig ({why})",
+  "edit.open": "Kartendatei öffnen",
+  "edit.opened": "Kartendatei {file} im Editor geöffnet: {n} Objekte",
+  "edit.openFailed": "{file} nicht geöffnet: {why}",
 };

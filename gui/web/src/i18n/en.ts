@@ -256,6 +256,9 @@ export const en = {
   "rm.loaded": "Roadmap loaded into the editor: {n} stations, {e} edges",
   "rm.sent": "Roadmap sent to the platform (CMD_SET_ROADMAP): {n} stations, {e} edges",
   "rm.invalid": "Not sent: the roadmap is invalid ({why})",
+  "edit.open": "Open a map file",
+  "edit.opened": "Map file {file} opened in the editor: {n} objects",
+  "edit.openFailed": "{file} not opened: {why}",
 } as const;
 
 export type Key = keyof typeof en;

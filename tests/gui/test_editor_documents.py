@@ -1,0 +1,84 @@
+"""The editors' documents (issue 20) in Debian's chromium against the reference server: what reaches the platform
+is checked over its OTHER port. Round trips keep every object and attribute; a document invalid against the
+project's XSD (spec/schemas) is not sent, and the editor selects the object at fault."""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from typing import Any
+
+from tests.gui.conftest import REPO, Gateway, Platform, expect_text, open_gui, wait_for
+from tests.gui.test_editor import _objects, _open_editor
+
+FIXTURE_MAP = REPO / "fixtures" / "maps" / "office.map"
+FIXTURE_ROADMAP = REPO / "fixtures" / "roadmaps" / "office.rm"
+SMALL_MAP = '<map Version="1.0"><layer index="0"><line><point x="0" y="0"/><point x="100" y="0"/></line></layer></map>'
+SMALL_ROADMAP = '<roadmap Version="1.0"><stations/><edges/></roadmap>'
+
+
+def tree(el: ET.Element) -> tuple[str, dict[str, str], list[Any]]:
+    """An element as tag, attributes and children, recursively (text and comments left out)."""
+    return (el.tag, dict(el.attrib), [tree(c) for c in el])
+
+
+def messages(page: Any) -> Any:
+    return page.get_by_role("status", name="Messages", exact=True)
+
+
+def test_the_fixture_map_loaded_and_sent_back_reaches_the_platform_unchanged(
+    page: Any, gateway: Gateway, platform: Platform
+) -> None:
+    fixture = _objects(FIXTURE_MAP.read_bytes())
+    assert _objects(platform.other.get_map().xml) == fixture  # the server booted on the fixture office
+    state = _open_editor(page, gateway, platform)
+    wait_for(lambda: state.get_attribute("data-objects") == str(len(fixture)), what="the loaded map")
+    platform.other.set_map("small", SMALL_MAP)  # so the editor's send is seen
+    wait_for(lambda: len(_objects(platform.other.get_map().xml)) == 1, what="the small map")
+    page.get_by_role("button", name="Send to platform", exact=True).click()
+    expect_text(messages(page), "Map sent to the platform")
+    wait_for(lambda: _objects(platform.other.get_map().xml) == fixture, what="the fixture's objects, every attribute")
+
+
+def test_a_map_file_invalid_against_the_xsd_is_not_sent_and_its_object_is_selected(
+    page: Any, gateway: Gateway, platform: Platform
+) -> None:
+    before = platform.other.get_map().xml
+    state = _open_editor(page, gateway, platform)
+    page.get_by_label("Open a map file").set_input_files(str(REPO / "fixtures" / "invalid" / "missing_point.map"))
+    expect_text(messages(page), "missing_point.map opened in the editor: 2 objects")
+    page.get_by_role("button", name="Send to platform", exact=True).click()
+    expect_text(messages(page), "Not sent: the document is invalid")
+    expect_text(messages(page), "Element 'line': Missing child element(s)")
+    # the object at fault is selected on the view: the line with its single point
+    assert '"kind":"line","points":[0,0]' in (state.get_attribute("data-selected") or "")
+    assert state.get_attribute("data-dirty") == "false"
+    # the platform's active map is untouched: a valid send after it shows the GUI's link still in order
+    assert platform.other.get_map().xml == before
+
+
+def test_a_file_of_the_wrong_kind_is_refused_and_the_editor_keeps_its_map(
+    page: Any, gateway: Gateway, platform: Platform
+) -> None:
+    n = len(_objects(platform.other.get_map().xml))
+    state = _open_editor(page, gateway, platform)
+    wait_for(lambda: state.get_attribute("data-objects") == str(n), what="the loaded map")
+    page.get_by_label("Open a map file").set_input_files(str(FIXTURE_ROADMAP))
+    expect_text(messages(page), "office.rm not opened: expected a <map> document, got <roadmap>")
+    assert state.get_attribute("data-objects") == str(n)
+
+
+def test_the_fixture_roadmap_loaded_and_sent_back_reaches_the_platform_unchanged(
+    page: Any, gateway: Gateway, platform: Platform
+) -> None:
+    fixture = tree(ET.fromstring(FIXTURE_ROADMAP.read_bytes()))
+    assert tree(ET.fromstring(platform.other.get_roadmap().xml)) == fixture
+    open_gui(page, gateway, platform.target)
+    page.get_by_role("menuitem", name="Edit", exact=True).click()
+    page.get_by_role("menuitem", name="Edit Roadmap", exact=True).click()
+    page.get_by_role("button", name="Load from platform", exact=True).click()
+    expect_text(messages(page), "Roadmap loaded into the editor: 18 stations, 17 edges")
+    platform.other.set_roadmap("empty", SMALL_ROADMAP)
+    wait_for(lambda: not ET.fromstring(platform.other.get_roadmap().xml).findall("stations/station"), what="empty")
+    page.get_by_role("button", name="Send to platform", exact=True).click()
+    expect_text(messages(page), "Roadmap sent to the platform")
+    wait_for(lambda: tree(ET.fromstring(platform.other.get_roadmap().xml)) == fixture, what="the fixture roadmap")
