@@ -3,6 +3,7 @@ changes how the platform drives. The platform is driven and watched over its OTH
 
 from __future__ import annotations
 
+import functools
 import itertools
 import json
 import math
@@ -95,6 +96,20 @@ def test_a_wall_drawn_across_a_room_makes_move_abs_plan_around_it(
 STATIONS = [("Alpha", 3000, 10000, 0), ("Bravo", 5000, 9400, 0), ("Charlie", 5000, 12500, 90)]
 
 
+def selected(state: Any) -> dict[str, object]:
+    """The roadmap editor's selected station: name, x, y (mm) and angle (degrees)."""
+    s: dict[str, object] = json.loads(state.get_attribute("data-selected") or "{}")
+    return {k: s.get(k) for k in ("name", "x", "y", "angle")}
+
+
+def has_pose(state: Any, want: dict[str, object]) -> bool:
+    return selected(state) == want
+
+
+def attr_is(locator: Any, name: str, value: str) -> bool:
+    return bool(locator.get_attribute(name) == value)
+
+
 def _open_roadmap_editor(page: Any, gateway: Gateway, platform: Platform) -> Any:
     open_gui(page, gateway, platform.target)
     page.get_by_role("menuitem", name="Edit", exact=True).click()
@@ -112,17 +127,12 @@ def test_a_three_station_roadmap_built_in_the_editor_is_followed_by_move_to_stat
         page.get_by_role("textbox", name="Station name").fill(name)
         page.get_by_role("spinbutton", name="Angle (degrees)").fill(str(angle))
         page.mouse.click(*screen(page, x + 120, y - 90))  # near the pose; the typed coordinates make it exact
-        wait_for(lambda k=k: state.get_attribute("data-stations") == str(k + 1), what=f"station {name}")
+        wait_for(functools.partial(attr_is, state, "data-stations", str(k + 1)), what=f"station {name}")
         page.get_by_role("spinbutton", name="X (mm)").fill(str(x))
         page.get_by_role("spinbutton", name="Y (mm)").fill(str(y))
         page.get_by_role("button", name="Apply pose", exact=True).click()
-        want = {"name": name, "x": x, "y": y, "angle": angle}
-        wait_for(
-            lambda want=want: all(
-                json.loads(state.get_attribute("data-selected") or "{}").get(k) == v for k, v in want.items()
-            ),
-            what=f"the typed pose of {name}",
-        )
+        want: dict[str, object] = {"name": name, "x": x, "y": y, "angle": angle}
+        wait_for(functools.partial(has_pose, state, want), what=f"the pose of {name}")
     page.get_by_role("button", name="Add an edge", exact=True).click()
     for a, b in [(0, 1), (1, 2)]:
         page.mouse.click(*screen(page, *STATIONS[a][1:3]))
