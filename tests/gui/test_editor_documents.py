@@ -4,11 +4,13 @@ project's XSD (spec/schemas) is not sent, and the editor selects the object at f
 
 from __future__ import annotations
 
+import math
 import xml.etree.ElementTree as ET
 from typing import Any
 
 from tests.gui.conftest import REPO, Gateway, Platform, expect_text, open_gui, wait_for
-from tests.gui.test_editor import _objects, _open_editor
+from tests.gui.test_editor import _objects, _open_editor, _sent
+from tests.gui.test_editor_motion import running_automatic
 
 FIXTURE_MAP = REPO / "fixtures" / "maps" / "office.map"
 FIXTURE_ROADMAP = REPO / "fixtures" / "roadmaps" / "office.rm"
@@ -82,3 +84,40 @@ def test_the_fixture_roadmap_loaded_and_sent_back_reaches_the_platform_unchanged
     page.get_by_role("button", name="Send to platform", exact=True).click()
     expect_text(messages(page), "Roadmap sent to the platform")
     wait_for(lambda: tree(ET.fromstring(platform.other.get_roadmap().xml)) == fixture, what="the fixture roadmap")
+
+
+def _segments(xml: str | bytes, kinds: tuple[str, ...]) -> list[tuple[float, float, float, float]]:
+    out = []
+    for tag, _, pts in _objects(xml):
+        if tag in kinds and len(pts) == 2:
+            (_, a), (_, b) = pts
+            out.append((float(a["x"]), float(a["y"]), float(b["x"]), float(b["y"])))
+    return out
+
+
+def _distance(px: float, py: float, s: tuple[float, float, float, float]) -> float:
+    ax, ay, bx, by = s
+    dx, dy = bx - ax, by - ay
+    u = max(0.0, min(1.0, ((px - ax) * dx + (py - ay) * dy) / (dx * dx + dy * dy)))
+    return float(((px - ax - u * dx) ** 2 + (py - ay - u * dy) ** 2) ** 0.5)
+
+
+def test_lines_converted_from_a_scan_of_the_office_lie_within_30_mm_of_its_walls(
+    page: Any, gateway: Gateway, platform: Platform
+) -> None:
+    original = platform.other.get_map().xml
+    walls = _segments(FIXTURE_MAP.read_bytes(), ("line", "auxline"))
+    n = len(_objects(original))
+    running_automatic(platform)  # the laser scans while the platform is up (start pose (2000, 10000, 0))
+    state = _open_editor(page, gateway, platform)
+    wait_for(lambda: state.get_attribute("data-objects") == str(n), what="the loaded map")
+    page.get_by_role("button", name="Convert lines from scan", exact=True).click()
+    expect_text(messages(page), "lines converted from the scan")
+    page.get_by_role("button", name="Send to platform", exact=True).click()
+    sent = _segments(_sent(platform, original), ("linemapped", "auxlinemapped"))
+    assert len(sent) >= 2, sent  # at least the corridor's two walls
+    assert max(math.dist(s[:2], s[2:]) for s in sent) >= 3000  # long stretches of wall, not only crumbs
+    for s in sent:
+        wall = min(walls, key=lambda w: _distance(s[0], s[1], w) + _distance(s[2], s[3], w))
+        off = max(_distance(s[0], s[1], wall), _distance(s[2], s[3], wall))
+        assert off <= 30, f"converted line {s} lies {off:.0f} mm off the nearest wall {wall}"

@@ -10,11 +10,12 @@ import { GetMapReply, GetMapRequest, SetMapRequest } from "../pltf";
 import type { MapView } from "../panels/mapview";
 import type { PlatformSession } from "../session/session";
 import { toScreen } from "../view/camera";
-import { addObject, deleteObjects, History, invertLine, lineOp, moveObjects } from "./commands";
+import { addObject, addObjects, deleteObjects, History, invertLine, lineOp, moveObjects } from "./commands";
 import { clean, extend, orthogonal, parallel, snap, type Pt, type Seg, trim } from "./geometry";
 import { newMapDoc, parseMapDoc, writeMapDoc } from "./mapdoc";
 import { MAX_XML_CHARS } from "./xml";
 import { objectAtLine, validateDocument } from "./validate";
+import { LINE_LEN_DEFAULTS, linesFromScan, type ScanStatus } from "./fromscan";
 
 type EditTool = "select" | "addLine" | "trim" | "extend" | "parallel" | "orthogonal";
 type RefTool = Exclude<EditTool, "select" | "addLine">;
@@ -268,6 +269,25 @@ export function mapEditor(
   for (const k of ["trim", "extend", "parallel", "orthogonal"] as const) {
     toolButtons.set(k, act(`edit.${k}`, () => setTool(k)));
   }
+  act("edit.fromScan", () => {
+    const st = session.status.last;
+    if (st === undefined || st.scan.length === 0) {
+      say(t("edit.noScan"));
+      return;
+    }
+    const lens = { ...LINE_LEN_DEFAULTS };
+    for (const p of session.params.last?.parameters ?? []) {
+      if ((p.key === "MinLineLenAux" || p.key === "MinLineLenMap") && Number.isFinite(Number(p.value))) {
+        lens[p.key] = Number(p.value);
+      }
+    }
+    const objs = linesFromScan(st as unknown as ScanStatus, lens);
+    if (objs.length === 0) {
+      say(t("edit.noLines"));
+      return;
+    }
+    run({ ok: true, value: addObjects(history.doc, objs, t("edit.converted", { n: objs.length })) });
+  });
   act("edit.delete", () => {
     if (selected === null) {
       say(t("edit.noneSelected"));

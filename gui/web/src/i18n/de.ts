@@ -261,4 +261,8 @@ export const de: Record<Key, string> = {
   "edit.open": "Kartendatei öffnen",
   "edit.opened": "Kartendatei {file} im Editor geöffnet: {n} Objekte",
   "edit.openFailed": "{file} nicht geöffnet: {why}",
+  "edit.fromScan": "Linien aus dem Scan übernehmen",
+  "edit.noScan": "Noch kein Laserscan von der Plattform",
+  "edit.noLines": "Keine Linie im Scan ist lang genug (MinLineLenAux)",
+  "edit.converted": "{n} Linien aus dem Scan übernommen",
 };

@@ -259,6 +259,10 @@ export const en = {
   "edit.open": "Open a map file",
   "edit.opened": "Map file {file} opened in the editor: {n} objects",
   "edit.openFailed": "{file} not opened: {why}",
+  "edit.fromScan": "Convert lines from scan",
+  "edit.noScan": "No laser scan from the platform yet",
+  "edit.noLines": "No line in the scan is long enough (MinLineLenAux)",
+  "edit.converted": "{n} lines converted from the scan",
 } as const;
 
 export type Key = keyof typeof en;
