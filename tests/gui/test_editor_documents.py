@@ -4,13 +4,14 @@ project's XSD (spec/schemas) is not sent, and the editor selects the object at f
 
 from __future__ import annotations
 
+import json
 import math
 import xml.etree.ElementTree as ET
 from typing import Any
 
 from tests.gui.conftest import REPO, Gateway, Platform, expect_text, open_gui, wait_for
 from tests.gui.test_editor import _objects, _open_editor, _sent
-from tests.gui.test_editor_motion import running_automatic
+from tests.gui.test_editor_motion import drag, running_automatic, screen
 
 FIXTURE_MAP = REPO / "fixtures" / "maps" / "office.map"
 FIXTURE_ROADMAP = REPO / "fixtures" / "roadmaps" / "office.rm"
@@ -121,3 +122,39 @@ def test_lines_converted_from_a_scan_of_the_office_lie_within_30_mm_of_its_walls
         wall = min(walls, key=lambda w: _distance(s[0], s[1], w) + _distance(s[2], s[3], w))
         off = max(_distance(s[0], s[1], wall), _distance(s[2], s[3], wall))
         assert off <= 30, f"converted line {s} lies {off:.0f} mm off the nearest wall {wall}"
+
+
+def test_undo_and_redo_of_a_drag_restore_exact_coordinates_on_the_platform(
+    page: Any, gateway: Gateway, platform: Platform
+) -> None:
+    original = platform.other.get_map().xml
+    objects = _objects(original)
+    state = _open_editor(page, gateway, platform)
+    wait_for(lambda: state.get_attribute("data-objects") == str(len(objects)), what="the loaded map")
+    wall = [9100, 11200, 18400, 11200]  # the corridor's north wall between the meeting room and office N1
+
+    def selected() -> list[float]:
+        points: list[float] = json.loads(state.get_attribute("data-selected") or "{}").get("points", [])
+        return points
+
+    page.mouse.click(*screen(page, 12000, 11200))
+    wait_for(lambda: selected() == wall, what="the wall selected")
+    drag(page, (12000, 11200), (12700, 12100))
+    wait_for(lambda: selected() != wall, what="the wall moved")
+    moved = selected()
+    dx, dy = moved[0] - wall[0], moved[1] - wall[1]
+    assert moved == [wall[0] + dx, wall[1] + dy, wall[2] + dx, wall[3] + dy] and dx % 10 == 0 and dy % 10 == 0
+    assert abs(dx - 700) <= 100 and abs(dy - 900) <= 100, (dx, dy)
+    page.get_by_role("button", name="Undo", exact=True).click()
+    wait_for(lambda: selected() == wall, what="undo: the wall where it was, exactly")
+    page.get_by_role("button", name="Redo", exact=True).click()
+    wait_for(lambda: selected() == moved, what="redo: the wall moved again, exactly")
+    page.get_by_role("button", name="Send to platform", exact=True).click()
+    after = _objects(_sent(platform, original))
+    k = next(i for i, o in enumerate(objects) if o[0] == "line" and o[2][0][1] == {"x": "9100", "y": "11200"})
+    assert [(float(p["x"]), float(p["y"])) for _, p in after[k][2]] == [(moved[0], moved[1]), (moved[2], moved[3])]
+    assert after[:k] + after[k + 1 :] == objects[:k] + objects[k + 1 :]  # nothing else changed
+    page.get_by_role("button", name="Undo", exact=True).click()
+    wait_for(lambda: selected() == wall, what="undo again")
+    page.get_by_role("button", name="Send to platform", exact=True).click()
+    wait_for(lambda: _objects(platform.other.get_map().xml) == objects, what="the original map, exactly")
