@@ -317,7 +317,7 @@ def _auto(ctx: CaseContext, target: Pose, how: str) -> Pose:
     # 6.4 "Platform target reached". The flag marks the move's end (a platform may pause before its final turn);
     # a target that never sets it is judged by its pose alone, after the same time.
     limit = target.dist(pose(ctx)) / 100.0 + 15.0
-    ctx.poll(ctx.status, lambda s: bool(s.telegram.target_reached), within=limit)
+    ctx.poll(ctx.status, lambda s: bool(s.telegram.target_reached), within=limit)  # type: ignore[attr-defined]  # a GET_STATUS field, from the spec
     return at_pose(ctx, target, how)
 
 
@@ -542,6 +542,6 @@ def target_reached(ctx: CaseContext) -> None:
     if st.target_reached:  # type: ignore[attr-defined]
         raise Fail("'target reached' is 1 right after a new CMD_MOVE_REL")
     _auto(ctx, start.ahead(500), "CMD_MOVE_REL(500)")
-    st = ctx.poll(lambda: ctx.status().telegram, lambda t: t.target_reached == 1, within=2.0)
+    st = ctx.poll(lambda: ctx.status().telegram, lambda t: t.target_reached == 1, within=2.0)  # type: ignore[attr-defined]  # a GET_STATUS field, from the spec
     if st.target_reached != 1:  # type: ignore[attr-defined]
         raise Fail("the target is reached but 'target reached' stays 0")
