@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import math
 import xml.etree.ElementTree as ET
+from pathlib import Path
 from typing import Any
 
 from tests.gui.conftest import REPO, Gateway, Platform, expect_text, open_gui, wait_for
@@ -158,3 +159,21 @@ def test_undo_and_redo_of_a_drag_restore_exact_coordinates_on_the_platform(
     wait_for(lambda: selected() == wall, what="undo again")
     page.get_by_role("button", name="Send to platform", exact=True).click()
     wait_for(lambda: _objects(platform.other.get_map().xml) == objects, what="the original map, exactly")
+
+
+def test_save_downloads_the_platform_map_and_roadmap_unchanged(page: Any, gateway: Gateway, platform: Platform) -> None:
+    state = _open_editor(page, gateway, platform)
+    wait_for(lambda: state.get_attribute("data-objects") == str(len(_objects(FIXTURE_MAP.read_bytes()))), what="map")
+    with page.expect_download() as got:
+        page.get_by_role("button", name="Save", exact=True).click()
+    saved = Path(got.value.path()).read_bytes()
+    assert got.value.suggested_filename.endswith(".map")
+    assert tree(ET.fromstring(saved)) == tree(ET.fromstring(FIXTURE_MAP.read_bytes()))
+    page.get_by_role("menuitem", name="Edit", exact=True).click()
+    page.get_by_role("menuitem", name="Edit Roadmap", exact=True).click()
+    page.get_by_role("button", name="Load from platform", exact=True).click()
+    expect_text(messages(page), "Roadmap loaded into the editor: 18 stations, 17 edges")
+    with page.expect_download() as got:
+        page.get_by_role("button", name="Save", exact=True).click()
+    assert got.value.suggested_filename.endswith(".rm")
+    assert tree(ET.fromstring(Path(got.value.path()).read_bytes())) == tree(ET.fromstring(FIXTURE_ROADMAP.read_bytes()))

@@ -14,6 +14,7 @@ import { addObject, addObjects, deleteObjects, History, invertLine, lineOp, move
 import { clean, extend, orthogonal, parallel, snap, type Pt, type Seg, trim } from "./geometry";
 import { newMapDoc, parseMapDoc, writeMapDoc } from "./mapdoc";
 import { MAX_XML_CHARS } from "./xml";
+import { download, fileNameOf } from "./files";
 import { objectAtLine, validateDocument } from "./validate";
 import { LINE_LEN_DEFAULTS, linesFromScan, type ScanStatus } from "./fromscan";
 
@@ -251,6 +252,11 @@ export function mapEditor(
     });
   });
   bar.append(file);
+  act("edit.save", () => {
+    download(fileNameOf(history.doc.scene.name, "map", ".map"), writeMapDoc(history.doc));
+    history.markSaved();
+    refresh();
+  });
   act("edit.new", () => {
     history = new History(newMapDoc());
     selected = null;

@@ -26,6 +26,7 @@ import {
   writeRoadmapDoc,
 } from "./roadmapdoc";
 import { validateDocument } from "./validate";
+import { download, fileNameOf } from "./files";
 
 type RmTool = "select" | "addStation" | "addEdge";
 const GRID_MM = 10;
@@ -199,6 +200,11 @@ export function roadmapEditor(
         say(t("rm.loaded", { n: history.doc.stations.length, e: history.doc.edges.length }));
       })
       .catch((e: Error) => say(e.message));
+  });
+  act("edit.save", () => {
+    download(fileNameOf(name, "roadmap", ".rm"), writeRoadmapDoc(history.doc));
+    history.markSaved();
+    refresh();
   });
   act("rm.new", () => replace(newRoadmapDoc(), ""));
   act("rm.clear", () => run(clearRoadmap, t("rm.cleared")));

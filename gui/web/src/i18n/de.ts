@@ -265,4 +265,5 @@ export const de: Record<Key, string> = {
   "edit.noScan": "Noch kein Laserscan von der Plattform",
   "edit.noLines": "Keine Linie im Scan ist lang genug (MinLineLenAux)",
   "edit.converted": "{n} Linien aus dem Scan übernommen",
+  "edit.save": "Speichern",
 };

@@ -263,6 +263,7 @@ export const en = {
   "edit.noScan": "No laser scan from the platform yet",
   "edit.noLines": "No line in the scan is long enough (MinLineLenAux)",
   "edit.converted": "{n} lines converted from the scan",
+  "edit.save": "Save",
 } as const;
 
 export type Key = keyof typeof en;
