@@ -25,6 +25,7 @@ from aiohttp import WSMsgType, web
 from pltf.gui.link import PlatformLink, parse_target
 from pltf.gui.network_ini import NetworkIni
 from pltf.gui.truth import TruthReader
+from pltf.gui.validate import add_routes as add_validate_routes
 
 log = logging.getLogger("pltf.gui")
 STATIC = Path(__file__).resolve().parent / "static"
@@ -161,6 +162,7 @@ def make_app(
     app.router.add_get("/", index)
     app.router.add_get("/ws", websocket)
     app.router.add_route("*", "/api/targets", targets)
+    add_validate_routes(app)  # the editors' check before sending (issue 20)
     if (STATIC / "assets").is_dir():
         app.router.add_static("/assets", STATIC / "assets")
     app.on_shutdown.append(_shutdown)

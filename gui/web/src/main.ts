@@ -14,6 +14,7 @@ import { parametersWindow } from "./panels/params";
 import { plotsPanel } from "./panels/plots";
 import { wirePanel } from "./panels/wire";
 import { mapEditor } from "./editor/editpanel";
+import { roadmapEditor } from "./editor/roadmappanel";
 import { footprint } from "./view/overlay";
 import { closeSocket, menubar, openSocketAt, shutdownPlatform } from "./panels/menubar";
 import { motionPanel } from "./panels/motion";
@@ -50,6 +51,8 @@ dock.add("log", "menu.log", logPanel(session));
 dock.add("wire", "menu.wire", wire.root, wire.onShow);
 const editor = mapEditor(session, map, say);
 dock.add("edit-map", "menu.editMap", editor.root, editor.onShow);
+const rmEditor = roadmapEditor(session, map, say);
+dock.add("edit-roadmap", "menu.editRoadmap", rmEditor.root, rmEditor.onShow);
 
 // The platform's own geometry (guide 5.9 Geometry, UltraSonic) for the footprint and the ultrasonic sensors.
 session.params.subscribe((r) => {
@@ -86,7 +89,7 @@ const menus: Array<[Key, Array<{ key: Key; run?: () => void; shortcut?: string }
     { key: "menu.wire", run: () => dock.show("wire") },
   ]],
   ["menu.parameter", [{ key: "menu.platformParameters", run: () => dock.show("parameters") }]],
-  ["menu.edit", [{ key: "menu.editMap", run: () => dock.show("edit-map") }, { key: "menu.editRoadmap" }]],
+  ["menu.edit", [{ key: "menu.editMap", run: () => dock.show("edit-map") }, { key: "menu.editRoadmap", run: () => dock.show("edit-roadmap") }]],
 ];
 
 const header = h("header", { class: "top" }, menubar(menus), h("h1", { class: "title" }));

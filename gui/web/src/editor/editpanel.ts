@@ -10,9 +10,13 @@ import { GetMapReply, GetMapRequest, SetMapRequest } from "../pltf";
 import type { MapView } from "../panels/mapview";
 import type { PlatformSession } from "../session/session";
 import { toScreen } from "../view/camera";
-import { addObject, deleteObjects, History, invertLine, lineOp, moveObjects } from "./commands";
+import { addObject, addObjects, deleteObjects, History, invertLine, lineOp, moveObjects } from "./commands";
 import { clean, extend, orthogonal, parallel, snap, type Pt, type Seg, trim } from "./geometry";
 import { newMapDoc, parseMapDoc, writeMapDoc } from "./mapdoc";
+import { MAX_XML_CHARS } from "./xml";
+import { download, fileNameOf } from "./files";
+import { objectAtLine, validateDocument } from "./validate";
+import { LINE_LEN_DEFAULTS, linesFromScan, type ScanStatus } from "./fromscan";
 
 type EditTool = "select" | "addLine" | "trim" | "extend" | "parallel" | "orthogonal";
 type RefTool = Exclude<EditTool, "select" | "addLine">;
@@ -220,6 +224,39 @@ export function mapEditor(
       })
       .catch((e: Error) => say(e.message));
   });
+  // guide 5.4 "Load a map file from the hard disk of the PC": a malformed file or another kind of document is
+  // refused with its reason and the editor keeps its content
+  const file = h("input", { type: "file", accept: ".map,.xml,application/xml,text/xml" });
+  bind(file, "edit.open", { text: false });
+  file.addEventListener("change", () => {
+    const f = file.files?.[0];
+    file.value = "";
+    if (f === undefined) {
+      return;
+    }
+    if (f.size > MAX_XML_CHARS) {
+      say(t("edit.openFailed", { file: f.name, why: `${f.size} bytes is over ${MAX_XML_CHARS}` }));
+      return;
+    }
+    void f.text().then((text) => {
+      try {
+        history = new History(parseMapDoc(text, f.name.replace(/\.[^.]*$/, "")));
+      } catch (e) {
+        say(t("edit.openFailed", { file: f.name, why: (e as Error).message }));
+        return;
+      }
+      selected = null;
+      say(t("edit.opened", { file: f.name, n: history.doc.scene.objects.length }));
+      refresh();
+      view.zoomAll();
+    });
+  });
+  bar.append(file);
+  act("edit.save", () => {
+    download(fileNameOf(history.doc.scene.name, "map", ".map"), writeMapDoc(history.doc));
+    history.markSaved();
+    refresh();
+  });
   act("edit.new", () => {
     history = new History(newMapDoc());
     selected = null;
@@ -238,6 +275,25 @@ export function mapEditor(
   for (const k of ["trim", "extend", "parallel", "orthogonal"] as const) {
     toolButtons.set(k, act(`edit.${k}`, () => setTool(k)));
   }
+  act("edit.fromScan", () => {
+    const st = session.status.last;
+    if (st === undefined || st.scan.length === 0) {
+      say(t("edit.noScan"));
+      return;
+    }
+    const lens = { ...LINE_LEN_DEFAULTS };
+    for (const p of session.params.last?.parameters ?? []) {
+      if ((p.key === "MinLineLenAux" || p.key === "MinLineLenMap") && Number.isFinite(Number(p.value))) {
+        lens[p.key] = Number(p.value);
+      }
+    }
+    const objs = linesFromScan(st as unknown as ScanStatus, lens);
+    if (objs.length === 0) {
+      say(t("edit.noLines"));
+      return;
+    }
+    run({ ok: true, value: addObjects(history.doc, objs, t("edit.converted", { n: objs.length })) });
+  });
   act("edit.delete", () => {
     if (selected === null) {
       say(t("edit.noneSelected"));
@@ -255,15 +311,31 @@ export function mapEditor(
     run(invertLine(history.doc, selected));
   });
   act("edit.send", () => {
+    const doc = history.doc;
+    let xml: string;
     try {
-      const doc = history.doc;
-      session.send(new SetMapRequest({ name: doc.scene.name || "edited", xml: writeMapDoc(doc) }));
-      history.markSaved();
-      say(t("edit.sent", { n: doc.scene.objects.length }));
-      refresh();
+      xml = writeMapDoc(doc);
     } catch (e) {
       say((e as Error).message);
+      return;
     }
+    // issue 20: checked against spec/schemas/map.xsd first; an invalid document is not sent, the object is selected
+    void validateDocument("map", xml).then((v) => {
+      if (!v.ok) {
+        selected = v.line === null ? null : objectAtLine(doc, xml, v.line);
+        say(t("edit.invalid", { why: v.message }));
+        refresh();
+        return;
+      }
+      try {
+        session.send(new SetMapRequest({ name: doc.scene.name || "edited", xml }));
+        history.markSaved();
+        say(t("edit.sent", { n: doc.scene.objects.length }));
+        refresh();
+      } catch (e) {
+        say((e as Error).message);
+      }
+    });
   });
   document.addEventListener("keydown", (e) => {
     if (!open || !(e.ctrlKey || e.metaKey) || view.tool !== "edit") {

@@ -1,0 +1,279 @@
+/**
+ * Edit -> Edit Roadmap (guide 5.5): "The toolbar for editing the roadmap ... looks similar to the toolbar of the
+ * map editor." Load the platform's roadmap (CMD_GET_ROADMAP), new, clear, undo and redo, add stations (click on
+ * the map; name and angle from the fields), add edges (click two stations), move a station by drag and drop or
+ * by typed coordinates (mm, degrees), delete, send to the platform (CMD_SET_ROADMAP) after checking the document
+ * against the project's XSD (validate.ts). The view draws the editor's roadmap while the editor is open.
+ */
+import { h } from "../dom";
+import { bind, type Key, t } from "../i18n/i18n";
+import { GetRoadmapReply, GetRoadmapRequest, SetRoadmapRequest } from "../pltf";
+import type { MapView } from "../panels/mapview";
+import type { Roadmap } from "../scene/roadmap";
+import type { PlatformSession } from "../session/session";
+import { toScreen } from "../view/camera";
+import {
+  addEdge,
+  addStation,
+  clearRoadmap,
+  deleteStation,
+  type Edit,
+  moveStation,
+  newRoadmapDoc,
+  parseRoadmapDoc,
+  type RoadmapDoc,
+  RoadmapHistory,
+  writeRoadmapDoc,
+} from "./roadmapdoc";
+import { validateDocument } from "./validate";
+import { download, fileNameOf } from "./files";
+
+type RmTool = "select" | "addStation" | "addEdge";
+const GRID_MM = 10;
+const HIT_PX = 10;
+
+/** The view's roadmap (scene/roadmap.ts) of the editor's document. */
+export function toScene(doc: RoadmapDoc, name: string): Roadmap {
+  return {
+    name,
+    stations: doc.stations.map((s) => ({ id: s.id, name: s.name, x: s.x, y: s.y, angle: s.angle })),
+    edges: doc.edges.map((e) => ({ start: e.start, end: e.end, points: [...e.points] })),
+  };
+}
+
+/** The station nearest (x, y) within `tol` mm, or null. */
+export function stationAt(doc: RoadmapDoc, x: number, y: number, tol: number): string | null {
+  let best: string | null = null;
+  let bestD = tol;
+  for (const s of doc.stations) {
+    const d = Math.hypot(s.x - x, s.y - y);
+    if (d <= bestD) {
+      bestD = d;
+      best = s.id;
+    }
+  }
+  return best;
+}
+
+const grid = (v: number): number => Math.round(v / GRID_MM) * GRID_MM;
+
+function numberField(key: Key, step: string): HTMLInputElement {
+  const i = h("input", { type: "number", step });
+  bind(i, key, { text: false });
+  return i;
+}
+
+export function roadmapEditor(
+  session: PlatformSession,
+  view: MapView,
+  say: (s: string) => void,
+): { root: HTMLElement; onShow: (shown: boolean) => void } {
+  let open = false;
+  let history = new RoadmapHistory(newRoadmapDoc());
+  let name = "";
+  let tool: RmTool = "select";
+  let selected: string | null = null;
+  let edgeFrom: string | null = null;
+  let drag: { id: string; moved: boolean } | null = null;
+  const tip = h("p", { class: "edit-tip", role: "note" });
+  bind(tip, "edit.tip", { text: false });
+  const state = h("output", { class: "rm-state" });
+  const nameIn = h("input", { type: "text" });
+  bind(nameIn, "rm.stationName", { text: false });
+  const xIn = numberField("rm.x", "10");
+  const yIn = numberField("rm.y", "10");
+  const angleIn = numberField("rm.angle", "1");
+  const tipFor: Record<RmTool, Key> = { select: "rm.tipSelect", addStation: "rm.tipAddStation", addEdge: "rm.tipAddEdge" };
+
+  const refresh = (): void => {
+    const doc = history.doc;
+    if (open) {
+      view.roadmap = toScene(doc, name);
+      view.showScene(view.scene); // redraws the static layer with the editor's roadmap
+    }
+    const s = doc.stations.find((x) => x.id === selected);
+    state.textContent = s === undefined ? "" : t("edit.selected", { what: `${s.name} (${s.x}, ${s.y}, ${s.angle}°)` });
+    state.dataset.stations = String(doc.stations.length);
+    state.dataset.edges = String(doc.edges.length);
+    state.dataset.dirty = String(history.dirty);
+    state.dataset.selected = s === undefined ? "" : JSON.stringify({ id: s.id, name: s.name, x: s.x, y: s.y, angle: s.angle });
+    if (s !== undefined) {
+      nameIn.value = s.name;
+      xIn.value = String(s.x);
+      yIn.value = String(s.y);
+      angleIn.value = String(s.angle);
+    }
+    undoB.disabled = !history.canUndo;
+    redoB.disabled = !history.canRedo;
+  };
+  const run = (edit: Edit, label: string): void => {
+    const why = history.run(edit);
+    say(why ?? label);
+    refresh();
+  };
+
+  const hooks: NonNullable<MapView["editHooks"]> = {
+    down(x, y, pxPerMm) {
+      const id = stationAt(history.doc, x, y, HIT_PX / pxPerMm);
+      if (tool === "addStation") {
+        const n = nameIn.value.trim() || `Station_${history.doc.stations.length + 1}`;
+        const angle = Number(angleIn.value || "0");
+        run(addStation(n, grid(x), grid(y), Number.isFinite(angle) ? angle : 0), t("rm.added", { name: n }));
+        selected = history.doc.stations.find((s) => s.name === n)?.id ?? selected;
+        refresh();
+      } else if (tool === "addEdge") {
+        if (id === null) {
+          return;
+        }
+        if (edgeFrom === null || edgeFrom === id) {
+          edgeFrom = id;
+          selected = id;
+          refresh();
+        } else {
+          const from = edgeFrom;
+          edgeFrom = null;
+          selected = id;
+          run(addEdge(from, id), t("rm.edgeAdded"));
+        }
+      } else {
+        selected = id;
+        drag = id === null ? null : { id, moved: false };
+        refresh();
+      }
+    },
+    move() {
+      if (drag !== null) {
+        drag.moved = true;
+      }
+    },
+    up(x, y) {
+      const d = drag;
+      drag = null;
+      if (d !== null && d.moved) {
+        run(moveStation(d.id, grid(x), grid(y)), t("rm.moved"));
+      }
+    },
+    draw(ctx, cam) {
+      const s = history.doc.stations.find((x) => x.id === selected);
+      if (s !== undefined) {
+        const [sx, sy] = toScreen(cam, s.x, s.y);
+        ctx.strokeStyle = "#e65100";
+        ctx.lineWidth = 3;
+        ctx.beginPath();
+        ctx.arc(sx, sy, 9, 0, 2 * Math.PI);
+        ctx.stroke();
+        ctx.lineWidth = 1;
+      }
+    },
+  };
+
+  const bar = h("div", { role: "toolbar", class: "edit-tools" });
+  bind(bar, "rm.tools", { text: false });
+  const act = (key: Key, fn: () => void): HTMLButtonElement => {
+    const b = h("button", { type: "button" });
+    bind(b, key);
+    b.addEventListener("click", fn);
+    bar.append(b);
+    return b;
+  };
+  const toolButtons = new Map<RmTool, HTMLButtonElement>();
+  const setTool = (next: RmTool): void => {
+    tool = next;
+    edgeFrom = null;
+    for (const [k, b] of toolButtons) {
+      b.setAttribute("aria-pressed", String(k === next));
+    }
+    bind(tip, tipFor[next], { name: false });
+  };
+  const replace = (doc: RoadmapDoc, newName: string): void => {
+    history = new RoadmapHistory(doc);
+    name = newName;
+    selected = null;
+    refresh();
+  };
+  act("edit.load", () => {
+    session
+      .request(new GetRoadmapRequest())
+      .then((r) => {
+        const m = r as GetRoadmapReply;
+        replace(parseRoadmapDoc(m.xml), m.name);
+        say(t("rm.loaded", { n: history.doc.stations.length, e: history.doc.edges.length }));
+      })
+      .catch((e: Error) => say(e.message));
+  });
+  act("edit.save", () => {
+    download(fileNameOf(name, "roadmap", ".rm"), writeRoadmapDoc(history.doc));
+    history.markSaved();
+    refresh();
+  });
+  act("rm.new", () => replace(newRoadmapDoc(), ""));
+  act("rm.clear", () => run(clearRoadmap, t("rm.cleared")));
+  const undoB = act("edit.undo", () => {
+    history.undo();
+    refresh();
+  });
+  const redoB = act("edit.redo", () => {
+    history.redo();
+    refresh();
+  });
+  toolButtons.set("select", act("rm.select", () => setTool("select")));
+  toolButtons.set("addStation", act("rm.addStation", () => setTool("addStation")));
+  toolButtons.set("addEdge", act("rm.addEdge", () => setTool("addEdge")));
+  act("edit.delete", () => {
+    if (selected === null) {
+      say(t("edit.noneSelected"));
+      return;
+    }
+    run(deleteStation(selected), t("rm.deleted"));
+    selected = null;
+    refresh();
+  });
+  const apply = act("rm.apply", () => {
+    const id = selected;
+    if (id === null) {
+      say(t("edit.noneSelected"));
+      return;
+    }
+    const [x, y, a] = [Number(xIn.value), Number(yIn.value), Number(angleIn.value || "0")];
+    if (![x, y, a].every(Number.isFinite)) {
+      say(t("rm.badPose"));
+      return;
+    }
+    const newName = nameIn.value.trim();
+    run((doc) => {
+      const s = doc.stations.find((st) => st.id === id);
+      if (s === undefined) {
+        return `no station ${id}`;
+      }
+      Object.assign(s, { x, y, angle: a, name: newName || s.name });
+      return null;
+    }, t("rm.moved"));
+  });
+  act("edit.send", () => {
+    const xml = writeRoadmapDoc(history.doc);
+    void validateDocument("roadmap", xml).then((v) => {
+      if (!v.ok) {
+        say(t("rm.invalid", { why: v.message }));
+        return;
+      }
+      session.send(new SetRoadmapRequest({ name: name || "edited", xml }));
+      history.markSaved();
+      say(t("rm.sent", { n: history.doc.stations.length, e: history.doc.edges.length }));
+      refresh();
+    });
+  });
+  const fields = h("div", { class: "rm-fields" }, nameIn, xIn, yIn, angleIn, apply);
+  setTool("select");
+  refresh();
+  const onShow = (shown: boolean): void => {
+    open = shown;
+    view.editHooks = shown ? hooks : null;
+    view.setTool(shown ? "edit" : "pan");
+    if (shown) {
+      refresh();
+    } else {
+      session.refreshDocuments(); // the view shows the platform's roadmap again
+    }
+  };
+  return { root: h("div", { class: "roadmap-editor" }, bar, fields, state, tip), onShow };
+}
