@@ -1,7 +1,7 @@
 /**
  * The menus as chapter 5 names them: Socket (Open Socket, Open Socket At, Close Socket, Shutdown Platform),
  * View (Map, Hardware Monitor, View Options, and the views beyond the original), Parameter (Platform
- * parameters), Edit (the editors of guide 5.4 and 5.5: the next issue, shown disabled).
+ * parameters), Edit (the map and roadmap editors of guide 5.4 and 5.5, gui/web/src/editor).
  */
 import { h } from "../dom";
 import { bind, type Key, t } from "../i18n/i18n";
