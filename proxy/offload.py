@@ -1,10 +1,11 @@
 """The recorder in a process of its own, so that decoding, the view and the files never delay a forwarded byte.
 
 Rules:
-- ``RecorderPipe`` stands where the network module expects a recorder: each call becomes one message on a pipe
-  (a fixed header and the bytes), written without blocking; what the pipe does not take at once waits in a
-  buffer and goes with the next message or the next ``flush``. Cost on the forwarding path: one pack and one
-  write.
+- ``RecorderPipe`` stands where the network module expects a recorder: each call becomes one message (a fixed
+  header and the bytes) in a buffer; ``flush`` (the network module's, after each delivery of queued events)
+  writes the buffer to the pipe without blocking, and so does a call that finds ``WRITE_AT`` bytes waiting:
+  one write and one wakeup of the recorder process for many messages. What the pipe does not take at once
+  waits for the next write.
 - The child (forked before the event loop starts, so it inherits no loop and no socket) builds the recorder
   with ``make`` and replays the messages into it in order; at the end of the pipe it closes the recorder
   (files flushed) and prints the summary.
@@ -30,6 +31,7 @@ _HEAD = struct.Struct("<BIBdI")  # kind, connection, c2s, time, payload length
 START, OPENED, DATA, HALF, CLOSED = range(5)
 _PIPE_SIZE = 1 << 20
 IDLE_FLUSH = 0.25  # s without messages after which the child flushes its files
+WRITE_AT = 1 << 16  # bytes of messages waiting that are written at once, without waiting for ``flush``
 
 
 class RecorderPipe:
@@ -70,7 +72,8 @@ class RecorderPipe:
             return
         self._buf += _HEAD.pack(kind, conn, c2s, now, len(payload))
         self._buf += payload
-        self._write()
+        if len(self._buf) >= WRITE_AT:
+            self._write()
 
     def _write(self) -> None:
         try:
