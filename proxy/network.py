@@ -243,30 +243,41 @@ class ProxyServer:
         self._listeners: dict[Route, socket.socket] = {}
         self._numbers = itertools.count(1)
         self._events: collections.deque[tuple[str, tuple[Any, ...]]] = collections.deque()
+        self._direct = bool(getattr(observer, "threadsafe", False))  # may be called from the forwarding threads
         self._stopped = asyncio.Event()
         self.loop = asyncio.get_running_loop()
 
     def observe(self, what: str, *args: Any) -> None:
-        """Queue an event for the observer (any thread; a deque's append is atomic)."""
-        self._events.append((what, args))
+        """An event for the observer, from any thread: handed over at once to a ``threadsafe`` observer, else
+        queued (a deque's append is atomic) for the loop to deliver."""
+        if self._direct:
+            self._call(what, args)
+        else:
+            self._events.append((what, args))
 
-    def deliver(self) -> bool:
-        """Hand the queued events to the observer; a failure stops recording, never forwarding."""
-        events, delivered = self._events, False
-        while events:
-            what, args = events.popleft()
-            delivered = True
-            if self.observer is None:
-                continue
-            try:
-                getattr(self.observer, what)(*args)
-            except Exception:  # the proxy never dies of what passes through it
+    def _call(self, what: str, args: tuple[Any, ...]) -> None:
+        """A failure of the observer stops recording, never forwarding."""
+        observer = self.observer
+        if observer is None:
+            return
+        try:
+            getattr(observer, what)(*args)
+        except Exception:  # the proxy never dies of what passes through it
+            if self.observer is not None:
+                self.observer = None
                 print(
                     "pltf proxy: internal error while recording; recording stopped, forwarding goes on:\n"
                     + traceback.format_exc(limit=3),
                     file=sys.stderr,
                 )
-                self.observer = None
+
+    def deliver(self) -> bool:
+        """Hand the queued events to the observer (the loop's thread); True when there were any."""
+        events, delivered = self._events, False
+        while events:
+            what, args = events.popleft()
+            delivered = True
+            self._call(what, args)
         return delivered
 
     async def start(self) -> list[tuple[str, int]]:
@@ -329,14 +340,13 @@ class ProxyServer:
         while True:
             await asyncio.sleep(DELIVER_EVERY)
             idle += DELIVER_EVERY
-            if self.deliver() or idle >= FLUSH_EVERY:
+            if self.deliver() or self._direct or idle >= FLUSH_EVERY:
                 idle = 0.0
                 self.flush()
 
     def flush(self) -> None:
-        if self.observer is not None:
-            self.observe("flush")
-            self.deliver()
+        self.deliver()
+        self._call("flush", ())
         if self.flush_extra is not None:
             self.flush_extra()
 
