@@ -3,9 +3,11 @@
 Rules:
 - Bytes first: each direction of a connection is one thread that reads a chunk and sends it on at once,
   unchanged (no reframing, no reassembly), blocking in ``recv`` and ``sendall`` (the GIL is released while
-  blocked, so a hop costs a wakeup and two system calls, not a turn of an event loop). Only then is the chunk
-  handed to the observer (the recorder: decode, view, session file, pcapng), through a queue that the event
-  loop delivers every ``DELIVER_EVERY`` s: recording never holds up a forwarded byte.
+  blocked, so a hop costs a wakeup and two system calls, not a turn of an event loop). Between the two the
+  chunk is only queued for the observer (the recorder: decode, view, session file, pcapng): an append to a
+  deque, which the event loop delivers every ``DELIVER_EVERY`` s, or a pack and an append for the recorder
+  process's pipe. Queued before it is sent, a request is always queued before the reply it causes (queued
+  after, the other direction's thread could get in first); recording never holds up a forwarded byte.
 - The event loop (asyncio) does the rest: listening, accepting, connecting to the target, probing a target
   that refused, delivering to the observer, stopping.
 - Flow control: a thread blocked in ``sendall`` does not read; what the slow side does not take stays in the
@@ -136,11 +138,11 @@ class _Conn:
                 return side, exc
             if not data:
                 return None
+            observe("data", number, clock(), side, data)  # before the send: a reply is never queued before its request
             try:
                 sendall(data)
             except OSError as exc:
                 return not side, exc
-            observe("data", number, clock(), side, data)
 
     def _pump(self, side: bool) -> None:
         failed = self._forward(side)
