@@ -17,7 +17,10 @@ GUI_SOURCES := $(shell find $(GUI_WEB)/src -type f 2>/dev/null) $(GUI_WEB)/index
 
 # Three distributions, one import namespace `pltf` (spec/ -> pltf.spec, clients/pltf_client/ -> pltf.client, the
 # toolkit's folders -> pltf.*; see setup.py). mypy cannot run setuptools' editable import hooks, so it reads the
-# namespace through a tree of links in the venv (NSTREE).
+# namespace through a tree of links in the venv (NSTREE). The tree's empty pltf/__init__.pyi is for mypy alone: in
+# namespace mode mypy lets a folder shadow a module of the same name when no __init__ is found all the way up
+# (python/mypy#13663), so pltf.spec.errata would be the data folder spec/errata/ instead of spec/errata.py, which
+# Python imports. With the marker mypy verifies the module path and picks errata.py as Python does.
 NSTREE := $(VENV)/namespace/pltf
 NSLINKS := spec:spec client:clients/pltf_client reference_server:reference_server fake_hardware:fake_hardware \
 	conformance_tests:conformance_tests fuzz:fuzz stubgen:clients/stubgen cli:pltf_cli fixtures:fixtures gui:gui zoo:zoo proxy:proxy
@@ -28,6 +31,7 @@ $(STAMP): pyproject.toml setup.py spec/pyproject.toml clients/pyproject.toml $(w
 	$(BIN)/python -m pip install --quiet -e ./spec -e ./clients -e '.[dev]'
 	@rm -rf $(NSTREE) && mkdir -p $(NSTREE)
 	@for l in $(NSLINKS); do ln -s "$(CURDIR)/$${l#*:}" "$(NSTREE)/$${l%%:*}"; done
+	@touch $(NSTREE)/__init__.pyi
 	@touch $(STAMP)
 
 install: $(STAMP) $(GUI_BUILT)

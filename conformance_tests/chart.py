@@ -16,11 +16,13 @@ Rules:
 from __future__ import annotations
 
 import enum
+from typing import Any
 
 from pltf.spec.model import enum_classes
 
-OperationState = enum_classes()["OperationState"]
-MotionMode = enum_classes()["MotionMode"]
+# The spec's enums are built at import; mypy sees them as plain IntEnum classes without members.
+OperationState: Any = enum_classes()["OperationState"]
+MotionMode: Any = enum_classes()["MotionMode"]
 
 
 class St(enum.Enum):

@@ -32,8 +32,9 @@ from pltf.spec.model import enum_classes
 from pltf.spec.telegram import Telegram
 
 T = TypeVar("T")
-MotionMode = enum_classes()["MotionMode"]
-OperationState = enum_classes()["OperationState"]
+# The spec's enums are built at import; mypy sees them as plain IntEnum classes without members.
+MotionMode: Any = enum_classes()["MotionMode"]
+OperationState: Any = enum_classes()["OperationState"]
 
 
 @dataclass
@@ -172,7 +173,7 @@ class CaseContext:
     notes: list[str] = field(default_factory=list)
     unsolicited: list[tuple[str, bytes]] = field(default_factory=list)
     abuse_from: Status | None = None  # the status just before a case sent malformed input
-    _finalizers: list[tuple[str, Callable[[], None]]] = field(default_factory=list)
+    _finalizers: list[tuple[str, Callable[[], object]]] = field(default_factory=list)
     _extra: list[Session] = field(default_factory=list)
 
     # ---- observer hooks (wire.Observer)
@@ -211,7 +212,8 @@ class CaseContext:
     def note(self, text: str) -> None:
         self.notes.append(text)
 
-    def on_exit(self, what: str, fn: Callable[[], None]) -> None:
+    def on_exit(self, what: str, fn: Callable[[], object]) -> None:
+        """Call ``fn`` when the case ends (last registered first); what it returns is dropped."""
         self._finalizers.append((what, fn))
 
     def finish(self) -> None:

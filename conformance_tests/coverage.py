@@ -75,7 +75,7 @@ def xsd_elements() -> dict[str, frozenset[str]]:
             files.append(SCHEMA_DIR / "task.xsd")
         for path in files:
             tree = etree.parse(str(path), etree.XMLParser(resolve_entities=False, no_network=True))
-            names.update(e.get("name") for e in tree.iter(f"{XS}element") if e.get("name"))
+            names.update(name for e in tree.iter(f"{XS}element") if (name := e.get("name")))
         out[kind.value] = frozenset(names)
     return out
 
@@ -137,7 +137,7 @@ class Coverage:
             if f.enum:
                 seen = self.enum_values if direction == "request" else self.reply_enum_values
                 vals = v if isinstance(v, tuple) else (v,)
-                seen.setdefault(f.enum, set()).update(int(x) for x in vals)  # type: ignore[call-overload]
+                seen.setdefault(f.enum, set()).update(int(x) for x in vals)
 
     def document(self, kind: str, root: etree._Element) -> None:
         with self._lock:

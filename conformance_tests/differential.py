@@ -33,7 +33,8 @@ from pltf.spec.volatile import rule, values_differ, volatile
 from pltf.zoo import launch
 
 __all__ = ["Diff", "Step", "compare", "diff_replies", "play", "relative", "run_differential", "script", "volatile"]
-MotionMode = enum_classes()["MotionMode"]
+# The spec's enums are built at import; mypy sees them as plain IntEnum classes without members.
+MotionMode: Any = enum_classes()["MotionMode"]
 
 
 @dataclass(frozen=True)
@@ -213,7 +214,7 @@ def play(config: Config, steps: list[Step]) -> list[Telegram | None]:
             elif step.kind == "rest":
                 ctx.sleep(0.5)  # the move has started by now
                 # the move's end: its target reached (guide 6.4), not a pause between driving and the end turn
-                ctx.poll(ctx.status, lambda s: bool(s.telegram.target_reached), within=30.0)
+                ctx.poll(ctx.status, lambda s: bool(s.telegram.target_reached), within=30.0)  # type: ignore[attr-defined]  # a GET_STATUS field, from the spec
                 rest(ctx, within=30.0)
                 replies.append(None)
             elif step.kind == "send":

@@ -44,7 +44,7 @@ from pltf.conformance_tests.outcome import (
     verdict_for_level,
     worst,
 )
-from pltf.conformance_tests.wire import WireEntry, WireLog
+from pltf.conformance_tests.wire import NullObserver, WireEntry, WireLog
 
 
 def first_line(text: str) -> str:
@@ -185,7 +185,7 @@ class Runner:
         harness_error = None
         try:
             # reachable = a TCP connection is accepted; a broken GET_STATUS is the cases' to report, not ours
-            self.target.connect("A", WireLog(), _NullCtx(), probe=False).close()
+            self.target.connect("A", WireLog(), NullObserver(), probe=False).close()
         except Unreachable as exc:
             harness_error = str(exc)
         if harness_error is None:
@@ -371,22 +371,6 @@ def _resolve(attempts: list[Attempt]) -> tuple[Verdict, str]:
     if len(attempts) > 1 and final is Verdict.PASS:
         msg = f"passed on attempt {len(attempts)}"
     return final, msg
-
-
-class _NullCtx:
-    """An observer that records nothing (the reachability probe before the run)."""
-
-    def on_sent(self, telegram: object) -> None:
-        pass
-
-    def on_received(self, telegram: object) -> None:
-        pass
-
-    def on_deviation(self, deviation: object) -> None:
-        pass
-
-    def on_unsolicited(self, port: str, data: bytes) -> None:
-        pass
 
 
 def run(

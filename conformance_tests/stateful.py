@@ -36,7 +36,8 @@ from pltf.spec.compiler import fixed_size
 from pltf.spec.model import enum_classes
 from pltf.spec.telegram import user_fields
 
-MotionMode = enum_classes()["MotionMode"]
+# The spec's enums are built at import; mypy sees them as plain IntEnum classes without members.
+MotionMode: Any = enum_classes()["MotionMode"]
 MODES = sorted(MotionMode._value2member_map_)
 KINDS = ("map", "roadmap", "program")
 

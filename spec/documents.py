@@ -18,7 +18,7 @@ import functools
 import threading
 from pathlib import Path
 
-from lxml import etree  # type: ignore[import-untyped, unused-ignore]
+from lxml import etree
 
 __all__ = [
     "DEFAULT_MAX_SIZE",
@@ -136,7 +136,7 @@ def detect_kind(data: bytes, *, max_size: int = DEFAULT_MAX_SIZE) -> DocumentKin
     kind = _kind_of(root)
     if kind is None:
         expected = ", ".join(f"<{k.value}>" for k in DocumentKind)
-        raise DocumentError(f"unknown root element <{root.tag}>, expected one of {expected}", line=root.sourceline)
+        raise DocumentError(f"unknown root element <{root.tag!s}>, expected one of {expected}", line=root.sourceline)
     return kind
 
 
@@ -146,7 +146,7 @@ def validate_document(kind: DocumentKind, data: bytes, *, max_size: int = DEFAUL
     tree = _parse(data, kind, max_size)
     root = tree.getroot()
     if _kind_of(root) is not kind:
-        raise DocumentError(f"root element is <{root.tag}>, expected <{kind.value}>", kind=kind, line=root.sourceline)
+        raise DocumentError(f"root element is <{root.tag!s}>, expected <{kind.value}>", kind=kind, line=root.sourceline)
     schema = _schema(kind)
     with _VALIDATE_LOCK:
         valid = schema.validate(tree)

@@ -12,8 +12,9 @@ from pltf.conformance_tests.context import CaseContext, Status
 from pltf.conformance_tests.outcome import Fail, NotApplicable
 from pltf.spec.model import enum_classes
 
-MotionMode = enum_classes()["MotionMode"]
-OperationState = enum_classes()["OperationState"]
+# The spec's enums are built at import; mypy sees them as plain IntEnum classes without members.
+MotionMode: Any = enum_classes()["MotionMode"]
+OperationState: Any = enum_classes()["OperationState"]
 NO = MotionMode.MODE_MOTION_NO
 
 STATES: tuple[St, ...] = (St.NOT_CONNECTED, St.CONNECTED, St.READY, St.RUNNING, St.BREAKED)

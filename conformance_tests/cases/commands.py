@@ -18,7 +18,8 @@ from pltf.conformance_tests.context import CaseContext
 from pltf.conformance_tests.outcome import ConnectionClosed, Fail
 from pltf.spec.model import enum_classes
 
-_E = enum_classes()
+# The spec's enums are built at import; mypy sees them as plain IntEnum classes (by name) without members.
+_E: dict[str, Any] = enum_classes()
 Fields = Callable[[CaseContext], dict[str, Any]]
 
 

@@ -110,9 +110,9 @@ def split_long(ctx: CaseContext) -> None:
             s.send_chunks([frame[:i], frame[i:j], frame[j:]], note=f"split at {i},{j}")
             if s.read_reply("CMD_GET_PLTF_PARAM").key != key:  # type: ignore[attr-defined]
                 raise Fail(f"split at {i},{j}: the reply names another key")
-    frame = far_frame(pos)
-    x = frame["x"]
-    setf = _frame("CMD_SET_FRM_PLTF", **frame)
+    far = far_frame(pos)
+    x = far["x"]
+    setf = _frame("CMD_SET_FRM_PLTF", **far)
     for k in range(1, len(setf)):
         s.send_chunks([setf[:k], setf[k:]], note=f"split at {k}")
         got = s.request(build("request", "CMD_GET_POSITION"))
@@ -168,8 +168,8 @@ def coalesced(ctx: CaseContext) -> None:
         if (first.motion_mode, second.motion_mode) != (VEL, NO):  # type: ignore[attr-defined]
             raise Fail(
                 f"coalesced frames out of order: the modes read back are {first.motion_mode}, "  # type: ignore[attr-defined]
-                f"{second.motion_mode} (expected {VEL}, {NO})"
-            )  # type: ignore[attr-defined]
+                f"{second.motion_mode} (expected {VEL}, {NO})"  # type: ignore[attr-defined]
+            )
         s.read_reply("CMD_GET_POSITION")
         s.read_reply("CMD_GET_PLTF_PARAM_VEC")
     if ctx.unsolicited:

@@ -3,14 +3,29 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+from typing import Any
 
 from pltf.conformance_tests.cases._common import FAR_OFFSET, no_unsolicited
 from pltf.conformance_tests.catalogue import Level, Tier, case
 from pltf.conformance_tests.context import CaseContext
 from pltf.conformance_tests.outcome import Fail, NotApplicable
 from pltf.spec.model import enum_classes
+from pltf.spec.telegram import Telegram
 
-_E = enum_classes()
+# The spec's enums are built at import; mypy sees them as plain IntEnum classes without members.
+_E: dict[str, Any] = enum_classes()
+
+
+def _near(x: int, y: int) -> Callable[[Telegram], bool]:
+    def near(p: Any) -> bool:  # a GET_POSITION reply: its fields come from the spec, unknown to mypy
+        return bool(abs(p.x - x) <= 20 and abs(p.y - y) <= 20)
+
+    return near
+
+
+def _field_is(name: str, value: int) -> Callable[[Telegram], bool]:
+    return lambda t: bool(getattr(t, name) == value)
 
 
 @case(
@@ -27,14 +42,14 @@ def sets_estimate(ctx: CaseContext) -> None:
     for dx, dy, milli_deg in (FAR_OFFSET, (-321, 789, -135500)):  # both beyond the capture range (FAR_OFFSET)
         x, y = p0.x + dx, p0.y + dy  # type: ignore[attr-defined]
         ctx.send("CMD_SET_FRM_PLTF", x=x, y=y, angle=milli_deg)
-        got = ctx.poll(ctx.position, lambda p, x=x, y=y: abs(p.x - x) <= 20 and abs(p.y - y) <= 20, within=1.0)
+        got = ctx.poll(ctx.position, _near(x, y), within=1.0)
         d = math.degrees(got.angle) - milli_deg / 1000.0  # type: ignore[attr-defined]
         d = (d + 180.0) % 360.0 - 180.0
         if abs(got.x - x) > 20 or abs(got.y - y) > 20 or abs(d) > 1.0:  # type: ignore[attr-defined]
             raise Fail(
                 f"CMD_SET_FRM_PLTF({x}, {y}, {milli_deg}): GET_POSITION reports ({got.x}, {got.y}, "  # type: ignore[attr-defined]
-                f"{math.degrees(got.angle):.2f} deg)"
-            )  # type: ignore[attr-defined]
+                f"{math.degrees(got.angle):.2f} deg)"  # type: ignore[attr-defined]
+            )
         st = ctx.status().telegram
         if abs(st.est_x - x) > 20 or abs(st.est_y - y) > 20:  # type: ignore[attr-defined]
             raise Fail(f"CMD_SET_FRM_PLTF({x}, {y}): GET_STATUS estimate ({st.est_x}, {st.est_y})")  # type: ignore[attr-defined]
@@ -53,7 +68,7 @@ def mapping_mode(ctx: CaseContext) -> None:
     ctx.on_exit("stop mapping", lambda: ctx.send("CMD_MAPPING_STOP"))
     for command, flag in (("CMD_MAPPING_START", 1), ("CMD_MAPPING_RESET", 1), ("CMD_MAPPING_STOP", 0)):
         ctx.send(command)
-        got = ctx.poll(lambda: ctx.get("CMD_GET_DEBUG_DATA"), lambda t, f=flag: t.mapping_mode == f, within=2.0)
+        got = ctx.poll(lambda: ctx.get("CMD_GET_DEBUG_DATA"), _field_is("mapping_mode", flag), within=2.0)
         if got.mapping_mode != flag:  # type: ignore[attr-defined]
             raise Fail(f"after {command} the debug data say mapping mode {got.mapping_mode}")  # type: ignore[attr-defined]
         if command == "CMD_MAPPING_RESET" and got.mapped_segments:  # type: ignore[attr-defined]

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from functools import partial
+from typing import Any
 
 from pltf.conformance_tests import chart
 from pltf.conformance_tests.cases._common import (
@@ -16,7 +18,7 @@ from pltf.conformance_tests.cases._common import (
 )
 from pltf.conformance_tests.catalogue import Level, Tier, add, case
 from pltf.conformance_tests.chart import St
-from pltf.conformance_tests.context import CaseContext
+from pltf.conformance_tests.context import CaseContext, Status
 from pltf.conformance_tests.outcome import Fail, NotApplicable
 from pltf.spec.codec import build
 
@@ -40,8 +42,12 @@ _GUIDE_TEXT = {
 _DECISION = "; the project's state chart (figure 2 is lost in the text guide, erratum {erratum}): {what}"
 
 
-def _fields(command: str) -> dict[str, int]:
+def _fields(command: str) -> dict[str, Any]:
     return {"mode": MotionMode.MODE_MOTION_VEL} if command == "CMD_SET_MODE" else {}
+
+
+def _mode_is(mode: int) -> Callable[[Status], bool]:
+    return lambda s: s.mode == mode
 
 
 def _cell(ctx: CaseContext, state: St, command: str) -> None:
@@ -146,7 +152,7 @@ def optional_modes(ctx: CaseContext) -> None:
         MotionMode.MODE_MOTION_POST_PROCESS_REPLAY,
     ):
         ctx.send("CMD_SET_MODE", mode=mode)
-        s = ctx.poll(ctx.status, lambda x, m=mode: x.mode == m, within=5.0)
+        s = ctx.poll(ctx.status, _mode_is(mode), within=5.0)
         if s.mode != mode:
             missing.append(MotionMode(mode).name)
         ctx.send("CMD_SET_MODE", mode=NO)

@@ -174,7 +174,7 @@ def _status_field(data: bytes, name: str, new_type: str) -> bytes:
     tdef = t.DEF
     layout = tuple(dataclasses.replace(f, type=new_type, enum=None) if f.name == name else f for f in tdef.reply or ())
     cls, _dec, enc = compile_telegram(dataclasses.replace(tdef, reply=layout), "reply")
-    return enc(cls._make(tuple(t)))  # type: ignore[attr-defined, no-any-return]
+    return enc(cls._make(tuple(t)))  # type: ignore[attr-defined]
 
 
 def _swap_position_ints(data: bytes) -> bytes:

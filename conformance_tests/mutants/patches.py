@@ -54,7 +54,7 @@ def documents_unvalidated() -> None:
 
     from pltf.reference_server import documents
 
-    def parse_only(kind: Any, data: bytes) -> Any:
+    def parse_only(kind: Any, data: bytes, *, max_size: int = 0) -> Any:
         from pltf.spec.documents import DocumentError
 
         try:
@@ -62,7 +62,8 @@ def documents_unvalidated() -> None:
         except etree.XMLSyntaxError as exc:
             raise DocumentError(str(exc)) from None
 
-    documents.validate_document = parse_only  # type: ignore[assignment]
+    # the name the reference server's documents module imported and calls (not re-exported, hence the ignore)
+    documents.validate_document = parse_only  # type: ignore[attr-defined]
 
 
 def refusal_clears_active() -> None:
@@ -108,7 +109,7 @@ def no_watchdog() -> None:
 def moves_in_every_mode() -> None:
     from pltf.reference_server import platform
 
-    platform.Platform._unless_mode = lambda self, name, *modes: None  # type: ignore[method-assign]
+    platform.Platform.unless_mode = lambda self, name, *modes: None  # type: ignore[method-assign]
 
 
 def die_on_malformed() -> None:
@@ -123,7 +124,8 @@ def die_on_malformed() -> None:
             except RemoteProtocolError:
                 os._exit(3)
 
-    network.TelegramDecoder = Dying  # type: ignore[misc]
+    # the name the reference server's network module imported and calls (not re-exported, hence the ignore)
+    network.TelegramDecoder = Dying  # type: ignore[attr-defined]
 
 
 def allow_in_state(command: str, state: str) -> None:
@@ -148,9 +150,10 @@ def parameter_text_lenient() -> None:
     def boolean(text: str) -> bool:
         return text.strip().lower() == "true"
 
-    parameters._PARSERS = {
+    # a mutant rebinds the table the parameter checks read at each call, Final or not
+    parameters._PARSERS = {  # type: ignore[misc]
         parameters.DataType.BOOLEAN: boolean,
-        parameters.DataType.INTEGER: integer,  # type: ignore[attr-defined]
+        parameters.DataType.INTEGER: integer,
         parameters.DataType.DOUBLE: double,
     }
 

@@ -17,6 +17,7 @@ import contextlib
 import socket
 import struct
 import threading
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -67,7 +68,7 @@ def split_frames(buf: bytearray) -> list[bytes]:
 
 
 class FrameProxy:
-    def __init__(self, upstream_host: str, upstream_ports: list[int], mutant: Any = None) -> None:
+    def __init__(self, upstream_host: str, upstream_ports: Sequence[int], mutant: Any = None) -> None:
         self.upstream_host = upstream_host
         self.upstream_ports = list(upstream_ports)
         self.mutant = mutant

@@ -6,7 +6,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from rich.console import Console
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+from rich.progress import BarColumn, MofNCompleteColumn, Progress, TaskID, TextColumn, TimeElapsedColumn
 from rich.table import Table
 
 from pltf.conformance_tests.catalogue import Case, Verdict
@@ -31,7 +31,7 @@ class ConsoleReporter:
         self.verbose = verbose
         self.show_coverage = show_coverage
         self._progress: Progress | None = None
-        self._task: int | None = None
+        self._task: TaskID | None = None
 
     def on_start(self, config: Config, cases: Sequence[Case], gate: list[str]) -> None:
         c = self.console

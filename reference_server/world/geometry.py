@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
-from lxml import etree  # type: ignore[import-untyped]
+from lxml import etree
 from scipy.spatial import cKDTree  # type: ignore[import-untyped]
 
 try:
