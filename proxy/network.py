@@ -1,44 +1,51 @@
-"""The forwarding core of ``pltf proxy``: asyncio, and the only module of the proxy with sockets and a clock.
+"""The forwarding core of ``pltf proxy``, and the only module of the proxy with sockets and a clock.
 
 Rules:
-- Bytes first: a chunk is sent on to the other side as soon as it is read, unchanged (no reframing, no
-  reassembly), and only then reported to the observer (the recorder: decode, view, session file, pcapng).
-- Connections are plain non-blocking sockets on the loop's selector (``add_reader``), like the reference
-  server's: no transport or protocol objects on the data path, one read and one send per chunk.
-- Flow control: bytes the other side does not take yet wait in a buffer; above ``HIGH_WATER`` buffered bytes
-  reading from the sending side pauses until the buffer is below ``LOW_WATER``, so a slow reader slows its
-  sender as it would without the proxy.
-- Ends travel: a FIN from one side becomes a FIN to the other once what it still had to send is sent
-  (half-close); a reset becomes a reset (SO_LINGER 0). When both directions have ended, or one side is gone,
-  both sockets close. A target that cannot be reached closes the client at once.
+- Bytes first: each direction of a connection is one thread that reads a chunk and sends it on at once,
+  unchanged (no reframing, no reassembly), blocking in ``recv`` and ``sendall`` (the GIL is released while
+  blocked, so a hop costs a wakeup and two system calls, not a turn of an event loop). Between the two the
+  chunk is only queued for the observer (the recorder: decode, view, session file, pcapng): an append to a
+  deque, which the event loop delivers every ``DELIVER_EVERY`` s, or a pack and an append for the recorder
+  process's pipe. Queued before it is sent, a request is always queued before the reply it causes (queued
+  after, the other direction's thread could get in first); recording never holds up a forwarded byte.
+- The event loop (asyncio) does the rest: listening, accepting, connecting to the target, probing a target
+  that refused, delivering to the observer, stopping.
+- Flow control: a thread blocked in ``sendall`` does not read; what the slow side does not take stays in the
+  kernel's buffers, so a slow reader slows its sender as it would without the proxy.
+- Ends travel: a FIN from one side becomes a FIN to the other (everything before it was sent already:
+  half-close); a reset becomes a reset (SO_LINGER 0). When both directions have ended, or one side is gone,
+  both sockets close; the last of the two threads closes them. A target that cannot be reached closes the
+  client at once.
 - One client connection, one target connection, on the route it arrived on; the proxy adds no policy of its
   own (a second client on a busy port is the target's to turn away, guide 6.1). When the target refuses a
   connection (its port no longer listens: CMD_EXIT, a restart), the proxy stops listening on that route too
   and listens again once the target accepts a probe (every ``PROBE_EVERY`` s): a client sees the port as it is.
-- The proxy never dies of what passes through it: the observer is handed bytes after they are forwarded;
-  should it fail, the failure is reported once and recording stops while forwarding goes on.
+- The proxy never dies of what passes through it: should the observer fail, the failure is reported once and
+  recording stops while forwarding goes on.
 """
 
 from __future__ import annotations
 
 import asyncio
+import collections
 import contextlib
 import itertools
 import socket
 import struct
 import sys
+import threading
 import time
 import traceback
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-FLUSH_EVERY = 0.25  # s between flushes of the observer (session file, pcapng, view)
+DELIVER_EVERY = 0.02  # s between deliveries of the queued events to the observer
+FLUSH_EVERY = 0.25  # s between flushes of the observer (session file, pcapng, view) when nothing happens
 READ_SIZE = 65536
-HIGH_WATER = 1 << 20  # bytes waiting for a side above which reading from the other side pauses
-LOW_WATER = 1 << 18
 BACKLOG = 100
 PROBE_EVERY = 0.5  # s between probes of a target that refused a connection
+STOP_WAIT = 2.0  # s the proxy waits, when it stops, for a connection's threads to leave
 _LINGER_RESET = struct.pack("ii", 1, 0)
 
 
@@ -50,167 +57,149 @@ class Route:
     target_port: int
 
 
+def _who(side: bool) -> str:
+    return "client" if side else "target"
+
+
 class _Conn:
-    """One proxied connection: ``socks[True]`` is the client's socket (what it sends goes client -> target)."""
+    """One proxied connection: ``socks[True]`` is the client's socket (what it sends goes client -> target).
+
+    The two forwarding threads and the loop (``stop``) meet under ``lock``: the first end decides how the
+    connection ended; ``closing`` tells a thread woken by the teardown to leave without a word."""
 
     def __init__(self, proxy: ProxyServer, number: int, route: Route, client: socket.socket, peer: Any) -> None:
         self.proxy, self.number, self.route = proxy, number, route
-        self.loop = proxy.loop
         self.peer = (str(peer[0]), int(peer[1])) if isinstance(peer, tuple) else ("?", 0)
         self.socks: dict[bool, socket.socket | None] = {True: client, False: None}
-        self.pending: dict[bool, bytearray] = {True: bytearray(), False: bytearray()}  # to send to that side
         self.eof: dict[bool, bool] = {True: False, False: False}  # that side sent its FIN
-        self.shut: dict[bool, bool] = {True: False, False: False}  # we sent our FIN to that side
-        self.paused: dict[bool, bool] = {True: False, False: False}  # reading from that side paused
+        self.lock = threading.Lock()
+        self.threads: list[threading.Thread] = []
+        self.running = 0  # forwarding threads not yet finished
+        self.closing = False  # torn down (a reset, the proxy stopping): the threads leave
+        self.reset = False  # the teardown resets both sides (SO_LINGER 0)
         self.ended: str | None = None
         self.ended_at = 0.0
         self.done = False
 
     # ------------------------------------------------------------------ set-up
     async def connect(self) -> None:
-        r = self.route
+        r, loop = self.route, self.proxy.loop
         try:
-            infos = await self.loop.getaddrinfo(r.target_host, r.target_port, type=socket.SOCK_STREAM)
+            infos = await loop.getaddrinfo(r.target_host, r.target_port, type=socket.SOCK_STREAM)
             family, kind, proto, _, addr = infos[0]
             sock = socket.socket(family, kind, proto)
             sock.setblocking(False)
             try:
-                await self.loop.sock_connect(sock, addr)
+                await loop.sock_connect(sock, addr)
             except BaseException:
                 sock.close()
                 raise
         except OSError as exc:
-            self.proxy.observe(
-                "opened", self.number, time.time(), r.target_port, self.peer, (r.target_host, r.target_port)
-            )
-            self._end(f"by proxy (target unreachable: {exc.strerror or exc})")
-            self._close_all()
+            self._opened()
+            with self.lock:
+                self._end(f"by proxy (target unreachable: {exc.strerror or exc})")
+                self._close_all()
             if isinstance(exc, ConnectionRefusedError):
                 self.proxy.target_refused(r)
             return
-        _nodelay(sock)
-        self.socks[False] = sock
+        with self.lock:
+            if self.closing:  # the proxy stopped while we connected
+                sock.close()
+                return
+            _nodelay(sock)
+            self.socks[False] = sock
+            self._opened()
+            for side in (True, False):
+                s = self.socks[side]
+                assert s is not None
+                s.setblocking(True)
+            self.running = 2
+            for side in (True, False):
+                name = f"proxy-{self.number}-{'c2s' if side else 's2c'}"
+                thread = threading.Thread(target=self._pump, args=(side,), name=name, daemon=True)
+                self.threads.append(thread)
+                thread.start()
+
+    def _opened(self) -> None:
+        r = self.route
         self.proxy.observe("opened", self.number, time.time(), r.target_port, self.peer, (r.target_host, r.target_port))
-        for side in (True, False):
-            self._reading(side, True)
 
-    def _reading(self, side: bool, on: bool) -> None:
-        sock = self.socks[side]
-        if sock is None:
-            return
-        if on:
-            self.loop.add_reader(sock, self._readable, side)
-        else:
-            self.loop.remove_reader(sock)
-
-    # ------------------------------------------------------------------ data
-    def _readable(self, side: bool) -> None:
-        sock = self.socks[side]
-        if sock is None:
-            return
-        try:
-            data = sock.recv(READ_SIZE)
-        except (BlockingIOError, InterruptedError):
-            return
-        except OSError as exc:
-            self._reset_by(side, exc)
-            return
-        if not data:
-            self._eof_from(side)
-            return
-        self._send(not side, data)
-        self.proxy.observe("data", self.number, time.time(), side, data)
-
-    def _send(self, side: bool, data: bytes) -> None:
-        """Bytes for ``side`` (True: the client): now when it takes them, else when it can."""
-        sock, buf = self.socks[side], self.pending[side]
-        if sock is None:
-            return
-        if not buf:
+    # ------------------------------------------------------------------ data (one thread per direction)
+    def _forward(self, side: bool) -> tuple[bool, OSError] | None:
+        """Chunks from ``side`` to the other until ``side``'s FIN (None) or a failure (whose side, the error)."""
+        src, dst = self.socks[side], self.socks[not side]
+        assert src is not None and dst is not None
+        observe, number, clock = self.proxy.observe, self.number, time.time
+        recv, sendall = src.recv, dst.sendall
+        while True:
             try:
-                n = sock.send(data)
-            except (BlockingIOError, InterruptedError):
-                n = 0
+                data = recv(READ_SIZE)
             except OSError as exc:
-                self._reset_by(side, exc)
-                return
-            if n == len(data):
-                return
-            data = data[n:]
-            self.loop.add_writer(sock, self._writable, side)
-        buf += data
-        if len(buf) > HIGH_WATER and not self.paused[not side]:
-            self.paused[not side] = True
-            self._reading(not side, False)
+                return side, exc
+            if not data:
+                return None
+            observe("data", number, clock(), side, data)  # before the send: a reply is never queued before its request
+            try:
+                sendall(data)
+            except OSError as exc:
+                return not side, exc
 
-    def _writable(self, side: bool) -> None:
-        sock, buf = self.socks[side], self.pending[side]
-        if sock is None:
-            return
-        try:
-            n = sock.send(buf)
-        except (BlockingIOError, InterruptedError):
-            return
-        except OSError as exc:
-            self._reset_by(side, exc)
-            return
-        del buf[:n]
-        if self.paused[not side] and len(buf) < LOW_WATER and not self.eof[not side]:
-            self.paused[not side] = False
-            self._reading(not side, True)
-        if not buf:
-            self.loop.remove_writer(sock)
-            if self.eof[not side]:
-                self._shutdown(side)
+    def _pump(self, side: bool) -> None:
+        failed = self._forward(side)
+        with self.lock:
+            self.running -= 1
+            if self.closing:
+                pass  # woken by the teardown
+            elif failed is not None:
+                self._reset_by(*failed)
+            else:
+                self._eof_from(side)
+            if self.closing and self.running == 0:
+                self._close_all()
 
-    # ------------------------------------------------------------------ ends
+    # ------------------------------------------------------------------ ends (under ``lock``)
     def _end(self, how: str) -> None:
         """The first end (a FIN, a reset, a failed connect, the proxy stopping) is how the connection ended."""
         if self.ended is None:
             self.ended, self.ended_at = how, time.time()
 
     def _eof_from(self, side: bool) -> None:
-        self._end(f"by {'client' if side else 'target'} (FIN)")
+        """``side`` sent its FIN; all it sent before is sent on: our FIN to the other side."""
+        self._end(f"by {_who(side)} (FIN)")
         self.eof[side] = True
-        self._reading(side, False)
         self.proxy.observe("half_closed", self.number, time.time(), side)
-        if not self.pending[not side]:
-            self._shutdown(not side)
-
-    def _shutdown(self, side: bool) -> None:
-        """Our FIN to ``side`` (its peer sent one and everything before it is delivered)."""
-        sock = self.socks[side]
-        if sock is None or self.shut[side]:
-            return
-        self.shut[side] = True
-        with contextlib.suppress(OSError):
-            sock.shutdown(socket.SHUT_WR)
-        if self.eof[side] and self.eof[not side] and not any(self.pending.values()):
-            self._close_all()
+        other = self.socks[not side]
+        if other is not None:
+            with contextlib.suppress(OSError):
+                other.shutdown(socket.SHUT_WR)
+        if self.eof[not side]:
+            self.closing = True
 
     def _reset_by(self, side: bool, exc: OSError) -> None:
         """``side`` reset the connection (or is gone): the other side gets a reset too."""
-        self._end(f"by {'client' if side else 'target'} (reset: {exc.strerror or exc})")
-        self._close_all(reset=True)
+        self._end(f"by {_who(side)} (reset: {exc.strerror or exc})")
+        self._teardown(reset=True)
 
-    def _close_all(self, reset: bool = False) -> None:
+    def _teardown(self, reset: bool) -> None:
+        """Wake a thread still blocked in ``recv`` (SHUT_RD says nothing on the wire; SHUT_RDWR sends FINs)."""
+        self.closing, self.reset = True, reset
+        for sock in self.socks.values():
+            if sock is not None:
+                with contextlib.suppress(OSError):
+                    sock.shutdown(socket.SHUT_RD if reset else socket.SHUT_RDWR)
+
+    def _close_all(self) -> None:
         for side in (True, False):
             sock = self.socks[side]
             if sock is None:
                 continue
-            self.loop.remove_reader(sock)
-            self.loop.remove_writer(sock)
-            if reset:
+            if self.reset:
                 with contextlib.suppress(OSError):
                     sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, _LINGER_RESET)
             with contextlib.suppress(OSError):
                 sock.close()
             self.socks[side] = None
         self._finish()
-
-    def stop(self) -> None:
-        self._end("by proxy (stopped)")
-        self._close_all()
 
     def _finish(self) -> None:
         if self.done:
@@ -220,6 +209,21 @@ class _Conn:
         self._end("by proxy (closed)")
         self.proxy.observe("closed", self.number, time.time(), self.ended, self.ended_at)
 
+    # ------------------------------------------------------------------ the loop's side
+    def stop(self) -> None:
+        """The proxy stops: FINs to both sides; the threads leave and the last one closes."""
+        with self.lock:
+            self._end("by proxy (stopped)")
+            if self.running:
+                self._teardown(reset=False)
+            else:
+                self.closing = True
+                self._close_all()
+
+    def join(self, deadline: float) -> None:
+        for thread in self.threads:
+            thread.join(max(0.0, deadline - time.monotonic()))
+
 
 def _nodelay(sock: socket.socket) -> None:
     with contextlib.suppress(OSError):
@@ -228,8 +232,8 @@ def _nodelay(sock: socket.socket) -> None:
 
 class ProxyServer:
     """Listens on each route and forwards; ``observer`` (a Recorder, or its pipe to a recorder process) gets
-    ``opened``/``data``/``half_closed``/``closed`` calls after the bytes moved, ``flush`` now and then, ``close``
-    at the end."""
+    ``opened``/``data``/``half_closed``/``closed`` calls after the bytes moved, in the order they happened, from
+    the loop's thread (``DELIVER_EVERY``), then ``flush``; ``close`` at the end."""
 
     def __init__(self, routes: list[Route], observer: Any = None, flush: Callable[[], None] | None = None) -> None:
         self.routes = routes
@@ -240,28 +244,49 @@ class ProxyServer:
         self.listening: list[tuple[str, int]] = []
         self._listeners: dict[Route, socket.socket] = {}
         self._numbers = itertools.count(1)
+        self._events: collections.deque[tuple[str, tuple[Any, ...]]] = collections.deque()
+        self._direct = bool(getattr(observer, "threadsafe", False))  # may be called from the forwarding threads
         self._stopped = asyncio.Event()
         self.loop = asyncio.get_running_loop()
 
     def observe(self, what: str, *args: Any) -> None:
-        """Hand an event to the observer; a failure stops recording, never forwarding."""
-        if self.observer is None:
+        """An event for the observer, from any thread: handed over at once to a ``threadsafe`` observer, else
+        queued (a deque's append is atomic) for the loop to deliver."""
+        if self._direct:
+            self._call(what, args)
+        else:
+            self._events.append((what, args))
+
+    def _call(self, what: str, args: tuple[Any, ...]) -> None:
+        """A failure of the observer stops recording, never forwarding."""
+        observer = self.observer
+        if observer is None:
             return
         try:
-            getattr(self.observer, what)(*args)
+            getattr(observer, what)(*args)
         except Exception:  # the proxy never dies of what passes through it
-            print(
-                "pltf proxy: internal error while recording; recording stopped, forwarding goes on:\n"
-                + traceback.format_exc(limit=3),
-                file=sys.stderr,
-            )
-            self.observer = None
+            if self.observer is not None:
+                self.observer = None
+                print(
+                    "pltf proxy: internal error while recording; recording stopped, forwarding goes on:\n"
+                    + traceback.format_exc(limit=3),
+                    file=sys.stderr,
+                )
+
+    def deliver(self) -> bool:
+        """Hand the queued events to the observer (the loop's thread); True when there were any."""
+        events, delivered = self._events, False
+        while events:
+            what, args = events.popleft()
+            delivered = True
+            self._call(what, args)
+        return delivered
 
     async def start(self) -> list[tuple[str, int]]:
         for route in self.routes:
             sock = self._listen(route, route.listen_port)
             self.listening.append(sock.getsockname()[:2])
-        self._spawn(self._flusher())
+        self._spawn(self._deliverer())
         return self.listening
 
     def _listen(self, route: Route, port: int) -> socket.socket:
@@ -307,19 +332,23 @@ class ProxyServer:
             except OSError as exc:  # out of descriptors: try again later
                 print(f"pltf proxy: accept failed: {exc.strerror or exc}", file=sys.stderr)
                 return
-            client.setblocking(False)
             _nodelay(client)
             conn = _Conn(self, next(self._numbers), route, client, peer)
             self.conns.add(conn)
             self._spawn(conn.connect())
 
-    async def _flusher(self) -> None:
+    async def _deliverer(self) -> None:
+        idle = 0.0
         while True:
-            await asyncio.sleep(FLUSH_EVERY)
-            self.flush()
+            await asyncio.sleep(DELIVER_EVERY)
+            idle += DELIVER_EVERY
+            if self.deliver() or self._direct or idle >= FLUSH_EVERY:
+                idle = 0.0
+                self.flush()
 
     def flush(self) -> None:
-        self.observe("flush")
+        self.deliver()
+        self._call("flush", ())
         if self.flush_extra is not None:
             self.flush_extra()
 
@@ -335,11 +364,16 @@ class ProxyServer:
             self.loop.remove_reader(sock)
             sock.close()
         self._listeners.clear()
-        for conn in list(self.conns):
-            conn.stop()
         for task in list(self.tasks):
             task.cancel()
         await asyncio.sleep(0)
+        conns = list(self.conns)
+        for conn in conns:
+            conn.stop()
+        deadline = time.monotonic() + STOP_WAIT
+        for conn in conns:  # their last events (the closes) before the observer's close
+            conn.join(deadline)
         self.observe("close", time.time())
+        self.deliver()
         if self.flush_extra is not None:
             self.flush_extra()

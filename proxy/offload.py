@@ -1,10 +1,13 @@
 """The recorder in a process of its own, so that decoding, the view and the files never delay a forwarded byte.
 
 Rules:
-- ``RecorderPipe`` stands where the network module expects a recorder: each call becomes one message on a pipe
-  (a fixed header and the bytes), written without blocking; what the pipe does not take at once waits in a
-  buffer and goes with the next message or the next ``flush``. Cost on the forwarding path: one pack and one
-  write.
+- ``RecorderPipe`` stands where the network module expects a recorder, and may be called from any thread (the
+  forwarding threads call it directly, ``threadsafe``): each call packs one message (a fixed header and the
+  bytes) and appends it to a queue, nothing more. ``flush`` (the network module's event loop, every few
+  milliseconds) writes what is queued to the pipe without blocking: one write, and one wakeup of the recorder
+  process, for many messages. What the pipe does not take at once waits for the next ``flush``.
+- The child runs at a lower priority (``NICE``): when the machine is busy, forwarding comes first and the
+  recording catches up when there is time (what it has not taken waits in the pipe and in the buffer).
 - The child (forked before the event loop starts, so it inherits no loop and no socket) builds the recorder
   with ``make`` and replays the messages into it in order; at the end of the pipe it closes the recorder
   (files flushed) and prints the summary.
@@ -13,6 +16,7 @@ Rules:
 
 from __future__ import annotations
 
+import collections
 import contextlib
 import fcntl
 import json
@@ -29,15 +33,19 @@ from pltf.proxy.recorder import Recorder
 _HEAD = struct.Struct("<BIBdI")  # kind, connection, c2s, time, payload length
 START, OPENED, DATA, HALF, CLOSED = range(5)
 _PIPE_SIZE = 1 << 20
+NICE = 10  # added to the recorder process's niceness
 IDLE_FLUSH = 0.25  # s without messages after which the child flushes its files
 
 
 class RecorderPipe:
+    threadsafe = True  # the network module may call it from its forwarding threads
+
     def __init__(self, make: Callable[[], Recorder], summary: Callable[[Recorder], str]) -> None:
         self.make, self.summary = make, summary
         self.pid = 0
         self.fd = -1
-        self._buf = bytearray()
+        self._queue: collections.deque[bytes] = collections.deque()  # messages (appended from any thread)
+        self._buf = bytearray()  # what the pipe has not taken yet (``flush``'s thread only)
         self.broken = False
 
     def start(self) -> None:
@@ -48,6 +56,8 @@ class RecorderPipe:
         if pid == 0:  # the child: Ctrl-C is the parent's to act on (it ends the pipe, and so the child)
             signal.signal(signal.SIGINT, signal.SIG_IGN)
             os.close(w)
+            with contextlib.suppress(OSError):
+                os.nice(NICE)
             code = 0
             try:
                 _child(r, self.make, self.summary)
@@ -66,11 +76,8 @@ class RecorderPipe:
 
     # ------------------------------------------------------------------ what the network module calls
     def _send(self, kind: int, conn: int, c2s: bool, now: float, payload: bytes = b"") -> None:
-        if self.broken:
-            return
-        self._buf += _HEAD.pack(kind, conn, c2s, now, len(payload))
-        self._buf += payload
-        self._write()
+        if not self.broken:
+            self._queue.append(_HEAD.pack(kind, conn, c2s, now, len(payload)) + payload)
 
     def _write(self) -> None:
         try:
@@ -98,8 +105,17 @@ class RecorderPipe:
     def closed(self, conn: int, now: float, detail: str, ended_at: float | None = None) -> None:
         self._send(CLOSED, conn, False, now, json.dumps([detail, ended_at]).encode())
 
+    def _take(self) -> None:
+        queue, buf = self._queue, self._buf
+        while queue:
+            buf += queue.popleft()
+
     def flush(self) -> None:
-        if self._buf and not self.broken:
+        """Write what is queued (from one thread at a time: the network module's loop)."""
+        if self.broken:
+            return
+        self._take()
+        if self._buf:
             self._write()
 
     def close(self, now: float) -> None:
@@ -107,6 +123,7 @@ class RecorderPipe:
         if self.fd < 0:
             return
         if not self.broken:
+            self._take()
             os.set_blocking(self.fd, True)
             with contextlib.suppress(OSError):
                 while self._buf:

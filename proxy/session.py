@@ -16,12 +16,13 @@ Format (version 1):
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any
 
-from pltf.proxy.tap import CLOSE, FRAME, OPEN, RAW, Record
+from pltf.proxy.tap import CLOSE, FRAME, MEMO_BYTES, MEMO_FRAMES, OPEN, RAW, Record
 from pltf.spec import errors
 from pltf.spec.codec import FRAME_OVERHEAD, telegram_set
 from pltf.spec.jsonio import telegram_to_json
@@ -77,6 +78,7 @@ class SessionWriter:
         self.path = path
         self._fh: IO[str] = path.open("w", encoding="ascii")
         self.lines = 0
+        self._memo: dict[tuple[str, str | None, bytes, str | None, bool], str] = {}
 
     def start(self, routes: list[Route], started: float) -> None:
         header = {
@@ -88,8 +90,27 @@ class SessionWriter:
         self._fh.write(json.dumps(header) + "\n")
 
     def write(self, rec: Record) -> None:
-        self._fh.write(json.dumps(record_to_json(rec)) + "\n")
+        self._fh.write(self._line(rec) + "\n")
         self.lines += 1
+
+    def _line(self, rec: Record) -> str:
+        """``json.dumps(record_to_json(rec))``; the part after ``kind`` is kept for short frames (a poller's
+        identical requests and unchanged replies are turned into JSON once)."""
+        if rec.kind in (OPEN, CLOSE) or len(rec.raw) > MEMO_BYTES:
+            return json.dumps(record_to_json(rec))
+        key = (rec.kind, rec.direction, rec.raw, rec.error, rec.telegram is None)
+        tail = self._memo.get(key)
+        if tail is None:
+            body = record_to_json(rec)
+            for name in ("time", "conn", "port", "kind"):
+                del body[name]
+            tail = json.dumps(body)
+            if len(self._memo) >= MEMO_FRAMES:
+                self._memo.clear()
+            self._memo[key] = tail
+        t = round(rec.time, 6)
+        stamp = repr(t) if math.isfinite(t) else json.dumps(t)  # what json.dumps writes for a number
+        return f'{{"time": {stamp}, "conn": {int(rec.conn)}, "port": {int(rec.port)}, "kind": "{rec.kind}", {tail[1:]}'
 
     def flush(self) -> None:
         self._fh.flush()

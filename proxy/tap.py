@@ -9,6 +9,9 @@ Rules:
 - A framing error (a bad header, a length over the maximum) loses the frame boundaries: the bytes from there on
   are recorded raw and marked, chunk by chunk, and nothing is guessed (no search for the next header: it could
   sit inside a string). The end of the stream inside a frame marks the partial frame Truncated.
+- Decoding is a function of the direction and the frame's bytes: the result for a short frame is kept
+  (``MEMO_FRAMES`` of them, at most ``MEMO_BYTES`` each), so a poller's identical requests and unchanged
+  replies are decoded once.
 """
 
 from __future__ import annotations
@@ -22,6 +25,9 @@ from pltf.spec.model import Direction
 from pltf.spec.telegram import Telegram
 
 _LENGTH = struct.Struct(">I")
+MEMO_FRAMES = 4096  # decoded frames kept per direction (the memo is emptied when it is full)
+MEMO_BYTES = 512  # longer frames are decoded every time
+_MEMO: dict[Direction, dict[bytes, tuple[Telegram | None, str | None]]] = {"request": {}, "reply": {}}
 
 # Record kinds
 FRAME = "frame"  # one frame: a telegram, or a frame marked with its error
@@ -129,7 +135,20 @@ class Tap:
         raw = bytes(buf[pos:end])
         self._pos = end
         self.frames += 1
+        telegram, error = self._decode(raw)
+        return self._record(now, raw, telegram, error)
+
+    def _decode(self, raw: bytes) -> tuple[Telegram | None, str | None]:
+        memo = _MEMO[self.direction]
+        found = memo.get(raw)
+        if found is not None:
+            return found
         try:
-            return self._record(now, raw, self._set.decode_data(raw[FRAME_OVERHEAD:]))
+            found = (self._set.decode_data(raw[FRAME_OVERHEAD:]), None)
         except errors.RemoteProtocolError as exc:
-            return self._record(now, raw, error=_describe(exc))
+            found = (None, _describe(exc))
+        if len(raw) <= MEMO_BYTES:
+            if len(memo) >= MEMO_FRAMES:
+                memo.clear()
+            memo[raw] = found
+        return found

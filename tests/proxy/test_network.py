@@ -7,9 +7,11 @@ from __future__ import annotations
 import random
 import socket
 import struct
+import threading
 import time
 
-from pltf.proxy.tap import CLOSE, FRAME, OPEN, RAW
+from pltf.proxy.recorder import Recorder
+from pltf.proxy.tap import CLOSE, FRAME, OPEN, RAW, Record
 from pltf.spec.codec import REQUESTS, encode
 from tests.proxy.helpers import Peer, ProxyThread, read_exactly, read_to_end
 
@@ -112,7 +114,6 @@ def test_a_slow_reader_slows_the_sender() -> None:
         conn.settimeout(None)
         got = bytearray()
         c.settimeout(10)
-        import threading
 
         def rest() -> None:
             conn.sendall(blob[pushed:])
@@ -192,3 +193,35 @@ def test_while_the_target_does_not_listen_neither_does_the_proxy() -> None:
             assert read_exactly(conn, len(STOP)) == STOP
             conn.close()
         back.close()
+
+
+def test_a_stuck_recorder_does_not_hold_up_forwarding() -> None:
+    """The observer gets the bytes after they moved: while it hangs, round trips go on; then it gets them all."""
+    release = threading.Event()
+    records: list[Record] = []
+
+    def stuck(rec: Record) -> None:
+        release.wait(30)
+        records.append(rec)
+
+    server = socket.create_server(("127.0.0.1", 0))
+    server.settimeout(5)
+    with ProxyThread([server.getsockname()[1]], Recorder([stuck])) as proxy:
+        c = socket.create_connection(("127.0.0.1", proxy.ports[0]))
+        conn, _ = server.accept()
+        for k in range(50):
+            c.sendall(STOP)
+            assert read_exactly(conn, len(STOP)) == STOP, f"round trip {k} held up by the recorder"
+            conn.sendall(STOP)
+            assert read_exactly(c, len(STOP)) == STOP, f"round trip {k} held up by the recorder"
+        assert not records
+        release.set()
+        deadline = time.monotonic() + 10
+        while sum(r.kind == FRAME for r in records) < 100:
+            assert time.monotonic() < deadline, f"{len(records)} records"
+            time.sleep(0.01)
+        c.close()
+        conn.close()
+    server.close()
+    frames = [r for r in records if r.kind == FRAME]
+    assert [r.direction for r in frames] == ["request", "reply"] * 50  # each request before the reply it caused

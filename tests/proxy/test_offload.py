@@ -68,5 +68,7 @@ def test_a_dead_recorder_process_stops_recording_not_the_caller(tmp_path: Path) 
     with pytest.raises(RuntimeError, match="recorder process is gone"):
         for _ in range(100):
             pipe.data(1, 1.0, True, STOP)
+            pipe.flush()
     pipe.data(1, 1.0, True, STOP)  # from then on: nothing, no error
+    pipe.flush()
     pipe.close(2.0)

@@ -211,7 +211,9 @@ def test_the_recording_holds_every_exchange(recorded: Path) -> None:
     assert names.count("open") == names.count("close") == 3
     assert {"CMD_MOVE_REL", "CMD_GET_PLTF_PARAM_VEC", "CMD_SET_PLTF_PARAM", "CMD_GET_MAP"} <= set(names)
     assert [r.error.split(":")[0] for r in s.records if r.error] == ["BadHeader"]
-    assert s.records[-1].detail.startswith("by target")  # the bad header closed it
+    (bad,) = [r.conn for r in s.records if r.error]
+    (close,) = [r for r in s.records if r.kind == "close" and r.conn == bad]
+    assert close.detail.startswith("by target")  # the bad header closed it
 
 
 def test_the_pcapng_opens_in_tshark_with_the_dissector(recorded: Path) -> None:

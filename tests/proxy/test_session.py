@@ -101,3 +101,17 @@ def test_a_missing_file_is_one_line(tmp_path: Path) -> None:
 def test_events_keep_their_detail() -> None:
     rec = Record(3.0, 2, 10002, CLOSE, detail="by target (FIN)")
     assert record_to_json(rec) == {"time": 3.0, "conn": 2, "port": 10002, "kind": "close", "detail": "by target (FIN)"}
+
+
+def test_a_repeated_frame_is_written_as_json_dumps_writes_it(tmp_path: Path) -> None:
+    """The JSON of a short frame is kept and reused: every line is still exactly ``json.dumps(record_to_json)``."""
+    tap = Tap("request", 3, 10002)
+    records = [*tap.feed(SET_MODE + BAD, 1.25), *tap.feed(SET_MODE + BAD + b"\x00junk", 1_764_000_000.1234567)]
+    records.append(Record(1_764_000_001.0, 3, 10002, CLOSE, detail="by target (FIN)"))
+    path = tmp_path / "s.jsonl"
+    w = SessionWriter(path)
+    for r in records:
+        w.write(r)
+    w.close()
+    assert path.read_text().splitlines() == [json.dumps(record_to_json(r)) for r in records]
+    assert len({line.split('"hex"')[1] for line in path.read_text().splitlines()[:4]}) == 2  # the same frames twice
