@@ -419,6 +419,26 @@ def preempts(ctx: CaseContext) -> None:
     still(ctx, pose(ctx), "a preempted CMD_MOVE_ABS")
 
 
+MOVE_WALL = 0.8  # wall s a halted move of 600 mm must last at least: the command sent must land within it
+
+
+def _slow_enough(ctx: CaseContext) -> None:
+    """A case that halts a move in flight needs the move to outlast the suite's round trips: at time scale 10 a
+    600 mm move at the default 1000 mm/s is over in ~0.1 wall s, and on a loaded machine the halting command
+    sometimes arrived after it had ended (a FAIL that was the machine's). Where that is so the move runs
+    slower: guide 5.9 IpoTransVel "Translational velocity of the interpolated frame", restored at the end."""
+    fastest = 600.0 / (MOVE_WALL * ctx.config.time_scale)  # mm/s that keep 600 mm over MOVE_WALL wall s
+    if fastest >= 1000.0:
+        return
+    old = ctx.preserve_param("IpoTransVel")
+    try:
+        current = float(old)
+    except ValueError:
+        current = 1000.0
+    if current > fastest:
+        ctx.send("CMD_SET_PLTF_PARAM", key="IpoTransVel", value=str(max(50, int(fastest))))
+
+
 def _moving(ctx: CaseContext, start: Pose) -> Pose:
     far = start.ahead(600)
     ctx.send("CMD_MOVE_ABS", x=round(far.x), y=round(far.y), angle=_milli(start.th))
@@ -439,6 +459,7 @@ def _moving(ctx: CaseContext, start: Pose) -> Pose:
     telegrams=("CMD_BREAK", "CMD_CONTINUE", "CMD_MOVE_ABS"),
 )
 def break_continue(ctx: CaseContext) -> None:
+    _slow_enough(ctx)
     start = begin(ctx, AUTO)
     far = _moving(ctx, start)
     ctx.send("CMD_BREAK")
@@ -458,6 +479,7 @@ def short_of(halted: Pose, target: Pose, command: str) -> None:
 
 
 def _halts(ctx: CaseContext, command: str, state: St, *, blind: bool = False) -> None:
+    _slow_enough(ctx)
     start = begin(ctx, AUTO)
     far = _moving(ctx, start)
     ctx.send(command)
