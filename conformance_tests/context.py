@@ -32,6 +32,7 @@ from pltf.spec.model import enum_classes
 from pltf.spec.telegram import Telegram
 
 T = TypeVar("T")
+STATUS_FRESH = 0.5  # wall s a status read stands for the current one when nothing was sent since
 MotionMode = enum_classes()["MotionMode"]
 OperationState = enum_classes()["OperationState"]
 
@@ -174,6 +175,7 @@ class CaseContext:
     abuse_from: Status | None = None  # the status just before a case sent malformed input
     _finalizers: list[tuple[str, Callable[[], None]]] = field(default_factory=list)
     _extra: list[Session] = field(default_factory=list)
+    _last_status: tuple[int, float, Status] | None = None  # (log.sent, when, status) of the last GET_STATUS
 
     # ---- observer hooks (wire.Observer)
     def on_sent(self, telegram: Telegram) -> None:
@@ -281,7 +283,17 @@ class CaseContext:
 
     def status(self, label: str = "A") -> Status:
         t = self.get("CMD_GET_STATUS", label)
-        return Status(t.operation_state, t.initialized, t.motion_mode, t)  # type: ignore[attr-defined]
+        s = Status(t.operation_state, t.initialized, t.motion_mode, t)  # type: ignore[attr-defined]
+        self._last_status = (self.log.sent, time.monotonic(), s)
+        return s
+
+    def current_status(self) -> Status:
+        """The status: the last one read when nothing was sent since and it is under ``STATUS_FRESH`` wall s old
+        (each round trip counts against a slow link: issue 17), else a new GET_STATUS."""
+        last = self._last_status
+        if last is not None and last[0] == self.log.sent and time.monotonic() - last[1] < STATUS_FRESH:
+            return last[2]
+        return self.status()
 
     def position(self, label: str = "A") -> Telegram:
         return self.get("CMD_GET_POSITION", label)
@@ -308,7 +320,10 @@ class CaseContext:
     # ---- the known state
     def ensure(self, state: St, mode: int = MotionMode.MODE_MOTION_NO) -> Status:
         """Drive the target to ``state`` with motion mode ``mode`` (set in Ready); precondition failure if not."""
-        s = self.status()
+        s = self.current_status()
+        if (s.op, s.mode, state) == (OperationState.ST_OP_RUNNING, mode, St.BREAKED):  # one step: guide 6.3 BREAK
+            self.send("CMD_BREAK")
+            return self._await_op(OperationState.ST_OP_BREAKED, "CMD_BREAK", within=10.0)
         if s.op in (OperationState.ST_OP_RUNNING, OperationState.ST_OP_BREAKED):
             self.send("CMD_STOP")
             s = self._await_op(OperationState.ST_OP_READY, "CMD_STOP", within=10.0)
@@ -335,11 +350,12 @@ class CaseContext:
         self.send("CMD_CONNECT_TO_PLTF")
         self.send("CMD_INIT_PLTF")
         s = self.poll(self.status, lambda x: x.op == OperationState.ST_OP_READY, within=15.0)
-        if s.op != OperationState.ST_OP_READY:
-            self.sleep(1.0)
-            self.send("CMD_CONNECT_TO_PLTF")  # refused when the bus is up already: changes nothing
-            self.send("CMD_INIT_PLTF")
-            how += " (twice)"
+        if s.op == OperationState.ST_OP_READY:
+            return s  # no second look: each round trip counts against a slow link
+        self.sleep(1.0)
+        self.send("CMD_CONNECT_TO_PLTF")  # refused when the bus is up already: changes nothing
+        self.send("CMD_INIT_PLTF")
+        how += " (twice)"
         return self._await_op(OperationState.ST_OP_READY, how, within=15.0)
 
     def _await_op(self, op: int, how: str, within: float) -> Status:

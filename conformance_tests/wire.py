@@ -57,8 +57,10 @@ class WireLog:
     t0: float = field(default_factory=time.monotonic)
     entries: list[WireEntry] = field(default_factory=list)
     max_entries: int = 2000
+    sent: int = 0  # writes logged (kept counting past ``max_entries``): has anything been sent since?
 
     def add(self, port: str, direction: str, data: bytes = b"", note: str = "") -> None:
+        self.sent += direction == "tx"
         if len(self.entries) >= self.max_entries:
             if len(self.entries) == self.max_entries:
                 self.entries.append(WireEntry(time.monotonic() - self.t0, port, "ev", b"", "wire log truncated"))

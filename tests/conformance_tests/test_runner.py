@@ -125,6 +125,36 @@ def test_ensure_walks_the_chart(tiny: TinyTarget, tiny_config: Config) -> None:
     assert seen == [St.BREAKED, St.CONNECTED, St.RUNNING, St.NOT_CONNECTED, St.READY] and tiny.mode == 3
 
 
+def test_ensure_reads_no_status_it_just_read(tiny: TinyTarget, tiny_config: Config) -> None:
+    """Each round trip counts against a slow link (issue 17): a status read a moment ago with nothing sent since
+    stands for the current one; anything sent since (a raw frame too) asks again."""
+    sent: list[list[str]] = []
+
+    def tx(ctx: CaseContext) -> list[str]:
+        return [e.note for e in ctx.log.entries if e.direction == "tx"]
+
+    def walk(ctx: CaseContext) -> None:
+        ctx.ensure(St.READY)
+        ctx.status()
+        before = len(tx(ctx))
+        ctx.ensure(St.RUNNING)
+        sent.append(tx(ctx)[before:])
+        ctx.session().send_raw(bytes.fromhex("ff01fe02 00000001 0c"), "CMD_BREAK, raw")
+        before = len(tx(ctx))
+        ctx.ensure(St.BREAKED)
+        sent.append(tx(ctx)[before:])
+        ctx.status()
+        before = len(tx(ctx))
+        ctx.ensure(St.BREAKED)
+        sent.append(tx(ctx)[before:])
+
+    assert run(tiny_config, make("4.2/t/memo", walk))["4.2/t/memo"].verdict is Verdict.PASS
+    assert sent[0][0] == "CMD_START"  # no GET_STATUS first
+    assert sent[1][0] == "CMD_GET_STATUS"  # the raw BREAK was sent since
+    assert sent[2][0] == "CMD_STOP"  # in Breaked: via Ready, as before
+    assert tiny.state is St.BREAKED
+
+
 def test_the_chart_cases_pass_an_independent_implementation(tiny_config: Config) -> None:
     cases = select(load_all().values(), tier=Tier.STANDARD, keyword="6.3/CMD_*/in-*")
     assert len(cases) == 40
