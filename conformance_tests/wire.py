@@ -15,6 +15,7 @@ Rules:
 from __future__ import annotations
 
 import contextlib
+import select
 import socket
 import struct
 import time
@@ -304,6 +305,14 @@ class Session:
                 self.observer.on_deviation(dev)
             self.observer.on_received(telegram)
             return telegram
+
+    def pending(self) -> bool:
+        """Whether reply bytes wait to be read (buffered, or on the socket now): a read would not block long."""
+        if self._rx:
+            return True
+        if self.eof or self.sock is None:
+            return False
+        return bool(select.select([self.sock], [], [], 0)[0])
 
     def request(self, telegram: Telegram, timeout: float | None = None) -> Telegram:
         self.send(telegram)

@@ -51,8 +51,12 @@ class Pose:
 
 
 def pose(ctx: CaseContext) -> Pose:
-    p = ctx.position()
-    return Pose(p.x, p.y, p.angle, p.vel_trans, p.vel_rot)  # type: ignore[attr-defined]
+    return _pose_of(ctx.position())
+
+
+def _pose_of(p: Any) -> Pose:
+    """A CMD_GET_POSITION reply as a Pose."""
+    return Pose(p.x, p.y, p.angle, p.vel_trans, p.vel_rot)
 
 
 def _milli(th: float) -> int:
@@ -127,16 +131,27 @@ def hold(
 ) -> list[Pose]:
     """Send ``name`` every ``period`` simulated seconds for ``seconds``; the poses sampled in between.
 
+    Each send is followed by a CMD_GET_POSITION whose reply is read once it is there: on a slow link (issue 17)
+    the replies arrive late, and waiting for each one would stretch the gap between two sends past the
+    watchdog. A target answers a connection's requests in order, so each pose is the one after its send.
     When the suite itself fell behind (the gap between two sends, in simulated time, reached ``limit``: the
     target's watchdog) the measurement is void, not the target's fault: Inconclusive, and the runner re-runs.
     """
-    samples, sent, worst_gap = [], time.monotonic(), 0.0
+    session = ctx.session()
+    samples: list[Pose] = []
+    sent, worst_gap, asked = time.monotonic(), 0.0, 0
     for _ in range(max(1, round(seconds / period))):
         ctx.send(name, **fields)
         now = time.monotonic()
         worst_gap, sent = max(worst_gap, (now - sent) * ctx.config.time_scale), now
+        ctx.send("CMD_GET_POSITION")
+        asked += 1
         ctx.sleep(period)
-        samples.append(pose(ctx))
+        while asked and session.pending():
+            samples.append(_pose_of(session.read_reply("CMD_GET_POSITION")))
+            asked -= 1
+    for _ in range(asked):
+        samples.append(_pose_of(session.read_reply("CMD_GET_POSITION")))
     if limit is not None and worst_gap >= 0.8 * limit:
         raise Inconclusive(
             f"the suite could not resend {name} within the watchdog ({worst_gap:.2f} of {limit:.2f} "
