@@ -101,7 +101,10 @@ def ours(launch: str, seconds: float, pipeline: bool = True, big_share: float = 
         )
         campaign = Campaign(opts)
         campaign.run()
-        return campaign.stats.rate, len(campaign.stats.findings) + len(campaign.stats.unconfirmed)
+        st = campaign.stats
+        way = "kept connection" if st.dear else "fresh connections"
+        print(f"  {' '.join(launch.split()[2:4])}: {st.rate:,.0f} cases/s, {way} (trial: {st.ways})", file=sys.stderr)
+        return st.rate, len(st.findings) + len(st.unconfirmed)
 
 
 # ---------------------------------------------------------------------------------------------- boofuzz
