@@ -203,6 +203,13 @@ class CaseContext:
     def wall(self, sim_seconds: float) -> float:
         return max(self.config.min_wall, sim_seconds / self.config.time_scale)
 
+    def close_wait(self, sim_seconds: float) -> float:
+        """Wall seconds to wait for a close a case requires: ``wall(sim_seconds)``, never under the reply timeout.
+        A close is the target's answer and travels like one (through a relay, on a loaded machine); waiting costs
+        nothing on a target that closes, so a required close gets a reply's patience (issue 17: CMD_CLOSE_SOCKET
+        through the slow-release relay at load 8 closed after 0.4 s, the 0.25 s wait had ended)."""
+        return max(self.wall(sim_seconds), self.config.reply_timeout)
+
     def sleep(self, sim_seconds: float) -> None:
         time.sleep(sim_seconds / self.config.time_scale)
 
