@@ -56,6 +56,7 @@ class Config:
     probe_timeout: float = 1.0  # wall seconds for the GET_STATUS that probes a new connection
     case_budget: float | None = None  # wall seconds one case may take (None: pace.case_budget)
     run_budget: float | None = None  # wall seconds the whole run may take (None: no limit)
+    reply_time: float | None = None  # the target's GET_STATUS round trip measured at the start (pace.measure)
 
     @property
     def motion_allowed(self) -> bool:

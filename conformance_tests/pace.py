@@ -92,6 +92,7 @@ def measure(target: Target, samples: int = 3) -> Pace:
 
 def apply(pace: Pace, config: Config) -> None:
     """Scale the run's waits to the measured reply time (see the module rules)."""
+    config.reply_time = pace.reply
     if pace.reply is not None and pace.reply <= MAX_SCALED:
         config.min_wall = max(config.min_wall, WAIT_SCALE * pace.reply)
         config.probe_timeout = max(config.probe_timeout, SCALE * pace.reply)
