@@ -161,6 +161,13 @@ def hold(
             f"the suite could not resend {name} within the watchdog ({worst_gap:.2f} of {limit:.2f} "
             "simulated s): a loaded machine, not the target"
         )
+    distinct = len({(p.x, p.y, p.th) for p in samples})
+    if late and 2 * distinct < len(samples):
+        raise Inconclusive(
+            f"{len(samples)} poses read late, only {distinct} distinct: the target answered the requests in bursts "
+            "(it fell behind them: a slow target or a loaded machine, not a slow link), so its motion could not be "
+            f"sampled while {name} was resent"
+        )
     return samples
 
 
