@@ -14,7 +14,8 @@ Rules:
   the run says at its start why its cases will fail.
 - Budgets (wall seconds): a case's waits end at its budget, ``CASE_WALL + CASE_SIM / time scale`` unless given;
   the case is then INCONCLUSIVE "case budget spent" and not re-run. The run's budget (``Config.run_budget``) ends
-  the run: the cases left are INCONCLUSIVE "not run".
+  the run: the cases left are INCONCLUSIVE "not run"; a case begun late gets what is left of it (at least
+  ``runner.LAST_CASE_GRACE``) and is not re-run.
 - ``Watch``: after ``STUCK_AFTER`` cases in a row that ended with the target not answering at all (a reply
   timeout, no working connection, a spent budget), one health check - a new connection answered with
   CMD_GET_STATUS within the reply timeout. If it fails, the cases that follow are not run (INCONCLUSIVE, "the
