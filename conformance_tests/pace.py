@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 
 from pltf.conformance_tests.context import Config, Target
 from pltf.conformance_tests.outcome import ConnectionClosed, TargetFailure, Unreachable
-from pltf.conformance_tests.wire import Session, WireLog
+from pltf.conformance_tests.wire import NullObserver, Session, WireLog
 from pltf.spec.codec import build
 
 PATIENCE = 15.0  # s the first GET_STATUS of the run may take
@@ -160,22 +160,12 @@ def health(target: Target) -> str:
     target.close()  # one client per port: our own sessions would keep the port busy
     try:
         target.connect(
-            "A", WireLog(max_entries=50), _Quiet(), window=min(cfg.connect_window, 2.0), probe_timeout=cfg.reply_timeout
+            "A",
+            WireLog(max_entries=50),
+            NullObserver(),
+            window=min(cfg.connect_window, 2.0),
+            probe_timeout=cfg.reply_timeout,
         ).close()
     except Unreachable as exc:
         return str(exc)
     return ""
-
-
-class _Quiet:
-    def on_sent(self, telegram: object) -> None:
-        pass
-
-    def on_received(self, telegram: object) -> None:
-        pass
-
-    def on_deviation(self, deviation: object) -> None:
-        pass
-
-    def on_unsolicited(self, port: str, data: bytes) -> None:
-        pass

@@ -22,7 +22,7 @@ from pltf.conformance_tests.catalogue import Case, Level, Tier, Verdict, load_al
 from pltf.conformance_tests.context import Config
 from pltf.conformance_tests.outcome import Unreachable
 from pltf.conformance_tests.runner import CaseResult, Runner
-from pltf.conformance_tests.wire import WireLog
+from pltf.conformance_tests.wire import NullObserver, WireLog
 
 _RUNNER = pytest.StashKey[Runner]()
 _RESULTS = pytest.StashKey[list[CaseResult]]()
@@ -120,7 +120,7 @@ def pytest_sessionstart(session: pytest.Session) -> None:
         return
     runner = Runner(cfg, [])
     try:
-        runner.target.connect("A", WireLog(), _Quiet(), probe=False).close()
+        runner.target.connect("A", WireLog(), NullObserver(), probe=False).close()
     except Unreachable as exc:
         pytest.exit(f"pltf conformance: {exc}", returncode=2)
     runner.prepare()  # the target's reply time scales the waits (pace.py)
@@ -140,17 +140,3 @@ def pytest_terminal_summary(terminalreporter: Any, config: pytest.Config) -> Non
         terminalreporter.section("pltf conformance: NON-STRICT (SHOULD requirements not met)")
         for r in soft:
             terminalreporter.line(f"{r.case.id}: {r.message.splitlines()[0] if r.message else ''}")
-
-
-class _Quiet:
-    def on_sent(self, t: object) -> None:
-        pass
-
-    def on_received(self, t: object) -> None:
-        pass
-
-    def on_deviation(self, d: object) -> None:
-        pass
-
-    def on_unsolicited(self, port: str, data: bytes) -> None:
-        pass

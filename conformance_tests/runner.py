@@ -44,7 +44,7 @@ from pltf.conformance_tests.outcome import (
     verdict_for_level,
     worst,
 )
-from pltf.conformance_tests.wire import WireEntry, WireLog
+from pltf.conformance_tests.wire import NullObserver, WireEntry, WireLog
 
 
 def first_line(text: str) -> str:
@@ -189,7 +189,7 @@ class Runner:
         harness_error = None
         try:
             # reachable = a TCP connection is accepted; a broken GET_STATUS is the cases' to report, not ours
-            self.target.connect("A", WireLog(), _NullCtx(), probe=False).close()
+            self.target.connect("A", WireLog(), NullObserver(), probe=False).close()
         except Unreachable as exc:
             harness_error = str(exc)
         if harness_error is None:
@@ -229,6 +229,13 @@ class Runner:
         if p.reply is None or p.reply > self.config.reply_timeout:
             self.watch.pace = self.notes[-1]
         return p
+
+    def _case_budget(self) -> float:
+        """A case's budget; a case begun late in the run ends near the run's budget, not beyond it."""
+        budget = pace.case_budget(self.config)
+        if self._run_end is not None:
+            budget = min(budget, max(LAST_CASE_GRACE, self._run_end - time.monotonic()))
+        return budget
 
     def _spent(self) -> bool:
         return self._run_end is not None and time.monotonic() >= self._run_end
@@ -296,9 +303,7 @@ class Runner:
         ctx = CaseContext(self.target, c)
         t0 = time.monotonic()
         verdict, message, pre, silent = Verdict.PASS, "", False, False
-        budget = pace.case_budget(self.config)
-        if self._run_end is not None:  # a case begun late in the run ends near the run's budget, not beyond it
-            budget = min(budget, max(LAST_CASE_GRACE, self._run_end - time.monotonic()))
+        budget = self._case_budget()
         self._budget(budget)
         try:
             c.func(ctx)
@@ -381,22 +386,6 @@ def _resolve(attempts: list[Attempt]) -> tuple[Verdict, str]:
     if len(attempts) > 1 and final is Verdict.PASS:
         msg = f"passed on attempt {len(attempts)}"
     return final, msg
-
-
-class _NullCtx:
-    """An observer that records nothing (the reachability probe before the run)."""
-
-    def on_sent(self, telegram: object) -> None:
-        pass
-
-    def on_received(self, telegram: object) -> None:
-        pass
-
-    def on_deviation(self, deviation: object) -> None:
-        pass
-
-    def on_unsolicited(self, port: str, data: bytes) -> None:
-        pass
 
 
 def run(

@@ -78,7 +78,9 @@ class Observer(Protocol):
     def on_unsolicited(self, port: str, data: bytes) -> None: ...
 
 
-class _NullObserver:
+class NullObserver:
+    """An observer that records nothing (reachability probes, sessions nobody watches)."""
+
     def on_sent(self, telegram: Telegram) -> None:
         pass
 
@@ -132,7 +134,7 @@ class Session:
         self.budget = budget
         self.log = log if log is not None else WireLog()
         self.timeout = timeout
-        self.observer: Observer = observer or _NullObserver()
+        self.observer: Observer = observer or NullObserver()
         self.profile = profile
         self.sock: socket.socket | None = None
         self._rx = bytearray()

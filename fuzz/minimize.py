@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Hashable, Sequence
-from typing import TypeVar
+from typing import Generic, TypeVar
 
 T = TypeVar("T", bound=Hashable)
 
@@ -18,43 +18,55 @@ T = TypeVar("T", bound=Hashable)
 def ddmin(
     items: Sequence[T], test: Callable[[list[T]], bool], max_tests: int = 200, max_seconds: float = 60.0
 ) -> list[T]:
+    """Zeller's delta debugging: a 1-minimal failing subsequence, within ``max_tests`` tests and ``max_seconds``."""
+    check = _Checker(test, max_tests, time.monotonic() + max_seconds)
     current = list(items)
-    cache: dict[tuple[T, ...], bool] = {}
-    deadline = time.monotonic() + max_seconds
-    tests = 0
-
-    def check(candidate: list[T]) -> bool:
-        nonlocal tests
-        key = tuple(candidate)
-        if key not in cache:
-            if tests >= max_tests or time.monotonic() > deadline:
-                return False
-            tests += 1
-            cache[key] = test(candidate)
-        return cache[key]
-
     n = 2
-    while len(current) >= 2:
+    while len(current) >= 2 and not check.spent():
         size = len(current)
         chunks = [current[size * k // n : size * (k + 1) // n] for k in range(n)]
-        reduced = False
-        for chunk in chunks:  # try each chunk alone
-            if chunk and len(chunk) < size and check(chunk):
-                current, n, reduced = chunk, 2, True
-                break
-        if not reduced:
-            for k in range(n):  # try each complement
-                complement = [x for j, c in enumerate(chunks) if j != k for x in c]
-                if complement and len(complement) < size and check(complement):
-                    current, n, reduced = complement, max(n - 1, 2), True
-                    break
-        if not reduced:
-            if n >= size:
-                break
-            n = min(size, 2 * n)
-        if tests >= max_tests or time.monotonic() > deadline:
+        reduced = _first_failing(chunks, size, check)  # each chunk alone
+        if reduced is not None:
+            current, n = reduced, 2
+            continue
+        complements = [[x for j, c in enumerate(chunks) if j != k for x in c] for k in range(n)]
+        reduced = _first_failing(complements, size, check)
+        if reduced is not None:
+            current, n = reduced, max(n - 1, 2)
+        elif n >= size:
             break
+        else:
+            n = min(size, 2 * n)
     return current
+
+
+class _Checker(Generic[T]):
+    """The test, cached by candidate, and its budget of tests and time."""
+
+    def __init__(self, test: Callable[[list[T]], bool], max_tests: int, deadline: float) -> None:
+        self.test, self.max_tests, self.deadline = test, max_tests, deadline
+        self.cache: dict[tuple[T, ...], bool] = {}
+        self.tests = 0
+
+    def spent(self) -> bool:
+        return self.tests >= self.max_tests or time.monotonic() > self.deadline
+
+    def __call__(self, candidate: list[T]) -> bool:
+        key = tuple(candidate)
+        if key not in self.cache:
+            if self.spent():
+                return False
+            self.tests += 1
+            self.cache[key] = self.test(candidate)
+        return self.cache[key]
+
+
+def _first_failing(candidates: list[list[T]], size: int, check: _Checker[T]) -> list[T] | None:
+    """The first non-empty candidate smaller than ``size`` that still fails."""
+    for candidate in candidates:
+        if candidate and len(candidate) < size and check(candidate):
+            return candidate
+    return None
 
 
 def shortest_failing_prefix(items: Sequence[T], test: Callable[[list[T]], bool]) -> list[T]:

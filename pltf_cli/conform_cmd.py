@@ -10,15 +10,19 @@ import argparse
 import sys
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from rich.console import Console
 
 from pltf.cli.options import USAGE, CommandError, count, exit_status, port, positive, target
 from pltf.conformance_tests.baseline import Baseline, BaselineError
-from pltf.conformance_tests.catalogue import Tier, Verdict, load_all, select
+from pltf.conformance_tests.catalogue import Case, Tier, Verdict, load_all, select
 from pltf.conformance_tests.context import Config
 from pltf.conformance_tests.outcome import Outcome, Unreachable
 from pltf.conformance_tests.pace import run_budget
+
+if TYPE_CHECKING:
+    from pltf.conformance_tests.runner import RunResult
 
 
 def add_conform_arguments(p: argparse.ArgumentParser) -> None:
@@ -111,10 +115,31 @@ def add_conform_arguments(p: argparse.ArgumentParser) -> None:
 
 def run_conform(args: argparse.Namespace) -> int:
     from pltf.conformance_tests.reports.console import ConsoleReporter
-    from pltf.conformance_tests.reports.files import write_json, write_junit
-    from pltf.conformance_tests.reports.html import write_html
     from pltf.conformance_tests.runner import Runner
 
+    config = _config(args)
+    try:
+        cases = select(load_all().values(), tier=config.tier, keyword=config.keyword)
+        baseline = Baseline.load(args.baseline) if args.baseline else Baseline()
+    except (ValueError, BaselineError) as exc:
+        raise CommandError(str(exc)) from None
+    console = Console(width=None if sys.stdout.isatty() else 140)
+    if args.list:
+        return _list(cases, console)
+    if not cases:
+        raise CommandError("no case selected")
+    run = Runner(config, cases, [ConsoleReporter(console, verbose=args.verbose)], baseline).run()
+    _write_reports(args, run, console)
+    code = _after_run(args, config, run, console)
+    if run.harness_error:
+        raise CommandError(f"target unreachable: {run.harness_error}")
+    if code == USAGE:
+        errors = sum(r.verdict is Verdict.ERROR for r in run.results)
+        raise CommandError(f"{errors} case(s) ended in a harness ERROR (see above)")
+    return code
+
+
+def _config(args: argparse.Namespace) -> Config:
     host, number = args.target
     config = Config(
         host=host,
@@ -135,29 +160,35 @@ def run_conform(args: argparse.Namespace) -> int:
         config.run_budget = args.budget
     elif config.tier is not Tier.EXHAUSTIVE:  # a standard run ends within 5 minutes whatever the target does
         config.run_budget = run_budget(config)
-    try:
-        cases = select(load_all().values(), tier=config.tier, keyword=config.keyword)
-        baseline = Baseline.load(args.baseline) if args.baseline else Baseline()
-    except (ValueError, BaselineError) as exc:
-        raise CommandError(str(exc)) from None
-    console = Console(width=None if sys.stdout.isatty() else 140)
-    if args.list:
-        for c in cases:
-            flags = " ".join(f for f in ("moves_platform", "switches_outputs", "destructive", "abuse") if getattr(c, f))
-            console.print(f"{c.id}  [dim]{c.level} {c.tier.name.lower()} {flags}[/]", highlight=False)
-        console.print(f"{len(cases)} cases")
-        return 0
-    if not cases:
-        raise CommandError("no case selected")
-    run = Runner(config, cases, [ConsoleReporter(console, verbose=args.verbose)], baseline).run()
-    code = run.exit_code
+    return config
+
+
+def _list(cases: list[Case], console: Console) -> int:
+    for c in cases:
+        flags = " ".join(f for f in ("moves_platform", "switches_outputs", "destructive", "abuse") if getattr(c, f))
+        console.print(f"{c.id}  [dim]{c.level} {c.tier.name.lower()} {flags}[/]", highlight=False)
+    console.print(f"{len(cases)} cases")
+    return 0
+
+
+def _write_reports(args: argparse.Namespace, run: RunResult, console: Console) -> None:
+    from pltf.conformance_tests.reports.files import write_json, write_junit
+    from pltf.conformance_tests.reports.html import write_html
+
     for path, write in ((args.junit, write_junit), (args.json, write_json), (args.html, write_html)):
         if path:
             write(run, path)
             console.print(f"report written to {path}")
     if args.write_baseline:
         Path(args.write_baseline).write_text(Baseline.render(run.results), encoding="utf-8")
-    if args.coverage_threshold is not None and code != 2:
+
+
+def _after_run(args: argparse.Namespace, config: Config, run: RunResult, console: Console) -> int:
+    """The run's exit code, raised by the coverage threshold and the differential and stateful runs."""
+    code = run.exit_code
+    if code == USAGE:
+        return code
+    if args.coverage_threshold is not None:
         below = run.target.coverage.below(args.coverage_threshold)
         for m in below:
             console.print(
@@ -165,15 +196,10 @@ def run_conform(args: argparse.Namespace) -> int:
                 f"(missing: {', '.join(m.missing[:5])})"
             )
         code = max(code, 1 if below else 0)
-    if code != 2 and args.differential:
+    if args.differential:
         code = max(code, _differential(config, console))
-    if code != 2 and args.stateful:
+    if args.stateful:
         code = max(code, _stateful(config, args.stateful, args.stateful_out, console))
-    if run.harness_error:
-        raise CommandError(f"target unreachable: {run.harness_error}")
-    if code == USAGE:
-        errors = sum(r.verdict is Verdict.ERROR for r in run.results)
-        raise CommandError(f"{errors} case(s) ended in a harness ERROR (see above)")
     return code
 
 

@@ -214,40 +214,22 @@ def run_run_program(args: argparse.Namespace) -> int:
     if args.stdin_events:
         threading.Thread(target=_stdin_events, args=(machine,), daemon=True).start()
     out = Console()
+
+    def run(on_tick: Callable[[ip.Interpreter, list[ip.Progress], float], None]) -> RunResult:
+        return run_remote(
+            program,
+            machine,
+            time_scale=args.time_scale,
+            seed=args.seed,
+            period=args.period,
+            timeout=args.timeout,
+            on_tick=on_tick,
+        )
+
     try:
         with client:
             prepare(client)
-            if args.plain or not out.is_terminal:
-
-                def on_tick(interp: ip.Interpreter, records: list[ip.Progress], now: float) -> None:
-                    for r in records:
-                        out.print(_line(r), markup=False, highlight=False)
-
-                result = run_remote(
-                    program,
-                    machine,
-                    time_scale=args.time_scale,
-                    seed=args.seed,
-                    period=args.period,
-                    timeout=args.timeout,
-                    on_tick=on_tick,
-                )
-            else:
-                with Live(view.render(), console=out, refresh_per_second=8) as live:
-
-                    def on_live(interp: ip.Interpreter, records: list[ip.Progress], now: float) -> None:
-                        view.update(interp, records, now)
-                        live.update(view.render())
-
-                    result = run_remote(
-                        program,
-                        machine,
-                        time_scale=args.time_scale,
-                        seed=args.seed,
-                        period=args.period,
-                        timeout=args.timeout,
-                        on_tick=on_live,
-                    )
+            result = run(_plain_lines(out)) if args.plain or not out.is_terminal else _run_live(view, out, run)
     except KeyboardInterrupt:
         _stop_quietly(client)
         return 130
@@ -260,3 +242,26 @@ def run_run_program(args: argparse.Namespace) -> int:
             f"pltf run-program: program still running after {result.elapsed:.1f} s simulated: stopped", markup=False
         )
     return 0 if result.finished and not result.failed else 1
+
+
+def _plain_lines(out: Console) -> Callable[[ip.Interpreter, list[ip.Progress], float], None]:
+    """Progress as one printed line per record (not a terminal, or --plain)."""
+
+    def on_tick(interp: ip.Interpreter, records: list[ip.Progress], now: float) -> None:
+        for r in records:
+            out.print(_line(r), markup=False, highlight=False)
+
+    return on_tick
+
+
+def _run_live(
+    view: View, out: Console, run: Callable[[Callable[[ip.Interpreter, list[ip.Progress], float], None]], RunResult]
+) -> RunResult:
+    """Progress as a live view on the terminal."""
+    with Live(view.render(), console=out, refresh_per_second=8) as live:
+
+        def on_live(interp: ip.Interpreter, records: list[ip.Progress], now: float) -> None:
+            view.update(interp, records, now)
+            live.update(view.render())
+
+        return run(on_live)

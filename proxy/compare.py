@@ -52,7 +52,7 @@ def diff_telegrams(recorded: Telegram, replayed: Telegram) -> list[FieldDiff]:
     if recorded.NAME != replayed.NAME:
         return [FieldDiff("(telegram)", recorded.NAME, replayed.NAME)]
     a, b = telegram_to_json(recorded), telegram_to_json(replayed)
-    names_a, names_b = a.get("names", {}), b.get("names", {})
+    names = _Names(a.get("names", {}), b.get("names", {}))
     layout = recorded.DEF.layout(recorded.DIRECTION) if recorded.DEF.layout_known else None
     groups = {f.name for f in layout or () if f.is_group}
     out: list[FieldDiff] = []
@@ -62,26 +62,43 @@ def diff_telegrams(recorded: Telegram, replayed: Telegram) -> list[FieldDiff]:
         if r.ignored:
             continue
         if field in groups:
-            if len(va) != len(vb):
-                out.append(FieldDiff(f"{field} (count)", str(len(va)), str(len(vb))))
-                continue
-            for i, (ia, ib) in enumerate(zip(va, vb, strict=True)):
-                for sub, x in ia.items():
-                    if values_differ(x, ib[sub], r.tolerance):
-                        key = f"{field}/{i}/{sub}"
-                        out.append(
-                            FieldDiff(
-                                f"{field}[{i}].{sub}", _show(x, names_a.get(key)), _show(ib[sub], names_b.get(key))
-                            )
-                        )
+            out += _diff_group(field, va, vb, r.tolerance, names)
         elif isinstance(va, list):
-            for i, (x, y) in enumerate(zip(va, vb, strict=True)):
-                if values_differ(x, y, r.tolerance):
-                    key = f"{field}/{i}"
-                    out.append(FieldDiff(f"{field}[{i}]", _show(x, names_a.get(key)), _show(y, names_b.get(key))))
+            out += _diff_values(
+                [(f"{field}[{i}]", f"{field}/{i}", x, y) for i, (x, y) in enumerate(zip(va, vb, strict=True))],
+                r.tolerance,
+                names,
+            )
         elif isinstance(va, str) and isinstance(vb, str):
             if va != vb:
                 out.append(FieldDiff(field, *_strings(va, vb)))
-        elif values_differ(va, vb, r.tolerance):
-            out.append(FieldDiff(field, _show(va, names_a.get(field)), _show(vb, names_b.get(field))))
+        else:
+            out += _diff_values([(field, field, va, vb)], r.tolerance, names)
     return out
+
+
+class _Names:
+    """The enum names the JSON form gives beside values, by key, of the recorded and the replayed reply."""
+
+    def __init__(self, recorded: dict[str, str], replayed: dict[str, str]) -> None:
+        self.recorded, self.replayed = recorded, replayed
+
+
+def _diff_values(pairs: list[tuple[str, str, Any, Any]], tolerance: float | None, names: _Names) -> list[FieldDiff]:
+    """(shown name, names key, recorded value, replayed value) pairs that differ beyond ``tolerance``."""
+    return [
+        FieldDiff(shown, _show(x, names.recorded.get(key)), _show(y, names.replayed.get(key)))
+        for shown, key, x, y in pairs
+        if values_differ(x, y, tolerance)
+    ]
+
+
+def _diff_group(field: str, va: list[Any], vb: list[Any], tolerance: float | None, names: _Names) -> list[FieldDiff]:
+    if len(va) != len(vb):
+        return [FieldDiff(f"{field} (count)", str(len(va)), str(len(vb)))]
+    pairs = [
+        (f"{field}[{i}].{sub}", f"{field}/{i}/{sub}", x, ib[sub])
+        for i, (ia, ib) in enumerate(zip(va, vb, strict=True))
+        for sub, x in ia.items()
+    ]
+    return _diff_values(pairs, tolerance, names)

@@ -327,28 +327,10 @@ class _Connection:
         return True
 
     def _received(self, data: bytes) -> None:
-        decoder, platform, clock = self.decoder, self.server.platform, self.server.clock
-        decoder.receive_data(data)
+        self.decoder.receive_data(data)
         replies: list[bytes] = []
-        now: float | None = None  # one simulated time for the telegrams of one read, the ticks due run first
         try:
-            while (telegram := decoder.next_telegram()) is not None:
-                if now is None:
-                    now = clock.now()
-                outcome = platform.handle(telegram, now)
-                if outcome.frame is not None:
-                    replies.append(outcome.frame)
-                elif outcome.reply is not None:
-                    replies.append(encode(outcome.reply))
-                if outcome.exit_server:
-                    self.server.stop()
-                    self._write(replies)
-                    self._end(logging.INFO, "%s", "CMD_EXIT: server exits")
-                    return
-                if outcome.close_connection:
-                    self._write(replies)
-                    self._end(logging.INFO, "%s", "CMD_CLOSE_SOCKET: connection closed")
-                    return
+            ended = self._handle_telegrams(replies)
         except RemoteProtocolError as exc:
             self._write(replies)
             self._end(logging.WARNING, "%s: %s; connection closed", type(exc).__name__, exc)
@@ -358,18 +340,42 @@ class _Connection:
             self._write(replies)
             self._end(None)
             return
+        if ended is not None:
+            self._write(replies)
+            self._end(logging.INFO, "%s", ended)
+            return
         self._write(replies)
         if self.closing:  # the write failed
             return
         if not data:
             self._end(logging.INFO, "%s", "disconnected")
             return
-        if decoder.pending:
+        if self.decoder.pending:
             self._arm_stall()
         else:
             self.stall_at = None
         if len(self.out) > HIGH_WATER:
             self._pause_reading()
+
+    def _handle_telegrams(self, replies: list[bytes]) -> str | None:
+        """Hand every complete telegram read to the platform, the replies into ``replies``; why the connection
+        ends (CMD_EXIT, CMD_CLOSE_SOCKET), or None."""
+        decoder, platform, clock = self.decoder, self.server.platform, self.server.clock
+        now: float | None = None  # one simulated time for the telegrams of one read, the ticks due run first
+        while (telegram := decoder.next_telegram()) is not None:
+            if now is None:
+                now = clock.now()
+            outcome = platform.handle(telegram, now)
+            if outcome.frame is not None:
+                replies.append(outcome.frame)
+            elif outcome.reply is not None:
+                replies.append(encode(outcome.reply))
+            if outcome.exit_server:
+                self.server.stop()
+                return "CMD_EXIT: server exits"
+            if outcome.close_connection:
+                return "CMD_CLOSE_SOCKET: connection closed"
+        return None
 
     # ---- the stall timeout of a partial frame
     def _arm_stall(self) -> None:

@@ -127,7 +127,7 @@ class Platform:
         except StorageError as exc:
             self.log(logging.WARNING, "init pose not read: %s; starting at x:0 y:0 a:0", exc)
         for kind in DOCUMENT_OF.values():
-            self._load(kind, startup=True)
+            self.load_document(kind, startup=True)
         self.log(logging.INFO, "system state: %s", self.chart.state.value)
 
     # ---- the two entry points
@@ -142,7 +142,7 @@ class Platform:
             self.touch()
         handler = HANDLERS.get(name)
         if handler is None:  # pragma: no cover - a test checks every telegram has a handler
-            return self._ignore(f"command {name} not implemented")
+            return self.ignore(f"command {name} not implemented")
         outcome = handler(self, telegram, now)
         if outcome.refused is None and outcome.pending is None and outcome.failed is None:
             self.fire(name)
@@ -246,37 +246,43 @@ class Platform:
         self.protocol_queue.append(f"{self.now:.3f} {text}".encode("latin-1", "replace").decode("latin-1"))
         log.log(level, "%s", text)
 
-    def _refuse(self, reason: str) -> Outcome:
+    # --- the command handlers' interface (reference_server/commands/): outcomes, the mode check, documents
+
+    def refuse(self, reason: str) -> Outcome:
+        """The telegram is refused (logged as a warning): an error reply where the command has one."""
         self.log(logging.WARNING, "%s", reason)
         return Outcome(refused=reason)
 
-    def _ignore(self, reason: str) -> Outcome:
+    def ignore(self, reason: str) -> Outcome:
+        """The telegram has no effect (logged): guide 4.3, a command outside its motion mode."""
         self.log(logging.INFO, "%s", reason)
         return Outcome(ignored=reason)
 
-    def _mode_name(self) -> str:
+    def mode_name(self) -> str:
         return str(MotionMode(self.motion_mode).name)
 
-    def _unless_mode(self, name: str, *modes: int) -> Outcome | None:
+    def unless_mode(self, name: str, *modes: int) -> Outcome | None:
         """None when the motion mode takes the move ``name``; else the ignored outcome (guide 4.3)."""
         if self.motion_mode in modes:
             return None
-        return self._ignore(f"{name} has no effect in motion mode {self._mode_name()}")
+        return self.ignore(f"{name} has no effect in motion mode {self.mode_name()}")
 
-    def _activated(self, kind: DocumentKind) -> None:
+    def activated(self, kind: DocumentKind) -> None:
+        """The active document of ``kind`` changed: the roadmap and the world's walls follow it."""
         doc = self.documents.get(kind)
         if kind is DocumentKind.ROADMAP:
             self.roadmap = None if doc is None else Roadmap(doc.tree)
         elif kind is DocumentKind.MAP and self.world is not None:
             self.world.set_map_tree(None if doc is None else doc.tree)  # the walls the body and sensors meet
 
-    def _load(self, kind: DocumentKind, startup: bool = False) -> Outcome:
+    def load_document(self, kind: DocumentKind, startup: bool = False) -> Outcome:
+        """Load the stored document of ``kind``; a bad one is refused and the active one stays."""
         try:
             self.documents.load(kind)
         except (StorageError, DocumentError) as exc:
             what = "not loaded" if startup else "load refused, the active one stays"
-            return self._refuse(f"{kind.value} {what}: {exc}")
-        self._activated(kind)
+            return self.refuse(f"{kind.value} {what}: {exc}")
+        self.activated(kind)
         self.log(logging.INFO, "load %s: %s", kind.value, self.storage.path(kind))
         return ACCEPTED
 

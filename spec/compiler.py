@@ -79,47 +79,62 @@ def check_value(f: FieldDef, value: Any, where: str) -> str | None:
     """Slow, precise validation of one user value; the message of the first problem, or None."""
     name = f"{where}.{f.name}"
     if f.is_group:
-        if not isinstance(value, (tuple, list)):
-            return f"{name}: expected a sequence of {f.item}, got {type(value).__name__}"
-        for i, item in enumerate(value):
-            sub = user_fields(f.fields)
-            if not isinstance(item, (tuple, list)) or len(item) != len(sub):
-                return f"{name}[{i}]: expected {len(sub)} values ({', '.join(g.name for g in sub)})"
-            for g, v in zip(sub, item, strict=True):
-                msg = check_value(g, v, f"{name}[{i}]")
-                if msg:
-                    return msg
-        return None
+        return _check_group(f, value, name)
     if f.type in ("STRING", "XML"):
-        if isinstance(value, (bytes, bytearray)):
-            return None
-        if not isinstance(value, str):
-            return f"{name}: expected str, got {type(value).__name__}"
-        try:
-            value.encode("latin-1")
-        except UnicodeEncodeError as exc:
-            return f"{name}: not encodable as Latin-1 (erratum E-WIRE-003): {exc.reason} at {exc.start}"
-        return None
+        return _check_text(value, name)
     values = value if f.repeat else (value,)
     if f.repeat and (not isinstance(value, (tuple, list)) or len(value) != f.repeat):
         return f"{name}: expected {f.repeat} values"
-    char = WIRE[f.type][0]
-    allowed, rng = allowed_values(f), value_range(f)
     for v in values:
-        if char == "d":
-            if isinstance(v, bool) or not isinstance(v, (int, float)):
-                return f"{name}: expected a number, got {v!r}"
-            continue
-        if isinstance(v, bool) or not isinstance(v, int):
-            return f"{name}: expected an integer, got {v!r}"
-        try:
-            struct.pack(">" + char, v)
-        except struct.error:
-            return f"{name}: {v} does not fit {f.type}"
-        if allowed is not None and v not in allowed:
-            return f"{name}: {v} is not a valid {f.enum or f.type} value"
-        if rng is not None and not rng[0] <= v <= rng[1]:
-            return f"{name}: {v} outside {rng[0]}..{rng[1]}"
+        msg = _check_number(f, v, name)
+        if msg:
+            return msg
+    return None
+
+
+def _check_group(f: FieldDef, value: Any, name: str) -> str | None:
+    if not isinstance(value, (tuple, list)):
+        return f"{name}: expected a sequence of {f.item}, got {type(value).__name__}"
+    sub = user_fields(f.fields)
+    for i, item in enumerate(value):
+        if not isinstance(item, (tuple, list)) or len(item) != len(sub):
+            return f"{name}[{i}]: expected {len(sub)} values ({', '.join(g.name for g in sub)})"
+        for g, v in zip(sub, item, strict=True):
+            msg = check_value(g, v, f"{name}[{i}]")
+            if msg:
+                return msg
+    return None
+
+
+def _check_text(value: Any, name: str) -> str | None:
+    if isinstance(value, (bytes, bytearray)):
+        return None
+    if not isinstance(value, str):
+        return f"{name}: expected str, got {type(value).__name__}"
+    try:
+        value.encode("latin-1")
+    except UnicodeEncodeError as exc:
+        return f"{name}: not encodable as Latin-1 (erratum E-WIRE-003): {exc.reason} at {exc.start}"
+    return None
+
+
+def _check_number(f: FieldDef, v: Any, name: str) -> str | None:
+    char = WIRE[f.type][0]
+    if char == "d":
+        return (
+            None if isinstance(v, (int, float)) and not isinstance(v, bool) else f"{name}: expected a number, got {v!r}"
+        )
+    if isinstance(v, bool) or not isinstance(v, int):
+        return f"{name}: expected an integer, got {v!r}"
+    try:
+        struct.pack(">" + char, v)
+    except struct.error:
+        return f"{name}: {v} does not fit {f.type}"
+    allowed, rng = allowed_values(f), value_range(f)
+    if allowed is not None and v not in allowed:
+        return f"{name}: {v} is not a valid {f.enum or f.type} value"
+    if rng is not None and not rng[0] <= v <= rng[1]:
+        return f"{name}: {v} outside {rng[0]}..{rng[1]}"
     return None
 
 

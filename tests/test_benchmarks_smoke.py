@@ -7,7 +7,6 @@ codecs decode the same frames to the same values as ``pltf.spec.codec`` (and enc
 
 from __future__ import annotations
 
-import json
 import subprocess
 import sys
 from pathlib import Path
@@ -33,6 +32,7 @@ from pltf.spec import errors
 from pltf.spec.codec import REPLIES, REQUESTS, TelegramDecoder, decode_frame, encode
 from pltf.spec.strategies import telegram_strategy
 from pltf.spec.telegram import Telegram
+from tests.benchrun import quick
 
 ROOT = Path(__file__).resolve().parents[1]
 SUBJECTS = [OURS, HANDWRITTEN, CONSTRUCT, CONSTRUCT_COMPILED]
@@ -52,17 +52,7 @@ TARGET_ROWS = {
 
 @pytest.fixture(scope="module")
 def report(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
-    out = tmp_path_factory.mktemp("bench") / "bench.json"
-    proc = subprocess.run(
-        [sys.executable, "-m", "benchmarks", "--quick", "--only", "codec", "--json", str(out)],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=240,
-        check=False,
-    )
-    assert proc.returncode == 0, proc.stdout + proc.stderr
-    return json.loads(out.read_text())  # type: ignore[no-any-return]
+    return quick("codec", tmp_path_factory.mktemp("bench") / "bench.json", timeout=240)
 
 
 def test_report_has_machine_info(report: dict[str, Any]) -> None:
@@ -214,17 +204,7 @@ def test_handwritten_status_checks_enums_like_ours() -> None:
 @pytest.mark.slow
 def test_cli_startup_benchmark_runs_every_subject(tmp_path: Path) -> None:
     """benchmarks/bench_cli.py: every subject exits 0 (the benchmark raises otherwise), each with both metrics."""
-    out = tmp_path / "cli.json"
-    proc = subprocess.run(
-        [sys.executable, "-m", "benchmarks", "--quick", "--only", "cli", "--json", str(out)],
-        cwd=ROOT,
-        capture_output=True,
-        text=True,
-        timeout=600,
-        check=False,
-    )
-    assert proc.returncode == 0, proc.stdout + proc.stderr
-    rows = json.loads(out.read_text())["rows"]
+    rows = quick("cli", tmp_path / "cli.json", timeout=600)["rows"]
     subjects = {r["subject"] for r in rows}
     assert {"python -c pass", "pltf --help", "pltf decode", "pltf encode"} <= subjects
     assert {(s, m) for s in subjects for m in ("wall_seconds", "cpu_seconds")} == {

@@ -145,25 +145,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         for m in MEMBERS.values():
             print(f"{m.name:18} {'conforming (' + m.profile + ')' if m.conforming else 'planted bug':22} {m.summary}")
         return 0
-    if not args.member:
-        _error("name a member (--list shows them)")
-    if args.member not in MEMBERS:
-        _error(f"no member {args.member!r} (members: {', '.join(MEMBERS)})")
-    if not (args.serve or args.upstream):
-        _error("give --serve reference|emulator or --upstream HOST:PORT,PORT")
+    _check(args)
     m = configured(args)
     signal.signal(signal.SIGTERM, _terminate)
     behind: launch.Launched | None = None
     relay: Relay | None = None
     try:
         if args.serve:
-            try:
-                level = {"log_level": args.log_level} if args.serve == "reference" else {}
-                behind = launch.target(args.serve, time_scale=args.time_scale, seed=args.seed, **level)
-                behind.new_session = False  # in our process group: stopped with us
-                behind.start()
-            except launch.LaunchError as exc:
-                _error(str(exc))
+            behind = _start_behind(args)
             host, ports = "127.0.0.1", behind.ports
             print(f"zoo {m.name}: {behind.name} behind at {host}:{ports[0]},{ports[1]} (pid {behind.pid})", flush=True)
         else:
@@ -179,23 +168,51 @@ def main(argv: Sequence[str] | None = None) -> int:
             on_exit=behind.cleanup if behind else lambda: None,
             log=lambda line: print(line, flush=True),
         )
-
-        def ready(bound: list[int]) -> None:
-            for port in bound:
-                print(f"zoo {m.name}: server started at port {port}", flush=True)
-
-        try:
-            asyncio.run(relay.serve_forever(ready))
-        except OSError as exc:
-            _error(f"cannot listen on {args.host}: {exc}")
-        except KeyboardInterrupt:
-            pass
+        _serve(relay, m.name, args.host)
         return 0
     finally:
         if args.stats and relay is not None:
             Path(args.stats).write_text(json.dumps(relay.stats))
         if behind is not None:
             behind.cleanup()
+
+
+def _check(args: argparse.Namespace) -> None:
+    """The member and what it stands in front of: one line on stderr and exit 2 when missing."""
+    if not args.member:
+        _error("name a member (--list shows them)")
+    if args.member not in MEMBERS:
+        _error(f"no member {args.member!r} (members: {', '.join(MEMBERS)})")
+    if not (args.serve or args.upstream):
+        _error("give --serve reference|emulator or --upstream HOST:PORT,PORT")
+
+
+def _start_behind(args: argparse.Namespace) -> launch.Launched:
+    """The implementation behind the member, started in our process group (stopped with us)."""
+    behind: launch.Launched | None = None
+    try:
+        level = {"log_level": args.log_level} if args.serve == "reference" else {}
+        behind = launch.target(args.serve, time_scale=args.time_scale, seed=args.seed, **level)
+        behind.new_session = False
+        behind.start()
+    except launch.LaunchError as exc:
+        if behind is not None:
+            behind.cleanup()
+        _error(str(exc))
+    return behind
+
+
+def _serve(relay: Relay, name: str, listen_host: str) -> None:
+    def ready(bound: list[int]) -> None:
+        for port in bound:
+            print(f"zoo {name}: server started at port {port}", flush=True)
+
+    try:
+        asyncio.run(relay.serve_forever(ready))
+    except OSError as exc:
+        _error(f"cannot listen on {listen_host}: {exc}")
+    except KeyboardInterrupt:
+        pass
 
 
 if __name__ == "__main__":

@@ -468,8 +468,10 @@ def _slow_enough(ctx: CaseContext) -> None:
 def _moving(ctx: CaseContext, start: Pose) -> Pose:
     far = start.ahead(600)
     ctx.send("CMD_MOVE_ABS", x=round(far.x), y=round(far.y), angle=_milli(start.th))
-    p = ctx.poll(lambda: pose(ctx), lambda q: q.dist(start) > 100 and abs(q.v) > 50, within=10.0)
-    if p.dist(start) <= 100:
+    # the first sample that shows the move under way: the earlier the halting command, the further it is from
+    # the target's braking distance (see EARLY)
+    p = ctx.poll(lambda: pose(ctx), lambda q: q.dist(start) > 30 and abs(q.v) > 50, within=10.0)
+    if p.dist(start) <= 30:
         raise Fail(
             f"precondition: CMD_MOVE_ABS 600 mm ahead did not start the platform ({p.describe()})", precondition=True
         )
@@ -488,30 +490,54 @@ def break_continue(ctx: CaseContext) -> None:
     _slow_enough(ctx)
     start = begin(ctx, AUTO)
     far = _moving(ctx, start)
-    ctx.send("CMD_BREAK")
+    met = send_early(ctx, "CMD_BREAK")
     expect_state(ctx, St.BREAKED, "CMD_BREAK while moving")
     halted = rest(ctx, within=3.0)
-    short_of(halted, far, "CMD_BREAK")
+    short_of(halted, far, "CMD_BREAK", met)
     still(ctx, halted, "the platform in Breaked")
     ctx.send("CMD_CONTINUE")
     expect_state(ctx, St.RUNNING, "CMD_CONTINUE")
     _auto(ctx, far, "CMD_CONTINUE: the interrupted CMD_MOVE_ABS")
 
 
-def short_of(halted: Pose, target: Pose, command: str) -> None:
-    """The platform stopped on ``command`` (sent early in a 600 mm move), not at the move's target."""
-    if halted.dist(target) <= POS_TOL:
-        raise Fail(f"{command} sent early in a 600 mm move: the platform went on to the target {target.describe()}")
+# mm of the 600 mm move still ahead when a halting command counts as "sent early": more than a platform needs to
+# brake from its top speed (the reference server: about 290 mm from 670 mm/s) plus POS_TOL, so that stopping at
+# the target can only mean the command was not obeyed
+EARLY = 400.0
+
+
+def send_early(ctx: CaseContext, command: str) -> Pose:
+    """Send ``command`` into a move; the pose it met: the GET_POSITION right behind it on the same connection is
+    answered at the same moment on the target."""
+    ctx.send(command)
+    return pose(ctx)
+
+
+def short_of(halted: Pose, target: Pose, command: str, met: Pose) -> None:
+    """The platform stopped on ``command`` (sent early in a 600 mm move), not at the move's target. Had the move
+    nearly ended when the command arrived (``met`` closer than EARLY: a high time scale on a busy machine), a
+    platform that brakes is at the target too: the measurement is void, not the target's fault."""
+    if halted.dist(target) > POS_TOL:
+        return
+    if met.dist(target) < EARLY:
+        raise Inconclusive(
+            f"{command} came too late to judge: the move was {met.dist(target):.0f} mm from its target when it "
+            f"arrived (at least {EARLY:.0f} mm wanted, to tell a halt from braking): a loaded machine, not the target"
+        )
+    raise Fail(
+        f"{command} sent {600 - met.dist(target):.0f} mm into a 600 mm move: the platform went on to the target "
+        f"{target.describe()}"
+    )
 
 
 def _halts(ctx: CaseContext, command: str, state: St, *, blind: bool = False) -> None:
     _slow_enough(ctx)
     start = begin(ctx, AUTO)
     far = _moving(ctx, start)
-    ctx.send(command)
+    met = send_early(ctx, command)
     expect_state(ctx, state, f"{command} while moving", within=5.0)
     halted = rest(ctx, within=STOP_WITHIN)
-    short_of(halted, far, command)
+    short_of(halted, far, command, met)
     if blind:
         # Without its CAN bus a platform has no odometry: it may report v 0 and a standing pose while the body still
         # brakes. Restarted then - a client at time scale 1 does it 30 ms later - it shows the end of its braking
@@ -522,7 +548,7 @@ def _halts(ctx: CaseContext, command: str, state: St, *, blind: bool = False) ->
     # localization, and the estimate may settle by a few cm (it was frozen while CAN was down) - not a move
     restarted = pose(ctx)
     still(ctx, restarted, f"CMD_START after {command} (the old move must not resume)")
-    short_of(pose(ctx), far, f"CMD_START after {command}")
+    short_of(pose(ctx), far, f"CMD_START after {command}", met)
 
 
 @case(

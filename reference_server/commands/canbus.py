@@ -114,16 +114,16 @@ def board_command(p: Platform, t: Any, now: float) -> Outcome:
     command = BOARD_COMMANDS[t.NAME]
     hw: HardwareLink | None = p.hardware
     if hw is None:
-        return p._ignore(command.no_bus(t))
+        return p.ignore(command.no_bus(t))
     node = command.node(t)
     if node is None:
-        return p._refuse(f"{t.NAME} refused: {command.invalid(t)}")
+        return p.refuse(f"{t.NAME} refused: {command.invalid(t)}")
     if not hw.connected(node):
-        return p._ignore(f"{t.NAME}: {node.name} is not connected, nothing sent")
+        return p.ignore(f"{t.NAME}: {node.name} is not connected, nothing sent")
     try:
         command.send(hw.controller, t, now)
     except ControllerError as exc:
-        return p._refuse(f"{t.NAME} refused: {exc}")
+        return p.refuse(f"{t.NAME} refused: {exc}")
     p.log(logging.INFO, command.done(t, node))
     return ACCEPTED
 
@@ -132,12 +132,12 @@ def board_command(p: Platform, t: Any, now: float) -> Outcome:
 def send_can_message(p: Platform, t: Any, now: float) -> Outcome:
     # guide 6.3: "Send a CAN-Message" - a standard frame with 8 data bytes (erratum E-HW-013)
     if p.hardware is None:
-        return p._ignore(f"{t.NAME}: the board is not present on the CAN bus")
+        return p.ignore(f"{t.NAME}: the board is not present on the CAN bus")
     data = bytes(t.data)
     try:
         sent = p.hardware.controller.send_can_message(t.can_id, data, now)
     except ControllerError as exc:
-        return p._refuse(f"{t.NAME} refused: {exc}")
+        return p.refuse(f"{t.NAME} refused: {exc}")
     p.log(logging.INFO, f"CAN message 0x{t.can_id:03X} [{data.hex(' ')}] {'sent' if sent else 'lost'}")
     return ACCEPTED
 

@@ -35,8 +35,8 @@ def set_document(p: Platform, t: Any, now: float) -> Outcome:
     try:
         p.documents.set(kind, name, from_wire(t.xml))
     except DocumentError as exc:
-        return p._refuse(f"set {kind.value} {name!r} refused: {exc}")
-    p._activated(kind)
+        return p.refuse(f"set {kind.value} {name!r} refused: {exc}")
+    p.activated(kind)
     p.log(logging.INFO, f"set {kind.value}: {name} ({len(t.xml)} bytes)")
     return ACCEPTED
 
@@ -51,7 +51,7 @@ def get_document(p: Platform, t: Any, now: float) -> Outcome:
 
 @handles("CMD_LOAD_MAP", "CMD_LOAD_ROADMAP", "CMD_LOAD_PROGRAM")
 def load_document(p: Platform, t: Any, now: float) -> Outcome:
-    return p._load(_kind(t))
+    return p.load_document(_kind(t))
 
 
 @handles("CMD_SAVE_MAP", "CMD_SAVE_ROADMAP", "CMD_SAVE_PROGRAM")
@@ -60,7 +60,7 @@ def save_document(p: Platform, t: Any, now: float) -> Outcome:
     try:
         path = p.documents.save(kind)
     except StorageError as exc:
-        return p._refuse(f"save {kind.value} refused: {exc}")
+        return p.refuse(f"save {kind.value} refused: {exc}")
     p.log(logging.INFO, f"save {kind.value}: {path}")
     return ACCEPTED
 
@@ -87,7 +87,7 @@ def set_param(p: Platform, t: Any, now: float) -> Outcome:
     try:
         p.params.set_text(t.key, t.value)
     except ParameterError as exc:  # erratum E-PAR-007: refused as a whole, the old value stays
-        return p._refuse(f"set parameter refused: {exc}")
+        return p.refuse(f"set parameter refused: {exc}")
     p.log(logging.INFO, f"parameter {t.key} = {p.params.get_text(t.key)}")
     return ACCEPTED
 

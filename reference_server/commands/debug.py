@@ -35,7 +35,7 @@ def mouse_move(p: Platform, t: Any, now: float) -> Outcome:
 
 @handles("CMD_SET_LOG_ENABLED", "CMD_SET_POST_PROCESS_FILENAME")
 def unused(p: Platform, t: Any, now: float) -> Outcome:
-    return p._ignore(f"{t.NAME}: not used at the moment (guide 6.3)")
+    return p.ignore(f"{t.NAME}: not used at the moment (guide 6.3)")
 
 
 # guide 6.3 CMD_SET_EVENT: the replay's events; erratum E-MOT-010: they act in motion mode POST_PROCESS_REPLAY
@@ -55,15 +55,15 @@ _REPLAY_EVENTS = frozenset(
 def set_event(p: Platform, t: Any, now: float) -> Outcome:
     replaying = p.motion_mode == MotionMode.MODE_MOTION_POST_PROCESS_REPLAY and p.chart.state is State.RUNNING
     if t.event in _REPLAY_EVENTS and not replaying:
-        return p._ignore(
+        return p.ignore(
             f"{t.NAME} {Event(t.event).name}: a replay runs in motion mode "
-            f"MODE_MOTION_POST_PROCESS_REPLAY and state Running only, not {p._mode_name()} in "
+            f"MODE_MOTION_POST_PROCESS_REPLAY and state Running only, not {p.mode_name()} in "
             f"{p.chart.state.value} (erratum E-MOT-010)"
         )
     if p.world is not None:  # guide 6.3: post-process recording and replay (errata E-MOT-006, E-MOT-010)
         p.log(logging.INFO, f"{t.NAME} {Event(t.event).name}: {p.world.event(t.event, now)}")
         return ACCEPTED
-    return p._ignore(f"{t.NAME} {Event(t.event).name}: post-process recording is not simulated")
+    return p.ignore(f"{t.NAME} {Event(t.event).name}: post-process recording is not simulated")
 
 
 @handles(
@@ -82,4 +82,4 @@ def set_event(p: Platform, t: Any, now: float) -> Outcome:
     "CMD_SHUTDOWN_HOST",
 )
 def layout_unknown(p: Platform, t: Any, now: float) -> Outcome:
-    return p._ignore(f"{t.NAME}: layout unknown, command not supported")
+    return p.ignore(f"{t.NAME}: layout unknown, command not supported")

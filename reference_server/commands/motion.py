@@ -27,7 +27,7 @@ def rad(milli_deg: int) -> float:
 @handles("CMD_MOVE_VEL_WHEEL")
 def move_vel_wheel(p: Platform, t: Any, now: float) -> Outcome:
     # guide 4.3 Mode Velocity: "set ... using the commands CMD_MOVE_VEL_WHEEL or CMD_MOVE_VEL"
-    skip = p._unless_mode(t.NAME, MotionMode.MODE_MOTION_VEL)
+    skip = p.unless_mode(t.NAME, MotionMode.MODE_MOTION_VEL)
     if skip is None:
         p.motion.command_wheels(t.vel_right, t.vel_left, now)
     return skip or ACCEPTED
@@ -36,7 +36,7 @@ def move_vel_wheel(p: Platform, t: Any, now: float) -> Outcome:
 @handles("CMD_MOVE_VEL")
 def move_vel(p: Platform, t: Any, now: float) -> Outcome:
     # guide 4.3 Mode Joystick (Software): "set ... using the command CMD MOVE VEL"; [1000*rad/s] = mrad/s
-    skip = p._unless_mode(t.NAME, MotionMode.MODE_MOTION_VEL, MotionMode.MODE_MOTION_JOYSOFT)
+    skip = p.unless_mode(t.NAME, MotionMode.MODE_MOTION_VEL, MotionMode.MODE_MOTION_JOYSOFT)
     if skip is None:
         kind = "joy" if p.motion_mode == MotionMode.MODE_MOTION_JOYSOFT else "vel"
         p.motion.command_velocity(float(t.vel_trans), t.vel_rot / 1000.0, now, kind)
@@ -44,11 +44,11 @@ def move_vel(p: Platform, t: Any, now: float) -> Outcome:
 
 
 def drive_path(p: Platform, name: str, frames: list[Frame]) -> Outcome:
-    skip = p._unless_mode(name, MotionMode.MODE_MOTION_AUTOMATIC)
+    skip = p.unless_mode(name, MotionMode.MODE_MOTION_AUTOMATIC)
     if skip is not None:
         return skip
     if not frames:
-        return p._refuse(f"{name}: empty path")
+        return p.refuse(f"{name}: empty path")
     p.motion.command_path(frames)  # guide 4.3: a new move command preempts the running one
     end = frames[-1]
     p.log(logging.INFO, f"{name}: target x:{end.x:.0f} y:{end.y:.0f} a:{end.angle:.3f}")
@@ -75,19 +75,19 @@ def move_path(p: Platform, t: Any, now: float) -> Outcome:
 def move_to_station(p: Platform, t: Any, now: float) -> Outcome:
     # guide 4.3: "The shortest path on the roadmap from the current platform position to the target
     # station is calculated. Following the command CMD_MOVE_PATH is executed."
-    skip = p._unless_mode(t.NAME, MotionMode.MODE_MOTION_AUTOMATIC)
+    skip = p.unless_mode(t.NAME, MotionMode.MODE_MOTION_AUTOMATIC)
     if skip is not None:
         return skip
     if p.roadmap is None:
-        return p._refuse(f"{t.NAME}: no active roadmap")
+        return p.refuse(f"{t.NAME}: no active roadmap")
     goal = p.roadmap.find(t.station)
     if goal is None:
-        return p._refuse(f"{t.NAME}: no station {t.station!r} in the roadmap")
+        return p.refuse(f"{t.NAME}: no station {t.station!r} in the roadmap")
     pose = p.motion.pose
     start = p.roadmap.nearest(pose.x, pose.y)
     frames = None if start is None else p.roadmap.route(start.id, goal.id)
     if frames is None:
         p.planner_state = PlannerState.PLANNER_NO_PATH
-        return p._refuse(f"{t.NAME}: no path on the roadmap to station {t.station!r}")
+        return p.refuse(f"{t.NAME}: no path on the roadmap to station {t.station!r}")
     p.planner_state = PlannerState.PLANNER_PATH_FOUND
     return drive_path(p, t.NAME, frames)

@@ -35,7 +35,7 @@ def operate(p: Platform, t: Any, now: float) -> Outcome:
     motion_op, program_op = _OPERATIONS[t.NAME]
     getattr(p.motion, motion_op)()
     if t.NAME == "CMD_START":
-        p.log(logging.INFO, f"start motion mode {p._mode_name()}")
+        p.log(logging.INFO, f"start motion mode {p.mode_name()}")
     if _program_mode(p):
         getattr(p.program, program_op)(now)
     return ACCEPTED
@@ -44,7 +44,7 @@ def operate(p: Platform, t: Any, now: float) -> Outcome:
 @handles("CMD_SET_MODE")
 def set_mode(p: Platform, t: Any, now: float) -> Outcome:
     p.motion_mode = t.mode
-    p.log(logging.INFO, f"motion mode: {p._mode_name()}")
+    p.log(logging.INFO, f"motion mode: {p.mode_name()}")
     return ACCEPTED
 
 

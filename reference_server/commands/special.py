@@ -19,7 +19,7 @@ if TYPE_CHECKING:
 @handles("CMD_SPEAK_TEXT", "CMD_PLAY_SOUND")
 def audio(p: Platform, t: Any, now: float) -> Outcome:
     text = t.text if t.NAME == "CMD_SPEAK_TEXT" else t.filename
-    return p._ignore(f"{t.NAME} {text!r}: no audio output on the simulated platform")
+    return p.ignore(f"{t.NAME} {text!r}: no audio output on the simulated platform")
 
 
 @handles("CMD_SET_POS_HEAD_DRIVE")
@@ -33,4 +33,4 @@ def head_position(p: Platform, t: Any, now: float) -> Outcome:
 @handles("CMD_GRAB_IMAGE", "CMD_SET_POS_PAN_TILT_CAMERA", "CMD_SET_VEL_HEAD_DRIVE")
 def absent_device(p: Platform, t: Any, now: float) -> Outcome:
     device = "head drive" if "HEAD" in t.NAME else "camera"
-    return p._ignore(f"{t.NAME}: no {device} mounted")
+    return p.ignore(f"{t.NAME}: no {device} mounted")

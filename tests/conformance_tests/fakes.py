@@ -182,65 +182,82 @@ class HardwareTarget(TinyTarget):
             return self._extra(t)
 
     def _extra(self, t: Any) -> Any:
+        """The commands the fake answers beyond the base: one ``_on_<command>`` method each (None: no reply)."""
         name = t.NAME
-        if name == "CMD_GET_STATUS":
-            return self.status.replace(
-                operation_state=chart.REPORTED[self.state],
-                motion_mode=self.mode,
-                initialized=chart.INITIALIZED[self.state],
-                io_digital_out=self.dout,
-                us_distance=tuple(self.us),
-                head_position=self.head,
-            )
-        if name == "CMD_ADD_CAN_LISTENING_ID":
-            self.listening.add(t.can_id)
-        elif name == "CMD_REMOVE_CAN_LISTENING_ID" and "can-ignores-remove" not in self.broken:
-            self.listening.discard(t.can_id)
-            self.buffer = [m for m in self.buffer if m[1] != t.can_id]
-        elif name == "CMD_GET_CAN_MESSAGES":
-            msgs = tuple(self.buffer)
-            if t.delete or "can-keep-deletes" in self.broken:
-                self.buffer.clear()
-            return REPLIES.CMD_GET_CAN_MESSAGES(messages=msgs)
-        elif name == "CMD_SET_DIGOUT" and t.board == 0:
-            bit = 1 << (t.channel + (1 if "digout-off-by-one" in self.broken else 0))
-            self.dout = self.dout | bit if t.value else self.dout & ~bit
-        elif name == "CMD_START_ULTRASONIC" and "us-none" not in self.broken:
-            self.us = [1500 if t.active_channels >> i & 1 else 0 for i in range(16)]
-        elif name == "CMD_STOP_ULTRASONIC":
-            self.us = [0] * 16
-        elif name == "CMD_SET_POS_HEAD_DRIVE":
-            self.head = t.angle + (10 if "head-off" in self.broken else 0)
-        elif name == "CMD_SET_PLTF_PARAM":
-            with contextlib.suppress(ParameterError):
-                self.params.set_text(t.key, t.value)
-        elif name == "CMD_GET_PLTF_PARAM":
-            row = self.params.parameter(t.key)
-            lo, hi = row.wire_bounds()
-            return REPLIES.CMD_GET_PLTF_PARAM(
-                key=t.key,
-                value=self.params.get_text(t.key),
-                category=row.category,
-                data_type=row.type,
-                minimum=lo,
-                maximum=hi,
-            )
-        elif name == "CMD_GET_PLTF_PARAM_VEC":
-            return REPLIES.CMD_GET_PLTF_PARAM_VEC(
-                parameters=tuple(
-                    (row.name, self.params.get_text(row.name), row.category, row.type, *row.wire_bounds())
-                    for row, _ in self.params.items()
-                )
-            )
-        elif name in ("CMD_SET_MAP", "CMD_SET_ROADMAP", "CMD_SET_PROGRAM"):
-            kind = name.split("_", 2)[2].lower()
-            self.docs[kind] = (t.xml, getattr(t, "name", ""))
-        elif name in ("CMD_GET_MAP", "CMD_GET_ROADMAP"):
+        if name in ("CMD_SET_MAP", "CMD_SET_ROADMAP", "CMD_SET_PROGRAM"):
+            self.docs[name.split("_", 2)[2].lower()] = (t.xml, getattr(t, "name", ""))
+            return None
+        if name in ("CMD_GET_MAP", "CMD_GET_ROADMAP"):
             xml, doc_name = self.docs[name.split("_", 2)[2].lower()]
             return REPLIES[name](xml=xml, name=doc_name)
-        elif name == "CMD_GET_PROGRAM":
-            return REPLIES.CMD_GET_PROGRAM(xml=self.docs["program"][0])
-        return None
+        handler = getattr(self, "_on_" + name, None)
+        return handler(t) if handler is not None else None
+
+    def _on_CMD_GET_STATUS(self, t: Any) -> Any:
+        return self.status.replace(
+            operation_state=chart.REPORTED[self.state],
+            motion_mode=self.mode,
+            initialized=chart.INITIALIZED[self.state],
+            io_digital_out=self.dout,
+            us_distance=tuple(self.us),
+            head_position=self.head,
+        )
+
+    def _on_CMD_ADD_CAN_LISTENING_ID(self, t: Any) -> None:
+        self.listening.add(t.can_id)
+
+    def _on_CMD_REMOVE_CAN_LISTENING_ID(self, t: Any) -> None:
+        if "can-ignores-remove" not in self.broken:
+            self.listening.discard(t.can_id)
+            self.buffer = [m for m in self.buffer if m[1] != t.can_id]
+
+    def _on_CMD_GET_CAN_MESSAGES(self, t: Any) -> Any:
+        msgs = tuple(self.buffer)
+        if t.delete or "can-keep-deletes" in self.broken:
+            self.buffer.clear()
+        return REPLIES.CMD_GET_CAN_MESSAGES(messages=msgs)
+
+    def _on_CMD_SET_DIGOUT(self, t: Any) -> None:
+        if t.board == 0:
+            bit = 1 << (t.channel + (1 if "digout-off-by-one" in self.broken else 0))
+            self.dout = self.dout | bit if t.value else self.dout & ~bit
+
+    def _on_CMD_START_ULTRASONIC(self, t: Any) -> None:
+        if "us-none" not in self.broken:
+            self.us = [1500 if t.active_channels >> i & 1 else 0 for i in range(16)]
+
+    def _on_CMD_STOP_ULTRASONIC(self, t: Any) -> None:
+        self.us = [0] * 16
+
+    def _on_CMD_SET_POS_HEAD_DRIVE(self, t: Any) -> None:
+        self.head = t.angle + (10 if "head-off" in self.broken else 0)
+
+    def _on_CMD_SET_PLTF_PARAM(self, t: Any) -> None:
+        with contextlib.suppress(ParameterError):
+            self.params.set_text(t.key, t.value)
+
+    def _on_CMD_GET_PLTF_PARAM(self, t: Any) -> Any:
+        row = self.params.parameter(t.key)
+        lo, hi = row.wire_bounds()
+        return REPLIES.CMD_GET_PLTF_PARAM(
+            key=t.key,
+            value=self.params.get_text(t.key),
+            category=row.category,
+            data_type=row.type,
+            minimum=lo,
+            maximum=hi,
+        )
+
+    def _on_CMD_GET_PLTF_PARAM_VEC(self, t: Any) -> Any:
+        return REPLIES.CMD_GET_PLTF_PARAM_VEC(
+            parameters=tuple(
+                (row.name, self.params.get_text(row.name), row.category, row.type, *row.wire_bounds())
+                for row, _ in self.params.items()
+            )
+        )
+
+    def _on_CMD_GET_PROGRAM(self, t: Any) -> Any:
+        return REPLIES.CMD_GET_PROGRAM(xml=self.docs["program"][0])
 
     # ---- the task interpreter (MODE_MOTION_PROGRAM)
     def _start_program(self) -> None:
