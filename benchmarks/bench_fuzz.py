@@ -5,11 +5,11 @@ for per-connection INFO lines):
 
 - ``reference server``: ``python -m pltf.reference_server``. It reads what a port's client sent before it judges a
   newcomer (erratum E-WIRE-007), so clients may follow each other back to back.
-- ``slow-release proxy``: the reference server behind ``tests/fuzz/foreign.py --release 5-50``, a plain TCP proxy
-  that frees a port 5-50 ms after its client left and turns newcomers away until then (FIN): what a foreign
-  platform behind a proxy does. No read-ahead helps here.
-- ``accept-once proxy``: the same proxy with ``--accept-once``: newcomers wait in the listen backlog until the
-  port's client has gone (the E-WIRE-007 alternative reading).
+- ``zoo slow-release``: the reference server behind the zoo member ``slow-release`` (``python -m pltf.zoo
+  slow-release --serve reference``), a TCP relay that frees a port 5-50 ms after its client left and turns
+  newcomers away until then (FIN): what a foreign platform behind a proxy does. No read-ahead helps here.
+- ``zoo accept-once``: the zoo member ``accept-once``: newcomers wait in the listen backlog until the port's
+  client has gone (the E-WIRE-007 alternative reading).
 
 Subjects, each for the same wall time (10 s), three times, interleaved; the median rate is reported:
 
@@ -26,8 +26,8 @@ Subjects, each for the same wall time (10 s), three times, interleaved; the medi
   length computed by ``s_size`` over the data block, every field fuzzable with boofuzz's own value library), a
   ``Session`` on a TCP connection with no sleeps and no receive, the web UI off, results in a throw-away sqlite
   file: boofuzz as one would set it up for speed. It opens a connection per case and never reads, so it does not
-  notice a newcomer turned away: behind a proxy its rate counts only the connections the proxy served (the
-  proxy's own count, ``--stats``); its own count is in ``boofuzz, as it counts``.
+  notice a newcomer turned away: behind a zoo member its rate counts only the connections the member served (the
+  member's own count, ``--stats``); its own count is in ``boofuzz, as it counts``.
 
 A case is one test case: one boofuzz mutation, one ``pltf fuzz`` case. Targets: >= 3,000 cases/s against the
 reference server, >= 10x boofuzz (time ratio <= 0.1) on every target, no false finding.
@@ -38,7 +38,6 @@ from __future__ import annotations
 import contextlib
 import io
 import json
-import socket
 import statistics
 import sys
 import tempfile
@@ -50,7 +49,7 @@ from benchmarks.harness import Config, Row, Target, benchmark, make_row
 from pltf.fuzz.engine import Campaign, Options
 from pltf.fuzz.schedule import BIG_SHARE
 from pltf.spec.model import FieldDef, load_telegrams
-from pltf.zoo.launch import Launcher
+from pltf.zoo.launch import Launcher, free_ports
 
 OURS = "pltf fuzz"
 OURS_PLAIN = "pltf fuzz, no pipelining"
@@ -63,31 +62,18 @@ SPEEDUP_TARGET = 10.0
 REFERENCE = (
     f"{sys.executable} -m pltf.reference_server --ports {{ports}} --data-dir {{tmpdir}} --seed 1 --log-level ERROR"
 )
-# The foreign targets are the fuzzer's test targets (tests/fuzz/foreign.py), run as a program, not imported.
-FOREIGN = Path(__file__).resolve().parents[1] / "tests" / "fuzz" / "foreign.py"
+ZOO = f"{sys.executable} -m pltf.zoo {{member}} --serve reference --ports {{{{ports}}}} --seed 1 --log-level ERROR"
 TARGETS = {
     "reference server": REFERENCE,
-    "slow-release proxy": f"{sys.executable} {FOREIGN} --ports {{ports}} --release 5-50 --turn-away fin",
-    "accept-once proxy": f"{sys.executable} {FOREIGN} --ports {{ports}} --accept-once",
+    "zoo slow-release": ZOO.format(member="slow-release"),
+    "zoo accept-once": ZOO.format(member="accept-once"),
 }
 DIRECT = "reference server"
 
 
-def free_ports() -> tuple[int, int]:
-    socks = [socket.socket() for _ in range(2)]
-    try:
-        for s in socks:
-            s.bind(("127.0.0.1", 0))
-        a, b = (s.getsockname()[1] for s in socks)
-        return a, b
-    finally:
-        for s in socks:
-            s.close()
-
-
 @contextlib.contextmanager
 def started(launch: str, stats: Path | None = None) -> Iterator[Launcher]:
-    """The target started on two free ports (the proxy writing its counts to ``stats`` when it ends)."""
+    """The target started on two free ports (a zoo member writing its counts to ``stats`` when it ends)."""
     a, b = free_ports()
     launcher = Launcher(launch + (f" --stats {stats}" if stats is not None else ""), "127.0.0.1", a, b)
     launcher.start()
@@ -115,7 +101,10 @@ def ours(launch: str, seconds: float, pipeline: bool = True, big_share: float = 
         )
         campaign = Campaign(opts)
         campaign.run()
-        return campaign.stats.rate, len(campaign.stats.findings) + len(campaign.stats.unconfirmed)
+        st = campaign.stats
+        way = "kept connection" if st.dear else "fresh connections"
+        print(f"  {' '.join(launch.split()[2:4])}: {st.rate:,.0f} cases/s, {way} (trial: {st.ways})", file=sys.stderr)
+        return st.rate, len(st.findings) + len(st.unconfirmed)
 
 
 # ---------------------------------------------------------------------------------------------- boofuzz

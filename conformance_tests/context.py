@@ -32,6 +32,7 @@ from pltf.spec.model import enum_classes
 from pltf.spec.telegram import Telegram
 
 T = TypeVar("T")
+STATUS_FRESH = 0.5  # wall s a status read stands for the current one when nothing was sent since
 # The spec's enums are built at import; mypy sees them as plain IntEnum classes without members.
 MotionMode: Any = enum_classes()["MotionMode"]
 OperationState: Any = enum_classes()["OperationState"]
@@ -56,6 +57,7 @@ class Config:
     probe_timeout: float = 1.0  # wall seconds for the GET_STATUS that probes a new connection
     case_budget: float | None = None  # wall seconds one case may take (None: pace.case_budget)
     run_budget: float | None = None  # wall seconds the whole run may take (None: no limit)
+    reply_time: float | None = None  # the target's GET_STATUS round trip measured at the start (pace.measure)
 
     @property
     def motion_allowed(self) -> bool:
@@ -175,6 +177,7 @@ class CaseContext:
     abuse_from: Status | None = None  # the status just before a case sent malformed input
     _finalizers: list[tuple[str, Callable[[], object]]] = field(default_factory=list)
     _extra: list[Session] = field(default_factory=list)
+    _last_status: tuple[int, float, Status] | None = None  # (log.sent, when, status) of the last GET_STATUS
 
     # ---- observer hooks (wire.Observer)
     def on_sent(self, telegram: Telegram) -> None:
@@ -201,6 +204,13 @@ class CaseContext:
 
     def wall(self, sim_seconds: float) -> float:
         return max(self.config.min_wall, sim_seconds / self.config.time_scale)
+
+    def close_wait(self, sim_seconds: float) -> float:
+        """Wall seconds to wait for a close a case requires: ``wall(sim_seconds)``, never under the reply timeout.
+        A close is the target's answer and travels like one (through a relay, on a loaded machine); waiting costs
+        nothing on a target that closes, so a required close gets a reply's patience (issue 17: CMD_CLOSE_SOCKET
+        through the slow-release relay at load 8 closed after 0.4 s, the 0.25 s wait had ended)."""
+        return max(self.wall(sim_seconds), self.config.reply_timeout)
 
     def sleep(self, sim_seconds: float) -> None:
         time.sleep(sim_seconds / self.config.time_scale)
@@ -283,7 +293,17 @@ class CaseContext:
 
     def status(self, label: str = "A") -> Status:
         t = self.get("CMD_GET_STATUS", label)
-        return Status(t.operation_state, t.initialized, t.motion_mode, t)  # type: ignore[attr-defined]
+        s = Status(t.operation_state, t.initialized, t.motion_mode, t)  # type: ignore[attr-defined]
+        self._last_status = (self.log.sent, time.monotonic(), s)
+        return s
+
+    def current_status(self) -> Status:
+        """The status: the last one read when nothing was sent since and it is under ``STATUS_FRESH`` wall s old
+        (each round trip counts against a slow link: issue 17), else a new GET_STATUS."""
+        last = self._last_status
+        if last is not None and last[0] == self.log.sent and time.monotonic() - last[1] < STATUS_FRESH:
+            return last[2]
+        return self.status()
 
     def position(self, label: str = "A") -> Telegram:
         return self.get("CMD_GET_POSITION", label)
@@ -310,7 +330,10 @@ class CaseContext:
     # ---- the known state
     def ensure(self, state: St, mode: int = MotionMode.MODE_MOTION_NO) -> Status:
         """Drive the target to ``state`` with motion mode ``mode`` (set in Ready); precondition failure if not."""
-        s = self.status()
+        s = self.current_status()
+        if (s.op, s.mode, state) == (OperationState.ST_OP_RUNNING, mode, St.BREAKED):  # one step: guide 6.3 BREAK
+            self.send("CMD_BREAK")
+            return self._await_op(OperationState.ST_OP_BREAKED, "CMD_BREAK", within=10.0)
         if s.op in (OperationState.ST_OP_RUNNING, OperationState.ST_OP_BREAKED):
             self.send("CMD_STOP")
             s = self._await_op(OperationState.ST_OP_READY, "CMD_STOP", within=10.0)
@@ -337,11 +360,12 @@ class CaseContext:
         self.send("CMD_CONNECT_TO_PLTF")
         self.send("CMD_INIT_PLTF")
         s = self.poll(self.status, lambda x: x.op == OperationState.ST_OP_READY, within=15.0)
-        if s.op != OperationState.ST_OP_READY:
-            self.sleep(1.0)
-            self.send("CMD_CONNECT_TO_PLTF")  # refused when the bus is up already: changes nothing
-            self.send("CMD_INIT_PLTF")
-            how += " (twice)"
+        if s.op == OperationState.ST_OP_READY:
+            return s  # no second look: each round trip counts against a slow link
+        self.sleep(1.0)
+        self.send("CMD_CONNECT_TO_PLTF")  # refused when the bus is up already: changes nothing
+        self.send("CMD_INIT_PLTF")
+        how += " (twice)"
         return self._await_op(OperationState.ST_OP_READY, how, within=15.0)
 
     def _await_op(self, op: int, how: str, within: float) -> Status:

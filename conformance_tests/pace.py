@@ -7,12 +7,15 @@ Rules:
   connection turned away is retried for the connect window), the first allowed ``PATIENCE`` s. Their median is
   the target's reply time (None when nothing came).
 - ``apply`` scales the run's waits to it: a reply time up to ``MAX_SCALED`` raises the wall floor of every wait
-  derived from simulated time (``Config.min_wall``) and the connection probe's patience to ``SCALE`` times the
-  reply time, so a slow but conforming target (a slow link) is judged on what it does, not on how fast it does
-  it. A slower target keeps the configured waits, and the run says at its start why its cases will fail.
+  derived from simulated time (``Config.min_wall``) to ``WAIT_SCALE`` and the connection probe's patience to
+  ``SCALE`` times the reply time (a wait floor of two reply times, not four: the standard tier has hundreds of
+  such waits, and at four a slow link's run did not fit its budget), so a slow but conforming target (a slow
+  link) is judged on what it does, not on how fast it does it. A slower target keeps the configured waits, and
+  the run says at its start why its cases will fail.
 - Budgets (wall seconds): a case's waits end at its budget, ``CASE_WALL + CASE_SIM / time scale`` unless given;
   the case is then INCONCLUSIVE "case budget spent" and not re-run. The run's budget (``Config.run_budget``) ends
-  the run: the cases left are INCONCLUSIVE "not run".
+  the run: the cases left are INCONCLUSIVE "not run"; a case begun late gets what is left of it (at least
+  ``runner.LAST_CASE_GRACE``) and is not re-run.
 - ``Watch``: after ``STUCK_AFTER`` cases in a row that ended with the target not answering at all (a reply
   timeout, no working connection, a spent budget), one health check - a new connection answered with
   CMD_GET_STATUS within the reply timeout. If it fails, the cases that follow are not run (INCONCLUSIVE, "the
@@ -33,7 +36,8 @@ from pltf.spec.codec import build
 
 PATIENCE = 15.0  # s the first GET_STATUS of the run may take
 MAX_SCALED = 1.0  # s: a reply time up to this scales the waits; a slower target is not waited for
-SCALE = 4.0  # waits scale to this many reply times
+SCALE = 4.0  # the connection probe's patience scales to this many reply times
+WAIT_SCALE = 2.0  # the wall floor of a wait derived from simulated time: this many reply times
 CASE_WALL, CASE_SIM = 30.0, 240.0  # a case's budget: wall s + simulated s (at the declared time scale)
 STUCK_AFTER = 3  # silent cases in a row before the health check
 RECHECK = 20.0  # s between two health checks while the target stays silent
@@ -89,8 +93,9 @@ def measure(target: Target, samples: int = 3) -> Pace:
 
 def apply(pace: Pace, config: Config) -> None:
     """Scale the run's waits to the measured reply time (see the module rules)."""
+    config.reply_time = pace.reply
     if pace.reply is not None and pace.reply <= MAX_SCALED:
-        config.min_wall = max(config.min_wall, SCALE * pace.reply)
+        config.min_wall = max(config.min_wall, WAIT_SCALE * pace.reply)
         config.probe_timeout = max(config.probe_timeout, SCALE * pace.reply)
 
 

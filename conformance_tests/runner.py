@@ -157,6 +157,9 @@ def gate_notice(config: Config) -> list[str]:
     return lines
 
 
+LAST_CASE_GRACE = 10.0  # wall s a case begun just before the run's budget is spent may still take
+
+
 class Runner:
     def __init__(
         self,
@@ -172,6 +175,7 @@ class Runner:
         self.target = Target(config)
         self.watch = pace.Watch()
         self.notes: list[str] = []
+        self._run_end: float | None = None  # when the run's budget is spent (monotonic), None: no budget
 
     def _emit(self, hook: str, *args: object) -> None:
         for r in self.reporters:
@@ -192,6 +196,7 @@ class Runner:
             self.prepare()
             group = None
             budget = self.config.run_budget
+            self._run_end = None if budget is None else t0 + budget
             for c in self.cases:
                 self._emit("on_case_start", c)
                 if budget is not None and time.monotonic() - t0 > budget and not self._gate(c):
@@ -224,6 +229,16 @@ class Runner:
         if p.reply is None or p.reply > self.config.reply_timeout:
             self.watch.pace = self.notes[-1]
         return p
+
+    def _case_budget(self) -> float:
+        """A case's budget; a case begun late in the run ends near the run's budget, not beyond it."""
+        budget = pace.case_budget(self.config)
+        if self._run_end is not None:
+            budget = min(budget, max(LAST_CASE_GRACE, self._run_end - time.monotonic()))
+        return budget
+
+    def _spent(self) -> bool:
+        return self._run_end is not None and time.monotonic() >= self._run_end
 
     def _budget(self, seconds: float) -> None:
         self.target.budget.seconds = seconds
@@ -261,8 +276,8 @@ class Runner:
             again = (a.verdict is Verdict.INCONCLUSIVE and not a.final) or (
                 c.timing and a.verdict in (Verdict.FAIL, Verdict.NON_STRICT) and not a.precondition
             )
-            if not again or a.silent:
-                break
+            if not again or a.silent or self._spent():
+                break  # no re-run once the run's budget is spent: the run ends within it
         verdict, message = _resolve(attempts)
         last = attempts[-1]
         if last.silent and verdict in (Verdict.NON_STRICT, Verdict.NA):
@@ -288,7 +303,7 @@ class Runner:
         ctx = CaseContext(self.target, c)
         t0 = time.monotonic()
         verdict, message, pre, silent = Verdict.PASS, "", False, False
-        budget = pace.case_budget(self.config)
+        budget = self._case_budget()
         self._budget(budget)
         try:
             c.func(ctx)

@@ -15,6 +15,7 @@ Rules:
 from __future__ import annotations
 
 import contextlib
+import select
 import socket
 import struct
 import time
@@ -57,8 +58,10 @@ class WireLog:
     t0: float = field(default_factory=time.monotonic)
     entries: list[WireEntry] = field(default_factory=list)
     max_entries: int = 2000
+    sent: int = 0  # writes logged (kept counting past ``max_entries``): has anything been sent since?
 
     def add(self, port: str, direction: str, data: bytes = b"", note: str = "") -> None:
+        self.sent += direction == "tx"
         if len(self.entries) >= self.max_entries:
             if len(self.entries) == self.max_entries:
                 self.entries.append(WireEntry(time.monotonic() - self.t0, port, "ev", b"", "wire log truncated"))
@@ -304,6 +307,14 @@ class Session:
                 self.observer.on_deviation(dev)
             self.observer.on_received(telegram)
             return telegram
+
+    def pending(self) -> bool:
+        """Whether reply bytes wait to be read (buffered, or on the socket now): a read would not block long."""
+        if self._rx:
+            return True
+        if self.eof or self.sock is None:
+            return False
+        return bool(select.select([self.sock], [], [], 0)[0])
 
     def request(self, telegram: Telegram, timeout: float | None = None) -> Telegram:
         self.send(telegram)

@@ -41,6 +41,7 @@ from pltf.fuzz.prefetch import Prefetcher
 from pltf.fuzz.preludes import STATEFUL, StatePlan
 from pltf.fuzz.schedule import BIG_CASE, Scheduler
 from pltf.fuzz.target import Session
+from pltf.fuzz.trial import Trial
 from pltf.fuzz.unit import Unit, window_units
 from pltf.fuzz.verdict import NEEDED, REPLAYS, TIMED_OUT, Verdict, confirm, confirmed
 
@@ -91,6 +92,7 @@ class Campaign:
         self.coverage: set[tuple[Any, ...]] = set()
         self.writer = FindingWriter(self, self.corpus.known_findings())
         self.prefetch: Prefetcher | None = None
+        self.trial = Trial()  # fresh connections or the dear way, measured (kept across restarts)
 
     # ------------------------------------------------------------------ lifecycle
     def start_target(self) -> None:
@@ -110,7 +112,9 @@ class Campaign:
                     why = e.verdict.reason if e is not None and e.verdict is not None else "no client admitted"
                     raise HarnessError(f"the target does not answer on {self.o.host}:{self.ports[k]}: {why}")
                 self._learn(e.flight.out.replies)
-        lanes.dear = self.o.lanes > 1 and any(g.dear for g in lanes.gates[: self.o.lanes])
+        if self.o.lanes < 2 or any(g.dear for g in lanes.gates[: self.o.lanes]):
+            self.trial.settle(self.o.lanes > 1)  # one lane has no other port for the fresh connections
+        lanes.dear = self.trial.way()
         self._gate_stats()
 
     def _gate_stats(self) -> None:
@@ -118,6 +122,7 @@ class Campaign:
         st, gates = self.stats, self.lanes.gates
         st.release_ms = [round(g.release * 1000, 3) for g in gates]
         st.dear = self.lanes.dear
+        st.ways = {k: round(v, 1) for k, v in self.trial.rates.items()} if self.trial.seen else {}
         st.pipelined = sum(g.pipelined for g in gates)
         st.turn_aways = sum(1 for g in gates if not g.pipelining and g.pipelined)
         st.turned_away = self.lanes.turned_away
@@ -190,12 +195,23 @@ class Campaign:
             self.stats.skipped += len(skip)
             units = [u for u in units if u not in skip]
         self.lanes.add(units)
-        self._lanes_run(batches_only=self.lanes.dear)
+        t0, served, dear = time.monotonic(), self.stats.cases, self.lanes.dear
+        self._lanes_run(batches_only=dear)
         if not self.stop:
             self.plan.window_done(any(c.size > BIG_CASE for c in cases))
-            if not self.lanes.dear and self.o.lanes > 1 and any(g.dear for g in self.lanes.gates):
-                self.lanes.dear = True  # turn-aways began late (a target that is slow to free a port)
+            if self.o.lanes > 1 and any(g.dear for g in self.lanes.gates):
+                self.trial.settle(True)  # turn-aways began late (a target that is slow to free a port)
+            self.trial.record(dear, self.stats.cases - served, time.monotonic() - t0)
+            self._way(self.trial.way())
         self._gate_stats()
+
+    def _way(self, dear: bool) -> None:
+        """Run the next window the dear way or with fresh connections (``pltf.fuzz.trial``)."""
+        assert self.lanes is not None
+        if dear != self.lanes.dear:
+            if not dear:
+                self.lanes.release()  # the kept connection would hold port 0 (a target that admits one client)
+            self.lanes.dear = dear
 
     def _lanes_run(self, batches_only: bool) -> None:
         assert self.lanes is not None

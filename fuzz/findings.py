@@ -157,7 +157,8 @@ class FindingWriter:
             biggest = sorted(sessions_of, key=lambda p: -len(p[1].data))[:2]
             busiest = sorted(sessions_of, key=lambda p: -len(p[1].frames))[:2]
             every = [sessions_of[-1][0], *(s for _, s in sessions_of)]
-            for candidate in [every, *([p, s] for p, s in dict.fromkeys([*biggest, *busiest]))]:
+            pairs = list({(id(p), id(s)): (p, s) for p, s in [*biggest, *busiest]}.values())  # sessions: no hash
+            for candidate in [every, *([p, s] for p, s in pairs)]:
                 if self.reproduce(candidate, repeat=REPEAT_MAX, seconds=REPEAT_SECONDS)[0] == kind:
                     got["sessions"], got["repeat"] = candidate, 2 * self.rounds  # a margin for a fresh instance
                     break

@@ -53,6 +53,7 @@ class Stats:
     turned_away: list[str] = field(default_factory=list)  # the cases of the unit that showed it
     release_ms: list[float] = field(default_factory=list)  # per port: mean wait for a fresh connection
     dear: bool = False
+    ways: dict[str, float] = field(default_factory=dict)  # cases/s each way in the trial (fuzz.trial)
     duplicates: int = 0
     origins: collections.Counter[str] = field(default_factory=collections.Counter)
     telegrams: set[str] = field(default_factory=set)

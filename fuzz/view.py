@@ -29,6 +29,8 @@ def render(stats: Any, title: str) -> Table:
         table.add_row("pipelined", f"{stats.pipelined:,} units{off}")
         release = ", ".join(f"{ms:g}" for ms in stats.release_ms)
         dear = f"; dear: batches kept, {stats.skipped:,} singles skipped" if stats.dear else ""
+        if stats.ways:
+            dear += " (measured: " + ", ".join(f"{k} {v:,.0f}/s" for k, v in stats.ways.items()) + ")"
         table.add_row("connections", f"{stats.not_admitted:,} not served (run again); release {release} ms{dear}")
     table.add_row("telegrams", f"{min(covered, n_tel)}/{n_tel} request telegrams, {ids} other ids")
     if hasattr(stats, "state_targets"):

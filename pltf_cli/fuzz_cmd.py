@@ -207,6 +207,7 @@ def _summary(out: Path, stats: object) -> None:
             "release_ms": getattr(s, "release_ms", None),  # per port: median wait for a fresh connection
             "dear": getattr(s, "dear", None),  # batches on a kept connection, singles skipped beyond a queue
             "singles_skipped": getattr(s, "skipped", None),
+            "ways": getattr(s, "ways", None),  # cases/s with fresh connections and the dear way (fuzz.trial)
         },
         "replays": getattr(s, "replays", None),
     }

@@ -12,13 +12,15 @@ from __future__ import annotations
 import argparse
 import asyncio
 import dataclasses
+import json
 import signal
 import sys
 from collections.abc import Sequence
+from pathlib import Path
 from typing import NoReturn
 
 from pltf.zoo import launch
-from pltf.zoo.bugs import Leak
+from pltf.zoo.bugs import BUGS, Leak
 from pltf.zoo.members import GET_STATUS_ID, MEMBERS, Member, member
 from pltf.zoo.relay import Relay
 from pltf.zoo.schedule import for_ident, jitter
@@ -73,7 +75,12 @@ def parser() -> argparse.ArgumentParser:
         metavar="LO,HI",
         help="turn-away members: the port is free LO-HI ms after its client left",
     )
-    p.add_argument("--turn-away", choices=("fin", "rst"), help="turn-away members: close a newcomer with FIN or RST")
+    p.add_argument(
+        "--turn-away",
+        choices=("fin", "rst", "refuse"),
+        help="turn-away members: close a newcomer with FIN or RST, or refuse it (the port stops listening)",
+    )
+    p.add_argument("--bug", choices=sorted(BUGS), help="plant this bug in the member (replaces its own)")
     p.add_argument(
         "--delay-ms",
         type=lambda t: _pair(t, "milliseconds"),
@@ -91,6 +98,13 @@ def parser() -> argparse.ArgumentParser:
         metavar="S",
         help="a planted hang lasts S seconds, then the member exits (default 600)",
     )
+    p.add_argument(
+        "--log-level",
+        default="INFO",
+        choices=("DEBUG", "INFO", "WARNING", "ERROR"),
+        help="log level of the --serve reference server (default INFO; the benchmarks use ERROR)",
+    )
+    p.add_argument("--stats", metavar="FILE", help="write the clients served and turned away per port here at exit")
     return p
 
 
@@ -108,6 +122,8 @@ def configured(args: argparse.Namespace) -> Member:
         changes["segment"] = max(0, args.segment)
     if args.status_delay is not None:
         changes["delay"] = for_ident(GET_STATUS_ID, args.status_delay)
+    if args.bug is not None:
+        changes["bug"] = BUGS[args.bug]
     if args.leak_kb is not None or args.leak_limit_mb is not None:
         kb, limit = args.leak_kb or 32, args.leak_limit_mb or 64
         changes["bug"] = lambda: Leak(kb=kb, limit_mb=limit)
@@ -133,6 +149,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     m = configured(args)
     signal.signal(signal.SIGTERM, _terminate)
     behind: launch.Launched | None = None
+    relay: Relay | None = None
     try:
         if args.serve:
             behind = _start_behind(args)
@@ -154,6 +171,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         _serve(relay, m.name, args.host)
         return 0
     finally:
+        if args.stats and relay is not None:
+            Path(args.stats).write_text(json.dumps(relay.stats))
         if behind is not None:
             behind.cleanup()
 
@@ -172,7 +191,8 @@ def _start_behind(args: argparse.Namespace) -> launch.Launched:
     """The implementation behind the member, started in our process group (stopped with us)."""
     behind: launch.Launched | None = None
     try:
-        behind = launch.target(args.serve, time_scale=args.time_scale, seed=args.seed)
+        level = {"log_level": args.log_level} if args.serve == "reference" else {}
+        behind = launch.target(args.serve, time_scale=args.time_scale, seed=args.seed, **level)
         behind.new_session = False
         behind.start()
     except launch.LaunchError as exc:

@@ -92,6 +92,24 @@ class CrashAfterStart:
 
 
 @dataclass
+class CrashInVelocityMode:
+    """CMD_MOVE_VEL_WHEEL in Running, motion mode VEL, with a wheel velocity at or below -2^30 mm/s overflows the
+    wheel controller's set point (a signed 32-bit product): the process dies. It needs the prelude
+    CONNECT_TO_PLTF, INIT_PLTF, SET_MODE VEL, START - the mode set in Ready, before START."""
+
+    view: PlatformView = field(default_factory=PlatformView)
+
+    def on_request(self, piece: Piece, now: float) -> Fault | None:
+        name = NAME.get(-1 if piece.ident is None else piece.ident, "")
+        if name == "CMD_MOVE_VEL_WHEEL" and self.view.state == RU and self.view.mode == MotionMode.MODE_MOTION_VEL:
+            speeds = [_decoded_field(piece, f) for f in ("vel_right", "vel_left")]
+            if any(isinstance(v, int) and v <= -(1 << 30) for v in speeds):
+                return Fault("crash", f"CMD_MOVE_VEL_WHEEL {speeds} in running, mode VEL: the set point overflows")
+        self.view.on_request(name, piece)
+        return None
+
+
+@dataclass
 class HangOnUnknownKey:
     """CMD_SET_PLTF_PARAM with a key the parameter table does not have sends the lookup into an endless loop: the
     whole target stops answering (every port; newcomers wait in the backlog)."""
@@ -130,3 +148,13 @@ class Leak:
         if self.leaked >= self.limit_mb * 1024 * 1024:
             return Fault("crash", f"out of memory: {self.leaked >> 20} MiB leaked after {self.requests} requests")
         return None
+
+
+# the planted bugs by name: a member's own, or any of them on a member's wire behaviour (``python -m pltf.zoo
+# slow-release --bug crash-after-start``: a crash behind a proxy that turns newcomers away)
+BUGS: dict[str, type[Bug]] = {
+    "crash-after-start": CrashAfterStart,
+    "crash-in-velocity-mode": CrashInVelocityMode,
+    "hang-unknown-key": HangOnUnknownKey,
+    "leak": Leak,
+}

@@ -4,7 +4,8 @@ Rules:
 - ``admit`` says what a newcomer on a port meets: ``transparent`` - every client gets its own connection to the
   target behind, which decides (the reference server turns a second client away, the emulator leaves it in its
   backlog); ``turn-away`` - one client per port, a newcomer is accepted and closed (FIN, or RST with
-  ``turn_away="rst"``) while the port is busy and for ``release`` seconds after its client left;
+  ``turn_away="rst"``; with ``"refuse"`` the port stops listening and its connect is refused) while the port
+  is busy and for ``release`` seconds after its client left;
   ``backlog`` - one client per port, the next one is accepted only when the current one has left.
 - ``conforming`` members pass the standard conformance tier under ``profile`` (a test holds them to it);
   the others carry a planted bug and fail it.
@@ -30,7 +31,7 @@ class Member:
     conforming: bool
     profile: str = "strict"  # the profile the standard tier passes it under (conforming members)
     admit: str = "transparent"  # "transparent", "turn-away" or "backlog"
-    turn_away: str = "fin"  # "fin" or "rst"
+    turn_away: str = "fin"  # "fin", "rst" or "refuse"
     release: tuple[float, float] = (0.0, 0.0)  # s after a client left until its port takes the next one
     delay: Delay = no_delay
     segment: int = 0  # replies cut into writes of 1..segment bytes (0: as they come)

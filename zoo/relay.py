@@ -47,6 +47,14 @@ async def _guarded(pump: Coroutine[Any, Any, None]) -> bool:
     return True
 
 
+async def _pump(loop: asyncio.AbstractEventLoop, src: socket.socket, dst: socket.socket) -> None:
+    """``src`` to ``dst`` until ``src``'s end-of-stream, which is passed on (half-close)."""
+    while data := await loop.sock_recv(src, 65536):
+        await loop.sock_sendall(dst, data)
+    with contextlib.suppress(OSError):
+        dst.shutdown(socket.SHUT_WR)
+
+
 @dataclass
 class PortState:
     index: int
@@ -78,21 +86,22 @@ class Relay:
         self.on_exit = on_exit
         self.log = log
         self.ports: list[int] = []
-        self.clients = 0
-        self.turned_away = 0
+        self.served = [0, 0]  # clients admitted, per port
+        self.refused = [0, 0]  # newcomers turned away, per port
         self._tasks: set[asyncio.Task[None]] = set()
 
     # ---- start
+    def _listen(self, want: int) -> socket.socket:
+        ls = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        ls.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        ls.bind((self.host, want))
+        ls.listen(16)
+        ls.setblocking(False)
+        return ls
+
     async def serve_forever(self, ready: Callable[[list[int]], None] = lambda ports: None) -> None:
-        listeners = []
-        for want in self.want:
-            ls = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
-            ls.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-            ls.bind((self.host, want))
-            ls.listen(16)
-            ls.setblocking(False)
-            listeners.append(ls)
-            self.ports.append(ls.getsockname()[1])
+        listeners = [self._listen(want) for want in self.want]
+        self.ports = [ls.getsockname()[1] for ls in listeners]
         ready(self.ports)
         try:
             await asyncio.gather(*(self._accept_loop(PortState(i), ls) for i, ls in enumerate(listeners)))
@@ -100,27 +109,38 @@ class Relay:
             for ls in listeners:
                 ls.close()
 
-    async def _accept_loop(self, port: PortState, ls: socket.socket) -> None:
+    async def _accept_loop(self, port: PortState, ls: socket.socket | None) -> None:
         loop = asyncio.get_running_loop()
         port.idle.set()
         admit = self.member.admit
+        refuse = admit == "turn-away" and self.member.turn_away == "refuse"
         while True:
-            if admit == "backlog":
-                await port.idle.wait()  # the next client stays in the listen backlog until then
+            if admit == "backlog" or ls is None:
+                await port.idle.wait()  # the next client stays in the listen backlog (or is refused) until then
+            if ls is None:
+                ls = self._listen(self.ports[port.index])
             sock, _ = await loop.sock_accept(ls)
             if admit == "turn-away" and (port.busy or loop.time() < port.free_at):
+                self.refused[port.index] += 1
                 self._turn_away(sock)
                 continue
             if admit != "transparent":
                 port.busy = True
                 port.idle.clear()
-            self.clients += 1
+            if refuse:  # the port stops listening: a newcomer's connect is refused until the port is free
+                ls.close()
+                ls = None
+            self.served[port.index] += 1
             task = asyncio.create_task(self._client(port, sock))
             self._tasks.add(task)
             task.add_done_callback(self._tasks.discard)
 
+    @property
+    def stats(self) -> dict[str, list[int]]:
+        """The clients served and the newcomers turned away, per port (``--stats``)."""
+        return {"served": list(self.served), "turned_away": list(self.refused)}
+
     def _turn_away(self, sock: socket.socket) -> None:
-        self.turned_away += 1
         if self.member.turn_away == "rst":
             sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
         else:  # FIN first; what the newcomer sent is read away, else the close would reset the connection
@@ -136,24 +156,10 @@ class Relay:
         loop = asyncio.get_running_loop()
         try:
             sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-            c_reader, c_writer = await asyncio.open_connection(sock=sock)
-            try:
-                u_reader, u_writer = await asyncio.open_connection(self.upstream[0], self.upstream[1][port.index])
-            except OSError as exc:
-                self.log(f"upstream port {self.upstream[1][port.index]} unreachable: {exc}")
-                c_writer.close()
-                return
-            u_writer.get_extra_info("socket").setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-            up = asyncio.create_task(_guarded(self._to_target(c_reader, u_writer)))
-            down = asyncio.create_task(_guarded(self._to_client(u_reader, c_writer)))
-            done, _ = await asyncio.wait({up, down}, return_when=asyncio.FIRST_COMPLETED)
-            if up in done and up.result():  # the client's end-of-stream: the target may still answer
-                await asyncio.wait({down}, timeout=HALF_CLOSE_WAIT)
-            for task in (up, down):
-                task.cancel()
-            for w in (c_writer, u_writer):
-                with contextlib.suppress(OSError, RuntimeError):
-                    w.close()
+            if self.bug is None and not self.member.shapes_replies:
+                await self._plain(sock, port)
+            else:
+                await self._shaped(sock, port)
         except OSError:
             pass
         finally:
@@ -165,6 +171,48 @@ class Relay:
                 wait = self.rng.uniform(lo, hi) if hi > 0 else 0.0
                 port.free_at = loop.time() + wait
                 loop.call_later(wait, port.idle.set)
+
+    async def _both_ways(self, up: Coroutine[Any, Any, None], down: Coroutine[Any, Any, None]) -> None:
+        """Run both directions; after the client's end-of-stream the target may still answer (and close)."""
+        t_up, t_down = asyncio.create_task(_guarded(up)), asyncio.create_task(_guarded(down))
+        done, _ = await asyncio.wait({t_up, t_down}, return_when=asyncio.FIRST_COMPLETED)
+        if t_up in done and t_up.result():
+            await asyncio.wait({t_down}, timeout=HALF_CLOSE_WAIT)
+        for task in (t_up, t_down):
+            task.cancel()
+
+    async def _plain(self, sock: socket.socket, port: PortState) -> None:
+        """Bytes passed on as they come, on the raw sockets (no streams: a member that only decides who is
+        admitted costs a connection as little as it can - the benchmarks fuzz through it)."""
+        loop = asyncio.get_running_loop()
+        sock.setblocking(False)
+        up = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        up.setblocking(False)
+        up.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        try:
+            try:
+                await loop.sock_connect(up, (self.upstream[0], self.upstream[1][port.index]))
+            except OSError as exc:
+                self.log(f"upstream port {self.upstream[1][port.index]} unreachable: {exc}")
+                return
+            await self._both_ways(_pump(loop, sock, up), _pump(loop, up, sock))
+        finally:
+            up.close()
+
+    async def _shaped(self, sock: socket.socket, port: PortState) -> None:
+        """Through the member's bug (requests cut into frames) and reply schedule (delays, coalescing, segments)."""
+        c_reader, c_writer = await asyncio.open_connection(sock=sock)
+        try:
+            u_reader, u_writer = await asyncio.open_connection(self.upstream[0], self.upstream[1][port.index])
+        except OSError as exc:
+            self.log(f"upstream port {self.upstream[1][port.index]} unreachable: {exc}")
+            c_writer.close()
+            return
+        u_writer.get_extra_info("socket").setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        await self._both_ways(self._to_target(c_reader, u_writer), self._to_client(u_reader, c_writer))
+        for w in (c_writer, u_writer):
+            with contextlib.suppress(OSError, RuntimeError):
+                w.close()
 
     async def _to_target(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
         cutter = FrameCutter() if self.bug is not None else None

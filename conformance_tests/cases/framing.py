@@ -317,7 +317,7 @@ def half_close_partial(ctx: CaseContext) -> None:
     s = ctx.fresh()
     s.send_raw(_frame("CMD_SET_MODE", mode=VEL)[:6], "first 6 bytes of CMD_SET_MODE(VEL)")
     s.shutdown_write()
-    if not s.wait_closed(ctx.wall(2.0)):
+    if not s.wait_closed(ctx.close_wait(2.0)):
         raise Fail("the target kept the half-closed connection with an incomplete frame open")
 
 

@@ -190,7 +190,7 @@ def close_socket(ctx: CaseContext) -> None:
         before = ctx.status()
         s = ctx.fresh()
         s.send(build("request", "CMD_CLOSE_SOCKET"))
-        if not s.wait_closed(ctx.wall(2.0)):
+        if not s.wait_closed(ctx.close_wait(2.0)):
             raise Fail(f"CMD_CLOSE_SOCKET in {state.value}: the connection stayed open")
         after = ctx.status()
         if (after.op, after.mode) != (before.op, before.mode):

@@ -125,6 +125,36 @@ def test_ensure_walks_the_chart(tiny: TinyTarget, tiny_config: Config) -> None:
     assert seen == [St.BREAKED, St.CONNECTED, St.RUNNING, St.NOT_CONNECTED, St.READY] and tiny.mode == 3
 
 
+def test_ensure_reads_no_status_it_just_read(tiny: TinyTarget, tiny_config: Config) -> None:
+    """Each round trip counts against a slow link (issue 17): a status read a moment ago with nothing sent since
+    stands for the current one; anything sent since (a raw frame too) asks again."""
+    sent: list[list[str]] = []
+
+    def tx(ctx: CaseContext) -> list[str]:
+        return [e.note for e in ctx.log.entries if e.direction == "tx"]
+
+    def walk(ctx: CaseContext) -> None:
+        ctx.ensure(St.READY)
+        ctx.status()
+        before = len(tx(ctx))
+        ctx.ensure(St.RUNNING)
+        sent.append(tx(ctx)[before:])
+        ctx.session().send_raw(bytes.fromhex("ff01fe02 00000001 0c"), "CMD_BREAK, raw")
+        before = len(tx(ctx))
+        ctx.ensure(St.BREAKED)
+        sent.append(tx(ctx)[before:])
+        ctx.status()
+        before = len(tx(ctx))
+        ctx.ensure(St.BREAKED)
+        sent.append(tx(ctx)[before:])
+
+    assert run(tiny_config, make("4.2/t/memo", walk))["4.2/t/memo"].verdict is Verdict.PASS
+    assert sent[0][0] == "CMD_START"  # no GET_STATUS first
+    assert sent[1][0] == "CMD_GET_STATUS"  # the raw BREAK was sent since
+    assert sent[2][0] == "CMD_STOP"  # in Breaked: via Ready, as before
+    assert tiny.state is St.BREAKED
+
+
 def test_the_chart_cases_pass_an_independent_implementation(tiny_config: Config) -> None:
     cases = select(load_all().values(), tier=Tier.STANDARD, keyword="6.3/CMD_*/in-*")
     assert len(cases) == 40
@@ -155,3 +185,31 @@ def test_an_unreachable_target_is_a_harness_error() -> None:
     probe.close()
     out = run(Config("127.0.0.1", port), make("6.1/t/x", lambda ctx: None))
     assert out["run"].exit_code == 2 and out["run"].harness_error
+
+
+def test_no_rerun_and_a_clipped_case_budget_once_the_run_budget_is_spent(tiny_config: Config, monkeypatch: Any) -> None:
+    """A run ends within its budget (issue 17: a case begun at 279 s with two re-runs ended a run at 310 s)."""
+    import time
+
+    from pltf.conformance_tests import runner
+
+    monkeypatch.setattr(runner, "LAST_CASE_GRACE", 0.3)
+    tiny_config.run_budget = 0.4
+    waited: list[float] = []
+
+    def late(ctx: CaseContext) -> None:
+        time.sleep(0.5)
+        raise Inconclusive("a measurement spoiled by the machine (would be re-run)")
+
+    def slow(ctx: CaseContext) -> None:
+        t0 = time.monotonic()
+        try:
+            ctx.poll(ctx.status, lambda s: False, within=100.0)  # waits until its budget ends
+        finally:
+            waited.append(time.monotonic() - t0)
+
+    out = run(tiny_config, make("6.1/t/late", late))
+    assert len(out["6.1/t/late"].attempts) == 1  # the budget was spent during it: no re-run
+    tiny_config.run_budget = 0.2
+    out = run(tiny_config, make("6.1/t/first", lambda ctx: time.sleep(0.1)), make("6.1/t/slow", slow))
+    assert out["6.1/t/slow"].verdict is Verdict.INCONCLUSIVE and waited[0] < 2.0  # not the case budget of 54 s

@@ -6,7 +6,7 @@ from __future__ import annotations
 from typing import Any
 
 from pltf.spec.codec import build, encode
-from pltf.zoo.bugs import CrashAfterStart, HangOnUnknownKey, Leak, PlatformView
+from pltf.zoo.bugs import BUGS, CrashAfterStart, CrashInVelocityMode, HangOnUnknownKey, Leak, PlatformView
 from pltf.zoo.frames import FrameCutter, Piece
 
 AUTO, VEL, NO = 4, 3, 0
@@ -70,3 +70,19 @@ def test_the_leak_grows_with_every_request_and_kills_at_its_limit() -> None:
     assert feed(bug, [status] * 3) == [None] * 3 and bug.leaked == 3 * 256 * 1024
     fault = bug.on_request(status, 0.0)
     assert fault is not None and fault.kind == "crash" and "4 requests" in fault.why
+
+
+def test_crash_in_velocity_mode_needs_mode_vel_set_before_start() -> None:
+    wheel = req("CMD_MOVE_VEL_WHEEL", vel_right=100, vel_left=-(1 << 30))
+    vel = [PRELUDE[0], PRELUDE[1], req("CMD_SET_MODE", mode=VEL), PRELUDE[2]]
+    faults = feed(CrashInVelocityMode(), [*vel, wheel])
+    assert faults[:4] == [None] * 4 and faults[4].kind == "crash" and "MOVE_VEL_WHEEL" in faults[4].why
+    assert feed(CrashInVelocityMode(), [*PRELUDE, wheel]) == [None] * 4  # mode NO: the target refuses it
+    late = [*PRELUDE, req("CMD_SET_MODE", mode=VEL), wheel]  # SET_MODE only counts in Ready
+    assert feed(CrashInVelocityMode(), late) == [None] * 5
+    slow = req("CMD_MOVE_VEL_WHEEL", vel_right=100, vel_left=-(1 << 30) + 1)
+    assert feed(CrashInVelocityMode(), [*vel, slow]) == [None] * 5  # just above the limit: no overflow
+
+
+def test_every_bug_is_named() -> None:
+    assert set(BUGS) == {"crash-after-start", "crash-in-velocity-mode", "hang-unknown-key", "leak"}

@@ -153,7 +153,7 @@ def test_the_emulator_passes_the_original_profile_with_its_readings_non_strict()
 # ---- @slow: the whole standard tier, every member, both targets
 
 MATRIX = [f"zoo:{m}@{up}" for up in ("reference", "emulator") for m in MEMBERS] + ["emulator", "reference"]
-SLOW_LINK_GAP = "zoo:slow-link"  # ~3,000 sequential round trips at 50-200 ms: not within 5 minutes (zoo/README)
+SLOW_LINK_GAP = "zoo:slow-link"  # ~2,000 sequential round trips at 50-200 ms: not within 5 minutes (zoo/README)
 
 
 @pytest.mark.slow

@@ -6,6 +6,7 @@ line so that a loaded machine cannot blur them; the members' defaults run in tes
 
 from __future__ import annotations
 
+import json
 import shutil
 import socket
 import subprocess
@@ -89,7 +90,7 @@ def served(z: launch.Launched, within: float) -> tuple[float, int]:
                 s.sendall(STATUS)
                 replies(s, timeout=1.0)
                 return time.monotonic() - t0, away
-        except (AssertionError, ConnectionResetError, BrokenPipeError):
+        except (AssertionError, ConnectionResetError, ConnectionRefusedError, BrokenPipeError):
             away += 1
             time.sleep(0.002)
     raise AssertionError(f"no newcomer served within {within} s")
@@ -120,6 +121,38 @@ def test_slow_release_turns_newcomers_away_until_the_window_ends(
         assert newcomer(z) == how
         wait, _ = served(z, within=5.0)
         assert wait >= 0.3, f"served {wait:.2f} s after the turn-away, inside the 600 ms window"
+
+
+def test_slow_release_refuse_stops_listening_until_the_window_ends(upstream: launch.Launched) -> None:
+    with member(upstream, "slow-release", "--turn-away", "refuse", "--release-ms", "600,600") as z:
+        first = connect(z)
+        first.sendall(STATUS)
+        replies(first)
+        with pytest.raises(ConnectionRefusedError):  # busy: the port does not listen
+            connect(z)
+        first.close()
+        time.sleep(0.1)
+        with pytest.raises(ConnectionRefusedError):  # left, but inside the release window
+            connect(z)
+        wait, _ = served(z, within=5.0)
+        assert wait >= 0.3, f"served {wait:.2f} s after the refusal, inside the 600 ms window"
+        with connect(z, 1) as other:  # the other port is not affected
+            other.sendall(STATUS)
+            replies(other)
+
+
+def test_the_member_counts_served_and_turned_away_clients(upstream: launch.Launched, tmp_path: Path) -> None:
+    stats = tmp_path / "stats.json"
+    with member(upstream, "slow-release", "--release-ms", "600,600", "--stats", str(stats)) as z:
+        with connect(z) as first:
+            first.sendall(STATUS)
+            replies(first)
+            assert newcomer(z) == "fin"
+            assert newcomer(z) == "fin"
+        with connect(z, 1) as other:
+            other.sendall(STATUS)
+            replies(other)
+    assert json.loads(stats.read_text()) == {"served": [1, 1], "turned_away": [2, 0]}
 
 
 def test_slow_release_defaults_free_the_port_within_milliseconds(upstream: launch.Launched) -> None:
@@ -240,6 +273,16 @@ def test_crash_after_start_dies_behind_its_prelude_only(upstream: launch.Launche
         with pytest.raises(ConnectionRefusedError):
             connect(z)
     assert upstream.alive()  # not the member's: it stays
+
+
+def test_a_bug_planted_in_another_member_fires_behind_its_wire_behaviour(upstream: launch.Launched) -> None:
+    wheel = encode(build("request", "CMD_MOVE_VEL_WHEEL", vel_right=0, vel_left=-(1 << 30)))
+    with member(upstream, "slow-release", "--bug", "crash-in-velocity-mode") as z:
+        with connect(z) as s:
+            s.sendall(encode(build("request", "CMD_STOP")) + _prelude(mode=3) + wheel + STATUS)
+            assert turned_away(s) in ("fin", "rst")
+        assert z.proc is not None and z.proc.wait(5) == 134
+        assert any("crash: CMD_MOVE_VEL_WHEEL" in line for line in z.output)
 
 
 def test_hang_unknown_key_stops_every_port(upstream: launch.Launched) -> None:
