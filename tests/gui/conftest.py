@@ -212,7 +212,7 @@ def page(browser: Any) -> Iterator[Any]:
 
 
 def open_gui(page: Any, gateway: Gateway, target: str, *, connected: bool = True) -> None:
-    page.goto(gateway.url(target))
+    page.goto(gateway.url(target), timeout=30_000)  # the gateway shares 2 cores with the server and the browser
     if connected:
         expect_text(page.get_by_role("status", name="Connection"), f"connected to {target}")
 
