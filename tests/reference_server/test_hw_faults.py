@@ -123,9 +123,11 @@ def test_can_frame_delay_beyond_the_node_timeout_is_a_drive_fault(data_dir: Path
         r.control("can-delay 0.05 left")  # within the timeouts: nothing happens
         st = r.wait(lambda s: s.vel_trans > 250, "still driving", keep=FORWARD)
         assert st.motor_left_status == 0
-        r.control("can-delay 1.0 left")
-        _halted_in_ready(r, "frames 1 s late")
-        assert r.status().motor_left_status & St.NODE_TIMEOUT
+        # Late frames are frames again once they arrive: NODE_TIMEOUT lasts from 0.5 s after the last timely frame
+        # until the first late one, here 9.5 s of platform time (0.5 s at the rig's time scale of 20).
+        r.control("can-delay 10.0 left")
+        st = _halted_in_ready(r, "frames 10 s late")
+        assert st.motor_left_status & St.NODE_TIMEOUT
         r.control("clear can-delay left")
         r.wait_log("drive fault cleared")
         _restart(r)

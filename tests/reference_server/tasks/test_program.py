@@ -58,16 +58,21 @@ def test_break_freezes_the_program_and_continue_resumes_it(session: Session) -> 
         program(task("<log message='A'/><wait><delay amount='3000'/></wait><log message='B'/>")), wait_finished=False
     )
     session.wait_log("] A")
+    # The protocol does not say when the platform acted on a command, only when it answered a status: the pause
+    # the program saw lies between the last status before BREAK and the first after CONTINUE (longest) and the
+    # first status in Break and the last one before CONTINUE (shortest). A loaded machine widens the bracket.
+    before_break = session.status().timestamp_ms
     session.client.break_()
     session.client.wait_state(OperationState.ST_OP_BREAKED)
-    paused = session.status().timestamp_ms
+    in_break = session.status().timestamp_ms
     time.sleep(4.0 / SCALE)
+    before_continue = session.status().timestamp_ms
     session.client.continue_()
-    resumed = session.status().timestamp_ms
+    after_continue = session.status().timestamp_ms
     lines = session.wait_log("program finished")
-    pause = (resumed - paused) / 1000.0
-    assert pause > 2.0
-    assert at(lines, "B") - at(lines, "A") == pytest.approx(3.0 + pause, abs=0.2)
+    shortest, longest = (before_continue - in_break) / 1000.0, (after_continue - before_break) / 1000.0
+    assert shortest > 2.0
+    assert 3.0 + shortest - 0.2 <= at(lines, "B") - at(lines, "A") <= 3.0 + longest + 0.2
 
 
 def test_stop_aborts_the_program(session: Session) -> None:
