@@ -3,6 +3,7 @@ import office from "../../../fixtures/maps/office.map?raw";
 import {
   addObject,
   addObjects,
+  addReplacing,
   clearMap,
   deleteObjects,
   History,
@@ -10,6 +11,7 @@ import {
   lineOp,
   moveObjects,
   moveVertex,
+  setGeometry,
 } from "../src/editor/commands";
 import { extend, trim } from "../src/editor/geometry";
 import { parseMapDoc, writeMapDoc } from "../src/editor/mapdoc";
@@ -109,5 +111,36 @@ describe("geometric commands", () => {
     expect(pointsOf(h, 1)).toEqual([32000, 0, 0, 0]);
     h.undo();
     expect(pointsOf(h, 1)).toEqual([0, 0, 32000, 0]);
+  });
+});
+
+describe("object commands", () => {
+  it("typed geometry replaces points, radius and text and keeps other attributes; undo restores it", () => {
+    const h = fresh();
+    const circle = h.doc.scene.objects.find((o) => o.kind === "circle");
+    const label = h.doc.scene.objects.find((o) => o.kind === "hiddenlabel");
+    if (circle === undefined || label === undefined) throw new Error("fixture without a circle or a label");
+    const start = writeMapDoc(h.doc);
+    h.run(setGeometry(h.doc, circle.id, { points: [100, 200], r: 400 }));
+    h.run(setGeometry(h.doc, label.id, { points: [5, 6], text: "Store" }));
+    const xml = writeMapDoc(h.doc);
+    expect(xml).toContain(`<circle><center x="100" y="200"/><radius r="400"/></circle>`);
+    expect(xml).toMatch(/<hiddenlabel [^>]*text="Store"[^>]*><point x="5" y="6"\/><\/hiddenlabel>/);
+    h.undo();
+    h.undo();
+    expect(writeMapDoc(h.doc)).toBe(start);
+  });
+  it("a new workarea replaces the old one in one step", () => {
+    const h = fresh();
+    const start = writeMapDoc(h.doc);
+    const n = h.doc.scene.objects.length;
+    h.run(addReplacing(h.doc, { kind: "workarea", layer: 0, points: [0, 0, 10, 0, 10, 10], attrs: {} }, [0], "workarea replaced"));
+    const areas = h.doc.scene.objects.filter((o) => o.kind === "workarea");
+    expect(areas.map((o) => o.points)).toEqual([[0, 0, 10, 0, 10, 10]]);
+    expect(h.doc.scene.objects.length).toBe(n);
+    h.undo();
+    expect(writeMapDoc(h.doc)).toBe(start);
+    h.redo();
+    expect(h.doc.scene.objects.filter((o) => o.kind === "workarea").map((o) => o.points)).toEqual([[0, 0, 10, 0, 10, 10]]);
   });
 });

@@ -203,3 +203,25 @@ export function addObjects(doc: MapDoc, objs: ReadonlyArray<Omit<MapObject, "id"
   }));
   return { label, changes };
 }
+
+/** Typed coordinates (typed.ts): the object's points, radius and text replaced; its other attributes kept. */
+export function setGeometry(doc: MapDoc, id: number, g: { points: number[]; r?: number; text?: string }): Command {
+  const index = indexOf(doc, id);
+  const before = doc.scene.objects[index];
+  const after: MapObject = { ...before, points: [...g.points] };
+  if (g.r !== undefined) {
+    after.r = g.r;
+  }
+  if (g.text !== undefined) {
+    after.text = g.text;
+    after.attrs = { ...before.attrs, text: g.text };
+  }
+  return { label: "typed coordinates", changes: [{ index, before, after }] };
+}
+
+/** Add `obj` and remove the objects `ids` in one step (a new workarea replaces the old one). */
+export function addReplacing(doc: MapDoc, obj: Omit<MapObject, "id">, ids: readonly number[], label: string): Command {
+  const removed = deleteObjects(doc, ids).changes;
+  const after: MapObject = { ...obj, id: doc.nextId, points: [...obj.points], attrs: { ...obj.attrs } };
+  return { label, changes: [...removed, { index: doc.scene.objects.length - removed.length, before: null, after }] };
+}

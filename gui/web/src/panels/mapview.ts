@@ -25,7 +25,8 @@ type Tool = "pan" | "zoomArea" | "shift" | "flag" | "edit";
 
 /** The map editor's hold on the view (editor/editpanel.ts): pointer events in world mm, and its own drawing. */
 export interface EditHooks {
-  down(x: number, y: number, pxPerMm: number): void;
+  /** `button`: 0 left, 2 right (a right-click finishes a polygon) */
+  down(x: number, y: number, pxPerMm: number, button: number): void;
   move(x: number, y: number): void;
   up(x: number, y: number): void;
   draw(ctx: CanvasRenderingContext2D, cam: Camera): void;
@@ -304,7 +305,7 @@ export class MapView {
     this.drag = { x: e.offsetX, y: e.offsetY, button: e.button, cam: this.cam };
     if (this.tool === "edit" && this.editHooks !== null) {
       const [wx, wy] = toWorld(this.cam, e.offsetX, e.offsetY);
-      this.editHooks.down(wx, wy, this.cam.scale);
+      this.editHooks.down(wx, wy, this.cam.scale, e.button);
       return;
     }
     if (this.tool === "shift" && this.status) {
