@@ -121,9 +121,15 @@ def test_vertices_measuring_select_all_and_clear(page: Any, gateway: Gateway, pl
     # a vertex of the prohibited zone dragged onto a wall's end
     tool(page, "Edit vertices")
     drag(page, (14500, 5500), (15000, 8800))
-    zone = [11000, 1000, 14500, 1000, 15000, 8800, 11000, 5500]
-    edited = [obj("prohibit", zone) if o[0] == "prohibit" else o for o in objects]
-    assert edited != objects
+    # a vertex added on the zone's south edge and dragged onto another wall's end; one of the hidden polygon's
+    # vertices deleted by a right-click
+    drag(page, (12000, 1000), (9000, 0))
+    click(page, 3000, 8800, button="right")
+    zone = [11000, 1000, 9000, 0, 14500, 1000, 15000, 8800, 11000, 5500]
+    hidden = [0, 8800, 3000, 11200, 0, 11200]
+    edits = {"prohibit": obj("prohibit", zone), "hiddenpolygon": obj("hiddenpolygon", hidden)}
+    edited = [edits.get(o[0], o) for o in objects]
+    wait_for(lambda: state.get_attribute("data-dirty") == "true", what="the vertex edits")
 
     # the measuring tool: corner to corner of the office (its ends snap to the wall ends), nothing changes
     tool(page, "Measure")

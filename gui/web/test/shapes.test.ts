@@ -3,6 +3,7 @@ import {
   circleObject,
   labelObject,
   measure,
+  polygonEdgeAt,
   polygonObject,
   segmentObject,
   signedArea2,
@@ -77,5 +78,19 @@ describe("vertices and measuring", () => {
     expect(measure({ x: 100, y: 0 }, { x: 0, y: 0 })).toEqual({ distance: 100, dx: -100, dy: 0, angle: 180 });
     expect(measure({ x: 0, y: 0 }, { x: 0, y: -250 })).toEqual({ distance: 250, dx: 0, dy: -250, angle: -90 });
     expect(measure({ x: 7, y: 7 }, { x: 7, y: 7 })).toEqual({ distance: 0, dx: 0, dy: 0, angle: 0 });
+  });
+});
+
+describe("polygon edges", () => {
+  const objs: MapObject[] = [
+    { id: 1, kind: "line", layer: 0, points: [0, 50, 1000, 50], attrs: {} },
+    { id: 2, kind: "prohibit", layer: 0, points: [0, 0, 1000, 0, 1000, 1000, 0, 1000], attrs: {} },
+  ];
+  it("the edge of a polygon under the pointer, the closing edge included; lines are not polygons", () => {
+    expect(polygonEdgeAt(objs, 500, 10, 20)).toEqual({ id: 2, after: 0 });
+    expect(polygonEdgeAt(objs, 1010, 500, 20)).toEqual({ id: 2, after: 1 });
+    expect(polygonEdgeAt(objs, -5, 500, 20)).toEqual({ id: 2, after: 3 });
+    expect(polygonEdgeAt(objs, 500, 50, 20, new Set([1]))).toBeNull();
+    expect(polygonEdgeAt(objs, 500, 500, 20)).toBeNull();
   });
 });

@@ -6,7 +6,7 @@
  * one command, so a refused object (zero length, no area, no text) says why and changes nothing.
  */
 import { type Camera, toScreen } from "../view/camera";
-import { addObject, addReplacing, type Command, moveVertex } from "./commands";
+import { addObject, addReplacing, type Command, deleteVertex, insertVertex, moveVertex } from "./commands";
 import type { Pt, Result } from "./geometry";
 import type { MapDoc } from "./mapdoc";
 import {
@@ -15,6 +15,7 @@ import {
   measure,
   type Measure,
   type NewObject,
+  polygonEdgeAt,
   polygonObject,
   type PolygonKind,
   segmentObject,
@@ -75,15 +76,37 @@ export class ShapeTools {
     } else if (tool === "label") {
       this.c.run(asCommand(this.c.doc(), labelObject(p, this.c.labelText())));
     } else if (tool === "vertex") {
-      const sel = this.c.selection();
-      const tol = HIT_PX / pxPerMm;
-      const v = vertexAt(this.c.doc().scene.objects, x, y, tol, sel.size > 0 ? sel : null) ?? vertexAt(this.c.doc().scene.objects, x, y, tol);
-      if (v !== null) {
-        this.drag = { from: { x, y }, to: { x, y }, pxPerMm, vertex: v };
-      }
+      this.vertexDown(x, y, pxPerMm, button);
     } else {
       const from = tool === "measure" ? this.c.snapEnd({ x, y }, pxPerMm) : p;
       this.drag = { from, to: from, pxPerMm };
+    }
+  }
+
+  /**
+   * Edit vertices: drag a vertex (of the selection first); right-click a polygon's vertex to delete it; press on a
+   * polygon's edge to insert a vertex there and drag it.
+   */
+  private vertexDown(x: number, y: number, pxPerMm: number, button: number): void {
+    const objs = this.c.doc().scene.objects;
+    const sel = this.c.selection();
+    const tol = HIT_PX / pxPerMm;
+    const v = vertexAt(objs, x, y, tol, sel.size > 0 ? sel : null) ?? vertexAt(objs, x, y, tol);
+    if (v !== null && button === 2) {
+      this.c.run(deleteVertex(this.c.doc(), v.id, v.vertex));
+    } else if (v !== null) {
+      this.drag = { from: { x, y }, to: { x, y }, pxPerMm, vertex: v };
+    } else if (button === 0) {
+      const e = polygonEdgeAt(objs, x, y, tol, sel.size > 0 ? sel : null) ?? polygonEdgeAt(objs, x, y, tol);
+      if (e === null) {
+        return;
+      }
+      const p = this.c.snap({ x, y }, pxPerMm);
+      const r = insertVertex(this.c.doc(), e.id, e.after, p);
+      this.c.run(r);
+      if (r.ok) {
+        this.drag = { from: { x, y }, to: p, pxPerMm, vertex: { id: e.id, vertex: e.after + 1 } };
+      }
     }
   }
 

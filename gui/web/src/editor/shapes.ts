@@ -146,3 +146,35 @@ export function measure(a: Pt, b: Pt): Measure {
   const angle = dx === 0 && dy === 0 ? 0 : (Math.atan2(dy, dx) * 180) / Math.PI;
   return { distance: r(Math.hypot(dx, dy)), dx: r(dx), dy: r(dy), angle: r(angle === -180 ? 180 : angle) };
 }
+
+/**
+ * The polygon edge under (x, y) within `tol` mm, of the objects in `ids` (all when null) of a polygon kind:
+ * the object and the vertex the edge starts at (the new vertex goes after it). Null when none.
+ */
+export function polygonEdgeAt(
+  objects: readonly MapObject[],
+  x: number,
+  y: number,
+  tol: number,
+  ids: ReadonlySet<number> | null = null,
+): { id: number; after: number } | null {
+  let best: { id: number; after: number } | null = null;
+  let bestD = tol;
+  for (const o of objects) {
+    if (!(POLYGON_KINDS as readonly string[]).includes(o.kind) || (ids !== null && !ids.has(o.id))) {
+      continue;
+    }
+    const p = o.points;
+    for (let i = 0; i + 1 < p.length; i += 2) {
+      const j = (i + 2) % p.length;
+      const len2 = (p[j] - p[i]) ** 2 + (p[j + 1] - p[i + 1]) ** 2;
+      const u = len2 === 0 ? 0 : Math.max(0, Math.min(1, ((x - p[i]) * (p[j] - p[i]) + (y - p[i + 1]) * (p[j + 1] - p[i + 1])) / len2));
+      const d = Math.hypot(x - (p[i] + u * (p[j] - p[i])), y - (p[i + 1] + u * (p[j + 1] - p[i + 1])));
+      if (d <= bestD) {
+        bestD = d;
+        best = { id: o.id, after: i / 2 };
+      }
+    }
+  }
+  return best;
+}

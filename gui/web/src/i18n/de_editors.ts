@@ -33,7 +33,7 @@ export const deEditors: Record<keyof typeof enEditors, string> = {
   "edit.ftext": "Text",
   "edit.flength": "Länge (mm)",
   "edit.fdirection": "Richtung (Grad)",
-  "edit.tipVertex": "Eckpunkte eines Polygons bearbeiten: einen Eckpunkt des ausgewählten (oder eines beliebigen) Objekts an seinen neuen Ort ziehen.",
+  "edit.tipVertex": "Eckpunkte eines Polygons bearbeiten: einen Eckpunkt (zuerst des ausgewählten Objekts) an seinen neuen Ort ziehen; auf eine Polygonkante drücken fügt dort einen Eckpunkt ein; Rechtsklick auf einen Eckpunkt löscht ihn.",
   "edit.tipReflector": "Reflektor hinzufügen. Linksklick zum Beginnen, dann ziehen.",
   "edit.tipCircle": "Kreis hinzufügen. Linksklick zum Beginnen, dann ziehen.",
   "edit.tipWorkarea": "Arbeitsbereich als Polygon zeichnen: jeden Eckpunkt anklicken; Rechtsklick, Klick auf den ersten Eckpunkt oder Enter schließt ab (Escape verwirft). Ein neuer Arbeitsbereich ersetzt den alten.",

@@ -31,7 +31,7 @@ export const enEditors = {
   "edit.ftext": "Text",
   "edit.flength": "Length (mm)",
   "edit.fdirection": "Direction (degrees)",
-  "edit.tipVertex": "Edit vertices of a polygon: drag a vertex of the selected object (or of any object) to its new place.",
+  "edit.tipVertex": "Edit vertices of a polygon: drag a vertex (of the selected object first) to its new place; press on a polygon's edge to add a vertex there; right-click a vertex to delete it.",
   "edit.tipReflector": "Add a reflector. Left-click to begin and drag to draw a reflector line.",
   "edit.tipCircle": "Add a circle. Left-click to begin and drag to draw a circle.",
   "edit.tipWorkarea": "Define a workspace for an application by drawing a polygon: click each vertex; right-click, click the first vertex or press Enter to finish (Escape drops it). A new workarea replaces the old one.",
