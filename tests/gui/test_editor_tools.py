@@ -12,8 +12,9 @@ from collections import Counter
 from pathlib import Path
 from typing import Any
 
-from tests.gui.conftest import Gateway, Platform, expect_text, wait_for
+from tests.gui.conftest import REPO, Gateway, Platform, expect_text, wait_for
 from tests.gui.test_editor import _objects, _open_editor, _sent
+from tests.gui.test_editor_documents import tree
 from tests.gui.test_editor_motion import _open_roadmap_editor, drag, screen
 
 Obj = tuple[str, dict[str, str], list[tuple[str, dict[str, str]]]]
@@ -226,7 +227,7 @@ def test_save_as_tooltips_and_the_close_question(
 
 
 def test_roadmap_path_points_are_added_and_deleted_on_the_platform(
-    page: Any, gateway: Gateway, platform: Platform
+    page: Any, gateway: Gateway, platform: Platform, tmp_path: Path
 ) -> None:
     before = platform.other.get_roadmap().xml
     state = _open_roadmap_editor(page, gateway, platform)
@@ -264,3 +265,21 @@ def test_roadmap_path_points_are_added_and_deleted_on_the_platform(
         for e in root.findall("edges/edge")
         if (e.get("startstation"), e.get("endstation")) not in {("c_west", "c_01"), ("c_01", "r_kitchen")}
     ]
+
+    # Save as: the roadmap the platform got, downloaded under the name asked for
+    tool(page, "Save as")
+    box = page.get_by_role("dialog", name="Save the roadmap as a new file")
+    box.get_by_label("File name").fill("corridor")
+    with page.expect_download() as got:
+        box.get_by_role("button", name="Save as", exact=True).click()
+    assert got.value.suggested_filename == "corridor.rm"
+    saved = tmp_path / "corridor.rm"
+    got.value.save_as(saved)
+    assert tree(ET.fromstring(saved.read_bytes())) == tree(root)
+    # Open a roadmap file: the fixture is read; a map file is refused and the editor keeps the fixture
+    opener = page.get_by_label("Open a roadmap file")
+    opener.set_input_files(str(REPO / "fixtures" / "roadmaps" / "office.rm"))
+    expect_text(messages(page), "Roadmap file office.rm opened in the editor: 18 stations, 17 edges")
+    opener.set_input_files(str(REPO / "fixtures" / "maps" / "office.map"))
+    expect_text(messages(page), "office.map not opened: expected a <roadmap> document, got <map>")
+    assert state.get_attribute("data-stations") == "18"

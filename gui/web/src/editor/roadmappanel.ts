@@ -28,6 +28,8 @@ import {
 import { validateDocument } from "./validate";
 import { deletePathPoint, edgeAt, edgePath, insertPathPoint, movePathPoint, pathPointAt } from "./roadmappath";
 import { download, fileNameOf } from "./files";
+import { MAX_XML_CHARS } from "./xml";
+import { dialog } from "../panels/menubar";
 
 type RmTool = "select" | "addStation" | "addEdge" | "pathPoints";
 const GRID_MM = 10;
@@ -272,10 +274,49 @@ export function roadmapEditor(
       })
       .catch((e: Error) => say(e.message));
   });
-  act("edit.save", () => {
-    download(fileNameOf(name, "roadmap", ".rm"), writeRoadmapDoc(history.doc));
+  // guide 5.5 "Load a map from the hard disk": a malformed file or another kind of document is refused with its
+  // reason and the editor keeps its roadmap
+  const file = h("input", { type: "file", accept: ".rm,.xml,application/xml,text/xml" });
+  bind(file, "rm.open", { text: false });
+  file.addEventListener("change", () => {
+    const f = file.files?.[0];
+    file.value = "";
+    if (f === undefined) {
+      return;
+    }
+    if (f.size > MAX_XML_CHARS) {
+      say(t("edit.openFailed", { file: f.name, why: `${f.size} bytes is over ${MAX_XML_CHARS}` }));
+      return;
+    }
+    void f.text().then((text) => {
+      try {
+        replace(parseRoadmapDoc(text), f.name.replace(/\.[^.]*$/, ""));
+      } catch (e) {
+        say(t("edit.openFailed", { file: f.name, why: (e as Error).message }));
+        return;
+      }
+      say(t("rm.opened", { file: f.name, n: history.doc.stations.length, e: history.doc.edges.length }));
+    });
+  });
+  bar.append(file);
+  const save = (fileName: string): void => {
+    download(fileName, writeRoadmapDoc(history.doc));
     history.markSaved();
+    say(t("rm.saved", { file: fileName }));
     refresh();
+  };
+  act("edit.save", () => save(fileNameOf(name, "roadmap", ".rm")));
+  // guide 5.5 "Save a roadmap as...": the file name asked for; the roadmap keeps it as its name
+  act("edit.saveAs", () => {
+    const nameIn = h("input", { type: "text", value: fileNameOf(name, "roadmap", ".rm") });
+    bind(nameIn, "edit.fileName", { text: false });
+    void dialog("rm.saveAsTitle", nameIn, ["edit.saveAs", "dialog.cancel"]).then((k) => {
+      if (k === 0) {
+        const fileName = fileNameOf(nameIn.value, "roadmap", ".rm");
+        name = fileName.replace(/\.rm$/, "");
+        save(fileName);
+      }
+    });
   });
   act("rm.new", () => replace(newRoadmapDoc(), ""));
   act("rm.clear", () => run(clearRoadmap, t("rm.cleared")));

@@ -60,4 +60,8 @@ export const deEditors: Record<keyof typeof enEditors, string> = {
   "rm.edgeSelected": "Kante {from} -> {to} ausgewählt: {n} Pfadpunkte",
   "rm.pathChanged": "Pfadpunkte der Kante {from} -> {to}: {n}",
   "rm.noEdge": "Zuerst eine Kante anklicken",
+  "rm.open": "Straßenkarten-Datei öffnen",
+  "rm.opened": "Straßenkarten-Datei {file} im Editor geöffnet: {n} Stationen, {e} Kanten",
+  "rm.saveAsTitle": "Straßenkarte als neue Datei speichern",
+  "rm.saved": "Straßenkarte gespeichert als {file}",
 };

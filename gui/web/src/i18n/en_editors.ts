@@ -58,4 +58,8 @@ export const enEditors = {
   "rm.edgeSelected": "Edge {from} -> {to} selected: {n} path points",
   "rm.pathChanged": "Path points of edge {from} -> {to}: {n}",
   "rm.noEdge": "Click an edge first",
+  "rm.open": "Open a roadmap file",
+  "rm.opened": "Roadmap file {file} opened in the editor: {n} stations, {e} edges",
+  "rm.saveAsTitle": "Save the roadmap as a new file",
+  "rm.saved": "Roadmap saved as {file}",
 } as const;
