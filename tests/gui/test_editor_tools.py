@@ -9,6 +9,7 @@ from __future__ import annotations
 import json
 import xml.etree.ElementTree as ET
 from collections import Counter
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -24,7 +25,7 @@ def messages(page: Any) -> Any:
     return page.get_by_role("status", name="Messages", exact=True)
 
 
-def obj(tag: str, points: list[float], attrs: dict[str, str] | None = None, r: float | None = None) -> Obj:
+def obj(tag: str, points: Sequence[float], attrs: dict[str, str] | None = None, r: float | None = None) -> Obj:
     """An object as `_objects` gives it: a circle's first point is its <center>, then its <radius>."""
     child = "center" if tag == "circle" else "point"
     kids = [(child, {"x": f"{points[i]:g}", "y": f"{points[i + 1]:g}"}) for i in range(0, len(points), 2)]
@@ -46,7 +47,7 @@ def tool(page: Any, name: str) -> None:
 
 
 def n_is(state: Any, n: int) -> bool:
-    return state.get_attribute("data-objects") == str(n)
+    return bool(state.get_attribute("data-objects") == str(n))
 
 
 def test_object_tools_and_typed_coordinates_reach_the_platform(page: Any, gateway: Gateway, platform: Platform) -> None:
@@ -255,7 +256,10 @@ def test_roadmap_path_points_are_added_and_deleted_on_the_platform(
 
     root = wait_for(sent, what="the roadmap sent")
     edges = {(e.get("startstation"), e.get("endstation")): e for e in root.findall("edges/edge")}
-    pts = lambda e: [(float(p.get("x", "")), float(p.get("y", ""))) for p in e.iter("point")]  # noqa: E731
+
+    def pts(e: ET.Element) -> list[tuple[float, float]]:
+        return [(float(p.get("x", "")), float(p.get("y", ""))) for p in e.iter("point")]
+
     assert pts(edges[("c_west", "c_01")]) == [(px, py)]
     assert pts(edges[("c_01", "r_kitchen")]) == []
     old = ET.fromstring(before)
