@@ -68,6 +68,18 @@ def test_object_tools_and_typed_coordinates_reach_the_platform(page: Any, gatewa
     tool(page, "Apply coordinates")
     wait_for(lambda: '"points":[5600,11200,5600,13200]' in (state.get_attribute("data-selected") or ""), what="typed")
 
+    # Invert direction of a wall, and Delete a pillar (selected by its rim)
+    click(page, 9000, 4000)
+    wait_for(lambda: '"points":[9000,0,9000,8800]' in (state.get_attribute("data-selected") or ""), what="the wall")
+    tool(page, "Invert direction")
+    wait_for(lambda: '"points":[9000,8800,9000,0]' in (state.get_attribute("data-selected") or ""), what="inverted")
+    click(page, 20250, 4000)
+    wait_for(
+        lambda: '"kind":"circle","points":[20000,4000]' in (state.get_attribute("data-selected") or ""), what="pillar"
+    )
+    tool(page, "Delete")
+    wait_for(lambda: n_is(state, len(objects) - 1), what="the pillar deleted")
+
     tool(page, "Add a reflector")
     drag(page, (23000, 11200), (24200, 11200))
     tool(page, "Add a circle")
@@ -86,7 +98,7 @@ def test_object_tools_and_typed_coordinates_reach_the_platform(page: Any, gatewa
     page.get_by_label("Label text").fill("Entrance")
     tool(page, "Add a label")
     click(page, 7000, 20000)
-    wait_for(lambda: n_is(state, len(objects) + 5), what="five objects added, the workarea replaced")
+    wait_for(lambda: n_is(state, len(objects) + 4), what="five objects added, the workarea replaced, one deleted")
 
     # a polygon of two vertices is refused with its reason and changes nothing
     tool(page, "Prohibited zone")
@@ -94,13 +106,19 @@ def test_object_tools_and_typed_coordinates_reach_the_platform(page: Any, gatewa
     click(page, 9000, 0)
     tool(page, "Finish polygon")
     expect_text(messages(page), "a polygon needs 3 vertices or more (got 2)")
-    assert n_is(state, len(objects) + 5)
+    assert n_is(state, len(objects) + 4)
 
     tool(page, "Send to platform")
     got = _objects(_sent(platform, original))
-    removed = [obj("workarea", [0, 0, 32000, 0, 32000, 20000, 0, 20000]), obj("line", [5600, 11200, 7900, 11200])]
+    removed = [
+        obj("workarea", [0, 0, 32000, 0, 32000, 20000, 0, 20000]),
+        obj("line", [5600, 11200, 7900, 11200]),
+        obj("line", [9000, 0, 9000, 8800]),
+        obj("circle", [20000, 4000], r=250),
+    ]
     added = [
         obj("line", [5600, 11200, 5600, 13200]),
+        obj("line", [9000, 8800, 9000, 0]),
         obj("reflmark", [23000, 11200, 24200, 11200]),
         obj("circle", [3500, 16000], r=5320),
         obj("workarea", [0, 0, 32000, 0, 32000, 11200, 0, 11200]),
