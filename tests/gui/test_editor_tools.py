@@ -132,6 +132,40 @@ def test_object_tools_and_typed_coordinates_reach_the_platform(page: Any, gatewa
     assert [o for o in got if o in kept] == kept  # the objects not touched keep their order
 
 
+def test_line_tools_extend_parallel_and_orthogonal_reach_the_platform(
+    page: Any, gateway: Gateway, platform: Platform
+) -> None:
+    original = platform.other.get_map().xml
+    objects = _objects(original)
+    state = _open_editor(page, gateway, platform)
+    wait_for(lambda: n_is(state, len(objects)), what="the loaded map")
+    steps = [
+        # (tool, the line clicked, the reference line clicked)
+        ("Extend", (4000, 11200), (7000, 15000)),  # corridor wall (0,11200)-(4400,11200) to the wall x = 7000
+        (
+            "Make orthogonal",
+            (5300, 14000),
+            (4500, 8800),
+        ),  # aux line (1500,14000)-(5500,14000), turned about its west end
+        ("Make parallel", (12800, 14500), (15000, 16000)),  # aux line (9500,14500)-(13000,14500) to the wall x = 15000
+    ]
+    for name, line, ref in steps:
+        tool(page, name)
+        click(page, *line)
+        click(page, *ref)
+        expect_text(messages(page), name.lower().removeprefix("make "))  # the command's label
+    changes = {
+        key(obj("line", [0, 11200, 4400, 11200])): obj("line", [0, 11200, 7000, 11200]),
+        key(obj("auxline", [1500, 14000, 5500, 14000])): obj("auxline", [1500, 14000, 1500, 18000]),
+        key(obj("auxline", [9500, 14500, 13000, 14500])): obj("auxline", [9500, 14500, 9500, 18000]),
+    }
+    # undone and redone all three before sending: the platform gets exact coordinates, nothing else changed
+    for name in ["Undo"] * 3 + ["Redo"] * 3:
+        tool(page, name)
+    tool(page, "Send to platform")
+    assert _objects(_sent(platform, original)) == [changes.get(key(o), o) for o in objects]
+
+
 def test_vertices_measuring_select_all_and_clear(page: Any, gateway: Gateway, platform: Platform) -> None:
     original = platform.other.get_map().xml
     objects = _objects(original)
