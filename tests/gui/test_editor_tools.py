@@ -321,7 +321,10 @@ def test_roadmap_path_points_are_added_and_deleted_on_the_platform(
         for e in root.findall("edges/edge")
         if (e.get("startstation"), e.get("endstation")) not in {("c_west", "c_01"), ("c_01", "r_kitchen")}
     ]
+    _roadmap_files_and_the_close_question(page, state, root, tmp_path)
 
+
+def _roadmap_files_and_the_close_question(page: Any, state: Any, root: ET.Element, tmp_path: Path) -> None:
     # Save as: the roadmap the platform got, downloaded under the name asked for
     tool(page, "Save as")
     box = page.get_by_role("dialog", name="Save the roadmap as a new file")
@@ -339,3 +342,17 @@ def test_roadmap_path_points_are_added_and_deleted_on_the_platform(
     opener.set_input_files(str(REPO / "fixtures" / "maps" / "office.map"))
     expect_text(messages(page), "office.map not opened: expected a <roadmap> document, got <map>")
     assert state.get_attribute("data-stations") == "18"
+
+    # closing with changes asks; Save downloads the roadmap and closes; reopened, the editor has it still
+    tool(page, "Clear roadmap")
+    wait_for(lambda: state.get_attribute("data-stations") == "0", what="the cleared roadmap")
+    tool(page, "Close the toolbar")
+    with page.expect_download() as got:
+        page.get_by_role("dialog", name="Unsaved changes").get_by_role("button", name="Save", exact=True).click()
+    got.value.save_as(tmp_path / "cleared.rm")
+    assert not ET.fromstring((tmp_path / "cleared.rm").read_bytes()).findall("stations/station")
+    expect_text(messages(page), "Roadmap editor closed")
+    assert not page.get_by_role("toolbar", name="Roadmap editor").is_visible()
+    page.get_by_role("menuitem", name="Edit", exact=True).click()
+    page.get_by_role("menuitem", name="Edit Roadmap", exact=True).click()
+    assert state.get_attribute("data-dirty") == "false" and state.get_attribute("data-stations") == "0"

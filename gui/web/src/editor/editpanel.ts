@@ -19,6 +19,7 @@ import { objectAtLine, validateDocument } from "./validate";
 import { LINE_LEN_DEFAULTS, linesFromScan, type ScanStatus } from "./fromscan";
 import { SHAPE_TOOLS, type ShapeTool, ShapeTools } from "./drawtools";
 import { typedPanel } from "./typedpanel";
+import { askToClose } from "./closeask";
 import { applyFields } from "./typed";
 import { dialog } from "../panels/menubar";
 
@@ -455,20 +456,15 @@ export function mapEditor(
       close();
       say(t("edit.closed"));
     };
-    if (!history.dirty) {
-      shut();
-      return;
-    }
-    const ask = h("p");
-    bind(ask, "edit.closeAsk", { name: false });
-    void dialog("edit.closeTitle", ask, ["edit.save", "edit.discard", "dialog.cancel"]).then((k) => {
-      if (k === 0) {
+    void askToClose(history.dirty, "edit.closeAsk").then((how) => {
+      if (how === "saved") {
         save(fileNameOf(history.doc.scene.name, "map", ".map"));
-        shut();
-      } else if (k === 1) {
+      } else if (how === "discarded") {
         history = new History(newMapDoc());
         selected = null;
         many = new Set();
+      }
+      if (how !== "cancelled") {
         shut();
       }
     });

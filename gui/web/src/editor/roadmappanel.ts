@@ -30,6 +30,7 @@ import { deletePathPoint, edgeAt, edgePath, insertPathPoint, movePathPoint, path
 import { download, fileNameOf } from "./files";
 import { MAX_XML_CHARS } from "./xml";
 import { dialog } from "../panels/menubar";
+import { askToClose } from "./closeask";
 
 type RmTool = "select" | "addStation" | "addEdge" | "pathPoints";
 const GRID_MM = 10;
@@ -70,6 +71,7 @@ export function roadmapEditor(
   session: PlatformSession,
   view: MapView,
   say: (s: string) => void,
+  close: () => void = () => undefined,
 ): { root: HTMLElement; onShow: (shown: boolean) => void } {
   let open = false;
   let history = new RoadmapHistory(newRoadmapDoc());
@@ -374,6 +376,20 @@ export function roadmapEditor(
       history.markSaved();
       say(t("rm.sent", { n: history.doc.stations.length, e: history.doc.edges.length }));
       refresh();
+    });
+  });
+  // guide 5.5 "looks similar to the toolbar of the map editor": closing asks for saving if necessary
+  act("edit.close", () => {
+    void askToClose(history.dirty, "rm.closeAsk").then((how) => {
+      if (how === "saved") {
+        save(fileNameOf(name, "roadmap", ".rm"));
+      } else if (how === "discarded") {
+        replace(newRoadmapDoc(), "");
+      }
+      if (how !== "cancelled") {
+        close();
+        say(t("rm.closed"));
+      }
     });
   });
   const fields = h("div", { class: "rm-fields" }, nameIn, xIn, yIn, angleIn, apply);

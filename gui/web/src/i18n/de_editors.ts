@@ -64,4 +64,6 @@ export const deEditors: Record<keyof typeof enEditors, string> = {
   "rm.opened": "Straßenkarten-Datei {file} im Editor geöffnet: {n} Stationen, {e} Kanten",
   "rm.saveAsTitle": "Straßenkarte als neue Datei speichern",
   "rm.saved": "Straßenkarte gespeichert als {file}",
+  "rm.closeAsk": "Die Straßenkarte hat Änderungen, die weder gespeichert noch an die Plattform gesendet wurden. Vor dem Schließen speichern?",
+  "rm.closed": "Straßenkarteneditor geschlossen",
 };

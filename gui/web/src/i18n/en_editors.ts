@@ -62,4 +62,6 @@ export const enEditors = {
   "rm.opened": "Roadmap file {file} opened in the editor: {n} stations, {e} edges",
   "rm.saveAsTitle": "Save the roadmap as a new file",
   "rm.saved": "Roadmap saved as {file}",
+  "rm.closeAsk": "The roadmap has changes that were neither saved nor sent to the platform. Save them before closing?",
+  "rm.closed": "Roadmap editor closed",
 } as const;
