@@ -17,7 +17,7 @@ import { type Bounds, countKinds, KINDS, type MapScene, MapParseError, parseMap,
 import { parseRoadmap, type Roadmap } from "../scene/roadmap";
 import type { PlatformSession, TruthEvent } from "../session/session";
 import { type Camera, fit, panBy, toWorld, viewBounds, zoomAt } from "../view/camera";
-import { drawStatic, type Layers, prepare, type Prepared } from "../view/maprender";
+import { drawStatic, type Layers, pack, prepare, type Prepared, transfers } from "../view/maprender";
 import { drawFlag, drawPlatform, drawStatus, footprint, type Footprint, type OverlayOptions, type Pose, type UsSensor } from "../view/overlay";
 import type { ViewOptions } from "./viewoptions";
 
@@ -194,7 +194,10 @@ export class MapView {
 
   private documentsChanged(): void {
     this.version++;
-    this.worker?.postMessage({ type: "scene", scene: this.scene, roadmap: this.roadmap });
+    if (this.worker !== null) {
+      const packed = this.scene === null ? null : pack(this.scene);
+      this.worker.postMessage({ type: "scene", scene: packed, roadmap: this.roadmap }, packed === null ? [] : transfers(packed));
+    }
     this.invalidate();
   }
 
