@@ -241,6 +241,14 @@ def test_save_as_tooltips_and_the_close_question(
     page.get_by_role("button", name="Save as", exact=True).hover()
     expect_text(tip, "Save a map as a new file.")
 
+    # objects on top of each other: a click selects the top one, the next click at the same spot the one beneath
+    def selected_kind() -> str:
+        return str(json.loads(state.get_attribute("data-selected") or '{"kind": ""}')["kind"])
+
+    for want in ("hiddenpolygon", "line", "hiddenpolygon"):  # the lobby's outline lies on the corridor's wall
+        click(page, 1000, 11200)
+        wait_for(lambda w=want: selected_kind() == w, what=f"the {want} selected")
+
     # Save as: the file name asked for, the document downloaded under it, equal to the platform's map
     tool(page, "Save as")
     box = page.get_by_role("dialog", name="Save the map as a new file")

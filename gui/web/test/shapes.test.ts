@@ -3,6 +3,7 @@ import {
   circleObject,
   labelObject,
   measure,
+  objectsAt,
   polygonEdgeAt,
   polygonObject,
   segmentObject,
@@ -92,5 +93,20 @@ describe("polygon edges", () => {
     expect(polygonEdgeAt(objs, -5, 500, 20)).toEqual({ id: 2, after: 3 });
     expect(polygonEdgeAt(objs, 500, 50, 20, new Set([1]))).toBeNull();
     expect(polygonEdgeAt(objs, 500, 500, 20)).toBeNull();
+  });
+});
+
+describe("objects under the pointer", () => {
+  const objs: MapObject[] = [
+    { id: 5, kind: "line", layer: 0, points: [0, 11200, 4400, 11200], attrs: {} },
+    { id: 9, kind: "circle", layer: 1, points: [2000, 11720], r: 500, attrs: {} },
+    { id: 40, kind: "hiddenpolygon", layer: 2, points: [0, 8800, 3000, 8800, 3000, 11200, 0, 11200], attrs: {} },
+  ];
+  it("nearest first, the later object first on a tie; a circle by its rim", () => {
+    expect(objectsAt(objs, 1000, 11200, 50)).toEqual([40, 5]);
+    expect(objectsAt(objs, 1000, 11190, 50)).toEqual([40, 5]);
+    expect(objectsAt(objs, 2000, 11215, 50)).toEqual([9, 40, 5]);
+    expect(objectsAt(objs, 3500, 11230, 50)).toEqual([5]);
+    expect(objectsAt(objs, 2000, 11720, 50)).toEqual([]);
   });
 });

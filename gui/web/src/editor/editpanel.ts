@@ -19,6 +19,7 @@ import { objectAtLine, validateDocument } from "./validate";
 import { LINE_LEN_DEFAULTS, linesFromScan, type ScanStatus } from "./fromscan";
 import { SHAPE_TOOLS, type ShapeTool, ShapeTools } from "./drawtools";
 import { typedPanel } from "./typedpanel";
+import { objectsAt } from "./shapes";
 import { askToClose } from "./closeask";
 import { applyFields } from "./typed";
 import { dialog } from "../panels/menubar";
@@ -29,28 +30,9 @@ const isShape = (t: EditTool): t is ShapeTool => (SHAPE_TOOLS as readonly string
 const GRID_MM = 10;
 const SNAP_PX = 8;
 
-/** The object under (x, y) within `tol` mm: the nearest line or vertex; null when none. */
+/** The object under (x, y) within `tol` mm: the nearest line or vertex (the later on a tie); null when none. */
 export function hit(h: History, x: number, y: number, tol: number): number | null {
-  let best: number | null = null;
-  let bestD = tol;
-  for (const o of h.doc.scene.objects) {
-    const p = o.points;
-    for (let i = 0; i + 1 < p.length; i += 2) {
-      const n = p.length >= 4 ? (i + 2) % p.length : i;
-      const ax = p[i];
-      const ay = p[i + 1];
-      const bx = p[n];
-      const by = p[n + 1];
-      const len2 = (bx - ax) ** 2 + (by - ay) ** 2;
-      const u = len2 === 0 ? 0 : Math.max(0, Math.min(1, ((x - ax) * (bx - ax) + (y - ay) * (by - ay)) / len2));
-      const d = Math.hypot(x - (ax + u * (bx - ax)), y - (ay + u * (by - ay))) - (o.r ?? 0);
-      if (Math.abs(d) <= bestD) {
-        bestD = Math.abs(d);
-        best = o.id;
-      }
-    }
-  }
-  return best;
+  return objectsAt(h.doc.scene.objects, x, y, tol)[0] ?? null;
 }
 
 function nearer(s: Seg, p: Pt): "a" | "b" {
@@ -73,6 +55,8 @@ export function mapEditor(
   const labelIn = h("input", { type: "text", class: "edit-label-text" });
   bind(labelIn, "edit.labelText", { text: false });
   let drag: { from: Pt; to: Pt; pxPerMm: number } | null = null;
+  /** the objects under the last press of "Edit objects", and whether it pressed the one already selected */
+  let under: { ids: number[]; again: boolean } = { ids: [], again: false };
   const tip = h("p", { class: "edit-tip", role: "note" });
   bind(tip, "edit.tip", { text: false });
   const state = h("output", { class: "edit-state" });
@@ -169,7 +153,12 @@ export function mapEditor(
       }
       const p = snap({ x, y }, endpoints(), SNAP_PX / pxPerMm, GRID_MM);
       if (tool === "select") {
-        const id = hit(history, x, y, SNAP_PX / pxPerMm);
+        // a press keeps the selected object when it is among those under the pointer (to drag it); a click that
+        // does not move goes on to the next of them (objects on top of each other: a wall on a polygon's edge)
+        const ids = objectsAt(history.doc.scene.objects, x, y, SNAP_PX / pxPerMm);
+        const again = many.size === 0 && selected !== null && ids.includes(selected);
+        under = { ids, again };
+        const id = again ? selected : (ids[0] ?? null);
         if (id === null || !many.has(id)) {
           many = new Set();
           selected = id;
@@ -218,6 +207,9 @@ export function mapEditor(
         const dy = Math.round((y - d.from.y) / GRID_MM) * GRID_MM;
         if (dx !== 0 || dy !== 0) {
           run({ ok: true, value: moveObjects(history.doc, selection(), dx, dy) });
+        } else if (under.again && under.ids.length > 1 && Math.hypot(x - d.from.x, y - d.from.y) * d.pxPerMm < 3) {
+          selected = under.ids[(under.ids.indexOf(selected as number) + 1) % under.ids.length];
+          refresh();
         }
       } else if (tool === "addLine") {
         const to = d.to;

@@ -178,3 +178,32 @@ export function polygonEdgeAt(
   }
   return best;
 }
+
+/** Distance from (x, y) to the outline of `o` (its segments, closed when it has 3 points or more; a circle's rim). */
+function outlineDistance(o: MapObject, x: number, y: number): number {
+  const p = o.points;
+  let best = Number.POSITIVE_INFINITY;
+  for (let i = 0; i + 1 < p.length; i += 2) {
+    const n = p.length >= 4 ? (i + 2) % p.length : i;
+    const [ax, ay, bx, by] = [p[i], p[i + 1], p[n], p[n + 1]];
+    const len2 = (bx - ax) ** 2 + (by - ay) ** 2;
+    const u = len2 === 0 ? 0 : Math.max(0, Math.min(1, ((x - ax) * (bx - ax) + (y - ay) * (by - ay)) / len2));
+    best = Math.min(best, Math.abs(Math.hypot(x - (ax + u * (bx - ax)), y - (ay + u * (by - ay))) - (o.r ?? 0)));
+  }
+  return best;
+}
+
+/**
+ * The objects whose outline passes within `tol` mm of (x, y), nearest first; on a tie the later in the document
+ * first (it is drawn on top). "Edit objects" selects the first and cycles through the rest on further clicks.
+ */
+export function objectsAt(objects: readonly MapObject[], x: number, y: number, tol: number): number[] {
+  const near: Array<{ id: number; d: number; k: number }> = [];
+  objects.forEach((o, k) => {
+    const d = outlineDistance(o, x, y);
+    if (d <= tol) {
+      near.push({ id: o.id, d, k });
+    }
+  });
+  return near.sort((a, b) => a.d - b.d || b.k - a.k).map((e) => e.id);
+}
