@@ -6,6 +6,7 @@ the editor's endpoint snap makes them exact."""
 
 from __future__ import annotations
 
+import functools
 import json
 import xml.etree.ElementTree as ET
 from collections import Counter
@@ -242,12 +243,12 @@ def test_save_as_tooltips_and_the_close_question(
     expect_text(tip, "Save a map as a new file.")
 
     # objects on top of each other: a click selects the top one, the next click at the same spot the one beneath
-    def selected_kind() -> str:
-        return str(json.loads(state.get_attribute("data-selected") or '{"kind": ""}')["kind"])
+    def kind_is(want: str) -> bool:
+        return bool(json.loads(state.get_attribute("data-selected") or "{}").get("kind") == want)
 
     for want in ("hiddenpolygon", "line", "hiddenpolygon"):  # the lobby's outline lies on the corridor's wall
         click(page, 1000, 11200)
-        wait_for(lambda w=want: selected_kind() == w, what=f"the {want} selected")
+        wait_for(functools.partial(kind_is, want), what=f"the {want} selected")
 
     # Save as: the file name asked for, the document downloaded under it, equal to the platform's map
     tool(page, "Save as")
