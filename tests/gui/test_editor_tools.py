@@ -51,6 +51,21 @@ def n_is(state: Any, n: int) -> bool:
     return bool(state.get_attribute("data-objects") == str(n))
 
 
+def _draw_polygons(page: Any) -> None:
+    """A workarea (closed by a right-click), a prohibited zone (Enter), a hidden polygon (its first vertex again)."""
+    tool(page, "Workarea")
+    for p in [(0, 0), (32000, 0), (32000, 11200), (0, 11200)]:
+        click(page, *p)
+    click(page, 16000, 16000, button="right")  # the new workarea replaces the old one
+    tool(page, "Prohibited zone")
+    for p in [(9100, 11200), (18400, 11200), (15000, 20000)]:
+        click(page, *p)
+    page.keyboard.press("Enter")
+    tool(page, "Hidden polygon")
+    for p in [(0, 8800), (6400, 8800), (9000, 0), (0, 8800)]:
+        click(page, *p)
+
+
 def test_object_tools_and_typed_coordinates_reach_the_platform(page: Any, gateway: Gateway, platform: Platform) -> None:
     original = platform.other.get_map().xml
     objects = _objects(original)
@@ -85,17 +100,7 @@ def test_object_tools_and_typed_coordinates_reach_the_platform(page: Any, gatewa
     drag(page, (23000, 11200), (24200, 11200))
     tool(page, "Add a circle")
     drag(page, (3500, 16000), (7000, 20000))  # radius 5315.07 mm, rounded to the 10 mm grid
-    tool(page, "Workarea")
-    for p in [(0, 0), (32000, 0), (32000, 11200), (0, 11200)]:
-        click(page, *p)
-    click(page, 16000, 16000, button="right")  # a right-click finishes; the new workarea replaces the old one
-    tool(page, "Prohibited zone")
-    for p in [(9100, 11200), (18400, 11200), (15000, 20000)]:
-        click(page, *p)
-    page.keyboard.press("Enter")
-    tool(page, "Hidden polygon")
-    for p in [(0, 8800), (6400, 8800), (9000, 0), (0, 8800)]:  # a click on the first vertex closes it
-        click(page, *p)
+    _draw_polygons(page)
     page.get_by_label("Label text").fill("Entrance")
     tool(page, "Add a label")
     click(page, 7000, 20000)
@@ -110,6 +115,10 @@ def test_object_tools_and_typed_coordinates_reach_the_platform(page: Any, gatewa
     assert n_is(state, len(objects) + 4)
 
     tool(page, "Send to platform")
+    # CMD_SET_MAP has no reply: the editor reads GET_MAP after it and says the map is active
+    expect_text(
+        messages(page), f"Map sent to the platform and active (CMD_GET_MAP returns it): {len(objects) + 4} objects"
+    )
     got = _objects(_sent(platform, original))
     removed = [
         obj("workarea", [0, 0, 32000, 0, 32000, 20000, 0, 20000]),

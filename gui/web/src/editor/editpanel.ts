@@ -12,7 +12,7 @@ import type { PlatformSession } from "../session/session";
 import { toScreen } from "../view/camera";
 import { addObject, addObjects, clearMap, deleteObjects, History, invertLine, lineOp, moveObjects, setGeometry } from "./commands";
 import { clean, extend, orthogonal, parallel, snap, type Pt, type Seg, trim } from "./geometry";
-import { newMapDoc, parseMapDoc, writeMapDoc } from "./mapdoc";
+import { newMapDoc, parseMapDoc, sameObjects, writeMapDoc } from "./mapdoc";
 import { MAX_XML_CHARS } from "./xml";
 import { download, fileNameOf } from "./files";
 import { objectAtLine, validateDocument } from "./validate";
@@ -436,6 +436,14 @@ export function mapEditor(
         history.markSaved();
         say(t("edit.sent", { n: doc.scene.objects.length }));
         refresh();
+        // CMD_SET_MAP has no reply: the platform's GET_MAP (answered after it, guide 6.1) says whether it took the map
+        session
+          .request(new GetMapRequest())
+          .then((r) => {
+            const got = (r as GetMapReply).xml;
+            say(sameObjects(xml, got) ? t("edit.active", { n: doc.scene.objects.length }) : t("edit.notTaken"));
+          })
+          .catch((e: Error) => say(e.message));
       } catch (e) {
         say((e as Error).message);
       }

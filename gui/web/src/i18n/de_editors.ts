@@ -2,6 +2,8 @@
 import type { enEditors } from "./en_editors";
 
 export const deEditors: Record<keyof typeof enEditors, string> = {
+  "edit.active": "Karte an die Plattform gesendet und aktiv (CMD_GET_MAP liefert sie): {n} Objekte",
+  "edit.notTaken": "Die Plattform hat die Karte nicht übernommen: CMD_GET_MAP nach CMD_SET_MAP liefert eine andere Karte (CMD_SET_MAP hat keine Antwort mit einem Grund)",
   "edit.saveAs": "Speichern unter",
   "edit.saveAsTitle": "Karte als neue Datei speichern",
   "edit.fileName": "Dateiname",

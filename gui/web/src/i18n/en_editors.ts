@@ -1,5 +1,7 @@
 /** English labels of the editors' tools added by issue 20's second part (guide 5.4, 5.5 words where it names them). */
 export const enEditors = {
+  "edit.active": "Map sent to the platform and active (CMD_GET_MAP returns it): {n} objects",
+  "edit.notTaken": "The platform did not take the map: CMD_GET_MAP after CMD_SET_MAP returns another map (CMD_SET_MAP has no reply to say why)",
   "edit.saveAs": "Save as",
   "edit.saveAsTitle": "Save the map as a new file",
   "edit.fileName": "File name",
