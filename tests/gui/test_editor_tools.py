@@ -318,7 +318,7 @@ def test_roadmap_path_points_are_added_and_deleted_on_the_platform(
     click(page, 5000, 11200, button="right")  # the path point of Corridor_01 -> Kitchen, deleted
     expect_text(messages(page), "Path points of edge Corridor_01 -> Kitchen: 0")
     tool(page, "Send to platform")
-    expect_text(messages(page), "Roadmap sent to the platform")
+    expect_text(messages(page), "Roadmap sent to the platform and active (CMD_GET_ROADMAP returns it): 18 stations")
 
     def sent() -> Any:
         xml = platform.other.get_roadmap().xml

@@ -23,6 +23,7 @@ import {
   parseRoadmapDoc,
   type RoadmapDoc,
   RoadmapHistory,
+  sameRoadmap,
   writeRoadmapDoc,
 } from "./roadmapdoc";
 import { validateDocument } from "./validate";
@@ -374,8 +375,14 @@ export function roadmapEditor(
       }
       session.send(new SetRoadmapRequest({ name: name || "edited", xml }));
       history.markSaved();
-      say(t("rm.sent", { n: history.doc.stations.length, e: history.doc.edges.length }));
+      const words = { n: history.doc.stations.length, e: history.doc.edges.length };
+      say(t("rm.sent", words));
       refresh();
+      // CMD_SET_ROADMAP has no reply: GET_ROADMAP after it says whether the platform took the roadmap
+      session
+        .request(new GetRoadmapRequest())
+        .then((r) => say(sameRoadmap(xml, (r as GetRoadmapReply).xml) ? t("rm.active", words) : t("rm.notTaken")))
+        .catch((e: Error) => say(e.message));
     });
   });
   // guide 5.5 "looks similar to the toolbar of the map editor": closing asks for saving if necessary

@@ -4,6 +4,8 @@ import type { enEditors } from "./en_editors";
 export const deEditors: Record<keyof typeof enEditors, string> = {
   "edit.active": "Karte an die Plattform gesendet und aktiv (CMD_GET_MAP liefert sie): {n} Objekte",
   "edit.notTaken": "Die Plattform hat die Karte nicht übernommen: CMD_GET_MAP nach CMD_SET_MAP liefert eine andere Karte (CMD_SET_MAP hat keine Antwort mit einem Grund)",
+  "rm.active": "Straßenkarte an die Plattform gesendet und aktiv (CMD_GET_ROADMAP liefert sie): {n} Stationen, {e} Kanten",
+  "rm.notTaken": "Die Plattform hat die Straßenkarte nicht übernommen: CMD_GET_ROADMAP nach CMD_SET_ROADMAP liefert eine andere (CMD_SET_ROADMAP hat keine Antwort mit einem Grund)",
   "edit.saveAs": "Speichern unter",
   "edit.saveAsTitle": "Karte als neue Datei speichern",
   "edit.fileName": "Dateiname",

@@ -2,6 +2,8 @@
 export const enEditors = {
   "edit.active": "Map sent to the platform and active (CMD_GET_MAP returns it): {n} objects",
   "edit.notTaken": "The platform did not take the map: CMD_GET_MAP after CMD_SET_MAP returns another map (CMD_SET_MAP has no reply to say why)",
+  "rm.active": "Roadmap sent to the platform and active (CMD_GET_ROADMAP returns it): {n} stations, {e} edges",
+  "rm.notTaken": "The platform did not take the roadmap: CMD_GET_ROADMAP after CMD_SET_ROADMAP returns another one (CMD_SET_ROADMAP has no reply to say why)",
   "edit.saveAs": "Save as",
   "edit.saveAsTitle": "Save the map as a new file",
   "edit.fileName": "File name",
