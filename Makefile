@@ -65,7 +65,7 @@ test: $(STAMP) $(GUI_BUILT) chromium tshark emulator
 	$(BIN)/python -m pltf.gui.specgen --check
 	$(BIN)/python -m pltf.proxy.dissector --check
 	cd $(GUI_WEB) && npm test --silent
-	PLTF_REQUIRE_EMULATOR=1 $(BIN)/python -m pytest -q -m "not slow"
+	PLTF_REQUIRE_EMULATOR=1 $(BIN)/python -m pytest -q -m "not slow" -n 2 --dist loadfile
 
 test-slow: $(STAMP) tshark
 	$(BIN)/python -m pytest -q -m slow
