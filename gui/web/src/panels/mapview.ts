@@ -17,7 +17,8 @@ import { type Bounds, countKinds, KINDS, type MapScene, MapParseError, parseMap,
 import { parseRoadmap, type Roadmap } from "../scene/roadmap";
 import type { PlatformSession, TruthEvent } from "../session/session";
 import { type Camera, fit, panBy, toWorld, viewBounds, zoomAt } from "../view/camera";
-import { drawStatic, type Layers, pack, prepare, type Prepared, transfers } from "../view/maprender";
+import { drawStatic, type Layers, pack, prepare, type Prepared, type ScenePatch, transfers } from "../view/maprender";
+import { changedWindow, patchCounts, windowSize } from "../view/scenediff";
 import { drawFlag, drawPlatform, drawStatus, footprint, type Footprint, type OverlayOptions, type Pose, type UsSensor } from "../view/overlay";
 import type { ViewOptions } from "./viewoptions";
 
@@ -32,6 +33,8 @@ export interface EditHooks {
   draw(ctx: CanvasRenderingContext2D, cam: Camera): void;
 }
 const MARGIN = 256; // px of static layer beyond each edge of the view
+/** an edit touching at most this many objects goes to the worker as a patch of its base (issue 20) */
+const PATCH_MAX = 2000;
 
 export class MapView {
   readonly root: HTMLElement;
@@ -58,6 +61,10 @@ export class MapView {
   /** draw the static layer on the page in every frame (the benchmark's baseline) */
   syncLayers = false;
   private worker: Worker | null = null;
+  /** the scene the worker holds as its base (its objects as they were then) and their counts per kind */
+  private base: { scene: MapScene; objects: MapScene["objects"]; counts: Record<string, number> } | null = null;
+  /** the current scene's counts per kind */
+  private counts: Record<string, number> = {};
   private inFlight: { id: number; version: number } | null = null;
   private requestId = 0;
   private version = 0;
@@ -194,11 +201,37 @@ export class MapView {
 
   private documentsChanged(): void {
     this.version++;
-    if (this.worker !== null) {
-      const packed = this.scene === null ? null : pack(this.scene);
-      this.worker.postMessage({ type: "scene", scene: packed, roadmap: this.roadmap }, packed === null ? [] : transfers(packed));
+    if (!this.sendPatch()) {
+      const s = this.scene;
+      this.counts = s === null ? {} : countKinds(s);
+      this.base = s === null ? null : { scene: s, objects: s.objects.slice(), counts: this.counts };
+      if (this.worker !== null) {
+        const packed = s === null ? null : pack(s);
+        this.worker.postMessage({ type: "scene", scene: packed, roadmap: this.roadmap }, packed === null ? [] : transfers(packed));
+      }
     }
     this.invalidate();
+  }
+
+  /**
+   * The same scene edited (the editor changes its document's object list by whole objects): only the objects in
+   * the changed window go to the worker, which draws them over its base. False when a whole scene must go.
+   */
+  private sendPatch(): boolean {
+    const s = this.scene;
+    const b = this.base;
+    if (this.worker === null || s === null || b === null || b.scene !== s) {
+      return false;
+    }
+    const w = changedWindow(b.objects, s.objects);
+    if (windowSize(w) > PATCH_MAX) {
+      return false;
+    }
+    this.counts = patchCounts(b.counts, b.objects, s.objects, w);
+    const added = pack({ ...s, objects: s.objects.slice(w.start, w.curEnd) });
+    const patch: ScenePatch = { bounds: this.bounds, hideFrom: w.start, hideTo: w.baseEnd, added, addedCount: w.curEnd - w.start };
+    this.worker.postMessage({ type: "patch", patch, roadmap: this.roadmap }, transfers(added));
+    return true;
   }
 
   private startWorker(): void {
@@ -521,7 +554,7 @@ export class MapView {
       this.summary.textContent = t("map.none");
       return;
     }
-    const counts = countKinds(scene);
+    const counts = this.counts;
     const parts = KINDS.filter((k) => counts[k] > 0).map((k) => `${t(`kind.${k}` as Key)}: ${this.drawn[k] ?? 0}/${counts[k]}`);
     if (this.roadmap) {
       parts.push(`${t("kind.station")}: ${this.drawn.station ?? 0}/${this.roadmap.stations.length}`);

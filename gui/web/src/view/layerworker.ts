@@ -4,12 +4,13 @@
  * while a new one is drawn, so a frame's cost does not grow with the map's size.
  *
  * Messages in: {type: "scene", scene, roadmap} (the scene packed by maprender.ts `pack`, its arrays transferred;
- * the worker builds its own index) and
+ * the worker builds its own index: the base), {type: "patch", patch, roadmap} (an edit of the base: only the
+ * changed objects, drawn over the base's index, which is not rebuilt; issue 20) and
  * {type: "render", id, cam, layers, dpr}. Out: {type: "layer", id, cam, bitmap, drawn, ms}.
  */
 import type { Roadmap } from "../scene/roadmap";
 import type { Camera } from "./camera";
-import { drawStatic, type Layers, type PackedScene, preparePacked, type Prepared } from "./maprender";
+import { applyPatch, drawStatic, type Layers, type PackedScene, preparePacked, type Prepared, type ScenePatch } from "./maprender";
 
 interface Scope {
   onmessage: ((e: MessageEvent) => void) | null;
@@ -17,15 +18,23 @@ interface Scope {
 }
 
 const scope = self as unknown as Scope;
+let base: Prepared | null = null;
 let prepared: Prepared | null = null;
 let roadmap: Roadmap | null = null;
 
 scope.onmessage = (e: MessageEvent) => {
   const m = e.data as
     | { type: "scene"; scene: PackedScene | null; roadmap: Roadmap | null }
+    | { type: "patch"; patch: ScenePatch; roadmap: Roadmap | null }
     | { type: "render"; id: number; cam: Camera; layers: Layers; dpr: number };
   if (m.type === "scene") {
-    prepared = m.scene === null ? null : preparePacked(m.scene);
+    base = m.scene === null ? null : preparePacked(m.scene);
+    prepared = base;
+    roadmap = m.roadmap;
+    return;
+  }
+  if (m.type === "patch") {
+    prepared = base === null ? null : applyPatch(base, m.patch);
     roadmap = m.roadmap;
     return;
   }

@@ -54,9 +54,33 @@ export interface Layers {
 
 export interface Prepared {
   bounds: Bounds | null;
-  lines: Map<string, { segs: Float64Array; grid: SegmentGrid }>;
+  /** per line kind: the segments, their grid, and the object (scene index) each segment came from */
+  lines: Map<string, { segs: Float64Array; grid: SegmentGrid; owners: Int32Array }>;
   others: MapScene["objects"];
+  /** each of `others`' scene index */
+  othersAt: number[];
   scratch: Uint32Array;
+  /** an edit on top of the prepared base (applyPatch): base objects hidden and the edit's objects */
+  patch: PreparedPatch | null;
+}
+
+/**
+ * An edit as the layer worker needs it (issue 20): the base's objects `hideFrom`..`hideTo` are gone, the objects of
+ * `added` (packed, few) take their place, and `bounds` are the edited scene's. The base's index is kept.
+ */
+export interface ScenePatch {
+  bounds: Bounds | null;
+  hideFrom: number;
+  hideTo: number;
+  /** the edited scene's objects `hideFrom`..`hideFrom + addedCount`, packed */
+  added: PackedScene;
+  addedCount: number;
+}
+
+export interface PreparedPatch {
+  hideFrom: number;
+  hideTo: number;
+  lines: Map<string, Float64Array>;
 }
 
 /**
@@ -67,28 +91,37 @@ export interface Prepared {
 export interface PackedScene {
   bounds: Bounds | null;
   segs: Array<[string, Float64Array]>;
+  /** per entry of `segs`: the scene index of each segment's object */
+  owners: Int32Array[];
   others: MapScene["objects"];
+  othersAt: number[];
 }
 
 export function pack(scene: MapScene): PackedScene {
   const counts = new Map<string, number>();
   const lineKinds = new Set<string>(LINE_KINDS);
   const others: MapScene["objects"] = [];
-  for (const o of scene.objects) {
+  const othersAt: number[] = [];
+  const objects = scene.objects;
+  for (let i = 0; i < objects.length; i++) {
+    const o = objects[i];
     if (!lineKinds.has(o.kind)) {
       others.push(o);
+      othersAt.push(i);
     } else if (o.points.length >= 2) {
       counts.set(o.kind, (counts.get(o.kind) ?? 0) + 1);
     }
   }
-  const segs = new Map<string, { a: Float64Array; n: number }>();
+  const segs = new Map<string, { a: Float64Array; owner: Int32Array; n: number }>();
   for (const [kind, n] of counts) {
-    segs.set(kind, { a: new Float64Array(4 * n), n: 0 });
+    segs.set(kind, { a: new Float64Array(4 * n), owner: new Int32Array(n), n: 0 });
   }
-  for (const o of scene.objects) {
+  for (let i = 0; i < objects.length; i++) {
+    const o = objects[i];
     const s = segs.get(o.kind);
     const p = o.points;
     if (s !== undefined && p.length >= 2) {
+      s.owner[s.n] = i;
       const k = 4 * s.n++;
       s.a[k] = p[0];
       s.a[k + 1] = p[1];
@@ -96,24 +129,57 @@ export function pack(scene: MapScene): PackedScene {
       s.a[k + 3] = p[p.length >= 4 ? 3 : 1];
     }
   }
-  return { bounds: sceneBounds(scene), segs: LINE_KINDS.filter((k) => segs.has(k)).map((k) => [k, segs.get(k)!.a]), others };
+  const kinds = LINE_KINDS.filter((k) => segs.has(k));
+  return {
+    bounds: sceneBounds(scene),
+    segs: kinds.map((k) => [k, segs.get(k)!.a]),
+    owners: kinds.map((k) => segs.get(k)!.owner),
+    others,
+    othersAt,
+  };
 }
 
 /** The transferable buffers of a packed scene (for postMessage). */
 export function transfers(p: PackedScene): Transferable[] {
-  return p.segs.map(([, a]) => a.buffer);
+  return [...p.segs.map(([, a]) => a.buffer), ...p.owners.map((a) => a.buffer)];
 }
 
 export function preparePacked(p: PackedScene): Prepared {
-  const lines = new Map<string, { segs: Float64Array; grid: SegmentGrid }>();
+  const lines = new Map<string, { segs: Float64Array; grid: SegmentGrid; owners: Int32Array }>();
   let most = 0;
-  for (const [kind, segs] of p.segs) {
+  p.segs.forEach(([kind, segs], i) => {
     if (segs.length > 0 && p.bounds !== null) {
-      lines.set(kind, { segs, grid: new SegmentGrid(segs, p.bounds) });
+      lines.set(kind, { segs, grid: new SegmentGrid(segs, p.bounds), owners: p.owners[i] });
       most = Math.max(most, segs.length / 4);
     }
-  }
-  return { bounds: p.bounds, lines, others: p.others, scratch: new Uint32Array(most) };
+  });
+  return { bounds: p.bounds, lines, others: p.others, othersAt: p.othersAt, scratch: new Uint32Array(most), patch: null };
+}
+
+/**
+ * The base with an edit on top (the base's grids and arrays shared, nothing rebuilt): its bounds, its other
+ * objects in scene order (the base's before the window, the edit's, the base's after it), its lines drawn by
+ * drawStatic from the base minus the hidden objects plus the edit's.
+ */
+export function applyPatch(base: Prepared, patch: ScenePatch): Prepared {
+  const { hideFrom, hideTo, added } = patch;
+  const others: MapScene["objects"] = [];
+  const othersAt: number[] = [];
+  const keep = (from: number, to: number, delta: number): void => {
+    base.othersAt.forEach((at, i) => {
+      if (at >= from && at < to) {
+        others.push(base.others[i]);
+        othersAt.push(at + delta);
+      }
+    });
+  };
+  keep(0, hideFrom, 0);
+  added.others.forEach((o, i) => {
+    others.push(o);
+    othersAt.push(hideFrom + added.othersAt[i]);
+  });
+  keep(hideTo, Number.POSITIVE_INFINITY, patch.addedCount - (hideTo - hideFrom));
+  return { ...base, bounds: patch.bounds, others, othersAt, patch: { hideFrom, hideTo, lines: new Map(added.segs) } };
 }
 
 export function prepare(scene: MapScene): Prepared {
@@ -126,6 +192,92 @@ function contains(outer: Bounds, inner: Bounds): boolean {
 
 function meets(a: Bounds, b: Bounds): boolean {
   return a.minX <= b.maxX && a.maxX >= b.minX && a.minY <= b.maxY && a.maxY >= b.minY;
+}
+
+/** Segments to draw: `n` of them, `idx[j]` each (all in order when `idx` is null). */
+interface SegPart {
+  segs: Float64Array;
+  idx: Uint32Array | null;
+  n: number;
+}
+
+/** The base's segments of a kind in view (none when the kind is absent), less those of objects an edit hid. */
+function baseSegs(prep: Prepared, kind: string, view: Bounds, whole: boolean): SegPart | null {
+  const entry = prep.lines.get(kind);
+  if (entry === undefined) {
+    return null;
+  }
+  let n = entry.grid.n;
+  let idx: Uint32Array | null = null;
+  if (!whole) {
+    n = entry.grid.query(view, prep.scratch);
+    idx = prep.scratch;
+  }
+  const p = prep.patch;
+  if (p === null || p.hideTo <= p.hideFrom) {
+    return { segs: entry.segs, idx, n };
+  }
+  const out = prep.scratch; // filtered in place: out[m] is written after idx[j] (j >= m) was read
+  let m = 0;
+  for (let j = 0; j < n; j++) {
+    const s = idx === null ? j : idx[j];
+    const o = entry.owners[s];
+    if (o < p.hideFrom || o >= p.hideTo) {
+      out[m++] = s;
+    }
+  }
+  return { segs: entry.segs, idx: out, n: m };
+}
+
+/** An edit's segments of a kind whose box meets the view (like SegmentGrid.query, without a grid: they are few). */
+export function visibleSegs(segs: Float64Array, view: Bounds, whole: boolean): SegPart {
+  const idx = new Uint32Array(segs.length / 4);
+  let m = 0;
+  for (let s = 0; s < idx.length; s++) {
+    const x1 = segs[4 * s], y1 = segs[4 * s + 1], x2 = segs[4 * s + 2], y2 = segs[4 * s + 3];
+    if (whole || !(Math.max(x1, x2) < view.minX || Math.min(x1, x2) > view.maxX || Math.max(y1, y2) < view.minY || Math.min(y1, y2) > view.maxY)) {
+      idx[m++] = s;
+    }
+  }
+  return { segs, idx, n: m };
+}
+
+/** What drawStatic draws of a line kind: the base's part and the edit's (empty when the scene has none). */
+export function lineParts(prep: Prepared, kind: string, view: Bounds, whole: boolean): SegPart[] {
+  const parts: SegPart[] = [];
+  const base = baseSegs(prep, kind, view, whole);
+  if (base !== null) {
+    parts.push(base);
+  }
+  const added = prep.patch?.lines.get(kind);
+  if (added !== undefined && added.length > 0) {
+    parts.push(visibleSegs(added, view, whole));
+  }
+  return parts;
+}
+
+function emitLines(ctx: Ctx2D, { segs, idx, n }: SegPart, ox: number, oy: number, k: number): void {
+  for (let j = 0; j < n; j++) {
+    const s = idx === null ? j : idx[j];
+    ctx.moveTo(ox + segs[4 * s] * k, oy - segs[4 * s + 1] * k);
+    ctx.lineTo(ox + segs[4 * s + 2] * k, oy - segs[4 * s + 3] * k);
+  }
+}
+
+function emitTicks(ctx: Ctx2D, { segs, idx, n }: SegPart, ox: number, oy: number, k: number): void {
+  for (let j = 0; j < n; j++) {
+    const s = idx === null ? j : idx[j];
+    const dx = segs[4 * s + 2] - segs[4 * s];
+    const dy = segs[4 * s + 3] - segs[4 * s + 1];
+    const len = Math.hypot(dx, dy);
+    if (len * k < 16) {
+      continue;
+    }
+    const mx = ox + (segs[4 * s] + dx / 2) * k;
+    const my = oy - (segs[4 * s + 1] + dy / 2) * k;
+    ctx.moveTo(mx, my);
+    ctx.lineTo(mx - (dy / len) * 6, my - (dx / len) * 6); // left normal (-dy, dx), screen y flipped
+  }
 }
 
 function applyStyle(ctx: Ctx2D, s: Style): void {
@@ -212,40 +364,23 @@ export function drawStatic(
     }
     const whole = prep.bounds !== null && contains(view, prep.bounds);
     const ticks = k >= 0.025;
-    for (const [kind, { segs, grid }] of prep.lines) {
-      if (!layers.kinds[kind]) {
+    for (const kind of LINE_KINDS) {
+      const parts = layers.kinds[kind] ? lineParts(prep, kind, view, whole) : [];
+      if (parts.length === 0) {
         continue;
-      }
-      let n = grid.n;
-      let idx: Uint32Array | null = null;
-      if (!whole) {
-        n = grid.query(view, prep.scratch);
-        idx = prep.scratch;
       }
       applyStyle(ctx, STYLES[kind]);
       ctx.beginPath();
-      for (let j = 0; j < n; j++) {
-        const s = idx === null ? j : idx[j];
-        ctx.moveTo(ox + segs[4 * s] * k, oy - segs[4 * s + 1] * k);
-        ctx.lineTo(ox + segs[4 * s + 2] * k, oy - segs[4 * s + 3] * k);
+      for (const part of parts) {
+        emitLines(ctx, part, ox, oy, k);
       }
       if (ticks && kind !== "reflmark") {
-        for (let j = 0; j < n; j++) {
-          const s = idx === null ? j : idx[j];
-          const dx = segs[4 * s + 2] - segs[4 * s];
-          const dy = segs[4 * s + 3] - segs[4 * s + 1];
-          const len = Math.hypot(dx, dy);
-          if (len * k < 16) {
-            continue;
-          }
-          const mx = ox + (segs[4 * s] + dx / 2) * k;
-          const my = oy - (segs[4 * s + 1] + dy / 2) * k;
-          ctx.moveTo(mx, my);
-          ctx.lineTo(mx - (dy / len) * 6, my - (dx / len) * 6); // left normal (-dy, dx), screen y flipped
+        for (const part of parts) {
+          emitTicks(ctx, part, ox, oy, k);
         }
       }
       ctx.stroke();
-      drawn[kind] = n;
+      drawn[kind] = parts.reduce((n, part) => n + part.n, 0);
     }
     for (const o of prep.others) {
       if (!layers.kinds[o.kind] || o.points.length < 2) {
