@@ -22,6 +22,21 @@ let base: Prepared | null = null;
 let prepared: Prepared | null = null;
 let roadmap: Roadmap | null = null;
 
+let kept: OffscreenCanvasRenderingContext2D | null = null;
+
+/**
+ * One canvas and context for every layer, copied into the bitmap sent: a new OffscreenCanvas per layer, or the new
+ * backing store transferToImageBitmap leaves, cost 15-40 ms of the worker's time per layer in headless chromium
+ * under load (issue 20); the copy 10-30 ms.
+ */
+function surface(width: number, height: number): OffscreenCanvasRenderingContext2D {
+  if (kept === null || kept.canvas.width !== width || kept.canvas.height !== height) {
+    kept = new OffscreenCanvas(width, height).getContext("2d")!;
+  }
+  kept.setTransform(1, 0, 0, 1, 0, 0);
+  return kept;
+}
+
 scope.onmessage = (e: MessageEvent) => {
   const m = e.data as
     | { type: "scene"; scene: PackedScene | null; roadmap: Roadmap | null }
@@ -39,10 +54,11 @@ scope.onmessage = (e: MessageEvent) => {
     return;
   }
   const t0 = performance.now();
-  const canvas = new OffscreenCanvas(Math.max(1, Math.round(m.cam.width * m.dpr)), Math.max(1, Math.round(m.cam.height * m.dpr)));
-  const ctx = canvas.getContext("2d")!;
+  const ctx = surface(Math.max(1, Math.round(m.cam.width * m.dpr)), Math.max(1, Math.round(m.cam.height * m.dpr)));
   ctx.setTransform(m.dpr, 0, 0, m.dpr, 0, 0);
   const drawn = drawStatic(ctx, m.cam, prepared, roadmap, m.layers);
-  const bitmap = canvas.transferToImageBitmap();
-  scope.postMessage({ type: "layer", id: m.id, cam: m.cam, bitmap, drawn, ms: performance.now() - t0 }, [bitmap]);
+  // a copy of the kept canvas (one render is in flight at a time, so the canvas is not drawn again before this)
+  void createImageBitmap(ctx.canvas).then((bitmap) => {
+    scope.postMessage({ type: "layer", id: m.id, cam: m.cam, bitmap, drawn, ms: performance.now() - t0 }, [bitmap]);
+  });
 };
