@@ -1,5 +1,6 @@
 import { describe, expect, it } from "vitest";
-import { changedWindow, patchCounts, windowSize } from "../src/view/scenediff";
+import { changedWindow, dirtyPart, patchCounts, union, windowBox, windowSize } from "../src/view/scenediff";
+import { toScreen } from "../src/view/camera";
 import { applyPatch, lineParts, pack, preparePacked, type Prepared } from "../src/view/maprender";
 import { countKinds, type MapObject, type MapScene, sceneBounds } from "../src/scene/map";
 
@@ -86,5 +87,30 @@ describe("applyPatch", () => {
       }
       expect(drawnSet(patched, full.bounds!, true)).toEqual(drawnSet(full, full.bounds!, true));
     }
+  });
+});
+
+describe("dirty regions", () => {
+  it("boxes the objects a window touches, radius included", () => {
+    const base = [line(0, 0), line(1, 100)];
+    const circle: MapObject = { id: 2, kind: "circle", layer: 0, points: [500, 500], r: 50, attrs: {} };
+    const cur = [base[0], circle];
+    expect(windowBox(base, cur, changedWindow(base, cur))).toEqual({ minX: 100, minY: 0, maxX: 550, maxY: 550 });
+    expect(windowBox(base, base, changedWindow(base, base))).toBeNull();
+    expect(union(null, { minX: 0, minY: 0, maxX: 1, maxY: 1 })).toEqual({ minX: 0, minY: 0, maxX: 1, maxY: 1 });
+  });
+  it("maps a world box to whole layer pixels and a camera that draws them at the same place", () => {
+    const cam = { cx: 1000, cy: 2000, scale: 0.1, width: 800, height: 600 };
+    const part = dirtyPart(cam, { minX: 1000, minY: 2000, maxX: 1500, maxY: 2300 }, 10)!;
+    expect(part.x).toBe(390);
+    expect(part.y).toBe(260);
+    expect([part.cam.width, part.cam.height]).toEqual([70, 50]);
+    for (const [x, y] of [[1000, 2000], [1500, 2300], [1234, 2111]]) {
+      const [lx, ly] = toScreen(cam, x, y);
+      const [px, py] = toScreen(part.cam, x, y);
+      expect(px + part.x).toBeCloseTo(lx, 6);
+      expect(py + part.y).toBeCloseTo(ly, 6);
+    }
+    expect(dirtyPart(cam, { minX: 99999, minY: 0, maxX: 100000, maxY: 1 }, 10)).toBeNull();
   });
 });

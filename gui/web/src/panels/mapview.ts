@@ -17,8 +17,8 @@ import { type Bounds, countKinds, KINDS, type MapScene, MapParseError, parseMap,
 import { parseRoadmap, type Roadmap } from "../scene/roadmap";
 import type { PlatformSession, TruthEvent } from "../session/session";
 import { type Camera, fit, panBy, toWorld, viewBounds, zoomAt } from "../view/camera";
-import { drawStatic, type Layers, pack, prepare, type Prepared, type ScenePatch, transfers } from "../view/maprender";
-import { changedWindow, patchCounts, windowSize } from "../view/scenediff";
+import { applyPatch, drawStatic, type Layers, pack, prepare, type Prepared, type ScenePatch, transfers } from "../view/maprender";
+import { type Box, changedWindow, dirtyPart, patchCounts, union, windowBox, windowSize } from "../view/scenediff";
 import { drawFlag, drawPlatform, drawStatus, footprint, type Footprint, type OverlayOptions, type Pose, type UsSensor } from "../view/overlay";
 import type { ViewOptions } from "./viewoptions";
 
@@ -35,6 +35,10 @@ export interface EditHooks {
 const MARGIN = 256; // px of static layer beyond each edge of the view
 /** an edit touching at most this many objects goes to the worker as a patch of its base (issue 20) */
 const PATCH_MAX = 2000;
+/** px around an edit's box redrawn on the page: the front-side ticks (6 px), the widest stroke (4 px) */
+const DIRTY_PAD = 10;
+/** ms after the worker's first layer of a new base before the page builds its own index of it (for edits) */
+const PAGE_INDEX_DELAY_MS = 300;
 
 export class MapView {
   readonly root: HTMLElement;
@@ -65,6 +69,12 @@ export class MapView {
   private base: { scene: MapScene; objects: MapScene["objects"]; counts: Record<string, number> } | null = null;
   /** the current scene's counts per kind */
   private counts: Record<string, number> = {};
+  /** the page's index of the base (built once, a while after the base is drawn): an edit is redrawn here at once */
+  private pageBase: { of: MapScene["objects"]; prep: Prepared } | null = null;
+  /** the world box of the objects the current patch touches (they differ from the base there) */
+  private patchBox: Box | null = null;
+  /** the layer was drawn on the page for an edit: the worker's layer of the version is still to come */
+  private countsStale = false;
   private inFlight: { id: number; version: number } | null = null;
   private requestId = 0;
   private version = 0;
@@ -205,6 +215,8 @@ export class MapView {
       const s = this.scene;
       this.counts = s === null ? {} : countKinds(s);
       this.base = s === null ? null : { scene: s, objects: s.objects.slice(), counts: this.counts };
+      this.pageBase = null;
+      this.patchBox = null;
       if (this.worker !== null) {
         const packed = s === null ? null : pack(s);
         this.worker.postMessage({ type: "scene", scene: packed, roadmap: this.roadmap }, packed === null ? [] : transfers(packed));
@@ -230,8 +242,66 @@ export class MapView {
     this.counts = patchCounts(b.counts, b.objects, s.objects, w);
     const added = pack({ ...s, objects: s.objects.slice(w.start, w.curEnd) });
     const patch: ScenePatch = { bounds: this.bounds, hideFrom: w.start, hideTo: w.baseEnd, added, addedCount: w.curEnd - w.start };
+    const box = windowBox(b.objects, s.objects, w);
+    this.patchLayer(patch, union(box, this.patchBox));
+    this.patchBox = box;
     this.worker.postMessage({ type: "patch", patch, roadmap: this.roadmap }, transfers(added));
+    this.askWorker(); // asked now, not at the next frame
     return true;
+  }
+
+  /**
+   * An edit drawn on the page at once (issue 20): the last layer, when it shows the document just before the edit,
+   * copied with the region the edit touches (`dirty`, world) redrawn from the page's index of the base and the
+   * patch. The worker's layer of the same version follows and replaces it (same pixels, and the counts).
+   */
+  private patchLayer(patch: ScenePatch, dirty: Box | null): void {
+    const l = this.layer;
+    const pb = this.pageBase;
+    if (l === null || pb === null || pb.of !== this.base?.objects || l.version !== this.version - 1) {
+      return;
+    }
+    const dpr = window.devicePixelRatio || 1;
+    const canvas = document.createElement("canvas");
+    canvas.width = Math.max(1, Math.round(l.cam.width * dpr));
+    canvas.height = Math.max(1, Math.round(l.cam.height * dpr));
+    const ctx = canvas.getContext("2d")!;
+    ctx.drawImage(l.image, 0, 0);
+    const part = dirty === null ? null : dirtyPart(l.cam, dirty, DIRTY_PAD);
+    if (part !== null) {
+      ctx.setTransform(dpr, 0, 0, dpr, dpr * part.x, dpr * part.y);
+      ctx.beginPath();
+      ctx.rect(0, 0, part.cam.width, part.cam.height);
+      ctx.clip();
+      drawStatic(ctx, part.cam, applyPatch(pb.prep, patch), this.roadmap, this.layers());
+    }
+    if (l.image instanceof ImageBitmap) {
+      l.image.close();
+    }
+    this.layer = { image: canvas, cam: l.cam, version: this.version };
+    this.countsStale = true; // what is in view per kind: the worker's layer of this version says
+  }
+
+  /** Ask the worker for a layer of the current version and view, unless one is being drawn. */
+  private askWorker(): void {
+    if (this.worker !== null && !this.syncLayers && this.inFlight === null) {
+      this.inFlight = { id: ++this.requestId, version: this.version };
+      const dpr = window.devicePixelRatio || 1;
+      this.worker.postMessage({ type: "render", id: this.requestId, cam: this.layerCamera(), layers: this.layers(), dpr });
+    }
+  }
+
+  /** The page's index of the base, built once the worker has drawn it (off the load's critical path). */
+  private buildPageBase(): void {
+    const b = this.base;
+    if (this.worker === null || b === null || this.pageBase?.of === b.objects) {
+      return;
+    }
+    setTimeout(() => {
+      if (this.base === b && this.pageBase?.of !== b.objects) {
+        this.pageBase = { of: b.objects, prep: prepare({ ...b.scene, objects: b.objects }) };
+      }
+    }, PAGE_INDEX_DELAY_MS);
   }
 
   private startWorker(): void {
@@ -248,19 +318,22 @@ export class MapView {
       const m = e.data as { id: number; cam: Camera; bitmap: ImageBitmap; drawn: Record<string, number>; ms: number };
       const asked = this.inFlight;
       this.inFlight = null;
-      if (asked === null || asked.id !== m.id) {
-        m.bitmap.close();
+      if (asked === null || asked.id !== m.id || (this.layer !== null && asked.version < this.layer.version)) {
+        m.bitmap.close(); // not asked for, or older than the layer drawn on the page for an edit
+        this.invalidate();
         return;
       }
       if (this.layer?.image instanceof ImageBitmap) {
         this.layer.image.close();
       }
       this.layer = { image: m.bitmap, cam: m.cam, version: asked.version };
+      this.countsStale = this.countsStale && asked.version !== this.version;
       this.layerTimes.push(m.ms);
       if (this.layerTimes.length > 1000) {
         this.layerTimes.splice(0, 500);
       }
       this.countVisible(m.drawn);
+      this.buildPageBase();
       this.invalidate();
     };
     this.worker.onerror = () => {
@@ -491,15 +564,12 @@ export class MapView {
 
   /** Keep the static layer up to date: ask the worker (or draw here) when the view has left it. */
   private updateLayer(): void {
-    if (this.covers(this.layer)) {
+    if (this.covers(this.layer) && !this.countsStale) {
       return;
     }
     const dpr = window.devicePixelRatio || 1;
     if (this.worker !== null && !this.syncLayers) {
-      if (this.inFlight === null) {
-        this.inFlight = { id: ++this.requestId, version: this.version };
-        this.worker.postMessage({ type: "render", id: this.requestId, cam: this.layerCamera(), layers: this.layers(), dpr });
-      }
+      this.askWorker();
       return;
     }
     if (this.prepared === null && this.scene !== null) {
