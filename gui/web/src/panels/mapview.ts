@@ -291,10 +291,13 @@ export class MapView {
     }
   }
 
-  /** The page's index of the base, built once the worker has drawn it (off the load's critical path). */
+  /**
+   * The page's index of the base, built once the worker has drawn it (off the load's critical path), and only while
+   * the editor shows its document (the platform's map is not edited).
+   */
   private buildPageBase(): void {
     const b = this.base;
-    if (this.worker === null || b === null || this.pageBase?.of === b.objects) {
+    if (this.worker === null || b === null || this.editHooks === null || this.pageBase?.of === b.objects) {
       return;
     }
     setTimeout(() => {
