@@ -25,10 +25,7 @@ import contextlib
 import math
 import os
 import random
-import re
 import socket
-import subprocess
-import sys
 import tempfile
 import threading
 import time
@@ -38,6 +35,7 @@ from typing import Any
 
 from benchmarks.harness import Config, Row, Target, benchmark, make_row
 from pltf.client import MotionMode, OperationState, PlatformClient
+from pltf.gui.launch import GatewayProcess
 from pltf.spec.codec import REPLIES, REQUESTS, TelegramDecoder, build, encode
 from pltf.spec.telegram import user_fields
 from pltf.zoo import launch
@@ -70,34 +68,11 @@ def _percentile(xs: list[float], q: float) -> float:
 # ---------------------------------------------------------------------------------------------- the parts
 @contextlib.contextmanager
 def gateway() -> Iterator[str]:
-    with tempfile.TemporaryDirectory(prefix="pltf-bench-gui-") as tmp:
-        proc = subprocess.Popen(
-            [
-                sys.executable,
-                "-m",
-                "pltf.cli.main",
-                "gui",
-                "--target",
-                "127.0.0.1:1",
-                "--listen",
-                "127.0.0.1:0",
-                "--network-ini",
-                str(Path(tmp) / "Network.ini"),
-            ],
-            stdout=subprocess.PIPE,
-            stderr=subprocess.DEVNULL,
-            text=True,
-            cwd=ROOT,
-        )
-        assert proc.stdout is not None
-        m = re.search(r"gui serving at (http://[^/]+)/", proc.stdout.readline())
-        try:
-            if m is None:
-                raise RuntimeError("the gateway did not start (is the GUI built? `make gui`)")
-            yield m.group(1)
-        finally:
-            proc.terminate()
-            proc.wait(10)
+    with (
+        tempfile.TemporaryDirectory(prefix="pltf-bench-gui-") as tmp,
+        GatewayProcess(Path(tmp) / "Network.ini") as gw,
+    ):
+        yield gw.base
 
 
 @contextlib.contextmanager
