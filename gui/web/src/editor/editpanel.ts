@@ -15,6 +15,7 @@ import { clean, extend, orthogonal, parallel, snap, type Pt, type Seg, trim } fr
 import { newMapDoc, parseMapDoc, writeMapDoc } from "./mapdoc";
 import { MAX_XML_CHARS } from "./xml";
 import { download, fileNameOf } from "./files";
+import { Toolbar } from "./toolbar";
 import { objectAtLine, validateDocument } from "./validate";
 import { LINE_LEN_DEFAULTS, linesFromScan, type ScanStatus } from "./fromscan";
 
@@ -190,22 +191,12 @@ export function mapEditor(
     },
   };
 
-  const bar = h("div", { role: "toolbar", class: "edit-tools" });
-  bind(bar, "edit.tools", { text: false });
-  const act = (key: Key, fn: () => void): HTMLButtonElement => {
-    const b = h("button", { type: "button" });
-    bind(b, key);
-    b.addEventListener("click", fn);
-    bar.append(b);
-    return b;
-  };
-  const toolButtons = new Map<EditTool, HTMLButtonElement>();
+  const bar = new Toolbar<EditTool>("edit.tools");
+  const act = (key: Key, fn: () => void): HTMLButtonElement => bar.action(key, fn);
   const setTool = (next: EditTool): void => {
     tool = next;
     first = null;
-    for (const [k, b] of toolButtons) {
-      b.setAttribute("aria-pressed", String(k === next));
-    }
+    bar.press(next);
     bind(tip, tipFor[next], { name: false });
     if (open) {
       view.setTool("edit");
@@ -251,7 +242,7 @@ export function mapEditor(
       view.zoomAll();
     });
   });
-  bar.append(file);
+  bar.root.append(file);
   act("edit.save", () => {
     download(fileNameOf(history.doc.scene.name, "map", ".map"), writeMapDoc(history.doc));
     history.markSaved();
@@ -270,10 +261,10 @@ export function mapEditor(
     history.redo();
     refresh();
   });
-  toolButtons.set("select", act("edit.select", () => setTool("select")));
-  toolButtons.set("addLine", act("edit.addLine", () => setTool("addLine")));
+  bar.tool("select", "edit.select", setTool);
+  bar.tool("addLine", "edit.addLine", setTool);
   for (const k of ["trim", "extend", "parallel", "orthogonal"] as const) {
-    toolButtons.set(k, act(`edit.${k}`, () => setTool(k)));
+    bar.tool(k, `edit.${k}`, setTool);
   }
   act("edit.fromScan", () => {
     const st = session.status.last;
@@ -361,5 +352,5 @@ export function mapEditor(
       session.refreshDocuments(); // the view shows the platform's map again
     }
   };
-  return { root: h("div", { class: "map-editor" }, bar, state, tip), onShow };
+  return { root: h("div", { class: "map-editor" }, bar.root, state, tip), onShow };
 }

@@ -27,6 +27,7 @@ import {
 } from "./roadmapdoc";
 import { validateDocument } from "./validate";
 import { download, fileNameOf } from "./files";
+import { Toolbar } from "./toolbar";
 
 type RmTool = "select" | "addStation" | "addEdge";
 const GRID_MM = 10;
@@ -167,22 +168,12 @@ export function roadmapEditor(
     },
   };
 
-  const bar = h("div", { role: "toolbar", class: "edit-tools" });
-  bind(bar, "rm.tools", { text: false });
-  const act = (key: Key, fn: () => void): HTMLButtonElement => {
-    const b = h("button", { type: "button" });
-    bind(b, key);
-    b.addEventListener("click", fn);
-    bar.append(b);
-    return b;
-  };
-  const toolButtons = new Map<RmTool, HTMLButtonElement>();
+  const bar = new Toolbar<RmTool>("rm.tools");
+  const act = (key: Key, fn: () => void): HTMLButtonElement => bar.action(key, fn);
   const setTool = (next: RmTool): void => {
     tool = next;
     edgeFrom = null;
-    for (const [k, b] of toolButtons) {
-      b.setAttribute("aria-pressed", String(k === next));
-    }
+    bar.press(next);
     bind(tip, tipFor[next], { name: false });
   };
   const replace = (doc: RoadmapDoc, newName: string): void => {
@@ -216,9 +207,9 @@ export function roadmapEditor(
     history.redo();
     refresh();
   });
-  toolButtons.set("select", act("rm.select", () => setTool("select")));
-  toolButtons.set("addStation", act("rm.addStation", () => setTool("addStation")));
-  toolButtons.set("addEdge", act("rm.addEdge", () => setTool("addEdge")));
+  bar.tool("select", "rm.select", setTool);
+  bar.tool("addStation", "rm.addStation", setTool);
+  bar.tool("addEdge", "rm.addEdge", setTool);
   act("edit.delete", () => {
     if (selected === null) {
       say(t("edit.noneSelected"));
@@ -275,5 +266,5 @@ export function roadmapEditor(
       session.refreshDocuments(); // the view shows the platform's roadmap again
     }
   };
-  return { root: h("div", { class: "roadmap-editor" }, bar, fields, state, tip), onShow };
+  return { root: h("div", { class: "roadmap-editor" }, bar.root, fields, state, tip), onShow };
 }
