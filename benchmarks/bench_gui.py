@@ -226,10 +226,31 @@ def pan_zoom(config: Config) -> list[Row]:
 # ---------------------------------------------------------------------------------------------- latency
 OBSERVE_JS = """() => {
   window.__changes = [];
+  window.__polls = [];
+  const now = () => performance.timeOrigin + performance.now();
   const out = document.querySelector('output[aria-label="Estimated pose"]');
-  new MutationObserver(() => window.__changes.push([performance.timeOrigin + performance.now(), out.textContent]))
+  new MutationObserver(() => window.__changes.push([now(), out.textContent]))
     .observe(out, { childList: true, characterData: true, subtree: true });
+  window.pltf.session.wire.subscribe((r) => {
+    if (r.telegram.telegramName === "CMD_GET_STATUS") window.__polls.push([r.dir, now(), r.telegram.estX ?? null]);
+  }, false);
 }"""
+STAGES = ("waiting for the poll", "GET_STATUS round trip (page, gateway, server)", "reply to screen")
+
+
+def _stages(samples: list[tuple[int, float, float]], polls: list[tuple[str, float, int | None]]) -> list[list[float]]:
+    """Where each sample's time went (ms): from the change to the sending of the GET_STATUS whose reply first
+    showed it, that request's round trip as the page saw it, and from its reply to the readout's change."""
+    out: list[list[float]] = [[], [], []]
+    for x, t0, shown in samples:
+        k = next((k for k, (d, _, est) in enumerate(polls) if d == "in" and est == x), None)
+        sent = next((t for d, t, _ in reversed(polls[:k]) if d == "out"), None) if k else None
+        if k is None or sent is None:
+            continue
+        got = polls[k][1]
+        for stage, ms in zip(out, (sent - t0, got - sent, shown - got), strict=True):
+            stage.append(ms)
+    return out
 
 
 @benchmark()
@@ -237,6 +258,7 @@ def status_latency(config: Config) -> list[Row]:
     """Status change (CMD_SET_FRM_PLTF on the other port) to the screen at the default polling (p95 <= 100 ms)."""
     n = 8 if config.quick else 60
     gui: list[float] = []
+    samples: list[tuple[int, float, float]] = []
     tight: list[float] = []
     with (
         launch.reference(time_scale=1.0) as server,
@@ -254,6 +276,7 @@ def status_latency(config: Config) -> list[Row]:
                     f"() => window.__changes.find(([t, s]) => s.startsWith('x {x} mm'))", timeout=5000
                 ).json_value()
                 gui.append(shown[0] - t0 * 1000)
+                samples.append((x, t0 * 1000, shown[0]))
             for i in range(n):  # the baseline apart: a client polling back to back loads the server
                 x = 5000 + 10 * i
                 time.sleep(random.uniform(0.1, 0.3))
@@ -262,6 +285,7 @@ def status_latency(config: Config) -> list[Row]:
                 while other.get_status().est_x_mm != x:
                     pass
                 tight.append((time.time() - t0) * 1000)
+        stages = _stages(samples, pg.evaluate("() => window.__polls"))
     return [
         make_row(
             "gui.status_latency",
@@ -274,6 +298,11 @@ def status_latency(config: Config) -> list[Row]:
             baseline_value=_percentile(tight, q),
             target=Target("value", "<=", LATENCY_TARGET_MS) if metric == "p95" else None,
         )
+        for metric, q in (("p50", 0.5), ("p95", 0.95))
+    ] + [
+        make_row("gui.status_latency", f"stage: {name}", metric, _percentile(ms, q), "ms", higher_is_better=False)
+        for name, ms in zip(STAGES, stages, strict=True)
+        if ms
         for metric, q in (("p50", 0.5), ("p95", 0.95))
     ]
 
