@@ -10,7 +10,10 @@ Rules:
   does one single in ``STATEFUL_EVERY`` about an operation or motion command. On a target whose connections are dear
   (``pltf.fuzz.gate``) the units of accepted cases run on a kept connection, and the cases a window brings that
   need a fresh connection (the target should close on them) beyond ``SINGLES_QUEUE`` waiting are skipped
-  (counted): fresh connections are what such a target has least of.
+  (counted): fresh connections are what such a target has least of. Those kept are the ones whose telegram ran
+  least so far (``pltf.fuzz.unit.rarest``): every id comes round. Where the target turns nobody away the dear way
+  is tried against fresh connections and kept only when it is faster and gives up few singles
+  (``pltf.fuzz.trial``).
 - A suspicion (``pltf.fuzz.verdict``) stops the lanes; once the ports are free its unit is replayed alone: a
   finding when it fails again the same way, else reported apart as unconfirmed (``stats.unconfirmed``), which
   never sets the exit status. A unit that timed out is a stall when another port still serves us, else a hang;
@@ -42,7 +45,7 @@ from pltf.fuzz.preludes import STATEFUL, StatePlan
 from pltf.fuzz.schedule import BIG_CASE, Scheduler
 from pltf.fuzz.target import Session
 from pltf.fuzz.trial import Trial
-from pltf.fuzz.unit import Unit, window_units
+from pltf.fuzz.unit import Unit, rarest, window_units
 from pltf.fuzz.verdict import NEEDED, REPLAYS, TIMED_OUT, Verdict, confirm, confirmed
 
 WINDOW = 256  # cases drawn at a time
@@ -88,6 +91,7 @@ class Campaign:
         self.suspicions: list[Suspicion] = []
         self.not_admitted_before = 0  # connections not served by the targets before the last restart
         self.stateful = 0  # singles about an operation or motion command drawn so far
+        self.single_telegrams: collections.Counter[str] = collections.Counter()  # singles queued on a dear target
         self.stop = False
         self.coverage: set[tuple[Any, ...]] = set()
         self.writer = FindingWriter(self, self.corpus.known_findings())
@@ -191,17 +195,18 @@ class Campaign:
         if self.lanes.dear:
             room = max(0, SINGLES_QUEUE - self.lanes.fresh_waiting())
             fresh = [u for u in units if not u.keep]
-            skip = set(fresh[room:])
+            skip = set(fresh) - set(rarest(fresh, room, self.single_telegrams))
             self.stats.skipped += len(skip)
             units = [u for u in units if u not in skip]
         self.lanes.add(units)
-        t0, served, dear = time.monotonic(), self.stats.cases, self.lanes.dear
+        t0, served, singles, dear = time.monotonic(), self.stats.cases, self.stats.singles, self.lanes.dear
         self._lanes_run(batches_only=dear)
         if not self.stop:
             self.plan.window_done(any(c.size > BIG_CASE for c in cases))
             if self.o.lanes > 1 and any(g.dear for g in self.lanes.gates):
                 self.trial.settle(True)  # turn-aways began late (a target that is slow to free a port)
-            self.trial.record(dear, self.stats.cases - served, time.monotonic() - t0)
+            st = self.stats
+            self.trial.record(dear, st.cases - served, time.monotonic() - t0, singles=st.singles - singles)
             self._way(self.trial.way())
         self._gate_stats()
 

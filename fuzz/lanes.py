@@ -17,7 +17,11 @@ Rules:
   ended by its sync reply, while the other port spends fresh connections on the cases the target should refuse
   (and on the others when none waits).
 - Deadlines: a unit's budget (``pltf.fuzz.target.session_deadline``) runs from its turn on its port, plus the
-  size allowances of the units in flight on the other ports (a target may serve one port at a time).
+  size allowances of the units in flight on the other ports (a target may serve one port at a time). Of the
+  units that start on other ports while it is in flight it gets at most ``SHARED_UNITS`` allowances: a target
+  that serves its ports in turn comes back to it after one of them. Unbounded, the kept connection's batches,
+  one after the other, would push a stalled single's deadline on for as long as they come, and the stall
+  would never show.
 - Every admitted unit is handed to the campaign's ``judge`` in its port's order; a False answer stops new units,
   the ones in flight run out (and are judged too) and ``run`` returns: the ports are then free for replays.
 """
@@ -39,6 +43,7 @@ from pltf.fuzz.verdict import NOT_ADMITTED, Liveness, Verdict, judge
 
 RECENT = 16  # units remembered as "sent last"
 WARMUP = 256  # units served, none turned away, before some may go without a lead
+SHARED_UNITS = 2  # allowances of units started on other ports that a unit in flight gets at most
 LEAD_EVERY = 4  # then: one unit in so many on a port keeps it (the liveness probe), and every unit that owes replies
 DONE, STOPPED = "done", "stopped"
 
@@ -53,6 +58,8 @@ class InFlight:
     led: bool  # the session opens with the lead
     started: float
     verdict: Verdict | None = None
+    shared: float = 0.0  # s added to its deadline for units started on other ports since it started
+    largest: float = 0.0  # the largest such allowance
 
 
 Judge = Callable[[InFlight, Verdict], bool]
@@ -218,15 +225,18 @@ class Lanes:
 
     def _share_allowances(self, k: int, flight: Flight) -> None:
         """A target may serve its ports one at a time: a unit's allowance for its size (a big document takes
-        seconds to parse) is added to the deadlines of the units in flight on the other ports, and theirs to
-        its deadline."""
+        seconds to parse) is added to the deadlines of the units in flight on the other ports (up to
+        ``SHARED_UNITS`` allowances each), and theirs to its deadline."""
         now = time.monotonic()
-        mine = flight.budget - self.deadline
+        mine = max(0.0, flight.budget - self.deadline)
         for j, q in enumerate(self.flights):
             for e in q if j != k else ():
                 if not e.flight.done:
                     flight.deadline += max(0.0, min(e.flight.deadline - now, e.flight.budget - self.deadline))
-                    e.flight.deadline += max(0.0, mine)
+                    e.largest = max(e.largest, mine)
+                    grant = max(0.0, min(mine, SHARED_UNITS * e.largest - e.shared))
+                    e.flight.deadline += grant
+                    e.shared += grant
 
     # ------------------------------------------------------------------ a finished flight
     def _done(self, e: InFlight, judge_unit: Judge) -> None:

@@ -15,10 +15,14 @@ Rules:
   (``pin``): were it the culprit, it would stall the other port too.
 - ``owed``: the replies the target must send (E-WIRE-006): every one of a batch; of a single, those asked before
   its case (the lead, the prelude's, the check) - behind a gate only the lead.
+- Where fresh connections are scarce (a dear target) and only some singles of a window can run, ``rarest`` keeps
+  those whose telegram (a name, or ``id N`` for an unknown id) ran least so far: every id and telegram comes
+  round in turn, none is left to the luck of the draw.
 """
 
 from __future__ import annotations
 
+import collections
 import functools
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -139,3 +143,18 @@ def window_units(
         out.extend(singles[round(i * step) : round((i + 1) * step)])
         out.append(batch)
     return out
+
+
+def rarest(singles: list[Unit], room: int, seen: collections.Counter[str]) -> list[Unit]:
+    """The ``room`` singles (in their order) whose telegrams ran least so far by ``seen``, which counts them:
+    the k-th single of a telegram in ``singles`` ranks as if the k - 1 before it had run (a round robin)."""
+    if len(singles) > room:
+        ahead: collections.Counter[str] = collections.Counter()
+        rank = []
+        for i, u in enumerate(singles):
+            t = u.cases[0].telegram if u.cases else ""
+            rank.append((seen[t] + ahead[t], i))
+            ahead[t] += 1
+        singles = [singles[i] for i in sorted(i for _, i in sorted(rank)[:room])]
+    seen.update(u.cases[0].telegram for u in singles if u.cases)
+    return singles

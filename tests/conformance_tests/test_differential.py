@@ -5,7 +5,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import pytest
 import yaml
 
 from pltf.conformance_tests.context import Config
@@ -14,6 +13,7 @@ from pltf.conformance_tests.mutants.catalogue import BY_ID
 from pltf.conformance_tests.mutants.proxy import FrameProxy
 from pltf.conformance_tests.readings import canonical
 from pltf.zoo import launch
+from tests.emulator_gate import emulator_or_skip
 
 
 def test_volatile_fields_are_ignored_and_tolerances_applied() -> None:
@@ -41,8 +41,7 @@ EMULATOR_DIFFERENCES = Path(__file__).resolve().parents[2] / "zoo" / "emulator_d
 
 
 def test_the_reference_and_the_emulator_differ_exactly_where_documented() -> None:
-    if launch.emulator_binary() is None:
-        pytest.skip(f"no emulator: {launch.why_no_emulator()}")
+    emulator_or_skip()
     documented = yaml.safe_load(EMULATOR_DIFFERENCES.read_text(encoding="utf-8"))
     with launch.reference(time_scale=10.0) as ref, launch.emulator(time_scale=10.0) as emu:
         rc = Config("127.0.0.1", ref.ports[0], time_scale=10.0, simulator=True, reply_timeout=10.0)

@@ -220,3 +220,19 @@ def test_a_suspicion_stops_new_units_and_the_ones_in_flight_are_judged() -> None
     assert lanes.run(judge) == STOPPED
     assert 5 <= len(out) < 30 and len(lanes.todo) == 30 - len(out)
     assert lanes.run(judged(out)) == DONE and len(out) == 30  # the rest runs when asked again
+
+
+def test_units_started_on_the_other_port_extend_a_unit_in_flight_by_shared_units_allowances_at_most() -> None:
+    """The kept connection's batches, one after the other, must not push a stalled single's deadline on for as
+    long as they come: the single gets the allowances of ``SHARED_UNITS`` of them, then its own deadline holds."""
+    from types import SimpleNamespace
+
+    lanes = lanes_for(Target(lambda f: SERVE))
+    now = time.monotonic()
+    single = SimpleNamespace(done=False, budget=1.0, deadline=now + 1.0)
+    lanes.flights[1].append(InFlight(single, Unit([REFUSED]), 1, False, False, True, now))  # type: ignore[arg-type]
+    for _ in range(50):  # batches on port 0, each with an allowance of 0.5 s for its size
+        batch = SimpleNamespace(done=False, budget=1.5, deadline=time.monotonic() + 1.5)
+        lanes._share_allowances(0, batch)  # type: ignore[arg-type]
+        batch.done = True
+    assert single.deadline == pytest.approx(now + 1.0 + lanes_module.SHARED_UNITS * 0.5)

@@ -80,3 +80,28 @@ def test_a_window_becomes_batches_among_singles_the_first_batch_behind_the_prelu
     asked: list[int] = []
     only = window_units(refused, lambda: asked.append(1) or [start], ("ready", 0), lambda c: [])  # type: ignore[func-returns-value]
     assert len(only) == 10 and not any(u.batch or u.prelude for u in only) and not asked  # no batch: it waits
+
+
+def test_rarest_keeps_the_singles_whose_telegrams_ran_least_and_every_id_comes_round() -> None:
+    """On a dear target only some singles of a window run: the rare telegrams (an unknown id) first, in order."""
+    import collections
+
+    from pltf.fuzz.unit import rarest
+
+    def single(ident: int) -> Unit:
+        name = REQUESTS.by_id[ident].NAME if ident in REQUESTS.by_id else f"id {ident}"
+        return Unit([Case((frame(bytes([ident, 0])),), "gen.any_id", name, expect=CLOSE)])
+
+    seen: collections.Counter[str] = collections.Counter()
+    common = [single(STATUS_ID) for _ in range(6)]
+    window = [*common[:3], single(77), *common[3:], single(177)]
+    kept = rarest(window, 3, seen)
+    assert [u.cases[0].telegram for u in kept] == ["CMD_GET_STATUS", "id 77", "id 177"]
+    assert kept[1] is window[3] and kept[2] is window[-1]  # in their order, the others skipped
+    assert seen == {"CMD_GET_STATUS": 1, "id 77": 1, "id 177": 1}
+    ids = range(200, 256)  # a window of 56 ids, 8 run per window: each one runs within 7 windows
+    ran: set[str] = set()
+    for _ in range(7):
+        ran.update(u.cases[0].telegram for u in rarest([single(i) for i in ids], 8, seen))
+    assert ran == {f"id {i}" for i in ids}
+    assert rarest(window[:2], 3, seen) == window[:2]  # room for all: all run

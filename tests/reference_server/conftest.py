@@ -245,7 +245,12 @@ class ServerProcess:
     (the process tests are about storage, signals and exit codes, and time the server's work)."""
 
     def __init__(
-        self, data_dir: Path, log_path: Path, *extra: str, module: str = "reference_server", hardware: bool = False
+        self,
+        data_dir: Path,
+        log_path: Path,
+        *extra: str,
+        module: str = "pltf.reference_server",
+        hardware: bool = False,
     ) -> None:
         self.log_path = log_path
         cmd = [sys.executable, "-m", module]
@@ -257,7 +262,11 @@ class ServerProcess:
         log_path.parent.mkdir(parents=True, exist_ok=True)
         self.log_file = log_path.open("wb")
         self.proc = subprocess.Popen(cmd, cwd=REPO, stdout=self.log_file, stderr=subprocess.STDOUT)
-        self.ports = [int(p) for p in wait_for(self._ports, timeout=20)]
+        try:
+            self.ports = [int(p) for p in wait_for(self._ports, timeout=20)]
+        except BaseException:  # not started in time: no server outlives its test
+            self.kill()
+            raise
 
     def _ports(self) -> list[str] | None:
         if self.proc.poll() is not None:

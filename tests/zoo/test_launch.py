@@ -15,6 +15,7 @@ from pathlib import Path
 import pytest
 
 from pltf.zoo import launch
+from tests.emulator_gate import emulator_or_skip
 
 # a target that starts in milliseconds: two listening ports, the reference server's log line, serves nothing
 TINY = (
@@ -129,8 +130,7 @@ def test_a_target_that_fails_to_start_is_one_clear_error(tmp_path: Path) -> None
 
 
 def test_the_emulator_is_started_like_the_reference_server() -> None:
-    if launch.emulator_binary() is None:
-        pytest.skip(f"no emulator: {launch.why_no_emulator()}")
+    emulator_or_skip()
     with launch.emulator(time_scale=10.0) as emu:
         assert not refused(emu.ports[0]) and not refused(emu.ports[1])
         assert (emu.data() / "Map" / "PltfMap.map").is_file()  # the disk the reference server starts with

@@ -19,6 +19,7 @@ from pltf.conformance_tests.context import Config
 from pltf.conformance_tests.runner import Runner, RunResult
 from pltf.zoo import launch
 from pltf.zoo.members import MEMBERS
+from tests.emulator_gate import emulator_or_skip
 
 # the emulator's ideal drive is exact at any time scale; the reference server's motion cases need the machine's
 # attention (a stop must land inside a 600 mm move): a loaded 2-core machine keeps up at 5, not always at 10
@@ -142,8 +143,7 @@ def test_slow_status_ends_soon_and_says_why() -> None:
 
 
 def test_the_emulator_passes_the_original_profile_with_its_readings_non_strict() -> None:
-    if launch.emulator_binary() is None:
-        pytest.skip(f"no emulator: {launch.why_no_emulator()}")
+    emulator_or_skip()
     run, _ = conform("emulator", profile="original", keyword="6.1/ports or MODE_MOTION_VEL or 5.9/parameters")
     soft = {r.case.id for r in run.results if r.verdict is Verdict.NON_STRICT}
     assert soft == {"6.1/ports/second-client-turned-away", "4.3/MODE_MOTION_VEL/watchdog"}
@@ -160,8 +160,8 @@ SLOW_LINK_GAP = "zoo:slow-link"  # ~2,000 sequential round trips at 50-200 ms: n
 @pytest.mark.timeout(600)
 @pytest.mark.parametrize("kind", MATRIX)
 def test_the_standard_tier_on_every_member_ends_within_5_minutes(kind: str) -> None:
-    if "emulator" in kind and launch.emulator_binary() is None:
-        pytest.skip(f"no emulator: {launch.why_no_emulator()}")
+    if "emulator" in kind:
+        emulator_or_skip()
     name = kind[4:].partition("@")[0] if kind.startswith("zoo:") else kind
     m = MEMBERS.get(name)
     profile = m.profile if m is not None else ("original" if kind == "emulator" else "strict")

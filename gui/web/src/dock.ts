@@ -24,6 +24,18 @@ export class Dock {
     this.panes.set(id, { tab, pane, onShow });
   }
 
+  /** Close a window (its tab stays in the dock to open it again). */
+  close(id: string): void {
+    const p = this.panes.get(id);
+    if (p === undefined || this.current !== id) {
+      return;
+    }
+    p.tab.setAttribute("aria-selected", "false");
+    p.pane.hidden = true;
+    this.current = null;
+    p.onShow?.(false);
+  }
+
   show(id: string): void {
     for (const [k, p] of this.panes) {
       const on = k === id;

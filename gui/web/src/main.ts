@@ -49,9 +49,9 @@ dock.add("view-options", "menu.viewOptions", viewOptionsPanel(options, planObsta
 dock.add("plots", "menu.plots", plots.root, plots.onShow);
 dock.add("log", "menu.log", logPanel(session));
 dock.add("wire", "menu.wire", wire.root, wire.onShow);
-const editor = mapEditor(session, map, say);
+const editor = mapEditor(session, map, say, () => dock.close("edit-map"));
 dock.add("edit-map", "menu.editMap", editor.root, editor.onShow);
-const rmEditor = roadmapEditor(session, map, say);
+const rmEditor = roadmapEditor(session, map, say, () => dock.close("edit-roadmap"));
 dock.add("edit-roadmap", "menu.editRoadmap", rmEditor.root, rmEditor.onShow);
 
 // The platform's own geometry (guide 5.9 Geometry, UltraSonic) for the footprint and the ultrasonic sensors.

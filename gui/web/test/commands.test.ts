@@ -3,13 +3,17 @@ import office from "../../../fixtures/maps/office.map?raw";
 import {
   addObject,
   addObjects,
+  addReplacing,
   clearMap,
   deleteObjects,
+  deleteVertex,
+  insertVertex,
   History,
   invertLine,
   lineOp,
   moveObjects,
   moveVertex,
+  setGeometry,
 } from "../src/editor/commands";
 import { extend, trim } from "../src/editor/geometry";
 import { parseMapDoc, writeMapDoc } from "../src/editor/mapdoc";
@@ -109,5 +113,69 @@ describe("geometric commands", () => {
     expect(pointsOf(h, 1)).toEqual([32000, 0, 0, 0]);
     h.undo();
     expect(pointsOf(h, 1)).toEqual([0, 0, 32000, 0]);
+  });
+});
+
+describe("object commands", () => {
+  it("typed geometry replaces points, radius and text and keeps other attributes; undo restores it", () => {
+    const h = fresh();
+    const circle = h.doc.scene.objects.find((o) => o.kind === "circle");
+    const label = h.doc.scene.objects.find((o) => o.kind === "hiddenlabel");
+    if (circle === undefined || label === undefined) throw new Error("fixture without a circle or a label");
+    const start = writeMapDoc(h.doc);
+    h.run(setGeometry(h.doc, circle.id, { points: [100, 200], r: 400 }));
+    h.run(setGeometry(h.doc, label.id, { points: [5, 6], text: "Store" }));
+    const xml = writeMapDoc(h.doc);
+    expect(xml).toContain(`<circle><center x="100" y="200"/><radius r="400"/></circle>`);
+    expect(xml).toMatch(/<hiddenlabel [^>]*text="Store"[^>]*><point x="5" y="6"\/><\/hiddenlabel>/);
+    h.undo();
+    h.undo();
+    expect(writeMapDoc(h.doc)).toBe(start);
+  });
+  it("a new workarea replaces the old one in one step", () => {
+    const h = fresh();
+    const start = writeMapDoc(h.doc);
+    const n = h.doc.scene.objects.length;
+    h.run(addReplacing(h.doc, { kind: "workarea", layer: 0, points: [0, 0, 10, 0, 10, 10], attrs: {} }, [0], "workarea replaced"));
+    const areas = h.doc.scene.objects.filter((o) => o.kind === "workarea");
+    expect(areas.map((o) => o.points)).toEqual([[0, 0, 10, 0, 10, 10]]);
+    expect(h.doc.scene.objects.length).toBe(n);
+    h.undo();
+    expect(writeMapDoc(h.doc)).toBe(start);
+    h.redo();
+    expect(h.doc.scene.objects.filter((o) => o.kind === "workarea").map((o) => o.points)).toEqual([[0, 0, 10, 0, 10, 10]]);
+  });
+});
+
+describe("vertices of polygons", () => {
+  it("a vertex is inserted after the given one and deleted again; a polygon keeps 3", () => {
+    const h = fresh();
+    const zone = h.doc.scene.objects.find((o) => o.kind === "prohibit");
+    if (zone === undefined) throw new Error("no prohibit in the fixture");
+    const start = [...zone.points];
+    const ins = insertVertex(h.doc, zone.id, 1, { x: 15000.0000001, y: 3000 });
+    if (!ins.ok) throw new Error(ins.reason);
+    h.run(ins.value);
+    expect(pointsOf(h, zone.id)).toEqual([11000, 1000, 14500, 1000, 15000, 3000, 14500, 5500, 11000, 5500]);
+    for (const k of [2, 0]) {
+      const del = deleteVertex(h.doc, zone.id, k);
+      if (!del.ok) throw new Error(del.reason);
+      h.run(del.value);
+    }
+    expect(pointsOf(h, zone.id)).toEqual([14500, 1000, 14500, 5500, 11000, 5500]);
+    expect(deleteVertex(h.doc, zone.id, 0)).toEqual({ ok: false, reason: "a polygon keeps at least 3 vertices: delete the polygon instead" });
+    expect(insertVertex(h.doc, 1, 0, { x: 1, y: 1 })).toEqual({
+      ok: false,
+      reason: "a <line> has a fixed number of points: only a polygon gets new vertices",
+    });
+    for (let k = 0; k < 3; k++) h.undo();
+    expect(pointsOf(h, zone.id)).toEqual(start);
+  });
+  it("clear keeps the elements the editor does not know", () => {
+    const src = `<map Version="1.0"><layer index="0"><line><point x="0" y="0"/><point x="5" y="0"/></line><door w="900"><point x="1" y="2"/></door></layer></map>`;
+    const h = new History(parseMapDoc(src));
+    h.run(clearMap(h.doc));
+    expect(writeMapDoc(h.doc)).toContain(`<door w="900"><point x="1" y="2"/></door>`);
+    expect(h.doc.scene.objects.map((o) => o.kind)).toEqual(["door"]);
   });
 });

@@ -1,6 +1,6 @@
 import { describe, expect, it } from "vitest";
 import office from "../../../fixtures/maps/office.map?raw";
-import { MapDocError, parseMapDoc, writeMapDoc } from "../src/editor/mapdoc";
+import { MapDocError, parseMapDoc, sameObjects, writeMapDoc } from "../src/editor/mapdoc";
 import { elementsOf, parseXml, type XmlElement, XmlError } from "../src/editor/xml";
 
 /** Elements only (whitespace and comments left out): name, attributes in order, children. */
@@ -57,5 +57,17 @@ describe("bad documents", () => {
   }
   it("says on which line", () => {
     expect(() => parseXml("<map>\n<layer>\n</map>")).toThrow(new XmlError("line 3: </map> closes <layer>"));
+  });
+});
+
+describe("after sending", () => {
+  it("the platform's map is the same when every object, attribute and point is", () => {
+    const a = `<map Version="1.0"><layer index="0"><line x="1"><point x="0" y="0"/><point x="5" y="0"/></line></layer></map>`;
+    const spaced = `<?xml version="1.0"?>\n<map Version="1.0">\n  <layer index="0">\n    <line x="1"><point x="0.0" y="0"/><point x="5" y="0"/></line>\n  </layer>\n</map>`;
+    expect(sameObjects(a, spaced)).toBe(true);
+    expect(sameObjects(a, a.replace('x="5"', 'x="6"'))).toBe(false);
+    expect(sameObjects(a, a.replace('<line x="1">', "<line>"))).toBe(false);
+    expect(sameObjects(a, "")).toBe(false);
+    expect(sameObjects("<map", "<map")).toBe(false);
   });
 });

@@ -10,6 +10,7 @@ import {
   parseRoadmapDoc,
   RoadmapDocError,
   RoadmapHistory,
+  sameRoadmap,
   writeRoadmapDoc,
 } from "../src/editor/roadmapdoc";
 import { parseMapDoc, writeMapDoc } from "../src/editor/mapdoc";
@@ -83,5 +84,13 @@ describe("the object at a line of the written map", () => {
     expect(objectAtLine(doc, xml, 7)).toBe(1);
     expect(objectAtLine(doc, xml, 8)).toBe(2);
     expect([1, 2, 3, 5, 6, 9].map((n) => objectAtLine(doc, xml, n))).toEqual([null, null, null, null, null, null]);
+  });
+});
+
+describe("after sending", () => {
+  it("the platform's roadmap is the same when it reads and writes the same", () => {
+    expect(sameRoadmap(office, office.replace(/\n\s*/g, ""))).toBe(true);
+    expect(sameRoadmap(office, office.replace('name="Kitchen"', 'name="Kitchen2"'))).toBe(false);
+    expect(sameRoadmap(office, "<map/>")).toBe(false);
   });
 });

@@ -6,7 +6,7 @@
  * read the document and return a command (or, for a geometric operation with no solution, the reason, the
  * document untouched); `History.run` applies it.
  */
-import type { MapObject } from "../scene/map";
+import { KINDS, type MapObject } from "../scene/map";
 import * as g from "./geometry";
 import type { MapDoc } from "./mapdoc";
 
@@ -112,11 +112,15 @@ export function deleteObjects(doc: MapDoc, ids: Iterable<number>, label = "delet
   return { label, changes: at.map((index) => ({ index, before: doc.scene.objects[index], after: null })) };
 }
 
-/** Clear the map (guide 5.4 "Clear the map"), undoable like any edit. */
+/**
+ * Clear the map (guide 5.4 "Clear the map"), undoable like any edit. Elements of a kind the editor does not know
+ * are kept (it neither draws nor edits them).
+ */
 export function clearMap(doc: MapDoc): Command {
+  const known = new Set<string>(KINDS);
   return deleteObjects(
     doc,
-    doc.scene.objects.map((o) => o.id),
+    doc.scene.objects.filter((o) => known.has(o.kind)).map((o) => o.id),
     "clear",
   );
 }
@@ -202,4 +206,55 @@ export function addObjects(doc: MapDoc, objs: ReadonlyArray<Omit<MapObject, "id"
     after: { ...o, id: doc.nextId + k, points: [...o.points], attrs: { ...o.attrs } },
   }));
   return { label, changes };
+}
+
+/** Typed coordinates (typed.ts): the object's points, radius and text replaced; its other attributes kept. */
+export function setGeometry(doc: MapDoc, id: number, g: { points: number[]; r?: number; text?: string }): Command {
+  const index = indexOf(doc, id);
+  const before = doc.scene.objects[index];
+  const after: MapObject = { ...before, points: [...g.points] };
+  if (g.r !== undefined) {
+    after.r = g.r;
+  }
+  if (g.text !== undefined) {
+    after.text = g.text;
+    after.attrs = { ...before.attrs, text: g.text };
+  }
+  return { label: "typed coordinates", changes: [{ index, before, after }] };
+}
+
+/** Add `obj` and remove the objects `ids` in one step (a new workarea replaces the old one). */
+export function addReplacing(doc: MapDoc, obj: Omit<MapObject, "id">, ids: readonly number[], label: string): Command {
+  const removed = deleteObjects(doc, ids).changes;
+  const after: MapObject = { ...obj, id: doc.nextId, points: [...obj.points], attrs: { ...obj.attrs } };
+  return { label, changes: [...removed, { index: doc.scene.objects.length - removed.length, before: null, after }] };
+}
+
+/** The kinds whose vertices can be added and removed (a polygon keeps at least 3, map.xsd allows it). */
+const POLYGONS = new Set(["workarea", "prohibit", "hiddenpolygon"]);
+const MIN_VERTICES = 3;
+
+/** Insert a vertex after vertex `after` of a polygon (guide 5.4 "Edit vertices of a polygon"). */
+export function insertVertex(doc: MapDoc, id: number, after: number, p: g.Pt): g.Result<Command> {
+  const before = doc.scene.objects[indexOf(doc, id)];
+  if (!POLYGONS.has(before.kind)) {
+    return { ok: false, reason: `a <${before.kind}> has a fixed number of points: only a polygon gets new vertices` };
+  }
+  const points = [...before.points];
+  points.splice(2 * (after + 1), 0, g.clean(p.x), g.clean(p.y));
+  return { ok: true, value: replace(doc, id, points, "add vertex") };
+}
+
+/** Delete vertex `vertex` of a polygon; a polygon keeps at least 3. */
+export function deleteVertex(doc: MapDoc, id: number, vertex: number): g.Result<Command> {
+  const before = doc.scene.objects[indexOf(doc, id)];
+  if (!POLYGONS.has(before.kind)) {
+    return { ok: false, reason: `a <${before.kind}> has a fixed number of points: only a polygon loses vertices` };
+  }
+  if (before.points.length / 2 <= MIN_VERTICES) {
+    return { ok: false, reason: `a polygon keeps at least ${MIN_VERTICES} vertices: delete the polygon instead` };
+  }
+  const points = [...before.points];
+  points.splice(2 * vertex, 2);
+  return { ok: true, value: replace(doc, id, points, "delete vertex") };
 }

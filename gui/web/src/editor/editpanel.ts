@@ -10,42 +10,30 @@ import { GetMapReply, GetMapRequest, SetMapRequest } from "../pltf";
 import type { MapView } from "../panels/mapview";
 import type { PlatformSession } from "../session/session";
 import { toScreen } from "../view/camera";
-import { addObject, addObjects, deleteObjects, History, invertLine, lineOp, moveObjects } from "./commands";
+import { addObject, addObjects, clearMap, deleteObjects, History, invertLine, lineOp, moveObjects, setGeometry } from "./commands";
 import { clean, extend, orthogonal, parallel, snap, type Pt, type Seg, trim } from "./geometry";
-import { newMapDoc, parseMapDoc, writeMapDoc } from "./mapdoc";
+import { newMapDoc, parseMapDoc, sameObjects, writeMapDoc } from "./mapdoc";
 import { MAX_XML_CHARS } from "./xml";
 import { download, fileNameOf } from "./files";
 import { Toolbar } from "./toolbar";
 import { objectAtLine, validateDocument } from "./validate";
 import { LINE_LEN_DEFAULTS, linesFromScan, type ScanStatus } from "./fromscan";
+import { SHAPE_TOOLS, type ShapeTool, ShapeTools } from "./drawtools";
+import { typedPanel } from "./typedpanel";
+import { objectsAt } from "./shapes";
+import { askToClose } from "./closeask";
+import { applyFields } from "./typed";
+import { dialog } from "../panels/menubar";
 
-type EditTool = "select" | "addLine" | "trim" | "extend" | "parallel" | "orthogonal";
-type RefTool = Exclude<EditTool, "select" | "addLine">;
+type RefTool = "trim" | "extend" | "parallel" | "orthogonal";
+type EditTool = "select" | "addLine" | RefTool | ShapeTool;
+const isShape = (t: EditTool): t is ShapeTool => (SHAPE_TOOLS as readonly string[]).includes(t);
 const GRID_MM = 10;
 const SNAP_PX = 8;
 
-/** The object under (x, y) within `tol` mm: the nearest line or vertex; null when none. */
+/** The object under (x, y) within `tol` mm: the nearest line or vertex (the later on a tie); null when none. */
 export function hit(h: History, x: number, y: number, tol: number): number | null {
-  let best: number | null = null;
-  let bestD = tol;
-  for (const o of h.doc.scene.objects) {
-    const p = o.points;
-    for (let i = 0; i + 1 < p.length; i += 2) {
-      const n = p.length >= 4 ? (i + 2) % p.length : i;
-      const ax = p[i];
-      const ay = p[i + 1];
-      const bx = p[n];
-      const by = p[n + 1];
-      const len2 = (bx - ax) ** 2 + (by - ay) ** 2;
-      const u = len2 === 0 ? 0 : Math.max(0, Math.min(1, ((x - ax) * (bx - ax) + (y - ay) * (by - ay)) / len2));
-      const d = Math.hypot(x - (ax + u * (bx - ax)), y - (ay + u * (by - ay))) - (o.r ?? 0);
-      if (Math.abs(d) <= bestD) {
-        bestD = Math.abs(d);
-        best = o.id;
-      }
-    }
-  }
-  return best;
+  return objectsAt(h.doc.scene.objects, x, y, tol)[0] ?? null;
 }
 
 function nearer(s: Seg, p: Pt): "a" | "b" {
@@ -56,12 +44,20 @@ export function mapEditor(
   session: PlatformSession,
   view: MapView,
   say: (s: string) => void,
+  close: () => void = () => undefined,
 ): { root: HTMLElement; onShow: (shown: boolean) => void } {
   let open = false;
   let history = new History(newMapDoc());
   let tool: EditTool = "select";
   let selected: number | null = null;
+  /** several objects selected at once (Select all); empty: the selection is `selected` alone */
+  let many = new Set<number>();
+  const selection = (): Set<number> => (many.size > 0 ? many : new Set(selected === null ? [] : [selected]));
+  const labelIn = h("input", { type: "text", class: "edit-label-text" });
+  bind(labelIn, "edit.labelText", { text: false });
   let drag: { from: Pt; to: Pt; pxPerMm: number } | null = null;
+  /** the objects under the last press of "Edit objects", and whether it pressed the one already selected */
+  let under: { ids: number[]; again: boolean } = { ids: [], again: false };
   const tip = h("p", { class: "edit-tip", role: "note" });
   bind(tip, "edit.tip", { text: false });
   const state = h("output", { class: "edit-state" });
@@ -72,6 +68,14 @@ export function mapEditor(
     extend: "edit.tipExtend",
     parallel: "edit.tipParallel",
     orthogonal: "edit.tipOrthogonal",
+    vertex: "edit.tipVertex",
+    reflector: "edit.tipReflector",
+    circle: "edit.tipCircle",
+    workarea: "edit.tipWorkarea",
+    prohibit: "edit.tipProhibit",
+    hiddenpolygon: "edit.tipHiddenpolygon",
+    label: "edit.tipLabel",
+    measure: "edit.tipMeasure",
   };
   /** The line clicked first in a two-click tool, and where it was clicked (trim keeps that side). */
   let first: { id: number; at: Pt } | null = null;
@@ -87,8 +91,11 @@ export function mapEditor(
     if (open) {
       view.showScene(history.doc.scene);
     }
-    const o = history.doc.scene.objects.find((x) => x.id === selected);
-    state.textContent = o === undefined ? "" : t("edit.selected", { what: `${o.kind} ${o.points.join(", ")}` });
+    const o = many.size > 0 ? undefined : history.doc.scene.objects.find((x) => x.id === selected);
+    state.textContent =
+      many.size > 0 ? t("edit.selectedN", { n: many.size }) : o === undefined ? "" : t("edit.selected", { what: `${o.kind} ${o.points.join(", ")}` });
+    state.dataset.selectedCount = String(selection().size);
+    typed.show(o ?? null);
     state.dataset.objects = String(history.doc.scene.objects.length);
     state.dataset.dirty = String(history.dirty);
     state.dataset.selected = o === undefined ? "" : JSON.stringify({ id: o.id, kind: o.kind, points: o.points });
@@ -114,11 +121,49 @@ export function mapEditor(
     return out;
   };
 
+  const shapes = new ShapeTools({
+    doc: () => history.doc,
+    run,
+    say,
+    snap: (p, pxPerMm) => snap(p, endpoints(), SNAP_PX / pxPerMm, GRID_MM),
+    snapEnd: (p, pxPerMm) => snap(p, endpoints(), SNAP_PX / pxPerMm, 0),
+    labelText: () => labelIn.value,
+    selection,
+    measured: (m) => {
+      state.dataset.measure = JSON.stringify(m);
+      return t("edit.measured", { d: m.distance, dx: m.dx, dy: m.dy, a: m.angle });
+    },
+    grid: GRID_MM,
+  });
+  // typed coordinates of the one selected object (typed.ts): mm and degrees, one undoable step
+  const typed = typedPanel((input, shown) => {
+    const o = history.doc.scene.objects.find((x) => x.id === selected);
+    if (o === undefined || many.size > 0) {
+      say(t("edit.noneSelected"));
+      return;
+    }
+    const g = applyFields(o, shown, input);
+    run(g.ok ? { ok: true, value: setGeometry(history.doc, o.id, g.value) } : g);
+  });
+
   const hooks: NonNullable<MapView["editHooks"]> = {
-    down(x, y, pxPerMm) {
+    down(x, y, pxPerMm, button) {
+      if (isShape(tool)) {
+        shapes.down(tool, x, y, pxPerMm, button);
+        return;
+      }
       const p = snap({ x, y }, endpoints(), SNAP_PX / pxPerMm, GRID_MM);
       if (tool === "select") {
-        selected = hit(history, x, y, SNAP_PX / pxPerMm);
+        // a press keeps the selected object when it is among those under the pointer (to drag it); a click that
+        // does not move goes on to the next of them (objects on top of each other: a wall on a polygon's edge)
+        const ids = objectsAt(history.doc.scene.objects, x, y, SNAP_PX / pxPerMm);
+        const again = many.size === 0 && selected !== null && ids.includes(selected);
+        under = { ids, again };
+        const id = again ? selected : (ids[0] ?? null);
+        if (id === null || !many.has(id)) {
+          many = new Set();
+          selected = id;
+        }
         refresh();
       } else if (tool !== "addLine") {
         const id = hit(history, x, y, SNAP_PX / pxPerMm);
@@ -140,21 +185,32 @@ export function mapEditor(
       drag = { from: tool === "select" ? { x, y } : p, to: p, pxPerMm };
     },
     move(x, y) {
+      if (isShape(tool)) {
+        shapes.move(tool, x, y);
+        return;
+      }
       if (drag !== null && (tool === "select" || tool === "addLine")) {
         drag.to = tool === "select" ? { x, y } : snap({ x, y }, endpoints(), SNAP_PX / drag.pxPerMm, GRID_MM);
       }
     },
     up(x, y) {
+      if (isShape(tool)) {
+        shapes.up(tool, x, y);
+        return;
+      }
       const d = drag;
       drag = null;
       if (d === null) {
         return;
       }
-      if (tool === "select" && selected !== null) {
+      if (tool === "select" && selection().size > 0) {
         const dx = Math.round((x - d.from.x) / GRID_MM) * GRID_MM;
         const dy = Math.round((y - d.from.y) / GRID_MM) * GRID_MM;
         if (dx !== 0 || dy !== 0) {
-          run({ ok: true, value: moveObjects(history.doc, [selected], dx, dy) });
+          run({ ok: true, value: moveObjects(history.doc, selection(), dx, dy) });
+        } else if (under.again && under.ids.length > 1 && Math.hypot(x - d.from.x, y - d.from.y) * d.pxPerMm < 3) {
+          selected = under.ids[(under.ids.indexOf(selected as number) + 1) % under.ids.length];
+          refresh();
         }
       } else if (tool === "addLine") {
         const to = d.to;
@@ -167,17 +223,25 @@ export function mapEditor(
       }
     },
     draw(ctx, cam) {
-      const o = history.doc.scene.objects.find((x) => x.id === selected);
       ctx.strokeStyle = "#e65100";
       ctx.lineWidth = 3;
-      if (o !== undefined && o.points.length >= 2) {
+      const sel = selection();
+      for (const o of sel.size > 0 ? history.doc.scene.objects : []) {
+        if (!sel.has(o.id) || o.points.length < 2) {
+          continue;
+        }
         ctx.beginPath();
         for (let i = 0; i + 1 < o.points.length; i += 2) {
           const [sx, sy] = toScreen(cam, o.points[i], o.points[i + 1]);
           if (i === 0) ctx.moveTo(sx, sy);
           else ctx.lineTo(sx, sy);
+          if (tool === "vertex") ctx.strokeRect(sx - 3, sy - 3, 6, 6);
         }
+        if (o.points.length > 4 && o.kind !== "line") ctx.closePath();
         ctx.stroke();
+      }
+      if (isShape(tool)) {
+        shapes.draw(ctx, cam, tool);
       }
       if (drag !== null && tool === "addLine") {
         const [x0, y0] = toScreen(cam, drag.from.x, drag.from.y);
@@ -196,19 +260,21 @@ export function mapEditor(
   const setTool = (next: EditTool): void => {
     tool = next;
     first = null;
+    shapes.cancel();
     bar.press(next);
     bind(tip, tipFor[next], { name: false });
     if (open) {
       view.setTool("edit");
     }
   };
-  act("edit.load", () => {
+  const loadB = act("edit.load", () => {
     session
       .request(new GetMapRequest())
       .then((r) => {
         const m = r as GetMapReply;
         history = new History(parseMapDoc(m.xml, m.name));
         selected = null;
+        many = new Set();
         say(t("edit.loaded", { n: history.doc.scene.objects.length }));
         refresh();
         view.zoomAll();
@@ -237,21 +303,44 @@ export function mapEditor(
         return;
       }
       selected = null;
+      many = new Set();
       say(t("edit.opened", { file: f.name, n: history.doc.scene.objects.length }));
       refresh();
       view.zoomAll();
     });
   });
   bar.root.append(file);
-  act("edit.save", () => {
-    download(fileNameOf(history.doc.scene.name, "map", ".map"), writeMapDoc(history.doc));
+  const save = (fileName: string): void => {
+    download(fileName, writeMapDoc(history.doc));
     history.markSaved();
+    say(t("edit.saved", { file: fileName }));
     refresh();
+  };
+  const saveB = act("edit.save", () => save(fileNameOf(history.doc.scene.name, "map", ".map")));
+  // guide 5.4 "Save a map as a new file": the file name asked for; the map keeps it as its name from then on
+  const saveAsB = act("edit.saveAs", () => {
+    const nameIn = h("input", { type: "text", value: fileNameOf(history.doc.scene.name, "map", ".map") });
+    bind(nameIn, "edit.fileName", { text: false });
+    nameIn.addEventListener("keydown", (e) => e.key === "Enter" && (nameIn.closest(".dialog")?.querySelector("button") as HTMLElement | null)?.click());
+    void dialog("edit.saveAsTitle", nameIn, ["edit.saveAs", "dialog.cancel"]).then((k) => {
+      const fileName = fileNameOf(nameIn.value, "map", ".map");
+      if (k === 0) {
+        history.doc.scene.name = fileName.replace(/\.map$/, "");
+        save(fileName);
+      }
+    });
   });
-  act("edit.new", () => {
+  const newB = act("edit.new", () => {
     history = new History(newMapDoc());
     selected = null;
+    many = new Set();
     refresh();
+  });
+  // guide 5.4 "Clear the map": every object removed in one undoable step (what the editor does not know stays)
+  const clearB = act("edit.clear", () => {
+    selected = null;
+    many = new Set();
+    run({ ok: true, value: clearMap(history.doc) });
   });
   const undoB = act("edit.undo", () => {
     history.undo();
@@ -262,11 +351,24 @@ export function mapEditor(
     refresh();
   });
   bar.tool("select", "edit.select", setTool);
+  bar.tool("vertex", "edit.vertex", setTool);
   bar.tool("addLine", "edit.addLine", setTool);
+  for (const k of ["reflector", "circle", "workarea", "prohibit", "hiddenpolygon", "label"] as const) {
+    bar.tool(k, `edit.${k}`, setTool);
+  }
+  const finishB = act("edit.finish", () => finishPolygon());
   for (const k of ["trim", "extend", "parallel", "orthogonal"] as const) {
     bar.tool(k, `edit.${k}`, setTool);
   }
-  act("edit.fromScan", () => {
+  bar.tool("measure", "edit.measure", setTool);
+  // guide 5.4 "Select all objects in map"
+  const allB = act("edit.selectAll", () => {
+    many = new Set(history.doc.scene.objects.map((o) => o.id));
+    selected = null;
+    setTool("select");
+    refresh();
+  });
+  const scanB = act("edit.fromScan", () => {
     const st = session.status.last;
     if (st === undefined || st.scan.length === 0) {
       say(t("edit.noScan"));
@@ -285,23 +387,24 @@ export function mapEditor(
     }
     run({ ok: true, value: addObjects(history.doc, objs, t("edit.converted", { n: objs.length })) });
   });
-  act("edit.delete", () => {
-    if (selected === null) {
+  const deleteB = act("edit.delete", () => {
+    const ids = selection();
+    if (ids.size === 0) {
       say(t("edit.noneSelected"));
       return;
     }
-    run({ ok: true, value: deleteObjects(history.doc, [selected]) });
     selected = null;
-    refresh();
+    many = new Set();
+    run({ ok: true, value: deleteObjects(history.doc, ids) });
   });
-  act("edit.invert", () => {
+  const invertB = act("edit.invert", () => {
     if (selected === null) {
       say(t("edit.noneSelected"));
       return;
     }
     run(invertLine(history.doc, selected));
   });
-  act("edit.send", () => {
+  const sendB = act("edit.send", () => {
     const doc = history.doc;
     let xml: string;
     try {
@@ -314,6 +417,7 @@ export function mapEditor(
     void validateDocument("map", xml).then((v) => {
       if (!v.ok) {
         selected = v.line === null ? null : objectAtLine(doc, xml, v.line);
+        many = new Set();
         say(t("edit.invalid", { why: v.message }));
         refresh();
         return;
@@ -323,10 +427,87 @@ export function mapEditor(
         history.markSaved();
         say(t("edit.sent", { n: doc.scene.objects.length }));
         refresh();
+        // CMD_SET_MAP has no reply: the platform's GET_MAP (answered after it, guide 6.1) says whether it took the map
+        session
+          .request(new GetMapRequest())
+          .then((r) => {
+            const got = (r as GetMapReply).xml;
+            say(sameObjects(xml, got) ? t("edit.active", { n: doc.scene.objects.length }) : t("edit.notTaken"));
+          })
+          .catch((e: Error) => say(e.message));
       } catch (e) {
         say((e as Error).message);
       }
     });
+  });
+  // guide 5.4 "Closes the toolbar and asks for saving if necessary"
+  const closeB = act("edit.close", () => {
+    const shut = (): void => {
+      shapes.cancel();
+      close();
+      say(t("edit.closed"));
+    };
+    void askToClose(history.dirty, "edit.closeAsk").then((how) => {
+      if (how === "saved") {
+        save(fileNameOf(history.doc.scene.name, "map", ".map"));
+      } else if (how === "discarded") {
+        history = new History(newMapDoc());
+        selected = null;
+        many = new Set();
+      }
+      if (how !== "cancelled") {
+        shut();
+      }
+    });
+  });
+  const finishPolygon = (): void => {
+    if (tool === "workarea" || tool === "prohibit" || tool === "hiddenpolygon") {
+      shapes.finish(tool);
+      view.setTool("edit"); // redraw without the draft
+    }
+  };
+  // the tooltips at the bottom of the toolbar (guide 5.4): the pointed-at button's use, else the chosen tool's
+  const hoverTips: Array<[HTMLElement, Key]> = [
+    [loadB, "edit.tipLoad"],
+    [file, "edit.tipOpen"],
+    [saveB, "edit.tipSave"],
+    [saveAsB, "edit.tipSaveAs"],
+    [newB, "edit.tipNew"],
+    [clearB, "edit.tipClear"],
+    [undoB, "edit.tipUndo"],
+    [redoB, "edit.tipRedo"],
+    [finishB, "edit.tipWorkarea"],
+    [allB, "edit.tipSelectAll"],
+    [scanB, "edit.tipFromScan"],
+    [deleteB, "edit.tipDelete"],
+    [invertB, "edit.tipInvert"],
+    [sendB, "edit.tipSend"],
+    [closeB, "edit.tipClose"],
+    ...[...bar.tools].map(([k, b]): [HTMLElement, Key] => [b, tipFor[k]]),
+  ];
+  for (const [b, key] of hoverTips) {
+    bind(b, key, { text: false, name: false, title: key });
+    const show = (): void => {
+      tip.textContent = t(key);
+    };
+    const back = (): void => {
+      tip.textContent = t(tipFor[tool]);
+    };
+    b.addEventListener("pointerenter", show);
+    b.addEventListener("focus", show);
+    b.addEventListener("pointerleave", back);
+    b.addEventListener("blur", back);
+  }
+  document.addEventListener("keydown", (e) => {
+    if (!open || view.tool !== "edit" || e.ctrlKey || e.metaKey || (e.target as HTMLElement).closest?.("input, .dialog")) {
+      return;
+    }
+    if (e.key === "Enter") {
+      finishPolygon();
+    } else if (e.key === "Escape") {
+      shapes.cancel();
+      view.setTool("edit");
+    }
   });
   document.addEventListener("keydown", (e) => {
     if (!open || !(e.ctrlKey || e.metaKey) || view.tool !== "edit") {
@@ -352,5 +533,7 @@ export function mapEditor(
       session.refreshDocuments(); // the view shows the platform's map again
     }
   };
-  return { root: h("div", { class: "map-editor" }, bar.root, state, tip), onShow };
+  const labelField = h("label", { class: "edit-label" }, h("span", {}), labelIn);
+  bind(labelField.firstElementChild as HTMLElement, "edit.labelText", { name: false });
+  return { root: h("div", { class: "map-editor" }, bar.root, labelField, typed.root, state, tip), onShow };
 }

@@ -155,4 +155,23 @@ export function newMapDoc(name = ""): MapDoc {
   return { scene: { name, version: "1.0", objects: [] }, rootAttrs: [["Version", "1.0"]], entries: [], nextId: 0 };
 }
 
+/**
+ * Whether two map documents hold the same objects (kind, layer, points, radius, text, attributes, in order):
+ * after CMD_SET_MAP, which has no reply, the platform's GET_MAP says whether it took the map. A document that does
+ * not parse is never the same.
+ */
+export function sameObjects(a: string, b: string): boolean {
+  const key = (src: string): string | null => {
+    try {
+      return JSON.stringify(
+        parseMapDoc(src).scene.objects.map((o: EditorObject) => [o.kind, o.layer, o.points, o.r ?? null, o.text ?? null, o.attrs]),
+      );
+    } catch {
+      return null;
+    }
+  };
+  const ka = key(a);
+  return ka !== null && ka === key(b);
+}
+
 export { XmlError };

@@ -133,6 +133,19 @@ export function writeRoadmapDoc(doc: RoadmapDoc): string {
   return writeDocument(el("roadmap", doc.rootAttrs, children));
 }
 
+/** Whether two roadmap documents are the same once read and written (false when either does not parse). */
+export function sameRoadmap(a: string, b: string): boolean {
+  const norm = (src: string): string | null => {
+    try {
+      return writeRoadmapDoc(parseRoadmapDoc(src));
+    } catch {
+      return null;
+    }
+  };
+  const na = norm(a);
+  return na !== null && na === norm(b);
+}
+
 export function newRoadmapDoc(): RoadmapDoc {
   return { rootAttrs: [["Version", "1.0"]], stations: [], edges: [], kept: [] };
 }

@@ -23,13 +23,18 @@ import {
   parseRoadmapDoc,
   type RoadmapDoc,
   RoadmapHistory,
+  sameRoadmap,
   writeRoadmapDoc,
 } from "./roadmapdoc";
 import { validateDocument } from "./validate";
+import { deletePathPoint, edgeAt, edgePath, insertPathPoint, movePathPoint, pathPointAt } from "./roadmappath";
 import { download, fileNameOf } from "./files";
 import { Toolbar } from "./toolbar";
+import { MAX_XML_CHARS } from "./xml";
+import { dialog } from "../panels/menubar";
+import { askToClose } from "./closeask";
 
-type RmTool = "select" | "addStation" | "addEdge";
+type RmTool = "select" | "addStation" | "addEdge" | "pathPoints";
 const GRID_MM = 10;
 const HIT_PX = 10;
 
@@ -68,6 +73,7 @@ export function roadmapEditor(
   session: PlatformSession,
   view: MapView,
   say: (s: string) => void,
+  close: () => void = () => undefined,
 ): { root: HTMLElement; onShow: (shown: boolean) => void } {
   let open = false;
   let history = new RoadmapHistory(newRoadmapDoc());
@@ -76,6 +82,9 @@ export function roadmapEditor(
   let selected: string | null = null;
   let edgeFrom: string | null = null;
   let drag: { id: string; moved: boolean } | null = null;
+  /** the edge whose path points are edited (its index), and a path point being dragged */
+  let edgeSel: number | null = null;
+  let pointDrag: { edge: number; k: number; moved: boolean } | null = null;
   const tip = h("p", { class: "edit-tip", role: "note" });
   bind(tip, "edit.tip", { text: false });
   const state = h("output", { class: "rm-state" });
@@ -84,7 +93,12 @@ export function roadmapEditor(
   const xIn = numberField("rm.x", "10");
   const yIn = numberField("rm.y", "10");
   const angleIn = numberField("rm.angle", "1");
-  const tipFor: Record<RmTool, Key> = { select: "rm.tipSelect", addStation: "rm.tipAddStation", addEdge: "rm.tipAddEdge" };
+  const tipFor: Record<RmTool, Key> = {
+    select: "rm.tipSelect",
+    addStation: "rm.tipAddStation",
+    addEdge: "rm.tipAddEdge",
+    pathPoints: "rm.tipPathPoints",
+  };
 
   const refresh = (): void => {
     const doc = history.doc;
@@ -97,6 +111,8 @@ export function roadmapEditor(
     state.dataset.stations = String(doc.stations.length);
     state.dataset.edges = String(doc.edges.length);
     state.dataset.dirty = String(history.dirty);
+    const e = edgeSel === null ? undefined : doc.edges[edgeSel];
+    state.dataset.edge = e === undefined ? "" : JSON.stringify({ start: e.start, end: e.end, points: e.points });
     state.dataset.selected = s === undefined ? "" : JSON.stringify({ id: s.id, name: s.name, x: s.x, y: s.y, angle: s.angle });
     if (s !== undefined) {
       nameIn.value = s.name;
@@ -107,14 +123,51 @@ export function roadmapEditor(
     undoB.disabled = !history.canUndo;
     redoB.disabled = !history.canRedo;
   };
-  const run = (edit: Edit, label: string): void => {
+  const run = (edit: Edit, label: string): string | null => {
     const why = history.run(edit);
     say(why ?? label);
     refresh();
+    return why;
+  };
+
+  const nameOf = (id: string): string => history.doc.stations.find((st) => st.id === id)?.name ?? id;
+  const edgeWords = (k: number): { from: string; to: string; n: number } => {
+    const e = history.doc.edges[k];
+    return { from: nameOf(e.start), to: nameOf(e.end), n: e.points.length / 2 };
+  };
+  /** guide 5.5 path points: select an edge, add a point to it, drag a point, right-click deletes it */
+  const pathDown = (x: number, y: number, pxPerMm: number, button: number): void => {
+    const tol = HIT_PX / pxPerMm;
+    const pp = pathPointAt(history.doc, x, y, tol);
+    if (pp !== null) {
+      edgeSel = pp.edge;
+      if (button === 2) {
+        if (run(deletePathPoint(pp.edge, pp.k), "") === null) say(t("rm.pathChanged", edgeWords(pp.edge)));
+      } else {
+        pointDrag = { ...pp, moved: false };
+        refresh();
+      }
+      return;
+    }
+    const k = edgeAt(history.doc, x, y, tol);
+    if (k !== null) {
+      edgeSel = k;
+      say(t("rm.edgeSelected", edgeWords(k)));
+      refresh();
+    } else if (edgeSel === null || edgePath(history.doc, edgeSel) === null) {
+      say(t("rm.noEdge"));
+    } else {
+      const sel = edgeSel;
+      if (run(insertPathPoint(sel, grid(x), grid(y)), "") === null) say(t("rm.pathChanged", edgeWords(sel)));
+    }
   };
 
   const hooks: NonNullable<MapView["editHooks"]> = {
-    down(x, y, pxPerMm) {
+    down(x, y, pxPerMm, button) {
+      if (tool === "pathPoints") {
+        pathDown(x, y, pxPerMm, button);
+        return;
+      }
       const id = stationAt(history.doc, x, y, HIT_PX / pxPerMm);
       if (tool === "addStation") {
         const n = nameIn.value.trim() || `Station_${history.doc.stations.length + 1}`;
@@ -146,8 +199,16 @@ export function roadmapEditor(
       if (drag !== null) {
         drag.moved = true;
       }
+      if (pointDrag !== null) {
+        pointDrag.moved = true;
+      }
     },
     up(x, y) {
+      const pd = pointDrag;
+      pointDrag = null;
+      if (pd !== null && pd.moved) {
+        if (run(movePathPoint(pd.edge, pd.k, grid(x), grid(y)), "") === null) say(t("rm.pathChanged", edgeWords(pd.edge)));
+      }
       const d = drag;
       drag = null;
       if (d !== null && d.moved) {
@@ -155,6 +216,20 @@ export function roadmapEditor(
       }
     },
     draw(ctx, cam) {
+      const path = tool === "pathPoints" && edgeSel !== null ? edgePath(history.doc, edgeSel) : null;
+      if (path !== null) {
+        ctx.strokeStyle = "#e65100";
+        ctx.lineWidth = 3;
+        ctx.beginPath();
+        for (let i = 0; i + 1 < path.length; i += 2) {
+          const [sx, sy] = toScreen(cam, path[i], path[i + 1]);
+          if (i === 0) ctx.moveTo(sx, sy);
+          else ctx.lineTo(sx, sy);
+          if (i > 0 && i + 2 < path.length) ctx.strokeRect(sx - 4, sy - 4, 8, 8);
+        }
+        ctx.stroke();
+        ctx.lineWidth = 1;
+      }
       const s = history.doc.stations.find((x) => x.id === selected);
       if (s !== undefined) {
         const [sx, sy] = toScreen(cam, s.x, s.y);
@@ -180,6 +255,7 @@ export function roadmapEditor(
     history = new RoadmapHistory(doc);
     name = newName;
     selected = null;
+    edgeSel = null;
     refresh();
   };
   act("edit.load", () => {
@@ -192,10 +268,49 @@ export function roadmapEditor(
       })
       .catch((e: Error) => say(e.message));
   });
-  act("edit.save", () => {
-    download(fileNameOf(name, "roadmap", ".rm"), writeRoadmapDoc(history.doc));
+  // guide 5.5 "Load a map from the hard disk": a malformed file or another kind of document is refused with its
+  // reason and the editor keeps its roadmap
+  const file = h("input", { type: "file", accept: ".rm,.xml,application/xml,text/xml" });
+  bind(file, "rm.open", { text: false });
+  file.addEventListener("change", () => {
+    const f = file.files?.[0];
+    file.value = "";
+    if (f === undefined) {
+      return;
+    }
+    if (f.size > MAX_XML_CHARS) {
+      say(t("edit.openFailed", { file: f.name, why: `${f.size} bytes is over ${MAX_XML_CHARS}` }));
+      return;
+    }
+    void f.text().then((text) => {
+      try {
+        replace(parseRoadmapDoc(text), f.name.replace(/\.[^.]*$/, ""));
+      } catch (e) {
+        say(t("edit.openFailed", { file: f.name, why: (e as Error).message }));
+        return;
+      }
+      say(t("rm.opened", { file: f.name, n: history.doc.stations.length, e: history.doc.edges.length }));
+    });
+  });
+  bar.root.append(file);
+  const save = (fileName: string): void => {
+    download(fileName, writeRoadmapDoc(history.doc));
     history.markSaved();
+    say(t("rm.saved", { file: fileName }));
     refresh();
+  };
+  act("edit.save", () => save(fileNameOf(name, "roadmap", ".rm")));
+  // guide 5.5 "Save a roadmap as...": the file name asked for; the roadmap keeps it as its name
+  act("edit.saveAs", () => {
+    const nameIn = h("input", { type: "text", value: fileNameOf(name, "roadmap", ".rm") });
+    bind(nameIn, "edit.fileName", { text: false });
+    void dialog("rm.saveAsTitle", nameIn, ["edit.saveAs", "dialog.cancel"]).then((k) => {
+      if (k === 0) {
+        const fileName = fileNameOf(nameIn.value, "roadmap", ".rm");
+        name = fileName.replace(/\.rm$/, "");
+        save(fileName);
+      }
+    });
   });
   act("rm.new", () => replace(newRoadmapDoc(), ""));
   act("rm.clear", () => run(clearRoadmap, t("rm.cleared")));
@@ -210,6 +325,7 @@ export function roadmapEditor(
   bar.tool("select", "rm.select", setTool);
   bar.tool("addStation", "rm.addStation", setTool);
   bar.tool("addEdge", "rm.addEdge", setTool);
+  bar.tool("pathPoints", "rm.pathPoints", setTool);
   act("edit.delete", () => {
     if (selected === null) {
       say(t("edit.noneSelected"));
@@ -217,6 +333,7 @@ export function roadmapEditor(
     }
     run(deleteStation(selected), t("rm.deleted"));
     selected = null;
+    edgeSel = null;
     refresh();
   });
   const apply = act("rm.apply", () => {
@@ -249,8 +366,28 @@ export function roadmapEditor(
       }
       session.send(new SetRoadmapRequest({ name: name || "edited", xml }));
       history.markSaved();
-      say(t("rm.sent", { n: history.doc.stations.length, e: history.doc.edges.length }));
+      const words = { n: history.doc.stations.length, e: history.doc.edges.length };
+      say(t("rm.sent", words));
       refresh();
+      // CMD_SET_ROADMAP has no reply: GET_ROADMAP after it says whether the platform took the roadmap
+      session
+        .request(new GetRoadmapRequest())
+        .then((r) => say(sameRoadmap(xml, (r as GetRoadmapReply).xml) ? t("rm.active", words) : t("rm.notTaken")))
+        .catch((e: Error) => say(e.message));
+    });
+  });
+  // guide 5.5 "looks similar to the toolbar of the map editor": closing asks for saving if necessary
+  act("edit.close", () => {
+    void askToClose(history.dirty, "rm.closeAsk").then((how) => {
+      if (how === "saved") {
+        save(fileNameOf(name, "roadmap", ".rm"));
+      } else if (how === "discarded") {
+        replace(newRoadmapDoc(), "");
+      }
+      if (how !== "cancelled") {
+        close();
+        say(t("rm.closed"));
+      }
     });
   });
   const fields = h("div", { class: "rm-fields" }, nameIn, xIn, yIn, angleIn, apply);

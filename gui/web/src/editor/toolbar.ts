@@ -8,7 +8,8 @@ import { bind, type Key } from "../i18n/i18n";
 
 export class Toolbar<T extends string> {
   readonly root: HTMLElement = h("div", { role: "toolbar", class: "edit-tools" });
-  private readonly tools = new Map<T, HTMLButtonElement>();
+  /** The tools' buttons, in the order they were added. */
+  readonly tools = new Map<T, HTMLButtonElement>();
 
   constructor(name: Key) {
     bind(this.root, name, { text: false });

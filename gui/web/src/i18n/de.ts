@@ -1,5 +1,6 @@
 /** German labels (the original GUI's second language, guide 5.7). */
 import type { Key } from "./en";
+import { deEditors } from "./de_editors";
 
 export const de: Record<Key, string> = {
   "app.title": "PlatformCtrlGUI",
@@ -290,4 +291,5 @@ export const de: Record<Key, string> = {
   "edit.noLines": "Keine Linie im Scan ist lang genug (MinLineLenAux)",
   "edit.converted": "{n} Linien aus dem Scan übernommen",
   "edit.save": "Speichern",
+  ...deEditors,
 };

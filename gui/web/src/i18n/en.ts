@@ -1,4 +1,6 @@
 /** English labels: the guide's own words wherever it names a control (chapters 4 and 5). */
+import { enEditors } from "./en_editors";
+
 export const en = {
   "app.title": "PlatformCtrlGUI",
   "app.messages": "Messages",
@@ -288,6 +290,7 @@ export const en = {
   "edit.noLines": "No line in the scan is long enough (MinLineLenAux)",
   "edit.converted": "{n} lines converted from the scan",
   "edit.save": "Save",
+  ...enEditors,
 } as const;
 
 export type Key = keyof typeof en;

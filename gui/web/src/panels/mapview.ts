@@ -17,7 +17,7 @@ import { type Bounds, countKinds, KINDS, type MapScene, MapParseError, parseMap,
 import { parseRoadmap, type Roadmap } from "../scene/roadmap";
 import type { PlatformSession, TruthEvent } from "../session/session";
 import { type Camera, fit, panBy, toWorld, viewBounds, zoomAt } from "../view/camera";
-import { drawStatic, type Layers, prepare, type Prepared } from "../view/maprender";
+import { drawStatic, type Layers, pack, prepare, type Prepared, transfers } from "../view/maprender";
 import { drawFlag, drawPlatform, drawStatus, footprint, type Footprint, type OverlayOptions, type Pose, type UsSensor } from "../view/overlay";
 import type { ViewOptions } from "./viewoptions";
 
@@ -25,7 +25,8 @@ type Tool = "pan" | "zoomArea" | "shift" | "flag" | "edit";
 
 /** The map editor's hold on the view (editor/editpanel.ts): pointer events in world mm, and its own drawing. */
 export interface EditHooks {
-  down(x: number, y: number, pxPerMm: number): void;
+  /** `button`: 0 left, 2 right (a right-click finishes a polygon) */
+  down(x: number, y: number, pxPerMm: number, button: number): void;
   move(x: number, y: number): void;
   up(x: number, y: number): void;
   draw(ctx: CanvasRenderingContext2D, cam: Camera): void;
@@ -193,7 +194,10 @@ export class MapView {
 
   private documentsChanged(): void {
     this.version++;
-    this.worker?.postMessage({ type: "scene", scene: this.scene, roadmap: this.roadmap });
+    if (this.worker !== null) {
+      const packed = this.scene === null ? null : pack(this.scene);
+      this.worker.postMessage({ type: "scene", scene: packed, roadmap: this.roadmap }, packed === null ? [] : transfers(packed));
+    }
     this.invalidate();
   }
 
@@ -304,7 +308,7 @@ export class MapView {
     this.drag = { x: e.offsetX, y: e.offsetY, button: e.button, cam: this.cam };
     if (this.tool === "edit" && this.editHooks !== null) {
       const [wx, wy] = toWorld(this.cam, e.offsetX, e.offsetY);
-      this.editHooks.down(wx, wy, this.cam.scale);
+      this.editHooks.down(wx, wy, this.cam.scale, e.button);
       return;
     }
     if (this.tool === "shift" && this.status) {

@@ -3,13 +3,13 @@
  * thread and sends it back as an ImageBitmap. The page keeps drawing frames from the last layer (moved and scaled)
  * while a new one is drawn, so a frame's cost does not grow with the map's size.
  *
- * Messages in: {type: "scene", scene, roadmap} (the plain documents; the worker builds its own index) and
+ * Messages in: {type: "scene", scene, roadmap} (the scene packed by maprender.ts `pack`, its arrays transferred;
+ * the worker builds its own index) and
  * {type: "render", id, cam, layers, dpr}. Out: {type: "layer", id, cam, bitmap, drawn, ms}.
  */
-import type { MapScene } from "../scene/map";
 import type { Roadmap } from "../scene/roadmap";
 import type { Camera } from "./camera";
-import { drawStatic, type Layers, prepare, type Prepared } from "./maprender";
+import { drawStatic, type Layers, type PackedScene, preparePacked, type Prepared } from "./maprender";
 
 interface Scope {
   onmessage: ((e: MessageEvent) => void) | null;
@@ -22,10 +22,10 @@ let roadmap: Roadmap | null = null;
 
 scope.onmessage = (e: MessageEvent) => {
   const m = e.data as
-    | { type: "scene"; scene: MapScene | null; roadmap: Roadmap | null }
+    | { type: "scene"; scene: PackedScene | null; roadmap: Roadmap | null }
     | { type: "render"; id: number; cam: Camera; layers: Layers; dpr: number };
   if (m.type === "scene") {
-    prepared = m.scene === null ? null : prepare(m.scene);
+    prepared = m.scene === null ? null : preparePacked(m.scene);
     roadmap = m.roadmap;
     return;
   }

@@ -2,7 +2,8 @@
  * Drawing the map document and the roadmap on a Canvas2D (the static layer of the map view).
  *
  * Rules:
- * - `prepare` turns a scene into flat Float64Arrays per kind and a SegmentGrid each, once per map.
+ * - `prepare` turns a scene into flat Float64Arrays per kind (`pack`: what goes to the layer worker) and a
+ *   SegmentGrid each (`preparePacked`), once per map version.
  * - `drawStatic` culls with the grid (only segments whose box meets the view are visited; none at all when the
  *   view holds the whole map) and batches: one path and one stroke per kind, whatever the number of lines.
  * - Styles are a table. A line's front side (the side the scanner sees, guide 5.4 "The Scanner only recognizes
@@ -52,32 +53,71 @@ export interface Layers {
 }
 
 export interface Prepared {
-  scene: MapScene;
   bounds: Bounds | null;
   lines: Map<string, { segs: Float64Array; grid: SegmentGrid }>;
   others: MapScene["objects"];
   scratch: Uint32Array;
 }
 
-export function prepare(scene: MapScene): Prepared {
-  const bounds = sceneBounds(scene);
-  const lines = new Map<string, { segs: Float64Array; grid: SegmentGrid }>();
-  let most = 0;
-  for (const kind of LINE_KINDS) {
-    const objs = scene.objects.filter((o) => o.kind === kind && o.points.length >= 2);
-    const segs = new Float64Array(objs.length * 4);
-    objs.forEach((o, i) => {
-      const p = o.points;
-      segs.set([p[0], p[1], p[p.length >= 4 ? 2 : 0], p[p.length >= 4 ? 3 : 1]], 4 * i);
-    });
-    if (objs.length > 0 && bounds !== null) {
-      lines.set(kind, { segs, grid: new SegmentGrid(segs, bounds) });
-      most = Math.max(most, objs.length);
+/**
+ * A scene as the layer worker needs it, cheap to send: the line kinds' segments in Float64Arrays (transferred, not
+ * copied) and the few other objects as they are. Posting the scene itself structured-clones 50,000 objects, which
+ * took the page's thread 100-600 ms per edit (benchmarks/bench_editors.py).
+ */
+export interface PackedScene {
+  bounds: Bounds | null;
+  segs: Array<[string, Float64Array]>;
+  others: MapScene["objects"];
+}
+
+export function pack(scene: MapScene): PackedScene {
+  const counts = new Map<string, number>();
+  const lineKinds = new Set<string>(LINE_KINDS);
+  const others: MapScene["objects"] = [];
+  for (const o of scene.objects) {
+    if (!lineKinds.has(o.kind)) {
+      others.push(o);
+    } else if (o.points.length >= 2) {
+      counts.set(o.kind, (counts.get(o.kind) ?? 0) + 1);
     }
   }
-  const lineKinds = new Set<string>(LINE_KINDS);
-  const others = scene.objects.filter((o) => !lineKinds.has(o.kind));
-  return { scene, bounds, lines, others, scratch: new Uint32Array(most) };
+  const segs = new Map<string, { a: Float64Array; n: number }>();
+  for (const [kind, n] of counts) {
+    segs.set(kind, { a: new Float64Array(4 * n), n: 0 });
+  }
+  for (const o of scene.objects) {
+    const s = segs.get(o.kind);
+    const p = o.points;
+    if (s !== undefined && p.length >= 2) {
+      const k = 4 * s.n++;
+      s.a[k] = p[0];
+      s.a[k + 1] = p[1];
+      s.a[k + 2] = p[p.length >= 4 ? 2 : 0];
+      s.a[k + 3] = p[p.length >= 4 ? 3 : 1];
+    }
+  }
+  return { bounds: sceneBounds(scene), segs: LINE_KINDS.filter((k) => segs.has(k)).map((k) => [k, segs.get(k)!.a]), others };
+}
+
+/** The transferable buffers of a packed scene (for postMessage). */
+export function transfers(p: PackedScene): Transferable[] {
+  return p.segs.map(([, a]) => a.buffer);
+}
+
+export function preparePacked(p: PackedScene): Prepared {
+  const lines = new Map<string, { segs: Float64Array; grid: SegmentGrid }>();
+  let most = 0;
+  for (const [kind, segs] of p.segs) {
+    if (segs.length > 0 && p.bounds !== null) {
+      lines.set(kind, { segs, grid: new SegmentGrid(segs, p.bounds) });
+      most = Math.max(most, segs.length / 4);
+    }
+  }
+  return { bounds: p.bounds, lines, others: p.others, scratch: new Uint32Array(most) };
+}
+
+export function prepare(scene: MapScene): Prepared {
+  return preparePacked(pack(scene));
 }
 
 function contains(outer: Bounds, inner: Bounds): boolean {
