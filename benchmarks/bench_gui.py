@@ -10,7 +10,9 @@ Benchmarks:
 - ``gui.status_latency``: a status change to the screen at the GUI's default polling rate: a plain client on the
   reference server's OTHER port sets the estimate (CMD_SET_FRM_PLTF); the time until the page's "Estimated pose"
   readout shows it (a MutationObserver stamps the change; both clocks are this machine's epoch clock).
-  Target: p95 <= 100 ms. Baseline: the same change seen by a client polling GET_STATUS back to back.
+  Target: p95 <= 100 ms. Baseline: the same change seen by a client polling GET_STATUS back to back. Rows
+  without a target say where the time went: waiting for the page's next GET_STATUS, that request's round trip as
+  the page saw it, reply to screen; and how busy the page's main thread is while it watches (ms per second).
 - ``gui.polling_cost``: CPU time of the reference server process (/proc/PID/stat) with the GUI connected and
   idle, minus the same server idle without it, over ``POLL_WINDOW`` s each. Target <= 5 % of one core.
 - ``gui.heap_growth``: JS heap (CDP Runtime.getHeapUsage after a forced garbage collection) before and after
@@ -25,10 +27,7 @@ import contextlib
 import math
 import os
 import random
-import re
 import socket
-import subprocess
-import sys
 import tempfile
 import threading
 import time
@@ -38,6 +37,7 @@ from typing import Any
 
 from benchmarks.harness import Config, Row, Target, benchmark, make_row
 from pltf.client import MotionMode, OperationState, PlatformClient
+from pltf.gui.launch import GatewayProcess
 from pltf.spec.codec import REPLIES, REQUESTS, TelegramDecoder, build, encode
 from pltf.spec.telegram import user_fields
 from pltf.zoo import launch
@@ -70,34 +70,11 @@ def _percentile(xs: list[float], q: float) -> float:
 # ---------------------------------------------------------------------------------------------- the parts
 @contextlib.contextmanager
 def gateway() -> Iterator[str]:
-    with tempfile.TemporaryDirectory(prefix="pltf-bench-gui-") as tmp:
-        proc = subprocess.Popen(
-            [
-                sys.executable,
-                "-m",
-                "pltf.cli.main",
-                "gui",
-                "--target",
-                "127.0.0.1:1",
-                "--listen",
-                "127.0.0.1:0",
-                "--network-ini",
-                str(Path(tmp) / "Network.ini"),
-            ],
-            stdout=subprocess.PIPE,
-            stderr=subprocess.DEVNULL,
-            text=True,
-            cwd=ROOT,
-        )
-        assert proc.stdout is not None
-        m = re.search(r"gui serving at (http://[^/]+)/", proc.stdout.readline())
-        try:
-            if m is None:
-                raise RuntimeError("the gateway did not start (is the GUI built? `make gui`)")
-            yield m.group(1)
-        finally:
-            proc.terminate()
-            proc.wait(10)
+    with (
+        tempfile.TemporaryDirectory(prefix="pltf-bench-gui-") as tmp,
+        GatewayProcess(Path(tmp) / "Network.ini") as gw,
+    ):
+        yield gw.base
 
 
 @contextlib.contextmanager
@@ -251,10 +228,31 @@ def pan_zoom(config: Config) -> list[Row]:
 # ---------------------------------------------------------------------------------------------- latency
 OBSERVE_JS = """() => {
   window.__changes = [];
+  window.__polls = [];
+  const now = () => performance.timeOrigin + performance.now();
   const out = document.querySelector('output[aria-label="Estimated pose"]');
-  new MutationObserver(() => window.__changes.push([performance.timeOrigin + performance.now(), out.textContent]))
+  new MutationObserver(() => window.__changes.push([now(), out.textContent]))
     .observe(out, { childList: true, characterData: true, subtree: true });
+  window.pltf.session.wire.subscribe((r) => {
+    if (r.telegram.telegramName === "CMD_GET_STATUS") window.__polls.push([r.dir, now(), r.telegram.estX ?? null]);
+  }, false);
 }"""
+STAGES = ("waiting for the poll", "GET_STATUS round trip (page, gateway, server)", "reply to screen")
+
+
+def _stages(samples: list[tuple[int, float, float]], polls: list[tuple[str, float, int | None]]) -> list[list[float]]:
+    """Where each sample's time went (ms): from the change to the sending of the GET_STATUS whose reply first
+    showed it, that request's round trip as the page saw it, and from its reply to the readout's change."""
+    out: list[list[float]] = [[], [], []]
+    for x, t0, shown in samples:
+        k = next((k for k, (d, _, est) in enumerate(polls) if d == "in" and est == x), None)
+        sent = next((t for d, t, _ in reversed(polls[:k]) if d == "out"), None) if k else None
+        if k is None or sent is None:
+            continue
+        got = polls[k][1]
+        for stage, ms in zip(out, (sent - t0, got - sent, shown - got), strict=True):
+            stage.append(ms)
+    return out
 
 
 @benchmark()
@@ -262,6 +260,7 @@ def status_latency(config: Config) -> list[Row]:
     """Status change (CMD_SET_FRM_PLTF on the other port) to the screen at the default polling (p95 <= 100 ms)."""
     n = 8 if config.quick else 60
     gui: list[float] = []
+    samples: list[tuple[int, float, float]] = []
     tight: list[float] = []
     with (
         launch.reference(time_scale=1.0) as server,
@@ -279,6 +278,7 @@ def status_latency(config: Config) -> list[Row]:
                     f"() => window.__changes.find(([t, s]) => s.startsWith('x {x} mm'))", timeout=5000
                 ).json_value()
                 gui.append(shown[0] - t0 * 1000)
+                samples.append((x, t0 * 1000, shown[0]))
             for i in range(n):  # the baseline apart: a client polling back to back loads the server
                 x = 5000 + 10 * i
                 time.sleep(random.uniform(0.1, 0.3))
@@ -287,20 +287,52 @@ def status_latency(config: Config) -> list[Row]:
                 while other.get_status().est_x_mm != x:
                     pass
                 tight.append((time.time() - t0) * 1000)
-    return [
-        make_row(
-            "gui.status_latency",
-            f"{GUI_TAG}, GET_STATUS at 20 Hz",
-            metric,
-            _percentile(gui, q),
-            "ms",
-            higher_is_better=False,
-            baseline_subject="GET_STATUS back to back (other port)",
-            baseline_value=_percentile(tight, q),
-            target=Target("value", "<=", LATENCY_TARGET_MS) if metric == "p95" else None,
-        )
-        for metric, q in (("p50", 0.5), ("p95", 0.95))
-    ]
+        stages = _stages(samples, pg.evaluate("() => window.__polls"))
+        busy = _busy(pg, 2.0 if config.quick else 10.0)
+    return (
+        [
+            make_row(
+                "gui.status_latency",
+                f"{GUI_TAG}, GET_STATUS at 20 Hz",
+                metric,
+                _percentile(gui, q),
+                "ms",
+                higher_is_better=False,
+                baseline_subject="GET_STATUS back to back (other port)",
+                baseline_value=_percentile(tight, q),
+                target=Target("value", "<=", LATENCY_TARGET_MS) if metric == "p95" else None,
+            )
+            for metric, q in (("p50", 0.5), ("p95", 0.95))
+        ]
+        + [
+            make_row("gui.status_latency", f"stage: {name}", metric, _percentile(ms, q), "ms", higher_is_better=False)
+            for name, ms in zip(STAGES, stages, strict=True)
+            if ms
+            for metric, q in (("p50", 0.5), ("p95", 0.95))
+        ]
+        + [
+            make_row(
+                "gui.status_latency", f"page main thread, watching: {what}", "busy", v, "ms/s", higher_is_better=False
+            )
+            for what, v in busy.items()
+        ]
+    )
+
+
+def _busy(pg: Any, seconds: float) -> dict[str, float]:
+    """The page's main thread per second of watching an idle platform (Chrome's Performance metrics): all its
+    tasks, and of them our script and the layout. A busy thread delays the poll's timer and the replies."""
+    cdp = pg.context.new_cdp_session(pg)
+    cdp.send("Performance.enable")
+
+    def metrics() -> dict[str, float]:
+        return {m["name"]: m["value"] for m in cdp.send("Performance.getMetrics")["metrics"]}
+
+    before, t0 = metrics(), time.monotonic()
+    time.sleep(seconds)
+    after, dt = metrics(), time.monotonic() - t0
+    names = {"all tasks": "TaskDuration", "script": "ScriptDuration", "layout": "LayoutDuration"}
+    return {what: 1000.0 * (after[k] - before[k]) / dt for what, k in names.items()}
 
 
 # ---------------------------------------------------------------------------------------------- server cost

@@ -7,6 +7,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 from pltf.conformance_tests.context import Config
 from pltf.conformance_tests.stateful import run_stateful
 from pltf.zoo import launch
@@ -22,6 +24,8 @@ def _replay(script: Path, port: int) -> subprocess.CompletedProcess[str]:
     )
 
 
+@pytest.mark.slow  # a property tier: 180 examples and a shrink against live servers, 2-3 minutes (make test-slow);
+# make test keeps tests/conformance_tests/test_cli.py's `pltf conform --stateful` against the reference server
 def test_stateful_machine_passes_the_reference_and_shrinks_a_broken_chart(tmp_path: Path) -> None:
     with launch.reference(time_scale=10.0) as ref:
         assert (

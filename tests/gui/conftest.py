@@ -12,8 +12,6 @@ import json
 import os
 import re
 import socket
-import subprocess
-import sys
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -22,6 +20,7 @@ from typing import Any
 import pytest
 
 from pltf.client import PlatformClient
+from pltf.gui.launch import GatewayProcess as Gateway
 from pltf.zoo import launch
 
 REPO = Path(__file__).resolve().parents[2]
@@ -118,61 +117,13 @@ def platform() -> Iterator[Platform]:
             p.close()
 
 
-class Gateway:
-    def __init__(self, ini: Path, reply_timeout: float = 2.0) -> None:
-        self.ini = ini
-        env = dict(os.environ, PYTHONUNBUFFERED="1")
-        self.proc = subprocess.Popen(
-            [
-                sys.executable,
-                "-m",
-                "pltf.cli.main",
-                "gui",
-                "--target",
-                "127.0.0.1:1",
-                "--listen",
-                "127.0.0.1:0",
-                "--network-ini",
-                str(ini),
-                "--reply-timeout",
-                str(reply_timeout),
-            ],
-            stdout=subprocess.PIPE,
-            stderr=subprocess.STDOUT,
-            text=True,
-            cwd=REPO,
-            env=env,
-        )
-        assert self.proc.stdout is not None
-        line = self.proc.stdout.readline()
-        m = re.search(r"gui serving at (http://[^/]+)/", line)
-        if m is None:
-            self.proc.kill()
-            raise AssertionError(f"the gateway did not start: {line}{self.proc.stdout.read()}")
-        self.base = m.group(1)
-
-    def url(self, target: str) -> str:
-        return f"{self.base}/?target={target}"
-
-    def stop(self) -> None:
-        self.proc.terminate()
-        try:
-            self.proc.communicate(timeout=10)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
-            self.proc.communicate()
-
-
 @pytest.fixture(scope="session")
 def gateway(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Gateway]:
     _need_browser()
     ini = tmp_path_factory.mktemp("gui") / "Network.ini"
     ini.write_text("[Network]\nlab = 127.0.0.1:10000\n", encoding="utf-8")
-    gw = Gateway(ini)
-    try:
+    with Gateway(ini, reply_timeout=2.0) as gw:  # its log goes to a file: a pipe nobody reads stalls it at 64 KB
         yield gw
-    finally:
-        gw.stop()
 
 
 # Package scope: Playwright's sync API keeps an asyncio loop marked running in the main thread while it is open,

@@ -10,8 +10,6 @@ import re
 from pathlib import Path
 from typing import Any
 
-import pytest
-
 from pltf.client import OperationState, PlatformClient
 from pltf.client.errors import PlatformError
 from tests.gui.conftest import Gateway, Platform, expect_text, open_gui, wait_for
@@ -60,11 +58,6 @@ def test_break_continue_and_stop_follow_the_state_chart(page: Any, gateway: Gate
     assert button(page, "Start").is_enabled() and button(page, "Stop").is_disabled()
 
 
-@pytest.mark.xfail(
-    reason="passes alone; in the whole tests/gui run (after the editors' tests) the gateway stopped answering page "
-    "loads for this test (30 s); cause not found yet (see the closing note of session 9)",
-    strict=False,
-)
 def test_the_wire_inspector_shows_every_telegram_decoded(
     page: Any, gateway: Gateway, platform: Platform, artifacts: Path
 ) -> None:
@@ -89,11 +82,6 @@ def test_the_wire_inspector_shows_every_telegram_decoded(
     )
 
 
-@pytest.mark.xfail(
-    reason="passes alone; in the whole tests/gui run (after the editors' tests) the gateway stopped answering page "
-    "loads for this test (30 s); cause not found yet (see the closing note of session 9)",
-    strict=False,
-)
 def test_shutdown_platform_asks_first_and_then_sends_cmd_exit(page: Any, gateway: Gateway, platform: Platform) -> None:
     open_gui(page, gateway, platform.target)
     for answer in ("Cancel", "Shutdown Platform"):

@@ -21,6 +21,14 @@ export function h<K extends keyof HTMLElementTagNameMap>(
   return el;
 }
 
+/** Write `text` only when it differs: an identical write still replaces the text node, and the browser lays out
+ * and paints the page again (at 20 status telegrams a second, most of an idle page's work; bench_gui.py). */
+export function setText(el: Node, text: string): void {
+  if (el.textContent !== text) {
+    el.textContent = text;
+  }
+}
+
 /** A button whose text and accessible name come from the catalog. */
 export function button(key: Key, onClick: () => void, attrs: Record<string, string | boolean> = {}): HTMLButtonElement {
   const b = bind(h("button", { type: "button", ...attrs }), key);

@@ -15,6 +15,7 @@ import { clean, extend, orthogonal, parallel, snap, type Pt, type Seg, trim } fr
 import { newMapDoc, parseMapDoc, sameObjects, writeMapDoc } from "./mapdoc";
 import { MAX_XML_CHARS } from "./xml";
 import { download, fileNameOf } from "./files";
+import { Toolbar } from "./toolbar";
 import { objectAtLine, validateDocument } from "./validate";
 import { LINE_LEN_DEFAULTS, linesFromScan, type ScanStatus } from "./fromscan";
 import { SHAPE_TOOLS, type ShapeTool, ShapeTools } from "./drawtools";
@@ -254,23 +255,13 @@ export function mapEditor(
     },
   };
 
-  const bar = h("div", { role: "toolbar", class: "edit-tools" });
-  bind(bar, "edit.tools", { text: false });
-  const act = (key: Key, fn: () => void): HTMLButtonElement => {
-    const b = h("button", { type: "button" });
-    bind(b, key);
-    b.addEventListener("click", fn);
-    bar.append(b);
-    return b;
-  };
-  const toolButtons = new Map<EditTool, HTMLButtonElement>();
+  const bar = new Toolbar<EditTool>("edit.tools");
+  const act = (key: Key, fn: () => void): HTMLButtonElement => bar.action(key, fn);
   const setTool = (next: EditTool): void => {
     tool = next;
     first = null;
     shapes.cancel();
-    for (const [k, b] of toolButtons) {
-      b.setAttribute("aria-pressed", String(k === next));
-    }
+    bar.press(next);
     bind(tip, tipFor[next], { name: false });
     if (open) {
       view.setTool("edit");
@@ -318,7 +309,7 @@ export function mapEditor(
       view.zoomAll();
     });
   });
-  bar.append(file);
+  bar.root.append(file);
   const save = (fileName: string): void => {
     download(fileName, writeMapDoc(history.doc));
     history.markSaved();
@@ -359,17 +350,17 @@ export function mapEditor(
     history.redo();
     refresh();
   });
-  toolButtons.set("select", act("edit.select", () => setTool("select")));
-  toolButtons.set("vertex", act("edit.vertex", () => setTool("vertex")));
-  toolButtons.set("addLine", act("edit.addLine", () => setTool("addLine")));
+  bar.tool("select", "edit.select", setTool);
+  bar.tool("vertex", "edit.vertex", setTool);
+  bar.tool("addLine", "edit.addLine", setTool);
   for (const k of ["reflector", "circle", "workarea", "prohibit", "hiddenpolygon", "label"] as const) {
-    toolButtons.set(k, act(`edit.${k}`, () => setTool(k)));
+    bar.tool(k, `edit.${k}`, setTool);
   }
   const finishB = act("edit.finish", () => finishPolygon());
   for (const k of ["trim", "extend", "parallel", "orthogonal"] as const) {
-    toolButtons.set(k, act(`edit.${k}`, () => setTool(k)));
+    bar.tool(k, `edit.${k}`, setTool);
   }
-  toolButtons.set("measure", act("edit.measure", () => setTool("measure")));
+  bar.tool("measure", "edit.measure", setTool);
   // guide 5.4 "Select all objects in map"
   const allB = act("edit.selectAll", () => {
     many = new Set(history.doc.scene.objects.map((o) => o.id));
@@ -492,7 +483,7 @@ export function mapEditor(
     [invertB, "edit.tipInvert"],
     [sendB, "edit.tipSend"],
     [closeB, "edit.tipClose"],
-    ...[...toolButtons].map(([k, b]): [HTMLElement, Key] => [b, tipFor[k]]),
+    ...[...bar.tools].map(([k, b]): [HTMLElement, Key] => [b, tipFor[k]]),
   ];
   for (const [b, key] of hoverTips) {
     bind(b, key, { text: false, name: false, title: key });
@@ -544,5 +535,5 @@ export function mapEditor(
   };
   const labelField = h("label", { class: "edit-label" }, h("span", {}), labelIn);
   bind(labelField.firstElementChild as HTMLElement, "edit.labelText", { name: false });
-  return { root: h("div", { class: "map-editor" }, bar, labelField, typed.root, state, tip), onShow };
+  return { root: h("div", { class: "map-editor" }, bar.root, labelField, typed.root, state, tip), onShow };
 }

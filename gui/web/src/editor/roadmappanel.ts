@@ -29,6 +29,7 @@ import {
 import { validateDocument } from "./validate";
 import { deletePathPoint, edgeAt, edgePath, insertPathPoint, movePathPoint, pathPointAt } from "./roadmappath";
 import { download, fileNameOf } from "./files";
+import { Toolbar } from "./toolbar";
 import { MAX_XML_CHARS } from "./xml";
 import { dialog } from "../panels/menubar";
 import { askToClose } from "./closeask";
@@ -242,22 +243,12 @@ export function roadmapEditor(
     },
   };
 
-  const bar = h("div", { role: "toolbar", class: "edit-tools" });
-  bind(bar, "rm.tools", { text: false });
-  const act = (key: Key, fn: () => void): HTMLButtonElement => {
-    const b = h("button", { type: "button" });
-    bind(b, key);
-    b.addEventListener("click", fn);
-    bar.append(b);
-    return b;
-  };
-  const toolButtons = new Map<RmTool, HTMLButtonElement>();
+  const bar = new Toolbar<RmTool>("rm.tools");
+  const act = (key: Key, fn: () => void): HTMLButtonElement => bar.action(key, fn);
   const setTool = (next: RmTool): void => {
     tool = next;
     edgeFrom = null;
-    for (const [k, b] of toolButtons) {
-      b.setAttribute("aria-pressed", String(k === next));
-    }
+    bar.press(next);
     bind(tip, tipFor[next], { name: false });
   };
   const replace = (doc: RoadmapDoc, newName: string): void => {
@@ -301,7 +292,7 @@ export function roadmapEditor(
       say(t("rm.opened", { file: f.name, n: history.doc.stations.length, e: history.doc.edges.length }));
     });
   });
-  bar.append(file);
+  bar.root.append(file);
   const save = (fileName: string): void => {
     download(fileName, writeRoadmapDoc(history.doc));
     history.markSaved();
@@ -331,10 +322,10 @@ export function roadmapEditor(
     history.redo();
     refresh();
   });
-  toolButtons.set("select", act("rm.select", () => setTool("select")));
-  toolButtons.set("addStation", act("rm.addStation", () => setTool("addStation")));
-  toolButtons.set("addEdge", act("rm.addEdge", () => setTool("addEdge")));
-  toolButtons.set("pathPoints", act("rm.pathPoints", () => setTool("pathPoints")));
+  bar.tool("select", "rm.select", setTool);
+  bar.tool("addStation", "rm.addStation", setTool);
+  bar.tool("addEdge", "rm.addEdge", setTool);
+  bar.tool("pathPoints", "rm.pathPoints", setTool);
   act("edit.delete", () => {
     if (selected === null) {
       say(t("edit.noneSelected"));
@@ -412,5 +403,5 @@ export function roadmapEditor(
       session.refreshDocuments(); // the view shows the platform's roadmap again
     }
   };
-  return { root: h("div", { class: "roadmap-editor" }, bar, fields, state, tip), onShow };
+  return { root: h("div", { class: "roadmap-editor" }, bar.root, fields, state, tip), onShow };
 }

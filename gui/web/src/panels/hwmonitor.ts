@@ -5,7 +5,7 @@
  * and sends frames (CMD_SEND_CAN_MESSAGE). TCP Client shows this tab's and the gateway's traffic, TCP Platform
  * the platform's own figures (CMD_GET_DEBUG_DATA).
  */
-import { field, h } from "../dom";
+import { field, h, setText } from "../dom";
 import { bind, type Key, t } from "../i18n/i18n";
 import {
   AddCanListeningIdRequest,
@@ -62,7 +62,7 @@ function table(rows: Row[], session: PlatformSession): HTMLElement {
     body.append(h("tr", {}, th, td));
     return td;
   });
-  session.status.subscribe((s) => rows.forEach(([, get], i) => (cells[i].textContent = get(s))));
+  session.status.subscribe((s) => rows.forEach(([, get], i) => setText(cells[i], get(s))));
   return h("table", {}, body);
 }
 
@@ -176,7 +176,7 @@ function usTab(session: PlatformSession, say: (s: string) => void): HTMLElement 
     }
     sensors.boxes.forEach((b, i) => {
       b.checked = mask === null ? false : ((mask >> i) & 1) === 1;
-      distances[i].textContent = measuring ? `${s.usDistance[i]} mm` : "-";
+      setText(distances[i], measuring ? `${s.usDistance[i]} mm` : "-");
     });
   });
   const startBtn = h("button", { type: "button" });

@@ -3,7 +3,7 @@
  * battery, localization, collision, the estimated and the desired pose, and the connection in words.
  * Values are in the guide's units as plain numbers: mm, degrees, volts.
  */
-import { h, readout } from "../dom";
+import { h, readout, setText } from "../dom";
 import { type Key, onLanguage, t } from "../i18n/i18n";
 import { EmergencyState, Flag, type GetStatusReply } from "../pltf";
 import type { ConnEvent, PlatformSession } from "../session/session";
@@ -31,18 +31,18 @@ export function statusBar(session: PlatformSession): HTMLElement {
   let lastConn: ConnEvent | null = null;
   const show = () => {
     const ev = lastConn;
-    conn.value.textContent = ev === null ? t("conn.closed") : connText(ev);
+    setText(conn.value, ev === null ? t("conn.closed") : connText(ev));
     conn.value.dataset.event = ev?.event ?? "closed";
     const s = session.connected ? last : null;
     if (s === null) {
       for (const i of Object.values(items)) {
-        i.value.textContent = "-";
+        setText(i.value, "-");
         i.value.removeAttribute("data-value");
       }
       return;
     }
     const set = (o: { value: HTMLOutputElement }, text: string, value: string | number) => {
-      o.value.textContent = text;
+      setText(o.value, text);
       o.value.dataset.value = String(value);
     };
     set(items.system, t(`opstate.${s.operationState}` as Key), s.operationState);
