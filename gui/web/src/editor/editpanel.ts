@@ -13,8 +13,7 @@ import { toScreen } from "../view/camera";
 import { addObject, addObjects, clearMap, deleteObjects, History, invertLine, lineOp, moveObjects, setGeometry } from "./commands";
 import { clean, extend, orthogonal, parallel, snap, type Pt, type Seg, trim } from "./geometry";
 import { newMapDoc, parseMapDoc, sameObjects, writeMapDoc } from "./mapdoc";
-import { MAX_XML_CHARS } from "./xml";
-import { download, fileNameOf } from "./files";
+import { download, fileInput, fileNameOf } from "./files";
 import { Toolbar } from "./toolbar";
 import { objectAtLine, validateDocument } from "./validate";
 import { LINE_LEN_DEFAULTS, linesFromScan, type ScanStatus } from "./fromscan";
@@ -283,31 +282,18 @@ export function mapEditor(
   });
   // guide 5.4 "Load a map file from the hard disk of the PC": a malformed file or another kind of document is
   // refused with its reason and the editor keeps its content
-  const file = h("input", { type: "file", accept: ".map,.xml,application/xml,text/xml" });
-  bind(file, "edit.open", { text: false });
-  file.addEventListener("change", () => {
-    const f = file.files?.[0];
-    file.value = "";
-    if (f === undefined) {
+  const file = fileInput(".map,.xml,application/xml,text/xml", "edit.open", say, (fileName, text) => {
+    try {
+      history = new History(parseMapDoc(text, fileName.replace(/\.[^.]*$/, "")));
+    } catch (e) {
+      say(t("edit.openFailed", { file: fileName, why: (e as Error).message }));
       return;
     }
-    if (f.size > MAX_XML_CHARS) {
-      say(t("edit.openFailed", { file: f.name, why: `${f.size} bytes is over ${MAX_XML_CHARS}` }));
-      return;
-    }
-    void f.text().then((text) => {
-      try {
-        history = new History(parseMapDoc(text, f.name.replace(/\.[^.]*$/, "")));
-      } catch (e) {
-        say(t("edit.openFailed", { file: f.name, why: (e as Error).message }));
-        return;
-      }
-      selected = null;
-      many = new Set();
-      say(t("edit.opened", { file: f.name, n: history.doc.scene.objects.length }));
-      refresh();
-      view.zoomAll();
-    });
+    selected = null;
+    many = new Set();
+    say(t("edit.opened", { file: fileName, n: history.doc.scene.objects.length }));
+    refresh();
+    view.zoomAll();
   });
   bar.root.append(file);
   const save = (fileName: string): void => {

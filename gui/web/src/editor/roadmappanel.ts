@@ -28,9 +28,8 @@ import {
 } from "./roadmapdoc";
 import { validateDocument } from "./validate";
 import { deletePathPoint, edgeAt, edgePath, insertPathPoint, movePathPoint, pathPointAt } from "./roadmappath";
-import { download, fileNameOf } from "./files";
+import { download, fileInput, fileNameOf } from "./files";
 import { Toolbar } from "./toolbar";
-import { MAX_XML_CHARS } from "./xml";
 import { dialog } from "../panels/menubar";
 import { askToClose } from "./closeask";
 
@@ -270,27 +269,14 @@ export function roadmapEditor(
   });
   // guide 5.5 "Load a map from the hard disk": a malformed file or another kind of document is refused with its
   // reason and the editor keeps its roadmap
-  const file = h("input", { type: "file", accept: ".rm,.xml,application/xml,text/xml" });
-  bind(file, "rm.open", { text: false });
-  file.addEventListener("change", () => {
-    const f = file.files?.[0];
-    file.value = "";
-    if (f === undefined) {
+  const file = fileInput(".rm,.xml,application/xml,text/xml", "rm.open", say, (fileName, text) => {
+    try {
+      replace(parseRoadmapDoc(text), fileName.replace(/\.[^.]*$/, ""));
+    } catch (e) {
+      say(t("edit.openFailed", { file: fileName, why: (e as Error).message }));
       return;
     }
-    if (f.size > MAX_XML_CHARS) {
-      say(t("edit.openFailed", { file: f.name, why: `${f.size} bytes is over ${MAX_XML_CHARS}` }));
-      return;
-    }
-    void f.text().then((text) => {
-      try {
-        replace(parseRoadmapDoc(text), f.name.replace(/\.[^.]*$/, ""));
-      } catch (e) {
-        say(t("edit.openFailed", { file: f.name, why: (e as Error).message }));
-        return;
-      }
-      say(t("rm.opened", { file: f.name, n: history.doc.stations.length, e: history.doc.edges.length }));
-    });
+    say(t("rm.opened", { file: fileName, n: history.doc.stations.length, e: history.doc.edges.length }));
   });
   bar.root.append(file);
   const save = (fileName: string): void => {
