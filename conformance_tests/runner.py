@@ -358,7 +358,8 @@ def _liveness(ctx: CaseContext, before: Status | None) -> str:
     for label in labels:
         ctx.reset_session(label)
         try:
-            s = ctx.status(label)
+            ctx.session(label)  # a new client, probed with CMD_GET_STATUS: its reply is the status
+            s = ctx.target.fresh_status() or ctx.status(label)
         except Exception as exc:
             return f"liveness after abuse: port {label} no longer serves a new client ({exc})"
         if before is not None and (s.op, s.mode) != (before.op, before.mode):
