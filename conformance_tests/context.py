@@ -28,6 +28,7 @@ import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Any, TypeVar
 
 from pltf.conformance_tests import chart
@@ -116,6 +117,7 @@ class Target:
         self.budget = CaseBudget()  # the running case's (pace.py); every session of the run carries it
         self.last_status: tuple[int, float, Status] | None = None  # (Session.events, when, status) of the last read
         self.prompt = True  # every commanded state showed at the first status after the command (see the rules)
+        self.notes: list[str] = []  # about the run as a whole
 
     def record(self, reply: Telegram) -> Status:
         """A CMD_GET_STATUS reply just read, nothing asked after it: the current status until something moves."""
@@ -373,9 +375,13 @@ class CaseContext:
                 return value
             time.sleep(max(0.002, every / self.config.time_scale))
 
+    def settle_time(self) -> float:
+        """Wall s a command that should have no effect gets to show one before the status that judges it."""
+        return max(0.02, 0.3 / self.config.time_scale)
+
     def settle(self) -> None:
         """Let a command that should have no effect have its chance to show one."""
-        time.sleep(max(0.02, 0.3 / self.config.time_scale))
+        time.sleep(self.settle_time())
 
     # ---- the known state
     def ensure(self, state: St, mode: int = MotionMode.MODE_MOTION_NO) -> Status:
@@ -453,11 +459,13 @@ class CaseContext:
             last = Status.of(session.next_reply())
             if last.op != leg.op:
                 self.target.prompt = False
-                self.note(
+                why = (
                     f"the target showed {last.describe()} at the first status after "
-                    f"{' + '.join(t.NAME for t in leg.commands)}: the way to a state is taken one leg at a time "
-                    "from here"
+                    f"{' + '.join(t.NAME for t in leg.commands)} ({self.case.id}): the way to a state is taken "
+                    "one leg at a time from here"
                 )
+                self.note(why)
+                self.target.notes.append(why)
                 self._abandon(session)
                 return None
             if last.mode != leg.mode:
@@ -519,9 +527,15 @@ class CaseContext:
         return pos
 
     def preserve_param(self, key: str) -> str:
-        value: str = self.get("CMD_GET_PLTF_PARAM", key=key).value  # type: ignore[attr-defined]
-        self.on_exit(f"restore parameter {key}", lambda: self.send("CMD_SET_PLTF_PARAM", key=key, value=value))
-        return value
+        return self.preserve_params([key])[0]
+
+    def preserve_params(self, keys: Sequence[str]) -> list[str]:
+        """GET each parameter (pipelined, erratum E-WIRE-008); restore each with SET at the end. The values."""
+        replies = self.exchange([build("request", "CMD_GET_PLTF_PARAM", key=key) for key in keys])
+        values: list[str] = [r.value for r in replies]  # type: ignore[attr-defined]
+        for key, value in zip(keys, values, strict=True):
+            self.on_exit(f"restore parameter {key}", partial(self.send, "CMD_SET_PLTF_PARAM", key=key, value=value))
+        return values
 
     def preserve_document(self, kind: str) -> tuple[str, str]:
         """GET the active map/roadmap/program; restore it with SET at the end. Returns (xml, name)."""

@@ -102,7 +102,7 @@ def measure(target: Target, samples: int = 3) -> Pace:
         return Pace(statistics.median(times), pipeline=pipeline)
 
 
-PIPELINE_PROBE = ("CMD_GET_STATUS", "CMD_GET_POSITION", "CMD_GET_STATUS")
+PIPELINE_PROBE = ("CMD_GET_STATUS", "CMD_GET_POSITION", "CMD_GET_POSITION")
 
 
 def _pipelined(s: Session, timeout: float) -> str:

@@ -211,6 +211,7 @@ class Runner:
                 results.append(result)
                 self._emit("on_case_end", result)
         self.target.close()
+        self.notes += self.target.notes
         ran = {r.case.id: r for r in results}
         stale = self.baseline.stale(ran)
         for r in results:
