@@ -318,8 +318,9 @@ class CaseContext:
         return s
 
     def before_abuse(self) -> Status:
-        """Record the state the abuse must not change (the runner compares it after the case)."""
-        self.abuse_from = self.status()
+        """Record the state the abuse must not change (the runner compares it after the case): the status, read
+        now unless one was read a moment ago with nothing sent since."""
+        self.abuse_from = self.current_status()
         return self.abuse_from
 
     def reset_session(self, label: str = "A") -> None:
