@@ -108,7 +108,11 @@ def at_pose(ctx: CaseContext, target: Pose, how: str, *, check_angle: bool = Tru
 
 def still(ctx: CaseContext, start: Pose, how: str, seconds: float = 1.0) -> None:
     ctx.sleep(seconds)
-    p = pose(ctx)
+    judge_still(pose(ctx), start, how)
+
+
+def judge_still(p: Pose, start: Pose, how: str) -> None:
+    """``p``, read a while after ``how``, is where the platform stood (``start``), at rest."""
     if (
         p.dist(start) > STILL_POS
         or abs(angle_diff(p.th, start.th)) > STILL_ANG
