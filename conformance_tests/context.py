@@ -376,6 +376,34 @@ class CaseContext:
                 return value
             time.sleep(max(0.002, every / self.config.time_scale))
 
+    def link_paced(self, period: float) -> bool:
+        """Whether polling one request at a time would sample the target less often than every ``period``
+        simulated s (its measured reply time is longer) while it takes pipelined requests (E-WIRE-008): then a
+        case samples with ``timeline`` at the platform's pace instead (a slow link, issue 17)."""
+        reply = self.config.reply_time or 0.0
+        return self.config.pipeline and reply * self.config.time_scale > period
+
+    def timeline(
+        self, ask: Telegram, seconds: float, events: Sequence[tuple[float, Telegram]], period: float = 0.1
+    ) -> list[tuple[float, Telegram]]:
+        """Send each of ``events`` at its simulated time (s from now), and ``ask`` every ``period`` simulated s for
+        ``seconds``, none waiting for a reply (pipelined, erratum E-WIRE-008); the replies to ``ask``, each with
+        the simulated time it was asked at. What a reply shows is the platform's at that time, whatever the link
+        then takes to bring it."""
+        session, scale = self.session(), self.config.time_scale
+        due, asked = sorted(events, key=lambda e: e[0]), []
+        t0 = time.monotonic()
+        while True:
+            t = (time.monotonic() - t0) * scale
+            while due and due[0][0] <= t:
+                session.send(due.pop(0)[1])
+            if t > seconds and not due:
+                break
+            session.send_pipelined([ask])
+            asked.append(t)
+            time.sleep(period / scale)
+        return [(t, session.next_reply()) for t in asked]
+
     def settle_time(self) -> float:
         """Wall s a command that should have no effect gets to show one before the status that judges it."""
         return max(0.02, 0.3 / self.config.time_scale)

@@ -293,8 +293,7 @@ def track(ctx: CaseContext, until: Callable[[Pose], bool], within: float, period
     without waiting for the replies before it, which are read as they come: the sampling keeps to the platform's
     time, not to the link's (one command against a watchdog of a simulated second or two was over before a
     second pose came back through a link of 200 ms at time scale 10)."""
-    reply = ctx.config.reply_time or 0.0
-    if not ctx.config.pipeline or reply * ctx.config.time_scale <= period:
+    if not ctx.link_paced(period):
         return ctx.poll(lambda: pose(ctx), until, within=within)
     session = ctx.session()
     ask = [build("request", "CMD_GET_POSITION")]
