@@ -129,3 +129,20 @@ def test_a_status_read_stands_for_the_next_case_until_anything_is_sent(link: Lin
         "CMD_START + CMD_GET_STATUS",
         "CMD_GET_STATUS / CMD_STOP + CMD_GET_STATUS",
     ]  # the probe's  # no GET_STATUS of their own
+
+
+def test_a_timeline_samples_at_the_platforms_pace_and_judges_each_reply_at_its_time(link: LinkTarget) -> None:
+    seen: dict[str, Any] = {}
+
+    def step(ctx: CaseContext) -> None:
+        ctx.ensure(St.NOT_CONNECTED)
+        seen["paced"] = ctx.link_paced(0.1)
+        events = [(0.0, build("request", "CMD_CONNECT_TO_PLTF")), (0.5, build("request", "CMD_INIT_PLTF"))]
+        seen["samples"] = [(t, r.initialized) for t, r in ctx.timeline(ASK, 1.0, events)]  # type: ignore[attr-defined]
+
+    result = run(link, case("4.2/t/timeline", step))
+    assert result.results[0].verdict is Verdict.PASS, result.results[0].message
+    samples = seen["samples"]
+    assert seen["paced"] and len(samples) >= 8 and [t for t, _ in samples] == sorted(t for t, _ in samples)
+    assert all(i == (1 if t >= 0.5 else 0) for t, i in samples)  # each reply as the platform was when asked
+    assert link.writes >= 9  # the replies came joined and torn, after the requests stopped
