@@ -84,7 +84,7 @@ def measure(target: Target, samples: int = 3) -> Pace:
                 times.append(time.monotonic() - t0)
                 if times[0] > MAX_SCALED:
                     break  # too slow to scale to: one sample says enough
-            pipeline = _pipelined(s, max(3 * times[0], 1.0))
+            pipeline = _pipelined(s, max(3 * times[0], 1.0)) if times[0] <= MAX_SCALED else "a slow target"
         except (ConnectionClosed, Unreachable) as exc:  # turned away: the port is not free yet (one client per port)
             refused = "refused" in str(exc).lower()  # nothing listens: no use waiting
             if not times and not refused and time.monotonic() < deadline:
