@@ -44,6 +44,7 @@ from pltf.spec.telegram import Telegram
 T = TypeVar("T")
 Then = Callable[[], list[Telegram]]  # the replies to what a case sends once in a state (CaseContext.enter)
 STATUS_FRESH = 0.5  # wall s a status read stands for the current one when nothing was sent since
+PACED = 0.25  # simulated s: a target whose reply takes longer is sampled at the platform's pace (link_paced)
 # The spec's enums are built at import; mypy sees them as plain IntEnum classes without members.
 MotionMode: Any = enum_classes()["MotionMode"]
 OperationState: Any = enum_classes()["OperationState"]
@@ -376,12 +377,13 @@ class CaseContext:
                 return value
             time.sleep(max(0.002, every / self.config.time_scale))
 
-    def link_paced(self, period: float) -> bool:
-        """Whether polling one request at a time would sample the target less often than every ``period``
-        simulated s (its measured reply time is longer) while it takes pipelined requests (E-WIRE-008): then a
-        case samples with ``timeline`` at the platform's pace instead (a slow link, issue 17)."""
+    def link_paced(self, gap: float = PACED) -> bool:
+        """Whether polling one request at a time would sample the target less often than every ``gap`` simulated
+        s (its measured reply time is longer) while it takes pipelined requests (E-WIRE-008): then a case samples
+        at the platform's pace instead (``timeline``; a slow link, issue 17). A fast target is polled as before: a
+        stream of unpaced requests can starve a loaded simulator (motion.hold)."""
         reply = self.config.reply_time or 0.0
-        return self.config.pipeline and reply * self.config.time_scale > period
+        return self.config.pipeline and reply * self.config.time_scale > gap
 
     def timeline(
         self, ask: Telegram, seconds: float, events: Sequence[tuple[float, Telegram]], period: float = 0.1

@@ -288,12 +288,12 @@ def move_vel(ctx: CaseContext) -> None:
 
 def track(ctx: CaseContext, until: Callable[[Pose], bool], within: float, period: float = 0.1) -> Pose:
     """``ctx.poll`` of the pose: the first that satisfies ``until`` within ``within`` simulated s, else the last.
-    Where the target's measured reply time is longer than ``period`` simulated s (a slow link, issue 17) and it
-    answers pipelined requests in order (erratum E-WIRE-008), a CMD_GET_POSITION leaves every ``period``
+    Where the target's measured reply time is longer than ``context.PACED`` simulated s (a slow link, issue 17) and
+    it answers pipelined requests in order (erratum E-WIRE-008), a CMD_GET_POSITION leaves every ``period``
     without waiting for the replies before it, which are read as they come: the sampling keeps to the platform's
     time, not to the link's (one command against a watchdog of a simulated second or two was over before a
     second pose came back through a link of 200 ms at time scale 10)."""
-    if not ctx.link_paced(period):
+    if not ctx.link_paced():
         return ctx.poll(lambda: pose(ctx), until, within=within)
     session = ctx.session()
     ask = [build("request", "CMD_GET_POSITION")]

@@ -71,7 +71,7 @@ def _until(ctx: CaseContext, value: str, within: float) -> bool:
 )
 def runs_on_start(ctx: CaseContext) -> None:
     old, new = _prepare(ctx, _set("{new}") + _delay(1500) + _set("{old}"))
-    if ctx.link_paced(0.1):
+    if ctx.link_paced():
         _runs_on_start_sampled(ctx, old.strip().lower(), new)
         return
     ctx.send("CMD_START")
@@ -94,7 +94,7 @@ def runs_on_start(ctx: CaseContext) -> None:
 )
 def stop_aborts(ctx: CaseContext) -> None:
     _, new = _prepare(ctx, _set("{new}") + _delay(2000) + _set("{old}"))
-    if ctx.link_paced(0.1):
+    if ctx.link_paced():
         _stop_aborts_sampled(ctx, new)
         return
     ctx.send("CMD_START")
