@@ -52,10 +52,33 @@ export interface Layers {
   kinds: Record<string, boolean>;
 }
 
+/** A line kind's segments and their grid, built when first asked for. */
+export class LineEntry {
+  private built: SegmentGrid | null = null;
+
+  constructor(
+    readonly segs: Float64Array,
+    readonly owners: Int32Array,
+    private readonly bounds: Bounds,
+  ) {}
+
+  get n(): number {
+    return this.segs.length / 4;
+  }
+
+  get grid(): SegmentGrid {
+    this.built ??= new SegmentGrid(this.segs, this.bounds);
+    return this.built;
+  }
+}
+
 export interface Prepared {
   bounds: Bounds | null;
-  /** per line kind: the segments, their grid, and the object (scene index) each segment came from */
-  lines: Map<string, { segs: Float64Array; grid: SegmentGrid; owners: Int32Array }>;
+  /**
+   * per line kind: the segments, their grid (built at the first query: a view of the whole map needs none, so the
+   * first drawing after a load does not wait for it; issue 20), and the object (scene index) each segment came from
+   */
+  lines: Map<string, LineEntry>;
   others: MapScene["objects"];
   /** each of `others`' scene index */
   othersAt: number[];
@@ -145,11 +168,11 @@ export function transfers(p: PackedScene): Transferable[] {
 }
 
 export function preparePacked(p: PackedScene): Prepared {
-  const lines = new Map<string, { segs: Float64Array; grid: SegmentGrid; owners: Int32Array }>();
+  const lines = new Map<string, LineEntry>();
   let most = 0;
   p.segs.forEach(([kind, segs], i) => {
     if (segs.length > 0 && p.bounds !== null) {
-      lines.set(kind, { segs, grid: new SegmentGrid(segs, p.bounds), owners: p.owners[i] });
+      lines.set(kind, new LineEntry(segs, p.owners[i], p.bounds));
       most = Math.max(most, segs.length / 4);
     }
   });
@@ -182,6 +205,13 @@ export function applyPatch(base: Prepared, patch: ScenePatch): Prepared {
   return { ...base, bounds: patch.bounds, others, othersAt, patch: { hideFrom, hideTo, lines: new Map(added.segs) } };
 }
 
+/** Build every grid now (off the drawing's path: a while after the first layer). */
+export function buildGrids(prep: Prepared): void {
+  for (const entry of prep.lines.values()) {
+    void entry.grid;
+  }
+}
+
 export function prepare(scene: MapScene): Prepared {
   return preparePacked(pack(scene));
 }
@@ -207,7 +237,7 @@ function baseSegs(prep: Prepared, kind: string, view: Bounds, whole: boolean): S
   if (entry === undefined) {
     return null;
   }
-  let n = entry.grid.n;
+  let n = entry.n;
   let idx: Uint32Array | null = null;
   if (!whole) {
     n = entry.grid.query(view, prep.scratch);
