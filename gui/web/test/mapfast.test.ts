@@ -28,7 +28,8 @@ const KEPT = `<map Version="1.0" vendor="x">
   <layer index="3" name="walls"><line colour="red"><point x="1" y="2"/><point x="3" y="4" z="9"/><tag k="v"/></line>
     <door width="900"><point x="5" y="6"/></door><circle><center x="1" y="1"/><radius r="5"/><radius r="6"/></circle>
     <hiddenlabel text="Hall"><point x="7" y="8"/></hiddenlabel><hiddenlabel><point x="7" y="8"/></hiddenlabel>
-    <empty/></layer>
+    <empty/><hiddenpolygon><point x="-0" y="1e3"/><point x=" 12 " y="0x10"/><point x="1234567890123456789" y="-12.5"/>
+    <point x="+5" y="007"/><point x="999999999999999" y="-999999999999999"/></hiddenpolygon></layer>
   <layer index="1"/>
 </map>
 <?pi after?>`;

@@ -65,56 +65,54 @@ function nameEnd(src: string, i: number): number {
   return j;
 }
 
-/** The attribute at `i` (after its white space): name end, value start and end; null when not plain. */
-interface Attr {
-  nameEnd: number;
-  from: number;
-  to: number;
-}
+/**
+ * The attribute read last by `attr` and the tag end read last by `tagEnd`: module state rather than an object per
+ * attribute (a map of 50,000 lines has 200,000 of them; the garbage was a good part of the load's time).
+ */
+let attrName = 0;
+let attrFrom = 0;
+let attrTo = 0;
+let tagSelf = false;
 
-function attr(src: string, i: number): Attr | null {
+/** The attribute at `i` (after its white space) into attrName (its name's end), attrFrom, attrTo; false when not plain. */
+function attr(src: string, i: number): boolean {
   const ne = nameEnd(src, i);
   if (ne < 0) {
-    return null;
+    return false;
   }
   let j = ws(src, ne);
   if (src.charCodeAt(j) !== 61) {
-    return null;
+    return false;
   }
   j = ws(src, j + 1);
   const q = src.charCodeAt(j);
   const to = q === 34 || q === 39 ? src.indexOf(q === 34 ? '"' : "'", j + 1) : -1;
   if (to < 0) {
-    return null;
+    return false;
   }
   for (let k = j + 1; k < to; k++) {
     const c = src.charCodeAt(k);
     if (c === 38 || c === 60) {
-      return null; // a reference or '<': the general reader
+      return false; // a reference or '<': the general reader
     }
   }
-  return { nameEnd: ne, from: j + 1, to };
+  attrName = ne;
+  attrFrom = j + 1;
+  attrTo = to;
+  return true;
 }
 
-/** Attributes from `i` to the tag's end: `each(name start, attr)` for each; the end ('>' or '/>' past), or -1. */
-function attrs(src: string, i: number, each: (start: number, a: Attr) => boolean): { end: number; self: boolean } | null {
-  let j = i;
-  for (;;) {
-    const k = ws(src, j);
-    const c = src.charCodeAt(k);
-    if (c === 62) {
-      return { end: k + 1, self: false };
-    }
-    if (c === 47) {
-      return src.charCodeAt(k + 1) === 62 ? { end: k + 2, self: true } : null;
-    }
-    const a = k > j ? attr(src, k) : null;
-    if (a === null || !each(k, a)) {
-      return null;
-    }
-    j = a.to + 1;
+/** At `k` ('>' or '/'): the tag's end, tagSelf set; -1 when it is not one. */
+function tagEnd(src: string, k: number): number {
+  const c = src.charCodeAt(k);
+  tagSelf = c === 47;
+  if (c === 62) {
+    return k + 1;
   }
+  return c === 47 && src.charCodeAt(k + 1) === 62 ? k + 2 : -1;
 }
+
+const isTagEnd = (c: number): boolean => c === 62 || c === 47;
 
 /** The start tag at `i` (src[i] is '<'): its name, attributes in order, where it ends; null when not plain. */
 function tag(src: string, i: number): Tag | null {
@@ -123,15 +121,23 @@ function tag(src: string, i: number): Tag | null {
     return null;
   }
   const list: Array<[string, string]> = [];
-  const end = attrs(src, ne, (k, a) => {
-    const name = src.slice(k, a.nameEnd);
-    if (list.some(([n]) => n === name)) {
-      return false;
+  let j = ne;
+  for (;;) {
+    const k = ws(src, j);
+    if (isTagEnd(src.charCodeAt(k))) {
+      const end = tagEnd(src, k);
+      return end < 0 ? null : { name: src.slice(i + 1, ne), attrs: list, end, self: tagSelf };
     }
-    list.push([name, src.slice(a.from, a.to)]);
-    return true;
-  });
-  return end === null ? null : { name: src.slice(i + 1, ne), attrs: list, ...end };
+    if (k === j || !attr(src, k)) {
+      return null;
+    }
+    const name = src.slice(k, attrName);
+    if (list.some(([n]) => n === name)) {
+      return null;
+    }
+    list.push([name, src.slice(attrFrom, attrTo)]);
+    j = attrTo + 1;
+  }
 }
 
 /** The end of the closing tag `</name>` at `i`, or -1. */
@@ -147,39 +153,70 @@ function closing(src: string, i: number, name: string): number {
   return src.charCodeAt(j) === 62 ? j + 1 : -1;
 }
 
+/** mapdoc.ts `num` of the text from..to: Number() of it, NaN when blank; plain integers read without a string. */
+function numberAt(src: string, from: number, to: number): number {
+  let k = from;
+  const neg = src.charCodeAt(k) === 45;
+  k += neg ? 1 : 0;
+  if (k < to && to - k <= 15) {
+    let v = 0;
+    for (; k < to; k++) {
+      const d = src.charCodeAt(k) - 48;
+      if (d < 0 || d > 9) {
+        break;
+      }
+      v = v * 10 + d;
+    }
+    if (k === to) {
+      return neg ? -v : v; // at most 15 digits: exact, as Number() gives it
+    }
+  }
+  const raw = src.slice(from, to);
+  return raw.trim() === "" ? Number.NaN : Number(raw);
+}
+
 /**
  * A self-closing <point> or <center> from `i` (after its name): its x and y appended to `points` (mapdoc.ts `num`:
  * other attributes are dropped); its end, or -1 (not plain, a repeated attribute, not a number).
  */
 function readPoint(src: string, i: number, points: number[]): number {
-  let x: string | undefined;
-  let y: string | undefined;
+  let x = Number.NaN;
+  let y = Number.NaN;
+  let seen = 0; // 1: x, 2: y
   let others: string[] | null = null;
-  const end = attrs(src, i, (k, a) => {
-    const one = a.nameEnd === k + 1 ? src.charCodeAt(k) : 0;
-    if (one === 120 || one === 121) {
-      const v = src.slice(a.from, a.to);
-      if ((one === 120 ? x : y) !== undefined) {
-        return false;
+  let j = i;
+  for (;;) {
+    const k = ws(src, j);
+    if (isTagEnd(src.charCodeAt(k))) {
+      const end = tagEnd(src, k);
+      if (end < 0 || !tagSelf || !Number.isFinite(x) || !Number.isFinite(y)) {
+        return -1;
       }
-      x = one === 120 ? v : x;
-      y = one === 121 ? v : y;
-      return true;
+      points.push(x, y);
+      return end;
     }
-    const name = src.slice(k, a.nameEnd);
-    if (others?.includes(name)) {
-      return false;
+    if (k === j || !attr(src, k)) {
+      return -1;
     }
-    (others ??= []).push(name);
-    return true;
-  });
-  const px = x === undefined || x.trim() === "" ? Number.NaN : Number(x);
-  const py = y === undefined || y.trim() === "" ? Number.NaN : Number(y);
-  if (end === null || !end.self || !Number.isFinite(px) || !Number.isFinite(py)) {
-    return -1;
+    const one = attrName === k + 1 ? src.charCodeAt(k) : 0;
+    const bit = one === 120 ? 1 : one === 121 ? 2 : 0;
+    if (bit !== 0) {
+      if ((seen & bit) !== 0) {
+        return -1;
+      }
+      seen |= bit;
+      const v = numberAt(src, attrFrom, attrTo);
+      x = bit === 1 ? v : x;
+      y = bit === 2 ? v : y;
+    } else {
+      const name = src.slice(k, attrName);
+      if (others?.includes(name)) {
+        return -1;
+      }
+      (others ??= []).push(name);
+    }
+    j = attrTo + 1;
   }
-  points.push(px, py);
-  return end.end;
 }
 
 /** mapdoc.ts `num`: the attribute's number, NaN where the general reader refuses it. */

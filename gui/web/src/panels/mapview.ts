@@ -245,12 +245,12 @@ export class MapView {
     this.version++;
     if (!this.sendPatch()) {
       const s = this.scene;
-      this.counts = s === null ? {} : countKinds(s);
+      const packed = s === null ? null : pack(s, this.bounds); // one pass: segments, counts per kind (bounds known)
+      this.counts = packed === null ? {} : packed.kinds;
       this.base = s === null ? null : { scene: s, objects: s.objects.slice(), counts: this.counts, bounds: this.bounds };
       this.pageBase = null;
       this.patchBox = null;
       if (this.worker !== null) {
-        const packed = s === null ? null : pack(s);
         this.worker.postMessage({ type: "scene", scene: packed, roadmap: this.roadmap }, packed === null ? [] : transfers(packed));
       }
     }

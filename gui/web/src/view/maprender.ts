@@ -13,7 +13,7 @@
  * - Lines are 1 px wide: the rasterizer's hairline path, about ten times faster than a 1.5 px stroke on 50,000 lines.
  * - The same code runs in the layer worker (OffscreenCanvas) and, without workers, on the page.
  */
-import { AREA_KINDS, type Bounds, LINE_KINDS, type MapScene, sceneBounds } from "../scene/map";
+import { AREA_KINDS, type Bounds, KINDS, LINE_KINDS, type MapScene, sceneBounds } from "../scene/map";
 import type { Roadmap } from "../scene/roadmap";
 import { type Camera, toScreen, viewBounds } from "./camera";
 import { SegmentGrid } from "./spatial";
@@ -118,16 +118,24 @@ export interface PackedScene {
   owners: Int32Array[];
   others: MapScene["objects"];
   othersAt: number[];
+  /** objects per kind (scene/map.ts countKinds), counted in the same pass */
+  kinds: Record<string, number>;
 }
 
-export function pack(scene: MapScene): PackedScene {
+/** The scene packed; `bounds`: its bounds when the caller has them (else computed: a pass over every object). */
+export function pack(scene: MapScene, bounds?: Bounds | null): PackedScene {
   const counts = new Map<string, number>();
   const lineKinds = new Set<string>(LINE_KINDS);
   const others: MapScene["objects"] = [];
   const othersAt: number[] = [];
   const objects = scene.objects;
+  const perKind: Record<string, number> = {};
+  for (const k of KINDS) {
+    perKind[k] = 0;
+  }
   for (let i = 0; i < objects.length; i++) {
     const o = objects[i];
+    perKind[o.kind] = (perKind[o.kind] ?? 0) + 1;
     if (!lineKinds.has(o.kind)) {
       others.push(o);
       othersAt.push(i);
@@ -154,11 +162,12 @@ export function pack(scene: MapScene): PackedScene {
   }
   const kinds = LINE_KINDS.filter((k) => segs.has(k));
   return {
-    bounds: sceneBounds(scene),
+    bounds: bounds === undefined ? sceneBounds(scene) : bounds,
     segs: kinds.map((k) => [k, segs.get(k)!.a]),
     owners: kinds.map((k) => segs.get(k)!.owner),
     others,
     othersAt,
+    kinds: perKind,
   };
 }
 
