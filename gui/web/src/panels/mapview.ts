@@ -18,7 +18,7 @@ import { parseRoadmap, type Roadmap } from "../scene/roadmap";
 import type { PlatformSession, TruthEvent } from "../session/session";
 import { type Camera, fit, panBy, toWorld, viewBounds, zoomAt } from "../view/camera";
 import { applyPatch, buildGrids, drawStatic, type Layers, pack, prepare, type Prepared, type ScenePatch, transfers } from "../view/maprender";
-import { type Box, changedWindow, dirtyPart, patchCounts, union, windowBox, windowSize } from "../view/scenediff";
+import { type Box, changedWindow, dirtyPart, HeadTailBoxes, patchCounts, union, windowBox, windowSize } from "../view/scenediff";
 import { drawFlag, drawPlatform, drawStatus, footprint, type Footprint, type OverlayOptions, type Pose, type UsSensor } from "../view/overlay";
 import { liveKey } from "../view/livekey";
 import type { ViewOptions } from "./viewoptions";
@@ -82,7 +82,14 @@ export class MapView {
   syncLayers = false;
   private worker: Worker | null = null;
   /** the scene the worker holds as its base (its objects as they were then) and their counts per kind */
-  private base: { scene: MapScene; objects: MapScene["objects"]; counts: Record<string, number>; bounds: Bounds | null } | null = null;
+  private base: {
+    scene: MapScene;
+    objects: MapScene["objects"];
+    counts: Record<string, number>;
+    bounds: Bounds | null;
+    /** the boxes of the base's heads and tails (built with the page's index): exact bounds after any edit */
+    boxes?: HeadTailBoxes;
+  } | null = null;
   /** the current scene's counts per kind */
   private counts: Record<string, number> = {};
   /** the page's index of the base (built once, a while after the base is drawn): an edit is redrawn here at once */
@@ -233,9 +240,10 @@ export class MapView {
   }
 
   /**
-   * The bounds of the base scene after an edit without a pass over every object (issue 20): the base's bounds
-   * grown by the new objects' box, exact when the objects gone lay strictly inside them (an extreme point is then
-   * still held by an object kept). Null when that does not hold: compute them.
+   * The bounds of the base scene after an edit without a pass over every object (issue 20): the box of the base's
+   * objects outside the changed window (head and tail boxes) and of the new ones; before those boxes are built,
+   * the base's bounds grown by the new objects' box, exact when the objects gone lay strictly inside them (an
+   * extreme point is then still held by an object kept). Null when neither holds: compute them.
    */
   private editedBounds(scene: MapScene): Bounds | null {
     const b = this.base;
@@ -243,12 +251,16 @@ export class MapView {
       return null;
     }
     const w = changedWindow(b.objects, scene.objects);
+    const added = windowBox(b.objects, scene.objects, { ...w, baseEnd: w.start });
+    if (b.boxes !== undefined) {
+      return union(b.boxes.outside(w.start, w.baseEnd), added);
+    }
     const gone = windowBox(b.objects, scene.objects, { ...w, curEnd: w.start });
     const bb = b.bounds;
     if (gone !== null && !(gone.minX > bb.minX && gone.minY > bb.minY && gone.maxX < bb.maxX && gone.maxY < bb.maxY)) {
       return null;
     }
-    return union(bb, windowBox(b.objects, scene.objects, { ...w, baseEnd: w.start }));
+    return union(bb, added);
   }
 
   private documentsChanged(): void {
@@ -360,6 +372,7 @@ export class MapView {
         const prep = prepare({ ...b.scene, objects: b.objects });
         buildGrids(prep); // here, not at the first edit
         this.pageBase = { of: b.objects, prep };
+        b.boxes = new HeadTailBoxes(b.objects);
       }
     }, PAGE_INDEX_DELAY_MS);
   }
