@@ -106,3 +106,30 @@ describe("the editor's spatial index", () => {
     expect(idx.near(50000, 50000, 1)).toEqual([]);
   });
 });
+
+describe("History.byId", () => {
+  it("finds each object as a pass over the document does, through edits, undo and redo", () => {
+    const rnd = rng(21);
+    const h = randomDoc(300, rnd);
+    for (let step = 0; step < 120; step++) {
+      const objs = h.doc.scene.objects;
+      const id = objs[Math.floor(rnd() * objs.length)].id;
+      const what = rnd();
+      if (what < 0.4) {
+        h.run(moveObjects(h.doc, [id], 10, -20));
+      } else if (what < 0.55) {
+        h.run(deleteObjects(h.doc, [id]));
+      } else if (what < 0.7) {
+        h.run(addObject(h.doc, { kind: "line", layer: 0, points: [1, 2, 3, 4], attrs: {} }));
+      } else if (what < 0.9) {
+        h.undo();
+      } else {
+        h.redo();
+      }
+      for (const probe of [id, id + 1, h.doc.nextId - 1, h.doc.nextId]) {
+        expect(h.byId(probe)).toBe(h.doc.scene.objects.find((o) => o.id === probe));
+      }
+    }
+    expect(h.byId(null)).toBeUndefined();
+  });
+});

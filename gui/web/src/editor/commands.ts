@@ -47,6 +47,8 @@ export class History {
   private saved: Command | null = null;
   /** the spatial index of the document's objects (objindex.ts), built at the first query, kept in step after */
   private idx: ObjectIndex | null = null;
+  /** the document's objects by id, built at the first look-up, kept in step after */
+  private ids: Map<number, MapObject> | null = null;
 
   constructor(public readonly doc: MapDoc) {}
 
@@ -55,7 +57,17 @@ export class History {
       applyChanges(this.doc, changes);
     } catch (e) {
       this.idx = null; // the document may be changed in part
+      this.ids = null;
       throw e;
+    }
+    const ids = this.ids ?? new Map<number, MapObject>();
+    for (const c of this.ids === null ? [] : changes) {
+      if (c.before !== null && ids.get(c.before.id) === c.before) {
+        ids.delete(c.before.id);
+      }
+      if (c.after !== null) {
+        ids.set(c.after.id, c.after);
+      }
     }
     const idx = this.idx;
     for (const c of idx === null ? [] : changes) {
@@ -69,6 +81,15 @@ export class History {
     if (idx !== null && !idx.ok) {
       this.idx = null; // out of step: built again at the next query
     }
+  }
+
+  /** The object with id `id` (the document's ids are unique), without a pass over the document; undefined: none. */
+  byId(id: number | null): MapObject | undefined {
+    if (id === null) {
+      return undefined;
+    }
+    this.ids ??= new Map(this.doc.scene.objects.map((o) => [o.id, o]));
+    return this.ids.get(id);
   }
 
   /** Build the spatial index now (off an edit's path, e.g. a while after a map is loaded). */
