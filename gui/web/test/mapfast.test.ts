@@ -41,7 +41,7 @@ describe("the fast map reader", () => {
       expect(fast).not.toBeNull(); // the fast path is taken for these: the comparison below is not vacuous
       expect(fast).toEqual(parseMapDocXml(src, "n"));
     }
-  });
+  }, 60_000);
 
   it("gives up where the document leaves the platform's form, so the general reader answers", () => {
     const leave = [
@@ -70,5 +70,5 @@ describe("the fast map reader", () => {
         expect(outcome(() => parseMapDoc(variant))).toEqual(outcome(() => parseMapDocXml(variant)));
       }
     }
-  });
+  }, 60_000);
 });

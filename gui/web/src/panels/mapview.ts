@@ -17,7 +17,19 @@ import { type Bounds, countKinds, KINDS, type MapScene, MapParseError, parseMap,
 import { parseRoadmap, type Roadmap } from "../scene/roadmap";
 import type { PlatformSession, TruthEvent } from "../session/session";
 import { type Camera, fit, panBy, toWorld, viewBounds, zoomAt } from "../view/camera";
-import { applyPatch, buildGrids, drawStatic, type Layers, pack, prepare, type Prepared, type ScenePatch, transfers } from "../view/maprender";
+import {
+  applyPatch,
+  buildGrids,
+  copyPacked,
+  drawStatic,
+  type Layers,
+  pack,
+  prepare,
+  preparePacked,
+  type Prepared,
+  type ScenePatch,
+  transfers,
+} from "../view/maprender";
 import { type Box, changedWindow, dirtyPart, HeadTailBoxes, patchCounts, union, windowBox, windowSize } from "../view/scenediff";
 import { drawFlag, drawPlatform, drawStatus, footprint, type Footprint, type OverlayOptions, type Pose, type UsSensor } from "../view/overlay";
 import { liveKey } from "../view/livekey";
@@ -87,8 +99,10 @@ export class MapView {
     objects: MapScene["objects"];
     counts: Record<string, number>;
     bounds: Bounds | null;
-    /** the boxes of the base's heads and tails (built with the page's index): exact bounds after any edit */
+    /** the boxes of the base's heads and tails (built with the page's grids): exact bounds after any edit */
     boxes?: HeadTailBoxes;
+    /** the page's grids and boxes are asked for */
+    indexing?: boolean;
   } | null = null;
   /** the current scene's counts per kind */
   private counts: Record<string, number> = {};
@@ -270,7 +284,10 @@ export class MapView {
       const packed = s === null ? null : pack(s, this.bounds); // one pass: segments, counts per kind (bounds known)
       this.counts = packed === null ? {} : packed.kinds;
       this.base = s === null ? null : { scene: s, objects: s.objects.slice(), counts: this.counts, bounds: this.bounds };
-      this.pageBase = null;
+      // while the editor shows its document the page keeps a copy of the packed arrays (its own index of the base,
+      // grids built later): an edit is drawn on the page from the first one on (issue 20)
+      const kept = packed !== null && this.worker !== null && this.editHooks !== null ? copyPacked(packed) : null;
+      this.pageBase = kept === null || this.base === null ? null : { of: this.base.objects, prep: preparePacked(kept) };
       this.patchBox = null;
       if (this.worker !== null) {
         this.worker.postMessage({ type: "scene", scene: packed, roadmap: this.roadmap }, packed === null ? [] : transfers(packed));
@@ -359,21 +376,25 @@ export class MapView {
   }
 
   /**
-   * The page's index of the base, built once the worker has drawn it (off the load's critical path), and only while
-   * the editor shows its document (the platform's map is not edited).
+   * The page's grids of the base and its head and tail boxes, built a while after the worker has drawn it (off the
+   * load's critical path), and only while the editor shows its document (the platform's map is not edited). An
+   * edit before then builds the grids it needs as it draws.
    */
   private buildPageBase(): void {
     const b = this.base;
-    if (this.worker === null || b === null || this.editHooks === null || this.pageBase?.of === b.objects) {
+    if (this.worker === null || b === null || this.editHooks === null || b.indexing === true) {
       return;
     }
+    b.indexing = true;
     setTimeout(() => {
-      if (this.base === b && this.pageBase?.of !== b.objects) {
-        const prep = prepare({ ...b.scene, objects: b.objects });
-        buildGrids(prep); // here, not at the first edit
-        this.pageBase = { of: b.objects, prep };
-        b.boxes = new HeadTailBoxes(b.objects);
+      if (this.base !== b) {
+        return;
       }
+      if (this.pageBase?.of !== b.objects) {
+        this.pageBase = { of: b.objects, prep: prepare({ ...b.scene, objects: b.objects }) };
+      }
+      buildGrids(this.pageBase.prep); // here, not at the first edit
+      b.boxes = new HeadTailBoxes(b.objects);
     }, PAGE_INDEX_DELAY_MS);
   }
 

@@ -171,6 +171,11 @@ export function pack(scene: MapScene, bounds?: Bounds | null): PackedScene {
   };
 }
 
+/** A copy of a packed scene's arrays (the page keeps one when the others are transferred to the worker). */
+export function copyPacked(p: PackedScene): PackedScene {
+  return { ...p, segs: p.segs.map(([k, a]) => [k, a.slice()]), owners: p.owners.map((a) => a.slice()) };
+}
+
 /** The transferable buffers of a packed scene (for postMessage). */
 export function transfers(p: PackedScene): Transferable[] {
   return [...p.segs.map(([, a]) => a.buffer), ...p.owners.map((a) => a.buffer)];
