@@ -20,6 +20,7 @@ import { type Camera, fit, panBy, toWorld, viewBounds, zoomAt } from "../view/ca
 import { applyPatch, drawStatic, type Layers, pack, prepare, type Prepared, type ScenePatch, transfers } from "../view/maprender";
 import { type Box, changedWindow, dirtyPart, patchCounts, union, windowBox, windowSize } from "../view/scenediff";
 import { drawFlag, drawPlatform, drawStatus, footprint, type Footprint, type OverlayOptions, type Pose, type UsSensor } from "../view/overlay";
+import { liveKey } from "../view/livekey";
 import type { ViewOptions } from "./viewoptions";
 
 type Tool = "pan" | "zoomArea" | "shift" | "flag" | "edit";
@@ -52,6 +53,8 @@ export class MapView {
   bounds: Bounds | null = null;
   roadmap: Roadmap | null = null;
   status: GetStatusReply | null = null;
+  /** the live key (view/livekey.ts) of the last status that asked for a redraw */
+  private drawnKey = "";
   flag: Pose | null = null;
   footprint: Footprint = footprint(650, 430, 100);
   usSensors: UsSensor[] = [];
@@ -168,6 +171,12 @@ export class MapView {
     });
     s.status.subscribe((st) => {
       this.status = st;
+      // a status that changes nothing the map draws is not redrawn (view/livekey.ts)
+      const key = liveKey(st, this.overlayOptions());
+      if (key === this.drawnKey) {
+        return;
+      }
+      this.drawnKey = key;
       if (this.options.centerPlatform) {
         this.cam = { ...this.cam, cx: st.estX, cy: st.estY };
       }
@@ -180,6 +189,7 @@ export class MapView {
     });
     this.options.changed.subscribe(() => {
       this.version++;
+      this.drawnKey = ""; // the next status is drawn (and centred on) whatever it shows
       this.invalidate();
     });
     new ResizeObserver(() => this.resize()).observe(this.canvas);
@@ -636,6 +646,20 @@ export class MapView {
     this.summary.textContent = `${t("map.summary", { name: scene.name || "-" })} ${parts.join(", ")}`;
   }
 
+  /** The live layers the view options show (guide 5.2 View). */
+  private overlayOptions(): OverlayOptions {
+    const o = this.options;
+    return {
+      showEstimated: o.showEstimated,
+      showDesired: o.showDesired,
+      scan: o.localization,
+      ultrasonic: o.ultrasonic,
+      path: o.planning,
+      localization: o.localization,
+      planObstacles: o.planObstacles,
+    };
+  }
+
   render(): void {
     const t0 = performance.now();
     this.dirty = false;
@@ -651,16 +675,7 @@ export class MapView {
     }
     this.updateLayer();
     this.drawLayer(ctx);
-    const o = this.options;
-    const overlay: OverlayOptions = {
-      showEstimated: o.showEstimated,
-      showDesired: o.showDesired,
-      scan: o.localization,
-      ultrasonic: o.ultrasonic,
-      path: o.planning,
-      localization: o.localization,
-      planObstacles: o.planObstacles,
-    };
+    const overlay = this.overlayOptions();
     if (this.status) {
       const live = drawStatus(ctx, c, this.status, this.footprint, this.usSensors, overlay);
       this.canvas.dataset.drawnScan = String(live.scan);
