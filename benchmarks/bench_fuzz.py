@@ -38,6 +38,7 @@ from __future__ import annotations
 import contextlib
 import io
 import json
+import os
 import statistics
 import sys
 import tempfile
@@ -102,8 +103,12 @@ def ours(launch: str, seconds: float, pipeline: bool = True, big_share: float = 
         campaign = Campaign(opts)
         campaign.run()
         st = campaign.stats
-        way = "kept connection" if st.dear else "fresh connections"
-        print(f"  {' '.join(launch.split()[2:4])}: {st.rate:,.0f} cases/s, {way} (trial: {st.ways})", file=sys.stderr)
+        way = ("kept connection" + (", paced" if st.ways else "")) if st.dear else "fresh connections"
+        load = os.getloadavg()[0]
+        print(
+            f"  {' '.join(launch.split()[2:4])}: {st.rate:,.0f} cases/s, {way} (trial: {st.ways}), load {load:.1f}",
+            file=sys.stderr,
+        )
         return st.rate, len(st.findings) + len(st.unconfirmed)
 
 
@@ -235,6 +240,7 @@ def cases_per_second(config: Config) -> list[Row]:
                 add(target, OURS_PLAIN, ours(launch, seconds, pipeline=False)[0])
                 add(target, OURS_NATURAL, ours(launch, seconds, big_share=1.0)[0])
             nominal, served = run_boofuzz(launch, seconds)
+            print(f"  boofuzz ({target}): {served:,.1f} cases/s served, load {os.getloadavg()[0]:.1f}", file=sys.stderr)
             add(target, BOOFUZZ, served)
             if target != DIRECT:
                 add(target, BOOFUZZ_NOMINAL, nominal)

@@ -12,8 +12,8 @@ Rules:
   need a fresh connection (the target should close on them) beyond ``SINGLES_QUEUE`` waiting are skipped
   (counted): fresh connections are what such a target has least of. Those kept are the ones whose telegram ran
   least so far (``pltf.fuzz.unit.rarest``): every id comes round. Where the target turns nobody away the dear way
-  is tried against fresh connections and kept only when it is faster and gives up few singles
-  (``pltf.fuzz.trial``).
+  is paced (its batches take turns with the singles, ``pltf.fuzz.pace``), tried against fresh connections and
+  kept only when it is faster and gives up few singles (``pltf.fuzz.trial``).
 - A suspicion (``pltf.fuzz.verdict``) stops the lanes; once the ports are free its unit is replayed alone: a
   finding when it fails again the same way, else reported apart as unconfirmed (``stats.unconfirmed``), which
   never sets the exit status. A unit that timed out is a stall when another port still serves us, else a hang;
@@ -40,6 +40,7 @@ from pltf.fuzz.knowledge import Knowledge
 from pltf.fuzz.lanes import DONE, STOPPED, InFlight, Lanes
 from pltf.fuzz.launch import Launcher
 from pltf.fuzz.options import Options, Stats
+from pltf.fuzz.pace import Pace
 from pltf.fuzz.prefetch import Prefetcher
 from pltf.fuzz.preludes import STATEFUL, StatePlan
 from pltf.fuzz.schedule import BIG_CASE, Scheduler
@@ -119,6 +120,7 @@ class Campaign:
         if self.o.lanes < 2 or any(g.dear for g in lanes.gates[: self.o.lanes]):
             self.trial.settle(self.o.lanes > 1)  # one lane has no other port for the fresh connections
         lanes.dear = self.trial.way()
+        lanes.pace = None if self.trial.settled else Pace()
         self._gate_stats()
 
     def _gate_stats(self) -> None:
@@ -193,22 +195,31 @@ class Campaign:
         self.index = first + len(cases)
         units = self.units(cases)
         if self.lanes.dear:
-            room = max(0, SINGLES_QUEUE - self.lanes.fresh_waiting())
+            room = max(0, self._singles_queue(units) - self.lanes.fresh_waiting())
             fresh = [u for u in units if not u.keep]
             skip = set(fresh) - set(rarest(fresh, room, self.single_telegrams))
             self.stats.skipped += len(skip)
             units = [u for u in units if u not in skip]
         self.lanes.add(units)
         t0, served, singles, dear = time.monotonic(), self.stats.cases, self.stats.singles, self.lanes.dear
-        self._lanes_run(batches_only=dear)
+        self._lanes_run(batches_only=dear and self.trial.next_way())  # a trial's ways are not mixed
         if not self.stop:
             self.plan.window_done(any(c.size > BIG_CASE for c in cases))
             if self.o.lanes > 1 and any(g.dear for g in self.lanes.gates):
                 self.trial.settle(True)  # turn-aways began late (a target that is slow to free a port)
+                self.lanes.pace = None
             st = self.stats
             self.trial.record(dear, st.cases - served, time.monotonic() - t0, singles=st.singles - singles)
             self._way(self.trial.way())
         self._gate_stats()
+
+    def _singles_queue(self, units: list[Unit]) -> int:
+        """Singles that may wait on the dear way: ``SINGLES_QUEUE``, or, paced, as many as the window's batches
+        owe the other port (``pltf.fuzz.pace``) when that is more."""
+        pace = self.lanes.pace if self.lanes is not None else None
+        if pace is None:
+            return SINGLES_QUEUE
+        return max(SINGLES_QUEUE, sum(pace.singles(len(u.cases)) for u in units if u.keep))
 
     def _way(self, dear: bool) -> None:
         """Run the next window the dear way or with fresh connections (``pltf.fuzz.trial``)."""

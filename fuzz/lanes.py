@@ -15,7 +15,8 @@ Rules:
 - A *dear* port (a connection costs milliseconds of release: a proxy, a slow accept) keeps one connection on
   the first port (``kept``) for the units of accepted cases (batches, big documents): one after the other, each
   ended by its sync reply, while the other port spends fresh connections on the cases the target should refuse
-  (and on the others when none waits).
+  (and on the others when none waits). On the trial's dear way (``pace``) a batch starts only once the singles
+  the batch before it owes were served, or none waits (``pltf.fuzz.pace``).
 - Deadlines: a unit's budget (``pltf.fuzz.target.session_deadline``) runs from its turn on its port, plus the
   size allowances of the units in flight on the other ports (a target may serve one port at a time). Of the
   units that start on other ports while it is in flight it gets at most ``SHARED_UNITS`` allowances: a target
@@ -37,6 +38,7 @@ from dataclasses import dataclass
 
 from pltf.fuzz.flight import Flight, fly, step_flights
 from pltf.fuzz.gate import DEPTH, Gate
+from pltf.fuzz.pace import Pace
 from pltf.fuzz.target import LEAD_IDS, session_deadline
 from pltf.fuzz.unit import PIPELINE_BYTES, Unit
 from pltf.fuzz.verdict import NOT_ADMITTED, Liveness, Verdict, judge
@@ -96,6 +98,7 @@ class Lanes:
         self.recent: collections.deque[InFlight] = collections.deque(maxlen=RECENT)
         self.kept: socket.socket | None = None
         self.dear = False  # set by the campaign from the gates' release
+        self.pace: Pace | None = None  # the dear way's batches take turns with the singles (``pltf.fuzz.pace``)
         self.stop = False
         self.gone: str | None = None  # "dead", "hang" or "stall" once the lanes saw it
         self.stuck: int | None = None  # the port of a stall
@@ -143,7 +146,10 @@ class Lanes:
                     self._done(e, judge_unit)
 
     def _batches_pending(self) -> bool:
-        """Units of accepted cases queued or in flight (on a dear target: the kept connection's)."""
+        """Units of accepted cases queued or in flight (on a dear target: the kept connection's), or singles the
+        last of them still owes the other ports (``pltf.fuzz.pace``)."""
+        if self.dear and self.pace is not None and not self.pace.ready(self._singles_waiting()):
+            return True
         return any(u.keep for u in self.todo) or any(e.unit.keep for q in self.flights for e in q)
 
     def _next_retry(self) -> float | None:
@@ -177,11 +183,11 @@ class Lanes:
 
     def _may_start(self, k: int, unit: Unit) -> bool:
         q = self.flights[k]
+        if self.dear and k == 0:  # the kept connection carries one batch at a time; paced, in its turn
+            return not q and (self.pace is None or self.pace.ready(self._singles_waiting()))
         if not q:
             return True
         gate = self.gates[k]
-        if self.dear and k == 0:
-            return False  # the kept connection carries one batch at a time
         if not gate.pipelining or unit.tries or len(q) >= DEPTH or not unit.whole:
             return False
         f = q[-1].flight
@@ -191,6 +197,12 @@ class Lanes:
             and f.session.half_close
             and len(f.data) <= PIPELINE_BYTES
             and all(i in LEAD_IDS for i in f.expected)
+        )
+
+    def _singles_waiting(self) -> bool:
+        """Singles queued for the other ports (not pinned to port 0) or in flight there."""
+        return any(not u.keep and u.pin != 0 for u in self.todo) or any(
+            not e.unit.keep for q in self.flights[1:] for e in q
         )
 
     def _led(self, k: int, unit: Unit, fresh: bool) -> bool:
@@ -209,6 +221,8 @@ class Lanes:
     def _start(self, k: int, unit: Unit) -> InFlight:
         kept = self.dear and k == 0 and unit.keep
         sock, self.kept = (self.kept, None) if kept else (None, self.kept)
+        if kept and self.pace is not None:
+            self.pace.batch_started(len(unit.cases))
         led = self._led(k, unit, sock is None)
         session = unit.session(lead=led, kept=kept)
         flight = self.connect(self.host, self.ports[k], session, self.deadline, sock=sock)
@@ -265,6 +279,8 @@ class Lanes:
         self.live.admitted(e.port, now)
         self.served += 1
         self.unled = self.served >= WARMUP and not self.unled_ever_off
+        if self.pace is not None and e.port and not unit.keep:
+            self.pace.single_served()
         if not judge_unit(e, v):
             self.stop = True
 

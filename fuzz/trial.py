@@ -14,6 +14,9 @@ Rules:
   A connection that costs little (the reference server: ~0.2 ms) keeps fresh connections; one behind a relay
   that admits one client at a time (a newcomer's connect waits for the last client's whole close) may be
   faster kept.
+- The dear way of a trial is paced (``pltf.fuzz.pace``): its batches take turns with the singles of the other
+  port. A window of it runs until its batches are done and the singles they owe were served; when the next
+  window runs the other way it runs its queued singles out, so that each way is credited with its own cases.
 - A trial's figures are reported (``Stats.ways``): cases per second each way, and singles per second each way.
 """
 
@@ -32,16 +35,25 @@ class Trial:
         self.singles = {False: 0, True: 0}
         self.seconds = {False: 0.0, True: 0.0}
         self.decided: bool | None = None
+        self.settled = False  # decided by the target, not by a trial (the dear way is then not paced)
 
     def settle(self, dear: bool) -> None:
         """No trial: the target decided (it turns newcomers away)."""
-        self.decided = dear
+        self.decided, self.settled = dear, True
 
     def way(self) -> bool:
         """Dear (True) or fresh connections (False) for the next window."""
         if self.decided is not None:
             return self.decided
         return self.seen >= WARMUP and (self.seen - WARMUP) % 2 == 1
+
+    def next_way(self) -> bool:
+        """The way of the window after the one running now, as far as it is known (the trial may still decide
+        otherwise). A dear window followed by a fresh one runs its singles out: the fresh window would count them."""
+        if self.decided is not None:
+            return self.decided
+        n = self.seen + 1
+        return n >= WARMUP and (n - WARMUP) % 2 == 1
 
     def record(self, dear: bool, cases: int, seconds: float, singles: int = 0) -> None:
         """A window ran ``dear`` or not and served ``cases`` in ``seconds``, ``singles`` of them singles (a case

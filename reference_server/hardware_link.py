@@ -25,6 +25,8 @@ import random
 from collections.abc import Callable, Iterable
 from typing import TYPE_CHECKING, Any, TypeVar
 
+import numpy as np
+
 from pltf.fake_hardware import ALL_NODES, Hardware, HwEvent, Node, St, Transaction, build_platform_hardware
 from pltf.fake_hardware.controller import HARDWARE_FAULTS
 from pltf.fake_hardware.serial_scanner import ANGLE_STEP, MAX_CM, POINTS, START_ANGLE, Ranges, Scan
@@ -36,8 +38,9 @@ if TYPE_CHECKING:
 HardwareFactory = Callable[["Platform"], "HardwareLink"]
 AUTO = "auto"
 NO_ECHO = MAX_CM * 10  # mm: what the S300 sends for a beam without echo
-_COS = [math.cos(START_ANGLE + i * ANGLE_STEP) for i in range(POINTS)]
-_SIN = [math.sin(START_ANGLE + i * ANGLE_STEP) for i in range(POINTS)]
+# each beam's direction, from math.cos/sin (numpy's may differ in the last bit): the points are exact
+_COS = np.array([math.cos(START_ANGLE + i * ANGLE_STEP) for i in range(POINTS)])
+_SIN = np.array([math.sin(START_ANGLE + i * ANGLE_STEP) for i in range(POINTS)])
 _I16 = 32767
 
 
@@ -180,20 +183,24 @@ class HardwareLink:
             return ()
         scan = reader.last_scan
         if self._scan_points[0] is not scan:
-            pts = tuple(
-                (_clip(mount_x + r * _COS[i]), _clip(r * _SIN[i]))
-                for i, r in enumerate(scan.ranges_mm)
-                if 0 < r < NO_ECHO
-            )
-            self._scan_points = (scan, pts)
+            self._scan_points = (scan, scan_to_platform(scan.ranges_mm, mount_x))
         return self._scan_points[1]
 
     def close(self) -> None:
         self.hw.close()
 
 
-def _clip(v: float) -> int:
-    return max(-_I16, min(_I16, round(v)))
+def scan_to_platform(ranges_mm: tuple[int, ...], mount_x: float) -> tuple[tuple[int, int], ...]:
+    """The beams with an echo as (x, y) in platform coordinates, mm, rounded half to even and saturated to
+    INT16 (the scan group of guide 6.4), in one numpy pass: a client polling GET_STATUS at 20 Hz meets a new
+    scan at nearly every request, and a loop over the 541 beams was most of the reply's cost."""
+    r = np.asarray(ranges_mm, dtype=np.float64)
+    n = len(r)
+    echo = (r > 0) & (r < NO_ECHO)
+    r = r[echo]
+    xy = np.stack((mount_x + r * _COS[:n][echo], r * _SIN[:n][echo]), axis=1)
+    ints = np.clip(np.rint(xy), -_I16, _I16).astype(np.int64)
+    return tuple(map(tuple, ints.tolist()))
 
 
 # ---- hardware events -> platform (emergency, drive fault, the deferred self test)

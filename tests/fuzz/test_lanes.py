@@ -5,6 +5,8 @@ No sockets: the target is a script that decides, per connection, what became of 
 
 from __future__ import annotations
 
+import collections
+import itertools
 import time
 from collections.abc import Callable, Iterator
 from typing import Any
@@ -14,6 +16,7 @@ import pytest
 import pltf.fuzz.lanes as lanes_module
 from pltf.fuzz.case import Case
 from pltf.fuzz.lanes import DONE, STOPPED, InFlight, Lanes
+from pltf.fuzz.pace import Pace
 from pltf.fuzz.target import Outcome, Session, session_reply_ids
 from pltf.fuzz.unit import Unit
 from pltf.fuzz.verdict import OK, Verdict
@@ -236,3 +239,37 @@ def test_units_started_on_the_other_port_extend_a_unit_in_flight_by_shared_units
         lanes._share_allowances(0, batch)  # type: ignore[arg-type]
         batch.done = True
     assert single.deadline == pytest.approx(now + 1.0 + lanes_module.SHARED_UNITS * 0.5)
+
+
+def test_a_paced_kept_connection_starts_a_batch_only_after_the_singles_the_last_one_owes() -> None:
+    """The trial's dear way (``pltf.fuzz.pace``): a batch of 8 cases at half a single per case owes 4 singles on
+    the other port; the next batch waits for them (those served while it ran count)."""
+    target = Target(lambda f: SERVE)
+    out: list[InFlight] = []
+    singles_at_batch: list[int] = []
+
+    def connect(host: str, port: int, session: Session, deadline: float, sock: Any = None) -> FakeFlight:
+        if port == 1 and not session.half_close:  # a batch on the kept connection of port 0 starts
+            singles_at_batch.append(sum(1 for e in out if not e.unit.keep))
+        return target.connect(host, port, session, deadline, sock)
+
+    lanes = Lanes("127.0.0.1", (1, 2), 1.0, connect=connect, patience=0.05)
+    lanes.dear, lanes.pace = True, Pace(turn=0.5)
+    lanes.add([Unit([ACCEPTED] * 8) for _ in range(3)] + [Unit([REFUSED]) for _ in range(20)])
+    assert lanes.run(judged(out)) == DONE
+    assert len(out) == 23 and len(singles_at_batch) == 3
+    assert all(b - a >= 4 for a, b in itertools.pairwise(singles_at_batch))
+    assert all(e.port == 1 for e in out if not e.unit.keep)
+
+
+def test_a_paced_window_of_batches_ends_when_the_singles_owed_were_served() -> None:
+    target = Target(lambda f: SERVE)
+    lanes = lanes_for(target)
+    lanes.dear, lanes.pace = True, Pace(turn=0.5)
+    lanes.add([Unit([ACCEPTED] * 8), *(Unit([REFUSED]) for _ in range(12))])
+    out: list[InFlight] = []
+    assert lanes.run(judged(out), batches_only=True) == DONE
+    assert sum(1 for e in out if not e.unit.keep) >= 4 and lanes.todo  # the other singles go on in the next call
+    lanes.add([Unit([ACCEPTED] * 8)])  # no single waits for the kept connection's next batch: it does not wait
+    lanes.todo = collections.deque(u for u in lanes.todo if u.keep)
+    assert lanes.run(judged(out), batches_only=True) == DONE

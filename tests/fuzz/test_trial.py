@@ -50,3 +50,16 @@ def test_a_target_that_turns_newcomers_away_settles_it() -> None:
     t.settle(True)
     assert run(t, fresh=5000, dear=1, windows=20) == [True] * 20
     assert t.seen == 0
+
+
+def test_the_next_way_is_known_ahead_so_a_window_is_credited_with_its_own_cases() -> None:
+    t = Trial()
+    nexts = []
+    for _ in range(WARMUP + 2 * WINDOWS):
+        nexts.append(t.next_way())
+        t.record(t.way(), 100, 0.1, singles=50)
+    ways = [False] * WARMUP + [False, True] * WINDOWS
+    assert nexts == [*ways[1:], t.decided]
+    assert not t.settled
+    t.settle(True)
+    assert t.settled and t.next_way() is True

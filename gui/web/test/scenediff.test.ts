@@ -1,5 +1,5 @@
 import { describe, expect, it } from "vitest";
-import { changedWindow, dirtyPart, patchCounts, union, windowBox, windowSize } from "../src/view/scenediff";
+import { changedWindow, dirtyPart, HeadTailBoxes, patchCounts, union, windowBox, windowSize } from "../src/view/scenediff";
 import { toScreen } from "../src/view/camera";
 import { applyPatch, lineParts, pack, preparePacked, type Prepared } from "../src/view/maprender";
 import { countKinds, type MapObject, type MapScene, sceneBounds } from "../src/scene/map";
@@ -112,5 +112,29 @@ describe("dirty regions", () => {
       expect(py + part.y).toBeCloseTo(ly, 6);
     }
     expect(dirtyPart(cam, { minX: 99999, minY: 0, maxX: 100000, maxY: 1 }, 10)).toBeNull();
+  });
+});
+
+describe("HeadTailBoxes", () => {
+  it("gives the box of the objects outside any window exactly as sceneBounds computes it", () => {
+    let seed = 9;
+    const rnd = (): number => (seed = (seed * 1103515245 + 12345) % 2147483648) / 2147483648;
+    const objects: MapObject[] = [];
+    for (let i = 0; i < 300; i++) {
+      const pts = Array.from({ length: 2 * Math.floor(rnd() * 4) }, () => Math.round((rnd() - 0.5) * 1e5));
+      const o: MapObject = { id: i, kind: "line", layer: 0, points: pts, attrs: {} };
+      if (rnd() < 0.2) {
+        o.r = Math.round((rnd() - 0.1) * 5000); // a few negative: the box inside out, as sceneBounds has it
+      }
+      objects.push(o);
+    }
+    const boxes = new HeadTailBoxes(objects);
+    for (let q = 0; q < 500; q++) {
+      const a = Math.floor(rnd() * 301);
+      const b = a + Math.floor(rnd() * (301 - a));
+      const outside = [...objects.slice(0, a), ...objects.slice(b)];
+      expect(boxes.outside(a, b)).toEqual(sceneBounds({ name: "", version: null, objects: outside }));
+    }
+    expect(boxes.outside(0, 300)).toBeNull();
   });
 });

@@ -9,6 +9,7 @@
 import { KINDS, type MapObject } from "../scene/map";
 import * as g from "./geometry";
 import type { MapDoc } from "./mapdoc";
+import { inDocumentOrder, ObjectIndex } from "./objindex";
 
 export interface Change {
   index: number;
@@ -44,11 +45,79 @@ export class History {
   private done: Command[] = [];
   private undone: Command[] = [];
   private saved: Command | null = null;
+  /** the spatial index of the document's objects (objindex.ts), built at the first query, kept in step after */
+  private idx: ObjectIndex | null = null;
+  /** the document's objects by id, built at the first look-up, kept in step after */
+  private ids: Map<number, MapObject> | null = null;
 
   constructor(public readonly doc: MapDoc) {}
 
+  private apply(changes: readonly Change[]): void {
+    try {
+      applyChanges(this.doc, changes);
+    } catch (e) {
+      this.idx = null; // the document may be changed in part
+      this.ids = null;
+      throw e;
+    }
+    const ids = this.ids ?? new Map<number, MapObject>();
+    for (const c of this.ids === null ? [] : changes) {
+      if (c.before !== null && ids.get(c.before.id) === c.before) {
+        ids.delete(c.before.id);
+      }
+      if (c.after !== null) {
+        ids.set(c.after.id, c.after);
+      }
+    }
+    const idx = this.idx;
+    for (const c of idx === null ? [] : changes) {
+      if (c.before !== null) {
+        idx!.remove(c.before);
+      }
+      if (c.after !== null) {
+        idx!.add(c.after);
+      }
+    }
+    if (idx !== null && !idx.ok) {
+      this.idx = null; // out of step: built again at the next query
+    }
+  }
+
+  /** The object with id `id` (the document's ids are unique), without a pass over the document; undefined: none. */
+  byId(id: number | null): MapObject | undefined {
+    if (id === null) {
+      return undefined;
+    }
+    this.ids ??= new Map(this.doc.scene.objects.map((o) => [o.id, o]));
+    return this.ids.get(id);
+  }
+
+  /** Build the spatial index now (off an edit's path, e.g. a while after a map is loaded). */
+  index(): ObjectIndex {
+    this.idx ??= new ObjectIndex(this.doc.scene.objects);
+    return this.idx;
+  }
+
+  /**
+   * The objects that may lie within `tol` mm of (x, y), in document order: every object whose point or outline is
+   * that near is among them (the hit tests then run on these alone). All objects when the index cannot say.
+   */
+  near(x: number, y: number, tol: number): readonly MapObject[] {
+    const objects = this.doc.scene.objects;
+    const cands = this.index().near(x, y, tol);
+    if (cands === null) {
+      return objects;
+    }
+    const { list, stale } = inDocumentOrder(objects, cands);
+    if (stale) {
+      this.idx = null;
+      return objects;
+    }
+    return list;
+  }
+
   run(cmd: Command): void {
-    applyChanges(this.doc, cmd.changes);
+    this.apply(cmd.changes);
     this.done.push(cmd);
     this.undone = [];
   }
@@ -59,7 +128,7 @@ export class History {
     if (cmd === undefined) {
       return null;
     }
-    applyChanges(this.doc, inverse(cmd.changes));
+    this.apply(inverse(cmd.changes));
     this.undone.push(cmd);
     return cmd.label;
   }
@@ -69,7 +138,7 @@ export class History {
     if (cmd === undefined) {
       return null;
     }
-    applyChanges(this.doc, cmd.changes);
+    this.apply(cmd.changes);
     this.done.push(cmd);
     return cmd.label;
   }

@@ -9,6 +9,7 @@ import { type Camera, toScreen } from "../view/camera";
 import { addObject, addReplacing, type Command, deleteVertex, insertVertex, moveVertex } from "./commands";
 import type { Pt, Result } from "./geometry";
 import type { MapDoc } from "./mapdoc";
+import type { MapObject } from "../scene/map";
 import {
   circleObject,
   labelObject,
@@ -43,6 +44,8 @@ export interface ToolContext {
   /** endpoint snap only (the measuring tool measures what is there) */
   snapEnd(p: Pt, pxPerMm: number): Pt;
   labelText(): string;
+  /** the objects that may lie within `tol` mm of (x, y), in document order (the history's spatial index) */
+  near(x: number, y: number, tol: number): readonly MapObject[];
   selection(): ReadonlySet<number>;
   /** the words of a measurement */
   measured(m: Measure): string;
@@ -88,9 +91,9 @@ export class ShapeTools {
    * polygon's edge to insert a vertex there and drag it.
    */
   private vertexDown(x: number, y: number, pxPerMm: number, button: number): void {
-    const objs = this.c.doc().scene.objects;
     const sel = this.c.selection();
     const tol = HIT_PX / pxPerMm;
+    const objs = this.c.near(x, y, tol);
     const v = vertexAt(objs, x, y, tol, sel.size > 0 ? sel : null) ?? vertexAt(objs, x, y, tol);
     if (v !== null && button === 2) {
       this.c.run(deleteVertex(this.c.doc(), v.id, v.vertex));

@@ -29,10 +29,20 @@ type EditTool = "select" | "addLine" | RefTool | ShapeTool;
 const isShape = (t: EditTool): t is ShapeTool => (SHAPE_TOOLS as readonly string[]).includes(t);
 const GRID_MM = 10;
 const SNAP_PX = 8;
+/** ms after a map is loaded before its spatial index is built (after the first drawing; else at the first click) */
+const INDEX_DELAY_MS = 1000;
 
-/** The object under (x, y) within `tol` mm: the nearest line or vertex (the later on a tie); null when none. */
+/** The document's spatial index built a while after it was loaded, off the load's and the first edit's path. */
+function indexLater(h: History): void {
+  setTimeout(() => h.index(), INDEX_DELAY_MS);
+}
+
+/**
+ * The object under (x, y) within `tol` mm: the nearest line or vertex (the later on a tie); null when none. The
+ * objects near the point come from the history's spatial index (objindex.ts), in document order.
+ */
 export function hit(h: History, x: number, y: number, tol: number): number | null {
-  return objectsAt(h.doc.scene.objects, x, y, tol)[0] ?? null;
+  return objectsAt(h.near(x, y, tol), x, y, tol)[0] ?? null;
 }
 
 function nearer(s: Seg, p: Pt): "a" | "b" {
@@ -90,7 +100,7 @@ export function mapEditor(
     if (open) {
       view.showScene(history.doc.scene);
     }
-    const o = many.size > 0 ? undefined : history.doc.scene.objects.find((x) => x.id === selected);
+    const o = many.size > 0 ? undefined : history.byId(selected);
     state.textContent =
       many.size > 0 ? t("edit.selectedN", { n: many.size }) : o === undefined ? "" : t("edit.selected", { what: `${o.kind} ${o.points.join(", ")}` });
     state.dataset.selectedCount = String(selection().size);
@@ -110,9 +120,10 @@ export function mapEditor(
     }
     refresh();
   };
-  const endpoints = (): Pt[] => {
+  /** the endpoints of the objects within `r` mm of `p` (those the endpoint snap can pick), in document order */
+  const endpoints = (p: Pt, r: number): Pt[] => {
     const out: Pt[] = [];
-    for (const o of history.doc.scene.objects) {
+    for (const o of history.near(p.x, p.y, r)) {
       for (let i = 0; i + 1 < o.points.length; i += 2) {
         out.push({ x: o.points[i], y: o.points[i + 1] });
       }
@@ -124,8 +135,9 @@ export function mapEditor(
     doc: () => history.doc,
     run,
     say,
-    snap: (p, pxPerMm) => snap(p, endpoints(), SNAP_PX / pxPerMm, GRID_MM),
-    snapEnd: (p, pxPerMm) => snap(p, endpoints(), SNAP_PX / pxPerMm, 0),
+    snap: (p, pxPerMm) => snap(p, endpoints(p, SNAP_PX / pxPerMm), SNAP_PX / pxPerMm, GRID_MM),
+    snapEnd: (p, pxPerMm) => snap(p, endpoints(p, SNAP_PX / pxPerMm), SNAP_PX / pxPerMm, 0),
+    near: (x, y, tol) => history.near(x, y, tol),
     labelText: () => labelIn.value,
     selection,
     measured: (m) => {
@@ -136,7 +148,7 @@ export function mapEditor(
   });
   // typed coordinates of the one selected object (typed.ts): mm and degrees, one undoable step
   const typed = typedPanel((input, shown) => {
-    const o = history.doc.scene.objects.find((x) => x.id === selected);
+    const o = history.byId(selected);
     if (o === undefined || many.size > 0) {
       say(t("edit.noneSelected"));
       return;
@@ -151,11 +163,11 @@ export function mapEditor(
         shapes.down(tool, x, y, pxPerMm, button);
         return;
       }
-      const p = snap({ x, y }, endpoints(), SNAP_PX / pxPerMm, GRID_MM);
+      const p = snap({ x, y }, endpoints({ x, y }, SNAP_PX / pxPerMm), SNAP_PX / pxPerMm, GRID_MM);
       if (tool === "select") {
         // a press keeps the selected object when it is among those under the pointer (to drag it); a click that
         // does not move goes on to the next of them (objects on top of each other: a wall on a polygon's edge)
-        const ids = objectsAt(history.doc.scene.objects, x, y, SNAP_PX / pxPerMm);
+        const ids = objectsAt(history.near(x, y, SNAP_PX / pxPerMm), x, y, SNAP_PX / pxPerMm);
         const again = many.size === 0 && selected !== null && ids.includes(selected);
         under = { ids, again };
         const id = again ? selected : (ids[0] ?? null);
@@ -189,7 +201,7 @@ export function mapEditor(
         return;
       }
       if (drag !== null && (tool === "select" || tool === "addLine")) {
-        drag.to = tool === "select" ? { x, y } : snap({ x, y }, endpoints(), SNAP_PX / drag.pxPerMm, GRID_MM);
+        drag.to = tool === "select" ? { x, y } : snap({ x, y }, endpoints({ x, y }, SNAP_PX / drag.pxPerMm), SNAP_PX / drag.pxPerMm, GRID_MM);
       }
     },
     up(x, y) {
@@ -225,8 +237,10 @@ export function mapEditor(
       ctx.strokeStyle = "#e65100";
       ctx.lineWidth = 3;
       const sel = selection();
-      for (const o of sel.size > 0 ? history.doc.scene.objects : []) {
-        if (!sel.has(o.id) || o.points.length < 2) {
+      // a few selected: looked up by id (no pass over 50,000 objects per frame); many: in document order
+      const drawn = sel.size > 16 ? history.doc.scene.objects.filter((o) => sel.has(o.id)) : [...sel].map((id) => history.byId(id));
+      for (const o of drawn) {
+        if (o === undefined || o.points.length < 2) {
           continue;
         }
         ctx.beginPath();
@@ -272,6 +286,7 @@ export function mapEditor(
       .then((r) => {
         const m = r as GetMapReply;
         history = new History(parseMapDoc(m.xml, m.name));
+        indexLater(history);
         selected = null;
         many = new Set();
         say(t("edit.loaded", { n: history.doc.scene.objects.length }));
@@ -285,6 +300,7 @@ export function mapEditor(
   const file = fileInput(".map,.xml,application/xml,text/xml", "edit.open", say, (fileName, text) => {
     try {
       history = new History(parseMapDoc(text, fileName.replace(/\.[^.]*$/, "")));
+      indexLater(history);
     } catch (e) {
       say(t("edit.openFailed", { file: fileName, why: (e as Error).message }));
       return;

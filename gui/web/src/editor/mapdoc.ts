@@ -5,6 +5,7 @@
  * (`extra`). An element kind the editor does not know is an object of that kind, kept and written back.
  */
 import type { MapObject, MapScene } from "../scene/map";
+import { readMapFast } from "./mapfast";
 import { elementsOf, parseXml, writeDocument, type XmlElement, XmlError } from "./xml";
 
 /** One child of <map>, in document order: a layer (its objects are the scene's of that index) or kept as is. */
@@ -62,8 +63,16 @@ function toObject(el: XmlElement, id: number, layer: number): EditorObject {
   return obj;
 }
 
-/** Read a map document; MapDocError (one line) when it is not well-formed or not a map. */
+/**
+ * Read a map document; MapDocError (one line) when it is not well-formed or not a map. The platform's usual form
+ * goes through the fast reader (mapfast.ts); whatever it does not take, the general reader below.
+ */
 export function parseMapDoc(src: string, name = ""): MapDoc {
+  return readMapFast(src, name) ?? parseMapDocXml(src, name);
+}
+
+/** The general reader: the XML tree first (xml.ts), then the objects. */
+export function parseMapDocXml(src: string, name = ""): MapDoc {
   let root: XmlElement;
   try {
     root = parseXml(src);

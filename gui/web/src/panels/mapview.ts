@@ -17,9 +17,22 @@ import { type Bounds, countKinds, KINDS, type MapScene, MapParseError, parseMap,
 import { parseRoadmap, type Roadmap } from "../scene/roadmap";
 import type { PlatformSession, TruthEvent } from "../session/session";
 import { type Camera, fit, panBy, toWorld, viewBounds, zoomAt } from "../view/camera";
-import { applyPatch, drawStatic, type Layers, pack, prepare, type Prepared, type ScenePatch, transfers } from "../view/maprender";
-import { type Box, changedWindow, dirtyPart, patchCounts, union, windowBox, windowSize } from "../view/scenediff";
+import {
+  applyPatch,
+  buildGrids,
+  copyPacked,
+  drawStatic,
+  type Layers,
+  pack,
+  prepare,
+  preparePacked,
+  type Prepared,
+  type ScenePatch,
+  transfers,
+} from "../view/maprender";
+import { type Box, changedWindow, dirtyPart, HeadTailBoxes, patchCounts, union, windowBox, windowSize } from "../view/scenediff";
 import { drawFlag, drawPlatform, drawStatus, footprint, type Footprint, type OverlayOptions, type Pose, type UsSensor } from "../view/overlay";
+import { liveKey } from "../view/livekey";
 import type { ViewOptions } from "./viewoptions";
 
 type Tool = "pan" | "zoomArea" | "shift" | "flag" | "edit";
@@ -32,7 +45,17 @@ export interface EditHooks {
   up(x: number, y: number): void;
   draw(ctx: CanvasRenderingContext2D, cam: Camera): void;
 }
+/** A region of the static layer an edit redrew on the page: its image and where it goes (CSS px of the layer). */
+interface LayerPatch {
+  image: HTMLCanvasElement;
+  x: number;
+  y: number;
+  width: number;
+  height: number;
+}
 const MARGIN = 256; // px of static layer beyond each edge of the view
+/** patches kept over one layer image before they are flattened into a copy of it */
+const PATCHES_MAX = 16;
 /** an edit touching at most this many objects goes to the worker as a patch of its base (issue 20) */
 const PATCH_MAX = 2000;
 /** px around an edit's box redrawn on the page: the front-side ticks (6 px), the widest stroke (4 px) */
@@ -52,21 +75,35 @@ export class MapView {
   bounds: Bounds | null = null;
   roadmap: Roadmap | null = null;
   status: GetStatusReply | null = null;
+  /** the live key (view/livekey.ts) of the last status that asked for a redraw */
+  private drawnKey = "";
   flag: Pose | null = null;
   footprint: Footprint = footprint(650, 430, 100);
   usSensors: UsSensor[] = [];
   drawn: Record<string, number> = {};
   /** ms spent in the last frames' drawing (the benchmark reads it) */
   frameTimes: number[] = [];
-  /** the last static layer: its image, the camera it was drawn for (margin included), the document version */
-  layer: { image: CanvasImageSource; cam: Camera; version: number } | null = null;
+  /**
+   * the last static layer: its image, the camera it was drawn for (margin included), the document version, and
+   * the regions edits redrew on the page over the image since (drawn on top, in order; issue 20)
+   */
+  layer: { image: CanvasImageSource; cam: Camera; version: number; patches?: LayerPatch[] } | null = null;
   /** ms the layer worker took for its last layers (the benchmark reads it) */
   layerTimes: number[] = [];
   /** draw the static layer on the page in every frame (the benchmark's baseline) */
   syncLayers = false;
   private worker: Worker | null = null;
   /** the scene the worker holds as its base (its objects as they were then) and their counts per kind */
-  private base: { scene: MapScene; objects: MapScene["objects"]; counts: Record<string, number> } | null = null;
+  private base: {
+    scene: MapScene;
+    objects: MapScene["objects"];
+    counts: Record<string, number>;
+    bounds: Bounds | null;
+    /** the boxes of the base's heads and tails (built with the page's grids): exact bounds after any edit */
+    boxes?: HeadTailBoxes;
+    /** the page's grids and boxes are asked for */
+    indexing?: boolean;
+  } | null = null;
   /** the current scene's counts per kind */
   private counts: Record<string, number> = {};
   /** the page's index of the base (built once, a while after the base is drawn): an edit is redrawn here at once */
@@ -168,6 +205,12 @@ export class MapView {
     });
     s.status.subscribe((st) => {
       this.status = st;
+      // a status that changes nothing the map draws is not redrawn (view/livekey.ts)
+      const key = liveKey(st, this.overlayOptions());
+      if (key === this.drawnKey) {
+        return;
+      }
+      this.drawnKey = key;
       if (this.options.centerPlatform) {
         this.cam = { ...this.cam, cx: st.estX, cy: st.estY };
       }
@@ -180,6 +223,7 @@ export class MapView {
     });
     this.options.changed.subscribe(() => {
       this.version++;
+      this.drawnKey = ""; // the next status is drawn (and centred on) whatever it shows
       this.invalidate();
     });
     new ResizeObserver(() => this.resize()).observe(this.canvas);
@@ -204,21 +248,48 @@ export class MapView {
   /** Show a document (the editor's): drawn like the platform's map until the editor closes. */
   showScene(scene: MapScene | null): void {
     this.scene = scene;
-    this.bounds = scene === null ? null : sceneBounds(scene);
+    this.bounds = scene === null ? null : (this.editedBounds(scene) ?? sceneBounds(scene));
     this.prepared = null;
     this.documentsChanged();
+  }
+
+  /**
+   * The bounds of the base scene after an edit without a pass over every object (issue 20): the box of the base's
+   * objects outside the changed window (head and tail boxes) and of the new ones; before those boxes are built,
+   * the base's bounds grown by the new objects' box, exact when the objects gone lay strictly inside them (an
+   * extreme point is then still held by an object kept). Null when neither holds: compute them.
+   */
+  private editedBounds(scene: MapScene): Bounds | null {
+    const b = this.base;
+    if (b === null || b.scene !== scene || b.bounds === null) {
+      return null;
+    }
+    const w = changedWindow(b.objects, scene.objects);
+    const added = windowBox(b.objects, scene.objects, { ...w, baseEnd: w.start });
+    if (b.boxes !== undefined) {
+      return union(b.boxes.outside(w.start, w.baseEnd), added);
+    }
+    const gone = windowBox(b.objects, scene.objects, { ...w, curEnd: w.start });
+    const bb = b.bounds;
+    if (gone !== null && !(gone.minX > bb.minX && gone.minY > bb.minY && gone.maxX < bb.maxX && gone.maxY < bb.maxY)) {
+      return null;
+    }
+    return union(bb, added);
   }
 
   private documentsChanged(): void {
     this.version++;
     if (!this.sendPatch()) {
       const s = this.scene;
-      this.counts = s === null ? {} : countKinds(s);
-      this.base = s === null ? null : { scene: s, objects: s.objects.slice(), counts: this.counts };
-      this.pageBase = null;
+      const packed = s === null ? null : pack(s, this.bounds); // one pass: segments, counts per kind (bounds known)
+      this.counts = packed === null ? {} : packed.kinds;
+      this.base = s === null ? null : { scene: s, objects: s.objects.slice(), counts: this.counts, bounds: this.bounds };
+      // while the editor shows its document the page keeps a copy of the packed arrays (its own index of the base,
+      // grids built later): an edit is drawn on the page from the first one on (issue 20)
+      const kept = packed !== null && this.worker !== null && this.editHooks !== null ? copyPacked(packed) : null;
+      this.pageBase = kept === null || this.base === null ? null : { of: this.base.objects, prep: preparePacked(kept) };
       this.patchBox = null;
       if (this.worker !== null) {
-        const packed = s === null ? null : pack(s);
         this.worker.postMessage({ type: "scene", scene: packed, roadmap: this.roadmap }, packed === null ? [] : transfers(packed));
       }
     }
@@ -251,9 +322,10 @@ export class MapView {
   }
 
   /**
-   * An edit drawn on the page at once (issue 20): the last layer, when it shows the document just before the edit,
-   * copied with the region the edit touches (`dirty`, world) redrawn from the page's index of the base and the
-   * patch. The worker's layer of the same version follows and replaces it (same pixels, and the counts).
+   * An edit drawn on the page at once (issue 20): when the last layer shows the document just before the edit, the
+   * region the edit touches (`dirty`, world) is redrawn from the page's index of the base and the patch into a
+   * small canvas laid over the layer (the layer's image itself is neither copied nor redrawn). The worker's layer
+   * of the same version follows and replaces both (same pixels, and the counts).
    */
   private patchLayer(patch: ScenePatch, dirty: Box | null): void {
     const l = this.layer;
@@ -261,25 +333,37 @@ export class MapView {
     if (l === null || pb === null || pb.of !== this.base?.objects || l.version !== this.version - 1) {
       return;
     }
+    const patches = [...(l.patches ?? [])];
+    const part = dirty === null ? null : dirtyPart(l.cam, dirty, DIRTY_PAD);
+    if (part !== null) {
+      const dpr = window.devicePixelRatio || 1;
+      const image = document.createElement("canvas");
+      image.width = Math.max(1, Math.round(part.cam.width * dpr));
+      image.height = Math.max(1, Math.round(part.cam.height * dpr));
+      const ctx = image.getContext("2d")!;
+      ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
+      drawStatic(ctx, part.cam, applyPatch(pb.prep, patch), this.roadmap, this.layers());
+      patches.push({ image, x: part.x, y: part.y, width: part.cam.width, height: part.cam.height });
+    }
+    this.layer = patches.length > PATCHES_MAX ? this.flatten(l, patches) : { image: l.image, cam: l.cam, version: this.version, patches };
+    this.countsStale = true; // what is in view per kind: the worker's layer of this version says
+  }
+
+  /** One image of a layer and its patches (when edits came faster than the worker's layers for long). */
+  private flatten(l: NonNullable<MapView["layer"]>, patches: readonly LayerPatch[]): NonNullable<MapView["layer"]> {
     const dpr = window.devicePixelRatio || 1;
     const canvas = document.createElement("canvas");
     canvas.width = Math.max(1, Math.round(l.cam.width * dpr));
     canvas.height = Math.max(1, Math.round(l.cam.height * dpr));
     const ctx = canvas.getContext("2d")!;
     ctx.drawImage(l.image, 0, 0);
-    const part = dirty === null ? null : dirtyPart(l.cam, dirty, DIRTY_PAD);
-    if (part !== null) {
-      ctx.setTransform(dpr, 0, 0, dpr, dpr * part.x, dpr * part.y);
-      ctx.beginPath();
-      ctx.rect(0, 0, part.cam.width, part.cam.height);
-      ctx.clip();
-      drawStatic(ctx, part.cam, applyPatch(pb.prep, patch), this.roadmap, this.layers());
+    for (const p of patches) {
+      ctx.drawImage(p.image, p.x * dpr, p.y * dpr);
     }
     if (l.image instanceof ImageBitmap) {
       l.image.close();
     }
-    this.layer = { image: canvas, cam: l.cam, version: this.version };
-    this.countsStale = true; // what is in view per kind: the worker's layer of this version says
+    return { image: canvas, cam: l.cam, version: this.version };
   }
 
   /** Ask the worker for a layer of the current version and view, unless one is being drawn. */
@@ -292,18 +376,25 @@ export class MapView {
   }
 
   /**
-   * The page's index of the base, built once the worker has drawn it (off the load's critical path), and only while
-   * the editor shows its document (the platform's map is not edited).
+   * The page's grids of the base and its head and tail boxes, built a while after the worker has drawn it (off the
+   * load's critical path), and only while the editor shows its document (the platform's map is not edited). An
+   * edit before then builds the grids it needs as it draws.
    */
   private buildPageBase(): void {
     const b = this.base;
-    if (this.worker === null || b === null || this.editHooks === null || this.pageBase?.of === b.objects) {
+    if (this.worker === null || b === null || this.editHooks === null || b.indexing === true) {
       return;
     }
+    b.indexing = true;
     setTimeout(() => {
-      if (this.base === b && this.pageBase?.of !== b.objects) {
+      if (this.base !== b) {
+        return;
+      }
+      if (this.pageBase?.of !== b.objects) {
         this.pageBase = { of: b.objects, prep: prepare({ ...b.scene, objects: b.objects }) };
       }
+      buildGrids(this.pageBase.prep); // here, not at the first edit
+      b.boxes = new HeadTailBoxes(b.objects);
     }, PAGE_INDEX_DELAY_MS);
   }
 
@@ -605,6 +696,9 @@ export class MapView {
     const dy = c.height / 2 - (l.cam.height / 2) * r + (c.cy - l.cam.cy) * c.scale;
     ctx.imageSmoothingEnabled = false; // a scaled layer is a stand-in until the worker sends the new one
     ctx.drawImage(l.image, dx, dy, l.cam.width * r, l.cam.height * r);
+    for (const p of l.patches ?? []) {
+      ctx.drawImage(p.image, dx + p.x * r, dy + p.y * r, p.width * r, p.height * r);
+    }
     ctx.imageSmoothingEnabled = true;
   }
 
@@ -636,6 +730,20 @@ export class MapView {
     this.summary.textContent = `${t("map.summary", { name: scene.name || "-" })} ${parts.join(", ")}`;
   }
 
+  /** The live layers the view options show (guide 5.2 View). */
+  private overlayOptions(): OverlayOptions {
+    const o = this.options;
+    return {
+      showEstimated: o.showEstimated,
+      showDesired: o.showDesired,
+      scan: o.localization,
+      ultrasonic: o.ultrasonic,
+      path: o.planning,
+      localization: o.localization,
+      planObstacles: o.planObstacles,
+    };
+  }
+
   render(): void {
     const t0 = performance.now();
     this.dirty = false;
@@ -651,16 +759,7 @@ export class MapView {
     }
     this.updateLayer();
     this.drawLayer(ctx);
-    const o = this.options;
-    const overlay: OverlayOptions = {
-      showEstimated: o.showEstimated,
-      showDesired: o.showDesired,
-      scan: o.localization,
-      ultrasonic: o.ultrasonic,
-      path: o.planning,
-      localization: o.localization,
-      planObstacles: o.planObstacles,
-    };
+    const overlay = this.overlayOptions();
     if (this.status) {
       const live = drawStatus(ctx, c, this.status, this.footprint, this.usSensors, overlay);
       this.canvas.dataset.drawnScan = String(live.scan);

@@ -10,7 +10,7 @@
  */
 import type { Roadmap } from "../scene/roadmap";
 import type { Camera } from "./camera";
-import { applyPatch, drawStatic, type Layers, type PackedScene, preparePacked, type Prepared, type ScenePatch } from "./maprender";
+import { applyPatch, buildGrids, drawStatic, type Layers, type PackedScene, preparePacked, type Prepared, type ScenePatch } from "./maprender";
 
 interface Scope {
   onmessage: ((e: MessageEvent) => void) | null;
@@ -60,5 +60,7 @@ scope.onmessage = (e: MessageEvent) => {
   // a copy of the kept canvas (one render is in flight at a time, so the canvas is not drawn again before this)
   void createImageBitmap(ctx.canvas).then((bitmap) => {
     scope.postMessage({ type: "layer", id: m.id, cam: m.cam, bitmap, drawn, ms: performance.now() - t0 }, [bitmap]);
+    // the base's grids are built after its first layer is sent (a view of the whole map needs none; issue 20)
+    setTimeout(() => base !== null && buildGrids(base), 0);
   });
 };

@@ -13,7 +13,7 @@
  * - Lines are 1 px wide: the rasterizer's hairline path, about ten times faster than a 1.5 px stroke on 50,000 lines.
  * - The same code runs in the layer worker (OffscreenCanvas) and, without workers, on the page.
  */
-import { AREA_KINDS, type Bounds, LINE_KINDS, type MapScene, sceneBounds } from "../scene/map";
+import { AREA_KINDS, type Bounds, KINDS, LINE_KINDS, type MapScene, sceneBounds } from "../scene/map";
 import type { Roadmap } from "../scene/roadmap";
 import { type Camera, toScreen, viewBounds } from "./camera";
 import { SegmentGrid } from "./spatial";
@@ -52,10 +52,33 @@ export interface Layers {
   kinds: Record<string, boolean>;
 }
 
+/** A line kind's segments and their grid, built when first asked for. */
+export class LineEntry {
+  private built: SegmentGrid | null = null;
+
+  constructor(
+    readonly segs: Float64Array,
+    readonly owners: Int32Array,
+    private readonly bounds: Bounds,
+  ) {}
+
+  get n(): number {
+    return this.segs.length / 4;
+  }
+
+  get grid(): SegmentGrid {
+    this.built ??= new SegmentGrid(this.segs, this.bounds);
+    return this.built;
+  }
+}
+
 export interface Prepared {
   bounds: Bounds | null;
-  /** per line kind: the segments, their grid, and the object (scene index) each segment came from */
-  lines: Map<string, { segs: Float64Array; grid: SegmentGrid; owners: Int32Array }>;
+  /**
+   * per line kind: the segments, their grid (built at the first query: a view of the whole map needs none, so the
+   * first drawing after a load does not wait for it; issue 20), and the object (scene index) each segment came from
+   */
+  lines: Map<string, LineEntry>;
   others: MapScene["objects"];
   /** each of `others`' scene index */
   othersAt: number[];
@@ -95,16 +118,24 @@ export interface PackedScene {
   owners: Int32Array[];
   others: MapScene["objects"];
   othersAt: number[];
+  /** objects per kind (scene/map.ts countKinds), counted in the same pass */
+  kinds: Record<string, number>;
 }
 
-export function pack(scene: MapScene): PackedScene {
+/** The scene packed; `bounds`: its bounds when the caller has them (else computed: a pass over every object). */
+export function pack(scene: MapScene, bounds?: Bounds | null): PackedScene {
   const counts = new Map<string, number>();
   const lineKinds = new Set<string>(LINE_KINDS);
   const others: MapScene["objects"] = [];
   const othersAt: number[] = [];
   const objects = scene.objects;
+  const perKind: Record<string, number> = {};
+  for (const k of KINDS) {
+    perKind[k] = 0;
+  }
   for (let i = 0; i < objects.length; i++) {
     const o = objects[i];
+    perKind[o.kind] = (perKind[o.kind] ?? 0) + 1;
     if (!lineKinds.has(o.kind)) {
       others.push(o);
       othersAt.push(i);
@@ -131,12 +162,18 @@ export function pack(scene: MapScene): PackedScene {
   }
   const kinds = LINE_KINDS.filter((k) => segs.has(k));
   return {
-    bounds: sceneBounds(scene),
+    bounds: bounds === undefined ? sceneBounds(scene) : bounds,
     segs: kinds.map((k) => [k, segs.get(k)!.a]),
     owners: kinds.map((k) => segs.get(k)!.owner),
     others,
     othersAt,
+    kinds: perKind,
   };
+}
+
+/** A copy of a packed scene's arrays (the page keeps one when the others are transferred to the worker). */
+export function copyPacked(p: PackedScene): PackedScene {
+  return { ...p, segs: p.segs.map(([k, a]) => [k, a.slice()]), owners: p.owners.map((a) => a.slice()) };
 }
 
 /** The transferable buffers of a packed scene (for postMessage). */
@@ -145,11 +182,11 @@ export function transfers(p: PackedScene): Transferable[] {
 }
 
 export function preparePacked(p: PackedScene): Prepared {
-  const lines = new Map<string, { segs: Float64Array; grid: SegmentGrid; owners: Int32Array }>();
+  const lines = new Map<string, LineEntry>();
   let most = 0;
   p.segs.forEach(([kind, segs], i) => {
     if (segs.length > 0 && p.bounds !== null) {
-      lines.set(kind, { segs, grid: new SegmentGrid(segs, p.bounds), owners: p.owners[i] });
+      lines.set(kind, new LineEntry(segs, p.owners[i], p.bounds));
       most = Math.max(most, segs.length / 4);
     }
   });
@@ -182,6 +219,13 @@ export function applyPatch(base: Prepared, patch: ScenePatch): Prepared {
   return { ...base, bounds: patch.bounds, others, othersAt, patch: { hideFrom, hideTo, lines: new Map(added.segs) } };
 }
 
+/** Build every grid now (off the drawing's path: a while after the first layer). */
+export function buildGrids(prep: Prepared): void {
+  for (const entry of prep.lines.values()) {
+    void entry.grid;
+  }
+}
+
 export function prepare(scene: MapScene): Prepared {
   return preparePacked(pack(scene));
 }
@@ -207,7 +251,7 @@ function baseSegs(prep: Prepared, kind: string, view: Bounds, whole: boolean): S
   if (entry === undefined) {
     return null;
   }
-  let n = entry.grid.n;
+  let n = entry.n;
   let idx: Uint32Array | null = null;
   if (!whole) {
     n = entry.grid.query(view, prep.scratch);
