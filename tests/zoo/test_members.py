@@ -153,7 +153,6 @@ def test_the_emulator_passes_the_original_profile_with_its_readings_non_strict()
 # ---- @slow: the whole standard tier, every member, both targets
 
 MATRIX = [f"zoo:{m}@{up}" for up in ("reference", "emulator") for m in MEMBERS] + ["emulator", "reference"]
-SLOW_LINK_GAP = "zoo:slow-link"  # ~2,000 sequential round trips at 50-200 ms: not within 5 minutes (zoo/README)
 
 
 @pytest.mark.slow
@@ -169,14 +168,6 @@ def test_the_standard_tier_on_every_member_ends_within_5_minutes(kind: str) -> N
     assert run.duration < FIVE_MINUTES, f"{run.duration:.0f} s"
     if m is not None and not m.conforming:
         assert run.exit_code == 1
-        return
-    if kind.startswith(SLOW_LINK_GAP):  # bounded and never wrong: what ran passed, the rest was not run
-        assert all(r.verdict not in BAD for r in run.results), "\n".join(bad(run))
-        assert all(
-            r.message.startswith(("not run: the run's budget", "case budget"))
-            for r in run.results
-            if r.verdict is Verdict.INCONCLUSIVE
-        )
         return
     assert not bad(run), "\n".join(bad(run))
     assert run.exit_code == 0
