@@ -366,6 +366,8 @@ class Campaign:
                 time.sleep(0.05)
         if self.launcher is not None and not self.launcher.alive():
             kind = "dead"
+        if culprit is None and kind == "stall":  # replayed first on a fresh instance, even if out of ``recent``
+            culprit = lanes.left_unanswered(lanes.stuck)
         last = [u for u in dict.fromkeys(e.unit for e in lanes.recent) if u is not culprit and u.cases]
         last += [culprit] if culprit is not None else []
         lanes.drain()
