@@ -11,14 +11,24 @@ Rules:
   and checks it through CMD_GET_STATUS; when it cannot, the case fails as a precondition failure.
 - A new connection is probed with CMD_GET_STATUS and retried for ``connect_window`` seconds: the target may
   not yet have noticed that our previous client on that port is gone (one client per port).
+- The last status read stands for the current one while nothing was sent, connected or closed since
+  (``wire.Session.events``) and it is under ``STATUS_FRESH`` wall s old - across cases too, and a probe's reply
+  counts: each round trip counts against a slow link (issue 17).
+- Pipelining (erratum E-WIRE-008; only when ``Config.pipeline``: the target answered pipelined requests in order
+  at the start of the run): ``enter`` sends the way to a state - each leg followed by the CMD_GET_STATUS that
+  checks it - and what the case sends in that state in one write, and judges the statuses in order. The way is
+  taken for granted only while the target has shown every commanded state at the first status after the
+  command (``Target.prompt``); a status that shows another state ends that for the run, and the step is done
+  again one request at a time, as without pipelining (what the case sent meanwhile was sent in vain).
 """
 
 from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Any, TypeVar
 
 from pltf.conformance_tests import chart
@@ -26,13 +36,15 @@ from pltf.conformance_tests.catalogue import Case, Tier
 from pltf.conformance_tests.chart import St
 from pltf.conformance_tests.coverage import Coverage
 from pltf.conformance_tests.outcome import ConnectionClosed, Deviation, Fail, NoConnection, TargetFailure, Unreachable
-from pltf.conformance_tests.wire import CaseBudget, Session, WireLog
+from pltf.conformance_tests.wire import CaseBudget, Pause, Session, WireLog, answered
 from pltf.spec.codec import build
 from pltf.spec.model import enum_classes
 from pltf.spec.telegram import Telegram
 
 T = TypeVar("T")
+Then = Callable[[], list[Telegram]]  # the replies to what a case sends once in a state (CaseContext.enter)
 STATUS_FRESH = 0.5  # wall s a status read stands for the current one when nothing was sent since
+PACED = 0.8  # simulated s: a target whose reply takes longer is sampled at the platform's pace (link_paced)
 # The spec's enums are built at import; mypy sees them as plain IntEnum classes without members.
 MotionMode: Any = enum_classes()["MotionMode"]
 OperationState: Any = enum_classes()["OperationState"]
@@ -58,6 +70,7 @@ class Config:
     case_budget: float | None = None  # wall seconds one case may take (None: pace.case_budget)
     run_budget: float | None = None  # wall seconds the whole run may take (None: no limit)
     reply_time: float | None = None  # the target's GET_STATUS round trip measured at the start (pace.measure)
+    pipeline: bool = False  # the target answers pipelined requests in order (pace.measure, erratum E-WIRE-008)
 
     @property
     def motion_allowed(self) -> bool:
@@ -73,10 +86,26 @@ class Status:
     mode: int
     telegram: Telegram
 
+    @classmethod
+    def of(cls, t: Telegram) -> Status:
+        return cls(t.operation_state, t.initialized, t.motion_mode, t)  # type: ignore[attr-defined]
+
     def describe(self) -> str:
         op = OperationState(self.op).name if self.op in OperationState._value2member_map_ else self.op
         mode = MotionMode(self.mode).name if self.mode in MotionMode._value2member_map_ else self.mode
         return f"{op}, initialized {self.initialized}, {mode}"
+
+
+@dataclass(frozen=True)
+class Leg:
+    """One leg of the way to a state: the commands, the operation state and motion mode the status must show
+    after them, and the way to take the leg one request at a time (polling, failing as a precondition)."""
+
+    commands: tuple[Telegram, ...]
+    op: int
+    mode: int
+    run: Callable[[Status], Status]  # from the status before the leg
+    foreseen: bool = True  # False: needed only if the leg before it changed the mode (not sent when pipelined)
 
 
 class Target:
@@ -87,6 +116,21 @@ class Target:
         self.coverage = coverage or Coverage()
         self._sessions: dict[str, Session] = {}
         self.budget = CaseBudget()  # the running case's (pace.py); every session of the run carries it
+        self.last_status: tuple[int, float, Status] | None = None  # (Session.events, when, status) of the last read
+        self.prompt = True  # every commanded state showed at the first status after the command (see the rules)
+        self.notes: list[str] = []  # about the run as a whole
+
+    def record(self, reply: Telegram) -> Status:
+        """A CMD_GET_STATUS reply just read, nothing asked after it: the current status until something moves."""
+        status = Status.of(reply)
+        self.last_status = (Session.events, time.monotonic(), status)
+        return status
+
+    def fresh_status(self) -> Status | None:
+        last = self.last_status
+        if last is not None and last[0] == Session.events and time.monotonic() - last[1] < STATUS_FRESH:
+            return last[2]
+        return None
 
     def port_of(self, label: str) -> int:
         if label.startswith("B"):
@@ -125,10 +169,11 @@ class Target:
                 s.connect()
                 if not probe:
                     return s
-                s.request(
+                reply = s.request(
                     build("request", "CMD_GET_STATUS"),
                     timeout=probe_timeout or min(cfg.reply_timeout, cfg.probe_timeout),
                 )
+                self.record(reply)
                 return s
             except Unreachable as exc:
                 if "refused" in str(exc).lower():
@@ -177,7 +222,6 @@ class CaseContext:
     abuse_from: Status | None = None  # the status just before a case sent malformed input
     _finalizers: list[tuple[str, Callable[[], object]]] = field(default_factory=list)
     _extra: list[Session] = field(default_factory=list)
-    _last_status: tuple[int, float, Status] | None = None  # (log.sent, when, status) of the last GET_STATUS
 
     # ---- observer hooks (wire.Observer)
     def on_sent(self, telegram: Telegram) -> None:
@@ -275,8 +319,9 @@ class CaseContext:
         return s
 
     def before_abuse(self) -> Status:
-        """Record the state the abuse must not change (the runner compares it after the case)."""
-        self.abuse_from = self.status()
+        """Record the state the abuse must not change (the runner compares it after the case): the status, read
+        now unless one was read a moment ago with nothing sent since."""
+        self.abuse_from = self.current_status()
         return self.abuse_from
 
     def reset_session(self, label: str = "A") -> None:
@@ -292,18 +337,27 @@ class CaseContext:
         return self.session(label).request(build("request", telegram, **fields))
 
     def status(self, label: str = "A") -> Status:
-        t = self.get("CMD_GET_STATUS", label)
-        s = Status(t.operation_state, t.initialized, t.motion_mode, t)  # type: ignore[attr-defined]
-        self._last_status = (self.log.sent, time.monotonic(), s)
-        return s
+        return self.target.record(self.get("CMD_GET_STATUS", label))
 
     def current_status(self) -> Status:
-        """The status: the last one read when nothing was sent since and it is under ``STATUS_FRESH`` wall s old
-        (each round trip counts against a slow link: issue 17), else a new GET_STATUS."""
-        last = self._last_status
-        if last is not None and last[0] == self.log.sent and time.monotonic() - last[1] < STATUS_FRESH:
-            return last[2]
-        return self.status()
+        """The status: the last one read when nothing was sent, connected or closed since and it is under
+        ``STATUS_FRESH`` wall s old (each round trip counts against a slow link: issue 17), else a new GET_STATUS."""
+        return self.target.fresh_status() or self.status()
+
+    def exchange(self, items: Sequence[Telegram | Pause], label: str = "A") -> list[Telegram]:
+        """Send ``items`` and return the replies of the answered ones in order: in one write when the target takes
+        pipelined requests (erratum E-WIRE-008), else one request at a time, each reply read before the next is
+        sent. A CMD_GET_STATUS asked last is the current status (``Target.record``)."""
+        s = self.session(label)
+        if self.config.pipeline:
+            replies = s.exchange(items)
+        else:
+            replies = []
+            for item in items:
+                replies += s.exchange([item])
+        if items and not isinstance(items[-1], Pause) and items[-1].NAME == "CMD_GET_STATUS":
+            self.target.record(replies[-1])
+        return replies
 
     def position(self, label: str = "A") -> Telegram:
         return self.get("CMD_GET_POSITION", label)
@@ -323,23 +377,97 @@ class CaseContext:
                 return value
             time.sleep(max(0.002, every / self.config.time_scale))
 
+    def link_paced(self, gap: float = PACED) -> bool:
+        """Whether polling one request at a time would sample the target less often than every ``gap`` simulated
+        s (its measured reply time is longer) while it takes pipelined requests (E-WIRE-008): then a case samples
+        at the platform's pace instead (``timeline``; a slow link, issue 17). A fast target is polled as before: a
+        stream of unpaced requests can starve a loaded simulator (motion.hold)."""
+        reply = self.config.reply_time or 0.0
+        return self.config.pipeline and reply * self.config.time_scale > gap
+
+    def timeline(
+        self, ask: Telegram, seconds: float, events: Sequence[tuple[float, Telegram]], period: float = 0.1
+    ) -> list[tuple[float, Telegram]]:
+        """Send each of ``events`` at its simulated time (s from now), and ``ask`` every ``period`` simulated s for
+        ``seconds``, none waiting for a reply (pipelined, erratum E-WIRE-008); the replies to ``ask``, each with
+        the simulated time it was asked at. What a reply shows is the platform's at that time, whatever the link
+        then takes to bring it."""
+        session, scale = self.session(), self.config.time_scale
+        due, asked = sorted(events, key=lambda e: e[0]), []
+        t0 = time.monotonic()
+        while True:
+            t = (time.monotonic() - t0) * scale
+            while due and due[0][0] <= t:
+                session.send(due.pop(0)[1])
+            if t > seconds and not due:
+                break
+            session.send_pipelined([ask])
+            asked.append(t)
+            time.sleep(period / scale)
+        return [(t, session.next_reply()) for t in asked]
+
+    def settle_time(self) -> float:
+        """Wall s a command that should have no effect gets to show one before the status that judges it."""
+        return max(0.02, 0.3 / self.config.time_scale)
+
     def settle(self) -> None:
         """Let a command that should have no effect have its chance to show one."""
-        time.sleep(max(0.02, 0.3 / self.config.time_scale))
+        time.sleep(self.settle_time())
 
     # ---- the known state
     def ensure(self, state: St, mode: int = MotionMode.MODE_MOTION_NO) -> Status:
         """Drive the target to ``state`` with motion mode ``mode`` (set in Ready); precondition failure if not."""
+        return self.enter(state, mode)[0]
+
+    def enter(
+        self, state: St, mode: int = MotionMode.MODE_MOTION_NO, then: Sequence[Telegram | Pause] = ()
+    ) -> tuple[Status, Then]:
+        """``ensure(state, mode)``, then ``then`` in that state: the status there, and a function that returns the
+        replies to the answered requests of ``then`` in order (call it once, where the case sent ``then`` before:
+        what the target does to them is raised there). Pipelined when the target allows it (module rules)."""
         s = self.current_status()
+        legs = self._legs(s, state, mode)
+        foreseen = [leg for leg in legs if leg.foreseen]
+        if foreseen and self.config.pipeline and self.target.prompt:
+            done = self._pipelined(foreseen, then)
+            if done is not None:
+                return done
+            s = self.status()
+            legs = self._legs(s, state, mode)
+        for leg in legs:
+            s = leg.run(s)
+        return s, lambda: self.exchange(then)
+
+    def _legs(self, s: Status, state: St, mode: int) -> list[Leg]:
+        """The way from ``s`` to ``state`` and ``mode``, leg by leg (guide 4.2, chart.PATH_FROM_READY)."""
         if (s.op, s.mode, state) == (OperationState.ST_OP_RUNNING, mode, St.BREAKED):  # one step: guide 6.3 BREAK
-            self.send("CMD_BREAK")
-            return self._await_op(OperationState.ST_OP_BREAKED, "CMD_BREAK", within=10.0)
+            return [self._leg(("CMD_BREAK",), OperationState.ST_OP_BREAKED, mode)]
+        legs = []
         if s.op in (OperationState.ST_OP_RUNNING, OperationState.ST_OP_BREAKED):
-            self.send("CMD_STOP")
-            s = self._await_op(OperationState.ST_OP_READY, "CMD_STOP", within=10.0)
+            legs.append(self._leg(("CMD_STOP",), OperationState.ST_OP_READY, s.mode))
         elif s.op == OperationState.ST_OP_NOT_INITIALIZED:
-            s = self._initialize()
-        if s.mode != mode:
+            init = tuple(build("request", c) for c in ("CMD_CONNECT_TO_PLTF", "CMD_INIT_PLTF"))
+            legs.append(Leg(init, OperationState.ST_OP_READY, s.mode, lambda _: self._initialize()))
+        if legs or s.mode != mode:  # the mode is set in Ready (guide 6.3 CMD_SET_MODE) when it is not the one asked
+            set_mode = (build("request", "CMD_SET_MODE", mode=mode),)
+            legs.append(Leg(set_mode, OperationState.ST_OP_READY, mode, self._mode_run(mode), s.mode != mode))
+        path = chart.PATH_FROM_READY[state]
+        if path:
+            legs.append(self._leg(path, chart.REPORTED[state], mode))
+        return legs
+
+    def _leg(self, commands: tuple[str, ...], op: int, mode: int) -> Leg:
+        def run(_: Status) -> Status:
+            for c in commands:
+                self.send(c)
+            return self._await_op(op, " + ".join(commands), within=10.0)
+
+        return Leg(tuple(build("request", c) for c in commands), op, mode, run)
+
+    def _mode_run(self, mode: int) -> Callable[[Status], Status]:
+        def run(before: Status) -> Status:
+            if before.mode == mode:
+                return before
             self.send("CMD_SET_MODE", mode=mode)
             s = self.poll(self.status, lambda x: x.mode == mode, within=5.0)
             if s.mode != mode:
@@ -347,11 +475,50 @@ class CaseContext:
                     f"precondition: CMD_SET_MODE({MotionMode(mode).name}) in Ready left {s.describe()}",
                     precondition=True,
                 )
-        for cmd in chart.PATH_FROM_READY[state]:
-            self.send(cmd)
-        if chart.PATH_FROM_READY[state]:
-            s = self._await_op(chart.REPORTED[state], " + ".join(chart.PATH_FROM_READY[state]), within=10.0)
-        return s
+            return s
+
+        return run
+
+    def _pipelined(self, legs: list[Leg], then: Sequence[Telegram | Pause]) -> tuple[Status, Then] | None:
+        """Every leg with its CMD_GET_STATUS, then ``then``, in one write; None when a status shows that the way was
+        not taken as foreseen (then nothing of it is judged: the caller goes again one request at a time)."""
+        ask = build("request", "CMD_GET_STATUS")
+        session = self.session()
+        session.send_pipelined([*(t for leg in legs for t in (*leg.commands, ask)), *then])
+        last = None
+        for leg in legs:
+            last = Status.of(session.next_reply())
+            if last.op != leg.op:
+                self.target.prompt = False
+                why = (
+                    f"the target showed {last.describe()} at the first status after "
+                    f"{' + '.join(t.NAME for t in leg.commands)} ({self.case.id}): the way to a state is taken "
+                    "one leg at a time from here"
+                )
+                self.note(why)
+                self.target.notes.append(why)
+                self._abandon(session)
+                return None
+            if last.mode != leg.mode:
+                self._abandon(session)  # the mode was foreseen wrong (changed by STOP or INIT?)
+                return None
+        assert last is not None
+        if not then:
+            self.target.record(last.telegram)
+        return last, lambda: self._rest(session, then)
+
+    def _abandon(self, session: Session) -> None:
+        """The replies still due on ``session`` are read and dropped (the connection is dropped if that fails)."""
+        try:
+            session.exchange([])
+        except TargetFailure:
+            self.target.drop(session.label)
+
+    def _rest(self, session: Session, then: Sequence[Telegram | Pause]) -> list[Telegram]:
+        replies = [session.next_reply() for item in then if not isinstance(item, Pause) and answered(item.NAME)]
+        if then and not isinstance(then[-1], Pause) and then[-1].NAME == "CMD_GET_STATUS":
+            self.target.record(replies[-1])
+        return replies
 
     def _initialize(self) -> Status:
         """CONNECT + INIT. A self test may fail on a platform that still rolls or turns (a gyro calibrates at
@@ -391,9 +558,15 @@ class CaseContext:
         return pos
 
     def preserve_param(self, key: str) -> str:
-        value: str = self.get("CMD_GET_PLTF_PARAM", key=key).value  # type: ignore[attr-defined]
-        self.on_exit(f"restore parameter {key}", lambda: self.send("CMD_SET_PLTF_PARAM", key=key, value=value))
-        return value
+        return self.preserve_params([key])[0]
+
+    def preserve_params(self, keys: Sequence[str]) -> list[str]:
+        """GET each parameter (pipelined, erratum E-WIRE-008); restore each with SET at the end. The values."""
+        replies = self.exchange([build("request", "CMD_GET_PLTF_PARAM", key=key) for key in keys])
+        values: list[str] = [r.value for r in replies]  # type: ignore[attr-defined]
+        for key, value in zip(keys, values, strict=True):
+            self.on_exit(f"restore parameter {key}", partial(self.send, "CMD_SET_PLTF_PARAM", key=key, value=value))
+        return values
 
     def preserve_document(self, kind: str) -> tuple[str, str]:
         """GET the active map/roadmap/program; restore it with SET at the end. Returns (xml, name)."""

@@ -5,7 +5,9 @@ waiting on a target that no longer answers (issue 17: against a slow or stuck ta
 Rules:
 - ``measure`` runs once, before the first case: CMD_GET_STATUS three times on a fresh connection to port A (a
   connection turned away is retried for the connect window), the first allowed ``PATIENCE`` s. Their median is
-  the target's reply time (None when nothing came).
+  the target's reply time (None when nothing came). Then three GET_* requests in one write: when their replies
+  come in the order asked, the run pipelines its requests (``Config.pipeline``, erratum E-WIRE-008); when not,
+  it sends one request at a time, as a client that waits for each reply.
 - ``apply`` scales the run's waits to it: a reply time up to ``MAX_SCALED`` raises the wall floor of every wait
   derived from simulated time (``Config.min_wall``) to ``WAIT_SCALE`` and the connection probe's patience to
   ``SCALE`` times the reply time (a wait floor of two reply times, not four: the standard tier has hundreds of
@@ -47,6 +49,7 @@ RECHECK = 20.0  # s between two health checks while the target stays silent
 class Pace:
     reply: float | None  # the median GET_STATUS round trip, s (None: no reply within PATIENCE)
     error: str = ""
+    pipeline: str = ""  # "" when pipelined requests were answered in order, else why the run does not pipeline
 
     def describe(self, config: Config) -> str:
         if self.reply is None:
@@ -59,6 +62,10 @@ class Pace:
             )
         elif self.reply > MAX_SCALED:
             text += f"; the waits are not scaled beyond {MAX_SCALED:g} s"
+        if self.pipeline:
+            text += f"; requests are sent one at a time ({self.pipeline})"
+        else:
+            text += "; it answers pipelined requests in order, and the run pipelines (erratum E-WIRE-008)"
         return text
 
 
@@ -67,6 +74,7 @@ def measure(target: Target, samples: int = 3) -> Pace:
     deadline = time.monotonic() + cfg.connect_window
     while True:
         times: list[float] = []
+        pipeline = "not measured"
         s = Session(cfg.host, target.port_of("A"), label="A", log=WireLog(max_entries=50), timeout=PATIENCE)
         try:
             s.connect(timeout=min(cfg.reply_timeout, 5.0))
@@ -76,6 +84,7 @@ def measure(target: Target, samples: int = 3) -> Pace:
                 times.append(time.monotonic() - t0)
                 if times[0] > MAX_SCALED:
                     break  # too slow to scale to: one sample says enough
+            pipeline = _pipelined(s, max(3 * times[0], 1.0)) if times[0] <= MAX_SCALED else "a slow target"
         except (ConnectionClosed, Unreachable) as exc:  # turned away: the port is not free yet (one client per port)
             refused = "refused" in str(exc).lower()  # nothing listens: no use waiting
             if not times and not refused and time.monotonic() < deadline:
@@ -83,17 +92,32 @@ def measure(target: Target, samples: int = 3) -> Pace:
                 continue
             if not times:
                 return Pace(None, str(exc))
+            pipeline = f"not measured: {exc}"
         except TargetFailure as exc:
             if not times:
                 return Pace(None, str(exc))
+            pipeline = f"not measured: {exc}"
         finally:
             s.close()
-        return Pace(statistics.median(times))
+        return Pace(statistics.median(times), pipeline=pipeline)
+
+
+PIPELINE_PROBE = ("CMD_GET_STATUS", "CMD_GET_POSITION", "CMD_GET_POSITION")
+
+
+def _pipelined(s: Session, timeout: float) -> str:
+    """'' when the requests of PIPELINE_PROBE, sent in one write, are answered in that order; else what happened."""
+    try:
+        s.exchange([build("request", name) for name in PIPELINE_PROBE], timeout=timeout)
+    except TargetFailure as exc:
+        return f"three requests in one write: {exc}"
+    return ""
 
 
 def apply(pace: Pace, config: Config) -> None:
     """Scale the run's waits to the measured reply time (see the module rules)."""
     config.reply_time = pace.reply
+    config.pipeline = pace.reply is not None and not pace.pipeline
     if pace.reply is not None and pace.reply <= MAX_SCALED:
         config.min_wall = max(config.min_wall, WAIT_SCALE * pace.reply)
         config.probe_timeout = max(config.probe_timeout, SCALE * pace.reply)

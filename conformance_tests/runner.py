@@ -211,6 +211,7 @@ class Runner:
                 results.append(result)
                 self._emit("on_case_end", result)
         self.target.close()
+        self.notes += self.target.notes
         ran = {r.case.id: r for r in results}
         stale = self.baseline.stale(ran)
         for r in results:
@@ -358,7 +359,8 @@ def _liveness(ctx: CaseContext, before: Status | None) -> str:
     for label in labels:
         ctx.reset_session(label)
         try:
-            s = ctx.status(label)
+            ctx.session(label)  # a new client, probed with CMD_GET_STATUS: its reply is the status
+            s = ctx.target.fresh_status() or ctx.status(label)
         except Exception as exc:
             return f"liveness after abuse: port {label} no longer serves a new client ({exc})"
         if before is not None and (s.op, s.mode) != (before.op, before.mode):

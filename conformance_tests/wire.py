@@ -9,6 +9,12 @@ Rules:
   as a header-less reply, an alternative reading of erratum E-WIRE-001 (recorded as a deviation).
 - Frames that arrive while a reply is awaited but carry another identifier are unsolicited (guide 6.1: the
   interface "returns data only on request"); they are logged and reported to the observer, then skipped.
+- Pipelining (``exchange``, erratum E-WIRE-008): several requests leave back to back before their replies are
+  read; the replies are read in the order asked. A reply to a request asked later that comes first is a
+  ``BadReply`` (E-WIRE-008), never taken for the one awaited. A ``Pause`` between two requests is a wait
+  between two writes (a command's chance to show an effect before the status that judges it is asked).
+- ``Session.events`` counts what could change the target since a status was read: every write, connect and
+  close of any session of the run (context.py keeps a status only while it has not moved).
 - Target misbehaviour raises ``outcome.TargetFailure`` subclasses; only harness bugs raise anything else.
 """
 
@@ -19,8 +25,10 @@ import select
 import socket
 import struct
 import time
+from collections import deque
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import ClassVar, Protocol
 
 from pltf.conformance_tests import readings
 from pltf.conformance_tests.outcome import (
@@ -97,6 +105,18 @@ class NullObserver:
 _LEN = struct.Struct(">I")
 
 
+@dataclass(frozen=True)
+class Pause:
+    """A wait of ``seconds`` between two writes of an ``exchange``."""
+
+    seconds: float
+
+
+def answered(name: str) -> bool:
+    """Guide 6.1: only the telegrams with a reply table (the GET_* requests) are answered (E-CMD-013)."""
+    return REQUESTS[name].DEF.answered
+
+
 @dataclass
 class CaseBudget:
     """The wall-clock end of the running case's budget (monotonic s; None: none). Every read of a session that
@@ -118,6 +138,8 @@ class CaseBudget:
 class Session:
     """One TCP connection to one port of the target."""
 
+    events: ClassVar[int] = 0  # writes, connects and closes of every session (see the module rules)
+
     def __init__(
         self,
         host: str,
@@ -138,6 +160,7 @@ class Session:
         self.profile = profile
         self.sock: socket.socket | None = None
         self._rx = bytearray()
+        self._asked: deque[str] = deque()  # requests sent by ``send_pipelined`` whose replies are still unread
         self.eof = False
 
     # ---- connection
@@ -148,6 +171,7 @@ class Session:
             self.log.add(self.label, "ev", note=f"connect to {self.host}:{self.port} failed: {exc}")
             raise Unreachable(f"cannot connect to {self.host}:{self.port}: {exc}") from None
         self.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        Session.events += 1
         self._rx.clear()
         self.eof = False
         self.log.add(self.label, "ev", note=f"connected to {self.host}:{self.port}")
@@ -159,10 +183,12 @@ class Session:
 
     def close(self) -> None:
         if self.sock is not None:
+            Session.events += 1
             with contextlib.suppress(OSError):
                 self.sock.close()
             self.log.add(self.label, "ev", note="closed by us")
         self.sock = None
+        self._asked.clear()
 
     def shutdown_write(self) -> None:
         """TCP half-close: we send no more, the target may still send."""
@@ -201,6 +227,7 @@ class Session:
     def _sendall(self, data: bytes, note: str) -> None:
         if self.sock is None:
             raise ConnectionClosed(f"port {self.label}: not connected")
+        Session.events += 1
         self.log.add(self.label, "tx", data, note)
         try:
             self.sock.sendall(data)
@@ -293,10 +320,24 @@ class Session:
         return data, headerless
 
     def read_reply(self, name: str, timeout: float | None = None) -> Telegram:
-        """The next reply to request ``name``, decoded strictly (unsolicited frames are reported and skipped)."""
+        """The next reply to request ``name``, decoded strictly (unsolicited frames are reported and skipped).
+        Replies pipelined before and not read yet are read and dropped first."""
+        while self._asked:
+            self.next_reply(timeout)
+        return self._read_reply(name, timeout, ())
+
+    def _read_reply(self, name: str, timeout: float | None, later: Sequence[str]) -> Telegram:
+        """``read_reply``; a reply to one of ``later`` (asked after ``name``) that comes first is out of order."""
         expect = REQUESTS[name].ID
+        ahead = {REQUESTS[n].ID for n in later} - {expect}
         while True:
             data, headerless = self.read_frame(timeout, expect)
+            if data[0] in ahead:
+                raise BadReply(
+                    f"port {self.label}: the reply to {REQUESTS.by_id[data[0]].NAME} came before the reply to "
+                    f"{name}, asked before it (replies come in the order asked)",
+                    erratum="E-WIRE-008",
+                )
             if data[0] != expect:
                 self.observer.on_unsolicited(self.label, data)
                 continue
@@ -307,6 +348,42 @@ class Session:
                 self.observer.on_deviation(dev)
             self.observer.on_received(telegram)
             return telegram
+
+    def exchange(self, items: Sequence[Telegram | Pause], timeout: float | None = None) -> list[Telegram]:
+        """Pipelining (erratum E-WIRE-008): send ``items`` back to back (one write between two pauses), then read
+        the replies of the answered ones in the order asked; the replies, in that order."""
+        while self._asked:
+            self.next_reply(timeout)
+        return [self.next_reply(timeout) for _ in range(self.send_pipelined(items))]
+
+    def send_pipelined(self, items: Sequence[Telegram | Pause]) -> int:
+        """Send ``items`` back to back (one write between two pauses) without reading; how many replies are due
+        (``next_reply`` reads them in order)."""
+        batch: list[Telegram] = []
+        asked = 0
+        for item in items:
+            if isinstance(item, Pause):
+                self._send_batch(batch)
+                batch = []
+                time.sleep(item.seconds)
+                continue
+            batch.append(item)
+            if answered(item.NAME):
+                self._asked.append(item.NAME)
+                asked += 1
+        self._send_batch(batch)
+        return asked
+
+    def next_reply(self, timeout: float | None = None) -> Telegram:
+        """The reply to the first request ``send_pipelined`` sent that is not read yet."""
+        name = self._asked.popleft()
+        return self._read_reply(name, timeout, list(self._asked))
+
+    def _send_batch(self, batch: list[Telegram]) -> None:
+        if len(batch) == 1:
+            self.send(batch[0])
+        elif batch:
+            self.send_many(batch, " + ".join(t.NAME for t in batch))
 
     def pending(self) -> bool:
         """Whether reply bytes wait to be read (buffered, or on the socket now): a read would not block long."""

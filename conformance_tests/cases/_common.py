@@ -33,14 +33,25 @@ def far_frame(pos: Any) -> dict[str, int]:
     return {"x": pos.x + dx, "y": pos.y + dy, "angle": milli_deg}
 
 
-def expect_state(ctx: CaseContext, state: St, how: str, *, mode: int | None = None, within: float = 0.0) -> Status:
-    """The status shows ``state`` (op state and initialized flag), and ``mode`` when given."""
+def expect_state(
+    ctx: CaseContext,
+    state: St,
+    how: str,
+    *,
+    mode: int | None = None,
+    within: float = 0.0,
+    first: Status | None = None,
+) -> Status:
+    """The status shows ``state`` (op state and initialized flag), and ``mode`` when given. ``first``: the first
+    status asked after ``how`` (read already, pipelined with it); else it is asked now."""
     op, init = chart.REPORTED[state], chart.INITIALIZED[state]
 
     def ok(s: Status) -> bool:
         return s.op == op and s.initialized == init and (mode is None or s.mode == mode)
 
-    s = ctx.poll(ctx.status, ok, within=within) if within else ctx.status()
+    s = first or ctx.status()
+    if within and not ok(s):
+        s = ctx.poll(ctx.status, ok, within=within)
     if not ok(s):
         want = f"{OperationState(op).name}, initialized {init}"
         if mode is not None:
@@ -49,10 +60,13 @@ def expect_state(ctx: CaseContext, state: St, how: str, *, mode: int | None = No
     return s
 
 
-def expect_unchanged(ctx: CaseContext, state: St, before: Status, how: str) -> Status:
-    """After ``how`` (a command that must have no effect): nothing the status shows has changed."""
-    ctx.settle()
-    s = ctx.status()
+def expect_unchanged(ctx: CaseContext, state: St, before: Status, how: str, *, after: Status | None = None) -> Status:
+    """After ``how`` (a command that must have no effect): nothing the status shows has changed. ``after``: the
+    status asked a settling time after ``how`` (read already, pipelined with it); else the settling and the ask
+    happen now."""
+    if after is None:
+        ctx.settle()
+    s = after or ctx.status()
     if (s.op, s.initialized, s.mode) != (before.op, before.initialized, before.mode):
         raise Fail(f"{how} must change nothing: the status went from {before.describe()} to {s.describe()}")
     if state is St.CONNECTED:

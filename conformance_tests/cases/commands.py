@@ -14,8 +14,10 @@ from typing import Any
 
 from pltf.conformance_tests.cases._common import STATES, no_unsolicited
 from pltf.conformance_tests.catalogue import Level, add
-from pltf.conformance_tests.context import CaseContext
+from pltf.conformance_tests.chart import St
+from pltf.conformance_tests.context import CaseContext, Status, Then
 from pltf.conformance_tests.outcome import ConnectionClosed, Fail
+from pltf.spec.codec import build
 from pltf.spec.model import enum_classes
 
 # The spec's enums are built at import; mypy sees them as plain IntEnum classes (by name) without members.
@@ -37,12 +39,15 @@ def _param(ctx: CaseContext) -> dict[str, Any]:
 
 
 def _digout(ctx: CaseContext) -> dict[str, Any]:
-    mask = ctx.status().telegram.io_digital_out  # type: ignore[attr-defined]
+    mask = ctx.current_status().telegram.io_digital_out  # type: ignore[attr-defined]
     return {"board": 0, "channel": 15, "value": (mask >> 15) & 1}
 
 
 def _head(ctx: CaseContext) -> dict[str, Any]:
-    return {"angle": ctx.status().telegram.head_position}  # type: ignore[attr-defined]
+    return {"angle": ctx.current_status().telegram.head_position}  # type: ignore[attr-defined]
+
+
+_READ_IN_STATE = (_pose, _param, _digout, _head)  # the values these send are read in each state
 
 
 def _const(**fields: Any) -> Fields:
@@ -107,21 +112,33 @@ def _every_state(ctx: CaseContext, name: str, fields: Fields | None) -> None:
     if name in _AFTER:
         ctx.on_exit(f"undo {name}", lambda: _AFTER[name](ctx))
     for state in STATES:
-        before = ctx.ensure(state)
-        values = fields(ctx) if fields is not None else {"payload": b""}
+        before, rest = _in_state(ctx, state, name, fields)
         try:
-            ctx.send(name, **values)
-            after = ctx.status()
+            (reply,) = rest()
         except ConnectionClosed:
             if fields is not None:
                 raise
             ctx.deviate("E-CMD-012", 0, f"{name} closed the connection (refused as unknown) in {state.value}")
             ctx.reset_session()
             continue
+        after = Status.of(reply)
         if (after.op, after.initialized, after.mode) != (before.op, before.initialized, before.mode):
             raise Fail(f"{name} in {state.value} changed the platform: {before.describe()} -> {after.describe()}")
     no_unsolicited(ctx, name)
     ctx.ready()
+
+
+def _in_state(ctx: CaseContext, state: St, name: str, fields: Fields | None) -> tuple[Status, Then]:
+    """The status in ``state``, and the reply to the CMD_GET_STATUS asked after ``name`` was sent there. Values
+    read in the state (the pose, a parameter, an output) are read there first; constant ones go in one write with
+    the way to the state (pipelined, CaseContext.enter)."""
+    ask = build("request", "CMD_GET_STATUS")
+    if fields is None or fields not in _READ_IN_STATE:
+        values = fields(ctx) if fields is not None else {"payload": b""}
+        return ctx.enter(state, then=[build("request", name, **values), ask])
+    before = ctx.ensure(state)
+    values = fields(ctx)
+    return before, lambda: ctx.exchange([build("request", name, **values), ask])
 
 
 _RULE = (

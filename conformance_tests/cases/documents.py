@@ -11,23 +11,28 @@ from functools import partial
 from pltf.conformance_tests import docdata
 from pltf.conformance_tests.cases._common import STATES, no_unsolicited
 from pltf.conformance_tests.catalogue import Level, Tier, add, case
-from pltf.conformance_tests.context import CaseContext
+from pltf.conformance_tests.context import CaseContext, Status
 from pltf.conformance_tests.outcome import Fail
 from pltf.spec.codec import build
+from pltf.spec.telegram import Telegram
 
 KINDS = ("map", "roadmap", "program")
 _NAME = "conformance"
 
 
 def _set(ctx: CaseContext, kind: str, xml: bytes, name: str = _NAME) -> None:
+    ctx.session().send(_setter(ctx, kind, xml, name))
+
+
+def _setter(ctx: CaseContext, kind: str, xml: bytes, name: str = _NAME) -> Telegram:
+    """The CMD_SET_<kind> telegram of ``xml`` (its elements are counted as covered)."""
     text = xml.decode("latin-1")
-    if kind == "program":
-        ctx.send("CMD_SET_PROGRAM", xml=text)
-    else:
-        ctx.send(f"CMD_SET_{kind.upper()}", name=name, xml=text)
     root = docdata.parse(xml)
     if root is not None and root.tag == kind:
         ctx.target.coverage.document(kind, root)
+    if kind == "program":
+        return build("request", "CMD_SET_PROGRAM", xml=text)
+    return build("request", f"CMD_SET_{kind.upper()}", name=name, xml=text)
 
 
 def _get(ctx: CaseContext, kind: str) -> tuple[str, str]:
@@ -36,7 +41,12 @@ def _get(ctx: CaseContext, kind: str) -> tuple[str, str]:
 
 
 def _expect_active(ctx: CaseContext, kind: str, expected: bytes, how: str, name: str | None = None) -> None:
-    xml, got_name = _get(ctx, kind)
+    _judge_active(ctx, kind, ctx.get(f"CMD_GET_{kind.upper()}"), expected, how, name)
+
+
+def _judge_active(ctx: CaseContext, kind: str, reply: Telegram, expected: bytes, how: str, name: str | None) -> None:
+    """``reply`` (to CMD_GET_<kind>) carries the ``expected`` document (and ``name``)."""
+    xml, got_name = reply.xml, getattr(reply, "name", "")  # type: ignore[attr-defined]
     if docdata.same(xml, expected):
         if name is not None and kind != "program" and got_name != name:
             raise Fail(f"{how}: CMD_GET_{kind.upper()} returns the document but the name {got_name!r}, not {name!r}")
@@ -110,16 +120,20 @@ def _every_state(ctx: CaseContext, kind: str, command: str) -> None:
         ctx.send(f"CMD_LOAD_{up}")
     active, name = _get(ctx, kind)
     for state in STATES:
-        before = ctx.ensure(state)
         if command == f"CMD_SET_{up}":
-            _set(ctx, kind, docdata.wire_bytes(active) if active.strip() else docdata.valid(kind), name=name)
+            sent = _setter(ctx, kind, docdata.wire_bytes(active) if active.strip() else docdata.valid(kind), name=name)
         else:
-            ctx.send(command)
-        after = ctx.status()
+            sent = build("request", command)
+        then = [sent]
+        if active.strip():  # then the document must still be the active one
+            then.append(build("request", f"CMD_GET_{up}"))
+        before, rest = ctx.enter(state, then=[*then, build("request", "CMD_GET_STATUS")])  # pipelined (E-WIRE-008)
+        replies = rest()
+        after = Status.of(replies[-1])
         if (after.op, after.mode) != (before.op, before.mode):
             raise Fail(f"{command} in {state.value} changed the platform: {before.describe()} -> {after.describe()}")
         if active.strip():
-            _expect_active(ctx, kind, docdata.wire_bytes(active), f"{command} in {state.value}")
+            _judge_active(ctx, kind, replies[0], docdata.wire_bytes(active), f"{command} in {state.value}", None)
     no_unsolicited(ctx, command)
     ctx.ready()
 

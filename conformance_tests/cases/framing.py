@@ -143,7 +143,7 @@ def slow_sender(ctx: CaseContext) -> None:
 @case(
     "6.2/framing/coalesced",
     tier=Tier.SMOKE,
-    errata=("E-CMD-013",),
+    errata=("E-CMD-013", "E-WIRE-008"),
     requirement='guide 6.2 and field evidence (a client "sends many frames back to back on one connection and '
     'never waits for a reply"): frames sent in one piece, or in pieces that cut across frames, are '
     "executed in order and the GET_* replies come in the order of the requests",

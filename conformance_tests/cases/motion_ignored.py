@@ -17,6 +17,8 @@ from pltf.conformance_tests.cases.motion import (
     Pose,
     _local_roadmap,
     _milli,
+    _pose_of,
+    judge_still,
     pose,
     rest,
     still,
@@ -24,6 +26,9 @@ from pltf.conformance_tests.cases.motion import (
 from pltf.conformance_tests.catalogue import Level, add
 from pltf.conformance_tests.chart import St
 from pltf.conformance_tests.context import CaseContext
+from pltf.conformance_tests.wire import Pause
+from pltf.spec.codec import build
+from pltf.spec.telegram import Telegram
 
 _MOVES: dict[str, tuple[int, Callable[[Pose], dict[str, Any]]]] = {
     "CMD_MOVE_VEL": (VEL, lambda p: {"vel_trans": 300, "vel_rot": 0}),
@@ -42,14 +47,20 @@ def _only_in_running(ctx: CaseContext, name: str) -> None:
         p = pose(ctx)
         ctx.send("CMD_SET_ROADMAP", name="conformance_local", xml=_local_roadmap(p).decode())
     for state in (St.NOT_CONNECTED, St.CONNECTED, St.READY, St.BREAKED):
-        ctx.ensure(state, mode)
-        here = pose(ctx)
-        ctx.send(name, **fields(here))
-        still(ctx, here, f"{name} in {state.value}")
+        _, replies = ctx.enter(state, mode, then=[build("request", "CMD_GET_POSITION")])  # pipelined (E-WIRE-008)
+        here = _pose_of(replies()[0])
+        _still_after(ctx, build("request", name, **fields(here)), here, f"{name} in {state.value}")
         if state is St.BREAKED:
-            ctx.send("CMD_CONTINUE")
-            still(ctx, here, f"CMD_CONTINUE after a {name} sent in breaked")
+            _still_after(ctx, build("request", "CMD_CONTINUE"), here, f"CMD_CONTINUE after a {name} sent in breaked")
     ctx.ready()
+
+
+def _still_after(ctx: CaseContext, sent: Telegram, here: Pose, how: str) -> None:
+    """``sent``, then (1 simulated s later) the pose is still ``here``: motion.still, in one write with the
+    status the next step starts from (pipelined, erratum E-WIRE-008)."""
+    ask = [build("request", "CMD_GET_POSITION"), build("request", "CMD_GET_STATUS")]
+    reply, _ = ctx.exchange([sent, Pause(1.0 / ctx.config.time_scale), *ask])
+    judge_still(_pose_of(reply), here, how)
 
 
 def _mode_ignores(ctx: CaseContext, mode: int, names: tuple[str, ...]) -> None:

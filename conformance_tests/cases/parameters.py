@@ -15,7 +15,9 @@ from pltf.conformance_tests.cases._common import no_unsolicited, param_table
 from pltf.conformance_tests.catalogue import Level, Tier, case
 from pltf.conformance_tests.context import CaseContext
 from pltf.conformance_tests.outcome import Fail, NotApplicable
+from pltf.spec.codec import build
 from pltf.spec.parameters import Category, DataType, Parameter, load_parameters
+from pltf.spec.telegram import Telegram
 
 SPEC = load_parameters()
 _UNSAFE = {Category.GEOM, Category.USONIC, Category.COLLISION}
@@ -47,7 +49,11 @@ def _number(text: str, data_type: int) -> float | None:
 
 
 def _value(ctx: CaseContext, key: str) -> str:
-    reply = ctx.get("CMD_GET_PLTF_PARAM", key=key)
+    return _checked(ctx.get("CMD_GET_PLTF_PARAM", key=key), key)
+
+
+def _checked(reply: Telegram, key: str) -> str:
+    """The value of a CMD_GET_PLTF_PARAM reply asked for ``key``."""
     if reply.key != key:  # type: ignore[attr-defined]
         raise Fail(f"CMD_GET_PLTF_PARAM({key!r}) answered for key {reply.key!r}")  # type: ignore[attr-defined]
     return reply.value  # type: ignore[attr-defined, no-any-return]
@@ -162,20 +168,33 @@ def every_parameter(ctx: CaseContext) -> None:
             raise Fail(f"CMD_GET_PLTF_PARAM({key!r}) = {tuple(got)} but the vector lists {tuple(e)}")
 
 
+def _get(key: str) -> Telegram:
+    return build("request", "CMD_GET_PLTF_PARAM", key=key)
+
+
+def _put(key: str, value: str) -> Telegram:
+    return build("request", "CMD_SET_PLTF_PARAM", key=key, value=value)
+
+
 def _round_trip(ctx: CaseContext, params: list[Parameter]) -> None:
     table = param_table(ctx)
     chosen = [p for p in params if p.name in table]
     if not chosen:
         raise NotApplicable("the target lists none of the parameters the suite may change")
-    for p in chosen:
-        old = ctx.preserve_param(p.name)
-        new = _other_value(p, old)
-        ctx.send("CMD_SET_PLTF_PARAM", key=p.name, value=new)
-        got = _value(ctx, p.name)
+    olds = ctx.preserve_params([p.name for p in chosen])
+    news = [_other_value(p, old) for p, old in zip(chosen, olds, strict=True)]
+    # each parameter set, read, set back and read again, in this order; pipelined (erratum E-WIRE-008)
+    items = [
+        t
+        for p, old, new in zip(chosen, olds, news, strict=True)
+        for t in (_put(p.name, new), _get(p.name), _put(p.name, old), _get(p.name))
+    ]
+    replies = iter(ctx.exchange(items))
+    for p, old, new in zip(chosen, olds, news, strict=True):
+        got = _checked(next(replies), p.name)
         if not _same(got, new, p):
             raise Fail(f"{p.name}: set to {new!r}, read back {got!r}")
-        ctx.send("CMD_SET_PLTF_PARAM", key=p.name, value=old)
-        back = _value(ctx, p.name)
+        back = _checked(next(replies), p.name)
         if not _same(back, old, p):
             raise Fail(f"{p.name}: set back to {old!r}, read back {back!r}")
 
@@ -212,9 +231,8 @@ def _refused(
 ) -> None:
     """SET ``text`` must be refused with the old value kept; ``readings`` maps an observed value to the
     alternative of ``erratum`` it shows."""
-    old = _value(ctx, p.name)
-    ctx.send("CMD_SET_PLTF_PARAM", key=p.name, value=text)
-    got = _value(ctx, p.name)
+    replies = ctx.exchange([_get(p.name), _put(p.name, text), _get(p.name)])  # pipelined (erratum E-WIRE-008)
+    old, got = (_checked(r, p.name) for r in replies)
     if _same(got, old, p) and got == old:
         return
     ctx.send("CMD_SET_PLTF_PARAM", key=p.name, value=old)
@@ -291,14 +309,15 @@ def boolean_spellings(ctx: CaseContext) -> None:
         raise NotApplicable("no BOOLEAN parameter the suite may change is listed")
     p = bools[0]
     ctx.preserve_param(p.name)
-    for text, expected in (("true", "true"), ("false", "false")):
-        ctx.send("CMD_SET_PLTF_PARAM", key=p.name, value=text)
-        got = _value(ctx, p.name)
+    must = (("true", "true"), ("false", "false"))
+    may = (("TRUE", "true"), ("0", "false"), ("1", "true"), (" False ", "false"))
+    # each spelling set and read back, in this order; pipelined (erratum E-WIRE-008)
+    replies = ctx.exchange([t for text, _ in must + may for t in (_put(p.name, text), _get(p.name))])
+    read = [(text, expected, _checked(r, p.name)) for (text, expected), r in zip(must + may, replies, strict=True)]
+    for text, expected, got in read[: len(must)]:
         if not _same(got, expected, p):
             raise Fail(f"{p.name} = {text!r} reads back {got!r}")
-    for text, expected in (("TRUE", "true"), ("0", "false"), ("1", "true"), (" False ", "false")):
-        ctx.send("CMD_SET_PLTF_PARAM", key=p.name, value=text)
-        got = _value(ctx, p.name)
+    for text, expected, got in read[len(must) :]:
         if not _same(got, expected, p):
             ctx.deviate("E-PAR-005", 0, f"{p.name} = {text!r} was not taken (reads {got!r})")
     for text in ("maybe", "on"):
@@ -352,11 +371,12 @@ def read_only(ctx: CaseContext) -> None:
     ro = [p for p in SPEC.values() if not p.writable and p.name in table]
     if not ro:
         raise NotApplicable("none of the read-only parameters of the project's table is listed")
-    for p in ro:
-        old = _value(ctx, p.name)
-        new = _other_value(p, old)
-        ctx.send("CMD_SET_PLTF_PARAM", key=p.name, value=new)
-        got = _value(ctx, p.name)
+    olds = [_checked(r, p.name) for p, r in zip(ro, ctx.exchange([_get(p.name) for p in ro]), strict=True)]
+    news = [_other_value(p, old) for p, old in zip(ro, olds, strict=True)]
+    # each parameter set and read back, in this order; pipelined (erratum E-WIRE-008)
+    replies = ctx.exchange([t for p, new in zip(ro, news, strict=True) for t in (_put(p.name, new), _get(p.name))])
+    for p, old, new, r in zip(ro, olds, news, replies, strict=True):
+        got = _checked(r, p.name)
         if not _same(got, old, p):
             ctx.send("CMD_SET_PLTF_PARAM", key=p.name, value=old)
             ctx.deviate("E-PAR-024", 1, f"{p.name} took {new!r}")

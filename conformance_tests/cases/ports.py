@@ -186,13 +186,13 @@ def replies_in_order(ctx: CaseContext) -> None:
 )
 def close_socket(ctx: CaseContext) -> None:
     for state in STATES:
-        ctx.ensure(state)
-        before = ctx.status()
+        before = ctx.ensure(state)
         s = ctx.fresh()
         s.send(build("request", "CMD_CLOSE_SOCKET"))
         if not s.wait_closed(ctx.close_wait(2.0)):
             raise Fail(f"CMD_CLOSE_SOCKET in {state.value}: the connection stayed open")
-        after = ctx.status()
+        ctx.session()  # a new client: the CMD_GET_STATUS that probes it is the status after
+        after = ctx.current_status()
         if (after.op, after.mode) != (before.op, before.mode):
             raise Fail(f"CMD_CLOSE_SOCKET changed the platform: {before.describe()} -> {after.describe()}")
     ctx.ready()

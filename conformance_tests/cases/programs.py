@@ -11,6 +11,7 @@ from pltf.conformance_tests.cases._common import MotionMode, param_table
 from pltf.conformance_tests.catalogue import Level, case
 from pltf.conformance_tests.context import CaseContext
 from pltf.conformance_tests.outcome import Fail, NotApplicable
+from pltf.spec.codec import build
 
 PROGRAM = MotionMode.MODE_MOTION_PROGRAM
 KEY = "ViewPlanObstEnabled"
@@ -70,6 +71,9 @@ def _until(ctx: CaseContext, value: str, within: float) -> bool:
 )
 def runs_on_start(ctx: CaseContext) -> None:
     old, new = _prepare(ctx, _set("{new}") + _delay(1500) + _set("{old}"))
+    if ctx.link_paced():
+        _runs_on_start_sampled(ctx, old.strip().lower(), new)
+        return
     ctx.send("CMD_START")
     if not _until(ctx, new, 3.0):
         raise NotApplicable("CMD_START in MODE_MOTION_PROGRAM did not run the program (no parameter changed)")
@@ -90,6 +94,9 @@ def runs_on_start(ctx: CaseContext) -> None:
 )
 def stop_aborts(ctx: CaseContext) -> None:
     _, new = _prepare(ctx, _set("{new}") + _delay(2000) + _set("{old}"))
+    if ctx.link_paced():
+        _stop_aborts_sampled(ctx, new)
+        return
     ctx.send("CMD_START")
     if not _until(ctx, new, 3.0):
         raise NotApplicable("the program did not run")
@@ -118,3 +125,39 @@ def break_pauses(ctx: CaseContext) -> None:
     ctx.send("CMD_CONTINUE")
     if not _until(ctx, new, 5.0):
         raise NotApplicable("the program did not run after CMD_CONTINUE (or not at all)")
+
+
+# ---- the same judgements through a slow link (issue 17): a poll one request at a time samples the parameter once a
+# reply time, two simulated s through a link of 200 ms at time scale 10 - longer than the program's delays. There
+# the parameter is sampled every 0.1 simulated s (CaseContext.timeline) and each reading judged at the time it was
+# asked; CMD_STOP leaves at a fixed time, half the program's delay after CMD_START (a reply comes too late to react).
+
+
+def _values(ctx: CaseContext, seconds: float, events: list[tuple[float, str]]) -> list[tuple[float, str]]:
+    ask = build("request", "CMD_GET_PLTF_PARAM", key=KEY)
+    sent = [(t, build("request", name)) for t, name in events]
+    return [(t, r.value.strip().lower()) for t, r in ctx.timeline(ask, seconds, sent)]  # type: ignore[attr-defined]
+
+
+def _first(samples: list[tuple[float, str]], after: float) -> str | None:
+    return next((v for t, v in samples if t >= after), None)
+
+
+def _runs_on_start_sampled(ctx: CaseContext, old: str, new: str) -> None:
+    samples = _values(ctx, 3.0 + 0.8 + 5.0, [(0.0, "CMD_START")])
+    began = next((t for t, v in samples if v == new and t <= 3.0), None)
+    if began is None:
+        raise NotApplicable("CMD_START in MODE_MOTION_PROGRAM did not run the program (no parameter changed)")
+    if _first(samples, began + 0.8) != new:
+        raise Fail('the program\'s <delay amount="1500"/> did not delay the next step')
+    if not any(v == old for t, v in samples if began + 0.8 <= t <= began + 0.8 + 5.0):
+        raise Fail("the program did not go on after its delay")
+
+
+def _stop_aborts_sampled(ctx: CaseContext, new: str) -> None:
+    stop = 1.0  # half the program's delay
+    samples = _values(ctx, stop + 3.0 + 0.5, [(0.0, "CMD_START"), (stop, "CMD_STOP")])
+    if not any(v == new for t, v in samples if t < stop):
+        raise NotApplicable("the program did not run")
+    if _first(samples, stop + 3.0) != new:
+        raise Fail("the program went on after CMD_STOP")

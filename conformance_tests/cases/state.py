@@ -20,6 +20,7 @@ from pltf.conformance_tests.catalogue import Level, Tier, add, case
 from pltf.conformance_tests.chart import St
 from pltf.conformance_tests.context import CaseContext, Status
 from pltf.conformance_tests.outcome import Fail, NotApplicable
+from pltf.conformance_tests.wire import Pause
 from pltf.spec.codec import build
 
 _GUIDE_TEXT = {
@@ -51,18 +52,22 @@ def _mode_is(mode: int) -> Callable[[Status], bool]:
 
 
 def _cell(ctx: CaseContext, state: St, command: str) -> None:
-    before = ctx.ensure(state, NO)
-    ctx.send(command, **_fields(command))
-    dest = chart.target(state, command)
     how = f"{command} in {state.value}"
+    dest = chart.target(state, command)
+    ask = build("request", "CMD_GET_STATUS")
+    sent = build("request", command, **_fields(command))
     if chart.allowed(state, command):
+        _, rest = ctx.enter(state, NO, then=[sent, ask])
+        (first,) = rest()
         mode = MotionMode.MODE_MOTION_VEL if command == "CMD_SET_MODE" else None
         slow = command in ("CMD_CONNECT_TO_PLTF", "CMD_INIT_PLTF")  # a real platform tests its hardware
-        expect_state(ctx, dest, how, mode=mode, within=30.0 if slow else 5.0)
+        expect_state(ctx, dest, how, mode=mode, within=30.0 if slow else 5.0, first=Status.of(first))
         if dest is St.CONNECTED:
             probe_connected(ctx, how)
     else:
-        expect_unchanged(ctx, state, before, how)
+        before, rest = ctx.enter(state, NO, then=[sent, Pause(ctx.settle_time()), ask])
+        (after,) = rest()
+        expect_unchanged(ctx, state, before, how, after=Status.of(after))
     no_unsolicited(ctx, command)
     ctx.target.coverage.transition(state, command, dest)
 

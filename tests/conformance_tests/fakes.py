@@ -9,6 +9,7 @@ the hardware of the hardware cases, with switchable faults.
 from __future__ import annotations
 
 import contextlib
+import random
 import socket
 import threading
 import time
@@ -121,6 +122,66 @@ class TinyTarget(ScriptedServer):
                     self.mode = t.mode
                 self.state = chart.target(self.state, t.NAME)
             return None
+
+
+class LinkTarget(TinyTarget):
+    """TinyTarget behind a slow link: it answers once the client's requests pause (``quiet`` s without data), all
+    the replies due in one piece, its first eight writes 1-7 bytes, 1 ms apart (coalesced and torn, as the zoo's
+    slow-link member). ``reorder`` sends the replies due together last first (a target that breaks E-WIRE-008);
+    ``slow_init`` lets CMD_INIT_PLTF take effect only after the status that follows it (a self test that takes a
+    while). ``writes`` counts the pieces of replies sent."""
+
+    def __init__(self, *, reorder: bool = False, slow_init: bool = False, quiet: float = 0.02) -> None:
+        super().__init__()
+        self.reorder, self.slow_init, self.quiet = reorder, slow_init, quiet
+        self.rng = random.Random(1)
+        self.writes = 0
+        self._initializing = False
+
+    def _serve(self, conn: socket.socket) -> None:
+        dec = TelegramDecoder("request")
+        held: list[bytes] = []
+        conn.settimeout(self.quiet)
+        while not self._stop.is_set():
+            try:
+                data = conn.recv(65536)
+            except TimeoutError:
+                self._flush(conn, held)
+                held = []
+                continue
+            if not data:
+                return
+            dec.receive_data(data)
+            try:
+                held += [encode(r) for r in map(self.handle, dec) if r is not None]
+            except RemoteProtocolError:
+                return
+
+    def _flush(self, conn: socket.socket, held: list[bytes]) -> None:
+        data = b"".join(reversed(held) if self.reorder else held)
+        for _ in range(8):
+            if not data:
+                return
+            n = self.rng.randint(1, 7)
+            conn.sendall(data[:n])
+            data = data[n:]
+            self.writes += 1
+            time.sleep(0.001)
+        if data:
+            conn.sendall(data)
+            self.writes += 1
+
+    def handle(self, t: Any) -> Any:
+        if self.slow_init and t.NAME == "CMD_INIT_PLTF" and self.state is St.CONNECTED:
+            with self.lock:
+                self.commands.append(t.NAME)
+                self._initializing = True
+            return None
+        reply = super().handle(t)
+        if self._initializing and t.NAME == "CMD_GET_STATUS":
+            with self.lock:
+                self.state, self._initializing = St.READY, False
+        return reply
 
 
 class HardwareTarget(TinyTarget):

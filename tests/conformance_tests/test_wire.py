@@ -1,4 +1,5 @@
-"""The wire session: frames, strict replies, header-less replies, unsolicited frames, timeouts, closing."""
+"""The wire session: frames, strict replies, header-less replies, unsolicited frames, timeouts, closing, and
+pipelining through a link that joins and tears the replies."""
 
 from __future__ import annotations
 
@@ -7,10 +8,10 @@ from typing import Any
 
 import pytest
 
-from pltf.conformance_tests.outcome import ConnectionClosed, Deviation, ReplyTimeout, Unreachable
-from pltf.conformance_tests.wire import Session, WireLog
+from pltf.conformance_tests.outcome import BadReply, ConnectionClosed, Deviation, ReplyTimeout, Unreachable
+from pltf.conformance_tests.wire import Pause, Session, WireLog
 from pltf.spec.codec import REPLIES, build, encode, frame
-from tests.conformance_tests.fakes import ScriptedServer
+from tests.conformance_tests.fakes import LinkTarget, ScriptedServer
 
 POSITION = REPLIES.CMD_GET_POSITION(x=1, y=-2, angle=0.5, vel_trans=0.0, vel_rot=0.0)
 
@@ -98,3 +99,65 @@ def test_unreachable() -> None:
     probe.close()
     with pytest.raises(Unreachable):
         Session("127.0.0.1", port, log=WireLog()).connect()
+
+
+# ---- pipelining (erratum E-WIRE-008), through a link that holds the replies, joins them and tears them apart
+
+
+def _ask(name: str, **fields: Any) -> Any:
+    return build("request", name, **fields)
+
+
+def test_pipelined_replies_are_read_in_the_order_asked_though_joined_and_torn() -> None:
+    rec = Recorder()
+    with LinkTarget() as link, Session("127.0.0.1", link.ports[0], timeout=1.0, observer=rec).connect() as s:
+        items = [
+            _ask("CMD_CONNECT_TO_PLTF"),
+            _ask("CMD_GET_STATUS"),
+            _ask("CMD_INIT_PLTF"),
+            _ask("CMD_GET_POSITION"),
+            _ask("CMD_GET_STATUS"),
+            Pause(0.01),
+            _ask("CMD_SET_MODE", mode=3),
+            _ask("CMD_GET_STATUS"),
+        ]
+        first, position, second, third = s.exchange(items)
+    assert link.commands == [t.NAME for t in items if not isinstance(t, Pause)]  # every request, in order
+    assert (first.NAME, position.NAME, second.NAME, third.NAME) == (
+        "CMD_GET_STATUS",
+        "CMD_GET_POSITION",
+        "CMD_GET_STATUS",
+        "CMD_GET_STATUS",
+    )
+    assert first.initialized == 0 and second.initialized == 1 and third.motion_mode == 3  # type: ignore[attr-defined]
+    tx = [e.note for e in s.log.entries if e.direction == "tx"]
+    assert tx == [
+        "CMD_CONNECT_TO_PLTF + CMD_GET_STATUS + CMD_INIT_PLTF + CMD_GET_POSITION + CMD_GET_STATUS",
+        "CMD_SET_MODE + CMD_GET_STATUS",
+    ]
+    assert link.writes >= 9 and not rec.unsolicited and not rec.deviations  # torn into many writes
+
+
+def test_a_reply_that_overtakes_one_asked_before_it_is_a_bad_reply() -> None:
+    with (
+        LinkTarget(reorder=True) as link,
+        Session("127.0.0.1", link.ports[0], timeout=1.0).connect() as s,
+        pytest.raises(BadReply, match="came before the reply to CMD_GET_STATUS") as info,
+    ):
+        s.exchange([_ask("CMD_GET_STATUS"), _ask("CMD_GET_POSITION")])
+    assert info.value.erratum == "E-WIRE-008"
+
+
+def test_replies_pipelined_and_not_read_are_dropped_before_the_next_read() -> None:
+    with LinkTarget() as link, Session("127.0.0.1", link.ports[0], timeout=1.0).connect() as s:
+        assert s.send_pipelined([_ask("CMD_GET_STATUS"), _ask("CMD_CONNECT_TO_PLTF"), _ask("CMD_GET_STATUS")]) == 2
+        assert s.request(_ask("CMD_GET_POSITION")).NAME == "CMD_GET_POSITION"
+        assert s.exchange([_ask("CMD_GET_STATUS")])[0].NAME == "CMD_GET_STATUS"
+        assert s.exchange([]) == []
+    assert link.commands == [
+        "CMD_GET_STATUS",
+        "CMD_CONNECT_TO_PLTF",
+        "CMD_GET_STATUS",
+        "CMD_GET_POSITION",
+        "CMD_GET_STATUS",
+    ]
