@@ -17,7 +17,7 @@ Rules:
 - A suspicion (``pltf.fuzz.verdict``) stops the lanes; once the ports are free its unit is replayed alone: a
   finding when it fails again the same way, else reported apart as unconfirmed (``stats.unconfirmed``), which
   never sets the exit status. A unit that timed out is a stall when another port still serves us, else a hang;
-  a stall is replayed once, on the port that serves, with ``STALL_PATIENCE`` times the deadline.
+  a stall is replayed once, on the port that serves, with ``pltf.fuzz.verdict.STALL_PATIENCE`` times the deadline.
 - When no port serves us any more (``Lanes.gone``) the target is dead (or hung, or deaf): one finding names the
   units sent last; with ``--launch`` it is reproduced and minimised against fresh instances, the target
   restarted and the campaign goes on, without it the campaign stops.
@@ -47,7 +47,7 @@ from pltf.fuzz.schedule import BIG_CASE, Scheduler
 from pltf.fuzz.target import Session
 from pltf.fuzz.trial import Trial
 from pltf.fuzz.unit import Unit, rarest, window_units
-from pltf.fuzz.verdict import NEEDED, REPLAYS, TIMED_OUT, Verdict, confirm, confirmed
+from pltf.fuzz.verdict import NEEDED, REPLAYS, TIMED_OUT, Verdict, confirm, confirmed, patient
 
 WINDOW = 256  # cases drawn at a time
 MEASURE = 6  # status-only clients per port at the start: does it answer, what does a connection cost
@@ -56,7 +56,6 @@ STATEFUL_EVERY = 4  # one single about an operation or motion command in so many
 # Where the case generator runs in a thread (no fork), the main thread, back from a socket wait, can queue
 # behind it for milliseconds per unit with the default 5 ms GIL switch interval; a short one keeps it low.
 SWITCH_INTERVAL = 0.0002  # s
-STALL_PATIENCE = 3  # a stall is replayed with this many times the deadline: a slow target is not a stalled one
 SAVE_EVERY = 30.0  # s between saves of the corpus progress (a killed run resumes from there)
 HISTORY = 64  # sessions kept for a finding that needs more than its last unit
 STOPS = ("dead", "hang", "deaf", "stall")  # without --launch, the campaign ends with such a finding
@@ -322,12 +321,12 @@ class Campaign:
             kind, port = "stall", other  # the unit's port may still be held by the stalled connection
             reason = f"{reason} within the deadline; the other port still answers"
 
-        patient = self.o.deadline * STALL_PATIENCE if kind == "stall" else None
+        patient_deadline = patient(self.o.deadline) if kind == "stall" else None
 
         def replay() -> str | None:
             self.stats.replays += 1
             again = Unit(s.unit.cases, s.unit.prelude, s.unit.target)
-            e = self.lanes.alone(port, again, deadline=patient)  # type: ignore[union-attr]
+            e = self.lanes.alone(port, again, deadline=patient_deadline)  # type: ignore[union-attr]
             if e is None or e.verdict is None:
                 return None
             self._learn(e.flight.out.replies)
@@ -367,6 +366,8 @@ class Campaign:
                 time.sleep(0.05)
         if self.launcher is not None and not self.launcher.alive():
             kind = "dead"
+        if culprit is None and kind == "stall":  # replayed first on a fresh instance, even if out of ``recent``
+            culprit = lanes.left_unanswered(lanes.stuck)
         last = [u for u in dict.fromkeys(e.unit for e in lanes.recent) if u is not culprit and u.cases]
         last += [culprit] if culprit is not None else []
         lanes.drain()

@@ -26,7 +26,7 @@ from pltf.fuzz.minimize import ddmin, shortest_failing_prefix
 from pltf.fuzz.report import slug, write_finding
 from pltf.fuzz.target import LEAD, Outcome, Session, play_admitted, session_reply_ids
 from pltf.fuzz.unit import Unit
-from pltf.fuzz.verdict import BAD_REPLY, DROPPED, OK, TIMED_OUT, judge
+from pltf.fuzz.verdict import BAD_REPLY, DROPPED, OK, TIMED_OUT, judge, patient
 from pltf.spec.codec import REQUESTS
 
 if TYPE_CHECKING:
@@ -35,6 +35,8 @@ if TYPE_CHECKING:
 REPEAT_MAX = 2000  # rounds of a repeated candidate at most
 REPEAT_SECONDS = 30.0  # s a repeated candidate may take
 GONE = ("dead", "hang", "deaf")
+INCONCLUSIVE = "inconclusive"  # a replay the machine did not let run
+FRESH_TRIES = 3  # fresh instances a replay gets at most while it is inconclusive
 
 
 def led(s: Session) -> Session:
@@ -62,19 +64,35 @@ class FindingWriter:
     def reproduce(
         self, sessions: list[Session], record: bool = False, repeat: int = 1, seconds: float | None = None
     ) -> tuple[str | None, list[Outcome]]:
-        """Start a fresh target, replay ``sessions`` (``repeat`` rounds, until it dies), name the failure."""
+        """Start a fresh target, replay ``sessions`` (``repeat`` rounds, until it dies), name the failure. A replay
+        the machine left inconclusive (the fresh instance did not serve the probe port before anything was sent)
+        runs again on another fresh instance, ``FRESH_TRIES`` times at most: it is not "not reproduced"."""
+        verdict: str | None = INCONCLUSIVE
+        outcomes: list[Outcome] = []
+        for _ in range(FRESH_TRIES):
+            verdict, outcomes = self._replay(sessions, record, repeat, seconds)
+            if verdict != INCONCLUSIVE:
+                return verdict, outcomes
+        return None, outcomes
+
+    def _replay(
+        self, sessions: list[Session], record: bool, repeat: int, seconds: float | None
+    ) -> tuple[str | None, list[Outcome]]:
+        """One fresh instance. Every wait is the campaign's: the patient deadline of its stall replays
+        (``pltf.fuzz.verdict.patient``) and, for the probe port, the patience of its liveness: a fresh instance on a
+        loaded machine that answers late is slow, not stalled or hung."""
         launcher, o = self.c.launcher, self.c.o
         assert launcher is not None
         port, second = launcher.start()
-        patience = max(1.0, 2 * o.deadline)
+        deadline, patience = patient(o.deadline), max(1.0, 2 * o.deadline)
         outcomes: list[Outcome] = []
         status = Session([LEAD], half_close=True, led=True)
-        if not play_admitted(o.host, second, status, o.deadline, patience)[1]:
-            return None, outcomes
+        if not play_admitted(o.host, second, status, deadline, patience)[1]:
+            return INCONCLUSIVE, outcomes
         end = time.monotonic() + (seconds or REPEAT_SECONDS)
         for self.rounds in range(1, repeat + 1):
             for s in sessions:
-                out, served = play_admitted(o.host, port, s, o.deadline, patience, record, launcher.alive)
+                out, served = play_admitted(o.host, port, s, deadline, patience, record, launcher.alive)
                 outcomes.append(out)
                 if not served:  # the other port still serves: this one is stuck
                     return self._gone(second, patience) or "stall", outcomes
@@ -84,7 +102,7 @@ class FindingWriter:
                     return BAD_REPLY, outcomes
                 if v.kind in (DROPPED, TIMED_OUT):
                     time.sleep(0.02)
-                    gone = self._gone(second, o.deadline)
+                    gone = self._gone(second, patience)
                     return (gone or ("stall" if v.kind == TIMED_OUT else DROPPED)), outcomes
             if repeat > 1 and (not launcher.alive() or time.monotonic() > end):
                 break
@@ -97,7 +115,8 @@ class FindingWriter:
         assert launcher is not None
         if not launcher.alive():
             return "dead"
-        out, served = play_admitted(o.host, second, Session([LEAD], half_close=True, led=True), o.deadline, patience)
+        probe = Session([LEAD], half_close=True, led=True)
+        out, served = play_admitted(o.host, second, probe, patient(o.deadline), patience)
         if served and out.replies:
             return None
         if not launcher.alive() or out.refused:

@@ -297,6 +297,13 @@ class Lanes:
             return
         self.gone, self.stuck, self.stop = "stall", port, True
 
+    def left_unanswered(self, k: int | None) -> Unit | None:
+        """The unit that port ``k`` left unanswered (it waits, pinned there, to run again): what stalled a stuck
+        port, whether or not other units pushed it out of ``recent`` meanwhile."""
+        if k is None:
+            return None
+        return next((u for u in self.todo if u.pin == k), None)
+
     def _check_suspect(self) -> None:
         """One port has not served us for ``patience``: a stall when another one serves us now."""
         port, self.suspect = self.suspect, None

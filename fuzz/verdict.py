@@ -28,6 +28,7 @@ BAD_REPLY, TIMED_OUT, DROPPED = "bad-reply", "timed-out", "dropped"
 SUSPICIONS = (BAD_REPLY, TIMED_OUT, DROPPED)
 REPLAYS = 3  # replays of a suspicion's unit at most
 NEEDED = 2  # of them that must fail the same way
+STALL_PATIENCE = 3  # a stall is replayed with this many times the deadline: a slow target is not a stalled one
 
 DROPPED_REASON = (
     "the target closed the connection before answering, after frames the strict codec accepts "
@@ -75,6 +76,12 @@ def judge(out: Outcome, owed: int, led: bool, keep: bool) -> Verdict:
     if len(out.replies) < owed:
         return Verdict(DROPPED, DROPPED_REASON)
     return Verdict(OK)
+
+
+def patient(deadline: float) -> float:
+    """The reply deadline of a replay that judges a stall (the campaign's, and on a fresh instance): a target on a
+    loaded machine that answers within it is slow, not stalled."""
+    return deadline * STALL_PATIENCE
 
 
 def confirm(kind: str, replay: Callable[[], str | None], replays: int = REPLAYS, needed: int = NEEDED) -> list[str]:

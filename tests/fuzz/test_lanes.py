@@ -184,6 +184,27 @@ def test_a_port_that_serves_nobody_while_the_other_does_is_stuck() -> None:
     assert lanes.run(judged([])) == "stall" and lanes.stuck == 1
 
 
+def test_a_stuck_port_names_the_unit_it_left_unanswered() -> None:
+    """Issue 17: the unit that stalled a port is known after other units pushed it out of ``recent``."""
+    stall = case(frame(b"\x4d"))  # id 77: the fragile server's stall
+    held: set[int] = set()
+
+    def rule(f: FakeFlight) -> str:
+        if f.port in held:
+            return TURN_AWAY  # the stalled connection holds the port
+        if stall.frames[0] in f.session.frames:
+            held.add(f.port)
+            return SILENCE
+        return SERVE
+
+    lanes = lanes_for(Target(rule), pipelining=False, patience=0.05)
+    culprit = Unit([stall])
+    lanes.add([*(Unit([REFUSED]) for _ in range(3)), culprit, *(Unit([REFUSED]) for _ in range(5000))])
+    assert lanes.run(judged([])) == "stall"
+    assert culprit not in [e.unit for e in lanes.recent]  # the other port ran more than RECENT units meanwhile
+    assert lanes.left_unanswered(lanes.stuck) is culprit
+
+
 def test_a_port_left_silent_while_the_other_idles_is_asked_about_once_the_flights_ran_out() -> None:
     target = Target(lambda f: SILENCE if f.port == 2 else SERVE)
     lanes = lanes_for(target, pipelining=False)
