@@ -181,9 +181,12 @@ class PlatformLink:
     # ---- the connection
     async def _run(self) -> None:
         attempt = 0
+        me = asyncio.current_task()
         while self.want_open:
             attempt += 1
             served = await self._connect_and_serve(attempt)
+            if self._task is not me:  # closed (and maybe opened again) while the cancellation was swallowed
+                return
             self._drop_writer()
             self._fail_pending("connection lost")
             if not self.want_open:
@@ -251,6 +254,10 @@ class PlatformLink:
                     return False
                 self._fail("dropped", f"{self.target} closed the connection")
                 return True
+            if self._writer is not writer:
+                # Close Socket while this read completed: Python 3.11's wait_for can hand back a read that finished
+                # as the task was cancelled; the router was reset by close(), so the bytes belong to nobody
+                return received > 0
             received += len(data)
             if not self._deliver(data):
                 return True

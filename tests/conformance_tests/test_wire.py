@@ -135,7 +135,9 @@ def test_pipelined_replies_are_read_in_the_order_asked_though_joined_and_torn() 
         "CMD_CONNECT_TO_PLTF + CMD_GET_STATUS + CMD_INIT_PLTF + CMD_GET_POSITION + CMD_GET_STATUS",
         "CMD_SET_MODE + CMD_GET_STATUS",
     ]
-    assert link.writes >= 9 and not rec.unsolicited and not rec.deviations  # torn into many writes
+    # torn: a flush of the replies (hundreds of bytes) begins with eight writes of 1-7 bytes; how many flushes
+    # the two batches take is the fake's timing (one under load: 8-9 writes, two when quiet: 18)
+    assert link.writes >= 8 and not rec.unsolicited and not rec.deviations
 
 
 def test_a_reply_that_overtakes_one_asked_before_it_is_a_bad_reply() -> None:
