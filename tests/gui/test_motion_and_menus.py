@@ -84,6 +84,13 @@ def test_the_wire_inspector_shows_every_telegram_decoded(
 
 def test_shutdown_platform_asks_first_and_then_sends_cmd_exit(page: Any, gateway: Gateway, platform: Platform) -> None:
     open_gui(page, gateway, platform.target)
+    # every text the Messages line shows: once the platform has gone, a poll's "not sent" may replace the
+    # "CMD_EXIT sent" notice before a loaded machine's check reads it
+    page.evaluate(
+        """() => { const el = document.querySelector('[aria-label="Messages"]'); window.__said = [];
+        new MutationObserver(() => window.__said.push(el.textContent)).observe(el,
+        { childList: true, characterData: true, subtree: true }); }"""
+    )
     for answer in ("Cancel", "Shutdown Platform"):
         page.get_by_role("menuitem", name="Socket", exact=True).click()
         page.get_by_role("menuitem", name="Shutdown Platform", exact=True).click()
@@ -92,7 +99,7 @@ def test_shutdown_platform_asks_first_and_then_sends_cmd_exit(page: Any, gateway
         dialog.get_by_role("button", name=answer, exact=True).click()
         if answer == "Cancel":
             assert platform.other.get_status().operation_state == OperationState.ST_OP_NOT_INITIALIZED
-    expect_text(page.get_by_role("status", name="Messages", exact=True), "CMD_EXIT sent")
+    wait_for(lambda: any("CMD_EXIT sent" in m for m in page.evaluate("window.__said")), what="CMD_EXIT sent")
 
     def gone() -> bool:
         try:
