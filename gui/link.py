@@ -232,6 +232,7 @@ class PlatformLink:
         while True:
             try:
                 data = await asyncio.wait_for(reader.read(READ_SIZE), self._read_timeout())
+                closed_meanwhile = self._writer is not writer
             except TimeoutError:
                 if self._overdue():
                     self._fail(
@@ -244,6 +245,11 @@ class PlatformLink:
             except OSError as exc:
                 self._fail("dropped", f"{self.target} dropped the connection: {_reason(exc)}", detail=_reason(exc))
                 return received > 0
+            if closed_meanwhile:
+                # Close Socket while this read completed (its bytes or the platform's FIN after CMD_CLOSE_SOCKET):
+                # Python 3.11's wait_for can hand back a read that finished as the task was cancelled; close() has
+                # reset the router and said "socket closed", so the read belongs to nobody
+                return received > 0
             if not data:
                 if received == 0:
                     self._fail(
@@ -254,10 +260,6 @@ class PlatformLink:
                     return False
                 self._fail("dropped", f"{self.target} closed the connection")
                 return True
-            if self._writer is not writer:
-                # Close Socket while this read completed: Python 3.11's wait_for can hand back a read that finished
-                # as the task was cancelled; the router was reset by close(), so the bytes belong to nobody
-                return received > 0
             received += len(data)
             if not self._deliver(data):
                 return True
