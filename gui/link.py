@@ -292,6 +292,8 @@ class PlatformLink:
         return True
 
     def _fail(self, event: str, message: str, **fields: Any) -> None:
+        if self.state == "closed":  # a task whose cancellation was swallowed: Close Socket has had the last word
+            return
         self.stats.errors += 1
         self._failure, self._reason, self._failure_fields = message, event, fields
         self._event(event, message, **fields)
