@@ -225,3 +225,42 @@ def test_a_stuck_recorder_does_not_hold_up_forwarding() -> None:
     server.close()
     frames = [r for r in records if r.kind == FRAME]
     assert [r.direction for r in frames] == ["request", "reply"] * 50  # each request before the reply it caused
+
+
+def _cpu_ticks(thread: threading.Thread) -> int:
+    """CPU time (user + system, clock ticks) of one thread of this process, from /proc."""
+    with open(f"/proc/self/task/{thread.native_id}/stat") as f:
+        stat = f.read()
+    fields = stat[stat.rindex(")") + 2 :].split()
+    return int(fields[11]) + int(fields[12])  # utime, stime (fields 14 and 15 of proc(5))
+
+
+def _forwarding_threads() -> list[threading.Thread]:
+    return [t for t in threading.enumerate() if t.name.startswith("proxy-")]
+
+
+def test_an_idle_connection_costs_no_cpu_and_still_forwards() -> None:
+    """Between the exchanges of a poller the forwarding blocks: an idle connection's threads take no CPU (whatever
+    the proxy does after it moved bytes ends), and the bytes still pass both ways once the connection idled."""
+    server = socket.create_server(("127.0.0.1", 0))
+    server.settimeout(5)
+    with ProxyThread([server.getsockname()[1]]) as proxy, socket.create_connection(("127.0.0.1", proxy.ports[0])) as c:
+        conn, _ = server.accept()
+        for _ in range(20):  # a burst of exchanges, then silence
+            c.sendall(STOP)
+            assert read_exactly(conn, len(STOP)) == STOP
+            conn.sendall(SET_MODE)
+            assert read_exactly(c, len(SET_MODE)) == SET_MODE
+        threads = _forwarding_threads()
+        assert threads, "no forwarding thread"
+        before = {t: _cpu_ticks(t) for t in threads}
+        time.sleep(2.0)
+        used = {t.name: _cpu_ticks(t) - before[t] for t in threads}
+        assert all(ticks <= 20 for ticks in used.values()), f"CPU ticks over 2 s of silence: {used} (100/s: busy)"
+        c.sendall(SET_MODE)
+        assert read_exactly(conn, len(SET_MODE)) == SET_MODE
+        conn.sendall(STOP)
+        assert read_exactly(c, len(STOP)) == STOP
+        conn.close()
+        assert read_to_end(c) == b""
+    server.close()
