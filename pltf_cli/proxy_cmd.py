@@ -17,7 +17,7 @@ from pathlib import Path
 
 from pltf.cli.options import CommandError, count, exit_status, target, target_or_zero
 from pltf.proxy.capture import PcapngWriter
-from pltf.proxy.network import SPIN, ProxyServer, Route
+from pltf.proxy.network import ProxyServer, Route
 from pltf.proxy.offload import RecorderPipe
 from pltf.proxy.recorder import Recorder, Sink
 from pltf.proxy.session import SessionWriter
@@ -84,14 +84,6 @@ def add_proxy_arguments(p: argparse.ArgumentParser) -> None:
         metavar="BYTES",
         help="frames longer than this are marked FrameTooLarge (default 16 MiB, erratum E-WIRE-004)",
     )
-    p.add_argument(
-        "--spin-us",
-        type=count,
-        default=round(SPIN * 1e6),
-        metavar="US",
-        help="after forwarding, poll without blocking this long (us) before waiting: saves a thread wakeup per hop "
-        f"of a request/reply exchange, costs CPU while it lasts (default {round(SPIN * 1e6)}; 0: never spin)",
-    )
     p.epilog = exit_status(
         ok="stopped (Ctrl-C or SIGTERM)",
         usage="usage error: bad address, --listen's port in use, the recording not writable",
@@ -143,14 +135,14 @@ def run_proxy(args: argparse.Namespace) -> int:
     sys.stdout.flush()
     pipe.start()
     try:
-        return asyncio.run(_serve(routes, pipe, started, args.spin_us * 1e-6))
+        return asyncio.run(_serve(routes, pipe, started))
     except OSError as exc:
         pipe.close(time.time())
         raise CommandError(f"cannot listen on {lhost}: {exc.strerror or exc}") from None
 
 
-async def _serve(routes: list[Route], pipe: RecorderPipe, started: float, spin: float) -> int:
-    proxy = ProxyServer(routes, pipe, spin=spin)
+async def _serve(routes: list[Route], pipe: RecorderPipe, started: float) -> int:
+    proxy = ProxyServer(routes, pipe)
     listening = await proxy.start()
     pipe.session_start(
         [(f"{h}:{p}", f"{r.target_host}:{r.target_port}") for r, (h, p) in zip(routes, listening, strict=True)], started

@@ -30,8 +30,6 @@ import asyncio
 import collections
 import contextlib
 import itertools
-import os
-import select
 import socket
 import struct
 import sys
@@ -49,15 +47,6 @@ BACKLOG = 100
 PROBE_EVERY = 0.5  # s between probes of a target that refused a connection
 STOP_WAIT = 2.0  # s the proxy waits, when it stops, for a connection's threads to leave
 _LINGER_RESET = struct.pack("ii", 1, 0)
-# After it moved bytes, a connection polls its sockets without blocking for this long before it blocks again:
-# in a request/reply exchange the reply (the reference server takes ~60 us for GET_POSITION) and the next
-# request come within it, and a blocked thread's wakeup (15-30 us on the 2-core test VM, twice per round trip)
-# is saved. One connection at a time spins (``ProxyServer.spinner``): the GIL is never fought over by two
-# spinners. Cost: up to this much CPU per exchange, none while idle. ``pltf proxy --spin-us 0``: never spin.
-SPIN = 200e-6
-_YIELD = os.environ.get("PLTF_YIELD") == "1"
-_IN, _OUT = select.POLLIN, select.POLLOUT
-_GONE = select.POLLERR | select.POLLHUP | select.POLLNVAL  # reported whatever the mask
 
 
 @dataclass(frozen=True)
@@ -83,10 +72,9 @@ class _Conn:
         self.peer = (str(peer[0]), int(peer[1])) if isinstance(peer, tuple) else ("?", 0)
         self.socks: dict[bool, socket.socket | None] = {True: client, False: None}
         self.eof: dict[bool, bool] = {True: False, False: False}  # that side sent its FIN
-        self.pending: dict[bool, bytes] = {True: b"", False: b""}  # read from that side, not yet taken by the other
         self.lock = threading.Lock()
         self.threads: list[threading.Thread] = []
-        self.running = 0  # forwarding threads not yet finished (0 or 1)
+        self.running = 0  # forwarding threads not yet finished
         self.closing = False  # torn down (a reset, the proxy stopping): the threads leave
         self.reset = False  # the teardown resets both sides (SO_LINGER 0)
         self.ended: str | None = None
@@ -121,121 +109,53 @@ class _Conn:
             _nodelay(sock)
             self.socks[False] = sock
             self._opened()
-            for s in self.socks.values():
+            for side in (True, False):
+                s = self.socks[side]
                 assert s is not None
-                s.setblocking(False)
-            self.running = 1
-            thread = threading.Thread(target=self._pump, name=f"proxy-{self.number}", daemon=True)
-            self.threads.append(thread)
-            thread.start()
+                s.setblocking(True)
+            self.running = 2
+            for side in (True, False):
+                name = f"proxy-{self.number}-{'c2s' if side else 's2c'}"
+                thread = threading.Thread(target=self._pump, args=(side,), name=name, daemon=True)
+                self.threads.append(thread)
+                thread.start()
 
     def _opened(self) -> None:
         r = self.route
         self.proxy.observe("opened", self.number, time.time(), r.target_port, self.peer, (r.target_host, r.target_port))
 
-    # ------------------------------------------------------------------ data (one thread, both directions)
-    def _forward(self) -> tuple[bool, OSError] | None:
-        """Both directions until both FINs passed or the teardown (None), or a failure (whose side, the error).
+    # ------------------------------------------------------------------ data (one thread per direction)
+    def _forward(self, side: bool) -> tuple[bool, OSError] | None:
+        """Chunks from ``side`` to the other until ``side``'s FIN (None) or a failure (whose side, the error)."""
+        src, dst = self.socks[side], self.socks[not side]
+        assert src is not None and dst is not None
+        observe, number, clock = self.proxy.observe, self.number, time.time
+        recv, sendall = src.recv, dst.sendall
+        while True:
+            try:
+                data = recv(READ_SIZE)
+            except OSError as exc:
+                return side, exc
+            if not data:
+                return None
+            observe("data", number, clock(), side, data)  # before the send: a reply is never queued before its request
+            try:
+                sendall(data)
+            except OSError as exc:
+                return not side, exc
 
-        Blocks in ``poll`` on the two sockets; after an event it polls without blocking for ``proxy.spin`` s (if
-        it holds the proxy's spin token), so the reply and the next request of an exchange are picked up
-        without a wakeup."""
-        poller, watched = select.poll(), {True: 0, False: 0}
-        fds = {self._fileno(side): side for side in (True, False)}
-        spin, token, clock, poll = self.proxy.spin, self.proxy.spinner, time.monotonic, poller.poll
-        spinning, until = False, 0.0
-        try:
-            while not self.closing and self._watch(poller, watched):
-                events = poll(0) if spinning else poll()
-                while not events and spinning:  # nothing happened: nothing to watch anew
-                    if clock() < until:
-                        if _YIELD:
-                            os.sched_yield()
-                        events = poll(0)
-                    else:  # the budget is spent: block again
-                        spinning = False
-                        token.release()
-                        events = poll()
-                for fd, ev in events:
-                    failed = self._serve(fds[fd], ev)
-                    if failed is not None:
-                        return failed
-                if spin > 0 and (spinning or token.acquire(blocking=False)):
-                    spinning, until = True, clock() + spin
-        finally:
-            if spinning:
-                token.release()
-        return None
-
-    def _fileno(self, side: bool) -> int:
-        sock = self.socks[side]
-        assert sock is not None
-        return sock.fileno()
-
-    def _watch(self, poller: select.poll, watched: dict[bool, int]) -> bool:
-        """What to wait for on each socket: its bytes when what it sent before has gone on (flow control: what
-        the other side does not take stays in the kernel's buffers), room for the other side's bytes. False
-        when there is nothing left to wait for."""
-        for side in (True, False):
-            mask = (0 if self.eof[side] or self.pending[side] else _IN) | (_OUT if self.pending[not side] else 0)
-            if mask != watched[side]:
-                fd = self._fileno(side)
-                if mask:
-                    poller.register(fd, mask)
-                else:  # unregistered: a socket that is done reports POLLHUP, which no mask keeps out
-                    poller.unregister(fd)
-                watched[side] = mask
-        return bool(watched[True] or watched[False])
-
-    def _serve(self, side: bool, ev: int) -> tuple[bool, OSError] | None:
-        """``ev`` on ``side``'s socket: send it what waits for it, then read what it sent."""
-        if self.pending[not side] and ev & (_OUT | _GONE):
-            failed = self._send(not side)
-            if failed is not None:
-                return failed
-        if not (self.eof[side] or self.pending[side]) and ev & (_IN | _GONE):
-            return self._read(side)
-        return None
-
-    def _read(self, side: bool) -> tuple[bool, OSError] | None:
-        sock = self.socks[side]
-        assert sock is not None
-        try:
-            data = sock.recv(READ_SIZE)
-        except BlockingIOError:
-            return None
-        except OSError as exc:
-            return side, exc
-        if not data:
-            with self.lock:
-                if not self.closing:  # else woken by the teardown
-                    self._eof_from(side)
-            return None
-        self.proxy.observe("data", self.number, time.time(), side, data)  # before the send: see the rules
-        self.pending[side] = data
-        return self._send(side)
-
-    def _send(self, side: bool) -> tuple[bool, OSError] | None:
-        """What ``side`` sent and the other side has not taken yet: as much as the other side takes now."""
-        data, dst = self.pending[side], self.socks[not side]
-        assert dst is not None
-        try:
-            sent = dst.send(data)
-        except BlockingIOError:
-            return None
-        except OSError as exc:
-            return not side, exc
-        self.pending[side] = data[sent:]
-        return None
-
-    def _pump(self) -> None:
-        failed = self._forward()
+    def _pump(self, side: bool) -> None:
+        failed = self._forward(side)
         with self.lock:
-            self.running = 0
-            if not self.closing and failed is not None:
+            self.running -= 1
+            if self.closing:
+                pass  # woken by the teardown
+            elif failed is not None:
                 self._reset_by(*failed)
-            self.closing = True
-            self._close_all()
+            else:
+                self._eof_from(side)
+            if self.closing and self.running == 0:
+                self._close_all()
 
     # ------------------------------------------------------------------ ends (under ``lock``)
     def _end(self, how: str) -> None:
@@ -315,12 +235,8 @@ class ProxyServer:
     ``opened``/``data``/``half_closed``/``closed`` calls after the bytes moved, in the order they happened, from
     the loop's thread (``DELIVER_EVERY``), then ``flush``; ``close`` at the end."""
 
-    def __init__(
-        self, routes: list[Route], observer: Any = None, flush: Callable[[], None] | None = None, spin: float = SPIN
-    ) -> None:
+    def __init__(self, routes: list[Route], observer: Any = None, flush: Callable[[], None] | None = None) -> None:
         self.routes = routes
-        self.spin = spin  # s a connection polls without blocking after it moved bytes (0: never)
-        self.spinner = threading.Lock()  # held by the one connection that spins
         self.observer = observer
         self.flush_extra = flush
         self.conns: set[_Conn] = set()

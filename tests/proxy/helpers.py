@@ -17,10 +17,7 @@ from pltf.proxy.tap import Record
 class ProxyThread:
     """``ProxyServer`` on 127.0.0.1 ephemeral ports, one per target port, recording into ``records``."""
 
-    def __init__(
-        self, target_ports: list[int], recorder: Recorder | None = None, host: str = "127.0.0.1", **options: Any
-    ) -> None:
-        self.options = options  # more arguments of ProxyServer
+    def __init__(self, target_ports: list[int], recorder: Recorder | None = None, host: str = "127.0.0.1") -> None:
         self.records: list[Record] = []
         self.recorder = recorder or Recorder([self.records.append])
         self.routes = [Route("127.0.0.1", 0, host, p) for p in target_ports]
@@ -33,7 +30,7 @@ class ProxyThread:
 
     async def _main(self) -> None:
         try:
-            self.server = ProxyServer(self.routes, self.recorder, **self.options)
+            self.server = ProxyServer(self.routes, self.recorder)
             self._loop = asyncio.get_running_loop()
             self.ports = [p for _, p in await self.server.start()]
             self._ready.set()
