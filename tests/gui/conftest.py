@@ -35,6 +35,10 @@ CHROMIUM_ARGS = [
     "--no-first-run",
 ]
 VIEWPORT = {"width": 1400, "height": 900}
+# How long a wait or a page expectation may take before it fails: a guard against a hang, never a speed
+# assertion. The browser, the gateway and the platform share two cores with the other test worker (pytest -n 2);
+# under that load a page's answer took over 10 s twice in full runs, so the guard is generous.
+PATIENCE = 30.0  # s
 
 playwright_sync = pytest.importorskip("playwright.sync_api")
 
@@ -46,7 +50,7 @@ def _need_browser() -> None:
         pytest.fail("the GUI is not built: `make gui`")
 
 
-def wait_for(pred: Callable[[], Any], timeout: float = 10.0, what: str = "condition", every: float = 0.05) -> Any:
+def wait_for(pred: Callable[[], Any], timeout: float = PATIENCE, what: str = "condition", every: float = 0.05) -> Any:
     deadline = time.monotonic() + timeout
     while True:
         value = pred()
@@ -154,7 +158,7 @@ def page(browser: Any) -> Iterator[Any]:
     problems: list[str] = []
     pg.on("console", lambda m: problems.append(f"console {m.type}: {m.text}") if m.type == "error" else None)
     pg.on("pageerror", lambda e: problems.append(f"page error: {e}"))
-    pg.set_default_timeout(10_000)
+    pg.set_default_timeout(PATIENCE * 1000)
     try:
         yield pg
     finally:
@@ -168,5 +172,5 @@ def open_gui(page: Any, gateway: Gateway, target: str, *, connected: bool = True
         expect_text(page.get_by_role("status", name="Connection"), f"connected to {target}")
 
 
-def expect_text(locator: Any, text: str | re.Pattern[str], timeout: float = 10_000) -> None:
+def expect_text(locator: Any, text: str | re.Pattern[str], timeout: float = PATIENCE * 1000) -> None:
     playwright_sync.expect(locator).to_contain_text(text, timeout=timeout)
