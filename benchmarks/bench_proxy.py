@@ -6,6 +6,10 @@ it. In the same run, interleaved repeat by repeat, this process sends CMD_GET_PO
 connection to the server's first port (direct) and through the proxy: one request at a time (latency p50/p99,
 round trips per second), and in batches of ``BATCH`` requests per write (pipelined rate).
 Targets (issue 21): latency p50 through the proxy <= 1.5x direct; rate >= 50 % of direct (time ratio <= 2).
+Beside them, in the same loop, the floor of a user-space forwarder (benchmarks/forwarders/): the design of the
+proxy's forwarding core and nothing else, in C (``forward.c``, built here with ``cc -O2 -pthread``; without a C
+compiler its rows are left out and the reason printed) and in Python (``forward.py``), each its own process in front
+of the server's second port, as ``pltf proxy`` (recording) is: latency p50 and one-at-a-time rate, no target.
 
 ``proxy.tshark``: a capture of one million telegrams (500,000 GET_POSITION requests and their replies, one TCP
 segment each, written with fuzz/pcapng.py) read by ``tshark`` with the generated dissector (proxy/pltf.lua) and,
@@ -23,7 +27,7 @@ import sys
 import tempfile
 import time
 from collections.abc import Iterator
-from contextlib import contextmanager
+from contextlib import ExitStack, contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -34,6 +38,8 @@ from pltf.spec.codec import REPLIES, REQUESTS, decode_frame, encode
 
 ROOT = Path(__file__).resolve().parents[1]
 DIRECT, PROXIED, FORWARDING = "direct", "pltf proxy (recording)", "pltf proxy --quiet (forwarding only)"
+C_FLOOR, PY_FLOOR = "C forwarder, two blocking threads", "Python forwarder, two blocking threads"
+FORWARDERS = ROOT / "benchmarks" / "forwarders"
 TSHARK_PLAIN, TSHARK_PLTF = "tshark (TCP only)", "tshark + pltf.lua"
 LATENCY_TARGET = 1.5  # time ratio at p50
 RATE_TARGET = 2.0  # time ratio: >= 50 % of the direct rate
@@ -78,6 +84,7 @@ def _server(tmp: Path) -> Iterator[list[int]]:
 
 @contextmanager
 def _proxy(target_port: int, tmp: Path, record: bool = True) -> Iterator[int]:
+    """``pltf proxy`` in front of ``target_port``; its listening port. Stopped with SIGINT (it writes its files)."""
     cmd = [
         sys.executable,
         "-m",
@@ -89,16 +96,57 @@ def _proxy(target_port: int, tmp: Path, record: bool = True) -> Iterator[int]:
         f"127.0.0.1:{target_port}",
         "--quiet",
     ] + (["--record", str(tmp / "session.jsonl")] if record else [])
+    with _listening(cmd, stop_signal=2) as port:
+        yield port
+
+
+@contextmanager
+def _listening(cmd: list[str], stop_signal: int) -> Iterator[int]:
+    """Run ``cmd``, a forwarder that prints ``proxy listening at HOST:PORT`` first; its port."""
     proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
     try:
         assert proc.stdout is not None
         match = LISTENING.search(proc.stdout.readline())
         if match is None:
-            raise RuntimeError("pltf proxy did not start")
+            raise RuntimeError(f"{cmd[0]} did not start")
         yield int(match.group(1))
     finally:
-        proc.send_signal(2)
-        proc.wait(600)  # the recorder process writes what it was handed before it ends
+        proc.send_signal(stop_signal)
+        proc.wait(600)  # pltf proxy's recorder process writes what it was handed before it ends
+
+
+def build_c_forwarder(tmp: Path) -> Path | str:
+    """benchmarks/forwarders/forward.c built with ``cc -O2 -pthread`` in ``tmp``: the program, or why not."""
+    cc = shutil.which("cc")
+    if cc is None:
+        return "no C compiler (cc) on PATH"
+    exe = tmp / "forward"
+    cmd = [cc, "-O2", "-pthread", "-o", str(exe), str(FORWARDERS / "forward.c")]
+    proc = subprocess.run(cmd, capture_output=True, text=True, check=False)
+    if proc.returncode != 0:
+        return f"`{' '.join(cmd)}` failed: {(proc.stderr.strip().splitlines() or ['no message'])[-1]}"
+    return exe
+
+
+def forwarder_commands(tmp: Path, target_port: int) -> dict[str, list[str]]:
+    """The baseline forwarders' command lines, in front of ``target_port``; a C forwarder that cannot be built is
+    left out, the reason printed."""
+    commands = {PY_FLOOR: [sys.executable, str(FORWARDERS / "forward.py"), str(target_port)]}
+    built = build_c_forwarder(tmp)
+    if isinstance(built, str):
+        print(f"  {C_FLOOR}: left out, {built}", file=sys.stderr)
+        return commands
+    return {C_FLOOR: [str(built), str(target_port)]} | commands
+
+
+@contextmanager
+def _floors(target_port: int, tmp: Path) -> Iterator[dict[str, int]]:
+    """The baseline forwarders running in front of ``target_port``: subject -> listening port."""
+    with ExitStack() as stack:
+        yield {
+            subject: stack.enter_context(_listening(cmd, stop_signal=15))
+            for subject, cmd in forwarder_commands(tmp, target_port).items()
+        }
 
 
 def _connect(port: int) -> socket.socket:
@@ -171,88 +219,118 @@ def get_position(config: Config) -> list[Row]:
     piped: dict[str, list[float]] = {DIRECT: [], PROXIED: [], FORWARDING: []}
     with tempfile.TemporaryDirectory() as tmp_name:
         tmp = Path(tmp_name)
-        with _server(tmp) as ports, _proxy(ports[1], tmp) as proxy_port, _proxy(ports[0], tmp, False) as bare_port:
+        with (
+            _server(tmp) as ports,
+            _proxy(ports[1], tmp) as proxy_port,
+            _proxy(ports[0], tmp, False) as bare_port,
+            _floors(ports[1], tmp) as floor_ports,
+        ):
             with _connect(proxy_port) as sock:  # the proxy passes a real GET_POSITION reply
                 sock.sendall(REQUEST)
                 assert decode_frame(_read(sock, len(REPLY)), "reply").NAME == "CMD_GET_POSITION"
             # the forwarding-only proxy shares the first port with the direct connection (one client at a time)
-            port_of = {DIRECT: ports[0], PROXIED: proxy_port, FORWARDING: bare_port}
+            port_of = {DIRECT: ports[0], PROXIED: proxy_port, FORWARDING: bare_port} | floor_ports
+            runs |= {subject: [] for subject in floor_ports}
             for port in port_of.values():  # warm-up
                 _round_trips(port, n // 10)
             for _ in range(config.repeats):
                 for subject, port in port_of.items():
                     runs[subject].append(_round_trips(port, n))
-                    piped[subject].append(_pipelined(port, batches))
+                    if subject in piped:  # the floors: one at a time only
+                        piped[subject].append(_pipelined(port, batches))
     bench = "proxy.get_position"
     p50 = {s: statistics.median(_pct(t, 0.50) * 1e3 for t in r) for s, r in runs.items()}
     p99 = {s: statistics.median(_pct(t, 0.99) * 1e3 for t in r) for s, r in runs.items()}
     seq = {s: statistics.median(len(t) / sum(t) for t in r) for s, r in runs.items()}
     pip = {s: statistics.median(r) for s, r in piped.items()}
+    return (
+        [
+            make_row(
+                bench,
+                PROXIED,
+                "latency_p50",
+                p50[PROXIED],
+                "ms",
+                higher_is_better=False,
+                baseline_subject=DIRECT,
+                baseline_value=p50[DIRECT],
+                target=Target("ratio", "<=", LATENCY_TARGET),
+            ),
+            make_row(bench, DIRECT, "latency_p50", p50[DIRECT], "ms", higher_is_better=False),
+            make_row(
+                bench,
+                PROXIED,
+                "latency_p99",
+                p99[PROXIED],
+                "ms",
+                higher_is_better=False,
+                baseline_subject=DIRECT,
+                baseline_value=p99[DIRECT],
+            ),
+            make_row(bench, DIRECT, "latency_p99", p99[DIRECT], "ms", higher_is_better=False),
+            make_row(
+                bench,
+                PROXIED,
+                "round_trip_rate",
+                seq[PROXIED],
+                "1/s",
+                higher_is_better=True,
+                baseline_subject=DIRECT,
+                baseline_value=seq[DIRECT],
+                target=Target("ratio", "<=", RATE_TARGET),
+            ),
+            make_row(bench, DIRECT, "round_trip_rate", seq[DIRECT], "1/s", higher_is_better=True),
+            make_row(
+                bench,
+                PROXIED,
+                "pipelined_rate",
+                pip[PROXIED],
+                "telegrams/s",
+                higher_is_better=True,
+                baseline_subject=DIRECT,
+                baseline_value=pip[DIRECT],
+                target=Target("ratio", "<=", RATE_TARGET),
+            ),
+            make_row(bench, DIRECT, "pipelined_rate", pip[DIRECT], "telegrams/s", higher_is_better=True),
+        ]
+        + [
+            make_row(
+                bench,
+                FORWARDING,
+                metric,
+                values[FORWARDING],
+                unit,
+                higher_is_better=higher,
+                baseline_subject=DIRECT,
+                baseline_value=values[DIRECT],
+            )
+            for metric, values, unit, higher in (
+                ("latency_p50", p50, "ms", False),
+                ("latency_p99", p99, "ms", False),
+                ("round_trip_rate", seq, "1/s", True),
+                ("pipelined_rate", pip, "telegrams/s", True),
+            )
+        ]
+        + _floor_rows(bench, p50, seq)
+    )
+
+
+def _floor_rows(bench: str, p50: dict[str, float], seq: dict[str, float]) -> list[Row]:
+    """Latency p50 and one-at-a-time rate of the baseline forwarders that ran, direct as the baseline; no target."""
     return [
         make_row(
             bench,
-            PROXIED,
-            "latency_p50",
-            p50[PROXIED],
-            "ms",
-            higher_is_better=False,
-            baseline_subject=DIRECT,
-            baseline_value=p50[DIRECT],
-            target=Target("ratio", "<=", LATENCY_TARGET),
-        ),
-        make_row(bench, DIRECT, "latency_p50", p50[DIRECT], "ms", higher_is_better=False),
-        make_row(
-            bench,
-            PROXIED,
-            "latency_p99",
-            p99[PROXIED],
-            "ms",
-            higher_is_better=False,
-            baseline_subject=DIRECT,
-            baseline_value=p99[DIRECT],
-        ),
-        make_row(bench, DIRECT, "latency_p99", p99[DIRECT], "ms", higher_is_better=False),
-        make_row(
-            bench,
-            PROXIED,
-            "round_trip_rate",
-            seq[PROXIED],
-            "1/s",
-            higher_is_better=True,
-            baseline_subject=DIRECT,
-            baseline_value=seq[DIRECT],
-            target=Target("ratio", "<=", RATE_TARGET),
-        ),
-        make_row(bench, DIRECT, "round_trip_rate", seq[DIRECT], "1/s", higher_is_better=True),
-        make_row(
-            bench,
-            PROXIED,
-            "pipelined_rate",
-            pip[PROXIED],
-            "telegrams/s",
-            higher_is_better=True,
-            baseline_subject=DIRECT,
-            baseline_value=pip[DIRECT],
-            target=Target("ratio", "<=", RATE_TARGET),
-        ),
-        make_row(bench, DIRECT, "pipelined_rate", pip[DIRECT], "telegrams/s", higher_is_better=True),
-    ] + [
-        make_row(
-            bench,
-            FORWARDING,
+            floor,
             metric,
-            values[FORWARDING],
+            values[floor],
             unit,
             higher_is_better=higher,
             baseline_subject=DIRECT,
             baseline_value=values[DIRECT],
         )
-        for metric, values, unit, higher in (
-            ("latency_p50", p50, "ms", False),
-            ("latency_p99", p99, "ms", False),
-            ("round_trip_rate", seq, "1/s", True),
-            ("pipelined_rate", pip, "telegrams/s", True),
-        )
+        for floor in (C_FLOOR, PY_FLOOR)
+        if floor in p50
+        for metric, values, unit, higher in (("latency_p50", p50, "ms", False), ("round_trip_rate", seq, "1/s", True))
     ]
 
 
