@@ -29,6 +29,11 @@ Subjects, each for the same wall time (10 s), three times, interleaved; the medi
   notice a newcomer turned away: behind a zoo member its rate counts only the connections the member served (the
   member's own count, ``--stats``); its own count is in ``boofuzz, as it counts``.
 
+What bounds the rates, beside them (``benchmarks.proc_cpu``, the target's process group read from /proc while it
+runs): ``target CPU per case`` (ms of the target's CPU per case it served, ours with boofuzz's as its baseline) and
+``target busy`` (the cores it kept busy). Where ours keeps the target near one core busy, the target's CPU sets our
+rate; boofuzz leaves it mostly idle, so its rate is its own (zoo/README.md, run 7).
+
 A case is one test case: one boofuzz mutation, one ``pltf fuzz`` case. Targets: >= 3,000 cases/s against the
 reference server, >= 10x boofuzz (time ratio <= 0.1) on every target, no false finding.
 """
@@ -47,7 +52,9 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from benchmarks.harness import Config, Row, Target, benchmark, make_row
+from benchmarks.proc_cpu import group_cpu, pgid_of
 from pltf.fuzz.engine import Campaign, Options
+from pltf.fuzz.options import Stats
 from pltf.fuzz.schedule import BIG_SHARE
 from pltf.spec.model import FieldDef, load_telegrams
 from pltf.zoo.launch import Launcher, free_ports
@@ -70,6 +77,37 @@ TARGETS = {
     "zoo accept-once": ZOO.format(member="accept-once"),
 }
 DIRECT = "reference server"
+CPU_PER_CASE = "target CPU per case"
+BUSY = "target busy"
+
+
+class TargetCpu:
+    """The target's CPU while a subject drives it, from readings of its process group (``proc_cpu``): the first
+    and the last reading taken while it lived, with the cases served at each."""
+
+    def __init__(self, pid: int | None) -> None:
+        self.pgid = None if pid is None else pgid_of(pid)
+        self.first: tuple[float, float, int] | None = None  # (monotonic time, CPU seconds, cases)
+        self.last: tuple[float, float, int] | None = None
+
+    def read(self, cases: int) -> None:
+        cpu = None if self.pgid is None else group_cpu(self.pgid)
+        if not cpu:  # no /proc, or the group is gone (a stopped target reads as nothing)
+            return
+        reading = (time.monotonic(), cpu, cases)
+        self.first = self.first or reading
+        self.last = reading
+
+    def figures(self, cases: float | None = None) -> tuple[float, float] | None:
+        """(ms of target CPU per case served, cores the target kept busy) between the readings; ``cases``: the
+        cases served between them where the readings do not know it."""
+        if self.first is None or self.last is None:
+            return None
+        (t0, c0, n0), (t1, c1, n1) = self.first, self.last
+        served = n1 - n0 if cases is None else cases
+        if served <= 0 or t1 <= t0:
+            return None
+        return (c1 - c0) / served * 1e3, (c1 - c0) / (t1 - t0)
 
 
 @contextlib.contextmanager
@@ -84,8 +122,11 @@ def started(launch: str, stats: Path | None = None) -> Iterator[Launcher]:
         launcher.cleanup()
 
 
-def ours(launch: str, seconds: float, pipeline: bool = True, big_share: float = BIG_SHARE) -> tuple[float, int]:
-    """(cases per second, findings and unconfirmed suspicions) of a campaign of ``seconds``."""
+def ours(
+    launch: str, seconds: float, pipeline: bool = True, big_share: float = BIG_SHARE
+) -> tuple[float, int, tuple[float, float] | None]:
+    """(cases per second, findings and unconfirmed suspicions, the target's CPU figures of ``TargetCpu``) of a
+    campaign of ``seconds``."""
     a, b = free_ports()
     with tempfile.TemporaryDirectory() as out:
         opts = Options(
@@ -101,6 +142,14 @@ def ours(launch: str, seconds: float, pipeline: bool = True, big_share: float = 
             big_share=big_share,
         )
         campaign = Campaign(opts)
+        cpu = TargetCpu(None)
+
+        def tick(st: Stats) -> None:  # every 0.25 s while it runs (and once after the target is stopped)
+            if cpu.pgid is None and campaign.launcher is not None and campaign.launcher.proc is not None:
+                cpu.pgid = pgid_of(campaign.launcher.proc.pid)
+            cpu.read(st.cases)
+
+        campaign.on_tick = tick
         campaign.run()
         st = campaign.stats
         way = ("kept connection" + (", paced" if st.ways else "")) if st.dear else "fresh connections"
@@ -109,7 +158,7 @@ def ours(launch: str, seconds: float, pipeline: bool = True, big_share: float = 
             f"  {' '.join(launch.split()[2:4])}: {st.rate:,.0f} cases/s, {way} (trial: {st.ways}), load {load:.1f}",
             file=sys.stderr,
         )
-        return st.rate, len(st.findings) + len(st.unconfirmed)
+        return st.rate, len(st.findings) + len(st.unconfirmed), cpu.figures()
 
 
 # ---------------------------------------------------------------------------------------------- boofuzz
@@ -160,19 +209,26 @@ def boofuzz_requests(bf: object) -> list[object]:
     return out
 
 
-def run_boofuzz(launch: str, seconds: float) -> tuple[float, float]:
-    """(cases per second as boofuzz counts them, cases per second the target served)."""
+def run_boofuzz(launch: str, seconds: float) -> tuple[float, float, tuple[float, float] | None]:
+    """(cases per second as boofuzz counts them, cases per second the target served, the target's CPU figures of
+    ``TargetCpu``)."""
     import boofuzz as bf
 
     proxy = launch != REFERENCE
     with tempfile.TemporaryDirectory() as tmp:
         stats = Path(tmp) / "served.json"
         with started(launch, stats if proxy else None) as target:
+            cpu = TargetCpu(target.proc.pid if target.proc is not None else None)
+            cpu.read(0)
             nominal, elapsed = _boofuzz(bf, target.ports[0], seconds, Path(tmp))
-        if not proxy:
-            return nominal, nominal
-        served = json.loads(stats.read_text())["served"][0] if stats.exists() else 0
-        return nominal, served / elapsed
+            cpu.read(0)  # a member counts what it served when it ends: the cases come below
+        served = _served(stats) / elapsed if proxy else nominal
+        return nominal, served, cpu.figures(served * elapsed)
+
+
+def _served(stats: Path) -> float:
+    """The connections a zoo member served on its first port, from its ``--stats`` file (0 when it wrote none)."""
+    return float(json.loads(stats.read_text())["served"][0]) if stats.exists() else 0.0
 
 
 def _boofuzz(bf: object, port: int, seconds: float, tmp: Path) -> tuple[float, float]:
@@ -231,17 +287,24 @@ def cases_per_second(config: Config) -> list[Row]:
     def add(target: str, subject: str, value: float) -> None:
         samples.setdefault((target, subject), []).append(value)
 
+    def add_cpu(target: str, subject: str, figures: tuple[float, float] | None) -> None:
+        if figures is not None:
+            samples.setdefault((target, f"{CPU_PER_CASE}, {subject}"), []).append(figures[0])
+            samples.setdefault((target, f"{BUSY}, {subject}"), []).append(figures[1])
+
     for _ in range(repeats):  # interleaved, so a noisy spell on the machine hits every subject
         for target, launch in TARGETS.items():
-            rate, wrong = ours(launch, seconds)
+            rate, wrong, cpu = ours(launch, seconds)
             add(target, OURS, rate)
+            add_cpu(target, OURS, cpu)
             false[target] += wrong
             if target == DIRECT:
                 add(target, OURS_PLAIN, ours(launch, seconds, pipeline=False)[0])
                 add(target, OURS_NATURAL, ours(launch, seconds, big_share=1.0)[0])
-            nominal, served = run_boofuzz(launch, seconds)
+            nominal, served, cpu = run_boofuzz(launch, seconds)
             print(f"  boofuzz ({target}): {served:,.1f} cases/s served, load {os.getloadavg()[0]:.1f}", file=sys.stderr)
             add(target, BOOFUZZ, served)
+            add_cpu(target, BOOFUZZ, cpu)
             if target != DIRECT:
                 add(target, BOOFUZZ_NOMINAL, nominal)
     rates = {k: statistics.median(v) for k, v in samples.items()}
@@ -258,7 +321,7 @@ def cases_per_second(config: Config) -> list[Row]:
         )
     ]
     for target in TARGETS:
-        subjects = [s for t, s in rates if t == target]
+        subjects = [s for t, s in rates if t == target and not s.startswith((CPU_PER_CASE, BUSY))]
         for subject in subjects:
             base = BOOFUZZ if subject != BOOFUZZ else None
             goal = Target("ratio", "<=", 1 / SPEEDUP_TARGET) if subject == OURS else None
@@ -298,6 +361,33 @@ def cases_per_second(config: Config) -> list[Row]:
                     higher_is_better=True,
                     baseline_subject=f"{OURS} ({DIRECT})",
                     baseline_value=rates[DIRECT, OURS],
+                )
+            )
+    return rows + _cpu_rows(name, rates)
+
+
+def _cpu_rows(name: str, rates: dict[tuple[str, str], float]) -> list[Row]:
+    """What bounds the rates: the target's CPU per case served (ratio: ours over boofuzz's) and the cores it kept
+    busy, under each tool (the target's whole process group: a zoo member and the server behind it)."""
+    rows = []
+    for target in TARGETS:
+        for metric, unit, key in ((CPU_PER_CASE, "ms", "cpu_per_case"), (BUSY, "cores", "busy_cores")):
+            ours_key, base_key = (target, f"{metric}, {OURS}"), (target, f"{metric}, {BOOFUZZ}")
+            if ours_key not in rates or base_key not in rates:
+                continue  # no /proc here
+            base = f"{base_key[1]} ({target})"
+            per_case = metric == CPU_PER_CASE
+            rows.append(make_row(name, base, key, rates[base_key], unit, higher_is_better=False))
+            rows.append(
+                make_row(
+                    name,
+                    f"{ours_key[1]} ({target})",
+                    key,
+                    rates[ours_key],
+                    unit,
+                    higher_is_better=False,
+                    baseline_subject=base if per_case else None,
+                    baseline_value=rates[base_key] if per_case else None,
                 )
             )
     return rows
