@@ -96,23 +96,23 @@ def _proxy(target_port: int, tmp: Path, record: bool = True) -> Iterator[int]:
         f"127.0.0.1:{target_port}",
         "--quiet",
     ] + (["--record", str(tmp / "session.jsonl")] if record else [])
-    with _listening(cmd, stop_signal=2) as port:
+    with listening(cmd, stop_signal=2) as port:
         yield port
 
 
 @contextmanager
-def _listening(cmd: list[str], stop_signal: int) -> Iterator[int]:
+def listening(cmd: list[str], stop_signal: int) -> Iterator[int]:
     """Run ``cmd``, a forwarder that prints ``proxy listening at HOST:PORT`` first; its port."""
-    proc = subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
-    try:
-        assert proc.stdout is not None
-        match = LISTENING.search(proc.stdout.readline())
-        if match is None:
-            raise RuntimeError(f"{cmd[0]} did not start")
-        yield int(match.group(1))
-    finally:
-        proc.send_signal(stop_signal)
-        proc.wait(600)  # pltf proxy's recorder process writes what it was handed before it ends
+    with subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True) as proc:
+        try:
+            assert proc.stdout is not None
+            match = LISTENING.search(proc.stdout.readline())
+            if match is None:
+                raise RuntimeError(f"{cmd[0]} did not start")
+            yield int(match.group(1))
+        finally:
+            proc.send_signal(stop_signal)
+            proc.wait(600)  # pltf proxy's recorder process writes what it was handed before it ends
 
 
 def build_c_forwarder(tmp: Path) -> Path | str:
@@ -144,7 +144,7 @@ def _floors(target_port: int, tmp: Path) -> Iterator[dict[str, int]]:
     """The baseline forwarders running in front of ``target_port``: subject -> listening port."""
     with ExitStack() as stack:
         yield {
-            subject: stack.enter_context(_listening(cmd, stop_signal=15))
+            subject: stack.enter_context(listening(cmd, stop_signal=15))
             for subject, cmd in forwarder_commands(tmp, target_port).items()
         }
 
