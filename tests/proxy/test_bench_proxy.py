@@ -4,11 +4,12 @@ times: what it says, telegram for telegram."""
 from __future__ import annotations
 
 import json
+import shutil
 import subprocess
 import sys
 from pathlib import Path
 
-from benchmarks.bench_proxy import write_capture
+from benchmarks.bench_proxy import C_FLOOR, PY_FLOOR, write_capture
 from tests.proxy.tshark import run_tshark, telegrams
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -33,6 +34,12 @@ def test_proxy_benchmarks_run_and_write_their_rows(tmp_path: Path) -> None:
         for m in ("latency_p50", "latency_p99", "round_trip_rate", "pipelined_rate")
     }
     assert position <= keys
+    floors = (PY_FLOOR, C_FLOOR) if shutil.which("cc") else (PY_FLOOR,)  # without cc the C rows are left out
+    floor_rows = [r for r in rows if r["subject"] in (PY_FLOOR, C_FLOOR)]
+    assert {(r["subject"], r["metric"]) for r in floor_rows} == {
+        (s, m) for s in floors for m in ("latency_p50", "round_trip_rate")
+    }
+    assert all(r["baseline_subject"] == "direct" and r["ratio"] > 0 for r in floor_rows)
     assert {("proxy.tshark", s, "seconds") for s in ("tshark + pltf.lua", "tshark (TCP only)")} <= keys
     assert all(r["value"] > 0 for r in rows)
     targets = {(r["metric"], r["target"]) for r in rows if r["target"]}
