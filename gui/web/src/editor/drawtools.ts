@@ -44,6 +44,8 @@ export interface ToolContext {
   /** endpoint snap only (the measuring tool measures what is there) */
   snapEnd(p: Pt, pxPerMm: number): Pt;
   labelText(): string;
+  /** the layer new objects go into (the panel's "Layer for new objects", layers.ts) */
+  layer(): number;
   /** the objects that may lie within `tol` mm of (x, y), in document order (the history's spatial index) */
   near(x: number, y: number, tol: number): readonly MapObject[];
   selection(): ReadonlySet<number>;
@@ -77,7 +79,7 @@ export class ShapeTools {
     if (tool === "workarea" || tool === "prohibit" || tool === "hiddenpolygon") {
       this.click(tool, p, pxPerMm, button);
     } else if (tool === "label") {
-      this.c.run(asCommand(this.c.doc(), labelObject(p, this.c.labelText())));
+      this.c.run(asCommand(this.c.doc(), labelObject(p, this.c.labelText(), this.c.layer())));
     } else if (tool === "vertex") {
       this.vertexDown(x, y, pxPerMm, button);
     } else {
@@ -125,7 +127,7 @@ export class ShapeTools {
 
   /** Close the polygon drawn so far into an object of `kind` (a new workarea replaces the map's old one). */
   finish(kind: PolygonKind): void {
-    const r = polygonObject(kind, this.draft);
+    const r = polygonObject(kind, this.draft, this.c.layer());
     this.draft = [];
     if (!r.ok) {
       this.c.say(r.reason);
@@ -153,9 +155,9 @@ export class ShapeTools {
     this.move(tool, x, y);
     const doc = this.c.doc();
     if (tool === "reflector") {
-      this.c.run(asCommand(doc, segmentObject("reflmark", d.from, d.to)));
+      this.c.run(asCommand(doc, segmentObject("reflmark", d.from, d.to, this.c.layer())));
     } else if (tool === "circle") {
-      this.c.run(asCommand(doc, circleObject(d.from, d.to, this.c.grid)));
+      this.c.run(asCommand(doc, circleObject(d.from, d.to, this.c.grid, this.c.layer())));
     } else if (tool === "measure") {
       const m = measure(d.from, d.to);
       this.lastMeasure = { a: d.from, b: d.to, m };

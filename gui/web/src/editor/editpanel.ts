@@ -19,6 +19,7 @@ import { objectAtLine, validateDocument } from "./validate";
 import { LINE_LEN_DEFAULTS, linesFromScan, type ScanStatus } from "./fromscan";
 import { SHAPE_TOOLS, type ShapeTool, ShapeTools } from "./drawtools";
 import { typedPanel } from "./typedpanel";
+import { layerPanel } from "./layerpanel";
 import { objectsAt } from "./shapes";
 import { askToClose } from "./closeask";
 import { applyFields } from "./typed";
@@ -64,6 +65,8 @@ export function mapEditor(
   const selection = (): Set<number> => (many.size > 0 ? many : new Set(selected === null ? [] : [selected]));
   const labelIn = h("input", { type: "text", class: "edit-label-text" });
   bind(labelIn, "edit.labelText", { text: false });
+  // issue 20: the layer every add tool and the scan conversion put new objects into (layers.ts)
+  const layers = layerPanel();
   let drag: { from: Pt; to: Pt; pxPerMm: number } | null = null;
   /** the objects under the last press of "Edit objects", and whether it pressed the one already selected */
   let under: { ids: number[]; again: boolean } = { ids: [], again: false };
@@ -108,6 +111,7 @@ export function mapEditor(
     state.dataset.objects = String(history.doc.scene.objects.length);
     state.dataset.dirty = String(history.dirty);
     state.dataset.selected = o === undefined ? "" : JSON.stringify({ id: o.id, kind: o.kind, points: o.points });
+    layers.update(history.doc);
     undoB.disabled = !history.canUndo;
     redoB.disabled = !history.canRedo;
   };
@@ -139,6 +143,7 @@ export function mapEditor(
     snapEnd: (p, pxPerMm) => snap(p, endpoints(p, SNAP_PX / pxPerMm), SNAP_PX / pxPerMm, 0),
     near: (x, y, tol) => history.near(x, y, tol),
     labelText: () => labelIn.value,
+    layer: () => layers.value(),
     selection,
     measured: (m) => {
       state.dataset.measure = JSON.stringify(m);
@@ -230,7 +235,7 @@ export function mapEditor(
           return;
         }
         const points = [d.from.x, d.from.y, to.x, to.y].map(clean);
-        run({ ok: true, value: addObject(history.doc, { kind: "line", layer: 0, points, attrs: {} }) });
+        run({ ok: true, value: addObject(history.doc, { kind: "line", layer: layers.value(), points, attrs: {} }) });
       }
     },
     draw(ctx, cam) {
@@ -286,6 +291,7 @@ export function mapEditor(
       .then((r) => {
         const m = r as GetMapReply;
         history = new History(parseMapDoc(m.xml, m.name));
+        layers.reset(history.doc);
         indexLater(history);
         selected = null;
         many = new Set();
@@ -300,6 +306,7 @@ export function mapEditor(
   const file = fileInput(".map,.xml,application/xml,text/xml", "edit.open", say, (fileName, text) => {
     try {
       history = new History(parseMapDoc(text, fileName.replace(/\.[^.]*$/, "")));
+      layers.reset(history.doc);
       indexLater(history);
     } catch (e) {
       say(t("edit.openFailed", { file: fileName, why: (e as Error).message }));
@@ -334,6 +341,7 @@ export function mapEditor(
   });
   const newB = act("edit.new", () => {
     history = new History(newMapDoc());
+    layers.reset(history.doc);
     selected = null;
     many = new Set();
     refresh();
@@ -382,7 +390,7 @@ export function mapEditor(
         lens[p.key] = Number(p.value);
       }
     }
-    const objs = linesFromScan(st as unknown as ScanStatus, lens);
+    const objs = linesFromScan(st as unknown as ScanStatus, lens, layers.value());
     if (objs.length === 0) {
       say(t("edit.noLines"));
       return;
@@ -454,6 +462,7 @@ export function mapEditor(
         save(fileNameOf(history.doc.scene.name, "map", ".map"));
       } else if (how === "discarded") {
         history = new History(newMapDoc());
+        layers.reset(history.doc);
         selected = null;
         many = new Set();
       }
@@ -537,5 +546,5 @@ export function mapEditor(
   };
   const labelField = h("label", { class: "edit-label" }, h("span", {}), labelIn);
   bind(labelField.firstElementChild as HTMLElement, "edit.labelText", { name: false });
-  return { root: h("div", { class: "map-editor" }, bar.root, labelField, typed.root, state, tip), onShow };
+  return { root: h("div", { class: "map-editor" }, bar.root, labelField, layers.root, typed.root, state, tip), onShow };
 }

@@ -26,13 +26,19 @@ export function scanToWorld(s: ScanStatus): Pt[] {
   return s.scan.map((p) => ({ x: s.estX + p.x * c - p.y * n, y: s.estY + p.x * n + p.y * c }));
 }
 
-/** The map objects (layer 0) for the lines fitted to the scan; `lens` are MinLineLenAux and MinLineLenMap in mm. */
-export function linesFromScan(s: ScanStatus, lens: { MinLineLenAux: number; MinLineLenMap: number }): Array<Omit<MapObject, "id">> {
+/**
+ * The map objects, in `layer`, for the lines fitted to the scan; `lens` are MinLineLenAux and MinLineLenMap in mm.
+ */
+export function linesFromScan(
+  s: ScanStatus,
+  lens: { MinLineLenAux: number; MinLineLenMap: number },
+  layer = 0,
+): Array<Omit<MapObject, "id">> {
   const origin = { x: s.estX, y: s.estY };
   const lines = fitScan(scanToWorld(s), { origin, minLineLenAux: lens.MinLineLenAux, minLineLenMap: lens.MinLineLenMap });
   return lines.map((l) => ({
     kind: l.kind,
-    layer: 0,
+    layer,
     points: [l.a.x, l.a.y, l.b.x, l.b.y].map((v) => clean(Math.round(v))),
     attrs: {},
   }));

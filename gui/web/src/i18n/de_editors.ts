@@ -21,6 +21,8 @@ export const deEditors: Record<keyof typeof enEditors, string> = {
   "edit.hiddenpolygon": "Verstecktes Polygon",
   "edit.label": "Beschriftung hinzufügen",
   "edit.labelText": "Beschriftungstext",
+  "edit.layerFor": "Ebene für neue Objekte",
+  "edit.layerNew": "{n} (neue Ebene)",
   "edit.finish": "Polygon abschließen",
   "edit.measure": "Messen",
   "edit.measured": "Abstand {d} mm (dx {dx} mm, dy {dy} mm), Richtung {a}°",

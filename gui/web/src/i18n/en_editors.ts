@@ -19,6 +19,8 @@ export const enEditors = {
   "edit.hiddenpolygon": "Hidden polygon",
   "edit.label": "Add a label",
   "edit.labelText": "Label text",
+  "edit.layerFor": "Layer for new objects",
+  "edit.layerNew": "{n} (new layer)",
   "edit.finish": "Finish polygon",
   "edit.measure": "Measure",
   "edit.measured": "Distance {d} mm (dx {dx} mm, dy {dy} mm), direction {a}°",
