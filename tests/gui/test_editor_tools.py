@@ -374,3 +374,46 @@ def _roadmap_files_and_the_close_question(page: Any, state: Any, root: ET.Elemen
     page.get_by_role("menuitem", name="Edit", exact=True).click()
     page.get_by_role("menuitem", name="Edit Roadmap", exact=True).click()
     assert state.get_attribute("data-dirty") == "false" and state.get_attribute("data-stations") == "0"
+
+
+def _layers(xml: str | bytes) -> dict[str, list[Any]]:
+    """The map's layers by index: each one's attributes and objects (tag, attributes, children), in order."""
+    root = ET.fromstring(xml)
+    return {la.get("index", ""): [dict(la.attrib), [tree(o) for o in la]] for la in root.findall("layer")}
+
+
+def test_new_objects_go_into_the_chosen_layer(page: Any, gateway: Gateway, platform: Platform) -> None:
+    original = platform.other.get_map().xml
+    before = _layers(original)
+    assert list(before) == ["0", "1", "2"]  # the fixture office
+    state = _open_editor(page, gateway, platform)
+    wait_for(lambda: n_is(state, len(_objects(original))), what="the loaded map")
+    layer = page.get_by_role("combobox", name="Layer for new objects", exact=True)
+    # the document's layers and the next free index; the first layer of the document chosen
+    assert layer.locator("option").all_inner_texts() == ["0", "1", "2", "3 (new layer)"]
+    assert layer.input_value() == "0"
+
+    tool(page, "Add a line")
+    layer.select_option("2")
+    drag(page, (13000, 17000), (16000, 17000))
+    layer.select_option("3")
+    drag(page, (22000, 18000), (25000, 18000))
+    wait_for(lambda: n_is(state, len(_objects(original)) + 2), what="two lines added")
+    wait_for(lambda: layer.locator("option").all_inner_texts()[-1] == "4 (new layer)", what="layer 3 started")
+
+    tool(page, "Send to platform")
+    sent = _sent(platform, original)
+    after = _layers(sent)
+    assert ET.fromstring(sent).attrib == ET.fromstring(original).attrib
+    assert list(after) == ["0", "1", "2", "3"]
+    assert after["0"] == before["0"] and after["1"] == before["1"]  # nothing else changed
+    assert after["2"][0] == before["2"][0] and after["2"][1][:-1] == before["2"][1]
+    assert after["3"][0] == {"index": "3"} and len(after["3"][1]) == 1
+    # each line where it was drawn (within the screen's resolution; the 10 mm grid snaps it)
+    for (tag, attrs, points), want in [
+        (after["2"][1][-1], (13000, 17000, 16000)),
+        (after["3"][1][0], (22000, 18000, 25000)),
+    ]:
+        assert (tag, attrs, [p[0] for p in points]) == ("line", {}, ["point", "point"])
+        (x0, y0), (x1, y1) = [(float(p[1]["x"]), float(p[1]["y"])) for p in points]
+        assert max(abs(x0 - want[0]), abs(y0 - want[1]), abs(x1 - want[2]), abs(y1 - want[1])) <= 60
