@@ -510,7 +510,7 @@ export function mapEditor(
     b.addEventListener("blur", back);
   }
   document.addEventListener("keydown", (e) => {
-    if (!open || view.tool !== "edit" || e.ctrlKey || e.metaKey || (e.target as HTMLElement).closest?.("input, .dialog")) {
+    if (!open || view.tool !== "edit" || e.ctrlKey || e.metaKey || (e.target as HTMLElement).closest?.("input, select, .dialog")) {
       return;
     }
     if (e.key === "Enter") {
