@@ -31,8 +31,8 @@ Subjects, each for the same wall time (10 s), three times, interleaved; the medi
 
 What bounds the rates, beside them (``benchmarks.proc_cpu``, the target's process group read from /proc while it
 runs): ``target CPU per case`` (ms of the target's CPU per case it served, ours with boofuzz's as its baseline) and
-``target busy`` (the cores it kept busy). Where ours keeps the target near one core busy, the target's CPU sets our
-rate; boofuzz leaves it mostly idle, so its rate is its own (zoo/README.md, run 7).
+``target busy`` (the cores it kept busy): how much of the ratio is the target's cost and how much each tool's own
+(zoo/README.md, runs 7 and 8: on a free machine ours keeps the reference server three quarters busy, boofuzz a fifth).
 
 A case is one test case: one boofuzz mutation, one ``pltf fuzz`` case. Targets: >= 3,000 cases/s against the
 reference server, >= 10x boofuzz (time ratio <= 0.1) on every target, no false finding.
