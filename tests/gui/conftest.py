@@ -37,7 +37,8 @@ CHROMIUM_ARGS = [
 VIEWPORT = {"width": 1400, "height": 900}
 # How long a wait or a page expectation may take before it fails: a guard against a hang, never a speed
 # assertion. The browser, the gateway and the platform share two cores with the other test worker (pytest -n 2);
-# under that load a page's answer took over 10 s twice in full runs, so the guard is generous.
+# two browser tests failed once each in loaded full runs and passed when run again (their output was not kept),
+# so the guard is generous rather than tight.
 PATIENCE = 30.0  # s
 
 playwright_sync = pytest.importorskip("playwright.sync_api")
