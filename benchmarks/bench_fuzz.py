@@ -85,10 +85,13 @@ class TargetCpu:
     """The target's CPU while a subject drives it, from readings of its process group (``proc_cpu``): the first
     and the last reading taken while it lived, with the cases served at each."""
 
-    def __init__(self, pid: int | None) -> None:
-        self.pgid = None if pid is None else pgid_of(pid)
+    def __init__(self) -> None:
+        self.pgid: int | None = None  # the target's process group, once ``watch`` knows it
         self.first: tuple[float, float, int] | None = None  # (monotonic time, CPU seconds, cases)
         self.last: tuple[float, float, int] | None = None
+
+    def watch(self, pid: int) -> None:
+        self.pgid = pgid_of(pid)
 
     def read(self, cases: int) -> None:
         cpu = None if self.pgid is None else group_cpu(self.pgid)
@@ -142,11 +145,11 @@ def ours(
             big_share=big_share,
         )
         campaign = Campaign(opts)
-        cpu = TargetCpu(None)
+        cpu = TargetCpu()
 
         def tick(st: Stats) -> None:  # every 0.25 s while it runs (and once after the target is stopped)
             if cpu.pgid is None and campaign.launcher is not None and campaign.launcher.proc is not None:
-                cpu.pgid = pgid_of(campaign.launcher.proc.pid)
+                cpu.watch(campaign.launcher.proc.pid)
             cpu.read(st.cases)
 
         campaign.on_tick = tick
@@ -218,7 +221,9 @@ def run_boofuzz(launch: str, seconds: float) -> tuple[float, float, tuple[float,
     with tempfile.TemporaryDirectory() as tmp:
         stats = Path(tmp) / "served.json"
         with started(launch, stats if proxy else None) as target:
-            cpu = TargetCpu(target.proc.pid if target.proc is not None else None)
+            cpu = TargetCpu()
+            if target.proc is not None:
+                cpu.watch(target.proc.pid)
             cpu.read(0)
             nominal, elapsed = _boofuzz(bf, target.ports[0], seconds, Path(tmp))
             cpu.read(0)  # a member counts what it served when it ends: the cases come below

@@ -36,6 +36,7 @@ from pathlib import Path
 from typing import Any
 
 from benchmarks.harness import Config, Row, Target, benchmark, make_row
+from benchmarks.proc_cpu import process_cpu
 from pltf.client import MotionMode, OperationState, PlatformClient
 from pltf.gui.launch import GatewayProcess
 from pltf.spec.codec import REPLIES, REQUESTS, TelegramDecoder, build, encode
@@ -337,8 +338,10 @@ def _busy(pg: Any, seconds: float) -> dict[str, float]:
 
 # ---------------------------------------------------------------------------------------------- server cost
 def _cpu_seconds(pid: int) -> float:
-    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
-    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+    cpu = process_cpu(pid)
+    if cpu is None:
+        raise RuntimeError(f"the reference server (pid {pid}) is gone")
+    return cpu
 
 
 def _cpu_share(pid: int, seconds: float) -> float:

@@ -41,6 +41,7 @@ DIRECT, PROXIED, FORWARDING = "direct", "pltf proxy (recording)", "pltf proxy --
 C_FLOOR, PY_FLOOR = "C forwarder, two blocking threads", "Python forwarder, two blocking threads"
 FORWARDERS = ROOT / "benchmarks" / "forwarders"
 TSHARK_PLAIN, TSHARK_PLTF = "tshark (TCP only)", "tshark + pltf.lua"
+FLOOR_METRICS = ("latency_p50", "round_trip_rate")  # the floors run one request at a time only
 LATENCY_TARGET = 1.5  # time ratio at p50
 RATE_TARGET = 2.0  # time ratio: >= 50 % of the direct rate
 BATCH = 100
@@ -243,95 +244,46 @@ def get_position(config: Config) -> list[Row]:
     p99 = {s: statistics.median(_pct(t, 0.99) * 1e3 for t in r) for s, r in runs.items()}
     seq = {s: statistics.median(len(t) / sum(t) for t in r) for s, r in runs.items()}
     pip = {s: statistics.median(r) for s, r in piped.items()}
-    return (
-        [
-            make_row(
-                bench,
-                PROXIED,
-                "latency_p50",
-                p50[PROXIED],
-                "ms",
-                higher_is_better=False,
-                baseline_subject=DIRECT,
-                baseline_value=p50[DIRECT],
-                target=Target("ratio", "<=", LATENCY_TARGET),
-            ),
-            make_row(bench, DIRECT, "latency_p50", p50[DIRECT], "ms", higher_is_better=False),
-            make_row(
-                bench,
-                PROXIED,
-                "latency_p99",
-                p99[PROXIED],
-                "ms",
-                higher_is_better=False,
-                baseline_subject=DIRECT,
-                baseline_value=p99[DIRECT],
-            ),
-            make_row(bench, DIRECT, "latency_p99", p99[DIRECT], "ms", higher_is_better=False),
-            make_row(
-                bench,
-                PROXIED,
-                "round_trip_rate",
-                seq[PROXIED],
-                "1/s",
-                higher_is_better=True,
-                baseline_subject=DIRECT,
-                baseline_value=seq[DIRECT],
-                target=Target("ratio", "<=", RATE_TARGET),
-            ),
-            make_row(bench, DIRECT, "round_trip_rate", seq[DIRECT], "1/s", higher_is_better=True),
-            make_row(
-                bench,
-                PROXIED,
-                "pipelined_rate",
-                pip[PROXIED],
-                "telegrams/s",
-                higher_is_better=True,
-                baseline_subject=DIRECT,
-                baseline_value=pip[DIRECT],
-                target=Target("ratio", "<=", RATE_TARGET),
-            ),
-            make_row(bench, DIRECT, "pipelined_rate", pip[DIRECT], "telegrams/s", higher_is_better=True),
-        ]
-        + [
-            make_row(
-                bench,
-                FORWARDING,
-                metric,
-                values[FORWARDING],
-                unit,
-                higher_is_better=higher,
-                baseline_subject=DIRECT,
-                baseline_value=values[DIRECT],
-            )
-            for metric, values, unit, higher in (
-                ("latency_p50", p50, "ms", False),
-                ("latency_p99", p99, "ms", False),
-                ("round_trip_rate", seq, "1/s", True),
-                ("pipelined_rate", pip, "telegrams/s", True),
-            )
-        ]
-        + _floor_rows(bench, p50, seq)
+    # metric: (values per subject, unit, higher is better, the target of pltf proxy (recording))
+    metrics: dict[str, tuple[dict[str, float], str, bool, Target | None]] = {
+        "latency_p50": (p50, "ms", False, Target("ratio", "<=", LATENCY_TARGET)),
+        "latency_p99": (p99, "ms", False, None),
+        "round_trip_rate": (seq, "1/s", True, Target("ratio", "<=", RATE_TARGET)),
+        "pipelined_rate": (pip, "telegrams/s", True, Target("ratio", "<=", RATE_TARGET)),
+    }
+    # beside the proxy, against direct: the forwarding-only proxy, and the floors one at a time (p50 and rate)
+    others = {FORWARDING: tuple(metrics), C_FLOOR: FLOOR_METRICS, PY_FLOOR: FLOOR_METRICS}
+    rows = []
+    for metric, (values, unit, higher, target) in metrics.items():
+        rows.append(_against_direct(bench, PROXIED, metric, values, unit, higher, target))
+        rows.append(make_row(bench, DIRECT, metric, values[DIRECT], unit, higher_is_better=higher))
+    for subject, names in others.items():
+        if subject in p50:  # a C forwarder that could not be built did not run
+            rows += [_against_direct(bench, subject, m, *metrics[m][:3]) for m in names]
+    return rows
+
+
+def _against_direct(
+    bench: str,
+    subject: str,
+    metric: str,
+    values: dict[str, float],
+    unit: str,
+    higher: bool,
+    target: Target | None = None,
+) -> Row:
+    """The row of ``subject``'s ``metric`` with direct as its baseline."""
+    return make_row(
+        bench,
+        subject,
+        metric,
+        values[subject],
+        unit,
+        higher_is_better=higher,
+        baseline_subject=DIRECT,
+        baseline_value=values[DIRECT],
+        target=target,
     )
-
-
-def _floor_rows(bench: str, p50: dict[str, float], seq: dict[str, float]) -> list[Row]:
-    """Latency p50 and one-at-a-time rate of the baseline forwarders that ran, direct as the baseline; no target."""
-    return [
-        make_row(
-            bench,
-            floor,
-            metric,
-            values[floor],
-            unit,
-            higher_is_better=higher,
-            baseline_subject=DIRECT,
-            baseline_value=values[DIRECT],
-        )
-        for floor in (C_FLOOR, PY_FLOOR)
-        if floor in p50
-        for metric, values, unit, higher in (("latency_p50", p50, "ms", False), ("round_trip_rate", seq, "1/s", True))
-    ]
 
 
 # ---------------------------------------------------------------------------------------------- tshark

@@ -26,20 +26,35 @@ def _stat_fields(path: Path) -> list[str] | None:
     return text[text.rfind(")") + 2 :].split()
 
 
+def _seconds(fields: list[str]) -> float:
+    return (int(fields[11]) + int(fields[12])) / TICK  # utime, stime: fields 14 and 15 of the line (proc(5))
+
+
+def stat_cpu(stat_dir: Path) -> float | None:
+    """CPU seconds (user + system) of one process (``/proc/PID``) or thread (``/proc/PID/task/TID``); None when it
+    is gone."""
+    fields = _stat_fields(stat_dir)
+    return None if fields is None else _seconds(fields)
+
+
+def process_cpu(pid: int) -> float | None:
+    return stat_cpu(PROC / str(pid))
+
+
 def group_cpu(pgid: int) -> float | None:
     """CPU seconds (user + system) of the live processes of process group ``pgid``; None without /proc."""
     if not PROC.is_dir():
         return None
-    ticks = 0
+    total = 0.0
     for entry in PROC.iterdir():
         if not entry.name.isdigit():
             continue
         fields = _stat_fields(entry)
-        # after the command: state ppid pgrp session ... utime (14th field of the line) stime (15th); a zombie
-        # (state Z: ended, not yet reaped - an orphan where PID 1 does not reap) is not the target any more
+        # after the command: state ppid pgrp ...; a zombie (state Z: ended, not yet reaped - an orphan where PID 1
+        # does not reap) is not the target any more
         if fields is not None and int(fields[2]) == pgid and fields[0] != "Z":
-            ticks += int(fields[11]) + int(fields[12])
-    return ticks / TICK
+            total += _seconds(fields)
+    return total
 
 
 def pgid_of(pid: int) -> int | None:
@@ -49,4 +64,4 @@ def pgid_of(pid: int) -> int | None:
         return None
 
 
-__all__ = ["group_cpu", "pgid_of"]
+__all__ = ["TICK", "group_cpu", "pgid_of", "process_cpu", "stat_cpu"]

@@ -14,6 +14,7 @@ from pathlib import Path
 import pytest
 
 from benchmarks.bench_proxy import C_FLOOR, PY_FLOOR, build_c_forwarder, forwarder_commands, listening
+from tests.proxy.helpers import read_exactly, read_to_end
 
 BULK = random.Random(21).randbytes(300_000)  # larger than a loopback segment and the forwarders' 64 KiB reads
 
@@ -35,20 +36,6 @@ def forwarder(request: pytest.FixtureRequest, target: socket.socket, tmp_path: P
         yield port
 
 
-def _read_until_end(sock: socket.socket) -> bytes:
-    got = bytearray()
-    while data := sock.recv(65536):
-        got += data
-    return bytes(got)
-
-
-def _read_exactly(sock: socket.socket, n: int) -> bytes:
-    got = bytearray()
-    while len(got) < n and (data := sock.recv(n - len(got))):
-        got += data
-    return bytes(got)
-
-
 def _connect(port: int, target: socket.socket) -> tuple[socket.socket, socket.socket]:
     client = socket.create_connection(("127.0.0.1", port), timeout=10)
     accepted, _ = target.accept()
@@ -60,18 +47,18 @@ def test_bytes_pass_both_ways_and_a_fin_is_passed_on(forwarder: int, target: soc
     client, server = _connect(forwarder, target)
     with client, server:
         client.sendall(b"request")
-        assert _read_exactly(server, 7) == b"request"
+        assert read_exactly(server, 7) == b"request"
         server.sendall(b"reply")
-        assert _read_exactly(client, 5) == b"reply"
+        assert read_exactly(client, 5) == b"reply"
         sender = threading.Thread(target=client.sendall, args=(BULK,))
         sender.start()
-        assert _read_exactly(server, len(BULK)) == BULK
+        assert read_exactly(server, len(BULK)) == BULK
         sender.join()
         client.shutdown(socket.SHUT_WR)
         assert server.recv(1) == b""  # the client's FIN reached the target
         server.sendall(BULK)  # ... and the other direction still forwards
         server.shutdown(socket.SHUT_WR)
-        assert _read_until_end(client) == BULK  # then the target's FIN reached the client
+        assert read_to_end(client) == BULK  # then the target's FIN reached the client
 
 
 def test_the_next_connection_is_served(forwarder: int, target: socket.socket) -> None:
@@ -79,8 +66,8 @@ def test_the_next_connection_is_served(forwarder: int, target: socket.socket) ->
         client, server = _connect(forwarder, target)
         with client, server:
             client.sendall(b"ping %d" % k)
-            assert _read_exactly(server, 6) == b"ping %d" % k
+            assert read_exactly(server, 6) == b"ping %d" % k
             server.sendall(b"pong %d" % k)
-            assert _read_exactly(client, 6) == b"pong %d" % k
+            assert read_exactly(client, 6) == b"pong %d" % k
             client.shutdown(socket.SHUT_WR)
             assert server.recv(1) == b""

@@ -38,10 +38,10 @@ def test_a_group_of_two_burning_processes_reads_as_their_cpu_and_a_gone_group_as
 
 
 def test_target_cpu_gives_cpu_per_case_and_busy_cores_between_its_readings() -> None:
-    cpu = TargetCpu(None)
+    cpu = TargetCpu()
     cpu.first, cpu.last = (10.0, 2.0, 100), (12.0, 3.5, 1100)
     assert cpu.figures() == pytest.approx((1.5, 0.75))  # 1.5 s over 1,000 cases, in 2 s
     assert cpu.figures(cases=3000) == pytest.approx((0.5, 0.75))  # the cases counted elsewhere
-    assert TargetCpu(None).figures() is None  # never read: nothing to say
+    assert TargetCpu().figures() is None  # never read: nothing to say
     cpu.last = cpu.first
     assert cpu.figures() is None  # no case served between the readings

@@ -9,7 +9,9 @@ import socket
 import struct
 import threading
 import time
+from pathlib import Path
 
+from benchmarks.proc_cpu import TICK, stat_cpu
 from pltf.proxy.recorder import Recorder
 from pltf.proxy.tap import CLOSE, FRAME, OPEN, RAW, Record
 from pltf.spec.codec import REQUESTS, encode
@@ -229,10 +231,9 @@ def test_a_stuck_recorder_does_not_hold_up_forwarding() -> None:
 
 def _cpu_ticks(thread: threading.Thread) -> int:
     """CPU time (user + system, clock ticks) of one thread of this process, from /proc."""
-    with open(f"/proc/self/task/{thread.native_id}/stat") as f:
-        stat = f.read()
-    fields = stat[stat.rindex(")") + 2 :].split()
-    return int(fields[11]) + int(fields[12])  # utime, stime (fields 14 and 15 of proc(5))
+    seconds = stat_cpu(Path(f"/proc/self/task/{thread.native_id}"))
+    assert seconds is not None, f"{thread.name} is gone"
+    return round(seconds * TICK)
 
 
 def _forwarding_threads() -> list[threading.Thread]:
