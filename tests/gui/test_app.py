@@ -17,7 +17,7 @@ from typing import Any
 from playwright import sync_api as playwright_sync
 
 from pltf.client import EmergencyState, MotionMode, OperationState, PlatformClient
-from tests.gui.conftest import Gateway, Platform, expect_text, open_gui, wait_for
+from tests.gui.conftest import Gateway, Platform, aim, expect_text, open_gui, wait_for
 from tests.gui.fakes import bad_platform, free_port
 
 READY, RUNNING = OperationState.ST_OP_READY, OperationState.ST_OP_RUNNING
@@ -40,16 +40,6 @@ def init_and_start(page: Any, platform: Platform, mode: str | None = None) -> No
     button(page, "Start").click()
     expect_text(readout(page, "System state"), "Running")
     wait_for(lambda: platform.other.get_status().operation_state == RUNNING, what="Running over the other port")
-
-
-def to_screen(page: Any, x: float, y: float) -> tuple[float, float]:
-    canvas = page.get_by_role("img", name="Map")
-    cam = json.loads(canvas.get_attribute("data-camera"))
-    box = canvas.bounding_box()
-    return (
-        box["x"] + (x - cam["cx"]) * cam["scale"] + cam["width"] / 2,
-        box["y"] + (cam["cy"] - y) * cam["scale"] + cam["height"] / 2,
-    )
 
 
 def pose(client: PlatformClient) -> tuple[int, int, float]:
@@ -106,8 +96,8 @@ def test_automatic_and_a_dragged_target_flag_bring_the_platform_there(
     button(page, "Target frame").click()
     canvas = page.get_by_role("img", name="Map")
     wait_for(lambda: canvas.get_attribute("data-flag"), what="the target flag")
-    sx, sy = to_screen(page, x0, y0)
-    tx, ty = to_screen(page, *goal)
+    sx, sy = aim(page, x0, y0)
+    tx, ty = aim(page, *goal)
     page.mouse.move(sx, sy)
     page.mouse.down()
     page.mouse.move(tx, ty, steps=8)
@@ -323,8 +313,8 @@ def test_shifting_the_platform_by_drag_and_drop_sets_the_estimate(
     open_gui(page, gateway, platform.target)
     x0, y0, _ = pose(platform.other)
     button(page, "Shift platform").click()
-    sx, sy = to_screen(page, x0, y0)
-    tx, ty = to_screen(page, x0 + 1000, y0 - 400)
+    sx, sy = aim(page, x0, y0)
+    tx, ty = aim(page, x0 + 1000, y0 - 400)
     page.mouse.move(sx, sy)
     page.mouse.down()
     page.mouse.move(tx, ty, steps=6)

@@ -10,9 +10,9 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Any
 
-from tests.gui.conftest import REPO, Gateway, Platform, expect_text, open_gui, wait_for
+from tests.gui.conftest import REPO, Gateway, Platform, aim, expect_text, open_gui, wait_for
 from tests.gui.test_editor import _objects, _open_editor, _sent
-from tests.gui.test_editor_motion import drag, running_automatic, screen
+from tests.gui.test_editor_motion import drag, running_automatic
 
 FIXTURE_MAP = REPO / "fixtures" / "maps" / "office.map"
 FIXTURE_ROADMAP = REPO / "fixtures" / "roadmaps" / "office.rm"
@@ -142,7 +142,7 @@ def test_undo_and_redo_of_a_drag_restore_exact_coordinates_on_the_platform(
         points: list[float] = json.loads(state.get_attribute("data-selected") or "{}").get("points", [])
         return points
 
-    page.mouse.click(*screen(page, 12000, 11200))
+    page.mouse.click(*aim(page, 12000, 11200))
     wait_for(lambda: selected() == wall, what="the wall selected")
     drag(page, (12000, 11200), (12700, 12100))
     wait_for(lambda: selected() != wall, what="the wall moved")

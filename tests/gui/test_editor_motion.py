@@ -12,26 +12,17 @@ import xml.etree.ElementTree as ET
 from typing import Any
 
 from pltf.client import MotionMode, OperationState
-from tests.gui.conftest import Gateway, Platform, expect_text, open_gui, wait_for
+from tests.gui.conftest import Gateway, Platform, aim, expect_text, open_gui, wait_for
 from tests.gui.test_editor import _objects, _open_editor, _sent
 
 Trace = list[tuple[float, float]]
 
 
-def screen(page: Any, x: float, y: float) -> tuple[float, float]:
-    """The page coordinates of the world point (x, y) mm on the map view."""
-    canvas = page.get_by_role("img", name="Map")
-    cam = json.loads(canvas.get_attribute("data-camera"))
-    box = canvas.bounding_box()
-    sx = box["x"] + (x - cam["cx"]) * cam["scale"] + cam["width"] / 2
-    sy = box["y"] + (cam["cy"] - y) * cam["scale"] + cam["height"] / 2
-    return sx, sy
-
-
 def drag(page: Any, a: tuple[float, float], b: tuple[float, float]) -> None:
-    page.mouse.move(*screen(page, *a))
+    start, end = aim(page, *a), aim(page, *b)
+    page.mouse.move(*start)
     page.mouse.down()
-    page.mouse.move(*screen(page, *b), steps=5)
+    page.mouse.move(*end, steps=5)
     page.mouse.up()
 
 
@@ -126,7 +117,7 @@ def test_a_three_station_roadmap_built_in_the_editor_is_followed_by_move_to_stat
     for k, (name, x, y, angle) in enumerate(STATIONS):
         page.get_by_role("textbox", name="Station name").fill(name)
         page.get_by_role("spinbutton", name="Angle (degrees)").fill(str(angle))
-        page.mouse.click(*screen(page, x + 120, y - 90))  # near the pose; the typed coordinates make it exact
+        page.mouse.click(*aim(page, x + 120, y - 90))  # near the pose; the typed coordinates make it exact
         wait_for(functools.partial(attr_is, state, "data-stations", str(k + 1)), what=f"station {name}")
         page.get_by_role("spinbutton", name="X (mm)").fill(str(x))
         page.get_by_role("spinbutton", name="Y (mm)").fill(str(y))
@@ -135,8 +126,8 @@ def test_a_three_station_roadmap_built_in_the_editor_is_followed_by_move_to_stat
         wait_for(functools.partial(has_pose, state, want), what=f"the pose of {name}")
     page.get_by_role("button", name="Add an edge", exact=True).click()
     for a, b in [(0, 1), (1, 2)]:
-        page.mouse.click(*screen(page, *STATIONS[a][1:3]))
-        page.mouse.click(*screen(page, *STATIONS[b][1:3]))
+        page.mouse.click(*aim(page, *STATIONS[a][1:3]))
+        page.mouse.click(*aim(page, *STATIONS[b][1:3]))
     wait_for(lambda: state.get_attribute("data-edges") == "2", what="two edges")
     page.get_by_role("button", name="Undo", exact=True).click()
     wait_for(lambda: state.get_attribute("data-edges") == "1", what="undo of the second edge")

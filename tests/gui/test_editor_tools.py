@@ -14,10 +14,10 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from tests.gui.conftest import REPO, Gateway, Platform, expect_text, wait_for
+from tests.gui.conftest import REPO, Gateway, Platform, aim, expect_text, wait_for
 from tests.gui.test_editor import _objects, _open_editor, _sent
 from tests.gui.test_editor_documents import tree
-from tests.gui.test_editor_motion import _open_roadmap_editor, drag, screen
+from tests.gui.test_editor_motion import _open_roadmap_editor, drag
 
 Obj = tuple[str, dict[str, str], list[tuple[str, dict[str, str]]]]
 
@@ -40,7 +40,7 @@ def key(o: Obj) -> str:
 
 
 def click(page: Any, x: float, y: float, button: str = "left") -> None:
-    page.mouse.click(*screen(page, x, y), button=button)
+    page.mouse.click(*aim(page, x, y), button=button)
 
 
 def tool(page: Any, name: str) -> None:

@@ -11,9 +11,9 @@ from pathlib import Path
 from typing import Any
 
 from pltf.client import PlatformClient
-from tests.gui.conftest import Gateway, Platform, expect_text, open_gui, wait_for
+from tests.gui.conftest import Gateway, Platform, expect_text, open_gui, page_point, wait_for
 from tests.gui.fakes import free_port
-from tests.gui.test_app import init_and_start, to_screen
+from tests.gui.test_app import init_and_start
 
 
 def red_near(page: Any, x: float, y: float, radius: int = 3) -> bool:
@@ -71,13 +71,13 @@ def test_planning_obstacles_are_drawn_while_view_plan_obst_enabled_is_set(
 
     wait_for(drawn_matches, what="one drawn obstacle per observed line and circle")
     inside = [
-        to_screen(page, x, y)
+        page_point(page, x, y)
         for x, y in observed_midpoints(other)
         if canvas.bounding_box()["x"]
-        < to_screen(page, x, y)[0]
+        < page_point(page, x, y)[0]
         < canvas.bounding_box()["x"] + canvas.bounding_box()["width"]
         and canvas.bounding_box()["y"]
-        < to_screen(page, x, y)[1]
+        < page_point(page, x, y)[1]
         < canvas.bounding_box()["y"] + canvas.bounding_box()["height"]
     ]
     assert inside, "no observed line lies in the view"
