@@ -62,43 +62,80 @@ def wait_for(pred: Callable[[], Any], timeout: float = PATIENCE, what: str = "co
         time.sleep(every)
 
 
-def page_point(page: Any, x: float, y: float) -> tuple[float, float]:
-    """The page coordinates of the world point (x, y) mm on the map view, as its camera was last drawn."""
-    canvas = page.get_by_role("img", name="Map")
-    cam = json.loads(canvas.get_attribute("data-camera"))
-    box = canvas.bounding_box()
+def _to_page(cam: dict[str, float], box: dict[str, float], x: float, y: float) -> tuple[float, float]:
     return (
         box["x"] + (x - cam["cx"]) * cam["scale"] + cam["width"] / 2,
         box["y"] + (cam["cy"] - y) * cam["scale"] + cam["height"] / 2,
     )
 
 
-def aim(page: Any, x: float, y: float, settle: float = 0.15) -> tuple[float, float]:
-    """Where to put the pointer for the world point (x, y) mm: ``page_point`` once the view has settled.
-
-    Settled: a map with lines drawn (``data-drawn-line``; every map the tests edit has walls), the layer current,
-    the camera and the canvas box the same over ``settle`` s, and the point inside the canvas. A point read while
-    the view is about to change - the platform's map arriving and being fitted just after connecting, a dock pane
-    opening beside the canvas - sends the click somewhere else (CI, stop 26: the first station of the roadmap
-    editor's test was never added)."""
+def page_point(page: Any, x: float, y: float) -> tuple[float, float]:
+    """The page coordinates of the world point (x, y) mm on the map view, as its camera was last drawn."""
     canvas = page.get_by_role("img", name="Map")
+    return _to_page(json.loads(canvas.get_attribute("data-camera")), canvas.bounding_box(), x, y)
 
-    def look() -> tuple[object, ...]:
-        watched = ("data-camera", "data-layer", "data-drawn-line")
-        return (*(canvas.get_attribute(a) for a in watched), canvas.bounding_box())
 
-    def settled() -> tuple[float, float] | None:
-        before = look()
-        time.sleep(settle)
-        now = look()
+View = tuple[dict[str, float], dict[str, float]]  # the map view's camera (data-camera) and its canvas box
+
+
+class _ViewWatch:
+    """Looks at the map view twice, ``settle`` s apart; remembers what it saw last for the failure message."""
+
+    WATCHED = ("data-camera", "data-layer", "data-drawn-line")
+
+    def __init__(self, page: Any, settle: float) -> None:
+        self.canvas = page.get_by_role("img", name="Map")
+        self.settle = settle
+        self.last: tuple[Any, ...] = ()
+
+    def look(self) -> tuple[Any, ...]:
+        return (*(self.canvas.get_attribute(a) for a in self.WATCHED), self.canvas.bounding_box())
+
+    def settled(self) -> View | None:
+        before = self.look()
+        time.sleep(self.settle)
+        self.last = now = self.look()
         camera, layer, lines, box = now
         if now != before or camera is None or box is None or layer != "current" or int(str(lines or 0)) == 0:
             return None
-        sx, sy = page_point(page, x, y)
-        inside = box["x"] <= sx < box["x"] + box["width"] and box["y"] <= sy < box["y"] + box["height"]
-        return (sx, sy) if inside else None
+        return json.loads(camera), box
 
-    got: tuple[float, float] = wait_for(settled, what=f"the map view settled with ({x}, {y}) in sight")
+    def wait(self, pred: Callable[[], Any], what: str) -> Any:
+        try:
+            return wait_for(pred, what=what)
+        except AssertionError as e:
+            seen = dict(zip((*self.WATCHED, "box"), self.last, strict=False))
+            raise AssertionError(f"{e}; last seen: {seen}") from None
+
+
+def settled_view(page: Any, settle: float = 0.15) -> View:
+    """The map view's camera (data-camera) and canvas box once the view has settled.
+
+    Settled: a map with lines drawn (``data-drawn-line``; every map the tests edit has walls), the layer current,
+    the camera and the canvas box the same over ``settle`` s. A position read while the view is about to change -
+    the platform's map arriving and being fitted just after connecting, a dock pane opening beside the canvas -
+    sends the pointer somewhere else (CI, stop 26: the roadmap editor test's first station was never added; before
+    the map is fitted, y 9910 mm lies ~500 px above the centre of the default camera, off the canvas)."""
+    watch = _ViewWatch(page, settle)
+    got: View = watch.wait(watch.settled, "the map view settled")
+    return got
+
+
+def aim(page: Any, x: float, y: float, settle: float = 0.15) -> tuple[float, float]:
+    """Where to put the pointer for the world point (x, y) mm: on the settled view, and inside the canvas."""
+    watch = _ViewWatch(page, settle)
+
+    def inside() -> tuple[float, float] | None:
+        view = watch.settled()
+        if view is None:
+            return None
+        box = view[1]
+        sx, sy = _to_page(*view, x, y)
+        return (
+            (sx, sy) if box["x"] <= sx < box["x"] + box["width"] and box["y"] <= sy < box["y"] + box["height"] else None
+        )
+
+    got: tuple[float, float] = watch.wait(inside, f"the map view settled with ({x}, {y}) in sight")
     return got
 
 

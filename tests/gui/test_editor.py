@@ -3,11 +3,10 @@ over the platform's OTHER port with a plain client, never through the GUI itself
 
 from __future__ import annotations
 
-import json
 import xml.etree.ElementTree as ET
 from typing import Any
 
-from tests.gui.conftest import Gateway, Platform, expect_text, open_gui, wait_for
+from tests.gui.conftest import Gateway, Platform, aim, expect_text, open_gui, settled_view, wait_for
 
 
 def _objects(xml: str | bytes) -> list[tuple[str, dict[str, str], list[tuple[str, dict[str, str]]]]]:
@@ -41,9 +40,7 @@ def test_round_trip_add_a_line_and_undo(page: Any, gateway: Gateway, platform: P
 
     # draw a line by dragging, send it: GET_MAP over the other port has it where it was drawn (10 mm grid)
     page.get_by_role("button", name="Add a line", exact=True).click()
-    canvas = page.get_by_role("img", name="Map")
-    box = canvas.bounding_box()
-    cam = json.loads(canvas.get_attribute("data-camera"))
+    cam, box = settled_view(page)
     s0, s1 = (box["width"] * 0.37, box["height"] * 0.41), (box["width"] * 0.63, box["height"] * 0.44)
     page.mouse.move(box["x"] + s0[0], box["y"] + s0[1])
     page.mouse.down()
@@ -82,14 +79,9 @@ def test_trim_against_a_parallel_line_says_why_and_changes_nothing(
     wait_for(lambda: state.get_attribute("data-objects") == str(len(objects)), what="the loaded map")
     page.get_by_role("button", name="Trim", exact=True).click()
     expect_text(page.get_by_role("note", name="Tool tip"), "Trim a line in respect of another line")
-    canvas = page.get_by_role("img", name="Map")
-    box = canvas.bounding_box()
-    cam = json.loads(canvas.get_attribute("data-camera"))
 
     def click(x: float, y: float) -> None:
-        sx = (x - cam["cx"]) * cam["scale"] + cam["width"] / 2
-        sy = (cam["cy"] - y) * cam["scale"] + cam["height"] / 2
-        page.mouse.click(box["x"] + sx, box["y"] + sy)
+        page.mouse.click(*aim(page, x, y))
 
     click(10000, 11200)  # the corridor's north wall (9100,11200)-(18400,11200) ...
     wait_for(
