@@ -3,6 +3,9 @@
 Rules (errata E-MOT-006, E-MOT-007, E-MOT-009, E-MOT-015):
 - Phases: ``plan`` (the first control step after the command: the planner state is PLANNING until then),
   ``drive`` (the interpolator runs the legs), ``settle`` (position stabilisation and the final turn), ``done``.
+- The reference waits for the platform: while it is more than ``LAG`` mm away (then the platform drives back
+  onto it), and on a turn while the heading lags more than ``TURN_LAG`` (the collision check holding a turn on
+  the spot back): a leg never starts with the platform far off its start or its heading.
 - CMD_MOVE_ABS/REL ("goto"): PlanningEnabled -> the planner's shortest path; a failure (no path, collision at
   start or target) ends the job at once with no motion and the planner state says why. Planning disabled ->
   the direct Bezier path (paths.direct).
@@ -41,6 +44,7 @@ Pose = tuple[float, float, float]
 
 CORRIDOR = 50.0  # mm beyond half the platform's width (less than the planner keeps from a sensed obstacle)
 LAG = 300.0  # mm: the reference waits while the platform is farther from it, and the platform drives back
+TURN_LAG = math.radians(10.0)  # the reference of a turn waits while the platform lags more than this behind it
 RECOVER_VEL = 300.0  # mm/s
 BRAKE_FIRST = 20.0  # mm/s: a new job plans once the platform is slower than this
 REPLAN_EVERY = 0.5  # s
@@ -136,7 +140,10 @@ class AutoJob:
             ref = self.ipo.reference(pose)
             off = math.hypot(ref.x - pose[0], ref.y - pose[1])
             self.recovering = off > LAG or (self.recovering and off > 0.5 * LAG)
-            self.ipo.step(dt, p, hold=self.recovering, stop_at=stop_at)
+            # a turn the platform does not follow (the collision check holds it back) waits for it: the next leg
+            # starts with the platform on the leg's heading, not TURN_LAG or more off it
+            behind = isinstance(self.ipo.leg, Turn) and abs(wrap(ref.theta - pose[2])) > TURN_LAG
+            self.ipo.step(dt, p, hold=self.recovering or behind, stop_at=stop_at)
             if self.ipo.done:
                 self.phase, self.settle_since = "settle", now
             elif self.recovering:  # far off the reference (blocked, pushed, a sharp preemption): back onto it

@@ -11,8 +11,12 @@ Rules (errata E-MOT-005, E-MOT-009; E-SRV-005 and E-SRV-016 stay as they are):
 - Every period: the command's desired (v, w), then the collision check (CollCheckEnabled: laser points in
   the field ahead of the front edge up to CollLaserMinDist stop forward motion, ultrasonic echoes of the
   rear sensors closer than CollLaserMinDist stop backward motion, a turn on the spot that would bring a laser
-  point within ``TURN_MARGIN`` of the footprint within ``TURN_LOOK`` stops in that direction: all at once,
-  and the status' collision flag says so), then MaxTransVel / MaxRotVel and the acceleration limits.
+  point or a place an ultrasonic echo may come from within ``TURN_MARGIN`` of the footprint within
+  ``TURN_LOOK`` stops in that direction: all at once, and the status' collision flag says so), then
+  MaxTransVel / MaxRotVel and the acceleration limits.
+- An ultrasonic sensor tells how far its echo is, not where in its 25 degree cone: the turn check takes the
+  echo at that range on each ray of the cone (``echo_points``), so a wall the sweep clears does not hold a turn
+  back however close it is to a side sensor, and one the rear corner would touch does (E-MOT-009).
 - Sans-IO: ``step`` takes ``now``, ``dt``, the estimated pose and what the sensors saw, and returns log lines.
 """
 
@@ -30,15 +34,11 @@ from pltf.reference_server.world.ipo import Ref
 from pltf.reference_server.world.paths import NO_POINTS
 from pltf.reference_server.world.planner import PlannerState
 from pltf.reference_server.world.replay import Recorder, ReplayJob
+from pltf.reference_server.world.sensors import US_RAY_OFFSETS, ultrasonic_mounts
 
 Params = Callable[[str], Any]
 Pose = tuple[float, float, float]
 REAR_SENSORS = (8, 9, 10, 11)  # USSensor09..12 face backwards (E-PAR-017)
-# a turn on the spot swings the rear out to one side, where the laser cannot see: the ultrasonic sensors on the
-# rear half of that side (and the rear sensors on that side) guard it; indices of USSensor01..16 (E-PAR-017)
-SWING_GUARD = {1.0: ((12, 13), (10, 11)), -1.0: ((7, 6), (8, 9))}  # turning left: the right side; right: the left
-SWING_SIDE = 250.0  # mm: how far the rear corner swings out beyond the side (sweep - half width, default 233)
-SWING_REAR = 100.0  # mm: beyond the rear edge
 TURN_MARGIN = 20.0  # mm
 TURN_LOOK = np.radians([5.0, 10.0, 15.0])  # rotations checked ahead of a turn on the spot
 TURN_ON_SPOT = 50.0  # mm/s: below this a rotation is a turn on the spot
@@ -192,8 +192,12 @@ class Motion:
             rear = [dist[i] for i in REAR_SENSORS if i < len(dist)]
             if rear and min(rear) < limit:
                 v, self.collision = 0.0, True
-        if w != 0.0 and abs(v) < TURN_ON_SPOT and (self._coll_turn[0 if w > 0 else 1] or _swing_hits(us(), w)):
-            w, self.collision = 0.0, True
+        if w != 0.0 and abs(v) < TURN_ON_SPOT:
+            sign = 1.0 if w > 0 else -1.0
+            # a turn on the spot swings the rear out to the side, where the laser cannot see: the echoes guard it
+            echoes = echo_points(us(), ultrasonic_mounts(params))
+            if self._coll_turn[0 if w > 0 else 1] or _turn_hits(echoes, nav, sign):
+                w, self.collision = 0.0, True
         return v, w
 
 
@@ -215,9 +219,13 @@ def _turn_hits(pts: np.ndarray, nav: Navigator, sign: float) -> bool:
     return False
 
 
-def _swing_hits(dist: list[float], w: float) -> bool:
-    """Would the rear's swing in a turn on the spot (left: w > 0) hit what the ultrasonic sensors see?"""
-    side, rear = SWING_GUARD[1.0 if w > 0 else -1.0]
-    return any(i < len(dist) and dist[i] < SWING_SIDE for i in side) or any(
-        i < len(dist) and dist[i] < SWING_REAR for i in rear
-    )
+def echo_points(dist: list[float], mounts: F64) -> F64:
+    """(n, 2), platform frame: where the ultrasonic echoes may come from - each finite range on every ray of its
+    sensor's cone (``mounts``: x, y, angle of each sensor, sensors.ultrasonic_mounts)."""
+    d = np.asarray(dist[: len(mounts)], dtype=np.float64)
+    seen = np.isfinite(d)
+    m, r = mounts[: len(d)][seen], d[seen][:, None]
+    rays = m[:, 2:3] + US_RAY_OFFSETS[None, :]
+    x = m[:, 0:1] + r * np.cos(rays)
+    y = m[:, 1:2] + r * np.sin(rays)
+    return np.column_stack([x.ravel(), y.ravel()])

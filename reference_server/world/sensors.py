@@ -37,7 +37,7 @@ US_HALF_CONE = math.radians(12.5)
 US_RAYS = 5
 US_RANGE = 3000.0
 US_SIGMA = 10.0
-_US_OFFSETS = np.linspace(-US_HALF_CONE, US_HALF_CONE, US_RAYS)  # the rays of one cone
+US_RAY_OFFSETS = np.linspace(-US_HALF_CONE, US_HALF_CONE, US_RAYS)  # the rays of one cone
 _INT16 = 32767
 
 Params = Callable[[str], Any]
@@ -209,7 +209,7 @@ def ultrasonic(pose: tuple[float, float, float], mounts: F64, scene: Scene, eps:
     c, s = math.cos(a), math.sin(a)
     ox = x + c * mounts[:, 0] - s * mounts[:, 1]
     oy = y + s * mounts[:, 0] + c * mounts[:, 1]
-    angles = (a + mounts[:, 2])[:, None] + _US_OFFSETS[None, :]
+    angles = (a + mounts[:, 2])[:, None] + US_RAY_OFFSETS[None, :]
     near = scene if scene.size < NEAR_MIN else _near(scene, x, y, US_RANGE + 1000.0)  # the same ranges either way
     ranges, _ = cast_rays(np.repeat(ox, US_RAYS), np.repeat(oy, US_RAYS), angles.ravel(), near, US_RANGE)
     best = ranges.reshape(US_SENSORS, US_RAYS).min(axis=1)

@@ -4,6 +4,7 @@ no path means no motion, stations are reached over the roadmap, a new command pr
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -11,8 +12,9 @@ import pytest
 
 from pltf.reference_server.kinematics import Frame, Roadmap, relative_to_world
 from pltf.reference_server.world import MapGeometry, PlannerState
+from pltf.reference_server.world.automatic import AutoJob
 from pltf.reference_server.world.geometry import circles, segments
-from pltf.reference_server.world.paths import DS, MAX_SAMPLES
+from pltf.reference_server.world.paths import DS, MAX_SAMPLES, Turn
 from pltf.spec.documents import DocumentKind, validate_document
 from tests.reference_server.world.conftest import (
     CORRIDOR_WEST,
@@ -177,6 +179,39 @@ def test_move_path_waits_then_drives_around_an_obstacle_and_rejoins() -> None:
     behind = [y for x, y, _ in sim.trace if x > 12000]
     assert max(abs(y - 10000) for y in behind[-50:]) < 50  # back on the path
     assert_clear_of(sim.trace, segments(walls), sim.world.footprint.half_width, circles([(9000.0, 10000.0, 200.0)]))
+
+
+def _off_path(trace: list[tuple[float, float, float]], corners: list[tuple[float, float]]) -> float:
+    """The farthest the wheel axis' midpoint came from the polyline through ``corners`` (mm)."""
+    pts = np.asarray(trace)[:, :2]
+    best = np.full(len(pts), np.inf)
+    for (x0, y0), (x1, y1) in itertools.pairwise(corners):
+        d = np.array([x1 - x0, y1 - y0])
+        t = np.clip(((pts - (x0, y0)) @ d) / (d @ d), 0.0, 1.0)
+        best = np.minimum(best, np.hypot(*(pts - (x0, y0) - t[:, None] * d).T))
+    return float(best.max())
+
+
+def test_a_turn_held_back_by_the_collision_check_is_waited_for_before_the_next_leg() -> None:
+    # a post beside the rear at the path's corner, which only the ultrasonic sensors see: the left turn there
+    # is held back until the post goes; the next leg starts on its heading instead of 90 degrees off it
+    # (seen 2026-11-26 in the editor test under load: a stalled turn at a station, the reference turned on alone)
+    corners = [(10000.0, 10000.0), (12000.0, 10000.0), (12000.0, 12000.0)]
+    sim = make_sim(OPEN, (*corners[0], 0.0), PlanningEnabled=False)
+    sim.world.set_obstacle("post", (12000.0 - 250.0, 10000.0 - 270.0 - 150.0, 60.0))
+    sim.world.follow_path([(*corners[1], 0.0), (*corners[2], math.pi / 2)])
+
+    def turning(w: object) -> bool:
+        job = sim.world.motion.job
+        return isinstance(job, AutoJob) and job.ipo is not None and isinstance(job.ipo.leg, Turn)
+
+    assert sim.run(30.0, turning)
+    sim.run(6.0)  # longer than the whole turn takes
+    assert sim.world.collision and abs(sim.world.truth[2]) < math.radians(15.0) and turning(sim.world)
+    sim.world.set_obstacle("post", None)
+    assert sim.until_idle(60.0)
+    _reached(sim, (*corners[2], math.pi / 2))
+    assert _off_path(sim.trace, corners) < 60.0
 
 
 def test_move_to_station_over_the_roadmap(office: MapGeometry) -> None:

@@ -138,8 +138,39 @@ def test_a_turn_on_the_spot_does_not_swing_the_rear_into_what_only_the_ultrasoni
     for _ in range(10):
         sim.world.command_velocity(0.0, -0.5, sim.now)
         sim.run(0.2)
-    assert sim.contacts == 0 and sim.world.collision and abs(sim.world.truth[2]) < 0.05
+    # the rear corner (sweep 504 mm) would reach the post after some 20 degrees: held back within the look-ahead
+    assert sim.contacts == 0 and sim.world.collision and abs(sim.world.truth[2]) < math.radians(15.0)
     for _ in range(10):  # the other way round is free
         sim.world.command_velocity(0.0, 0.5, sim.now)
         sim.run(0.2)
     assert sim.world.truth[2] > 0.5 and sim.contacts == 0
+
+
+def _turn_beside_a_wall(gap: float, w: float) -> tuple[float, bool]:
+    """Turn on the spot by 90 degrees (``w`` rad/s) beside a wall parallel to the heading, ``gap`` mm to the right
+    of the wheel axis' midpoint (the default footprint: rear corners 504 mm from it): (turned rad, collision)."""
+    y0 = 10000.0
+    sim = make_sim(geometry_of([*room(20000, 20000), (5000.0, y0 - gap, 15000.0, y0 - gap)]), (10000.0, y0, 0.0))
+    sim.world.sense(0.0, force=True)
+    for _ in range(25):
+        sim.world.command_velocity(0.0, w, sim.now)
+        sim.run(0.2)
+        if abs(sim.world.truth[2]) >= math.pi / 2:
+            break
+    assert sim.contacts == 0
+    return abs(sim.world.truth[2]), sim.world.collision
+
+
+def test_a_turn_on_the_spot_beside_a_wall_the_rear_clears_is_not_held_back() -> None:
+    # seen 2026-11-26 in the editor test under load: at station Bravo the right side's rear sensor read ~230 mm
+    # of a wall 596 mm from the axis, under the old fixed 250 mm threshold, and the turn stalled although the
+    # corner passes 92 mm clear of the wall; the job drove on 70 degrees off its path and ended stuck in a door
+    turned, held = _turn_beside_a_wall(596.0, 0.5)
+    assert turned >= math.pi / 2 and not held
+
+
+def test_a_turn_on_the_spot_that_would_swing_the_rear_into_a_wall_is_held_back_the_other_way_is_free() -> None:
+    turned, held = _turn_beside_a_wall(470.0, 0.5)  # left: the right rear corner swings out to 504 mm
+    assert held and turned < math.radians(45.0)
+    turned, held = _turn_beside_a_wall(470.0, -0.5)  # right: that corner swings away from the wall
+    assert turned >= math.pi / 2 and not held
