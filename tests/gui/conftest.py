@@ -104,7 +104,7 @@ class _ViewWatch:
         try:
             return wait_for(pred, what=what)
         except AssertionError as e:
-            seen = dict(zip((*self.WATCHED, "box"), self.last, strict=False))
+            seen = dict(zip((*self.WATCHED, "box", "on top"), self.last, strict=False))
             raise AssertionError(f"{e}; last seen: {seen}") from None
 
 
@@ -121,21 +121,28 @@ def settled_view(page: Any, settle: float = 0.15) -> View:
     return got
 
 
+# what the page has at a point: the canvas itself, or the tag and class of what lies over it there
+_ON_TOP = """(canvas, [x, y]) => {
+  const e = document.elementFromPoint(x, y);
+  return e === canvas ? "canvas" : e === null ? "nothing" : `${e.tagName.toLowerCase()}.${e.className}`;
+}"""
+
+
 def aim(page: Any, x: float, y: float, settle: float = 0.15) -> tuple[float, float]:
-    """Where to put the pointer for the world point (x, y) mm: on the settled view, and inside the canvas."""
+    """Where to put the pointer for the world point (x, y) mm: on the settled view, inside the canvas, and with
+    nothing over the canvas there (``page.mouse`` clicks whatever lies on top, unlike a locator's click)."""
     watch = _ViewWatch(page, settle)
 
-    def inside() -> tuple[float, float] | None:
+    def clear() -> tuple[float, float] | None:
         view = watch.settled()
         if view is None:
             return None
-        box = view[1]
         sx, sy = _to_page(*view, x, y)
-        return (
-            (sx, sy) if box["x"] <= sx < box["x"] + box["width"] and box["y"] <= sy < box["y"] + box["height"] else None
-        )
+        top = watch.canvas.evaluate(_ON_TOP, [sx, sy])
+        watch.last = (*watch.last, f"at ({sx:.0f}, {sy:.0f}): {top}")
+        return (sx, sy) if top == "canvas" else None
 
-    got: tuple[float, float] = watch.wait(inside, f"the map view settled with ({x}, {y}) in sight")
+    got: tuple[float, float] = watch.wait(clear, f"the map view settled with ({x}, {y}) in sight")
     return got
 
 
