@@ -14,7 +14,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from tests.gui.conftest import REPO, Gateway, Platform, aim, expect_text, wait_for
+from tests.gui.conftest import REPO, Gateway, Platform, aim, expect_text, settled_view, wait_for
 from tests.gui.test_editor import _objects, _open_editor, _sent
 from tests.gui.test_editor_documents import tree
 from tests.gui.test_editor_motion import _open_roadmap_editor, drag
@@ -401,13 +401,24 @@ def test_new_objects_go_into_the_chosen_layer(page: Any, gateway: Gateway, platf
     drag(page, (19000, 16000), (28000, 16500))
     wait_for(lambda: n_is(state, len(_objects(original)) + 2), what="two lines added")
     wait_for(lambda: layer.locator("option").all_inner_texts()[-1] == "4 (new layer)", what="layer 3 started")
+    # a circle into layer 1, the pillars' layer
+    tool(page, "Add a circle")
+    layer.select_option("1")
+    drag(page, (15000, 5000), (15500, 5000))
+    wait_for(lambda: n_is(state, len(_objects(original)) + 3), what="the circle added")
+    tol = 10 + 2 / settled_view(page)[0]["scale"]  # the grid, and a pixel either way of the pointer
 
     tool(page, "Send to platform")
     sent = _sent(platform, original)
     after = _layers(sent)
     assert ET.fromstring(sent).attrib == ET.fromstring(original).attrib
     assert list(after) == ["0", "1", "2", "3"]
-    assert after["0"] == before["0"] and after["1"] == before["1"]  # nothing else changed
+    assert after["0"] == before["0"]  # nothing else changed
+    assert after["1"][0] == before["1"][0] and after["1"][1][:-1] == before["1"][1]
+    tag, _, (center, radius) = after["1"][1][-1]
+    assert (tag, center[0], radius[0]) == ("circle", "center", "radius"), after["1"][1][-1]
+    assert abs(float(center[1]["x"]) - 15000) <= tol and abs(float(center[1]["y"]) - 5000) <= tol, center
+    assert abs(float(radius[1]["r"]) - 500) <= tol, radius
     assert after["2"][0] == before["2"][0] and after["2"][1][:-1] == before["2"][1]
     line = ("line", {}, [("point", {"x": "11000", "y": "16500"}, []), ("point", {"x": "19000", "y": "16000"}, [])])
     line3 = ("line", {}, [("point", {"x": "19000", "y": "16000"}, []), ("point", {"x": "28000", "y": "16500"}, [])])

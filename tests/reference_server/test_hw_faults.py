@@ -3,6 +3,7 @@ platform's reaction (state, motion, log) and what GET_STATUS reports (errata E-H
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Any
 
@@ -101,7 +102,12 @@ def test_encoder_slip_makes_the_estimate_drift_from_the_truth(data_dir: Path) ->
         pose = r.control("pose")
         # the right encoder counts 20 % too much: the estimate turns left while the body goes straight
         assert pose["estimate"][2] - pose["true"][2] > 0.3
-        assert abs(r.status().est_angle / 1000.0 - 57.29578 * pose["estimate"][2]) < 1.0
+        # GET_STATUS reports that estimate: read just before and just after it, the estimate turning left in
+        # between (the two readings are apart in time; on a loaded machine they were 1.3 degrees apart once)
+        before = r.status().est_angle / 1000.0
+        estimate = math.degrees(r.control("pose")["estimate"][2])
+        after = r.status().est_angle / 1000.0
+        assert before - 0.5 <= estimate <= after + 0.5, (before, estimate, after)
 
 
 def test_can_frame_loss_is_reported_and_odometry_survives_it(data_dir: Path) -> None:
