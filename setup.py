@@ -4,10 +4,11 @@ Everything else about the distribution is in pyproject.toml. The folders stay at
 (the layout is part of the product); each is installed as one subpackage of the namespace ``pltf`` (PEP 420:
 there is no ``pltf/__init__.py``, so the client and spec distributions add theirs beside it).
 
-The C extensions (inner loops of the ray caster and the planner's segment tests) are optional: without a
-compiler, or when ``PLTF_NO_EXTENSIONS=1``, the build goes on and the numpy fallbacks of
-reference_server/world/raycast.py and geometry.py run. -ffp-contract=off: no fused multiply-add, so the C loops
-round every product as numpy does (the tests hold them to numpy bit for bit).
+The C extensions (inner loops of the ray caster and the planner's segment tests, the proxy's forwarding loop)
+are optional: without a compiler, or when ``PLTF_NO_EXTENSIONS=1``, the build goes on and the numpy fallbacks of
+reference_server/world/raycast.py and geometry.py run, and the proxy forwards with Python threads.
+-ffp-contract=off: no fused multiply-add, so the C loops round every product as numpy does (the tests hold them
+to numpy bit for bit).
 """
 
 from __future__ import annotations
@@ -44,19 +45,19 @@ def _packages() -> tuple[list[str], dict[str, str]]:
 
 
 class OptionalBuildExt(build_ext):
-    """A failed extension build is a warning: the numpy fallbacks run instead."""
+    """A failed extension build is a warning: the Python fallbacks run instead."""
 
     def run(self) -> None:
         try:
             super().run()
         except Exception as exc:
-            print(f"warning: C extensions not built ({exc}); the numpy fallbacks run", file=sys.stderr)
+            print(f"warning: C extensions not built ({exc}); the Python fallbacks run", file=sys.stderr)
 
     def build_extension(self, ext: Extension) -> None:
         try:
             super().build_extension(ext)
         except Exception as exc:
-            print(f"warning: {ext.name} not built ({exc}); its numpy fallback runs", file=sys.stderr)
+            print(f"warning: {ext.name} not built ({exc}); its Python fallback runs", file=sys.stderr)
 
 
 FLAGS = ["-O2", "-ffp-contract=off"]
@@ -68,6 +69,9 @@ EXTENSIONS = [
         optional=True,
     )
     for name in ("_raycast", "_geometry")
+] + [
+    # pltf proxy's forwarding loop (proxy/_forward.c); without it the proxy forwards with Python threads
+    Extension("pltf.proxy._forward", ["proxy/_forward.c"], extra_compile_args=["-O2"], optional=True),
 ]
 
 PACKAGES, PACKAGE_DIR = _packages()

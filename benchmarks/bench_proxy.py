@@ -6,6 +6,8 @@ it. In the same run, interleaved repeat by repeat, this process sends CMD_GET_PO
 connection to the server's first port (direct) and through the proxy: one request at a time (latency p50/p99,
 round trips per second), and in batches of ``BATCH`` requests per write (pipelined rate).
 Targets (issue 21): latency p50 through the proxy <= 1.5x direct; rate >= 50 % of direct (time ratio <= 2).
+The proxy forwards with its C loop (proxy/_forward.c) when it is built; ``pltf proxy --threads`` (recording),
+its Python threads, runs beside it in front of the same port, so the two cores are compared in one run.
 Beside them, in the same loop, the floor of a user-space forwarder (benchmarks/forwarders/): the design of the
 proxy's forwarding core and nothing else, in C (``forward.c``, built here with ``cc -O2 -pthread``; without a C
 compiler its rows are left out and the reason printed) and in Python (``forward.py``), each its own process in front
@@ -38,6 +40,7 @@ from pltf.spec.codec import REPLIES, REQUESTS, decode_frame, encode
 
 ROOT = Path(__file__).resolve().parents[1]
 DIRECT, PROXIED, FORWARDING = "direct", "pltf proxy (recording)", "pltf proxy --quiet (forwarding only)"
+THREADED = "pltf proxy --threads (recording, Python threads)"
 C_FLOOR, PY_FLOOR = "C forwarder, two blocking threads", "Python forwarder, two blocking threads"
 FORWARDERS = ROOT / "benchmarks" / "forwarders"
 TSHARK_PLAIN, TSHARK_PLTF = "tshark (TCP only)", "tshark + pltf.lua"
@@ -84,7 +87,7 @@ def _server(tmp: Path) -> Iterator[list[int]]:
 
 
 @contextmanager
-def _proxy(target_port: int, tmp: Path, record: bool = True) -> Iterator[int]:
+def _proxy(target_port: int, tmp: Path, record: bool = True, extra: tuple[str, ...] = ()) -> Iterator[int]:
     """``pltf proxy`` in front of ``target_port``; its listening port. Stopped with SIGINT (it writes its files)."""
     cmd = [
         sys.executable,
@@ -96,7 +99,8 @@ def _proxy(target_port: int, tmp: Path, record: bool = True) -> Iterator[int]:
         "--target",
         f"127.0.0.1:{target_port}",
         "--quiet",
-    ] + (["--record", str(tmp / "session.jsonl")] if record else [])
+        *extra,
+    ] + (["--record", str(tmp / f"session{len(extra)}.jsonl")] if record else [])
     with listening(cmd, stop_signal=2) as port:
         yield port
 
@@ -216,21 +220,23 @@ def get_position(config: Config) -> list[Row]:
     """GET_POSITION round trips through `pltf proxy` (recording) vs direct: latency, sequential and pipelined rate."""
     n = 300 if config.quick else 5000
     batches = 5 if config.quick else 100
-    runs: dict[str, list[list[float]]] = {DIRECT: [], PROXIED: [], FORWARDING: []}
-    piped: dict[str, list[float]] = {DIRECT: [], PROXIED: [], FORWARDING: []}
+    runs: dict[str, list[list[float]]] = {DIRECT: [], PROXIED: [], FORWARDING: [], THREADED: []}
+    piped: dict[str, list[float]] = {DIRECT: [], PROXIED: [], FORWARDING: [], THREADED: []}
     with tempfile.TemporaryDirectory() as tmp_name:
         tmp = Path(tmp_name)
         with (
             _server(tmp) as ports,
             _proxy(ports[1], tmp) as proxy_port,
             _proxy(ports[0], tmp, False) as bare_port,
+            _proxy(ports[1], tmp, True, ("--threads",)) as threaded_port,
             _floors(ports[1], tmp) as floor_ports,
         ):
             with _connect(proxy_port) as sock:  # the proxy passes a real GET_POSITION reply
                 sock.sendall(REQUEST)
                 assert decode_frame(_read(sock, len(REPLY)), "reply").NAME == "CMD_GET_POSITION"
             # the forwarding-only proxy shares the first port with the direct connection (one client at a time)
-            port_of = {DIRECT: ports[0], PROXIED: proxy_port, FORWARDING: bare_port} | floor_ports
+            port_of = {DIRECT: ports[0], PROXIED: proxy_port, FORWARDING: bare_port, THREADED: threaded_port}
+            port_of |= floor_ports
             runs |= {subject: [] for subject in floor_ports}
             for port in port_of.values():  # warm-up
                 _round_trips(port, n // 10)
@@ -252,7 +258,7 @@ def get_position(config: Config) -> list[Row]:
         "pipelined_rate": (pip, "telegrams/s", True, Target("ratio", "<=", RATE_TARGET)),
     }
     # beside the proxy, against direct: the forwarding-only proxy, and the floors one at a time (p50 and rate)
-    others = {FORWARDING: tuple(metrics), C_FLOOR: FLOOR_METRICS, PY_FLOOR: FLOOR_METRICS}
+    others = {FORWARDING: tuple(metrics), THREADED: tuple(metrics), C_FLOOR: FLOOR_METRICS, PY_FLOOR: FLOOR_METRICS}
     rows = []
     for metric, (values, unit, higher, target) in metrics.items():
         rows.append(_against_direct(bench, PROXIED, metric, values, unit, higher, target))

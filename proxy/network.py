@@ -1,20 +1,30 @@
 """The forwarding core of ``pltf proxy``, and the only module of the proxy with sockets and a clock.
 
 Rules:
-- Bytes first: each direction of a connection is one thread that reads a chunk and sends it on at once,
-  unchanged (no reframing, no reassembly), blocking in ``recv`` and ``sendall`` (the GIL is released while
-  blocked, so a hop costs a wakeup and two system calls, not a turn of an event loop). Between the two the
-  chunk is only queued for the observer (the recorder: decode, view, session file, pcapng): an append to a
-  deque, which the event loop delivers every ``DELIVER_EVERY`` s, or a pack and an append for the recorder
-  process's pipe. Queued before it is sent, a request is always queued before the reply it causes (queued
-  after, the other direction's thread could get in first); recording never holds up a forwarded byte.
+- Bytes first: a chunk read is sent on at once, unchanged (no reframing, no reassembly). Two forwarding cores:
+  - the C loop (``_forward.c``, built with the package; ``ProxyServer(threads=False)``, the default when it is
+    importable): one thread per connection moves both directions with the GIL released and, after it moved
+    bytes, polls both sockets for ``SPIN_US`` (yielding the CPU between polls) before it sleeps in ``poll``, so
+    the next request or the reply is picked up without a thread wakeup, which on a virtual machine costs about
+    as much as the reference server takes to answer (proxy/README.md, "Measured");
+  - Python threads (the fallback, and ``threads=True``): each direction is one thread blocking in ``recv`` and
+    ``sendall`` (the GIL is released while blocked, so a hop costs a wakeup and two system calls, not a turn of
+    an event loop).
+  The observer (the recorder: decode, view, session file, pcapng) gets each chunk with the time it was read:
+  the Python threads queue it between reading and sending (an append to a deque, which the event loop delivers
+  every ``DELIVER_EVERY`` s, or a pack and an append for the recorder process's pipe); the C loop keeps a copy
+  before it sends and hands its copies over in order when it is about to sleep, before it reports an end, and
+  every 20 ms while bytes flow (a call into Python per chunk cost more than the hop saves). Kept before it is
+  sent, a request is always recorded before the reply it causes (queued after, the other direction's thread
+  could get in first); recording never holds up a forwarded byte.
 - The event loop (asyncio) does the rest: listening, accepting, connecting to the target, probing a target
   that refused, delivering to the observer, stopping.
-- Flow control: a thread blocked in ``sendall`` does not read; what the slow side does not take stays in the
-  kernel's buffers, so a slow reader slows its sender as it would without the proxy.
+- Flow control: a direction whose chunk waits for its receiver does not read (the C loop goes on with the other
+  direction; a Python thread blocks in ``sendall``); what the slow side does not take stays in the kernel's
+  buffers, so a slow reader slows its sender as it would without the proxy.
 - Ends travel: a FIN from one side becomes a FIN to the other (everything before it was sent already:
   half-close); a reset becomes a reset (SO_LINGER 0). When both directions have ended, or one side is gone,
-  both sockets close; the last of the two threads closes them. A target that cannot be reached closes the
+  both sockets close; the last thread of the connection closes them. A target that cannot be reached closes the
   client at once.
 - One client connection, one target connection, on the route it arrived on; the proxy adds no policy of its
   own (a second client on a busy port is the target's to turn away, guide 6.1). When the target refuses a
@@ -30,6 +40,7 @@ import asyncio
 import collections
 import contextlib
 import itertools
+import os
 import socket
 import struct
 import sys
@@ -40,12 +51,21 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+try:
+    from pltf.proxy import _forward
+
+    HAVE_C = True
+except ImportError:  # not built (a source checkout without a compiler): the Python threads forward
+    HAVE_C = False
+
 DELIVER_EVERY = 0.02  # s between deliveries of the queued events to the observer
 FLUSH_EVERY = 0.25  # s between flushes of the observer (session file, pcapng, view) when nothing happens
 READ_SIZE = 65536
 BACKLOG = 100
 PROBE_EVERY = 0.5  # s between probes of a target that refused a connection
 STOP_WAIT = 2.0  # s the proxy waits, when it stops, for a connection's threads to leave
+SPIN_US = 200  # us the C loop keeps polling after it moved bytes (0-400 measured: proxy/README.md, "Measured")
+MAX_SPIN_US = 1_000_000
 _LINGER_RESET = struct.pack("ii", 1, 0)
 
 
@@ -80,6 +100,7 @@ class _Conn:
         self.ended: str | None = None
         self.ended_at = 0.0
         self.done = False
+        self.wake = -1  # the C loop's eventfd: written by the teardown, it returns at once
 
     # ------------------------------------------------------------------ set-up
     async def connect(self) -> None:
@@ -109,14 +130,20 @@ class _Conn:
             _nodelay(sock)
             self.socks[False] = sock
             self._opened()
+            fast = not self.proxy.threads
             for side in (True, False):
                 s = self.socks[side]
                 assert s is not None
-                s.setblocking(True)
-            self.running = 2
-            for side in (True, False):
-                name = f"proxy-{self.number}-{'c2s' if side else 's2c'}"
-                thread = threading.Thread(target=self._pump, args=(side,), name=name, daemon=True)
+                s.setblocking(not fast)
+            if fast:
+                self.wake = os.eventfd(0, os.EFD_NONBLOCK | os.EFD_CLOEXEC)
+                self.running = 1
+                runs: list[tuple[str, Callable[..., None], tuple[Any, ...]]] = [(f"proxy-{self.number}", self._run, ())]
+            else:
+                self.running = 2
+                runs = [(f"proxy-{self.number}-{'c2s' if s else 's2c'}", self._pump, (s,)) for s in (True, False)]
+            for name, target, args in runs:
+                thread = threading.Thread(target=target, args=args, name=name, daemon=True)
                 self.threads.append(thread)
                 thread.start()
 
@@ -143,6 +170,31 @@ class _Conn:
                 sendall(data)
             except OSError as exc:
                 return not side, exc
+
+    def _run(self) -> None:
+        """The C loop, both directions (``_forward.run``): ends and failures are handled here as ``_pump`` does."""
+        client, target = self.socks[True], self.socks[False]
+        assert client is not None and target is not None
+        observe, number = self.proxy.observe, self.number
+
+        def data(chunks: list[tuple[bool, float, bytes]]) -> None:  # kept before they were sent, in order
+            for side, when, chunk in chunks:
+                observe("data", number, when, side, chunk)
+
+        def eof(side: bool) -> bool:
+            with self.lock:
+                if not self.closing:
+                    self._eof_from(side)
+                return self.closing
+
+        failed = _forward.run(client.fileno(), target.fileno(), self.wake, self.proxy.spin_us, data, eof)
+        with self.lock:
+            self.running = 0
+            if failed is not None and not self.closing:
+                side, err = failed
+                self._reset_by(side, OSError(err, os.strerror(err)))
+            self.closing = True
+            self._close_all()
 
     def _pump(self, side: bool) -> None:
         failed = self._forward(side)
@@ -187,6 +239,9 @@ class _Conn:
             if sock is not None:
                 with contextlib.suppress(OSError):
                     sock.shutdown(socket.SHUT_RD if reset else socket.SHUT_RDWR)
+        if self.wake >= 0:
+            with contextlib.suppress(OSError):
+                os.eventfd_write(self.wake, 1)
 
     def _close_all(self) -> None:
         for side in (True, False):
@@ -199,6 +254,10 @@ class _Conn:
             with contextlib.suppress(OSError):
                 sock.close()
             self.socks[side] = None
+        if self.wake >= 0:
+            with contextlib.suppress(OSError):
+                os.close(self.wake)
+            self.wake = -1
         self._finish()
 
     def _finish(self) -> None:
@@ -235,8 +294,17 @@ class ProxyServer:
     ``opened``/``data``/``half_closed``/``closed`` calls after the bytes moved, in the order they happened, from
     the loop's thread (``DELIVER_EVERY``), then ``flush``; ``close`` at the end."""
 
-    def __init__(self, routes: list[Route], observer: Any = None, flush: Callable[[], None] | None = None) -> None:
+    def __init__(
+        self,
+        routes: list[Route],
+        observer: Any = None,
+        flush: Callable[[], None] | None = None,
+        threads: bool = False,
+        spin_us: int = SPIN_US,
+    ) -> None:
         self.routes = routes
+        self.threads = threads or not HAVE_C  # the Python threads forward (else the C loop)
+        self.spin_us = max(0, min(spin_us, MAX_SPIN_US))
         self.observer = observer
         self.flush_extra = flush
         self.conns: set[_Conn] = set()

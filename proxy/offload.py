@@ -6,8 +6,11 @@ Rules:
   bytes) and appends it to a queue, nothing more. ``flush`` (the network module's event loop, every few
   milliseconds) writes what is queued to the pipe without blocking: one write, and one wakeup of the recorder
   process, for many messages. What the pipe does not take at once waits for the next ``flush``.
-- The child runs at a lower priority (``NICE``): when the machine is busy, forwarding comes first and the
-  recording catches up when there is time (what it has not taken waits in the pipe and in the buffer).
+- The child runs at a lower priority (``NICE``; on Linux also in the SCHED_IDLE class, which runs only on a CPU
+  nothing else wants - added with the C loop of network.py, whose spin yields its CPU to the client or the
+  target, not to the recorder; its effect alone was not measured): when the machine is busy, forwarding comes
+  first and the recording catches up when there is time (what it has not taken waits in the pipe and in the
+  buffer).
 - The child (forked before the event loop starts, so it inherits no loop and no socket) builds the recorder
   with ``make`` and replays the messages into it in order; at the end of the pipe it closes the recorder
   (files flushed) and prints the summary.
@@ -58,6 +61,8 @@ class RecorderPipe:
             os.close(w)
             with contextlib.suppress(OSError):
                 os.nice(NICE)
+            with contextlib.suppress(OSError, AttributeError):  # Linux: run only on a CPU nothing else wants
+                os.sched_setscheduler(0, os.SCHED_IDLE, os.sched_param(0))
             code = 0
             try:
                 _child(r, self.make, self.summary)

@@ -121,9 +121,12 @@ def test_wheels_install_nothing_but_the_pltf_namespace(dist: Path) -> None:
         assert not any(n == "pltf/__init__.py" for n in zipfile.ZipFile(wheel).namelist())  # PEP 420 namespace
 
 
-def test_without_a_compiler_the_toolkit_installs_and_runs_the_numpy_fallbacks(toolkit: Path, empty: Path) -> None:
-    probe = "from pltf.reference_server.world import geometry, raycast; print(geometry.HAVE_C, raycast.HAVE_C)"
-    assert _run(toolkit, "-c", probe, cwd=empty).stdout.split() == ["False", "False"]
+def test_without_a_compiler_the_toolkit_installs_and_runs_the_python_fallbacks(toolkit: Path, empty: Path) -> None:
+    probe = (
+        "from pltf.reference_server.world import geometry, raycast; from pltf.proxy import network; "
+        "print(geometry.HAVE_C, raycast.HAVE_C, network.HAVE_C)"
+    )
+    assert _run(toolkit, "-c", probe, cwd=empty).stdout.split() == ["False", "False", "False"]
 
 
 def test_the_client_distribution_alone_is_small_and_typed(dist: Path, tmp_path: Path, empty: Path) -> None:

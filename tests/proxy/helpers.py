@@ -17,6 +17,8 @@ from pltf.proxy.tap import Record
 class ProxyThread:
     """``ProxyServer`` on 127.0.0.1 ephemeral ports, one per target port, recording into ``records``."""
 
+    threads = False  # the forwarding core: Python threads (True) or the C loop (tests/proxy/test_network.py runs both)
+
     def __init__(self, target_ports: list[int], recorder: Recorder | None = None, host: str = "127.0.0.1") -> None:
         self.records: list[Record] = []
         self.recorder = recorder or Recorder([self.records.append])
@@ -30,7 +32,7 @@ class ProxyThread:
 
     async def _main(self) -> None:
         try:
-            self.server = ProxyServer(self.routes, self.recorder)
+            self.server = ProxyServer(self.routes, self.recorder, threads=self.threads)
             self._loop = asyncio.get_running_loop()
             self.ports = [p for _, p in await self.server.start()]
             self._ready.set()

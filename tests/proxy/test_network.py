@@ -1,6 +1,7 @@
-"""proxy/network.py over real loopback sockets: bytes pass unchanged both ways however they are cut, garbage
-included; half-close, reset and an unreachable target look to the other side as they would without the proxy;
-a slow reader slows the sender; nothing that passes through stops the proxy."""
+"""proxy/network.py over real loopback sockets, with each of its two forwarding cores (the C loop and the Python
+threads): bytes pass unchanged both ways however they are cut, garbage included; half-close, reset and an
+unreachable target look to the other side as they would without the proxy; a slow reader slows the sender;
+nothing that passes through stops the proxy."""
 
 from __future__ import annotations
 
@@ -9,9 +10,13 @@ import socket
 import struct
 import threading
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
+import pytest
+
 from benchmarks.proc_cpu import TICK, stat_cpu
+from pltf.proxy import network
 from pltf.proxy.recorder import Recorder
 from pltf.proxy.tap import CLOSE, FRAME, OPEN, RAW, Record
 from pltf.spec.codec import REQUESTS, encode
@@ -20,6 +25,16 @@ from tests.proxy.helpers import Peer, ProxyThread, read_exactly, read_to_end
 STOP = encode(REQUESTS.CMD_STOP())
 SET_MODE = bytes.fromhex("ff01fe02000000050f00000003")
 GARBAGE = b"\x00\x01garbage\xff\x01\xfe"
+
+
+@pytest.fixture(autouse=True, params=["c-loop", "threads"])
+def core(request: pytest.FixtureRequest) -> Iterator[str]:
+    """Every test runs once with each forwarding core (the C loop is built by ``make``: it must be there)."""
+    if request.param == "c-loop":
+        assert network.HAVE_C, "proxy/_forward.c is not built (make install builds it)"
+    ProxyThread.threads = request.param == "threads"
+    yield request.param
+    ProxyThread.threads = False
 
 
 def test_bytes_pass_unchanged_however_they_are_cut() -> None:
