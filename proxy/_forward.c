@@ -152,6 +152,22 @@ static int push(struct way *w) {
     return moved;
 }
 
+/* What to wait for: fds[0] the wake fd, fds[1] the client's socket, fds[2] the target's; a socket with nothing to
+ * wait for is left out (fd -1), so that a peer's hang-up on a way that waits for its other end is not a busy loop. */
+static void interest(struct pollfd fds[3], int wake, int client, int target, const struct way ways[2]) {
+    fds[0] = (struct pollfd){wake, POLLIN, 0};
+    fds[1] = (struct pollfd){client, 0, 0};
+    fds[2] = (struct pollfd){target, 0, 0};
+    for (int i = 0; i < 2; i++) {
+        const struct way *w = &ways[i];
+        struct pollfd *src = &fds[w->src == client ? 1 : 2], *dst = &fds[w->dst == client ? 1 : 2];
+        if (w->len) dst->events |= POLLOUT;
+        else if (w->reading) src->events |= POLLIN;
+    }
+    for (int i = 1; i < 3; i++)
+        if (fds[i].events == 0) fds[i].fd = -1;
+}
+
 static PyObject *run(PyObject *self, PyObject *args) {
     (void)self;
     int client, target, wake;
@@ -216,23 +232,17 @@ static PyObject *run(PyObject *self, PyObject *args) {
                 call(&ts, &kept, on_data, NULL, 0);
             continue;
         }
+        struct pollfd fds[3];
         if (now_ns() - last < spin_ns) {
-            struct pollfd p = {wake, POLLIN, 0};
-            if (poll(&p, 1, 0) > 0) break;
-            sched_yield();
-            continue;
+            /* spin: look without waiting (one poll for both sockets and the wake fd), yield the CPU between looks */
+            interest(fds, wake, client, target, ways);
+            int ready;
+            while ((ready = poll(fds, 3, 0)) == 0 && now_ns() - last < spin_ns) sched_yield();
+            if (ready > 0 && fds[0].revents) break;
+            if (ready != 0) continue;
         }
         call(&ts, &kept, on_data, NULL, 0);  /* idle: the recorder's turn */
-        /* sleep until a socket is ready for what its ways wait for (an fd with nothing to wait for is left out) */
-        struct pollfd fds[3] = {{wake, POLLIN, 0}, {client, 0, 0}, {target, 0, 0}};
-        for (int i = 0; i < 2; i++) {
-            struct way *w = &ways[i];
-            struct pollfd *src = &fds[w->src == client ? 1 : 2], *dst = &fds[w->dst == client ? 1 : 2];
-            if (w->len) dst->events |= POLLOUT;
-            else if (w->reading) src->events |= POLLIN;
-        }
-        for (int i = 1; i < 3; i++)
-            if (fds[i].events == 0) fds[i].fd = -1;
+        interest(fds, wake, client, target, ways);  /* sleep until a socket is ready for what its ways wait for */
         if (poll(fds, 3, -1) < 0 && errno != EINTR) {
             failed_side = 1, failed_errno = errno;
             break;
