@@ -79,7 +79,7 @@ def test_a_busy_exchange_is_forwarded_recorded_in_order_and_ctrl_c_ends_it(core:
                             conn.sendall(reply)
                             assert read_exactly(client, len(reply)) == reply
                 proc.send_signal(signal.SIGINT)
-                out, err = proc.communicate(timeout=20)
+                _, err = proc.communicate(timeout=20)
             finally:
                 proc.kill()
     assert proc.returncode == 0 and "Traceback" not in err, err
