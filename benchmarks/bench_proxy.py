@@ -87,8 +87,11 @@ def _server(tmp: Path) -> Iterator[list[int]]:
 
 
 @contextmanager
-def _proxy(target_port: int, tmp: Path, record: bool = True, extra: tuple[str, ...] = ()) -> Iterator[int]:
-    """``pltf proxy`` in front of ``target_port``; its listening port. Stopped with SIGINT (it writes its files)."""
+def _proxy(
+    target_port: int, tmp: Path, record: str | None = "session.jsonl", extra: tuple[str, ...] = ()
+) -> Iterator[int]:
+    """``pltf proxy`` in front of ``target_port``, recording into ``tmp / record`` (None: no files); its listening
+    port. Stopped with SIGINT (it writes its files)."""
     cmd = [
         sys.executable,
         "-m",
@@ -100,7 +103,7 @@ def _proxy(target_port: int, tmp: Path, record: bool = True, extra: tuple[str, .
         f"127.0.0.1:{target_port}",
         "--quiet",
         *extra,
-    ] + (["--record", str(tmp / f"session{len(extra)}.jsonl")] if record else [])
+    ] + (["--record", str(tmp / record)] if record is not None else [])
     with listening(cmd, stop_signal=2) as port:
         yield port
 
@@ -227,8 +230,8 @@ def get_position(config: Config) -> list[Row]:
         with (
             _server(tmp) as ports,
             _proxy(ports[1], tmp) as proxy_port,
-            _proxy(ports[0], tmp, False) as bare_port,
-            _proxy(ports[1], tmp, True, ("--threads",)) as threaded_port,
+            _proxy(ports[0], tmp, None) as bare_port,
+            _proxy(ports[1], tmp, "threads.jsonl", ("--threads",)) as threaded_port,
             _floors(ports[1], tmp) as floor_ports,
         ):
             with _connect(proxy_port) as sock:  # the proxy passes a real GET_POSITION reply

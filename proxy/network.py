@@ -304,7 +304,9 @@ class ProxyServer:
     ) -> None:
         self.routes = routes
         self.threads = threads or not HAVE_C  # the Python threads forward (else the C loop)
-        self.spin_us = max(0, min(spin_us, MAX_SPIN_US))
+        if not 0 <= spin_us <= MAX_SPIN_US:
+            raise ValueError(f"spin_us: 0 to {MAX_SPIN_US}, got {spin_us}")
+        self.spin_us = spin_us
         self.observer = observer
         self.flush_extra = flush
         self.conns: set[_Conn] = set()
