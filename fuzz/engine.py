@@ -263,7 +263,7 @@ class Campaign:
         """Count and learn from a unit the target served; False (stop the lanes) on a suspicion."""
         st, out, unit = self.stats, e.flight.out, e.unit
         st.units += 1
-        st.probes += 1
+        st.probes += e.led  # its lead was answered: a liveness probe
         st.batches += unit.batch
         st.singles += not unit.batch
         st.cut_replies += v.cut
