@@ -32,7 +32,10 @@ Subjects, each for the same wall time (10 s), three times, interleaved; the medi
 What bounds the rates, beside them (``benchmarks.proc_cpu``, the target's process group read from /proc while it
 runs): ``target CPU per case`` (ms of the target's CPU per case it served, ours with boofuzz's as its baseline) and
 ``target busy`` (the cores it kept busy): how much of the ratio is the target's cost and how much each tool's own
-(zoo/README.md, runs 7 and 8: on a free machine ours keeps the reference server three quarters busy, boofuzz a fifth).
+(zoo/README.md, runs 7 and 8: on a free machine ours keeps the reference server three quarters busy, boofuzz a fifth),
+and ``ratio ceiling, target never idle``: the ratio to boofuzz the target would give if its threads (the reference
+server's one loop; a zoo member's relay and the server behind it, at most the machine's cores) never waited -
+the most any fuzzer with this mix could reach on the machine of the run.
 
 A case is one test case: one boofuzz mutation, one ``pltf fuzz`` case. Targets: >= 3,000 cases/s against the
 reference server, >= 10x boofuzz (time ratio <= 0.1) on every target, no false finding.
@@ -79,6 +82,10 @@ TARGETS = {
 DIRECT = "reference server"
 CPU_PER_CASE = "target CPU per case"
 BUSY = "target busy"
+CEILING = "ratio ceiling, target never idle"
+# the threads that serve a case: the reference server is one asyncio loop; a zoo member adds its relay's loop
+TARGET_THREADS = {DIRECT: 1}
+RELAY_AND_SERVER = 2
 
 
 class TargetCpu:
@@ -368,7 +375,7 @@ def cases_per_second(config: Config) -> list[Row]:
                     baseline_value=rates[DIRECT, OURS],
                 )
             )
-    return rows + _cpu_rows(name, rates)
+    return rows + _cpu_rows(name, rates) + _ceiling_rows(name, rates)
 
 
 def _cpu_rows(name: str, rates: dict[tuple[str, str], float]) -> list[Row]:
@@ -398,4 +405,25 @@ def _cpu_rows(name: str, rates: dict[tuple[str, str], float]) -> list[Row]:
     return rows
 
 
-__all__ = ["boofuzz_requests", "cases_per_second"]
+def ceiling(cpu_ms: float, threads: int, baseline_rate: float, cores: int) -> float:
+    """The most times ``baseline_rate`` a target can serve when what a case costs it is ``cpu_ms`` of CPU and its
+    ``threads`` (at most ``cores`` of them at once) never wait: the bound the target puts on the ratio, whatever
+    the fuzzer does."""
+    return min(threads, cores) / (cpu_ms / 1e3) / baseline_rate
+
+
+def _ceiling_rows(name: str, rates: dict[tuple[str, str], float]) -> list[Row]:
+    """Per target: the ratio to boofuzz that the target's CPU per case of ours allows (``ceiling``), beside the
+    ratio target; a figure under it says the target, not the fuzzer, keeps the ratio under 10x."""
+    rows = []
+    for target in TARGETS:
+        cpu_key = (target, f"{CPU_PER_CASE}, {OURS}")
+        if cpu_key not in rates or not rates.get((target, BOOFUZZ)):
+            continue  # no /proc here, or boofuzz served nothing
+        threads = TARGET_THREADS.get(target, RELAY_AND_SERVER)
+        value = ceiling(rates[cpu_key], threads, rates[target, BOOFUZZ], os.cpu_count() or 1)
+        rows.append(make_row(name, f"{CEILING} ({target})", "ratio_ceiling", value, "x boofuzz", higher_is_better=True))
+    return rows
+
+
+__all__ = ["boofuzz_requests", "cases_per_second", "ceiling"]
