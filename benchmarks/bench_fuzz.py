@@ -84,8 +84,7 @@ CPU_PER_CASE = "target CPU per case"
 BUSY = "target busy"
 CEILING = "ratio ceiling, target never idle"
 # the threads that serve a case: the reference server is one asyncio loop; a zoo member adds its relay's loop
-TARGET_THREADS = {DIRECT: 1}
-RELAY_AND_SERVER = 2
+TARGET_THREADS = {DIRECT: 1, "zoo slow-release": 2, "zoo accept-once": 2}
 
 
 class TargetCpu:
@@ -420,8 +419,7 @@ def _ceiling_rows(name: str, rates: dict[tuple[str, str], float]) -> list[Row]:
         cpu_key = (target, f"{CPU_PER_CASE}, {OURS}")
         if cpu_key not in rates or not rates.get((target, BOOFUZZ)):
             continue  # no /proc here, or boofuzz served nothing
-        threads = TARGET_THREADS.get(target, RELAY_AND_SERVER)
-        value = ceiling(rates[cpu_key], threads, rates[target, BOOFUZZ], os.cpu_count() or 1)
+        value = ceiling(rates[cpu_key], TARGET_THREADS[target], rates[target, BOOFUZZ], os.cpu_count() or 1)
         rows.append(make_row(name, f"{CEILING} ({target})", "ratio_ceiling", value, "x boofuzz", higher_is_better=True))
     return rows
 

@@ -4,7 +4,17 @@ from __future__ import annotations
 
 import pytest
 
-from benchmarks.bench_fuzz import BOOFUZZ, CEILING, CPU_PER_CASE, DIRECT, OURS, _ceiling_rows, ceiling
+from benchmarks.bench_fuzz import (
+    BOOFUZZ,
+    CEILING,
+    CPU_PER_CASE,
+    DIRECT,
+    OURS,
+    TARGET_THREADS,
+    TARGETS,
+    _ceiling_rows,
+    ceiling,
+)
 
 
 def test_one_thread_at_a_third_of_a_millisecond_a_case_allows_under_ten_times_boofuzz() -> None:
@@ -26,3 +36,7 @@ def test_the_rows_name_each_target_and_skip_one_without_cpu_figures() -> None:
     [row] = _ceiling_rows("fuzz.cases_per_second", rates)
     assert row["subject"] == f"{CEILING} ({DIRECT})"
     assert row["value"] == pytest.approx(1 / 0.0005 / 200.0)
+
+
+def test_every_target_says_how_many_threads_serve_it() -> None:
+    assert set(TARGET_THREADS) == set(TARGETS)

@@ -138,7 +138,7 @@ def test_a_short_campaign_against_a_conforming_foreign_target_finds_nothing(tmp_
         assert c.stats.skipped > 0 and c.stats.batches > 10  # batches on a kept connection
     elif "accept-once" in target:  # pipelined newcomers wait their turn in the backlog and are served
         assert c.stats.pipelined > 100 and c.stats.not_admitted == 0
-        assert 0 < c.stats.probes < c.stats.units  # nobody turned away: after the warm-up most units owe no lead
+        assert 0 < c.stats.probes < c.stats.units  # nobody turned away: after the warm-up most go without the lead
         assert set(c.stats.ways) == {"fresh", "dear", "fresh singles", "dear singles"}  # nobody turned away: both
         # ways measured (fuzz.trial)
 
