@@ -86,6 +86,7 @@ class Script:
     waits: dict[int, Wait] = field(default_factory=dict)
     unsolicited: list[Record] = field(default_factory=list)  # recorded replies no request asked for
     closed_by: str = "client"  # who ended it in the recording: client, target (or proxy: as client)
+    closed: bool = False  # the recording has its close
     close_gap: float = 0.0  # recorded seconds from its last request or reply to the close
     last_time: float = 0.0
 
@@ -156,7 +157,7 @@ def _script(conn: int, records: list[Record], route: int, t0: float) -> Script:
             else:
                 script.unsolicited.append(rec)
         elif rec.kind == CLOSE:
-            script.closed_by = _closer(rec.detail)
+            script.closed, script.closed_by = True, _closer(rec.detail)
             script.close_gap = max(0.0, rec.time - max(last_reply_time, last_request_time))
         script.last_time = rec.time - t0
     _find_waits(script)
@@ -196,8 +197,20 @@ def plan(session: Session) -> list[Script]:
         scripts.append(_script(conn, records, route_of.get(records[0].port, 0), t0))
     scripts.sort(key=lambda s: s.start)
     for s in scripts:
-        s.after_closes = [o.conn for o in scripts if o is not s and o.last_time <= s.start]
+        s.after_closes = [o.conn for o in scripts if o is not s and _closes_before(o, s)]
     return scripts
+
+
+def _closes_before(o: Script, s: Script) -> bool:
+    """Whether ``o`` must be closed in the replay before ``s`` opens: it had closed before ``s`` opened in the
+    recording; or, on the same port, it opened first and closed before ``s`` ended - the target takes one client
+    per port (guide 6.1: "For each port one client is able to connect"), so it served ``s`` only once ``o`` had
+    left. The proxy stamps a close on the thread that forwards the connection and an open on the one that accepts
+    the next: a client that closed one connection and opened the next at once can find the open stamped a
+    millisecond before the close. A newcomer the target turned away while ``o`` was still there ended before it."""
+    if o.last_time <= s.start:
+        return True
+    return o.route == s.route and o.closed and o.start < s.start and o.last_time <= s.last_time
 
 
 def final_matches(step: Step, reply: Record) -> bool:

@@ -106,6 +106,34 @@ def test_a_connection_waits_for_the_ones_closed_before_it_opened() -> None:
     assert scripts[3].after_closes == [1] and scripts[2].after_closes == [1] and scripts[2].route == 1
 
 
+def test_on_one_port_a_connection_served_after_another_waits_for_it_though_the_close_was_stamped_late() -> None:
+    # recorded in a clean-clone run (2026-11-26): the client closed #2 and opened #3 on the same port at once; the
+    # proxy stamped #3's open 1.06 ms before #2's close; the target closed #3 (a malformed frame) after #2's close
+    s = session(
+        event(0.0, 1, OPEN),
+        event(0.3, 1, CLOSE, "by client (FIN)"),
+        event(0.300500, 2, OPEN, port=10002),
+        event(0.329654, 3, OPEN, port=10002),
+        event(0.330716, 2, CLOSE, "by client (FIN)", 10002),
+        event(0.330832, 3, CLOSE, "by target (FIN)", 10002),
+    )
+    scripts = {sc.conn: sc for sc in plan(s)}
+    assert scripts[3].after_closes == [1, 2] and scripts[2].after_closes == [1]
+
+
+def test_a_newcomer_turned_away_while_the_port_was_taken_does_not_wait_for_it() -> None:
+    s = session(
+        event(0.0, 1, OPEN),
+        event(0.5, 2, OPEN),
+        event(0.6, 2, CLOSE, "by target (FIN)"),  # turned away: one client per port
+        event(2.0, 1, CLOSE, "by client (FIN)"),
+        event(2.5, 3, OPEN, port=10002),  # the other port, while #1 was there: both drive one platform
+        event(2.8, 3, CLOSE, "by client (FIN)", 10002),
+    )
+    scripts = {sc.conn: sc for sc in plan(s)}
+    assert scripts[2].after_closes == [] and scripts[3].after_closes == [1, 2]
+
+
 # ---------------------------------------------------------------------------------------------- the judgement
 
 
