@@ -89,6 +89,7 @@ class _Conn:
 
     def __init__(self, proxy: ProxyServer, number: int, route: Route, client: socket.socket, peer: Any) -> None:
         self.proxy, self.number, self.route = proxy, number, route
+        self.accepted_at = time.time()  # the open's time: connections open in the order they were accepted
         self.peer = (str(peer[0]), int(peer[1])) if isinstance(peer, tuple) else ("?", 0)
         self.socks: dict[bool, socket.socket | None] = {True: client, False: None}
         self.eof: dict[bool, bool] = {True: False, False: False}  # that side sent its FIN
@@ -149,7 +150,9 @@ class _Conn:
 
     def _opened(self) -> None:
         r = self.route
-        self.proxy.observe("opened", self.number, time.time(), r.target_port, self.peer, (r.target_host, r.target_port))
+        self.proxy.observe(
+            "opened", self.number, self.accepted_at, r.target_port, self.peer, (r.target_host, r.target_port)
+        )
 
     # ------------------------------------------------------------------ data (one thread per direction)
     def _forward(self, side: bool) -> tuple[bool, OSError] | None:

@@ -6,7 +6,8 @@ Rules:
   client of its own. It opens at its recorded time (scaled), but never before the connections that had closed
   before it opened in the recording have closed in the replay: on its own port because the target takes one
   client per port (guide 6.1), on the other because both ports drive the same platform (what the one did, the
-  other saw).
+  other saw). On its own port it also waits for every connection opened before it, unless it was turned away
+  while that one was there (``turned_away``): the stamps of two proxy threads do not order them.
 - Requests are sent as recorded, byte for byte (malformed ones too), each frame whole. A request waits for the
   replies that had arrived before it in the recording, then for its recorded gap after the later of those
   replies and the previous request, divided by the time scale: a client that waited for a reply still does.
@@ -89,6 +90,7 @@ class Script:
     closed: bool = False  # the recording has its close
     close_gap: float = 0.0  # recorded seconds from its last request or reply to the close
     last_time: float = 0.0
+    last_data: float = 0.0  # recorded seconds of its last request or reply (its start when it had none)
 
     def wait_of(self, index: int) -> Wait | None:
         w = self.steps[index].wait
@@ -136,10 +138,12 @@ def _closer(detail: str) -> str:
 
 def _script(conn: int, records: list[Record], route: int, t0: float) -> Script:
     first = records[0]
-    script = Script(conn, route, first.port, first.time - t0)
+    script = Script(conn, route, first.port, first.time - t0, last_data=first.time - t0)
     pending: dict[int, list[int]] = {}
     replies_seen, last_reply_time, last_request_time = 0, first.time, first.time
     for rec in records:
+        if rec.kind in (FRAME, RAW):
+            script.last_data = rec.time - t0
         if rec.kind in (FRAME, RAW) and rec.direction == "request":
             ident = _ident(rec.raw)
             ref = max(last_reply_time, last_request_time)
@@ -203,14 +207,22 @@ def plan(session: Session) -> list[Script]:
 
 def _closes_before(o: Script, s: Script) -> bool:
     """Whether ``o`` must be closed in the replay before ``s`` opens: it had closed before ``s`` opened in the
-    recording; or, on the same port, it opened first and closed before ``s`` ended - the target takes one client
-    per port (guide 6.1: "For each port one client is able to connect"), so it served ``s`` only once ``o`` had
-    left. The proxy stamps a close on the thread that forwards the connection and an open on the one that accepts
-    the next: a client that closed one connection and opened the next at once can find the open stamped a
-    millisecond before the close. A newcomer the target turned away while ``o`` was still there ended before it."""
+    recording; or it opened first on the same port and ``s`` was not turned away while it was there. The target
+    takes one client per port (guide 6.1: "For each port one client is able to connect"), so on one port the
+    connections it served came one after the other, whatever the stamps say: the proxy stamps an open on the
+    thread that accepts it and a connection's traffic and close on the thread that forwards it, which may wait
+    milliseconds for the interpreter, so a client that closed one connection and opened the next at once can
+    find the next one's open stamped first (``turned_away``)."""
     if o.last_time <= s.start:
         return True
-    return o.route == s.route and o.closed and o.start < s.start and o.last_time <= s.last_time
+    return o.route == s.route and o.start < s.start and not turned_away(s, o)
+
+
+def turned_away(s: Script, o: Script) -> bool:
+    """``s`` was a newcomer the target turned away while ``o`` held the port (E-WIRE-007): the target closed it
+    unanswered, and ``o`` still talked after that."""
+    unanswered = not s.unsolicited and all(step.reply is None for step in s.steps)
+    return s.closed and s.closed_by == "target" and unanswered and o.last_data > s.last_time
 
 
 def final_matches(step: Step, reply: Record) -> bool:

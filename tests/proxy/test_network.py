@@ -8,6 +8,8 @@ from __future__ import annotations
 import random
 import socket
 import struct
+import subprocess
+import sys
 import threading
 import time
 from collections.abc import Iterator
@@ -18,6 +20,8 @@ import pytest
 from benchmarks.proc_cpu import TICK, stat_cpu
 from pltf.proxy import network
 from pltf.proxy.recorder import Recorder
+from pltf.proxy.replay import plan
+from pltf.proxy.session import Route, Session
 from pltf.proxy.tap import CLOSE, FRAME, OPEN, RAW, Record
 from pltf.spec.codec import REQUESTS, encode
 from tests.proxy.helpers import Peer, ProxyThread, read_exactly, read_to_end
@@ -280,3 +284,46 @@ def test_an_idle_connection_costs_no_cpu_and_still_forwards() -> None:
         conn.close()
         assert read_to_end(c) == b""
     server.close()
+
+
+def _closing_target() -> tuple[socket.socket, threading.Thread]:
+    """A target that reads each connection to its end and closes it, one connection after another."""
+    server = socket.create_server(("127.0.0.1", 0))
+
+    def serve() -> None:
+        while True:
+            try:
+                conn, _ = server.accept()
+            except OSError:
+                return
+            with conn:
+                read_to_end(conn)
+
+    thread = threading.Thread(target=serve, daemon=True, name="closing-target")
+    thread.start()
+    return server, thread
+
+
+def test_a_client_reconnecting_at_once_is_replayed_in_its_order(core: str) -> None:
+    """A client (a process of its own) closes a connection and opens the next on the same port at once, sixty
+    times. The proxy's stamps may not say so - a close is stamped by the thread that forwards it, the next open by
+    the one that accepts it, and a thread waits for the interpreter up to milliseconds - but the replay's plan
+    must: each connection waits for the one before it (replay.plan, one client per port), or a replay opens
+    the next while the last is still there and the target turns it away."""
+    server, _ = _closing_target()
+    rounds = 60
+    client = (
+        "import socket\n"
+        "for _ in range({n}):\n"
+        "    with socket.create_connection(('127.0.0.1', {port})) as c:\n"
+        "        c.sendall(bytes.fromhex('{stop}'))\n"
+    )
+    with ProxyThread([server.getsockname()[1]]) as proxy:
+        code = client.format(n=rounds, port=proxy.ports[0], stop=STOP.hex())
+        subprocess.run([sys.executable, "-c", code], check=True, timeout=30)
+        recs = proxy.wait_records(lambda rs: sum(r.kind == CLOSE for r in rs) == rounds)
+    server.close()
+    scripts = {s.conn: s for s in plan(Session(0.0, (Route("l:1", "h:1"),), tuple(recs)))}
+    assert len(scripts) == rounds
+    unordered = [n for n in scripts if n > 1 and n - 1 not in scripts[n].after_closes]
+    assert not unordered, (core, unordered)

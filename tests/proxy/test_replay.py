@@ -125,7 +125,8 @@ def test_a_newcomer_turned_away_while_the_port_was_taken_does_not_wait_for_it() 
     s = session(
         event(0.0, 1, OPEN),
         event(0.5, 2, OPEN),
-        event(0.6, 2, CLOSE, "by target (FIN)"),  # turned away: one client per port
+        event(0.6, 2, CLOSE, "by target (FIN)"),  # turned away unanswered: one client per port
+        rec(1.0, 1, "request", "CMD_STOP"),  # while the first client goes on
         event(2.0, 1, CLOSE, "by client (FIN)"),
         event(2.5, 3, OPEN, port=10002),  # the other port, while #1 was there: both drive one platform
         event(2.8, 3, CLOSE, "by client (FIN)", 10002),
