@@ -207,22 +207,23 @@ def plan(session: Session) -> list[Script]:
 
 def _closes_before(o: Script, s: Script) -> bool:
     """Whether ``o`` must be closed in the replay before ``s`` opens: it had closed before ``s`` opened in the
-    recording; or it opened first on the same port and ``s`` was not turned away while it was there. The target
-    takes one client per port (guide 6.1: "For each port one client is able to connect"), so on one port the
-    connections it served came one after the other, whatever the stamps say: the proxy stamps an open on the
-    thread that accepts it and a connection's traffic and close on the thread that forwards it, which may wait
-    milliseconds for the interpreter, so a client that closed one connection and opened the next at once can
-    find the next one's open stamped first (``turned_away``)."""
+    recording; or it opened first on the same port and ``s`` was not turned away while it was there
+    (``turned_away``). The target takes one client per port (guide 6.1: "For each port one client is able to
+    connect"), so on one port the connections it served came one after the other, whatever the stamps say: the
+    proxy stamps an open on the thread that accepts it and a connection's traffic and close on the thread that
+    forwards it, which may wait milliseconds for the interpreter, so a client that closed one connection and
+    opened the next at once can find the next one's open stamped first."""
     if o.last_time <= s.start:
         return True
-    return o.route == s.route and o.start < s.start and not turned_away(s, o)
+    return o.route == s.route and o.start < s.start and not turned_away(newcomer=s, holder=o)
 
 
-def turned_away(s: Script, o: Script) -> bool:
-    """``s`` was a newcomer the target turned away while ``o`` held the port (E-WIRE-007): the target closed it
-    unanswered, and ``o`` still talked after that."""
-    unanswered = not s.unsolicited and all(step.reply is None for step in s.steps)
-    return s.closed and s.closed_by == "target" and unanswered and o.last_data > s.last_time
+def turned_away(newcomer: Script, holder: Script) -> bool:
+    """``newcomer`` was turned away while ``holder`` had the port (E-WIRE-007): the target closed it unanswered,
+    and ``holder`` still talked after that."""
+    unanswered = not newcomer.unsolicited and all(step.reply is None for step in newcomer.steps)
+    closed_by_target = newcomer.closed and newcomer.closed_by == "target"
+    return closed_by_target and unanswered and holder.last_data > newcomer.last_time
 
 
 def final_matches(step: Step, reply: Record) -> bool:
