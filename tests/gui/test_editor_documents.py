@@ -10,7 +10,8 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 from typing import Any
 
-from tests.gui.conftest import REPO, Gateway, Platform, aim, expect_text, open_gui, wait_for
+from tests.gui.conftest import REPO, Gateway, Platform, aim, expect_text, open_gui, settled_view, wait_for
+from tests.gui.fakes import held_replies
 from tests.gui.test_editor import _objects, _open_editor, _sent
 from tests.gui.test_editor_motion import drag, running_automatic
 
@@ -86,6 +87,27 @@ def test_the_fixture_roadmap_loaded_and_sent_back_reaches_the_platform_unchanged
     page.get_by_role("button", name="Send to platform", exact=True).click()
     expect_text(messages(page), "Roadmap sent to the platform")
     wait_for(lambda: tree(ET.fromstring(platform.other.get_roadmap().xml)) == fixture, what="the fixture roadmap")
+
+
+def test_the_platform_map_answered_after_the_roadmap_editor_opened_is_drawn_under_the_editor_roadmap(
+    page: Any, gateway: Gateway, platform: Platform
+) -> None:
+    """The roadmap editor edits the roadmap over the platform's map (guide 5.5): a GET_MAP answered late (a busy
+    platform, a reconnect) still brings the map; a late GET_ROADMAP does not replace the editor's roadmap (CI,
+    stop 28: the map never appeared, and no station could be placed near its walls)."""
+    with held_replies(platform.ports[0]) as relay:
+        open_gui(page, gateway, relay.target)
+        page.get_by_role("menuitem", name="Edit", exact=True).click()
+        page.get_by_role("menuitem", name="Edit Roadmap", exact=True).click()
+        state = page.locator("output.rm-state")
+        wait_for(lambda: state.get_attribute("data-stations") == "0", what="the editor's new roadmap")
+        canvas = page.get_by_role("img", name="Map")
+        assert canvas.get_attribute("data-drawn-line") in (None, "0")  # no reply has come yet
+        relay.release()
+        settled_view(page)  # lines drawn: the platform's map
+        lines = sum(tag == "line" for tag, _, _ in _objects(platform.other.get_map().xml))
+        assert lines > 0 and canvas.get_attribute("data-drawn-line") == str(lines)
+        assert canvas.get_attribute("data-drawn-station") == "0"  # the editor's roadmap, not the platform's 18
 
 
 def _segments(xml: str | bytes, kinds: tuple[str, ...]) -> list[tuple[float, float, float, float]]:

@@ -163,6 +163,7 @@ export function mapEditor(
   });
 
   const hooks: NonNullable<MapView["editHooks"]> = {
+    shows: "map",
     down(x, y, pxPerMm, button) {
       if (isShape(tool)) {
         shapes.down(tool, x, y, pxPerMm, button);

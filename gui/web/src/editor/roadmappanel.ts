@@ -162,6 +162,7 @@ export function roadmapEditor(
   };
 
   const hooks: NonNullable<MapView["editHooks"]> = {
+    shows: "roadmap",
     down(x, y, pxPerMm, button) {
       if (tool === "pathPoints") {
         pathDown(x, y, pxPerMm, button);

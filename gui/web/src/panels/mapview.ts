@@ -39,6 +39,12 @@ type Tool = "pan" | "zoomArea" | "shift" | "flag" | "edit";
 
 /** The map editor's hold on the view (editor/editpanel.ts): pointer events in world mm, and its own drawing. */
 export interface EditHooks {
+  /**
+   * The platform's document this editor shows its own in place of: a GET_MAP (GET_ROADMAP) answered while the
+   * editor is open leaves that editor's document on the view; the other document is still the platform's, so
+   * the roadmap editor places its stations over the platform's map even when that map came late.
+   */
+  readonly shows: "map" | "roadmap";
   /** `button`: 0 left, 2 right (a right-click finishes a polygon) */
   down(x: number, y: number, pxPerMm: number, button: number): void;
   move(x: number, y: number): void;
@@ -175,8 +181,8 @@ export class MapView {
   private wire(): void {
     const s = this.session;
     s.map.subscribe((m) => {
-      if (this.editHooks !== null) {
-        return; // the editor shows its own document
+      if (this.editHooks?.shows === "map") {
+        return; // the map editor shows its own document
       }
       try {
         this.scene = parseMap(m.xml, m.name);
@@ -195,6 +201,9 @@ export class MapView {
       }
     });
     s.roadmap.subscribe((r) => {
+      if (this.editHooks?.shows === "roadmap") {
+        return; // the roadmap editor shows its own document
+      }
       try {
         this.roadmap = parseRoadmap(r.xml, r.name);
       } catch (e) {
