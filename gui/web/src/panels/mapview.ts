@@ -37,7 +37,7 @@ import type { ViewOptions } from "./viewoptions";
 
 type Tool = "pan" | "zoomArea" | "shift" | "flag" | "edit";
 
-/** The map editor's hold on the view (editor/editpanel.ts): pointer events in world mm, and its own drawing. */
+/** An editor's hold on the view (editor/editpanel.ts, editor/roadmappanel.ts): pointer events in world mm, and its own drawing. */
 export interface EditHooks {
   /**
    * The platform's document this editor shows its own in place of: a GET_MAP (GET_ROADMAP) answered while the
