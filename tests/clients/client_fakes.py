@@ -55,7 +55,57 @@ TRANSITIONS = {
 }
 
 
-class FakePlatform:
+class LoopbackServer:
+    """A TCP server on 127.0.0.1 (an ephemeral port) that serves each connection it accepts on a thread of its
+    own (``_serve``). A subclass sets its own state first, then calls ``start()``."""
+
+    def __init__(self) -> None:
+        self.listener = socket.create_server(("127.0.0.1", 0))
+        self.port: int = self.listener.getsockname()[1]
+        self.conns: list[socket.socket] = []
+        self._threads: list[threading.Thread] = []
+        self._stop = threading.Event()
+        self._accepter = threading.Thread(target=self._accept, daemon=True)
+
+    def start(self) -> None:
+        self._accepter.start()
+
+    def spawn(self, fn: Any, *args: Any) -> None:
+        """Run ``fn(*args)`` on a thread that ``close()`` waits for."""
+        t = threading.Thread(target=fn, args=args, daemon=True)
+        self._threads.append(t)
+        t.start()
+
+    def _accept(self) -> None:
+        self.listener.settimeout(0.05)  # closing a listener does not wake accept(): poll the stop flag
+        while not self._stop.is_set():
+            try:
+                conn, _ = self.listener.accept()
+            except TimeoutError:
+                continue
+            except OSError:
+                return
+            conn.settimeout(None)
+            self.conns.append(conn)
+            self.spawn(self._serve, conn)
+
+    def _serve(self, conn: socket.socket) -> None:
+        raise NotImplementedError
+
+    def close(self) -> None:
+        self._stop.set()
+        for conn in list(self.conns):
+            with contextlib.suppress(OSError):
+                conn.shutdown(socket.SHUT_RDWR)
+        for t in [self._accepter, *self._threads]:
+            if t.ident is not None:
+                t.join(5)
+        self.listener.close()
+        for conn in self.conns:
+            conn.close()
+
+
+class FakePlatform(LoopbackServer):
     """A stand-in PlatformCtrl on 127.0.0.1: one client at a time, served by a thread.
 
     A move in state Running and mode Automatic is taken up like in a control loop: the first status requested
@@ -65,6 +115,7 @@ class FakePlatform:
     """
 
     def __init__(self) -> None:
+        super().__init__()
         self.state: Any = NOT_INIT  # an OperationState, or "connected" (CAN up, not initialized)
         self.mode = MotionMode.MODE_MOTION_NO
         self.pose = (0, 0, 0)  # mm, mm, 1000*deg
@@ -84,37 +135,7 @@ class FakePlatform:
         self.hang_up_on: str | None = None  # close the connection on receiving this telegram
         self.disconnects = 0
         self._held: list[bytes] = []
-        self._listener = socket.create_server(("127.0.0.1", 0))
-        self.port: int = self._listener.getsockname()[1]
-        self._conns: list[socket.socket] = []
-        self._threads: list[threading.Thread] = []
-        self._stop = threading.Event()
-        self._accepter = threading.Thread(target=self._accept, daemon=True)
-        self._accepter.start()
-
-    def close(self) -> None:
-        self._stop.set()
-        for conn in list(self._conns):
-            with contextlib.suppress(OSError):
-                conn.shutdown(socket.SHUT_RDWR)
-        for t in [self._accepter, *self._threads]:
-            t.join(5)
-        self._listener.close()
-
-    def _accept(self) -> None:
-        self._listener.settimeout(0.05)  # closing a listener does not wake accept(): poll the stop flag
-        while not self._stop.is_set():
-            try:
-                conn, _ = self._listener.accept()
-            except TimeoutError:
-                continue
-            except OSError:
-                return
-            conn.settimeout(None)
-            self._conns.append(conn)
-            t = threading.Thread(target=self._serve, args=(conn,), daemon=True)
-            self._threads.append(t)
-            t.start()
+        self.start()
 
     def _serve(self, conn: socket.socket) -> None:
         decoder = TelegramDecoder("request")
