@@ -27,7 +27,12 @@ Rules:
   both sockets close; the last thread of the connection closes them. A target that cannot be reached closes the
   client at once.
 - One client connection, one target connection, on the route it arrived on; the proxy adds no policy of its
-  own (a second client on a busy port is the target's to turn away, guide 6.1). When the target refuses a
+  own (a second client on a busy port is the target's to turn away, guide 6.1). The order of connections
+  travels too: a new connection reaches the target only after the earlier ones on its route have passed on
+  what their clients had sent when it arrived, their FINs included (at most ``ORDER_WAIT`` s). A client that
+  closes and reconnects at once is not turned away through the proxy when it would not be without it: its
+  FIN would otherwise wait for a forwarding thread (the interpreter, a full recorder pipe) while the accepting
+  loop already connects the next. When the target refuses a
   connection (its port no longer listens: CMD_EXIT, a restart), the proxy stops listening on that route too
   and listens again once the target accepts a probe (every ``PROBE_EVERY`` s): a client sees the port as it is.
 - The proxy never dies of what passes through it: should the observer fail, the failure is reported once and
@@ -63,6 +68,8 @@ FLUSH_EVERY = 0.25  # s between flushes of the observer (session file, pcapng, v
 READ_SIZE = 65536
 BACKLOG = 100
 PROBE_EVERY = 0.5  # s between probes of a target that refused a connection
+ORDER_WAIT = 1.0  # s a new connection waits at most for the earlier ones on its route to pass their input on
+ORDER_POLL = 0.001  # s between looks while it waits
 STOP_WAIT = 2.0  # s the proxy waits, when it stops, for a connection's threads to leave
 SPIN_US = 200  # us the C loop keeps polling after it moved bytes (0-400 measured: proxy/README.md, "Measured")
 MAX_SPIN_US = 1_000_000
@@ -106,6 +113,7 @@ class _Conn:
     # ------------------------------------------------------------------ set-up
     async def connect(self) -> None:
         r, loop = self.route, self.proxy.loop
+        await self._after_earlier()
         try:
             infos = await loop.getaddrinfo(r.target_host, r.target_port, type=socket.SOCK_STREAM)
             family, kind, proto, _, addr = infos[0]
@@ -147,6 +155,38 @@ class _Conn:
                 thread = threading.Thread(target=target, args=args, name=name, daemon=True)
                 self.threads.append(thread)
                 thread.start()
+
+    async def _after_earlier(self) -> None:
+        """Wait (at most ``ORDER_WAIT`` s) until the earlier connections of this route have passed on what
+        their clients sent before this one arrived: the target sees the ends and the opens in the client's order."""
+        earlier = [c for c in self.proxy.conns if c.route == self.route and c.number < self.number]
+        deadline = time.monotonic() + ORDER_WAIT
+        while earlier and time.monotonic() < deadline:
+            earlier = [c for c in earlier if not c.passed_on()]
+            if earlier:
+                await asyncio.sleep(ORDER_POLL)
+
+    def passed_on(self) -> bool:
+        """Nothing its client sent waits in the proxy: it is connected to the target and its FIN was passed on,
+        or its socket has nothing unread (a look that takes nothing). Not while a forwarding thread holds the lock
+        (it may be passing an end on)."""
+        if not self.lock.acquire(blocking=False):
+            return False
+        try:
+            client = self.socks[True]
+            if client is None or self.closing or self.eof[True]:
+                return True
+            if self.socks[False] is None:
+                return False  # still connecting: its open goes first
+            try:
+                client.recv(1, socket.MSG_PEEK | socket.MSG_DONTWAIT)
+            except (BlockingIOError, InterruptedError):
+                return True  # nothing unread: the client is still there and quiet
+            except OSError:
+                return True  # a failed socket: its thread ends the connection
+            return False  # bytes or a FIN not yet taken by its thread
+        finally:
+            self.lock.release()
 
     def _opened(self) -> None:
         r = self.route

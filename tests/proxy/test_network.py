@@ -5,6 +5,7 @@ nothing that passes through stops the proxy."""
 
 from __future__ import annotations
 
+import contextlib
 import random
 import socket
 import struct
@@ -246,6 +247,48 @@ def test_a_stuck_recorder_does_not_hold_up_forwarding() -> None:
     server.close()
     frames = [r for r in records if r.kind == FRAME]
     assert [r.direction for r in frames] == ["request", "reply"] * 50  # each request before the reply it caused
+
+
+class _SlowToPassEnds(Recorder):
+    """A recorder called from the forwarding threads (``threadsafe``, as the recorder process's pipe is) that is
+    slow to take a client's FIN: the thread passing it on is held up, as by a full pipe."""
+
+    threadsafe = True
+
+    def __init__(self, hold: float) -> None:
+        super().__init__([])
+        self.hold = hold
+
+    def half_closed(self, conn: int, now: float, c2s: bool) -> None:
+        if c2s:
+            time.sleep(self.hold)
+        super().half_closed(conn, now, c2s)
+
+
+def test_a_client_that_closes_and_reconnects_at_once_reaches_the_target_in_that_order() -> None:
+    """The target (guide 6.1: one client per port) sees the first connection's FIN before the second's open, as
+    it would without the proxy, though the thread passing the FIN on is held up: a target that turns a newcomer
+    away while the port is taken would otherwise turn the client away (CI, stop 28: the replay test's recording
+    had a client turned away by the reference server that its replay then found served)."""
+    with contextlib.ExitStack() as stack:
+        server = stack.enter_context(socket.create_server(("127.0.0.1", 0)))
+        server.settimeout(5)
+        proxy = stack.enter_context(ProxyThread([server.getsockname()[1]], _SlowToPassEnds(hold=0.4)))
+        first = socket.create_connection(("127.0.0.1", proxy.ports[0]))
+        served = stack.enter_context(server.accept()[0])
+        first.sendall(STOP)
+        assert read_exactly(served, len(STOP)) == STOP
+        first.close()
+        second = stack.enter_context(socket.create_connection(("127.0.0.1", proxy.ports[0])))
+        newcomer = stack.enter_context(server.accept()[0])
+        served.setblocking(False)
+        try:
+            left = served.recv(1) == b""
+        except BlockingIOError:
+            left = False
+        assert left, "the second connection reached the target while the first was still there"
+        second.sendall(STOP)
+        assert read_exactly(newcomer, len(STOP)) == STOP
 
 
 def _cpu_ticks(thread: threading.Thread) -> int:
