@@ -41,15 +41,17 @@ def conform(
     profile: str = "strict",
     keyword: str | None = None,
     extra: Sequence[str] = (),
+    time_scale: float | None = None,
 ) -> tuple[RunResult, int | None]:
-    """A bounded run (the command line's default budget) against a fresh target; the run and the target's exit
-    status when it died during the run (None when it was still alive)."""
+    """A bounded run (the command line's default budget) against a fresh target, at ``time_scale`` (else the
+    target's in SCALE); the run and the target's exit status when it died during the run (None when it was still
+    alive)."""
     if kind.startswith("zoo:"):
         member, _, upstream = kind[4:].partition("@")
-        scale = LINK_SCALE if member == "slow-link" else SCALE[upstream or "reference"]
+        scale = time_scale or (LINK_SCALE if member == "slow-link" else SCALE[upstream or "reference"])
         target = launch.zoo(member, upstream=upstream or "reference", time_scale=scale, extra=extra)
     else:
-        scale = SCALE[kind]
+        scale = time_scale or SCALE[kind]
         target = launch.target(kind, time_scale=scale)
     with target:
         config = Config(
@@ -147,7 +149,11 @@ def test_slow_status_ends_soon_and_says_why() -> None:
 
 def test_the_emulator_passes_the_original_profile_with_its_readings_non_strict() -> None:
     emulator_or_skip()
-    run, _ = conform("emulator", profile="original", keyword="6.1/ports or MODE_MOTION_VEL or 5.9/parameters")
+    # at 5: the velocity cases resend CMD_MOVE_VEL within the 0.5 s watchdog, 50 ms of wall time at 10, which a
+    # loaded 2-core machine missed three attempts in a row (INCONCLUSIVE "a loaded machine, not the target")
+    run, _ = conform(
+        "emulator", profile="original", keyword="6.1/ports or MODE_MOTION_VEL or 5.9/parameters", time_scale=5.0
+    )
     soft = {r.case.id for r in run.results if r.verdict is Verdict.NON_STRICT}
     assert soft == {"6.1/ports/second-client-turned-away", "4.3/MODE_MOTION_VEL/watchdog"}
     assert not bad(run) and run.exit_code == 0
