@@ -69,7 +69,7 @@ READ_SIZE = 65536
 BACKLOG = 100
 PROBE_EVERY = 0.5  # s between probes of a target that refused a connection
 ORDER_WAIT = 1.0  # s a new connection waits at most for the earlier ones on its route to pass their input on
-ORDER_POLL = 0.001  # s between looks while it waits
+ORDER_POLL = 0.001  # s between looks while it waits for bytes its thread has not read (an end passed on wakes it)
 STOP_WAIT = 2.0  # s the proxy waits, when it stops, for a connection's threads to leave
 SPIN_US = 200  # us the C loop keeps polling after it moved bytes (0-400 measured: proxy/README.md, "Measured")
 MAX_SPIN_US = 1_000_000
@@ -109,6 +109,7 @@ class _Conn:
         self.ended_at = 0.0
         self.done = False
         self.wake = -1  # the C loop's eventfd: written by the teardown, it returns at once
+        self.watchers: list[Callable[[], None]] = []  # newer connections waiting for its client's end (the loop's)
 
     # ------------------------------------------------------------------ set-up
     async def connect(self) -> None:
@@ -161,10 +162,21 @@ class _Conn:
         their clients sent before this one arrived: the target sees the ends and the opens in the client's order."""
         earlier = [c for c in self.proxy.conns if c.route == self.route and c.number < self.number]
         deadline = time.monotonic() + ORDER_WAIT
-        while earlier and time.monotonic() < deadline:
-            earlier = [c for c in earlier if not c.passed_on()]
-            if earlier:
-                await asyncio.sleep(ORDER_POLL)
+        woken = asyncio.Event()
+        try:
+            while earlier and (left := deadline - time.monotonic()) > 0:
+                woken.clear()
+                for c in earlier:  # before the look: an end passed on after it wakes us
+                    if woken.set not in c.watchers:
+                        c.watchers.append(woken.set)
+                earlier = [c for c in earlier if not c.passed_on()]
+                if earlier:
+                    with contextlib.suppress(TimeoutError):
+                        await asyncio.wait_for(woken.wait(), min(left, ORDER_POLL))
+        finally:
+            for c in self.proxy.conns:
+                with contextlib.suppress(ValueError):
+                    c.watchers.remove(woken.set)
 
     def passed_on(self) -> bool:
         """Nothing its client sent waits in the proxy: it is connected to the target and its FIN was passed on,
@@ -267,8 +279,17 @@ class _Conn:
         if other is not None:
             with contextlib.suppress(OSError):
                 other.shutdown(socket.SHUT_WR)
+        if side:
+            self._tell_watchers()
         if self.eof[not side]:
             self.closing = True
+
+    def _tell_watchers(self) -> None:
+        """Its client's input is passed on (or never will be): wake the newer connections waiting for it."""
+        watchers, self.watchers = self.watchers, []
+        for wake in watchers:
+            with contextlib.suppress(RuntimeError):  # the loop is closed: the proxy has stopped
+                self.proxy.loop.call_soon_threadsafe(wake)
 
     def _reset_by(self, side: bool, exc: OSError) -> None:
         """``side`` reset the connection (or is gone): the other side gets a reset too."""
@@ -301,6 +322,7 @@ class _Conn:
             with contextlib.suppress(OSError):
                 os.close(self.wake)
             self.wake = -1
+        self._tell_watchers()
         self._finish()
 
     def _finish(self) -> None:
