@@ -32,9 +32,9 @@ Rules:
   what their clients had sent when it arrived, their FINs included (at most ``ORDER_WAIT`` s). A client that
   closes and reconnects at once is not turned away through the proxy when it would not be without it: its
   FIN would otherwise wait for a forwarding thread (the interpreter, a full recorder pipe) while the accepting
-  loop already connects the next. When the target refuses a
-  connection (its port no longer listens: CMD_EXIT, a restart), the proxy stops listening on that route too
-  and listens again once the target accepts a probe (every ``PROBE_EVERY`` s): a client sees the port as it is.
+  loop already connects the next. When the target refuses a connection (its port no longer listens:
+  CMD_EXIT, a restart), the proxy stops listening on that route too and listens again once the target accepts
+  a probe (every ``PROBE_EVERY`` s): a client sees the port as it is.
 - The proxy never dies of what passes through it: should the observer fail, the failure is reported once and
   recording stops while forwarding goes on.
 """
