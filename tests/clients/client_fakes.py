@@ -7,6 +7,7 @@ main transitions and can be told to misbehave (hold replies back, answer in reve
 
 from __future__ import annotations
 
+import abc
 import contextlib
 import math
 import re
@@ -16,7 +17,7 @@ import sys
 import threading
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, Self
 
 from pltf.client import EmergencyState, MotionMode, OperationState, PlannerState
 from pltf.spec.codec import REPLIES, TelegramDecoder, build, encode
@@ -55,9 +56,9 @@ TRANSITIONS = {
 }
 
 
-class LoopbackServer:
+class LoopbackServer(abc.ABC):
     """A TCP server on 127.0.0.1 (an ephemeral port) that serves each connection it accepts on a thread of its
-    own (``_serve``). A subclass sets its own state first, then calls ``start()``."""
+    own (``_serve``). A subclass sets its own state first, then calls ``start()``; ``with`` closes it."""
 
     def __init__(self) -> None:
         self.listener = socket.create_server(("127.0.0.1", 0))
@@ -89,8 +90,15 @@ class LoopbackServer:
             self.conns.append(conn)
             self.spawn(self._serve, conn)
 
+    @abc.abstractmethod
     def _serve(self, conn: socket.socket) -> None:
-        raise NotImplementedError
+        """Serve one accepted connection (on its own thread)."""
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
 
     def close(self) -> None:
         self._stop.set()

@@ -1,11 +1,11 @@
-"""Misbehaving platforms for the fault tests: each accepts on 127.0.0.1 and then does one wrong thing."""
+"""Platforms that misbehave for the fault tests, each accepting on 127.0.0.1 and then doing one wrong thing, and a
+relay that holds a platform's replies back (``HeldReplies``)."""
 
 from __future__ import annotations
 
 import contextlib
 import socket
 import threading
-from collections.abc import Iterator
 
 from pltf.spec.codec import encode
 from tests.clients.client_fakes import LoopbackServer, status_telegram
@@ -78,24 +78,6 @@ class HeldReplies(_Listening):
     def close(self) -> None:
         self.released.set()
         super().close()
-
-
-@contextlib.contextmanager
-def bad_platform(behaviour: str) -> Iterator[BadPlatform]:
-    p = BadPlatform(behaviour)
-    try:
-        yield p
-    finally:
-        p.close()
-
-
-@contextlib.contextmanager
-def held_replies(upstream_port: int) -> Iterator[HeldReplies]:
-    relay = HeldReplies(upstream_port)
-    try:
-        yield relay
-    finally:
-        relay.close()
 
 
 def free_port() -> int:

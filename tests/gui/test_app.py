@@ -18,7 +18,7 @@ from playwright import sync_api as playwright_sync
 
 from pltf.client import EmergencyState, MotionMode, OperationState, PlatformClient
 from tests.gui.conftest import Gateway, Platform, aim, expect_text, open_gui, wait_for
-from tests.gui.fakes import bad_platform, free_port
+from tests.gui.fakes import BadPlatform, free_port
 
 READY, RUNNING = OperationState.ST_OP_READY, OperationState.ST_OP_RUNNING
 
@@ -253,7 +253,7 @@ def test_each_fault_shows_its_message_and_the_gui_keeps_running(
         expect_text(status, re.compile(f"{re.escape(target)}|reconnecting"))
     misbehaving = [("silent", "stopped answering"), ("garbage", "malformed reply"), ("drop", "closed the connection")]
     for behaviour, text in misbehaving:
-        with bad_platform(behaviour) as bad:
+        with BadPlatform(behaviour) as bad:
             open_gui(page, gateway, bad.target, connected=False)
             expect_text(status, text)
     # the port already has a client (erratum E-WIRE-007): the platform turns the GUI away
@@ -278,7 +278,7 @@ def test_the_gateway_s_messages_follow_the_language(page: Any, gateway: Gateway,
         ("silent", "antwortet nicht mehr: keine Antwort seit 2 s"),
         ("garbage", "fehlerhafte Antwort"),
     ]:
-        with bad_platform(behaviour) as bad:
+        with BadPlatform(behaviour) as bad:
             open_gui(page, gateway, bad.target, connected=False)
             expect_text(status, text)
     with PlatformClient("127.0.0.1", platform.ports[0], timeout=5.0) as first:

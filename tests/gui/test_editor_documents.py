@@ -11,7 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from tests.gui.conftest import REPO, Gateway, Platform, aim, expect_text, open_gui, settled_view, wait_for
-from tests.gui.fakes import held_replies
+from tests.gui.fakes import HeldReplies
 from tests.gui.test_editor import _objects, _open_editor, _sent
 from tests.gui.test_editor_motion import drag, running_automatic
 
@@ -95,7 +95,7 @@ def test_the_platform_map_answered_after_the_roadmap_editor_opened_is_drawn_unde
     """The roadmap editor edits the roadmap over the platform's map (guide 5.5): a GET_MAP answered late (a busy
     platform, a reconnect) still brings the map; a late GET_ROADMAP does not replace the editor's roadmap (CI,
     stop 28: the map never appeared, and no station could be placed near its walls)."""
-    with held_replies(platform.ports[0]) as relay:
+    with HeldReplies(platform.ports[0]) as relay:
         open_gui(page, gateway, relay.target)
         page.get_by_role("menuitem", name="Edit", exact=True).click()
         page.get_by_role("menuitem", name="Edit Roadmap", exact=True).click()
