@@ -6,7 +6,7 @@ STAMP := $(VENV)/.installed
 
 SUDO := $(if $(filter 0,$(shell id -u)),,sudo)
 
-.PHONY: demo test test-slow lint typecheck docs docs-check bench clean install emulator gui chromium tshark
+.PHONY: demo test test-slow test-ray ray lint typecheck docs docs-check bench clean install emulator gui chromium tshark
 
 # The GUI's front end (gui/web, TypeScript + vite) is built into gui/static/ with the machine's node and npm.
 GUI_WEB := gui/web
@@ -65,10 +65,21 @@ test: $(STAMP) $(GUI_BUILT) chromium tshark emulator
 	$(BIN)/python -m pltf.gui.specgen --check
 	$(BIN)/python -m pltf.proxy.dissector --check
 	cd $(GUI_WEB) && npm test --silent
-	PLTF_REQUIRE_EMULATOR=1 $(BIN)/python -m pytest -q -m "not slow" -n 2 --dist loadfile
+	PLTF_REQUIRE_EMULATOR=1 $(BIN)/python -m pytest -q -m "not slow and not ray" -n 2 --dist loadfile
 
 test-slow: $(STAMP) tshark
-	$(BIN)/python -m pytest -q -m slow
+	$(BIN)/python -m pytest -q -m "slow and not ray"
+
+# Ray (an optional extra) for what runs past one machine: the tests start their own cluster on 127.0.0.1.
+RAY_STAMP := $(VENV)/.ray-installed
+$(RAY_STAMP): $(STAMP)
+	$(BIN)/python -m pip install --quiet -e '.[ray]'
+	@touch $(RAY_STAMP)
+
+ray: $(RAY_STAMP)
+
+test-ray: $(RAY_STAMP) emulator
+	RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER=0 PLTF_REQUIRE_RAY=1 $(BIN)/python -m pytest -q -m ray -p no:xdist
 
 lint: $(STAMP)
 	$(BIN)/ruff check .
