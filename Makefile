@@ -61,6 +61,7 @@ test: $(STAMP) $(GUI_BUILT) chromium tshark emulator
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .
 	$(BIN)/mypy
+	$(BIN)/lint-imports --no-cache
 	$(BIN)/python -m pltf.spec.docgen --check
 	$(BIN)/python -m pltf.gui.specgen --check
 	$(BIN)/python -m pltf.proxy.dissector --check
