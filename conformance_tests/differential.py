@@ -10,7 +10,9 @@ Rules:
   parameter reads and writes, documents; with motion allowed, relative moves in Automatic, each followed by a
   wait until the platform is at rest. Only the replies are compared; volatile fields (clocks, noise, sensor
   readings, values the guide leaves open) are ignored or compared within tolerances from ``spec/volatile.yaml``.
-- A diff is (step, request, field path, reference value, target value).
+- A diff is (step, request, field path, reference value, target value). A report groups them by reply and field
+  (``Differential.groups``): the same difference in every state of the chart walk is one line with a count, and a
+  difference listed in zoo/emulator_differences.yaml is named as documented, with its reason and errata.
 """
 
 from __future__ import annotations
@@ -20,19 +22,32 @@ from dataclasses import dataclass
 from typing import Any
 
 from rich.console import Console
-from rich.table import Table
 
 from pltf.conformance_tests import docdata
 from pltf.conformance_tests.cases.motion import rest
 from pltf.conformance_tests.catalogue import Case, Level, Tier
 from pltf.conformance_tests.chart import St
 from pltf.conformance_tests.context import CaseContext, Config, Target
+from pltf.conformance_tests.outcome import Outcome, Unreachable
+from pltf.conformance_tests.reports.differential import Differential, print_differential
 from pltf.spec.model import enum_classes
 from pltf.spec.telegram import Telegram
 from pltf.spec.volatile import rule, values_differ, volatile
 from pltf.zoo import launch
 
-__all__ = ["Diff", "Step", "compare", "diff_replies", "play", "relative", "run_differential", "script", "volatile"]
+__all__ = [
+    "Diff",
+    "Differential",
+    "Step",
+    "compare",
+    "diff_replies",
+    "play",
+    "relative",
+    "run_differential",
+    "script",
+    "session",
+    "volatile",
+]
 # The spec's enums are built at import; mypy sees them as plain IntEnum classes without members.
 MotionMode: Any = enum_classes()["MotionMode"]
 
@@ -239,19 +254,22 @@ def compare(reference: Config, target: Config, motion: bool) -> list[Diff]:
     return diffs
 
 
+def session(config: Config) -> Differential:
+    """The differential session against a reference server started for it. A target that closes, stalls or
+    garbles mid-session is the session's FAIL (``error``); one that cannot be reached is ``unreachable``."""
+    steps = len(script(config.motion_allowed))
+    try:
+        with launch.reference(time_scale=config.time_scale) as ref:
+            ref_config = Config("127.0.0.1", ref.ports[0], time_scale=config.time_scale, simulator=True)
+            return Differential(steps, compare(ref_config, config, motion=config.motion_allowed))
+    except Unreachable as exc:
+        return Differential(steps, error=f"target unreachable: {exc}", unreachable=True)
+    except (Outcome, OSError) as exc:
+        return Differential(steps, error=str(exc))
+
+
 def run_differential(config: Config, console: Console) -> int:
     """``pltf conform --differential``: 0 when the target answers like the reference server, else 1."""
-    with launch.reference(time_scale=config.time_scale) as ref:
-        ref_config = Config("127.0.0.1", ref.ports[0], time_scale=config.time_scale, simulator=True)
-        diffs = compare(ref_config, config, motion=config.motion_allowed)
-    if not diffs:
-        steps = len(script(config.motion_allowed))
-        console.print(f"differential: the target answered like the reference server ({steps} steps)")
-        return 0
-    table = Table(title=f"differential: {len(diffs)} field(s) differ from the reference server")
-    for col in ("step", "request", "field", "reference", "target"):
-        table.add_column(col)
-    for d in diffs[:200]:
-        table.add_row(str(d.step), d.request, d.path, repr(d.reference)[:50], repr(d.target)[:50])
-    console.print(table)
-    return 1
+    result = session(config)
+    print_differential(result, console)
+    return result.exit_code

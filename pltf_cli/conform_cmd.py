@@ -22,6 +22,7 @@ from pltf.conformance_tests.outcome import Outcome, Unreachable
 from pltf.conformance_tests.pace import run_budget
 
 if TYPE_CHECKING:
+    from pltf.conformance_tests.reports.differential import Differential
     from pltf.conformance_tests.runner import RunResult
 
 
@@ -129,8 +130,9 @@ def run_conform(args: argparse.Namespace) -> int:
     if not cases:
         raise CommandError("no case selected")
     run = Runner(config, cases, [ConsoleReporter(console, verbose=args.verbose)], baseline).run()
-    _write_reports(args, run, console)
-    code = _after_run(args, config, run, console)
+    differential = _differential(config, console) if args.differential and run.exit_code != USAGE else None
+    _write_reports(args, run, console, differential)
+    code = _after_run(args, config, run, console, differential)
     if run.harness_error:
         raise CommandError(f"target unreachable: {run.harness_error}")
     if code == USAGE:
@@ -171,19 +173,26 @@ def _list(cases: list[Case], console: Console) -> int:
     return 0
 
 
-def _write_reports(args: argparse.Namespace, run: RunResult, console: Console) -> None:
+def _write_reports(
+    args: argparse.Namespace, run: RunResult, console: Console, differential: Differential | None = None
+) -> None:
     from pltf.conformance_tests.reports.files import write_json, write_junit
     from pltf.conformance_tests.reports.html import write_html
 
     for path, write in ((args.junit, write_junit), (args.json, write_json), (args.html, write_html)):
         if path:
-            write(run, path)
+            try:
+                write(run, path, differential)
+            except OSError as exc:
+                raise CommandError(f"cannot write {path}: {exc.strerror or exc}") from None
             console.print(f"report written to {path}")
     if args.write_baseline:
         Path(args.write_baseline).write_text(Baseline.render(run.results), encoding="utf-8")
 
 
-def _after_run(args: argparse.Namespace, config: Config, run: RunResult, console: Console) -> int:
+def _after_run(
+    args: argparse.Namespace, config: Config, run: RunResult, console: Console, differential: Differential | None
+) -> int:
     """The run's exit code, raised by the coverage threshold and the differential and stateful runs."""
     code = run.exit_code
     if code == USAGE:
@@ -196,17 +205,23 @@ def _after_run(args: argparse.Namespace, config: Config, run: RunResult, console
                 f"(missing: {', '.join(m.missing[:5])})"
             )
         code = max(code, 1 if below else 0)
-    if args.differential:
-        code = max(code, _differential(config, console))
+    if differential is not None:
+        if differential.unreachable:
+            raise CommandError(f"differential run: {differential.error}")
+        code = max(code, differential.exit_code)
     if args.stateful:
         code = max(code, _stateful(config, args.stateful, args.stateful_out, console))
     return code
 
 
-def _differential(config: Config, console: Console) -> int:
-    from pltf.conformance_tests.differential import run_differential
+def _differential(config: Config, console: Console) -> Differential:
+    """The differential session (its grouped fields go to the console now and into every report)."""
+    from pltf.conformance_tests.differential import session
+    from pltf.conformance_tests.reports.differential import print_differential
 
-    return _guarded("differential run", console, lambda: run_differential(config, console))
+    result = session(config)
+    print_differential(result, console)
+    return result
 
 
 def _stateful(config: Config, examples: int, out: str, console: Console) -> int:

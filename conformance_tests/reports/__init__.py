@@ -6,8 +6,11 @@ the console and the HTML page show.
 
 from __future__ import annotations
 
+import os
+import tempfile
 from collections.abc import Iterable
 from dataclasses import dataclass, field
+from pathlib import Path
 
 from pltf.conformance_tests.catalogue import SECTIONS, Verdict
 
@@ -47,3 +50,16 @@ def summary_rows(results: Iterable[object]) -> list[Row]:
 
 def first_line(text: str) -> str:
     return text.splitlines()[0] if text else ""
+
+
+def write_atomic(path: str | Path, text: str) -> None:
+    """Write a report whole or not at all: a temporary file beside it, renamed over it."""
+    target = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", dir=target.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        os.replace(tmp, target)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise

@@ -1,15 +1,19 @@
-"""JUnit XML and JSON reports of a run (per case: requirement, verdict, messages and the wire log)."""
+"""JUnit XML and JSON reports of a run (per case: requirement, verdict, messages and the wire log), and the
+differential session's fields when one ran (``--differential``: a JSON section, a JUnit testsuite)."""
 
 from __future__ import annotations
 
 import json
 import xml.etree.ElementTree as ET
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from pltf.conformance_tests.catalogue import SECTIONS, Verdict
-from pltf.conformance_tests.reports import first_line
+from pltf.conformance_tests.reports import first_line, write_atomic
 from pltf.conformance_tests.runner import CaseResult, RunResult
+
+if TYPE_CHECKING:
+    from pltf.conformance_tests.reports.differential import Differential
 
 
 def wire_lines(result: CaseResult) -> list[str]:
@@ -46,7 +50,7 @@ def case_dict(r: CaseResult) -> dict[str, Any]:
     }
 
 
-def run_dict(run: RunResult) -> dict[str, Any]:
+def run_dict(run: RunResult, differential: Differential | None = None) -> dict[str, Any]:
     cfg = run.config
     return {
         "target": f"{cfg.host}:{cfg.port}",
@@ -62,12 +66,13 @@ def run_dict(run: RunResult) -> dict[str, Any]:
         "stale_baseline": run.stale,
         "notes": list(run.notes),
         "coverage": run.target.coverage.as_dict(),
+        "differential": None if differential is None else differential.as_dict(),
         "cases": [case_dict(r) for r in run.results],
     }
 
 
-def write_json(run: RunResult, path: str | Path) -> None:
-    Path(path).write_text(json.dumps(run_dict(run), indent=1) + "\n", encoding="utf-8")
+def write_json(run: RunResult, path: str | Path, differential: Differential | None = None) -> None:
+    write_atomic(path, json.dumps(run_dict(run, differential), indent=1) + "\n")
 
 
 def _outcome(r: CaseResult) -> tuple[str, str] | None:
@@ -85,8 +90,12 @@ def _outcome(r: CaseResult) -> tuple[str, str] | None:
     return None
 
 
-def write_junit(run: RunResult, path: str | Path) -> None:
-    suites = ET.Element("testsuites", name="pltf conform", tests=str(len(run.results)), time=f"{run.duration:.3f}")
+def write_junit(run: RunResult, path: str | Path, differential: Differential | None = None) -> None:
+    write_atomic(path, junit_text(run, differential))
+
+
+def junit_text(run: RunResult, differential: Differential | None = None, title: str = "pltf conform") -> str:
+    suites = ET.Element("testsuites", name=title, tests=str(len(run.results)), time=f"{run.duration:.3f}")
     by_section: dict[str, list[CaseResult]] = {}
     for r in run.results:
         by_section.setdefault(r.case.section, []).append(r)
@@ -126,5 +135,34 @@ def write_junit(run: RunResult, path: str | Path) -> None:
             out += [f"deviation: {d.describe()}" for d in r.deviations] + [f"note: {n}" for n in r.notes]
             out += ["wire log (t, port, dir, telegram, hex):", *wire_lines(r)]
             ET.SubElement(tc, "system-out").text = "\n".join(out)
+    if differential is not None:
+        _differential_suite(suites, differential)
     ET.indent(suites)
-    ET.ElementTree(suites).write(path, encoding="utf-8", xml_declaration=True)
+    return '<?xml version="1.0" encoding="utf-8"?>\n' + ET.tostring(suites, encoding="unicode") + "\n"
+
+
+def _differential_suite(suites: ET.Element, differential: Differential) -> None:
+    """One testcase per differing field (a failure: the differential fails the run), or one passing testcase."""
+    groups = differential.groups()
+    rows: list[tuple[str, str | None, str]] = [
+        (f"{g.reply} {g.path}", g.describe(), g.documented.describe() if g.documented else "") for g in groups
+    ]
+    if differential.error:
+        rows.append(("session", f"aborted: {differential.error}", ""))
+    if not rows:
+        rows = [("session", None, f"the target answered like the reference server ({differential.steps} steps)")]
+    suite = ET.SubElement(
+        suites,
+        "testsuite",
+        name="differential session against the reference server",
+        tests=str(len(rows)),
+        failures=str(sum(msg is not None for _, msg, _ in rows)),
+        errors="0",
+        skipped="0",
+    )
+    for name, msg, out in rows:
+        tc = ET.SubElement(suite, "testcase", classname="differential", name=name)
+        if msg is not None:
+            ET.SubElement(tc, "failure", type="differs", message=msg).text = "\n".join(x for x in (msg, out) if x)
+        if out:
+            ET.SubElement(tc, "system-out").text = out

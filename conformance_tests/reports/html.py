@@ -1,7 +1,8 @@
 """A self-contained HTML report: one file, inline CSS and a few lines of script, no external resources.
 
-Summary by guide section, the spec coverage, then one collapsible block per case with its requirement, verdict,
-messages, deviations from the errata and the wire log of every byte sent and received.
+Summary by guide section, the spec coverage, the differential session's fields when one ran, then one collapsible
+block per case with its requirement, verdict, messages, deviations from the errata and the wire log of every byte
+sent and received.
 """
 
 from __future__ import annotations
@@ -9,10 +10,14 @@ from __future__ import annotations
 import datetime
 from html import escape
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from pltf.conformance_tests.catalogue import Verdict
-from pltf.conformance_tests.reports import ORDER, first_line, summary_rows
+from pltf.conformance_tests.reports import ORDER, first_line, summary_rows, write_atomic
 from pltf.conformance_tests.runner import CaseResult, RunResult
+
+if TYPE_CHECKING:
+    from pltf.conformance_tests.reports.differential import Differential
 
 _COLOURS = {
     Verdict.PASS: "#2e7d32",
@@ -77,7 +82,26 @@ def _case(r: CaseResult) -> str:
     return "\n".join(parts)
 
 
-def render(run: RunResult) -> str:
+def differential_section(differential: Differential | None) -> str:
+    """The differential session: one row per differing field, with its count and why when documented."""
+    if differential is None:
+        return ""
+    rows = "".join(
+        f'<tr><td class="l">{escape(g.reply)}</td><td class="l">{escape(g.path)}</td><td class="l">'
+        + escape("; ".join(f"{a!r} / {b!r}"[:120] for a, b, _ in g.pairs))
+        + f'</td><td>{g.count}</td><td class="l">{escape(g.documented.describe()) if g.documented else ""}</td></tr>'
+        for g in differential.groups()
+    )
+    table = (
+        "<table><tr><th>reply</th><th>field</th><th>reference / target</th><th>times</th><th>documented</th></tr>"
+        f"{rows}</table>"
+        if rows
+        else ""
+    )
+    return f"<h2>Differential session</h2><p>{escape(differential.summary())}</p>{table}"
+
+
+def render(run: RunResult, differential: Differential | None = None) -> str:
     cfg = run.config
     when = datetime.datetime.fromtimestamp(run.started).isoformat(timespec="seconds")
     head = (
@@ -108,11 +132,12 @@ started {when}, {run.duration:.1f} s; exit status <b>{run.exit_code}</b>.</p>
 <h2>Results by guide section</h2><table>{head}{body}</table>
 <h2>Spec coverage</h2><table><tr><th>metric</th><th>covered</th><th>total</th><th>%</th><th>missing</th></tr>
 {cov}</table>
+{differential_section(differential)}
 <h2>Cases</h2><p id="filters"><button onclick="show('all')">all</button>{filters}</p>
 {"".join(_case(r) for r in run.results)}
 </body></html>
 """
 
 
-def write_html(run: RunResult, path: str | Path) -> None:
-    Path(path).write_text(render(run), encoding="utf-8")
+def write_html(run: RunResult, path: str | Path, differential: Differential | None = None) -> None:
+    write_atomic(path, render(run, differential))
