@@ -24,6 +24,7 @@ from pltf.zoo.bugs import BUGS, Leak
 from pltf.zoo.members import GET_STATUS_ID, MEMBERS, Member, member
 from pltf.zoo.relay import Relay
 from pltf.zoo.schedule import for_ident, jitter
+from pltf.zoo.values import STYLES
 
 
 def _pair(text: str, what: str, cast: type = int) -> tuple[float, float]:
@@ -87,6 +88,17 @@ def parser() -> argparse.ArgumentParser:
         metavar="LO,HI",
         help="every reply LO-HI ms late (jitter)",
     )
+    p.add_argument(
+        "--accept-every-ms",
+        type=float,
+        metavar="MS",
+        help="accept on a timer: every MS ms, every newcomer waiting in the backlog (slow-accept: 100)",
+    )
+    p.add_argument(
+        "--absurd",
+        choices=sorted(STYLES),
+        help="rewrite the doubles of GET_POSITION and GET_STATUS: little-endian byte order, NaN or infinity",
+    )
     p.add_argument("--segment", type=int, metavar="N", help="cut the replies into writes of 1..N bytes")
     p.add_argument("--status-delay", type=float, metavar="S", help="every CMD_GET_STATUS reply S seconds late")
     p.add_argument("--leak-kb", type=int, metavar="K", help="leak: KiB leaked per request (default 32)")
@@ -118,6 +130,10 @@ def configured(args: argparse.Namespace) -> Member:
         changes["turn_away"] = args.turn_away
     if args.delay_ms is not None:
         changes["delay"] = jitter(args.delay_ms[0] / 1000, args.delay_ms[1] / 1000)
+    if args.accept_every_ms is not None:
+        changes["accept_every"] = max(0.0, args.accept_every_ms / 1000)
+    if args.absurd is not None:
+        changes["absurd"] = args.absurd
     if args.segment is not None:
         changes["segment"] = max(0, args.segment)
     if args.status_delay is not None:

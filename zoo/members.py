@@ -7,6 +7,10 @@ Rules:
   ``turn_away="rst"``; with ``"refuse"`` the port stops listening and its connect is refused) while the port
   is busy and for ``release`` seconds after its client left;
   ``backlog`` - one client per port, the next one is accepted only when the current one has left.
+- ``accept_every`` > 0: the accept loop runs on a timer (every so many seconds, as a GUI application's timer would
+  run it) and takes every newcomer waiting in the backlog then; a newcomer is served up to that long after its
+  connect succeeded (the kernel completes the handshake at once).
+- ``absurd`` names a style of values.py: the doubles of the position and status replies are rewritten.
 - ``conforming`` members pass the standard conformance tier under ``profile`` (a test holds them to it);
   the others carry a planted bug and fail it.
 - Everything a member does is decided here and in bugs.py/schedule.py; relay.py only moves the bytes.
@@ -36,10 +40,12 @@ class Member:
     delay: Delay = no_delay
     segment: int = 0  # replies cut into writes of 1..segment bytes (0: as they come)
     bug: Callable[[], Bug] | None = None
+    accept_every: float = 0.0  # s between two runs of a timer-driven accept loop (0: accept at once)
+    absurd: str = ""  # a style of values.py: the doubles of GET_POSITION and GET_STATUS rewritten
 
     @property
     def shapes_replies(self) -> bool:
-        return self.delay is not no_delay or self.segment > 0
+        return self.delay is not no_delay or self.segment > 0 or bool(self.absurd)
 
 
 MEMBERS: dict[str, Member] = {
@@ -77,6 +83,20 @@ MEMBERS: dict[str, Member] = {
             True,
             profile="original",
             admit="backlog",
+        ),
+        Member(
+            "slow-accept",
+            "the accept loop runs every 100 ms (a GUI application's timer): a newcomer is served up to 100 ms "
+            "after its connect succeeded (matrix row 5)",
+            True,
+            accept_every=0.1,
+        ),
+        Member(
+            "absurd-values",
+            "reports absurd values: the doubles of GET_POSITION and GET_STATUS (the pose, the velocities, the GPS "
+            "position) as little-endian doubles (--absurd nan|inf: NaN or infinity in each)",
+            False,
+            absurd="little-endian",
         ),
         Member(
             "crash-after-start",

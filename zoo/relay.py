@@ -11,6 +11,8 @@ Rules:
   is one send(), one segment on the wire.
 - Half-close travels (a client's end-of-stream is passed on and the target may still answer); when the target
   closes, the client is closed after the replies still held for it.
+- A member with ``accept_every`` accepts on a timer: every tick it takes all newcomers waiting in the backlog.
+- A member with ``absurd`` rewrites the doubles of the position and status replies (values.py) as it passes them.
 - A crash calls ``on_exit`` (the member stops the target it started) and ends the process with status 134; a
   hang blocks the loop's thread for ``hang_seconds`` and then ends the process the same way with status 3.
 """
@@ -30,9 +32,10 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from pltf.zoo.bugs import Bug, Fault
-from pltf.zoo.frames import FrameCutter
+from pltf.zoo.frames import FrameCutter, Piece
 from pltf.zoo.members import Member
 from pltf.zoo.schedule import ReplySchedule, segments
+from pltf.zoo.values import rewrite
 
 SEGMENT_GAP = 0.001  # s between two writes of one chunk (slow link)
 HALF_CLOSE_WAIT = 15.0  # s the target may take to answer and close after a client's end-of-stream
@@ -113,27 +116,49 @@ class Relay:
         loop = asyncio.get_running_loop()
         port.idle.set()
         admit = self.member.admit
-        refuse = admit == "turn-away" and self.member.turn_away == "refuse"
         while True:
             if admit == "backlog" or ls is None:
                 await port.idle.wait()  # the next client stays in the listen backlog (or is refused) until then
             if ls is None:
                 ls = self._listen(self.ports[port.index])
-            sock, _ = await loop.sock_accept(ls)
-            if admit == "turn-away" and (port.busy or loop.time() < port.free_at):
-                self.refused[port.index] += 1
-                self._turn_away(sock)
-                continue
-            if admit != "transparent":
-                port.busy = True
-                port.idle.clear()
-            if refuse:  # the port stops listening: a newcomer's connect is refused until the port is free
-                ls.close()
-                ls = None
-            self.served[port.index] += 1
-            task = asyncio.create_task(self._client(port, sock))
-            self._tasks.add(task)
-            task.add_done_callback(self._tasks.discard)
+            for sock in await self._newcomers(loop, ls):
+                ls = self._admit(loop, port, ls, sock)
+
+    async def _newcomers(self, loop: asyncio.AbstractEventLoop, ls: socket.socket) -> list[socket.socket]:
+        """The next client, or, on a timer-driven accept loop, every client waiting when the timer fires."""
+        every = self.member.accept_every
+        if every <= 0:
+            return [(await loop.sock_accept(ls))[0]]
+        await asyncio.sleep(every - loop.time() % every)  # the timer's next tick
+        out: list[socket.socket] = []
+        while True:
+            try:
+                sock, _ = ls.accept()
+            except (BlockingIOError, InterruptedError):
+                return out
+            sock.setblocking(False)
+            out.append(sock)
+
+    def _admit(
+        self, loop: asyncio.AbstractEventLoop, port: PortState, ls: socket.socket | None, sock: socket.socket
+    ) -> socket.socket | None:
+        """Serve ``sock`` or turn it away (members.py: admit); the listening socket, None once it stopped."""
+        admit = self.member.admit
+        if admit == "turn-away" and (port.busy or loop.time() < port.free_at):
+            self.refused[port.index] += 1
+            self._turn_away(sock)
+            return ls
+        if admit != "transparent":
+            port.busy = True
+            port.idle.clear()
+        if admit == "turn-away" and self.member.turn_away == "refuse" and ls is not None:
+            ls.close()  # the port stops listening: a newcomer's connect is refused until the port is free
+            ls = None
+        self.served[port.index] += 1
+        task = asyncio.create_task(self._client(port, sock))
+        self._tasks.add(task)
+        task.add_done_callback(self._tasks.discard)
+        return ls
 
     @property
     def stats(self) -> dict[str, list[int]]:
@@ -249,7 +274,7 @@ class Relay:
             try:
                 while data := await reader.read(65536):
                     for piece in cutter.feed(data):
-                        schedule.push(piece, loop.time())
+                        schedule.push(self._reply(piece), loop.time())
                     more.set()
                 for piece in cutter.flush():
                     schedule.push(piece, loop.time())
@@ -274,6 +299,12 @@ class Relay:
                     await writer.drain()
         finally:
             reading.cancel()
+
+    def _reply(self, piece: Piece) -> Piece:
+        """A reply frame as the member reports it (absurd values rewritten)."""
+        if not (self.member.absurd and piece.frame):
+            return piece
+        return Piece(rewrite(piece, self.member.absurd), True)
 
     # ---- faults
     def _fault(self, fault: Fault) -> None:

@@ -7,8 +7,10 @@ line so that a loaded machine cannot blur them; the members' defaults run in tes
 from __future__ import annotations
 
 import json
+import math
 import shutil
 import socket
+import struct
 import subprocess
 import time
 from collections.abc import Iterator
@@ -325,3 +327,46 @@ def test_leak_grows_with_every_request_and_dies_at_its_limit(upstream: launch.La
 def test_the_member_tells_its_ports_and_upstream(upstream: launch.Launched) -> None:
     with member(upstream, "faithful") as z:
         assert sum("server started at port" in line for line in z.output) == 2
+
+
+def _first_reply_after_connect(z: launch.Launched, index: int) -> tuple[socket.socket, float]:
+    s = connect(z, index)
+    t0 = time.monotonic()
+    s.sendall(POSITION)
+    replies(s)
+    return s, time.monotonic() - t0
+
+
+def test_slow_accept_serves_a_newcomer_at_the_timers_next_tick(upstream: launch.Launched) -> None:
+    # a 1 s timer: the handshake completes at once (the kernel's backlog), the first reply waits for the tick;
+    # a newcomer right after a tick waits most of a period (a loop late by half a second would blur it); the two
+    # ports' timers tick together, and the server behind serves one client per port
+    with member(upstream, "slow-accept", "--accept-every-ms", "1000") as z:
+        first, _ = _first_reply_after_connect(z, 0)
+        second, wait = _first_reply_after_connect(z, 1)
+        assert wait > 0.5, f"served {wait * 1000:.0f} ms after the connect, before the timer's next tick"
+        t0 = time.monotonic()
+        first.sendall(POSITION)  # an admitted client is answered at once
+        replies(first)
+        assert time.monotonic() - t0 < 0.5
+        first.close()
+        second.close()
+
+
+def test_absurd_values_rewrite_the_doubles_of_position_and_status(upstream: launch.Launched) -> None:
+    _, b = upstream.ports  # the other port: the member's client on the first one is not turned away by it
+    with socket.create_connection(("127.0.0.1", b), timeout=5) as direct:
+        direct.sendall(POSITION)
+        [plain] = replies(direct)
+    with member(upstream, "absurd-values") as z, connect(z) as s:  # the default: little-endian
+        s.sendall(POSITION)
+        [swapped] = replies(s)
+    raw = struct.Struct(">d")
+    for name in ("angle", "vel_trans", "vel_rot"):  # the platform stands: the same pose, each double reversed
+        assert raw.pack(getattr(swapped, name)) == raw.pack(getattr(plain, name))[::-1]
+    for style, check in (("nan", math.isnan), ("inf", math.isinf)):
+        with member(upstream, "absurd-values", "--absurd", style) as z, connect(z) as s:
+            s.sendall(POSITION + STATUS)
+            pos, status = replies(s, 2)
+        assert (pos.x, pos.y) == (plain.x, plain.y)
+        assert all(check(v) for v in (pos.angle, pos.vel_trans, pos.vel_rot, status.gps_latitude, status.gps_longitude))
