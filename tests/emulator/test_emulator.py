@@ -1,6 +1,6 @@
-"""The Go emulator (emulator/, issue 17): it builds with its own script, its Go tests pass, it is gofmt-clean,
-and the toolkit's launcher starts it on ephemeral ports and reads them from its log, as it does the reference
-server's. Skipped (listed by -ra) only when the Go toolchain is absent, and then only outside make test
+"""The Go emulator (emulator/, issue 17): it builds with its own script, its Go tests pass, it is clean under gofmt
+and go vet, and the toolkit's launcher starts it on ephemeral ports and reads them from its log, as it does the
+reference server's. Skipped (listed by -ra) only when the Go toolchain is absent, and then only outside make test
 (tests/emulator_gate.py: PLTF_REQUIRE_EMULATOR=1 makes it a failure).
 """
 
@@ -39,6 +39,11 @@ def binary() -> Path:
 
 def test_go_tests_pass(binary: Path) -> None:
     proc = _run(["go", "test", "./..."])
+    assert proc.returncode == 0, (proc.stdout + proc.stderr)[-4000:]
+
+
+def test_go_vet_clean(binary: Path) -> None:
+    proc = _run(["go", "vet", "./..."])
     assert proc.returncode == 0, (proc.stdout + proc.stderr)[-4000:]
 
 

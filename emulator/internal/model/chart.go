@@ -5,7 +5,11 @@ package model
 // Rule 1: everything that decides whether a chart command is allowed lives in this table. A pair that is absent
 // is refused: logged, no reply (E-CMD-013), nothing changes.
 
-import pc "platformctrl"
+import (
+	pc "platformctrl"
+
+	"pltf/emulator/internal/ids"
+)
 
 // State is a state of the chart. NotConnected and Connected are both reported as ST_OP_NOT_INITIALIZED with
 // initialized = 0 (E-SRV-001).
@@ -41,39 +45,28 @@ type edge struct {
 	cmd  uint8
 }
 
-const (
-	idConnect  = 0
-	idShutdown = 1
-	idInit     = 2
-	idStart    = 11
-	idBreak    = 12
-	idContinue = 13
-	idStop     = 14
-	idSetMode  = 15
-)
-
 // transitions: where an allowed chart command leads.
 var transitions = map[edge]State{
 	// guide 4.2: "The initialization process starts with the command CMD_CONNECT_CAN" (E-CMD-002); E-SRV-002: once.
-	{NotConnected, idConnect}: Connected,
+	{NotConnected, ids.ConnectToPltf}: Connected,
 	// guide 4.2: "The command CMD_INIT_CAN initializes all hardware components"; E-SRV-002: only when connected.
-	{Connected, idInit}: Ready,
+	{Connected, ids.InitPltf}: Ready,
 	// guide 6.3 CMD_SHUTDOWN_PLTF "Used to shutdown the CAN communication"; E-SRV-003: from every state with the bus up.
-	{Connected, idShutdown}: NotConnected,
-	{Ready, idShutdown}:     NotConnected,
-	{Running, idShutdown}:   NotConnected,
-	{Breaked, idShutdown}:   NotConnected,
+	{Connected, ids.ShutdownPltf}: NotConnected,
+	{Ready, ids.ShutdownPltf}:     NotConnected,
+	{Running, ids.ShutdownPltf}:   NotConnected,
+	{Breaked, ids.ShutdownPltf}:   NotConnected,
 	// guide 6.3 CMD_START: 'The operation state changes into the state "Moving"'; E-SRV-018: from Ready only.
-	{Ready, idStart}: Running,
+	{Ready, ids.Start}: Running,
 	// guide 6.3 CMD_BREAK: 'changes into the state "Break"'; E-SRV-018: from Running only.
-	{Running, idBreak}: Breaked,
+	{Running, ids.Break}: Breaked,
 	// guide 6.3 CMD_CONTINUE: 'changes into the state "Moving"'; E-SRV-018: from Breaked only.
-	{Breaked, idContinue}: Running,
+	{Breaked, ids.Continue}: Running,
 	// guide 6.3 CMD_STOP: 'changes into the state "Ready"'; E-SRV-004: refused in Ready.
-	{Running, idStop}: Ready,
-	{Breaked, idStop}: Ready,
+	{Running, ids.Stop}: Ready,
+	{Breaked, ids.Stop}: Ready,
 	// guide 6.3 CMD_SET_MODE: 'The operation state has to be in "Ready" before changing to another motion mode'.
-	{Ready, idSetMode}: Ready,
+	{Ready, ids.SetMode}: Ready,
 }
 
 // Next is where cmd leads from s, and whether it is allowed there.
@@ -85,16 +78,7 @@ func Next(s State, cmd uint8) (State, bool) {
 // moveModes: the move commands each motion mode takes in Running (guide 4.3; E-SRV-005, E-CMD-014). Every other
 // mode (NO, JOYHARD, PROGRAM, POST_PROCESS_REPLAY) ignores all moves.
 var moveModes = map[pc.MotionMode]map[uint8]bool{
-	pc.ModeMotionVel:       {idMoveVelWheel: true, idMoveVel: true},
-	pc.ModeMotionJoysoft:   {idMoveVel: true},
-	pc.ModeMotionAutomatic: {idMovePath: true, idMoveToStation: true, idMoveAbs: true, idMoveRel: true},
+	pc.ModeMotionVel:       {ids.MoveVelWheel: true, ids.MoveVel: true},
+	pc.ModeMotionJoysoft:   {ids.MoveVel: true},
+	pc.ModeMotionAutomatic: {ids.MovePath: true, ids.MoveToStation: true, ids.MoveAbs: true, ids.MoveRel: true},
 }
-
-const (
-	idMovePath      = 19
-	idMoveToStation = 20
-	idMoveAbs       = 21
-	idMoveRel       = 22
-	idMoveVelWheel  = 23
-	idMoveVel       = 24
-)

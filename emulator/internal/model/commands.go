@@ -11,6 +11,8 @@ import (
 	"strconv"
 
 	pc "platformctrl"
+
+	"pltf/emulator/internal/ids"
 )
 
 // boards: what the emulator keeps of its CAN boards. There are no boards on its bus: nothing is ever received,
@@ -138,78 +140,83 @@ func doc(do func(p *Platform, t pc.Telegram) error) handler {
 
 func init() {
 	more := map[uint8]handler{
-		3: onBus(func(p *Platform, t pc.Telegram) { // CMD_SET_BRAKE: 0 engages, 1 releases (E-CMD-015)
+		ids.SetBrake: onBus(func(p *Platform, t pc.Telegram) { // CMD_SET_BRAKE: 0 engages, 1 releases (E-CMD-015)
 			r := t.(*pc.SetBrakeRequest)
 			p.board.brake[r.Motor] = r.State == pc.BrakeEnabled
 			p.Logf("brake of motor %d: %d", r.Motor, r.State)
 		}),
-		4: setDigout,
-		5: onBus(func(p *Platform, t pc.Telegram) {
+		ids.SetDigout: setDigout,
+		ids.StartUltrasonic: onBus(func(p *Platform, t pc.Telegram) {
 			p.board.usMask, p.board.usOn = t.(*pc.StartUltrasonicRequest).ActiveChannels, true
 			p.Logf("ultrasonic measurement started")
 		}),
-		6: onBus(func(p *Platform, t pc.Telegram) { p.board.usOn = false; p.Logf("ultrasonic measurement stopped") }),
-		7: onBus(func(p *Platform, t pc.Telegram) { p.board.listen[t.(*pc.AddCanListeningIdRequest).CanID] = true }),
-		8: onBus(func(p *Platform, t pc.Telegram) {
+		ids.StopUltrasonic: onBus(func(p *Platform, t pc.Telegram) {
+			p.board.usOn = false
+			p.Logf("ultrasonic measurement stopped")
+		}),
+		ids.AddCanListeningId: onBus(func(p *Platform, t pc.Telegram) {
+			p.board.listen[t.(*pc.AddCanListeningIdRequest).CanID] = true
+		}),
+		ids.RemoveCanListeningId: onBus(func(p *Platform, t pc.Telegram) {
 			delete(p.board.listen, t.(*pc.RemoveCanListeningIdRequest).CanID)
 		}),
-		9: onBus(func(p *Platform, t pc.Telegram) {
+		ids.SendCanMessage: onBus(func(p *Platform, t pc.Telegram) {
 			p.Logf("CAN message %d sent (no boards on the emulator's bus)", t.(*pc.SendCanMessageRequest).CanID)
 		}),
-		10: func(p *Platform, t pc.Telegram) Result {
+		ids.GetCanMessages: func(p *Platform, t pc.Telegram) Result {
 			return Result{Reply: &pc.GetCanMessagesReply{Messages: []pc.CanMessage{}}}
 		},
-		25: doc(func(p *Platform, t pc.Telegram) error {
+		ids.SetMap: doc(func(p *Platform, t pc.Telegram) error {
 			r := t.(*pc.SetMapRequest)
 			return p.Docs.Set(MapDoc, r.Name, r.XML)
 		}),
-		26: func(p *Platform, t pc.Telegram) Result {
+		ids.GetMap: func(p *Platform, t pc.Telegram) Result {
 			d := p.Docs.Active[MapDoc]
 			return Result{Reply: &pc.GetMapReply{XML: d.XML, Name: d.Name}}
 		},
-		27: doc(func(p *Platform, t pc.Telegram) error { return p.Docs.Load(MapDoc) }),
-		28: doc(func(p *Platform, t pc.Telegram) error { return p.Docs.Save(MapDoc) }),
-		29: func(p *Platform, t pc.Telegram) Result { p.mapping = true; p.Logf("mapping started"); return Result{} },
-		30: logged("mapping reset (the emulator builds no map)"),
-		31: func(p *Platform, t pc.Telegram) Result { p.mapping = false; p.Logf("mapping stopped"); return Result{} },
-		32: doc(func(p *Platform, t pc.Telegram) error {
+		ids.LoadMap:      doc(func(p *Platform, t pc.Telegram) error { return p.Docs.Load(MapDoc) }),
+		ids.SaveMap:      doc(func(p *Platform, t pc.Telegram) error { return p.Docs.Save(MapDoc) }),
+		ids.MappingStart: func(p *Platform, t pc.Telegram) Result { p.mapping = true; p.Logf("mapping started"); return Result{} },
+		ids.MappingReset: logged("mapping reset (the emulator builds no map)"),
+		ids.MappingStop:  func(p *Platform, t pc.Telegram) Result { p.mapping = false; p.Logf("mapping stopped"); return Result{} },
+		ids.SetRoadmap: doc(func(p *Platform, t pc.Telegram) error {
 			r := t.(*pc.SetRoadmapRequest)
 			return p.Docs.Set(RoadmapDoc, r.Name, r.XML)
 		}),
-		33: func(p *Platform, t pc.Telegram) Result {
+		ids.GetRoadmap: func(p *Platform, t pc.Telegram) Result {
 			d := p.Docs.Active[RoadmapDoc]
 			return Result{Reply: &pc.GetRoadmapReply{XML: d.XML, Name: d.Name}}
 		},
-		34: doc(func(p *Platform, t pc.Telegram) error { return p.Docs.Load(RoadmapDoc) }),
-		35: doc(func(p *Platform, t pc.Telegram) error { return p.Docs.Save(RoadmapDoc) }),
-		36: setFrame,
-		37: setParam,
-		38: getParam,
-		39: getParamVec,
-		40: doc(func(p *Platform, t pc.Telegram) error {
+		ids.LoadRoadmap:     doc(func(p *Platform, t pc.Telegram) error { return p.Docs.Load(RoadmapDoc) }),
+		ids.SaveRoadmap:     doc(func(p *Platform, t pc.Telegram) error { return p.Docs.Save(RoadmapDoc) }),
+		ids.SetFrmPltf:      setFrame,
+		ids.SetPltfParam:    setParam,
+		ids.GetPltfParam:    getParam,
+		ids.GetPltfParamVec: getParamVec,
+		ids.SetProgram: doc(func(p *Platform, t pc.Telegram) error {
 			return p.Docs.Set(ProgramDoc, "", t.(*pc.SetProgramRequest).XML)
 		}),
-		41: func(p *Platform, t pc.Telegram) Result {
+		ids.GetProgram: func(p *Platform, t pc.Telegram) Result {
 			return Result{Reply: &pc.GetProgramReply{XML: p.Docs.Active[ProgramDoc].XML}}
 		},
-		42: doc(func(p *Platform, t pc.Telegram) error { return p.Docs.Load(ProgramDoc) }),
-		43: doc(func(p *Platform, t pc.Telegram) error { return p.Docs.Save(ProgramDoc) }),
-		44: logged("no text-to-speech on the emulator"),
-		45: logged("no loudspeaker on the emulator"),
-		46: logged("no camera on the emulator"),
-		47: onBus(func(p *Platform, t pc.Telegram) { // the head drive is at its position at once (ideal)
+		ids.LoadProgram: doc(func(p *Platform, t pc.Telegram) error { return p.Docs.Load(ProgramDoc) }),
+		ids.SaveProgram: doc(func(p *Platform, t pc.Telegram) error { return p.Docs.Save(ProgramDoc) }),
+		ids.SpeakText:   logged("no text-to-speech on the emulator"),
+		ids.PlaySound:   logged("no loudspeaker on the emulator"),
+		ids.GrabImage:   logged("no camera on the emulator"),
+		ids.SetPosHeadDrive: onBus(func(p *Platform, t pc.Telegram) { // the head drive is at its position at once (ideal)
 			p.board.head = t.(*pc.SetPosHeadDriveRequest).Angle
 			p.Logf("head drive at %d deg", p.board.head)
 		}),
-		48: onBus(func(p *Platform, t pc.Telegram) { p.Logf("head drive velocity (positions are reached at once)") }),
-		49: logged("no pan-tilt camera on the emulator"),
-		50: getDebugData,
-		55: logged("mouse obstacle (the emulator has no obstacles)"),
-		56: logged("not used at the moment (E-CMD-010)"),
-		57: logged("not used at the moment (E-CMD-011)"),
-		58: logged("event (the emulator records and replays nothing)"),
-		59: func(p *Platform, t pc.Telegram) Result { return Result{Reply: &pc.GetCameraReply{}} }, // E-REP-020
-		99: logged("the host is never shut down (E-SRV-013)"),
+		ids.SetVelHeadDrive:        onBus(func(p *Platform, t pc.Telegram) { p.Logf("head drive velocity (positions are reached at once)") }),
+		ids.SetPosPanTiltCamera:    logged("no pan-tilt camera on the emulator"),
+		ids.GetDebugData:           getDebugData,
+		ids.MouseMove:              logged("mouse obstacle (the emulator has no obstacles)"),
+		ids.SetLogEnabled:          logged("not used at the moment (E-CMD-010)"),
+		ids.SetPostProcessFilename: logged("not used at the moment (E-CMD-011)"),
+		ids.SetEvent:               logged("event (the emulator records and replays nothing)"),
+		ids.GetCamera:              func(p *Platform, t pc.Telegram) Result { return Result{Reply: &pc.GetCameraReply{}} }, // E-REP-020
+		ids.ShutdownHost:           logged("the host is never shut down (E-SRV-013)"),
 	}
 	for id, h := range more {
 		handlers[id] = h

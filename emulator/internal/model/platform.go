@@ -8,6 +8,7 @@ import (
 	"math"
 	"strings"
 
+	"pltf/emulator/internal/ids"
 	"pltf/emulator/internal/params"
 
 	pc "platformctrl"
@@ -147,7 +148,7 @@ func halt(p *Platform) {
 
 func setMode(p *Platform, t pc.Telegram) Result {
 	mode := t.(*pc.SetModeRequest).Mode
-	if _, ok := Next(p.State, idSetMode); !ok {
+	if _, ok := Next(p.State, ids.SetMode); !ok {
 		return p.refuse(t, "the motion mode changes only in state ready (guide 6.3)")
 	}
 	p.Mode = mode
@@ -260,22 +261,22 @@ func movePath(p *Platform, t pc.Telegram) string {
 }
 
 var handlers = map[uint8]handler{
-	0:  chart(nil),                                              // CMD_CONNECT_TO_PLTF
-	1:  chart(func(p *Platform) { halt(p); p.board.busDown() }), // CMD_SHUTDOWN_PLTF (E-SRV-003)
-	2:  chart(func(p *Platform) { p.board.brake = [3]bool{} }),  // CMD_INIT_PLTF: the self test releases the brakes (E-HW-005)
-	11: chart(nil),                                              // CMD_START
-	12: chart(func(p *Platform) { p.Drive.Halted = true }),      // CMD_BREAK: halt, keep the command (E-MOT-005)
-	13: chart(func(p *Platform) { p.Drive.Halted = false }),     // CMD_CONTINUE
-	14: chart(halt),                                             // CMD_STOP
-	15: setMode,                                                 // CMD_SET_MODE
-	16: exit,                                                    // CMD_EXIT
-	17: func(p *Platform, t pc.Telegram) Result { p.Logf("close socket"); return Result{Close: true} },
-	18: getStatus,
-	74: getPosition,
-	19: move(movePath),
-	20: move(moveToStation),
-	21: move(moveAbs),
-	22: move(moveRel),
-	23: move(moveVelWheel),
-	24: move(moveVel),
+	ids.ConnectToPltf: chart(nil),
+	ids.ShutdownPltf:  chart(func(p *Platform) { halt(p); p.board.busDown() }), // E-SRV-003
+	ids.InitPltf:      chart(func(p *Platform) { p.board.brake = [3]bool{} }),  // the self test releases the brakes (E-HW-005)
+	ids.Start:         chart(nil),
+	ids.Break:         chart(func(p *Platform) { p.Drive.Halted = true }), // halt, keep the command (E-MOT-005)
+	ids.Continue:      chart(func(p *Platform) { p.Drive.Halted = false }),
+	ids.Stop:          chart(halt),
+	ids.SetMode:       setMode,
+	ids.Exit:          exit,
+	ids.CloseSocket:   func(p *Platform, t pc.Telegram) Result { p.Logf("close socket"); return Result{Close: true} },
+	ids.GetStatus:     getStatus,
+	ids.GetPosition:   getPosition,
+	ids.MovePath:      move(movePath),
+	ids.MoveToStation: move(moveToStation),
+	ids.MoveAbs:       move(moveAbs),
+	ids.MoveRel:       move(moveRel),
+	ids.MoveVelWheel:  move(moveVelWheel),
+	ids.MoveVel:       move(moveVel),
 }
