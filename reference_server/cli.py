@@ -120,6 +120,18 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument("--seed", type=int, default=0, help="seed of the simulation's random numbers (default 0)")
     p.add_argument(
+        "--fleet",
+        default=None,
+        metavar="FILE|N",
+        help="serve a fleet in one world: a fleet file (YAML: platforms with name, ports, pose, ...) or N platforms "
+        "at free places of the map on ports A+4k,B+4k from --ports A,B; data dirs DATA_DIR/NAME",
+    )
+    p.add_argument(
+        "--shared-map",
+        action="store_true",
+        help="with --fleet: a CMD_SET_MAP one platform accepts is sent to every other one too",
+    )
+    p.add_argument(
         "--log-level",
         default="INFO",
         choices=["DEBUG", "INFO", "WARNING", "ERROR"],
@@ -145,6 +157,13 @@ def build_platform(
 def run(args: argparse.Namespace, prog: str = "pltf serve") -> int:
     """Serve until CMD_EXIT or a signal; a user error is one line ``PROG: error: ...`` on stderr and status 2."""
     logging.basicConfig(level=args.log_level, format=LOG_FORMAT, datefmt=LOG_DATE, stream=sys.stderr, force=True)
+    if getattr(args, "fleet", None) is not None:
+        from pltf.reference_server.fleet.cli import run as run_fleet
+
+        return run_fleet(args, prog)
+    if getattr(args, "shared_map", False):
+        print(f"{prog}: error: --shared-map needs --fleet", file=sys.stderr)
+        return 2
     try:
         storage = Storage(args.data_dir)
     except OSError as exc:

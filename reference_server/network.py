@@ -113,8 +113,10 @@ class Server:
         *,
         stall_timeout: float = STALL_TIMEOUT,
         max_length: int = DEFAULT_MAX_LENGTH,
+        control: ControlLoop | None = None,
     ) -> None:
         self.platform = platform
+        self._shared = control  # a fleet's one control loop (reference_server/fleet/network.py), which it runs
         self.host = host
         self.requested_ports = list(ports)
         self.time_scale = time_scale
@@ -136,7 +138,7 @@ class Server:
 
     async def start(self) -> list[int]:
         loop = self._loop = asyncio.get_running_loop()
-        self.control = ControlLoop(self.platform, self.time_scale, loop.time())
+        self.control = self._shared or ControlLoop(self.platform, self.time_scale, loop.time())
         self._clock = SimClock(loop, self.control)
         try:
             for index, port in enumerate(self.requested_ports):
@@ -191,13 +193,20 @@ class Server:
             await self._stopped.wait()
         finally:
             sim.cancel()
-            self._close_listeners()
-            for conn in list(self._open):
-                conn.abort()
+            self.close()
             with contextlib.suppress(asyncio.CancelledError):
                 await sim
             log.info("server stopped")
         return self.exit_code
+
+    async def wait_stopped(self) -> None:
+        await self._stopped.wait()
+
+    def close(self) -> None:
+        """Close the listeners and every connection (what a stopping server does; a fleet's member on its own)."""
+        self._close_listeners()
+        for conn in list(self._open):
+            conn.abort()
 
     # ---- the control loop (50 Hz simulated; reference_server/control_loop.py)
     async def _simulate(self) -> None:

@@ -68,6 +68,8 @@ QUERIES = frozenset(
 
 
 class Platform:
+    logger: logging.Logger | logging.LoggerAdapter[logging.Logger] = log  # a fleet's platforms name themselves
+
     def __init__(
         self,
         data_dir: Storage,
@@ -244,7 +246,7 @@ class Platform:
     def log(self, level: int, msg: str, *args: object) -> None:
         text = msg % args if args else msg
         self.protocol_queue.append(f"{self.now:.3f} {text}".encode("latin-1", "replace").decode("latin-1"))
-        log.log(level, "%s", text)
+        self.logger.log(level, "%s", text)
 
     # --- the command handlers' interface (reference_server/commands/): outcomes, the mode check, documents
 

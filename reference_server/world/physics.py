@@ -10,6 +10,8 @@ Rules:
   step is at most ``MAX_STEP``, far less than the footprint; a longer one is split). A pose that already
   overlaps (an obstacle dropped onto the platform, a kidnap) may move only where the overlap does not grow.
 - pymunk does the contact tests and holds the spatial index; the poses are ours (exact arc integration).
+- In a fleet (``neighbours``, reference_server/world/neighbours.py) the other platforms' bodies count as well:
+  ``overlap`` is the deeper of the map's and theirs.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import cached_property
+from typing import Any
 
 import pymunk
 
@@ -70,6 +73,7 @@ class Physics:
         self._static: list[pymunk.Shape] = []
         self._obstacles: dict[object, pymunk.Shape] = {}
         self._known: tuple[float, float, float] | None = None  # the last move's end pose, if free
+        self.neighbours: Any = None  # the other bodies of a fleet (world.neighbours.Neighbours), or None
         self.footprint = footprint
         self.set_footprint(footprint)
 
@@ -116,6 +120,8 @@ class Physics:
         for info in self.space.shape_query(self.shape):
             for p in info.contact_point_set.points:
                 depth = max(depth, abs(p.distance), 1e-6)
+        if self.neighbours is not None:
+            depth = max(depth, self.neighbours.depth(x, y, a))
         return depth
 
     def move(self, x: float, y: float, a: float, v: float, w: float, dt: float) -> tuple[float, float, float, bool]:

@@ -15,6 +15,9 @@ Rules:
   changes rebuild the footprint and the planner).
 - The world keeps the TRUE pose (``truth``); everything the platform reports or decides on uses the
   ESTIMATE (``loc``). ``kidnap`` moves the truth only.
+- In a fleet (``attach``) the other platforms are bodies too (reference_server/world/neighbours.py): the
+  physics stops at them, and every sensing period the laser and the ultrasonic ring cast against the map's scene
+  plus their outlines within ``NEIGHBOUR_RANGE`` (``sensed``, the scene the last scan's hit ids index).
 """
 
 from __future__ import annotations
@@ -42,6 +45,7 @@ from pltf.reference_server.world.geometry import (
 )
 from pltf.reference_server.world.localization import Localization
 from pltf.reference_server.world.motion import Motion
+from pltf.reference_server.world.neighbours import Neighbours
 from pltf.reference_server.world.physics import Footprint, Physics
 from pltf.reference_server.world.planner import Plan, Planner, PlannerState
 from pltf.reference_server.world.raycast import Scene
@@ -57,6 +61,7 @@ MOUSE_RADIUS = 200.0  # mm: the CMD_MOUSE_MOVE obstacle (E-MOT-003)
 ODO_SCALE_SIGMA = 0.002  # per-run wheel scale error (drift)
 ODO_NOISE = 0.001  # mm^2 per mm of wheel travel: 1 mm per wheel and metre
 GRAVITY = 9.81  # m/s^2
+NEIGHBOUR_RANGE = sensors.LASER_FAN.max_range + 1000.0  # mm: other bodies farther away are neither seen nor heard
 
 
 def _initial_exact() -> F64:
@@ -100,6 +105,8 @@ class World:
         self._corners: F64 | None = np.zeros((0, 2))  # None: not computed yet for the active map
         self.map_scene = Scene.make()
         self.scene = Scene.make()
+        self.sensed = self.scene  # what the last sensing period cast against: the scene and, in a fleet, the others
+        self.neighbours: Neighbours | None = None
         self._planner: Planner | None = None
         self.truth: Pose = pose
         self.loc = Localization(*pose, cov=_initial_exact())
@@ -153,7 +160,23 @@ class World:
         self.scene = Scene.make(segs, circs)
         self.physics.set_map(segs, circs)
         # the last scan's hits index the old scene: its observations are gone until the next scan
-        self.last_scan, self._observation = None, None
+        self.last_scan, self._observation, self.sensed = None, None, self.scene
+
+    def attach(self, neighbours: Neighbours) -> None:
+        """Share the world with other bodies (a fleet): they block the body and the sensors see them."""
+        self.neighbours = self.physics.neighbours = neighbours
+        neighbours.set_footprint(self.footprint)
+        neighbours.place(*self.truth)
+
+    def _scene_now(self) -> Scene:
+        """The scene the sensors cast against now: the map's (with obstacles), plus the other bodies near."""
+        if self.neighbours is None:
+            return self.scene
+        x, y, _ = self.truth
+        others = self.neighbours.segments_near(x, y, NEIGHBOUR_RANGE)
+        if len(others) == 0:
+            return self.scene
+        return Scene.make(np.vstack([self.scene.segs, others]), self.scene.circs)
 
     # ---- geometry parameters
     def _geometry_key(self) -> tuple[float, float, float]:
@@ -167,6 +190,8 @@ class World:
             self.footprint = Footprint.from_params(*key)
             self.physics.set_footprint(self.footprint)
             self._planner = None
+            if self.neighbours is not None:
+                self.neighbours.set_footprint(self.footprint)
 
     @property
     def track(self) -> float:
@@ -198,6 +223,8 @@ class World:
         x0, y0, a0 = self.truth
         x, y, a, self.contact = self.physics.move(x0, y0, a0, v, w, dt)
         self.truth = (float(x), float(y), float((a + math.pi) % (2 * math.pi) - math.pi))
+        if self.neighbours is not None:
+            self.neighbours.place(*self.truth)
         da = (a - a0 + math.pi) % (2 * math.pi) - math.pi
         mid = a0 + 0.5 * da
         d = (x - x0) * math.cos(mid) + (y - y0) * math.sin(mid)
@@ -222,7 +249,8 @@ class World:
         self._next_sense = now + SCAN_PERIOD if self._next_sense is None else max(self._next_sense + SCAN_PERIOD, now)
         self._sync_geometry()
         mount = self.footprint.front
-        s = sensors.scan(self.truth, mount, self.scene, self.noise)
+        self.sensed = self._scene_now()
+        s = sensors.scan(self.truth, mount, self.sensed, self.noise)
         self.last_scan, self._scan_pose, self._observation = s, self.truth, None
         est = self.estimate
         pts = sensors.points_platform(s, mount)
@@ -240,20 +268,20 @@ class World:
         seq = self.perception.seq
         if self._us[0] != seq:
             mounts = sensors.ultrasonic_mounts(self.params)
-            self._us = (seq, sensors.ultrasonic(self._us_pose, mounts, self.scene, self._us_eps))
+            self._us = (seq, sensors.ultrasonic(self._us_pose, mounts, self.sensed, self._us_eps))
         return self._us[1]
 
     # ---- range callbacks for the fake hardware
     def scan(self, pose: Pose | None = None) -> list[float | None]:
         """541 ranges (mm, None: no echo) from ``pose`` (default: the true pose)."""
-        s = sensors.scan(pose or self.truth, self.footprint.front, self.scene, self._cb_noise)
+        s = sensors.scan(pose or self.truth, self.footprint.front, self._scene_now(), self._cb_noise)
         return [float(r) if math.isfinite(r) else None for r in s.ranges]
 
     def ultrasonic(self, pose: Pose | None = None) -> list[float]:
         """16 distances (mm, inf: no echo) from ``pose`` (default: the true pose)."""
         mounts = sensors.ultrasonic_mounts(self.params)
         eps = self._cb_noise.standard_normal(sensors.US_SENSORS)
-        return sensors.ultrasonic(pose or self.truth, mounts, self.scene, eps)
+        return sensors.ultrasonic(pose or self.truth, mounts, self._scene_now(), eps)
 
     # ---- state for the status telegram
     @property
@@ -270,7 +298,7 @@ class World:
                 self.last_scan,
                 self._scan_pose,
                 self.footprint.front,
-                self.scene,
+                self.sensed,
                 g.reflectors,
                 self._wall_corners(),
                 min_line,
@@ -284,6 +312,8 @@ class World:
     def kidnap(self, pose: Pose) -> None:
         """Move the platform without telling it (tests of "localization lost")."""
         self.truth = pose
+        if self.neighbours is not None:
+            self.neighbours.place(*pose)
 
     # ---- commands (the platform's side; guide 4.3, 6.3)
     def command_velocity(self, v: float, w: float, now: float, kind: str = "vel") -> None:
@@ -333,6 +363,8 @@ class World:
         """The body and the estimate at ``pose`` (the start pose at boot)."""
         self.truth = pose
         self.loc.set_estimate(*pose, exact=True)
+        if self.neighbours is not None:
+            self.neighbours.place(*pose)
 
     def event(self, event: int, now: float) -> str:
         """guide 6.3 CMD_SET_EVENT (1..6): post-process recording and replay; returns a log line."""
@@ -391,7 +423,7 @@ class World:
         """The serial scanner's source: the latest laser scan of ``sense`` (10 Hz), whatever its own period; mm,
         inf: no echo (the S300 encodes the ranges as an array: no list of floats and Nones in between)."""
         if self.last_scan is None:  # before the first sensing period: a scan of its own, as ``scan`` casts it
-            return sensors.scan(self.truth, self.footprint.front, self.scene, self._cb_noise).ranges
+            return sensors.scan(self.truth, self.footprint.front, self._scene_now(), self._cb_noise).ranges
         return self.last_scan.ranges.copy()
 
     def us_ranges(self, now: float) -> list[float | None]:

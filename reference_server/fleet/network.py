@@ -1,0 +1,118 @@
+"""The asyncio shell of a fleet: one event loop, one simulated clock, every member on its own ports.
+
+Rules:
+- One ``ControlLoop`` (reference_server/control_loop.py) ticks the whole ``Fleet`` at 50 Hz simulated time; every
+  member's ``network.Server`` shares it (``Server(..., control=...)``), so a telegram on any port first runs the
+  ticks due for the whole world, exactly as a single platform's server does for its one platform.
+- Each member's ports are served by a ``network.Server`` of its own: the protocol on each port is that of a single
+  platform (guide 6.1), and each logs "server started at port N" for its ports as ``pltf serve`` does, then
+  "platform NAME at HOST:PORT[,PORT]" once (the line a user looks for).
+- CMD_EXIT on a member's port ends that member only (it leaves the world, its ports close); the fleet exits with
+  status 0 when the last member has gone, on SIGINT or SIGTERM.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import signal
+from collections.abc import Callable
+
+from pltf.reference_server.control_loop import ControlLoop
+from pltf.reference_server.fleet.fleet import Fleet, Member
+from pltf.reference_server.network import Server
+
+log = logging.getLogger("pltf.server")
+
+
+class FleetServer:
+    def __init__(self, fleet: Fleet, host: str, time_scale: float = 1.0) -> None:
+        self.fleet = fleet
+        self.host = host
+        self.time_scale = time_scale
+        self.servers: dict[str, Server] = {}
+        self._stopped = asyncio.Event()
+        self.control: ControlLoop | None = None
+
+    async def start(self) -> None:
+        loop = asyncio.get_running_loop()
+        self.control = ControlLoop(self.fleet, self.time_scale, loop.time())
+        try:
+            for m in self.fleet.members:
+                srv = Server(m.platform, self.host, m.ports, self.time_scale, control=self.control)
+                await srv.start()
+                self.servers[m.name] = srv
+                log.info("platform %s at %s", m.name, ",".join(f"{self.host}:{p}" for p in srv.ports))
+        except OSError:
+            for srv in self.servers.values():
+                srv.close()
+            raise
+
+    def stop(self) -> None:
+        self._stopped.set()
+
+    async def run(self) -> int:
+        """Boot the fleet, tick it until every member exited or ``stop``, then close everything."""
+        control, loop = self.control, asyncio.get_running_loop()
+        assert control is not None, "FleetServer.start first"
+        self.fleet.boot(control.begin(loop.time()))
+        control.begin(loop.time())  # the boot took its time: the first tick is one period after it
+        tasks = [asyncio.create_task(self._simulate(control))]
+        tasks += [asyncio.create_task(self._watch(m)) for m in self.fleet.members]
+        try:
+            await self._stopped.wait()
+        finally:
+            for task in tasks:
+                task.cancel()
+            for srv in self.servers.values():
+                srv.close()
+            for task in tasks:
+                with contextlib.suppress(asyncio.CancelledError):
+                    await task
+            log.info("fleet stopped")
+        return 0
+
+    async def _simulate(self, control: ControlLoop) -> None:
+        loop = asyncio.get_running_loop()
+        while True:
+            control.now(loop.time())
+            await asyncio.sleep(max(0.0, control.wall_at(control.next_tick) - loop.time()))
+
+    async def _watch(self, member: Member) -> None:
+        """A member's server stopped (CMD_EXIT): it leaves; the last one to leave ends the fleet."""
+        srv = self.servers[member.name]
+        await srv.wait_stopped()
+        srv.close()
+        self.fleet.retire(member)
+        if not self.fleet.live:
+            self.stop()
+
+
+async def serve(
+    fleet: Fleet,
+    host: str,
+    time_scale: float = 1.0,
+    *,
+    ready: Callable[[FleetServer], None] | None = None,
+    handle_signals: bool = True,
+) -> int:
+    server = FleetServer(fleet, host, time_scale)
+    await server.start()
+    if handle_signals:
+        loop = asyncio.get_running_loop()
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            loop.add_signal_handler(sig, _on_signal, server, sig)
+    if ready is not None:
+        ready(server)
+    return await server.run()
+
+
+def _on_signal(server: FleetServer, sig: signal.Signals) -> None:
+    log.info("%s received: fleet exits", sig.name)
+    server.stop()
+
+
+def run(fleet: Fleet, host: str, time_scale: float = 1.0) -> int:
+    """Blocking entry point for the command line."""
+    return asyncio.run(serve(fleet, host, time_scale))
