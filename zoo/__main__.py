@@ -15,7 +15,7 @@ import dataclasses
 import json
 import signal
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import NoReturn
 
@@ -59,14 +59,14 @@ def parser() -> argparse.ArgumentParser:
         prog="python -m pltf.zoo",
         description=__doc__.split("\n\n")[0],
         formatter_class=argparse.RawDescriptionHelpFormatter,
-        epilog="members:\n" + "\n".join(f"  {m.name:18} {m.summary}" for m in MEMBERS.values()),
+        epilog="members:\n" + "\n".join(f"  {m.name:20} {m.summary}" for m in MEMBERS.values()),
     )
     p.add_argument("member", nargs="?", help="the member to run (--list shows them)")
     p.add_argument("--list", action="store_true", help="list the members and exit")
     where = p.add_mutually_exclusive_group()
     where.add_argument("--serve", choices=("reference", "emulator"), help="start this target behind the member")
     where.add_argument("--upstream", type=_upstream, metavar="HOST:PORT,PORT", help="a target that runs already")
-    p.add_argument("--host", default="127.0.0.1", help="address to listen on (default 127.0.0.1)")
+    p.add_argument("--host", help="address to listen on (default 127.0.0.1; ipv6-only: ::1)")
     p.add_argument("--ports", type=_ports, default=(0, 0), metavar="A,B", help="ports to listen on (default 0,0: any)")
     p.add_argument("--seed", type=int, default=1, help="seed of the member's random delays (and of --serve's target)")
     p.add_argument("--time-scale", type=float, default=1.0, metavar="X", help="time scale of the --serve target")
@@ -98,6 +98,10 @@ def parser() -> argparse.ArgumentParser:
         "--absurd",
         choices=sorted(STYLES),
         help="rewrite the doubles of GET_POSITION and GET_STATUS: little-endian byte order, NaN or infinity",
+    )
+    p.add_argument("--idle-seconds", type=float, metavar="S", help="close a client silent for S seconds (idle-drop)")
+    p.add_argument(
+        "--restart-every", type=float, metavar="S", help="restart every S seconds, the ports gone for 2 s (restarts)"
     )
     p.add_argument("--segment", type=int, metavar="N", help="cut the replies into writes of 1..N bytes")
     p.add_argument("--status-delay", type=float, metavar="S", help="every CMD_GET_STATUS reply S seconds late")
@@ -134,6 +138,10 @@ def configured(args: argparse.Namespace) -> Member:
         changes["accept_every"] = max(0.0, args.accept_every_ms / 1000)
     if args.absurd is not None:
         changes["absurd"] = args.absurd
+    if args.idle_seconds is not None:
+        changes["idle_drop"] = max(0.0, args.idle_seconds)
+    if args.restart_every is not None:
+        changes["restart_every"] = max(0.0, args.restart_every)
     if args.segment is not None:
         changes["segment"] = max(0, args.segment)
     if args.status_delay is not None:
@@ -159,7 +167,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser().parse_args(argv)
     if args.list:
         for m in MEMBERS.values():
-            print(f"{m.name:18} {'conforming (' + m.profile + ')' if m.conforming else 'planted bug':22} {m.summary}")
+            print(
+                f"{m.name:18} {'conforming (' + m.profile + ')' if m.conforming else 'fails the suite':22} {m.summary}"
+            )
         return 0
     _check(args)
     m = configured(args)
@@ -177,14 +187,15 @@ def main(argv: Sequence[str] | None = None) -> int:
             m,
             host,
             list(ports),
-            host=args.host,
+            host=args.host or m.host,
             ports=args.ports,
             seed=args.seed,
             hang_seconds=args.hang_seconds,
             on_exit=behind.cleanup if behind else lambda: None,
+            on_restart=_restarter(behind),
             log=lambda line: print(line, flush=True),
         )
-        _serve(relay, m.name, args.host)
+        _serve(relay, m.name, args.host or m.host)
         return 0
     finally:
         if args.stats and relay is not None:
@@ -216,6 +227,18 @@ def _start_behind(args: argparse.Namespace) -> launch.Launched:
             behind.cleanup()
         _error(str(exc))
     return behind
+
+
+def _restarter(behind: launch.Launched | None) -> Callable[[], Sequence[int]]:
+    """What a restart does to the target behind: a fresh instance (state lost) on new ports; nothing with
+    --upstream (the member only drops its connections and ports)."""
+
+    def restart() -> Sequence[int]:
+        if behind is None:
+            return ()
+        return behind.start()
+
+    return restart
 
 
 def _serve(relay: Relay, name: str, listen_host: str) -> None:

@@ -14,7 +14,8 @@ from __future__ import annotations
 import struct
 from dataclasses import dataclass
 
-from pltf.spec.codec import DEFAULT_MAX_LENGTH, HEADER
+from pltf.spec import errors
+from pltf.spec.codec import DEFAULT_MAX_LENGTH, HEADER, decode_frame
 
 _LEN = struct.Struct(">I")
 OVERHEAD = 8
@@ -70,3 +71,15 @@ class FrameCutter:
         rest = Piece(bytes(self._buf), False)
         self._buf.clear()
         return [rest]
+
+
+def well_formed(piece: Piece) -> bool:
+    """Whether a piece is a whole request frame the codec decodes (a known command with its fields): what a strict
+    member (matrix row 8) demands; raw bytes out of step, an unknown identifier or a bad field are not."""
+    if not piece.frame:
+        return False
+    try:
+        decode_frame(piece.data, "request")
+    except errors.ProtocolError:
+        return False
+    return True

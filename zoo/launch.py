@@ -444,7 +444,10 @@ def zoo(
         str(seed),
         *extra,
     )
-    return Launched(argv, ports=ports, name=f"zoo {member} ({upstream})")
+    from pltf.zoo.members import MEMBERS  # here: the launcher of the other targets needs no codec
+
+    host = MEMBERS[member].host if member in MEMBERS else "127.0.0.1"
+    return Launched(argv, host=host, ports=ports, name=f"zoo {member} ({upstream})")
 
 
 def target(kind: str, **kw: object) -> Launched:

@@ -10,6 +10,17 @@ Rules:
 - ``accept_every`` > 0: the accept loop runs on a timer (every so many seconds, as a GUI application's timer would
   run it) and takes every newcomer waiting in the backlog then; a newcomer is served up to that long after its
   connect succeeded (the kernel completes the handshake at once).
+- How a member ends a connection (matrix rows 1, 3, 7, 8; spec/errata/behaviour.yaml): ``on_fin`` "pass" lets
+  a client's half-close travel (the target may still answer), "end" ends the whole session at the client's FIN
+  (replies still owed are lost); ``close`` "rst" resets the client's connection wherever it would close it;
+  ``idle_drop`` closes a client that sent nothing for so many seconds; ``malformed`` "close" closes on a malformed
+  frame or an unknown command (after the replies owed for the frames before it), "skip" drops such a frame and
+  goes on ("": the target behind decides; both the reference server and the emulator close, E-WIRE-006).
+- ``silent`` (row 9): requests other than CMD_CONNECT_TO_PLTF are swallowed while the platform is not connected
+  (the chart of guide 4.2 followed from the commands, bugs.PlatformView): nothing is answered before it.
+- ``backlog`` is the listen backlog (row 6: 1); ``host`` the address it listens on by default (row 12: ::1);
+  ``restart_every`` (row 10): every so many seconds the member drops every connection, stops listening for
+  ``restart_down`` seconds and starts the target behind it afresh (state lost).
 - ``absurd`` names a style of values.py: the doubles of the position and status replies are rewritten.
 - ``conforming`` members pass the standard conformance tier under ``profile`` (a test holds them to it);
   the others carry a planted bug and fail it.
@@ -42,10 +53,25 @@ class Member:
     bug: Callable[[], Bug] | None = None
     accept_every: float = 0.0  # s between two runs of a timer-driven accept loop (0: accept at once)
     absurd: str = ""  # a style of values.py: the doubles of GET_POSITION and GET_STATUS rewritten
+    on_fin: str = "pass"  # "pass" (half-close travels) or "end" (the client's FIN ends the session)
+    close: str = "fin"  # "fin" or "rst": how the member closes a client's connection
+    idle_drop: float = 0.0  # s of silence from a client after which the member closes it (0: never)
+    malformed: str = ""  # a malformed frame or an unknown command: "close", "skip" ("": as the target behind does)
+    silent: bool = False  # nothing answered before CMD_CONNECT_TO_PLTF
+    backlog: int = 16  # the listen backlog
+    host: str = "127.0.0.1"  # the address it listens on unless --host says otherwise
+    restart_every: float = 0.0  # s between two restarts (0: never)
+    restart_down: float = 2.0  # s the ports are gone at a restart
+    row: str = ""  # the row of the behaviour matrix (zoo/README.md)
 
     @property
     def shapes_replies(self) -> bool:
         return self.delay is not no_delay or self.segment > 0 or bool(self.absurd)
+
+    @property
+    def cuts_requests(self) -> bool:
+        """Whether the requests are cut into frames on their way (a bug, a strict or a silent member)."""
+        return self.bug is not None or bool(self.malformed) or self.silent
 
 
 MEMBERS: dict[str, Member] = {
@@ -83,6 +109,70 @@ MEMBERS: dict[str, Member] = {
             True,
             profile="original",
             admit="backlog",
+        ),
+        Member(
+            "fin-ends-session",
+            "the client's FIN (half-close) ends the whole session: the connection behind is closed at once and the "
+            "replies still owed are lost (matrix row 1)",
+            True,
+            on_fin="end",
+        ),
+        Member(
+            "close-rst",
+            "closes a client's connection with a reset (RST) instead of a FIN: after CMD_CLOSE_SOCKET, when the "
+            "target closes, after the client's FIN (matrix row 3)",
+            True,
+            close="rst",
+        ),
+        Member(
+            "backlog-one",
+            "one client per port with a listen backlog of 1: a newcomer waits in the backlog, the SYNs beyond it "
+            "are dropped (the connect times out or retries; matrix row 6)",
+            True,
+            profile="original",
+            admit="backlog",
+            backlog=1,
+        ),
+        Member(
+            "idle-drop",
+            "closes a client that sent nothing for 10 s (--idle-seconds; matrix row 7)",
+            True,
+            idle_drop=10.0,
+        ),
+        Member(
+            "strict-framing",
+            "closes the connection on a malformed frame or an unknown command instead of skipping it, after the "
+            "replies owed for the frames before it (matrix row 8; E-WIRE-006's decision, whatever the target does)",
+            True,
+            malformed="close",
+        ),
+        Member(
+            "lenient-framing",
+            "skips a malformed frame or an unknown command and goes on: the frame is dropped unanswered (matrix row "
+            "8, E-WIRE-006's alternative reading 'ignore the telegram and go on')",
+            True,
+            profile="original",
+            malformed="skip",
+        ),
+        Member(
+            "silent-until-connect",
+            "answers nothing before CMD_CONNECT_TO_PLTF: while the platform is not connected every other request "
+            "is swallowed (matrix row 9)",
+            True,
+            silent=True,
+        ),
+        Member(
+            "restarts",
+            "restarts every 60 s (--restart-every): every connection dropped, the ports gone for 2 s, then a fresh "
+            "target behind (state lost; matrix row 10)",
+            True,
+            restart_every=60.0,
+        ),
+        Member(
+            "ipv6-only",
+            "listens on [::1] only: an IPv4 connect to 127.0.0.1 is refused (matrix row 12)",
+            True,
+            host="::1",
         ),
         Member(
             "slow-accept",

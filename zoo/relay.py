@@ -27,12 +27,12 @@ import socket
 import struct
 import sys
 import time
-from collections.abc import Callable, Coroutine
+from collections.abc import Callable, Coroutine, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from pltf.zoo.bugs import Bug, Fault
-from pltf.zoo.frames import FrameCutter, Piece
+from pltf.zoo.bugs import NAME, NC, Bug, Fault, PlatformView
+from pltf.zoo.frames import FrameCutter, Piece, well_formed
 from pltf.zoo.members import Member
 from pltf.zoo.schedule import ReplySchedule, segments
 from pltf.zoo.values import rewrite
@@ -50,12 +50,22 @@ async def _guarded(pump: Coroutine[Any, Any, None]) -> bool:
     return True
 
 
-async def _pump(loop: asyncio.AbstractEventLoop, src: socket.socket, dst: socket.socket) -> None:
-    """``src`` to ``dst`` until ``src``'s end-of-stream, which is passed on (half-close)."""
-    while data := await loop.sock_recv(src, 65536):
+async def _pump(
+    loop: asyncio.AbstractEventLoop, src: socket.socket, dst: socket.socket, *, eof: bool = True, idle: float = 0.0
+) -> None:
+    """``src`` to ``dst`` until ``src``'s end-of-stream, which is passed on (half-close) when ``eof``; with ``idle``,
+    a ``src`` silent that long ends the pump (TimeoutError)."""
+    while data := await _recv(loop, src, idle):
         await loop.sock_sendall(dst, data)
-    with contextlib.suppress(OSError):
-        dst.shutdown(socket.SHUT_WR)
+    if eof:
+        with contextlib.suppress(OSError):
+            dst.shutdown(socket.SHUT_WR)
+
+
+async def _recv(loop: asyncio.AbstractEventLoop, src: socket.socket, idle: float) -> bytes:
+    if idle <= 0:
+        return await loop.sock_recv(src, 65536)
+    return await asyncio.wait_for(loop.sock_recv(src, 65536), idle)
 
 
 @dataclass
@@ -78,6 +88,7 @@ class Relay:
         seed: int = 1,
         hang_seconds: float = 600.0,
         on_exit: Callable[[], None] = lambda: None,
+        on_restart: Callable[[], Sequence[int]] = lambda: (),
         log: Callable[[str], None] = print,
     ) -> None:
         self.member = member
@@ -87,6 +98,8 @@ class Relay:
         self.bug: Bug | None = member.bug() if member.bug is not None else None
         self.hang_seconds = hang_seconds
         self.on_exit = on_exit
+        self.on_restart = on_restart  # starts the target behind afresh; its new ports (empty: the same)
+        self.view = PlatformView()  # the platform's state from the commands relayed (silent members)
         self.log = log
         self.ports: list[int] = []
         self.served = [0, 0]  # clients admitted, per port
@@ -95,10 +108,12 @@ class Relay:
 
     # ---- start
     def _listen(self, want: int) -> socket.socket:
-        ls = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        ls = socket.socket(socket.AF_INET6 if ":" in self.host else socket.AF_INET, socket.SOCK_STREAM)
         ls.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        if ":" in self.host:  # row 12: IPv6 only, no IPv4-mapped addresses
+            ls.setsockopt(socket.IPPROTO_IPV6, socket.IPV6_V6ONLY, 1)
         ls.bind((self.host, want))
-        ls.listen(16)
+        ls.listen(self.member.backlog)
         ls.setblocking(False)
         return ls
 
@@ -106,11 +121,32 @@ class Relay:
         listeners = [self._listen(want) for want in self.want]
         self.ports = [ls.getsockname()[1] for ls in listeners]
         ready(self.ports)
-        try:
-            await asyncio.gather(*(self._accept_loop(PortState(i), ls) for i, ls in enumerate(listeners)))
-        finally:
-            for ls in listeners:
-                ls.close()
+        while True:
+            loops = asyncio.gather(*(self._accept_loop(PortState(i), ls) for i, ls in enumerate(listeners)))
+            try:
+                if not self.member.restart_every:
+                    await loops
+                    return
+                await asyncio.wait({asyncio.ensure_future(loops)}, timeout=self.member.restart_every)
+            finally:
+                loops.cancel()
+                for ls in listeners:
+                    ls.close()
+            listeners = await self._restart()
+
+    async def _restart(self) -> list[socket.socket]:
+        """Row 10: every connection dropped, the ports gone for ``restart_down`` s, a fresh target behind."""
+        for task in list(self._tasks):
+            task.cancel()
+        self.log(f"zoo {self.member.name}: restarting")
+        loop = asyncio.get_running_loop()
+        began = loop.time()
+        ports = await loop.run_in_executor(None, self.on_restart)
+        if ports:
+            self.upstream = (self.upstream[0], list(ports))
+        await asyncio.sleep(max(0.0, self.member.restart_down - (loop.time() - began)))
+        self.log(f"zoo {self.member.name}: back")
+        return [self._listen(port) for port in self.ports]
 
     async def _accept_loop(self, port: PortState, ls: socket.socket | None) -> None:
         loop = asyncio.get_running_loop()
@@ -181,7 +217,9 @@ class Relay:
         loop = asyncio.get_running_loop()
         try:
             sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-            if self.bug is None and not self.member.shapes_replies:
+            if self.member.close == "rst":  # row 3: every close of this connection is a reset
+                sock.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+            if not (self.member.cuts_requests or self.member.shapes_replies):
                 await self._plain(sock, port)
             else:
                 await self._shaped(sock, port)
@@ -201,7 +239,7 @@ class Relay:
         """Run both directions; after the client's end-of-stream the target may still answer (and close)."""
         t_up, t_down = asyncio.create_task(_guarded(up)), asyncio.create_task(_guarded(down))
         done, _ = await asyncio.wait({t_up, t_down}, return_when=asyncio.FIRST_COMPLETED)
-        if t_up in done and t_up.result():
+        if t_up in done and t_up.result() and self.member.on_fin == "pass":
             await asyncio.wait({t_down}, timeout=HALF_CLOSE_WAIT)
         for task in (t_up, t_down):
             task.cancel()
@@ -220,7 +258,8 @@ class Relay:
             except OSError as exc:
                 self.log(f"upstream port {self.upstream[1][port.index]} unreachable: {exc}")
                 return
-            await self._both_ways(_pump(loop, sock, up), _pump(loop, up, sock))
+            m = self.member
+            await self._both_ways(_pump(loop, sock, up, idle=m.idle_drop), _pump(loop, up, sock, eof=m.close == "fin"))
         finally:
             up.close()
 
@@ -240,23 +279,39 @@ class Relay:
                 w.close()
 
     async def _to_target(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
-        cutter = FrameCutter() if self.bug is not None else None
-        while data := await reader.read(65536):
+        cutter = FrameCutter() if self.member.cuts_requests else None
+        idle = self.member.idle_drop or None
+        while data := await asyncio.wait_for(reader.read(65536), idle):
             if cutter is None:
                 writer.write(data)
-            else:
-                for piece in cutter.feed(data):
-                    if piece.frame and self.bug is not None:
-                        fault = self.bug.on_request(piece, time.monotonic())
-                        if fault is not None:
-                            self._fault(fault)
-                    writer.write(piece.data)
+            elif not self._requests(cutter.feed(data), writer):
+                break  # a strict member closes: the target answers what came before, then the client is closed
             await writer.drain()
-        if cutter is not None:
-            for piece in cutter.flush():
-                writer.write(piece.data)
+        else:
+            if cutter is not None:
+                for piece in cutter.flush():
+                    writer.write(piece.data)
         with contextlib.suppress(OSError):
             writer.write_eof()
+
+    def _requests(self, pieces: list[Piece], writer: asyncio.StreamWriter) -> bool:
+        """Pass the pieces on through the member's rules; False when a strict member ends the connection."""
+        for piece in pieces:
+            if self.member.malformed and not well_formed(piece):
+                if self.member.malformed == "close":
+                    return False
+                if piece.frame:
+                    continue  # skipped unanswered; bytes out of step go on, the target judges them
+            if piece.frame and self.bug is not None:
+                fault = self.bug.on_request(piece, time.monotonic())
+                if fault is not None:
+                    self._fault(fault)
+            name = NAME.get(-1 if piece.ident is None else piece.ident, "")
+            swallowed = self.member.silent and self.view.state == NC and name != "CMD_CONNECT_TO_PLTF"
+            self.view.on_request(name, piece)
+            if not swallowed:
+                writer.write(piece.data)
+        return True
 
     async def _to_client(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
         if not self.member.shapes_replies:

@@ -370,3 +370,113 @@ def test_absurd_values_rewrite_the_doubles_of_position_and_status(upstream: laun
             pos, status = replies(s, 2)
         assert (pos.x, pos.y) == (plain.x, plain.y)
         assert all(check(v) for v in (pos.angle, pos.vel_trans, pos.vel_rot, status.gps_latitude, status.gps_longitude))
+
+
+def _until_closed(s: socket.socket, within: float = 5.0) -> tuple[bytes, str]:
+    """What came before the close, and how it closed: 'fin', 'rst' or '' (still open after ``within``)."""
+    s.settimeout(within)
+    got = b""
+    try:
+        while data := s.recv(65536):
+            got += data
+    except ConnectionResetError:
+        return got, "rst"
+    except TimeoutError:
+        return got, ""
+    return got, "fin"
+
+
+def test_fin_ends_session_loses_the_replies_owed_at_the_clients_fin(upstream: launch.Launched) -> None:
+    with member(upstream, "faithful") as z, connect(z) as s:  # the control: the half-close travels
+        s.sendall(STATUS * 3)
+        s.shutdown(socket.SHUT_WR)
+        assert [t.NAME for t in replies(s, 3)] == ["CMD_GET_STATUS"] * 3
+    with member(upstream, "fin-ends-session") as z, connect(z) as s:
+        s.sendall(STATUS)
+        replies(s)  # answered while the client's write half is open
+        s.sendall(STATUS * 3)
+        s.shutdown(socket.SHUT_WR)
+        got, how = _until_closed(s)
+        assert how == "fin" and len(got) < 3 * 100, f"{len(got)} bytes after the FIN ({how})"
+
+
+def test_close_rst_resets_where_it_would_close(upstream: launch.Launched) -> None:
+    close_socket = encode(build("request", "CMD_CLOSE_SOCKET"))
+    with member(upstream, "close-rst") as z, connect(z) as s:
+        s.sendall(POSITION + close_socket)
+        assert _until_closed(s)[1] == "rst"
+
+
+def test_backlog_one_drops_the_syns_beyond_its_backlog(upstream: launch.Launched) -> None:
+    with member(upstream, "backlog-one") as z:
+        first = connect(z)
+        first.sendall(POSITION)
+        replies(first)
+        kept, dropped = [], 0
+        for _ in range(4):
+            try:
+                kept.append(connect(z, timeout=1.0))
+            except TimeoutError:
+                dropped += 1  # the SYN was dropped: the connect times out (the kernel would retry)
+        assert kept and dropped, f"{len(kept)} connects completed, {dropped} timed out"
+        first.close()
+        kept[0].sendall(POSITION)
+        assert [t.NAME for t in replies(kept[0])] == ["CMD_GET_POSITION"]  # the first in the backlog: served
+        for s in kept:
+            s.close()
+
+
+def test_idle_drop_closes_a_silent_client_only(upstream: launch.Launched) -> None:
+    with member(upstream, "idle-drop", "--idle-seconds", "1.5") as z, connect(z) as quiet, connect(z, 1) as busy:
+        t0 = time.monotonic()
+        for _ in range(6):  # a request every 0.5 s keeps a client
+            busy.sendall(POSITION)
+            replies(busy)
+            time.sleep(0.5)
+        assert _until_closed(quiet, within=5.0) == (b"", "fin")
+        assert time.monotonic() - t0 >= 1.5
+        busy.sendall(POSITION)
+        replies(busy)
+
+
+def test_strict_framing_closes_at_an_unknown_command_and_lenient_framing_skips_it(upstream: launch.Launched) -> None:
+    unknown = b"\xff\x01\xfe\x02\x00\x00\x00\x01\xfa"  # command 250: no such telegram
+    with member(upstream, "strict-framing") as z, connect(z) as s:
+        s.sendall(POSITION + unknown + POSITION)
+        got, how = _until_closed(s)
+        dec = TelegramDecoder("reply")
+        dec.receive_data(got)
+        assert [t.NAME for t in dec] == ["CMD_GET_POSITION"] and how in ("fin", "rst")
+    with member(upstream, "lenient-framing") as z, connect(z) as s:  # the other reading: skipped, and on it goes
+        s.sendall(POSITION + unknown + POSITION)
+        assert [t.NAME for t in replies(s, 2)] == ["CMD_GET_POSITION"] * 2
+
+
+def test_silent_until_connect_answers_nothing_before_connect_to_pltf(upstream: launch.Launched) -> None:
+    connect_to_pltf = encode(build("request", "CMD_CONNECT_TO_PLTF"))
+    with member(upstream, "silent-until-connect") as z, connect(z) as s:
+        s.sendall(POSITION)
+        assert _until_closed(s, within=0.8) == (b"", "")  # open, and silent
+        s.sendall(connect_to_pltf + POSITION)
+        assert "CMD_GET_POSITION" in [t.NAME for t in replies(s, 1)]
+
+
+def test_restarts_drop_every_connection_and_the_ports_are_gone_for_a_while(upstream: launch.Launched) -> None:
+    with member(upstream, "restarts", "--restart-every", "2") as z, connect(z) as s:
+        s.sendall(POSITION)
+        replies(s)
+        assert _until_closed(s, within=10.0)[1] in ("fin", "rst")
+        t0 = time.monotonic()
+        with pytest.raises(ConnectionRefusedError):  # gone ...
+            connect(z)
+        wait, _ = served(z, within=10.0)  # ... and back
+        assert time.monotonic() - t0 >= 1.0, f"back after {wait:.2f} s"
+
+
+def test_ipv6_only_listens_on_the_ipv6_loopback_only(upstream: launch.Launched) -> None:
+    with member(upstream, "ipv6-only") as z:
+        with socket.create_connection(("::1", z.ports[0]), timeout=5) as s:
+            s.sendall(POSITION)
+            replies(s)
+        with pytest.raises(ConnectionRefusedError):
+            socket.create_connection(("127.0.0.1", z.ports[0]), timeout=5)
