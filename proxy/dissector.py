@@ -3,7 +3,9 @@
 Rules:
 - The generated file is the spec as Lua tables (every telegram of both directions, every field with its name,
   wire type, unit, enum, range and constant; every enum's names) followed by the dissector itself
-  (proxy/lua/runtime.lua, copied verbatim), which interprets the tables and never names a telegram.
+  (proxy/lua/runtime.lua, copied verbatim), which interprets the tables and never names a telegram. It is
+  registered on PORTS and, as a heuristic dissector on TCP, on any stream whose first bytes are a frame's header
+  and a sane length (issue 32).
 - Field names for display filters: ``pltf.req.<telegram>.<field>`` and ``pltf.rep.<telegram>.<field>`` (the
   telegram's name lower case without ``CMD_``; group items ``...<group>.<field>``; a group's count
   ``<group>_count``, a string's length ``<field>_length``). ``field_abbr`` is the one place that spells them.
@@ -31,8 +33,9 @@ BANNER = """\
 -- Do not edit: change the spec (or proxy/lua/runtime.lua) and run `python -m pltf.proxy.dissector`.
 --
 -- Wireshark dissector of the Neobotix PlatformCtrl socket protocol (guide chapter 6), TCP ports 10000 and
--- 10002 (other ports: Decode As... PLTF). Use: wireshark -X lua_script:pltf.lua FILE, or copy it into the
--- personal Lua plugins folder; tshark -X lua_script:pltf.lua -r FILE -V.
+-- 10002, and on any other port a stream that starts with FF 01 FE 02 and a sane length (a heuristic; also
+-- Decode As... PLTF). Use: wireshark -X lua_script:pltf.lua FILE, or copy it into the personal Lua plugins
+-- folder; tshark -X lua_script:pltf.lua -r FILE -V.
 """
 
 

@@ -2,8 +2,9 @@
 -- Do not edit: change the spec (or proxy/lua/runtime.lua) and run `python -m pltf.proxy.dissector`.
 --
 -- Wireshark dissector of the Neobotix PlatformCtrl socket protocol (guide chapter 6), TCP ports 10000 and
--- 10002 (other ports: Decode As... PLTF). Use: wireshark -X lua_script:pltf.lua FILE, or copy it into the
--- personal Lua plugins folder; tshark -X lua_script:pltf.lua -r FILE -V.
+-- 10002, and on any other port a stream that starts with FF 01 FE 02 and a sane length (a heuristic; also
+-- Decode As... PLTF). Use: wireshark -X lua_script:pltf.lua FILE, or copy it into the personal Lua plugins
+-- folder; tshark -X lua_script:pltf.lua -r FILE -V.
 
 local MAX_LENGTH = 16777216 -- erratum E-WIRE-004
 local PORTS = { [10000] = true, [10002] = true }
@@ -752,6 +753,7 @@ local out_of_sync = {} -- "<tcp stream>/<direction>" -> frame number of the fram
 
 function pltf.init()
   out_of_sync = {}
+  heur_server = {}
 end
 
 local HEADER_BYTES = { 0xFF, 0x01, 0xFE, 0x02 }
@@ -763,7 +765,17 @@ local function header_ok(tvb, offset, avail)
   return true
 end
 
-local function direction_of(pinfo)
+-- Streams found by the heuristic (any port): "<tcp stream>" -> the server's port, the destination of the stream's
+-- first PlatformCtrl bytes. Guide 6.1: the platform serves clients and answers their requests; it never speaks
+-- first, so the side that sends the first frame is the client (a capture that starts after the first request
+-- may show a reply first: then the directions are swapped, see proxy/README.md).
+local heur_server = {}
+
+local function direction_of(pinfo, stream)
+  local server = stream and heur_server[stream]
+  if server then
+    return pinfo.dst_port == server and "request" or "reply"
+  end
   local port = pinfo.match_uint
   if port == nil or port == 0 then
     return PORTS[pinfo.dst_port] and "request" or "reply"
@@ -788,9 +800,10 @@ end
 function pltf.dissector(tvb, pinfo, tree)
   local len = tvb:len()
   if len == 0 then return 0 end
-  local direction = direction_of(pinfo)
   local stream = tcp_stream()
-  local key = (stream and tostring(stream.value) or "?") .. "/" .. direction
+  stream = stream and tostring(stream.value)
+  local direction = direction_of(pinfo, stream)
+  local key = (stream or "?") .. "/" .. direction
   local lost = out_of_sync[key]
   if lost and pinfo.number > lost then
     local t = tree:add(pltf, tvb(), "PlatformCtrl " .. direction .. ": out of sync")
@@ -840,6 +853,27 @@ function pltf.dissector(tvb, pinfo, tree)
   return len
 end
 
+-- ------------------------------------------------------------------------------------------- any port
+-- A heuristic dissector on TCP: a stream whose bytes start with the header FF 01 FE 02 and a sane length (at
+-- least the identifier byte, at most MAX_LENGTH; guide 6.2) is PlatformCtrl on whatever port it runs, in both
+-- directions. Wireshark tries it on TCP payload no port-registered dissector took; once it says yes, the whole
+-- conversation is ours (pinfo.conversation), so the segments after it, replies included, come here directly.
+local function heuristic(tvb, pinfo, tree)
+  local len = tvb:len()
+  if len < 8 or not header_ok(tvb, 0, 4) then return false end
+  local n = tvb(4, 4):uint()
+  if n < 1 or n > MAX_LENGTH then return false end
+  local stream = tcp_stream()
+  if stream and not pinfo.visited then
+    local key = tostring(stream.value)
+    if heur_server[key] == nil then heur_server[key] = pinfo.dst_port end
+  end
+  pinfo.conversation = pltf
+  pltf.dissector(tvb, pinfo, tree)
+  return true
+end
+
 local tcp_table = DissectorTable.get("tcp.port")
 for port in pairs(PORTS) do tcp_table:add(port, pltf) end
 tcp_table:add_for_decode_as(pltf)
+pltf:register_heuristic("tcp", heuristic)
