@@ -13,6 +13,7 @@ import os
 import shlex
 import sys
 from pathlib import Path
+from typing import Any
 
 from pltf.cli.options import CommandError, check_listening, count, exit_status, port, positive, target_or_zero
 
@@ -88,6 +89,20 @@ def add_fuzz_arguments(p: argparse.ArgumentParser) -> None:
         metavar="FRACTION",
         help="of the cases over 1 MiB drawn, the share kept (default 0.25; 1: the natural mix)",
     )
+    p.add_argument(
+        "--jobs",
+        type=_jobs,
+        default=1,
+        metavar="N",
+        help="N workers, each with its own target from --launch and seed SEED+k, sharing what they find "
+        "interesting; findings once, one report (default 1)",
+    )
+    p.add_argument(
+        "--ray",
+        metavar="ADDRESS",
+        help="run the --jobs workers as Ray actors on the cluster at ADDRESS ('auto': the local one); "
+        "needs pip install 'pltf-toolkit[ray]'",
+    )
     p.add_argument("--quiet", action="store_true", help="no live view")
     p.epilog = exit_status(
         ok="nothing found",
@@ -104,6 +119,13 @@ def _share(text: str) -> float:
         raise argparse.ArgumentTypeError(f"expected a number from 0 to 1, got {text!r}") from None
     if not 0.0 <= value <= 1.0:
         raise argparse.ArgumentTypeError(f"expected a number from 0 to 1, got {text!r}")
+    return value
+
+
+def _jobs(text: str) -> int:
+    value = count(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, got {text!r}")
     return value
 
 
@@ -157,6 +179,8 @@ def run_fuzz(args: argparse.Namespace) -> int:
     )
     if args.big_share is not None:
         opts.big_share = args.big_share
+    if args.jobs > 1 or args.ray:
+        return _parallel(args, opts)
     campaign = Campaign(opts)
     try:
         with LiveView(f"pltf fuzz {host}:{port}", args.quiet) as view:
@@ -172,6 +196,36 @@ def run_fuzz(args: argparse.Namespace) -> int:
         raise CommandError(str(exc)) from None
     view.final(campaign.stats)
     _summary(args.out, campaign.stats)
+    return code
+
+
+def _parallel(args: argparse.Namespace, opts: Any) -> int:
+    """--jobs N (worker processes) or --ray ADDRESS (Ray actors): one client per port, so a target each."""
+    if not args.launch:
+        raise CommandError(
+            f"--jobs {args.jobs}{' --ray' if args.ray else ''} needs --launch CMD: a target serves one client per "
+            "port (guide 6.1), so each worker starts its own"
+        )
+    from pltf.fuzz.engine import HarnessError
+    from pltf.fuzz.parallel import LocalCampaign
+    from pltf.fuzz.view import LiveView
+    from pltf.zoo.launch import LaunchError
+
+    title = f"pltf fuzz --jobs {args.jobs}" + (f" --ray {args.ray}" if args.ray else "")
+    try:
+        if args.ray:
+            from pltf.fuzz.ray_fuzz import RayCampaign
+
+            campaign: Any = RayCampaign(opts, args.jobs, args.ray)
+        else:
+            campaign = LocalCampaign(opts, args.jobs)
+        campaign.start()  # the workers start before the live view's thread does (fork)
+        with LiveView(title, args.quiet) as view:
+            campaign.on_tick = view.update
+            code: int = campaign.run()
+    except (HarnessError, LaunchError, OSError) as exc:
+        raise CommandError(str(exc)) from None
+    view.final(campaign.view)
     return code
 
 
