@@ -6,7 +6,7 @@ STAMP := $(VENV)/.installed
 
 SUDO := $(if $(filter 0,$(shell id -u)),,sudo)
 
-.PHONY: demo test test-slow test-ray ray lint typecheck docs docs-check bench clean install emulator gui chromium tshark
+.PHONY: demo test test-slow test-ray ray lint typecheck docs docs-check bench soak clean install emulator gui chromium tshark
 
 # The GUI's front end (gui/web, TypeScript + vite) is built into gui/static/ with the machine's node and npm.
 GUI_WEB := gui/web
@@ -99,6 +99,11 @@ docs-check: $(STAMP)
 
 bench: $(STAMP) $(GUI_BUILT) chromium tshark
 	$(BIN)/python -m benchmarks --json benchmarks/results.json
+
+# An hour of the reference server at time scale 10 with the GUI in chromium, the proxy recording, the patrol and a
+# reconnecting client; RSS, descriptors and threads of every process each minute (benchmarks/soak/). Not in `test`.
+soak: $(STAMP) $(GUI_BUILT) chromium
+	$(BIN)/python -m benchmarks.soak --out benchmarks/results/soak.md
 
 # The Go emulator (issue 17), a second implementation of the protocol: emulator/bin/emulator.
 emulator:
