@@ -1,4 +1,4 @@
-"""The fleet's bodies: one pymunk space holding every platform's footprint, and one array of their outlines.
+"""The fleet's bodies (erratum E-FLEET-002): one pymunk space of every footprint, one array of their outlines.
 
 Rules:
 - One kinematic body per platform in ONE ``pymunk.Space`` (its spatial index): ``depth`` moves the asking

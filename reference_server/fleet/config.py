@@ -7,7 +7,7 @@ Rules:
   starts at its data dir's StartupPosition.dat), ``seed`` (default: the fleet's seed plus the platform's
   index) and ``data_dir`` (default: the fleet's data dir / name). Unknown keys are refused: a misspelt key
   would otherwise be silently ignored.
-- ``--fleet N``: N platforms named ``p01``..; ports ``A+4k, B+4k`` from ``--ports A,B`` (0 stays 0); the
+- ``--fleet N``: N platforms named ``p01``..; ports ``A+4k, B+4k`` from ``--ports A,B`` (0 stays 0; E-FLEET-003); the
   poses are chosen at free places of the map at start (reference_server/fleet/places.py).
 - Every error is a ``FleetError`` with a one-line message naming the file and the platform.
 """

@@ -7,8 +7,8 @@ Rules:
 - Each member's ports are served by a ``network.Server`` of its own: the protocol on each port is that of a single
   platform (guide 6.1), and each logs "server started at port N" for its ports as ``pltf serve`` does, then
   "platform NAME at HOST:PORT[,PORT]" once (the line a user looks for).
-- CMD_EXIT on a member's port ends that member only (it leaves the world, its ports close); the fleet exits with
-  status 0 when the last member has gone, on SIGINT or SIGTERM.
+- CMD_EXIT on a member's port ends that member only (erratum E-FLEET-001: it leaves the world, its ports close);
+  the fleet exits with status 0 when the last member has gone, on SIGINT or SIGTERM.
 """
 
 from __future__ import annotations
