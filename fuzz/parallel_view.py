@@ -34,6 +34,7 @@ class WorkerView:
     status: str = "starting"  # starting, running, done, failed, lost, stopped (--max-findings were kept)
     error: str = ""
     starts: int = 1  # a worker lost and started again (``--ray``) counts each start
+    where: str = "local"  # the Ray node of its actor (its target runs there)
 
 
 @dataclass
@@ -198,6 +199,7 @@ class CampaignView:
             "lost_workers": self.lost,
             "workers": [
                 {"worker": w.index, "seed": w.seed, "status": w.status, "starts": w.starts, "error": w.error}
+                | {"where": w.where}
                 | w.figures
                 for w in self.workers
             ],

@@ -84,13 +84,16 @@ class FuzzWorker:
         self.link = QueueLink()
         self.thread: threading.Thread | None = None
 
-    def start(self, opts: Options, index: int) -> int:
-        """The worker's campaign in a thread (the actor's other thread answers ``poll``); this process's id."""
+    def start(self, opts: Options, index: int) -> tuple[int, str]:
+        """The worker's campaign in a thread (the actor's other thread answers ``poll``); this process's id and
+        its node's."""
         scratch = Path(tempfile.mkdtemp(prefix=f"pltf-fuzz-ray-w{index}-"))
         wopts = worker_options(opts, index, scratch)
         self.thread = threading.Thread(target=run_worker, args=(wopts, index, self.link), daemon=True)
         self.thread.start()
-        return os.getpid()
+        import ray  # in the actor: Ray is there
+
+        return os.getpid(), ray.get_runtime_context().get_node_id()
 
     def poll(self, messages: list[dict[str, Any]]) -> list[dict[str, Any]]:
         return self.link.poll(messages)
@@ -125,7 +128,8 @@ class RayCampaign:
     def _start_worker(self, k: int) -> None:
         actor = self.actor_class.remote()
         self.actors[k] = actor
-        self.pids[k] = self.ray.get(actor.start.remote(self.o, k))
+        self.pids[k], node = self.ray.get(actor.start.remote(self.o, k))
+        self.view.workers[k].where = f"node {node[:12]}"
         self.polls[actor.poll.remote(self.view.drain(k))] = k
 
     def run(self) -> int:
