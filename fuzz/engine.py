@@ -32,7 +32,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from pltf.fuzz import preludes, safety
+from pltf.fuzz import preludes, profile, safety
 from pltf.fuzz.case import Case
 from pltf.fuzz.corpus import Corpus
 from pltf.fuzz.findings import FindingWriter
@@ -47,7 +47,7 @@ from pltf.fuzz.schedule import BIG_CASE, Scheduler
 from pltf.fuzz.target import Session
 from pltf.fuzz.trial import Trial
 from pltf.fuzz.unit import Unit, rarest, window_units
-from pltf.fuzz.verdict import NEEDED, REPLAYS, TIMED_OUT, Verdict, confirm, confirmed, patient
+from pltf.fuzz.verdict import HOW, NEEDED, REPLAYS, TIMED_OUT, Verdict, confirm, confirmed, patient
 
 WINDOW = 256  # cases drawn at a time
 MEASURE = 6  # status-only clients per port at the start: does it answer, what does a connection cost
@@ -97,6 +97,7 @@ class Campaign:
         self.writer = FindingWriter(self, self.corpus.known_findings())
         self.prefetch: Prefetcher | None = None
         self.trial = Trial()  # fresh connections or the dear way, measured (kept across restarts)
+        self.profile: profile.Profile | None = None  # learnt at the first start (``pltf.fuzz.profile``)
 
     # ------------------------------------------------------------------ lifecycle
     def start_target(self) -> None:
@@ -108,19 +109,44 @@ class Campaign:
         self.lanes = lanes = Lanes(
             self.o.host, self.ports, self.o.deadline, pipelining, active=self.o.lanes, lead_every=self.o.probe_every
         )
+        if self.profile is None:  # learnt once: a restarted instance is the same implementation
+            try:
+                self.profile = profile.learn(self.o.host, self.ports[0], self._flag(0), self.o.deadline)
+            except profile.ProfileError as exc:
+                raise HarnessError(str(exc)) from None
+            self.stats.profile = self.profile.to_json()
+        lanes.adapt = self.profile.adapt
         status = Unit([], [])
         for k in range(len(self.ports)):
             for _ in range(MEASURE if k < self.o.lanes else 1):
                 e = lanes.alone(k, status)
                 if e is None or e.verdict is None or e.verdict.suspicious or not e.flight.out.replies:
-                    why = e.verdict.reason if e is not None and e.verdict is not None else "no client admitted"
-                    raise HarnessError(f"the target does not answer on {self.o.host}:{self.ports[k]}: {why}")
+                    raise HarnessError(self._unanswered(k, e))
                 self._learn(e.flight.out.replies)
         if self.o.lanes < 2 or any(g.dear for g in lanes.gates[: self.o.lanes]):
             self.trial.settle(self.o.lanes > 1)  # one lane has no other port for the fresh connections
         lanes.dear = self.trial.way()
         lanes.pace = None if self.trial.settled else Pace()
         self._gate_stats()
+
+    def _flag(self, k: int) -> str:
+        """The option that named port ``k`` (for messages)."""
+        if self.launcher is not None:
+            return f"the {'first' if k == 0 else 'second'} port --launch's target reported"
+        return "--target" if k == 0 else "--second-port"
+
+    def _unanswered(self, k: int, e: InFlight | None) -> str:
+        """What the start saw on port ``k``: the port, the flag that named it, what the target did."""
+        assert self.lanes is not None
+        where = f"{self.o.host}:{self.ports[k]} ({self._flag(k)})"
+        if e is not None and e.verdict is not None and e.verdict.reason:
+            seen = e.verdict.reason
+        elif e is not None:
+            seen = "no reply"
+        else:
+            how = self.lanes.live.failing.get(k, "timed-out")
+            seen = f"{HOW[how]} each time for {self.lanes.patience:g} s"
+        return f"the target does not answer on {where}: connected, sent CMD_GET_POSITION, {seen}"
 
     def _gate_stats(self) -> None:
         assert self.lanes is not None

@@ -60,6 +60,11 @@ class FindingWriter:
         self.rounds = 1
         self.used_launcher = False  # the last ``handle`` started fresh targets (the campaign's is gone)
 
+    def adapt(self, session: Session) -> Session:
+        """A session as the campaign's target needs it (``pltf.fuzz.profile``)."""
+        profile = getattr(self.c, "profile", None)
+        return profile.adapt(session) if profile is not None else session
+
     # ------------------------------------------------------------------ replay against a fresh target
     def reproduce(
         self, sessions: list[Session], record: bool = False, repeat: int = 1, seconds: float | None = None
@@ -86,12 +91,12 @@ class FindingWriter:
         port, second = launcher.start()
         deadline, patience = patient(o.deadline), max(1.0, 2 * o.deadline)
         outcomes: list[Outcome] = []
-        status = Session([LEAD], half_close=True, led=True)
+        status = self.adapt(Session([LEAD], half_close=True, led=True))
         if not play_admitted(o.host, second, status, deadline, patience)[1]:
             return INCONCLUSIVE, outcomes
         end = time.monotonic() + (seconds or REPEAT_SECONDS)
         for self.rounds in range(1, repeat + 1):
-            for s in sessions:
+            for s in map(self.adapt, sessions):
                 out, served = play_admitted(o.host, port, s, deadline, patience, record, launcher.alive)
                 outcomes.append(out)
                 if not served:  # the other port still serves: this one is stuck
@@ -115,7 +120,7 @@ class FindingWriter:
         assert launcher is not None
         if not launcher.alive():
             return "dead"
-        probe = Session([LEAD], half_close=True, led=True)
+        probe = self.adapt(Session([LEAD], half_close=True, led=True))
         out, served = play_admitted(o.host, second, probe, patient(o.deadline), patience)
         if served and out.replies:
             return None
@@ -256,7 +261,7 @@ class FindingWriter:
             where / name,
             kind,
             reason,
-            sessions,
+            [self.adapt(s) for s in sessions],
             description,
             fresh.get("outcomes", []),
             c.ports[0],

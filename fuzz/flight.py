@@ -66,6 +66,7 @@ class Flight:
         self.reset = False  # the peer reset the connection (a close with our input unread)
         self.sending = True
         self.kept: socket.socket | None = None  # the connection, still open, after a clean finish of ``want``
+        self.fin_due = False  # all sent; our FIN waits for the replies asked for (``Session.fin_waits``)
         if sock is not None:
             self.sock, self.connected = sock, True
             self._send_some()
@@ -121,6 +122,13 @@ class Flight:
     def _sent_all(self) -> None:
         self.sending = False
         if self.session.half_close:
+            self.fin_due = True
+            self._fin()
+
+    def _fin(self) -> None:
+        """Our FIN once it is due: at once, or where it ends the session once every reply asked for came."""
+        if self.fin_due and (not self.session.fin_waits or len(self.out.replies) >= len(self.expected)):
+            self.fin_due = False
             with contextlib.suppress(OSError):
                 self.sock.shutdown(socket.SHUT_WR)
 
@@ -175,6 +183,10 @@ class Flight:
             self.decoder.receive_data(data)
             if self.awaiting:
                 self.awaiting = False
+        self._take_replies(data)
+
+    def _take_replies(self, data: bytes) -> None:
+        """The replies decoded so far; the end of the flight (``data`` empty: the peer closed) or our FIN due."""
         try:
             while (t := self.decoder.next_telegram()) is not None:
                 self.out.replies.append(t)
@@ -187,6 +199,8 @@ class Flight:
             self._finish(closed=True)
         elif self.want is not None and len(self.out.replies) >= self.want:
             self._finish()
+        else:
+            self._fin()
 
 
 def fly(flights: list[Flight]) -> None:

@@ -39,7 +39,7 @@ from dataclasses import dataclass
 from pltf.fuzz.flight import Flight, fly, step_flights
 from pltf.fuzz.gate import DEPTH, Gate
 from pltf.fuzz.pace import Pace
-from pltf.fuzz.target import LEAD_IDS, session_deadline
+from pltf.fuzz.target import LEAD_IDS, Session, session_deadline
 from pltf.fuzz.unit import PIPELINE_BYTES, Unit
 from pltf.fuzz.verdict import NOT_ADMITTED, Liveness, Verdict, judge
 
@@ -103,6 +103,7 @@ class Lanes:
         self.gone: str | None = None  # "dead", "hang" or "stall" once the lanes saw it
         self.stuck: int | None = None  # the port of a stall
         self.suspect: int | None = None  # a port that has not served us for ``patience``: are the others alive?
+        self.adapt: Callable[[Session], Session] = _as_is  # a session as the target needs it (``pltf.fuzz.profile``)
 
     # ------------------------------------------------------------------ queue
     def add(self, units: list[Unit]) -> None:
@@ -224,7 +225,7 @@ class Lanes:
         if kept and self.pace is not None:
             self.pace.batch_started(len(unit.cases))
         led = self._led(k, unit, sock is None)
-        session = unit.session(lead=led, kept=kept)
+        session = self.adapt(unit.session(lead=led, kept=kept))
         flight = self.connect(self.host, self.ports[k], session, self.deadline, sock=sock)
         q = self.flights[k]
         behind = bool(q)
@@ -328,7 +329,8 @@ class Lanes:
             now = time.monotonic()
             if now < gate.retry_at:
                 time.sleep(gate.retry_at - now)
-            flight = self.connect(self.host, self.ports[k], unit.session(), deadline or self.deadline, sock=None)
+            session = self.adapt(unit.session())
+            flight = self.connect(self.host, self.ports[k], session, deadline or self.deadline, sock=None)
             e = InFlight(flight, unit, k, False, False, True, flight.started)
             fly([flight])
             v = judge(flight.out, unit.owed(flight.session, len(flight.expected)), True, unit.keep)
@@ -366,6 +368,10 @@ class Lanes:
     def close(self) -> None:
         self.drain()
         self.release()
+
+
+def _as_is(session: Session) -> Session:
+    return session
 
 
 def _restart_clocks(q: collections.deque[InFlight]) -> None:

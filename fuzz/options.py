@@ -59,6 +59,7 @@ class Stats:
     telegrams: set[str] = field(default_factory=set)
     states: set[tuple[str, int | None]] = field(default_factory=set)
     state_targets: int = 0
+    profile: dict[str, Any] = field(default_factory=dict)  # what the opening phase learnt (fuzz.profile)
     findings: list[dict[str, Any]] = field(default_factory=list)
     unconfirmed: list[dict[str, Any]] = field(default_factory=list)
 

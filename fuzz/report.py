@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from pltf.fuzz.pcapng import Conversation, write_pcapng
-from pltf.fuzz.target import Outcome, Session
+from pltf.fuzz.target import LEAD, Outcome, Session
 from pltf.fuzz.wire import split_frames
 from pltf.spec import errors
 from pltf.spec.codec import REQUESTS
@@ -39,9 +39,11 @@ KIND = {kind!r}
 SESSIONS = {sessions}
 REPEAT = {repeat}  # rounds of the sessions (a failure that piles up, such as a leak, needs several)
 GET_STATUS = bytes.fromhex("ff01fe020000000112")
-LEAD = bytes.fromhex("ff01fe02000000014a")  # CMD_GET_POSITION: the cheapest request a server answers
+# CMD_GET_POSITION, the cheapest request a server answers (behind CMD_CONNECT_TO_PLTF where the target answers
+# nothing before it): the lead the campaign's target needed
+LEAD = bytes.fromhex({lead!r})
 PROBE = {{"frames": LEAD.hex(), "delivery": ["whole", 1, 0.0], "half_close": True, "sync": False, "led": True,
-         "gate": 0, "replies": 1}}
+         "gate": 0, "replies": 1, "fin_waits": True}}
 HEADER = bytes.fromhex("ff01fe02")
 try:  # strict reply checks when the pltf toolkit is importable; framing checks only otherwise
     from pltf.spec.codec import REPLIES
@@ -120,7 +122,7 @@ def play(host, port, session, deadline_s):
     deadline = time.monotonic() + deadline_s
     try:
         data = bytes.fromhex(session["frames"])
-        gate, got = session["gate"], 0
+        gate, got, early = session["gate"], 0, []
         try:
             if gate:  # the lead alone; the rest once it is answered
                 sock.sendall(data[:gate])
@@ -134,12 +136,18 @@ def play(host, port, session, deadline_s):
                 sock.sendall(chunk)
             if session["sync"]:
                 sock.sendall(GET_STATUS)
+            if session["half_close"] and session.get("fin_waits"):  # our FIN ends the session: the replies first
+                early, problem, _, extra = read_frames(sock, session["replies"] - (1 if gate else 0), deadline)
+                got += extra
+                if problem:
+                    return "bad-reply: " + problem
             if session["half_close"]:
                 sock.shutdown(socket.SHUT_WR)
         except OSError:
             pass  # the peer is gone: what did it say before it went?
         want = session["replies"] - (1 if gate else 0) if session["sync"] and not session["half_close"] else None
         frames, problem, timed_out, more = read_frames(sock, want, deadline)
+        frames = early + frames
         if session["led"] and not got and not more:
             return "unanswered" if timed_out else "unserved"
         if problem and not (problem.startswith("reply cut") and not session["sync"]):
@@ -246,6 +254,7 @@ def script_sessions(sessions: list[Session]) -> list[dict[str, Any]]:
             "led": s.led,
             "gate": s.gate_bytes,
             "replies": len(expected_reply_ids(s.data)) + (1 if s.sync else 0),
+            "fin_waits": s.fin_waits,
         }
         for s in sessions
     ]
@@ -277,6 +286,7 @@ def write_finding(
         sessions=sessions_src,
         deadline=deadline,
         repeat=repeat,
+        lead=next((s.frames[0] for s in sessions if s.led), LEAD).hex(),
     )
     (directory / "repro.py").write_text(script)
     desc = dict(description)

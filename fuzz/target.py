@@ -55,6 +55,7 @@ class Session:
     answered: list[int] | None = None  # ids of the answered requests among the frames, when known already
     gate: bool = False  # the first frame (the lead GET_STATUS) goes alone; the rest waits for a byte back
     led: bool = False  # the first frame is the lead GET_STATUS: a byte back proves the target served us
+    fin_waits: bool = False  # our FIN only once the replies asked for came (a target whose FIN ends the session)
 
     @property
     def gate_bytes(self) -> int:
@@ -78,6 +79,7 @@ class Session:
             "sync": self.sync,
             "gate": self.gate,
             "led": self.led,
+            "fin_waits": self.fin_waits,
         }
 
 
@@ -255,6 +257,13 @@ def play_on(conn: Conn, session: Session, deadline_s: float, out: Outcome) -> No
         if session.sync:
             conn.send(GET_STATUS)
             expected.append(REQUESTS.CMD_GET_STATUS.ID)
+        if session.half_close and session.fin_waits:  # the replies asked for first: our FIN ends the session
+            owed, bad, timed_out = conn.read_replies(len(expected) - len(out.replies), deadline)
+            out.replies.extend(owed)
+            if bad is not None or timed_out or conn.eof:
+                out.bad_reply, out.timed_out, out.closed, out.got = bad, timed_out, conn.eof, conn.got
+                out.bad_reply = out.bad_reply or check_order(out.replies, expected)
+                return
         if session.half_close:
             conn.shut_write()
     except OSError:

@@ -1,8 +1,8 @@
 """``pltf fuzz``: the protocol fuzzer (fuzz/); exit 0 nothing found, 1 findings written to --out, 2 harness error.
 
 The arguments are checked before anything is created: --out appears with the first finding or the summary. A
-target that does not answer the first liveness probe (on the second port) is named by the port the user gave
-when nothing listens there either.
+target that does not answer at the start is named by its port, the flag that gave it and what was seen
+(pltf.fuzz.profile, pltf.fuzz.engine).
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from pltf.cli.options import CommandError, check_listening, count, exit_status, port, positive, target_or_zero
+from pltf.cli.options import CommandError, count, exit_status, port, positive, target_or_zero
 
 
 def add_fuzz_arguments(p: argparse.ArgumentParser) -> None:
@@ -186,11 +186,9 @@ def run_fuzz(args: argparse.Namespace) -> int:
         with LiveView(f"pltf fuzz {host}:{port}", args.quiet) as view:
             campaign.on_tick = view.update
             code = campaign.run()
-    except HarnessError as exc:  # at the start: the probe port did not answer
+    except HarnessError as exc:  # at the start: the message names the port, the flag and what was seen
         campaign.close()
-        if not args.launch:  # a dead target is named by the port given, not by the probe's
-            check_listening(host, port, args.deadline)
-        raise CommandError(f"{exc} (the liveness probe's port: --second-port, default PORT+2)") from None
+        raise CommandError(str(exc)) from None
     except (LaunchError, OSError) as exc:
         campaign.close()
         raise CommandError(str(exc)) from None
@@ -244,6 +242,7 @@ def _in_process(args: argparse.Namespace, command: str) -> int:
 def _summary(out: Path, stats: object) -> None:
     s = stats
     doc = {
+        "profile": getattr(s, "profile", None) or None,  # what the opening phase learnt (pltf.fuzz.profile)
         "cases": s.cases,  # type: ignore[attr-defined]
         "seconds": round(s.elapsed, 3),  # type: ignore[attr-defined]
         "cases_per_second": round(s.rate, 1),  # type: ignore[attr-defined]

@@ -1,0 +1,246 @@
+"""What the fuzzer learns about a target before it fuzzes it: the target profile (issue 32).
+
+Rules:
+- A short opening phase on the target's first port, before any case: blocking sockets with deadlines, like
+  ``pltf.fuzz.target``. It measures how long a fresh connection takes to be served (the connection set-up) and a
+  reply on a kept one; whether anything is answered before CMD_CONNECT_TO_PLTF; whether the target still answers
+  what it owes after our half-close (FIN) or ends the session at it; what a newcomer meets while the port is busy
+  (served, closed with FIN, reset, refused, kept in the listen backlog - and how many such connects complete).
+- Nothing here is a finding: each behaviour is a reading the guide allows (spec/errata/behaviour.yaml). The
+  campaign then relies on none the target lacks: where our FIN ends the session, a session waits for the replies
+  it is owed before it half-closes (``Session.fin_waits``); where nothing is answered before CMD_CONNECT_TO_PLTF,
+  every lead carries it (``pltf.fuzz.target.lead``).
+- ``describe`` is the line the console and summary.json show: "ends the session at our FIN; turns newcomers away
+  with RST; replies in 2 ms".
+- Every failure to learn says what was seen and where: the port, the flag that named it, and what the target did
+  ("connected, sent CMD_GET_POSITION, the target closed without a reply").
+"""
+
+from __future__ import annotations
+
+import contextlib
+import select
+import socket
+import statistics
+import time
+from dataclasses import asdict, dataclass, field, replace
+
+from pltf.fuzz.replies import reply_decoder
+from pltf.fuzz.target import LEAD, Session, connect
+from pltf.spec.codec import REQUESTS, encode
+
+CONNECT_TO_PLTF = encode(REQUESTS.CMD_CONNECT_TO_PLTF())
+FIN_REPLIES = 4  # leads sent with our FIN: all answered, or the FIN ended the session
+FIN_TRIES = 2  # a relay that forwards fast may deliver every reply once; twice is the evidence
+REPLY_SAMPLES = 5
+BACKLOG_PROBES = 4  # connects tried while the port is busy and keeps newcomers waiting
+BACKLOG_WAIT = 0.5  # s a connect may take before its SYN counts as dropped
+NEWCOMER_WAIT = 1.0  # s a newcomer on a busy port is watched at most
+SERVED_RETRIES = 20  # fresh connections tried while a port that frees slowly turns us away
+TURN_AWAY = {  # what a newcomer on a busy port met -> how the profile says it
+    "served": "serves a second client on a port",
+    "fin": "turns newcomers away with FIN",
+    "rst": "turns newcomers away with RST",
+    "refused": "refuses newcomers (the port stops listening)",
+    "backlog": "keeps newcomers waiting in the listen backlog",
+}
+
+
+class ProfileError(RuntimeError):
+    """The target did not answer the opening phase (the harness cannot fuzz it: exit status 2)."""
+
+
+@dataclass
+class Profile:
+    setup_ms: float = 0.0  # median connect-to-first-reply of a fresh connection, less a reply's time
+    reply_ms: float = 0.0  # median reply time on a kept connection
+    fin_ends: bool = False  # our half-close ends the session: replies still owed are lost
+    silent_before_connect: bool = False  # nothing is answered before CMD_CONNECT_TO_PLTF
+    newcomer: str = ""  # a key of TURN_AWAY
+    backlog: int | None = None  # connects that complete while the port is busy (a backlog target), else None
+    notes: list[str] = field(default_factory=list)
+
+    def describe(self) -> str:
+        parts = ["ends the session at our FIN" if self.fin_ends else "answers after our FIN"]
+        if self.silent_before_connect:
+            parts.append("answers nothing before CMD_CONNECT_TO_PLTF")
+        if self.newcomer:
+            parts.append(TURN_AWAY[self.newcomer])
+        if self.backlog is not None:
+            parts.append(f"{self.backlog} connect(s) complete while the port is busy (its listen backlog)")
+        parts.append(f"replies in {self.reply_ms:.3g} ms, a fresh connection is served in {self.setup_ms:.3g} ms more")
+        return "; ".join(parts)
+
+    def adapt(self, session: Session) -> Session:
+        """``session`` as this target needs it: our FIN only after the replies owed (where it ends the session),
+        CMD_CONNECT_TO_PLTF in front of the lead (where nothing is answered before it)."""
+        if self.silent_before_connect and session.led and session.frames[0] == LEAD:
+            session = replace(session, frames=[CONNECT_TO_PLTF + LEAD, *session.frames[1:]])
+        return replace(session, fin_waits=True) if self.fin_ends and not session.fin_waits else session
+
+    def to_json(self) -> dict[str, object]:
+        return asdict(self) | {"summary": self.describe()}
+
+
+def learn(host: str, port: int, flag: str, deadline: float) -> Profile:
+    """The profile of the target at ``host:port`` (``flag``: the option that named the port, for messages)."""
+    where = f"{host}:{port} ({flag})"
+    prof = Profile()
+    first, setup = _first_served(host, port, deadline, where, prof)
+    try:
+        prof.reply_ms = _reply_ms(first, deadline)
+        prof.setup_ms = round(max(0.0, setup - prof.reply_ms), 3)
+        prof.newcomer, prof.backlog = _newcomer(host, port, deadline)
+    finally:
+        _close(first, deadline)
+    prof.fin_ends = any(_fin_loses(host, port, deadline, prof) for _ in range(FIN_TRIES))
+    return prof
+
+
+def _lead(prof: Profile) -> bytes:
+    return CONNECT_TO_PLTF + LEAD if prof.silent_before_connect else LEAD
+
+
+def _first_served(host: str, port: int, deadline: float, where: str, prof: Profile) -> tuple[socket.socket, float]:
+    """A connection the target served (its lead answered) and the ms from the connect to that reply. A target that
+    answers nothing before CMD_CONNECT_TO_PLTF is asked again with it in front."""
+    seen = ""
+    for lead in (LEAD, CONNECT_TO_PLTF + LEAD):
+        prof.silent_before_connect = lead != LEAD
+        for k in range(SERVED_RETRIES):
+            t0 = time.monotonic()
+            try:
+                s = connect(host, port, deadline)
+            except ConnectionRefusedError:
+                raise ProfileError(f"nothing listening on {where}: connection refused") from None
+            except OSError as exc:
+                raise ProfileError(f"cannot connect to {where}: {exc}") from None
+            got, how = _ask(s, lead, 1, deadline)
+            if got:
+                return s, (time.monotonic() - t0) * 1000
+            s.close()
+            seen = how
+            if how == "timed out":
+                break  # unanswered: try the next lead (a backlog would not have let us connect twice)
+            time.sleep(0.005 * (1 + k % 4))  # a port that frees slowly turned us away: again
+    raise ProfileError(
+        f"the target does not answer on {where}: connected, sent CMD_GET_POSITION (also behind "
+        f"CMD_CONNECT_TO_PLTF), {seen} within {deadline:g} s"
+    )
+
+
+def _ask(s: socket.socket, data: bytes, want: int, deadline: float, fin: bool = False) -> tuple[int, str]:
+    """Send ``data`` (then our FIN with ``fin``) and count replies until ``want`` of them, the target's close or
+    the deadline; (replies, what ended the wait)."""
+    dec = reply_decoder()
+    end = time.monotonic() + deadline
+    try:
+        s.sendall(data)
+        if fin:
+            s.shutdown(socket.SHUT_WR)
+    except OSError:
+        return 0, "the target closed the connection before we had sent"
+    got = 0
+    while got < want:
+        left = end - time.monotonic()
+        if left <= 0:
+            return got, "the target sent no reply" if not got else f"{got} of {want} replies came"
+        s.settimeout(left)
+        try:
+            data = s.recv(1 << 16)
+        except TimeoutError:
+            continue
+        except ConnectionResetError:
+            return got, "the target reset the connection without a reply" if not got else "reset"
+        except OSError as exc:
+            return got, f"the connection failed: {exc}"
+        if not data:
+            return got, "the target closed without a reply" if not got else f"closed after {got} of {want} replies"
+        dec.receive_data(data)
+        got += sum(1 for _ in dec)
+    return got, "answered"
+
+
+def _reply_ms(s: socket.socket, deadline: float) -> float:
+    times = []
+    for _ in range(REPLY_SAMPLES):
+        t0 = time.monotonic()
+        if _ask(s, LEAD, 1, deadline)[0] != 1:
+            break
+        times.append((time.monotonic() - t0) * 1000)
+    return round(statistics.median(times), 3) if times else 0.0
+
+
+def _newcomer(host: str, port: int, deadline: float) -> tuple[str, int | None]:
+    """What a second client meets while ``s`` holds the port, and for a backlog target how many connects
+    complete."""
+    try:
+        t = connect(host, port, min(deadline, NEWCOMER_WAIT))
+    except ConnectionRefusedError:
+        return "refused", None
+    except OSError:
+        return "rst", None
+    try:
+        got, how = _ask(t, LEAD, 1, min(deadline, NEWCOMER_WAIT))
+    finally:
+        t.close()
+    if got:
+        return "served", None
+    if how.startswith("the target sent no reply"):
+        return "backlog", _backlog(host, port)
+    return ("rst" if "reset" in how else "fin"), None
+
+
+def _backlog(host: str, port: int) -> int:
+    """Connects that complete within ``BACKLOG_WAIT`` while the port is held (each a SYN the backlog took)."""
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    socks = [socket.socket(family, socket.SOCK_STREAM) for _ in range(BACKLOG_PROBES)]
+    try:
+        for s in socks:
+            s.setblocking(False)
+            s.connect_ex((host, port))
+        end, done = time.monotonic() + BACKLOG_WAIT, set[socket.socket]()
+        while len(done) < len(socks) and (left := end - time.monotonic()) > 0:
+            _, writable, _ = select.select([], [s for s in socks if s not in done], [], left)
+            done |= {s for s in writable if s.getsockopt(socket.SOL_SOCKET, socket.SO_ERROR) == 0}
+        return len(done) + 1  # the one watched before these
+    finally:
+        for s in socks:
+            s.close()
+
+
+def _fin_loses(host: str, port: int, deadline: float, prof: Profile) -> bool:
+    """Whether the replies owed at our FIN are lost: served (its lead answered), then ``FIN_REPLIES`` leads and
+    our FIN in one write."""
+    s = _served_again(host, port, deadline, prof)
+    if s is None:
+        return False  # the port did not serve us again: nothing learnt (the campaign's start will say so)
+    try:
+        got, _ = _ask(s, LEAD * FIN_REPLIES, FIN_REPLIES, deadline, fin=True)
+    finally:
+        s.close()
+    return got < FIN_REPLIES
+
+
+def _served_again(host: str, port: int, deadline: float, prof: Profile) -> socket.socket | None:
+    for k in range(SERVED_RETRIES):
+        try:
+            s = connect(host, port, deadline)
+        except OSError:
+            s = None
+        if s is not None and _ask(s, _lead(prof), 1, deadline)[0]:
+            return s
+        if s is not None:
+            s.close()
+        time.sleep(0.005 * (1 + k % 4))
+    return None
+
+
+def _close(s: socket.socket, deadline: float) -> None:
+    """Our FIN, then the target's close (or the deadline): the port is free for what comes next."""
+    with contextlib.suppress(OSError):
+        s.shutdown(socket.SHUT_WR)
+        s.settimeout(deadline)
+        while s.recv(1 << 16):
+            pass
+    s.close()
