@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 from functools import partial
 from typing import Any, TypeVar
 
-from pltf.conformance_tests import chart
+from pltf.conformance_tests import chart, reported
 from pltf.conformance_tests.catalogue import Case, Tier
 from pltf.conformance_tests.chart import St
 from pltf.conformance_tests.coverage import Coverage
@@ -363,7 +363,8 @@ class CaseContext:
         return replies
 
     def position(self, label: str = "A") -> Telegram:
-        return self.get("CMD_GET_POSITION", label)
+        """CMD_GET_POSITION, its pose and velocities plausible (reported.py: else the case FAILs naming them)."""
+        return reported.position(self.get("CMD_GET_POSITION", label))
 
     def quiet(self, sim_seconds: float = 0.3, label: str = "A") -> None:
         """Fail when the target sends anything unasked within the time (guide 6.1, erratum E-CMD-013)."""

@@ -7,6 +7,7 @@ Rules:
 - ``Deviation`` (recorded with ``ctx.deviate``, never raised) - the target follows an alternative reading of an
   erratum. With the ``original`` profile an alternative the register marks ``accept`` gives NON-STRICT; every
   other deviation is graded like a Fail at the erratum's level (MAY deviations are informative only).
+- ``Absurd`` - the target reported a value no platform can have (reported.py): FAIL whatever the case's level.
 - ``NotApplicable`` - the target shows or declares that it lacks an optional feature.
 - ``Inconclusive`` - the observation cannot tell pass from fail (noise, timing); the runner re-runs the case,
   except when it is ``BudgetSpent`` (the case's time budget ran out, pace.py).
@@ -46,6 +47,11 @@ class ConnectionClosed(TargetFailure):
 
 class BadReply(TargetFailure):
     pass
+
+
+class Absurd(TargetFailure):
+    """The target reported a value no platform can have (NaN, an infinity, far out of range: reported.py, erratum
+    E-WIRE-009). A FAIL whatever the case's level: what a case was to judge cannot be judged from it."""
 
 
 class NoConnection(ConnectionClosed):

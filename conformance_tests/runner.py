@@ -32,6 +32,7 @@ from pltf.conformance_tests.baseline import Baseline
 from pltf.conformance_tests.catalogue import Case, Level, Verdict
 from pltf.conformance_tests.context import CaseContext, Config, Status, Target
 from pltf.conformance_tests.outcome import (
+    Absurd,
     BudgetSpent,
     Deviation,
     Fail,
@@ -350,7 +351,7 @@ class Runner:
 
 
 def _fail_verdict(c: Case, exc: Fail) -> Verdict:
-    return verdict_for_level(c.level)
+    return Verdict.FAIL if isinstance(exc, Absurd) else verdict_for_level(c.level)
 
 
 def _liveness(ctx: CaseContext, before: Status | None) -> str:

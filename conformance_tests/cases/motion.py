@@ -17,7 +17,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-from pltf.conformance_tests import docdata
+from pltf.conformance_tests import docdata, reported
 from pltf.conformance_tests.cases._common import MotionMode, angle_diff, expect_state, no_unsolicited
 from pltf.conformance_tests.catalogue import Level, case
 from pltf.conformance_tests.chart import St
@@ -58,7 +58,8 @@ def pose(ctx: CaseContext) -> Pose:
 
 
 def _pose_of(p: Any) -> Pose:
-    """A CMD_GET_POSITION reply as a Pose."""
+    """A CMD_GET_POSITION reply as a Pose (its values plausible: reported.py, else the case FAILs naming them)."""
+    reported.position(p)
     return Pose(p.x, p.y, p.angle, p.vel_trans, p.vel_rot)
 
 
@@ -129,7 +130,7 @@ def watchdog(ctx: CaseContext, key: str = "VelWatchdogTime", default: float = 0.
     """The target's velocity watchdog in s, when it lists it (erratum E-PAR-018), else ``default``."""
     for p in ctx.get("CMD_GET_PLTF_PARAM_VEC").parameters:  # type: ignore[attr-defined]
         if p.key == key:
-            return float(p.value) / 1000.0
+            return reported.number(p.value, f"the parameter {key} [ms]", lo=0.0, hi=3_600_000.0) / 1000.0
     return default
 
 
@@ -211,7 +212,7 @@ def _dist_wheels(ctx: CaseContext) -> float | None:
     reply = ctx.get("CMD_GET_PLTF_PARAM_VEC")
     for p in reply.parameters:  # type: ignore[attr-defined]
         if p.key == "DistWheels":
-            return float(p.value)
+            return reported.number(p.value, "the parameter DistWheels [mm]", lo=1.0, hi=100_000.0)
     return None
 
 
