@@ -19,7 +19,7 @@ import logging
 import signal
 from collections.abc import Callable
 
-from pltf.reference_server.control_loop import ControlLoop
+from pltf.reference_server.control_loop import BURST, ControlLoop
 from pltf.reference_server.fleet.fleet import Fleet, Member
 from pltf.reference_server.network import Server
 
@@ -37,7 +37,10 @@ class FleetServer:
 
     async def start(self) -> None:
         loop = asyncio.get_running_loop()
-        self.control = ControlLoop(self.fleet, self.time_scale, loop.time())
+        # a burst of ticks is the whole fleet's: as many platform periods between two looks at the sockets as a
+        # single platform's server runs (control_loop.BURST), so a client of any platform waits no longer
+        burst = max(1, BURST // max(1, len(self.fleet.members)))
+        self.control = ControlLoop(self.fleet, self.time_scale, loop.time(), burst=burst)
         try:
             for m in self.fleet.members:
                 srv = Server(m.platform, self.host, m.ports, self.time_scale, control=self.control)
