@@ -9,7 +9,9 @@ Rules:
   ground-truth reader of the tab (truth.py).
 - ``GET /api/targets`` lists the known addresses (guide 5.2: "Network.ini"), the default target first;
   ``POST /api/targets`` with ``{"target": "HOST:PORT"}`` adds one to the file.
-- A WebSocket from another origin is refused: a page from elsewhere must not drive the platform.
+- Who may come in (doors.py, issue 33): every request passes the Host, Origin and token checks first; a target
+  not on the list (targets.py) is refused before any connection attempt; one tab drives, the others watch
+  (control.py; ``{"op": "take"}`` is "Take control").
 """
 
 from __future__ import annotations
@@ -22,8 +24,10 @@ from typing import Any
 
 from aiohttp import WSMsgType, web
 
+from pltf.gui.doors import Doors
 from pltf.gui.link import PlatformLink, parse_target
 from pltf.gui.network_ini import NetworkIni
+from pltf.gui.targets import TargetList
 from pltf.gui.truth import TruthReader
 from pltf.gui.validate import add_routes as add_validate_routes
 
@@ -31,13 +35,7 @@ log = logging.getLogger("pltf.gui")
 STATIC = Path(__file__).resolve().parent / "static"
 LINKS = web.AppKey("links", dict)
 CONFIG = web.AppKey("config", dict)
-
-
-def _same_origin(request: web.Request) -> bool:
-    origin = request.headers.get("Origin")
-    if origin is None:
-        return True  # not a browser page (a test client, curl)
-    return origin.split("://", 1)[-1] == request.host
+TARGETS = web.AppKey("targets", TargetList)
 
 
 def _link(app: web.Application, target: str) -> PlatformLink:
@@ -52,20 +50,37 @@ def _link(app: web.Application, target: str) -> PlatformLink:
     return link
 
 
+def _label(request: web.Request) -> str:
+    """How the other tabs see this one: "tab N (ADDRESS)"."""
+    config = request.app[CONFIG]
+    config["tabs"] += 1
+    return f"tab {config['tabs']} ({request.remote or 'unknown address'})"
+
+
+async def _refuse_target(request: web.Request, target: str, why: str) -> web.WebSocketResponse:
+    """Said on the WebSocket, so the page shows it; no link, no connection attempt (targets.py)."""
+    ws = web.WebSocketResponse()
+    await ws.prepare(request)
+    log.warning("refused a tab's target: %s", why)
+    await ws.send_str(json.dumps({"event": "target_refused", "target": target, "message": why}))
+    await ws.close(code=4003, message=b"target not allowed")
+    return ws
+
+
 async def websocket(request: web.Request) -> web.StreamResponse:
-    if not _same_origin(request):
-        raise web.HTTPForbidden(text="WebSocket from another origin refused")
     target = request.query.get("target") or request.app[CONFIG]["target"]
     try:
         parse_target(target)
     except ValueError as exc:
         raise web.HTTPBadRequest(text=str(exc)) from None
+    if (why := request.app[TARGETS].refusal(target)) is not None:
+        return await _refuse_target(request, target, why)
     ws = web.WebSocketResponse(max_msg_size=32 * 1024 * 1024, heartbeat=20.0)
     await ws.prepare(request)
     link = _link(request.app, target)
     tab = object()
     queue: asyncio.Queue[bytes | dict[str, Any] | None] = asyncio.Queue()
-    link.attach(tab, queue.put_nowait)
+    link.attach(tab, queue.put_nowait, _label(request))
 
     async def pump() -> None:
         while (item := await queue.get()) is not None:
@@ -83,7 +98,7 @@ async def websocket(request: web.Request) -> web.StreamResponse:
             if msg.type == WSMsgType.BINARY:
                 link.submit(tab, msg.data)
             elif msg.type == WSMsgType.TEXT:
-                _command(link, msg.data, queue.put_nowait, truth)
+                _command(link, tab, msg.data, queue.put_nowait, truth)
     finally:
         for reader in truth:
             reader.stop()
@@ -93,7 +108,7 @@ async def websocket(request: web.Request) -> web.StreamResponse:
     return ws
 
 
-def _command(link: PlatformLink, text: str, send: Any, truth: list[TruthReader]) -> None:
+def _command(link: PlatformLink, tab: object, text: str, send: Any, truth: list[TruthReader]) -> None:
     try:
         body = json.loads(text)
         op = body.get("op")
@@ -104,7 +119,10 @@ def _command(link: PlatformLink, text: str, send: Any, truth: list[TruthReader])
     elif op == "open":
         link.open()
     elif op == "close":
-        link.close("socket closed by a viewer", by="viewer")
+        if link.may_close(tab):
+            link.close("socket closed by a viewer", by="viewer")
+    elif op == "take":
+        link.take(tab)
     elif op == "stats":
         send({"event": "stats", "target": link.target, "state": link.state, **link.stats.snapshot()})
     else:
@@ -123,9 +141,13 @@ def _truth(link: PlatformLink, control: str, send: Any, truth: list[TruthReader]
 
 async def targets(request: web.Request) -> web.Response:
     ini: NetworkIni = request.app[CONFIG]["ini"]
+    any_target = request.app[TARGETS].any_target
     if request.method == "POST":
-        if not _same_origin(request):
-            raise web.HTTPForbidden(text="request from another origin refused")
+        if not any_target:  # else a page could put any address on the list (targets.py)
+            raise web.HTTPForbidden(
+                text="adding an address from the page needs `pltf gui --allow-any-target`; "
+                f"or add it to {ini.path} yourself"
+            )
         try:
             body = await request.json()
             ini.add(str(body["target"]))
@@ -133,7 +155,7 @@ async def targets(request: web.Request) -> web.Response:
             raise web.HTTPBadRequest(text=f'expected {{"target": "HOST:PORT"}}: {exc}') from None
     default = request.app[CONFIG]["target"]
     known = [default, *(t for t in ini.targets() if t != default)]
-    return web.json_response({"default": default, "targets": known})
+    return web.json_response({"default": default, "targets": known, "any": any_target})
 
 
 async def index(request: web.Request) -> web.StreamResponse:
@@ -149,16 +171,26 @@ async def _shutdown(app: web.Application) -> None:
 
 
 def make_app(
-    target: str, ini: NetworkIni, *, reply_timeout: float | None = None, backoff: tuple[float, ...] | None = None
+    target: str,
+    ini: NetworkIni,
+    *,
+    reply_timeout: float | None = None,
+    backoff: tuple[float, ...] | None = None,
+    doors: Doors | None = None,
+    allowed: TargetList | None = None,
+    read_only: bool = False,
 ) -> web.Application:
-    app = web.Application()
-    link_options: dict[str, Any] = {}
+    """``doors`` and ``allowed`` (the targets) default to a loopback gateway that connects only to ``target`` and
+    the addresses of Network.ini."""
+    app = web.Application(middlewares=[(doors or Doors()).middleware()])
+    app[TARGETS] = allowed or TargetList(target, ini)
+    link_options: dict[str, Any] = {"read_only": read_only}
     if reply_timeout is not None:
         link_options["reply_timeout"] = reply_timeout
     if backoff is not None:
         link_options["backoff"] = backoff
     app[LINKS] = {}
-    app[CONFIG] = {"target": target, "ini": ini, "link": link_options}
+    app[CONFIG] = {"target": target, "ini": ini, "link": link_options, "tabs": 0}
     app.router.add_get("/", index)
     app.router.add_get("/ws", websocket)
     app.router.add_route("*", "/api/targets", targets)

@@ -14,6 +14,8 @@ Rules:
   E-WIRE-007: a busy port accepts a second client and closes it at once).
 - A request whose reply has not come within ``reply_timeout`` seconds ends the connection (the platform has
   stopped answering); a malformed reply does too (the stream is out of step).
+- One tab at a time drives (control.py, issue 33): a command of a tab that does not hold control, or of any tab
+  under ``read_only``, is refused here and never reaches the platform; each tab is told who drives (``control``).
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ from collections.abc import Callable, Hashable
 from dataclasses import dataclass, field
 from typing import Any
 
+from pltf.gui.control import COMMANDS, Control
 from pltf.gui.routing import ANSWERED, BadRequest, Router
 from pltf.spec.codec import FRAME_OVERHEAD
 from pltf.spec.errors import RemoteProtocolError
@@ -81,6 +84,7 @@ class PlatformLink:
         reply_timeout: float = REPLY_TIMEOUT,
         backoff: tuple[float, ...] = BACKOFF,
         on_idle: Callable[[PlatformLink], None] | None = None,
+        read_only: bool = False,
     ) -> None:
         self.target = target
         self.host, self.port = parse_target(target)
@@ -89,6 +93,7 @@ class PlatformLink:
         self.on_idle = on_idle
         self.tabs: dict[Hashable, Send] = {}
         self.router = Router()
+        self.control = Control(read_only=read_only)
         self.stats = Stats()
         self.state = "closed"  # closed | connecting | connected | waiting
         self.want_open = False
@@ -102,16 +107,20 @@ class PlatformLink:
         self._failure_fields: dict[str, Any] = {}
 
     # ---- tabs
-    def attach(self, tab: Hashable, send: Send) -> None:
+    def attach(self, tab: Hashable, send: Send, label: str = "a tab") -> None:
         self.tabs[tab] = send
+        self.control.join(tab, label)
         if self._idle is not None:
             self._idle.cancel()
             self._idle = None
         send(self.last_event)
+        send({**self.control.view(tab), "target": self.target})
 
     def detach(self, tab: Hashable) -> None:
         self.tabs.pop(tab, None)
         self.router.forget(tab)
+        if self.control.leave(tab):
+            self._tell_control()
         if not self.tabs:
             self._idle = asyncio.get_running_loop().call_later(IDLE_CLOSE, self._close_idle)
 
@@ -127,6 +136,42 @@ class PlatformLink:
         (log.info if event in ("connecting", "connected", "closed") else log.warning)("%s: %s", self.target, message)
         for send in list(self.tabs.values()):
             send(self.last_event)
+
+    # ---- who drives (issue 33)
+    def _tell_control(self) -> None:
+        for tab, send in list(self.tabs.items()):
+            send({**self.control.view(tab), "target": self.target})
+
+    def take(self, tab: Hashable) -> None:
+        """Take control (an explicit action of the tab); refused under read-only."""
+        if self.control.read_only:
+            self._refuse(
+                tab,
+                "read_only",
+                "Take control refused: this GUI is read-only (pltf gui --read-only)",
+                telegram="Take control",
+            )
+            return
+        if self.control.take(tab):
+            log.info("%s: %s takes control", self.target, self.control.labels.get(tab, "a tab"))
+            self._tell_control()
+
+    def may_close(self, tab: Hashable) -> bool:
+        """Close Socket ends the link for every tab: only the driver's, or anybody's while nobody drives."""
+        refused = self.control.refusal(tab)
+        if refused is not None and refused[0] == "viewer":
+            self._refuse(tab, refused[0], f"Close Socket {refused[1]}", telegram="Close Socket")
+            return False
+        return True
+
+    def _refuse(self, tab: Hashable, reason: str, message: str, telegram: str) -> None:
+        """Tell the tab its command was refused (``reason``: "read_only" or "viewer"); a command has no reply,
+        so nothing of the tab waits for it (``id`` None)."""
+        send = self.tabs.get(tab)
+        if send is not None:
+            holder = self.control.view(tab)["holder"]
+            event = {"event": "refused_command", "reason": reason, "telegram": telegram, "holder": holder, "id": None}
+            send({**event, "target": self.target, "message": message})
 
     # ---- open / close (Socket menu, guide 5.2)
     def open(self) -> None:
@@ -162,7 +207,13 @@ class PlatformLink:
     # ---- frames from tabs
     def submit(self, tab: Hashable, frame: bytes) -> None:
         send = self.tabs[tab]
-        answered = frame[FRAME_OVERHEAD] if len(frame) > FRAME_OVERHEAD and frame[FRAME_OVERHEAD] in ANSWERED else None
+        first = frame[FRAME_OVERHEAD] if len(frame) > FRAME_OVERHEAD else None
+        answered = first if first in ANSWERED else None
+        command = first in COMMANDS
+        if command and (refused := self.control.refusal(tab)) is not None:
+            name = COMMANDS[first] if first is not None else "the command"
+            self._refuse(tab, refused[0], f"{name} {refused[1]}", telegram=name)
+            return
         if self._writer is None or self.state != "connected":
             send({"event": "not_sent", "target": self.target, "message": "the socket is not open", "id": answered})
             return
@@ -177,6 +228,8 @@ class PlatformLink:
         self._writer.write(out)
         self.stats.bytes_out += len(out)
         self.stats.telegrams_out += 1
+        if command and self.control.claim(tab):
+            self._tell_control()
 
     # ---- the connection
     async def _run(self) -> None:

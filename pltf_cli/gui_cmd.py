@@ -8,7 +8,7 @@ import logging
 from pathlib import Path
 
 from pltf.cli.options import exit_status, format_host_port, positive, target, target_or_zero
-from pltf.gui.serve import serve
+from pltf.gui.serve import Options, serve
 
 
 def add_gui_arguments(p: argparse.ArgumentParser) -> None:
@@ -37,9 +37,50 @@ def add_gui_arguments(p: argparse.ArgumentParser) -> None:
         metavar="S",
         help="seconds a request may wait for its reply before the platform counts as silent (default 5)",
     )
+    add_door_arguments(p)
     p.epilog = exit_status(
         ok="stopped (Ctrl-C or a signal); a target that does not answer is shown, not an error",
         usage="usage error: bad options, --listen's port in use",
+    )
+
+
+def add_door_arguments(p: argparse.ArgumentParser) -> None:
+    """Who may drive the platform (issue 33, docs/security.md)."""
+    g = p.add_argument_group("who may come in (docs/security.md)")
+    g.add_argument(
+        "--allow-host",
+        action="append",
+        default=[],
+        metavar="NAME",
+        help="also serve requests whose Host is NAME (repeatable; default: the listen address, localhost, loopback)",
+    )
+    g.add_argument(
+        "--allow-target",
+        action="append",
+        default=[],
+        type=target,
+        metavar="HOST:PORT",
+        help="a platform the page may open besides --target and Network.ini's (repeatable)",
+    )
+    g.add_argument(
+        "--allow-any-target",
+        action="store_true",
+        help="let the page open any address, and add new ones to Network.ini (Open Socket At)",
+    )
+    tokens = g.add_mutually_exclusive_group()
+    tokens.add_argument(
+        "--token",
+        default=None,
+        metavar="TOKEN",
+        help="the token every request must carry (default beyond loopback: a new one, printed in the URL)",
+    )
+    tokens.add_argument(
+        "--no-token", action="store_true", help="no token even beyond loopback (warned: anyone there can drive)"
+    )
+    g.add_argument(
+        "--read-only",
+        action="store_true",
+        help="a viewer only: the gateway refuses every command that moves or changes the platform",
     )
 
 
@@ -52,5 +93,13 @@ def run_gui(args: argparse.Namespace) -> int:
             args.network_ini,
             args.open,
             args.reply_timeout,
+            Options(
+                allow_hosts=tuple(args.allow_host),
+                allow_targets=tuple(format_host_port(*t) for t in args.allow_target),
+                allow_any_target=args.allow_any_target,
+                token=args.token,
+                no_token=args.no_token,
+                read_only=args.read_only,
+            ),
         )
     )

@@ -1,13 +1,27 @@
-"""Platforms that misbehave for the fault tests, each accepting on 127.0.0.1 and then doing one wrong thing, and a
-relay that holds a platform's replies back (``HeldReplies``)."""
+"""Platforms that misbehave for the fault tests, each accepting on 127.0.0.1 and then doing one wrong thing, a
+relay that holds a platform's replies back (``HeldReplies``), and for the doors tests (issue 33) a platform that
+records what reaches it (``Recorder``), a raw HTTP request with any Host and Origin (``request``, ``upgrade``) and
+a WebSocket tab that speaks the gateway's protocol as a page's script would, without a browser (``Tab``).
+
+The tabs run on an event loop of their own thread (``run``): Playwright's sync API (tests/gui's browser fixture,
+package scope) keeps an event loop marked running in the main thread, where ``asyncio.run`` would refuse to start.
+"""
 
 from __future__ import annotations
 
+import asyncio
+import concurrent.futures
 import contextlib
+import http.client
+import json
 import socket
 import threading
+from collections.abc import Awaitable, Callable
+from typing import Any, TypeVar
 
-from pltf.spec.codec import encode
+import aiohttp
+
+from pltf.spec.codec import TelegramDecoder, build, encode
 from tests.clients.client_fakes import LoopbackServer, status_telegram
 
 
@@ -85,3 +99,134 @@ def free_port() -> int:
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         return int(s.getsockname()[1])
+
+
+class Recorder(_Listening):
+    """A platform that records what reaches it: every connection accepted (``connects``) and every request
+    telegram's name (``received``), in order; it answers CMD_GET_STATUS with a status telegram and nothing else
+    (the doors tests, issue 33: what a refused page must not get to the target)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.connects = 0
+        self.received: list[str] = []
+        self.start()
+
+    def _serve(self, conn: socket.socket) -> None:
+        self.connects += 1
+        decoder = TelegramDecoder("request")
+        with conn, contextlib.suppress(OSError):
+            while data := conn.recv(65536):
+                decoder.receive_data(data)
+                while (telegram := decoder.next_telegram()) is not None:
+                    self.received.append(telegram.NAME)
+                    if telegram.NAME == "CMD_GET_STATUS":
+                        conn.sendall(encode(status_telegram()))
+
+
+# ---------------------------------------------------------------- the doors tests' clients (issue 33)
+PATIENCE = 30.0  # s: a guard against a hang, not a speed assertion
+T = TypeVar("T")
+
+MOVE_VEL = encode(build("request", "CMD_MOVE_VEL", vel_trans=100, vel_rot=0))
+GET_STATUS = encode(build("request", "CMD_GET_STATUS"))
+
+
+def request(port: int, path: str, headers: dict[str, str], method: str = "GET") -> tuple[int, str, Any]:
+    """One HTTP request to 127.0.0.1:port with exactly these headers (Host included): (status, body, headers)."""
+    conn = http.client.HTTPConnection("127.0.0.1", port, timeout=PATIENCE)
+    try:
+        conn.putrequest(method, path, skip_host=True, skip_accept_encoding=True)
+        for k, v in headers.items():
+            conn.putheader(k, v)
+        conn.endheaders()
+        r = conn.getresponse()
+        return r.status, r.read().decode("utf-8", "replace"), r.headers
+    finally:
+        conn.close()
+
+
+def upgrade(port: int, target: str, headers: dict[str, str]) -> tuple[int, str, Any]:
+    """A WebSocket opening handshake to /ws?target=...: 101 when the gateway lets the tab in."""
+    ws = {
+        "Upgrade": "websocket",
+        "Connection": "Upgrade",
+        "Sec-WebSocket-Key": "dGhlIHNhbXBsZSBub25jZQ==",
+        "Sec-WebSocket-Version": "13",
+    }
+    return request(port, f"/ws?target={target}", {**ws, **headers})
+
+
+def run(make: Callable[[], Awaitable[T]]) -> T:
+    """Run ``make()`` to completion on a fresh event loop in a thread of its own."""
+    with concurrent.futures.ThreadPoolExecutor(1) as pool:
+        return pool.submit(lambda: asyncio.run(_bounded(make))).result()
+
+
+async def _bounded(make: Callable[[], Awaitable[T]]) -> T:
+    return await asyncio.wait_for(make(), 4 * PATIENCE)
+
+
+class Tab:
+    """One WebSocket to the gateway, as a page's script would hold it: sends frames and ops, reads events."""
+
+    def __init__(self, http: aiohttp.ClientSession, ws: aiohttp.ClientWebSocketResponse) -> None:
+        self.http = http
+        self.ws = ws
+        self.events: list[dict[str, Any]] = []
+        self.frames: list[bytes] = []
+
+    @classmethod
+    async def open(cls, base: str, target: str, headers: dict[str, str] | None = None) -> Tab:
+        http = aiohttp.ClientSession()
+        try:
+            ws = await http.ws_connect(f"{base}/ws?target={target}", headers=headers or {})
+        except BaseException:
+            await http.close()
+            raise
+        return cls(http, ws)
+
+    async def op(self, op: str, **fields: Any) -> None:
+        await self.ws.send_str(json.dumps({"op": op, **fields}))
+
+    async def frame(self, data: bytes) -> None:
+        await self.ws.send_bytes(data)
+
+    async def until(self, pred: Callable[[dict[str, Any] | bytes], bool], what: str) -> dict[str, Any] | bytes:
+        """Read until a message (an event's dict, or a frame's bytes) satisfies ``pred``; return it."""
+        deadline = asyncio.get_running_loop().time() + PATIENCE
+        while True:
+            left = deadline - asyncio.get_running_loop().time()
+            if left <= 0:
+                raise AssertionError(f"timed out waiting for {what}; events: {self.events[-6:]}")
+            msg = await self.ws.receive(timeout=left)
+            if msg.type == aiohttp.WSMsgType.TEXT:
+                item: dict[str, Any] | bytes = json.loads(msg.data)
+                self.events.append(item)  # type: ignore[arg-type]
+            elif msg.type == aiohttp.WSMsgType.BINARY:
+                item = bytes(msg.data)
+                self.frames.append(item)
+            else:
+                raise AssertionError(f"the WebSocket ended ({msg.type.name}) while waiting for {what}: {self.events}")
+            if pred(item):
+                return item
+
+    async def event(self, name: str, **fields: Any) -> dict[str, Any]:
+        def match(m: dict[str, Any] | bytes) -> bool:
+            return isinstance(m, dict) and m.get("event") == name and all(m.get(k) == v for k, v in fields.items())
+
+        got = await self.until(match, f"event {name} {fields or ''}")
+        assert isinstance(got, dict)
+        return got
+
+    async def status(self) -> bytes:
+        """Send GET_STATUS and wait for its reply: every frame this tab sent before has reached the gateway's
+        link (one WebSocket, read in order) and, if it was passed on, the platform (one connection, in order)."""
+        await self.frame(GET_STATUS)
+        got = await self.until(lambda m: isinstance(m, bytes), "the GET_STATUS reply")
+        assert isinstance(got, bytes)
+        return got
+
+    async def close(self) -> None:
+        await self.ws.close()
+        await self.http.close()

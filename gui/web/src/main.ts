@@ -16,16 +16,24 @@ import { wirePanel } from "./panels/wire";
 import { mapEditor } from "./editor/editpanel";
 import { roadmapEditor } from "./editor/roadmappanel";
 import { footprint } from "./view/overlay";
-import { closeSocket, menubar, openSocketAt, shutdownPlatform } from "./panels/menubar";
+import { closeSocket, type MenuItem, menubar, openSocketAt, shutdownPlatform } from "./panels/menubar";
 import { motionPanel } from "./panels/motion";
 import { operationPanel } from "./panels/operation";
 import { statusBar } from "./panels/statusbar";
+import { controlPanel } from "./panels/control";
 import { ViewOptions, viewOptionsPanel } from "./panels/viewoptions";
 import { planObstacleSwitch } from "./panels/planobst";
 import { PlatformSession } from "./session/session";
 import { connText } from "./session/connwords";
 
 const params = new URLSearchParams(window.location.search);
+// issue 33: the token of the printed URL has become a cookie (gui/doors.py): keep it out of the address bar,
+// the history and what a user copies from there
+if (params.has("token")) {
+  const clean = new URL(window.location.href);
+  clean.searchParams.delete("token");
+  history.replaceState(null, "", clean);
+}
 const target = params.get("target") ?? localStorage.getItem("pltf.lastTarget") ?? "";
 const wsUrl = new URL("ws", window.location.href);
 wsUrl.protocol = wsUrl.protocol === "https:" ? "wss:" : "ws:";
@@ -73,12 +81,14 @@ session.conn.subscribe((ev) => {
   }
 });
 
-const menus: Array<[Key, Array<{ key: Key; run?: () => void; shortcut?: string }>]> = [
+const menus: Array<[Key, MenuItem[]]> = [
   ["menu.socket", [
     { key: "menu.openSocket", run: () => session.open(), shortcut: "Control+O" },
     { key: "menu.openSocketAt", run: () => void openSocketAt(session, say) },
-    { key: "menu.closeSocket", run: () => closeSocket(session) },
-    { key: "menu.shutdownPlatform", run: () => void shutdownPlatform(session, say) },
+    // issue 33: Close Socket ends the link of every tab (refused to a viewer while another tab drives), Shutdown
+    // Platform is a command
+    { key: "menu.closeSocket", run: () => closeSocket(session), enabled: () => session.drive?.read_only === true || session.mayCommand },
+    { key: "menu.shutdownPlatform", run: () => void shutdownPlatform(session, say), enabled: () => session.mayCommand },
   ]],
   ["menu.view", [
     { key: "menu.map", run: () => map.canvas.focus() },
@@ -92,7 +102,7 @@ const menus: Array<[Key, Array<{ key: Key; run?: () => void; shortcut?: string }
   ["menu.edit", [{ key: "menu.editMap", run: () => dock.show("edit-map") }, { key: "menu.editRoadmap", run: () => dock.show("edit-roadmap") }]],
 ];
 
-const header = h("header", { class: "top" }, menubar(menus), h("h1", { class: "title" }));
+const header = h("header", { class: "top" }, menubar(menus), controlPanel(session), h("h1", { class: "title" }));
 onLanguage(() => {
   header.querySelector("h1")!.textContent = `${t("app.title")} ${session.target}`;
   document.title = t("app.title");

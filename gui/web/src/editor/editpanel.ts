@@ -9,6 +9,7 @@ import { bind, type Key, t } from "../i18n/i18n";
 import { GetMapReply, GetMapRequest, SetMapRequest } from "../pltf";
 import type { MapView } from "../panels/mapview";
 import type { PlatformSession } from "../session/session";
+import { guard } from "../panels/control";
 import { toScreen } from "../view/camera";
 import { addObject, addObjects, clearMap, deleteObjects, History, invertLine, lineOp, moveObjects, setGeometry } from "./commands";
 import { clean, extend, orthogonal, parallel, snap, type Pt, type Seg, trim } from "./geometry";
@@ -451,6 +452,7 @@ export function mapEditor(
       }
     });
   });
+  guard(session, sendB); // CMD_SET_MAP: only while this tab may command (issue 33)
   // guide 5.4 "Closes the toolbar and asks for saving if necessary"
   const closeB = act("edit.close", () => {
     const shut = (): void => {

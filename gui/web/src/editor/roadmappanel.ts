@@ -11,6 +11,7 @@ import { GetRoadmapReply, GetRoadmapRequest, SetRoadmapRequest } from "../pltf";
 import type { MapView } from "../panels/mapview";
 import type { Roadmap } from "../scene/roadmap";
 import type { PlatformSession } from "../session/session";
+import { guard } from "../panels/control";
 import { toScreen } from "../view/camera";
 import {
   addEdge,
@@ -344,7 +345,7 @@ export function roadmapEditor(
       return null;
     }, t("rm.moved"));
   });
-  act("edit.send", () => {
+  const sendB = act("edit.send", () => {
     const xml = writeRoadmapDoc(history.doc);
     void validateDocument("roadmap", xml).then((v) => {
       if (!v.ok) {
@@ -363,6 +364,7 @@ export function roadmapEditor(
         .catch((e: Error) => say(e.message));
     });
   });
+  guard(session, sendB); // CMD_SET_ROADMAP: only while this tab may command (issue 33)
   // guide 5.5 "looks similar to the toolbar of the map editor": closing asks for saving if necessary
   act("edit.close", () => {
     void askToClose(history.dirty, "rm.closeAsk").then((how) => {

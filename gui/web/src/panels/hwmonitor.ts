@@ -26,6 +26,7 @@ import {
   type Telegram,
 } from "../pltf";
 import type { PlatformSession } from "../session/session";
+import { commands } from "./control";
 
 /** erratum E-HW-005: the board status word; -1 = the node is not connected. */
 const STATUS_BITS: Array<[number, string]> = [
@@ -114,11 +115,11 @@ function motorTab(session: PlatformSession, say: (s: string) => void): HTMLEleme
       ["hw.tempLeft", (s) => `${s.motorLeftTemp} °C`],
       ["hw.velocity", (s) => `${s.velTrans} mm/s, ${s.velRot} mrad/s`],
     ], session),
-    h("div", { class: "row" },
+    commands(session, h("div", { class: "row" },
       brake(MotorIndex.CANNODE_MOTORRIGHT, BrakeState.BRAKE_ENABLED, "hw.brakeRightOn"),
       brake(MotorIndex.CANNODE_MOTORRIGHT, BrakeState.BRAKE_DISABLED, "hw.brakeRightOff"),
       brake(MotorIndex.CANNODE_MOTORLEFT, BrakeState.BRAKE_ENABLED, "hw.brakeLeftOn"),
-      brake(MotorIndex.CANNODE_MOTORLEFT, BrakeState.BRAKE_DISABLED, "hw.brakeLeftOff")),
+      brake(MotorIndex.CANNODE_MOTORLEFT, BrakeState.BRAKE_DISABLED, "hw.brakeLeftOff"))),
   );
 }
 
@@ -137,7 +138,7 @@ function ioTab(session: PlatformSession, say: (s: string) => void): HTMLElement 
       ["hw.analogIn", (s) => s.ioAnalogIn.join(", ")],
     ], session),
     heading("hw.digitalIn"), leds(16, (i) => `${t("hw.digitalIn")} ${i + 1}`, (s) => s.ioDigitalIn, session),
-    heading("hw.digitalOut"), outs.root,
+    heading("hw.digitalOut"), commands(session, outs.root),
   );
 }
 
@@ -151,7 +152,7 @@ function relayTab(session: PlatformSession, say: (s: string) => void): HTMLEleme
       ["hw.analogIn", (s) => s.relayAnalogIn.join(", ")],
       ["hw.opto", (s) => s.relayOptoDistance.map((d) => `${d} mm`).join(", ")],
     ], session),
-    heading("hw.relayOut"), outs.root,
+    heading("hw.relayOut"), commands(session, outs.root),
     heading("hw.digitalIn"), leds(8, (i) => `${t("hw.digitalIn")} ${i + 1}`, (s) => s.relayDigitalIn & 0xff, session),
     // erratum E-HW-011: the keypad keys are bits 8-15 of relay_digital_in
     heading("hw.keypad"), leds(8, (i) => `${t("hw.key")} ${i + 1}`, (s) => (s.relayDigitalIn >> 8) & 0xff, session),
@@ -190,8 +191,8 @@ function usTab(session: PlatformSession, say: (s: string) => void): HTMLElement 
       ["hw.status", (s) => statusWords(s.usStatus, "us")],
       ["hw.analogIn", (s) => s.usAnalogIn.join(", ")],
     ], session),
-    h("div", { class: "row" }, startBtn, stopBtn),
-    heading("hw.sensors"), sensors.root,
+    commands(session, h("div", { class: "row" }, startBtn, stopBtn)),
+    heading("hw.sensors"), commands(session, sensors.root),
   );
 }
 
@@ -262,11 +263,11 @@ function canTab(session: PlatformSession, say: (s: string) => void): { root: HTM
   });
   const head = h("tr", {}, h("th", {}, "t (s)"), h("th", {}, "id"), h("th", {}, "data"));
   const root = h("div", {},
-    h("div", { class: "row" }, field("hw.canId", listenId), idBtn("hw.listen", (id) => new AddCanListeningIdRequest({ canId: id })),
-      idBtn("hw.unlisten", (id) => new RemoveCanListeningIdRequest({ canId: id }))),
+    commands(session, h("div", { class: "row" }, field("hw.canId", listenId), idBtn("hw.listen", (id) => new AddCanListeningIdRequest({ canId: id })),
+      idBtn("hw.unlisten", (id) => new RemoveCanListeningIdRequest({ canId: id })))),
     h("div", { class: "row" }, field("hw.filter", filter)),
     h("table", { "aria-label": "CAN" }, h("thead", {}, head), body),
-    h("div", { class: "row" }, field("hw.canId", sendId), field("hw.canData", sendData), sendBtn),
+    commands(session, h("div", { class: "row" }, field("hw.canId", sendId), field("hw.canData", sendData), sendBtn)),
   );
   return { root, frames };
 }

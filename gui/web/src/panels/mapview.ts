@@ -33,6 +33,7 @@ import {
 import { type Box, changedWindow, dirtyPart, HeadTailBoxes, patchCounts, union, windowBox, windowSize } from "../view/scenediff";
 import { drawFlag, drawPlatform, drawStatus, footprint, type Footprint, type OverlayOptions, type Pose, type UsSensor } from "../view/overlay";
 import { liveKey } from "../view/livekey";
+import { guard } from "./control";
 import type { ViewOptions } from "./viewoptions";
 
 type Tool = "pan" | "zoomArea" | "shift" | "flag" | "edit";
@@ -166,6 +167,9 @@ export class MapView {
     toolButton("pan", "map.pan");
     toolButton("shift", "map.shift");
     toolButton("flag", "map.flag");
+    // issue 33: shifting the platform and the target flag send commands: only while this tab may command
+    guard(session, this.toolButtons.get("shift")!);
+    guard(session, this.toolButtons.get("flag")!);
     this.truthText = h("p", { class: "map-truth", role: "status", hidden: true });
     bind(this.truthText, "truth.title", { text: false });
     this.root = h("section", { class: "map-view" }, toolbar, h("div", { class: "map-frame" }, this.canvas), this.message, this.summary, this.truthText);

@@ -12,6 +12,8 @@ export interface MenuItem {
   key: Key;
   run?: () => void;
   shortcut?: string;
+  /** When the item may be used (looked at each time its menu opens and on click): issue 33's commands. */
+  enabled?: () => boolean;
 }
 
 export function menubar(menus: Array<[Key, MenuItem[]]>): HTMLElement {
@@ -25,6 +27,7 @@ export function menubar(menus: Array<[Key, MenuItem[]]>): HTMLElement {
       b.setAttribute("aria-expanded", "false");
     }
   };
+  const gates: Array<[HTMLElement, () => boolean]> = [];
   for (const [key, items] of menus) {
     const top = h("button", { type: "button", role: "menuitem", "aria-haspopup": "menu", "aria-expanded": "false" });
     bind(top, key);
@@ -38,15 +41,25 @@ export function menubar(menus: Array<[Key, MenuItem[]]>): HTMLElement {
         b.title = t("menu.nextIssue");
       } else {
         const run = item.run;
+        const enabled = item.enabled;
         b.addEventListener("click", () => {
+          if (enabled !== undefined && !enabled()) {
+            return;
+          }
           closeAll();
           run();
         });
+        if (enabled !== undefined) {
+          gates.push([b, enabled]);
+        }
       }
       menu.append(b);
     }
     top.addEventListener("click", () => {
       const open = menu.hidden;
+      for (const [b, enabled] of gates) {
+        b.setAttribute("aria-disabled", String(!enabled()));
+      }
       closeAll();
       menu.hidden = !open;
       top.setAttribute("aria-expanded", String(open));
@@ -93,8 +106,11 @@ export function dialog(title: Key, body: HTMLElement, buttons: Key[]): Promise<n
 /** Open Socket At (guide 5.2): the known addresses of Network.ini, or a new one (added to the file). */
 export async function openSocketAt(session: PlatformSession, say: (s: string) => void): Promise<void> {
   let known: string[] = [];
+  let any = false; // issue 33: a new address only when the gateway was started with --allow-any-target
   try {
-    known = ((await (await fetch("api/targets")).json()) as { targets: string[] }).targets;
+    const list = (await (await fetch("api/targets")).json()) as { targets: string[]; any?: boolean };
+    known = list.targets;
+    any = list.any === true;
   } catch {
     say(t("socket.noList"));
   }
@@ -107,7 +123,9 @@ export async function openSocketAt(session: PlatformSession, say: (s: string) =>
   const cap = h("span");
   bind(cap, "socket.address", { name: false });
   bind(input, "socket.address", { text: false });
-  const body = h("div", { class: "form" }, h("label", { class: "field" }, sel, select), h("label", { class: "field" }, cap, input));
+  const hint = h("p", { class: "hint" });
+  bind(hint, "socket.onlyKnown", { name: false });
+  const body = h("div", { class: "form" }, h("label", { class: "field" }, sel, select), any ? h("label", { class: "field" }, cap, input) : hint);
   const choice = await dialog("socket.openAt", body, ["socket.connect", "dialog.cancel"]);
   if (choice !== 0) {
     return;

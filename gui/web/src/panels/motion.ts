@@ -23,6 +23,7 @@ import {
 } from "../pltf";
 import { parseRoadmap } from "../scene/roadmap";
 import type { PlatformSession } from "../session/session";
+import { commands } from "./control";
 import type { MapView } from "./mapview";
 
 export const RESEND_MS = 100;
@@ -192,7 +193,7 @@ export function motionPanel(session: PlatformSession, map: MapView, say: (text: 
   const replay = h("div", { class: "mode-controls", "data-mode": "replay" },
     ...events.map(([ev, key]) => btn(key, () => send(new SetEventRequest({ event: ev }), "motion.sent"))));
   const note = h("p", { class: "mode-controls hint", "data-mode": "note" });
-  root.append(velocity, automatic, replay, note);
+  root.append(commands(session, velocity, automatic, replay), note);
 
   const update = () => {
     const mode = status?.motionMode;

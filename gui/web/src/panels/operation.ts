@@ -26,6 +26,7 @@ import {
   type Telegram,
 } from "../pltf";
 import type { PlatformSession } from "../session/session";
+import { commands } from "./control";
 
 const { ST_OP_READY: READY, ST_OP_RUNNING: RUNNING, ST_OP_BREAKED: BREAKED, ST_OP_NOT_INITIALIZED: NOT_INIT } = OperationState;
 
@@ -82,7 +83,6 @@ export function operationPanel(session: PlatformSession, say: (text: string) => 
     const b = h("button", { type: "button", "aria-keyshortcuts": c.shortcut || false });
     bind(b, c.key);
     b.addEventListener("click", () => sendAll(c.send()));
-    bar.append(b);
     return b;
   });
   // guide 5.6: "For starting a motion mode the platform has to be in the state 'Ready'. Select in to motion mode combo box"
@@ -95,7 +95,8 @@ export function operationPanel(session: PlatformSession, say: (text: string) => 
   const caption = h("span");
   bind(caption, "status.motionMode", { name: false });
   bind(select, "status.motionMode", { text: false });
-  bar.append(h("label", { class: "field" }, caption, select));
+  // issue 33: the state chart's buttons and the mode only while this tab may command (panels/control.ts)
+  bar.append(commands(session, ...buttons, h("label", { class: "field" }, caption, select)));
   let userPicked = false;
   select.addEventListener("focus", () => (userPicked = true));
   select.addEventListener("blur", () => (userPicked = false));
@@ -126,7 +127,7 @@ export function operationPanel(session: PlatformSession, say: (text: string) => 
       return;
     }
     const i = COMMANDS.findIndex((c) => c.shortcut === `Alt+${e.key.toUpperCase()}`);
-    if (i >= 0 && !buttons[i].disabled) {
+    if (i >= 0 && !buttons[i].disabled && session.mayCommand) {
       e.preventDefault();
       buttons[i].click();
     }

@@ -18,6 +18,7 @@ import {
 } from "../pltf";
 import { PARAM_BY_NAME, PARAM_TABS, type ParamDef } from "../spec";
 import type { PlatformSession } from "../session/session";
+import { commands } from "./control";
 
 const TYPES = ["BOOLEAN", "INTEGER", "DOUBLE"] as const;
 
@@ -135,7 +136,7 @@ export function parametersWindow(session: PlatformSession): { root: HTMLElement;
     }
   });
   const root = h("div", { class: "params" }, list, h("div", { class: "row" }, refresh), grid, description,
-    h("div", { class: "row" }, h("label", { class: "field" }, valueCaption, value), setBtn), answer);
+    h("div", { class: "row" }, commands(session, h("label", { class: "field" }, valueCaption, value), setBtn)), answer);
   return { root, onShow: (on) => on && session.connected && load() };
 }
 

@@ -9,6 +9,7 @@ import { h } from "../dom";
 import { bind } from "../i18n/i18n";
 import { GetPltfParamReply, GetPltfParamRequest, GetPltfParamVecReply, SetPltfParamRequest } from "../pltf";
 import type { PlatformSession } from "../session/session";
+import { commands } from "./control";
 import type { ViewOptions } from "./viewoptions";
 
 export const PLAN_OBST_PARAM = "ViewPlanObstEnabled";
@@ -49,5 +50,6 @@ export function planObstacleSwitch(session: PlatformSession, options: ViewOption
     }
     session.request(new GetPltfParamRequest({ key: PLAN_OBST_PARAM })).catch((e: Error) => say(e.message));
   });
-  return h("label", { class: "check" }, input, caption);
+  // the switch sets the platform's parameter: a command (issue 33)
+  return commands(session, h("label", { class: "check" }, input, caption));
 }

@@ -12,7 +12,7 @@ type Vars = Record<string, string | number>;
 
 function vars(ev: ConnEvent): Vars {
   const out: Vars = { target: ev.target };
-  for (const k of ["detail", "timeout", "attempt", "delay"]) {
+  for (const k of ["detail", "timeout", "attempt", "delay", "holder", "telegram"]) {
     const v = ev[k];
     if (typeof v === "string" || typeof v === "number") {
       out[k] = v;
@@ -34,6 +34,8 @@ function key(event: string, ev: ConnEvent): Key | null {
     malformed: "conn.ev.malformed",
     gateway_lost: "conn.ev.gatewayLost",
     not_sent: "conn.ev.notSent",
+    target_refused: "conn.ev.targetRefused",
+    refused_command: ev.reason === "read_only" ? "conn.ev.refusedReadOnly" : "conn.ev.refusedViewer",
     closed: ev.by === "viewer" ? "conn.ev.closedByViewer" : ev.by === "gateway" ? "conn.ev.gatewayStopped" : "conn.ev.closed",
   };
   return variants[event] ?? null;

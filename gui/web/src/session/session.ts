@@ -9,6 +9,10 @@
  * - Polling: each poller has at most one request in flight and asks again one period after the last reply.
  *   GET_STATUS runs at DEFAULT_STATUS_HZ while connected; the others are switched on by the panels that need them.
  * - A lost gateway is reconnected with backoff and said so; every failure ends up as a "conn" event in words.
+ * - Who drives (gui/control.py, issue 33): the gateway tells each tab who holds control ("control" events). A tab
+ *   that may not command (another tab drives, or the gateway is read-only) sends no command: `send` refuses the
+ *   telegrams the platform does not answer (guide 6.1), and the gateway refuses them too. A target that is not on
+ *   the gateway's list ("target_refused") is said and not tried again.
  */
 import { ANSWERED } from "../spec";
 import {
@@ -27,6 +31,7 @@ import {
   Telegram,
 } from "../pltf";
 import { Topic } from "./bus";
+import { t as tr } from "../i18n/i18n";
 
 export const DEFAULT_STATUS_HZ = 20;
 
@@ -44,6 +49,15 @@ export interface TruthEvent {
   true?: [number, number, number]; // mm, mm, degrees
   faults?: Array<{ kind: string; target: string; value?: number | string | null }>;
   detail?: string;
+}
+
+/** gui/control.py: who holds control of this target. */
+export interface ControlEvent {
+  event: "control";
+  holder: string | null;
+  you: boolean;
+  read_only: boolean;
+  message: string;
 }
 
 export interface WireRecord {
@@ -118,6 +132,11 @@ export class PlatformSession {
   /** The optional ground truth from the reference server's control channel (gui/truth.py): never needed. */
   readonly truth = new Topic<TruthEvent>();
   private control: string | null = null;
+  /** Who drives (gui/control.py); `drive` is the last word. */
+  readonly driving = new Topic<ControlEvent>();
+  drive: ControlEvent | null = null;
+  /** The gateway refused this target (not on its list): not tried again until another target is opened. */
+  private refusedTarget = false;
   /** Events about single requests (not sent, refused by the gateway): shown, but not the connection's state. */
   readonly notices = new Topic<ConnEvent>();
   /** This tab's own traffic (TCP Client tab). */
@@ -143,6 +162,7 @@ export class PlatformSession {
     if (target !== undefined && target !== this.target) {
       this.detach();
       this.target = target;
+      this.refusedTarget = false;
     }
     this.wantOpen = true;
     if (this.ws === null) {
@@ -155,7 +175,7 @@ export class PlatformSession {
   /** Close Socket (guide 5.2): CMD_CLOSE_SOCKET, then the link closes; the operating mode stays. */
   close(farewell?: Telegram): void {
     this.wantOpen = false;
-    if (farewell !== undefined && this.connected) {
+    if (farewell !== undefined && this.connected && this.mayCommand) {
       this.send(farewell);
     }
     this.setConnected(false);
@@ -169,6 +189,19 @@ export class PlatformSession {
     this.control = control === "" ? null : control;
     if (this.control !== null && this.ws?.readyState === WebSocket.OPEN) {
       this.ws.send(JSON.stringify({ op: "truth", control: this.control }));
+    }
+  }
+
+  /** May this tab send a command now: the gateway is not read-only and nobody else drives. */
+  get mayCommand(): boolean {
+    const d = this.drive;
+    return d === null || (!d.read_only && (d.holder === null || d.you));
+  }
+
+  /** Take control (an explicit action: the tab that drove becomes a viewer). */
+  takeControl(): void {
+    if (this.ws?.readyState === WebSocket.OPEN) {
+      this.ws.send(JSON.stringify({ op: "take" }));
     }
   }
 
@@ -204,6 +237,9 @@ export class PlatformSession {
       }
       this.ws = null;
       this.setConnected(false);
+      if (this.refusedTarget) {
+        return; // said once (target_refused); trying again would be refused again
+      }
       this.failAll("the gateway connection was lost");
       const delay = Math.min(8000, 500 * 2 ** this.wsRetry++);
       this.conn.publish({
@@ -224,6 +260,7 @@ export class PlatformSession {
     const ws = this.ws;
     this.ws = null;
     this.setConnected(false);
+    this.drive = null;
     this.failAll("switched to another platform");
     ws?.close();
   }
@@ -237,7 +274,15 @@ export class PlatformSession {
       this.truth.publish(ev as unknown as TruthEvent);
       return;
     }
-    if (ev.event === "lost" || ev.event === "not_sent" || ev.event === "bad_request") {
+    if (ev.event === "control") {
+      this.drive = ev as unknown as ControlEvent;
+      this.driving.publish(this.drive);
+      return;
+    }
+    if (ev.event === "target_refused") {
+      this.refusedTarget = true;
+    }
+    if (ev.event === "lost" || ev.event === "not_sent" || ev.event === "bad_request" || ev.event === "refused_command") {
       const id = ev.id as number | undefined;
       if (id !== undefined && this.waiting.length > 0 && this.waiting[0].id === id) {
         this.waiting.shift()!.reject(new Error(ev.message));
@@ -351,6 +396,9 @@ export class PlatformSession {
     const bytes = encode(t);
     if (this.ws?.readyState !== WebSocket.OPEN || !this.connected) {
       throw new Error(`${t.telegramName} not sent: the socket is not open`);
+    }
+    if (!this.mayCommand && !ANSWERED.has(t.telegramId)) {
+      throw new Error(`${t.telegramName} ${this.drive?.read_only ? tr("control.refusedReadOnly") : tr("control.refusedViewer", { holder: this.drive?.holder ?? "" })}`);
     }
     this.ws.send(bytes);
     this.traffic.bytesOut += bytes.length;
