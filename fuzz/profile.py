@@ -30,6 +30,7 @@ from pltf.fuzz.target import LEAD, Session, connect
 from pltf.spec.codec import REQUESTS, encode
 
 CONNECT_TO_PLTF = encode(REQUESTS.CMD_CONNECT_TO_PLTF())
+SHUTDOWN_PLTF = encode(REQUESTS.CMD_SHUTDOWN_PLTF())
 FIN_REPLIES = 4  # leads sent with our FIN: all answered, or the FIN ended the session
 FIN_TRIES = 2  # a relay that forwards fast may deliver every reply once; twice is the evidence
 REPLY_SAMPLES = 5
@@ -72,14 +73,24 @@ class Profile:
         return "; ".join(parts)
 
     def adapt(self, session: Session) -> Session:
-        """``session`` as this target needs it: our FIN only after the replies owed (where it ends the session),
-        CMD_CONNECT_TO_PLTF in front of the lead (where nothing is answered before it)."""
-        if self.silent_before_connect and session.led and session.frames[0] == LEAD:
-            session = replace(session, frames=[CONNECT_TO_PLTF + LEAD, *session.frames[1:]])
+        """``session`` as this target needs it: our FIN only after the replies owed (where it ends the session);
+        where nothing is answered before CMD_CONNECT_TO_PLTF, it in front of the lead and behind every
+        CMD_SHUTDOWN_PLTF (a platform not connected answers nothing: a state it cannot be fuzzed in)."""
+        if self.silent_before_connect:
+            session = _connected(session)
         return replace(session, fin_waits=True) if self.fin_ends and not session.fin_waits else session
 
     def to_json(self) -> dict[str, object]:
         return asdict(self) | {"summary": self.describe()}
+
+
+def _connected(session: Session) -> Session:
+    """The session with CMD_CONNECT_TO_PLTF in the lead's frame and in each CMD_SHUTDOWN_PLTF's (frame indices and
+    the replies asked for stay: CMD_CONNECT_TO_PLTF has no reply)."""
+    frames = [f + CONNECT_TO_PLTF if f == SHUTDOWN_PLTF else f for f in session.frames]
+    if session.led and frames[0] == LEAD:
+        frames[0] = CONNECT_TO_PLTF + LEAD
+    return replace(session, frames=frames) if frames != session.frames else session
 
 
 def learn(host: str, port: int, flag: str, deadline: float) -> Profile:
