@@ -1,7 +1,9 @@
-"""``pltf conform``: run the conformance suite against a PlatformCtrl target over TCP (conformance_tests).
+"""``pltf conform``: run the conformance suite against a PlatformCtrl target over TCP (conformance_tests), or
+against a fleet of them at once (``--targets FILE``, conformance_tests/fleet.py; ``--ray`` on a Ray cluster).
 
 Exit status: 0 when every selected MUST case passes (and no baseline entry is stale, coverage is not below
-``--coverage-threshold``), 1 when a case fails, 2 for a harness error (target unreachable, bad arguments).
+``--coverage-threshold``), 1 when a case fails, 2 for a harness error (target unreachable, bad arguments); for a
+fleet, the worst of its targets'.
 """
 
 from __future__ import annotations
@@ -10,7 +12,7 @@ import argparse
 import sys
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from rich.console import Console
 
@@ -27,7 +29,21 @@ if TYPE_CHECKING:
 
 
 def add_conform_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--target", type=target, required=True, metavar="HOST:PORT", help="the server to check")
+    which = p.add_mutually_exclusive_group(required=True)
+    which.add_argument("--target", type=target, metavar="HOST:PORT", help="the server to check")
+    which.add_argument(
+        "--targets",
+        metavar="FILE",
+        help="a fleet file (YAML: targets, each a name, target HOST:PORT, second_port, profile, time_scale, "
+        "target_is_simulator, ...): the suite against every target at once, one report (--junit is then a directory)",
+    )
+    p.add_argument("--jobs", type=count, metavar="N", help="with --targets: at most N targets at once (default all)")
+    p.add_argument(
+        "--ray",
+        metavar="ADDRESS",
+        help="with --targets: run each target's suite as a Ray task on the cluster at ADDRESS (or 'auto'); "
+        "needs pip install 'pltf-toolkit[ray]'",
+    )
     p.add_argument("--second-port", type=port, metavar="PORT", help="the target's second port (guide 6.1: 10002)")
     p.add_argument(
         "--time-scale",
@@ -49,9 +65,9 @@ def add_conform_arguments(p: argparse.ArgumentParser) -> None:
         help="how many cases: smoke < standard < exhaustive (default standard)",
     )
     p.add_argument("-k", dest="keyword", metavar="EXPR", help="select cases: and/or/not over id substrings or globs")
-    p.add_argument("--junit", metavar="FILE", help="write a JUnit XML report")
+    p.add_argument("--junit", metavar="FILE", help="write a JUnit XML report (--targets: a directory, NAME.xml each)")
     p.add_argument("--json", metavar="FILE", help="write a JSON report (with wire logs and coverage)")
-    p.add_argument("--html", metavar="FILE", help="write a self-contained HTML report")
+    p.add_argument("--html", metavar="FILE", help="write a self-contained HTML report (--targets: the matrix)")
     gate = p.add_argument_group("safety gate")
     gate.add_argument(
         "--allow-motion",
@@ -118,6 +134,8 @@ def run_conform(args: argparse.Namespace) -> int:
     from pltf.conformance_tests.reports.console import ConsoleReporter
     from pltf.conformance_tests.runner import Runner
 
+    if args.targets or args.ray or args.jobs:
+        return _run_fleet(args)
     config = _config(args)
     try:
         cases = select(load_all().values(), tier=config.tier, keyword=config.keyword)
@@ -240,3 +258,103 @@ def _guarded(what: str, console: Console, run: Callable[[], int]) -> int:
     except (Outcome, OSError) as exc:
         console.print(f"[bold red]{what} aborted: FAIL[/] {exc}")
         return 1
+
+
+# ---- a fleet (--targets FILE): conformance_tests/fleet.py, the matrix report in reports/matrix.py
+_NOT_FOR_FLEET = {
+    "baseline": "--baseline (give each target its own: 'baseline: FILE' in the fleet file)",
+    "write_baseline": "--write-baseline",
+    "stateful": "--stateful",
+}
+
+
+def _run_fleet(args: argparse.Namespace) -> int:
+    from pltf.conformance_tests import fleet
+    from pltf.conformance_tests.reports.fleet_console import FleetConsole
+
+    if not args.targets:
+        raise CommandError("--ray and --jobs run a fleet: give it with --targets FILE")
+    refused = [what for key, what in _NOT_FOR_FLEET.items() if getattr(args, key)]
+    if refused:
+        raise CommandError(f"not with --targets: {', '.join(refused)}")
+    targets = _fleet_targets(args)
+    options = fleet.FleetOptions(
+        tier=args.tier,
+        keyword=args.keyword,
+        allow_shutdown=args.allow_shutdown,
+        reruns=args.reruns,
+        budget=args.budget,
+        case_budget=args.case_budget,
+        coverage_threshold=args.coverage_threshold,
+        differential=args.differential,
+    )
+    try:
+        cases = select(load_all().values(), tier=Tier[args.tier.upper()], keyword=args.keyword)
+    except ValueError as exc:
+        raise CommandError(str(exc)) from None
+    console = Console(width=None if sys.stdout.isatty() else 140)
+    if args.list:
+        return _list(cases, console)
+    if not cases:
+        raise CommandError("no case selected")
+    view = FleetConsole(console, verbose=args.verbose)
+    at_once = min(args.jobs or len(targets), len(targets))
+    view.on_start(targets, f"Ray at {args.ray}" if args.ray else f"{at_once} at once, threads")
+    runs = _fleet_runs(args, targets, options, view)
+    code = fleet.exit_code(runs)
+    view.on_finish(runs, code)
+    _write_fleet_reports(args, targets, runs, code, console)
+    broken = [f"{r.name} ({r.error})" for r in runs if r.exit_code == USAGE]
+    if broken:
+        raise CommandError(f"{len(broken)} of {len(runs)} target(s) could not be checked: {'; '.join(broken)}")
+    return code
+
+
+def _fleet_targets(args: argparse.Namespace) -> list[Any]:
+    from pltf.conformance_tests.fleet import FleetError, load_fleet
+
+    defaults = {
+        "profile": args.profile,
+        "time_scale": args.time_scale,
+        "target_is_simulator": args.target_is_simulator,
+        "allow_motion": args.allow_motion,
+        "reply_timeout": args.reply_timeout,
+    }
+    if args.second_port is not None:
+        raise CommandError("--second-port belongs to each target of a fleet: 'second_port: PORT' in the fleet file")
+    try:
+        return load_fleet(args.targets, defaults)
+    except FleetError as exc:
+        raise CommandError(str(exc)) from None
+
+
+def _fleet_runs(args: argparse.Namespace, targets: list[Any], options: Any, view: Any) -> list[Any]:
+    from pltf.conformance_tests import fleet
+
+    if not args.ray:
+        return fleet.run_local(targets, options, view.on_case_end, args.jobs)
+    from pltf.conformance_tests.fleet_ray import RayMissing, run_ray
+
+    try:
+        return run_ray(targets, options, args.ray, view.on_target_end)
+    except RayMissing as exc:
+        raise CommandError(str(exc)) from None
+    except ConnectionError as exc:
+        raise CommandError(f"cannot reach the Ray cluster at {args.ray}: {exc}") from None
+
+
+def _write_fleet_reports(
+    args: argparse.Namespace, targets: list[Any], runs: list[Any], code: int, console: Console
+) -> None:
+    from pltf.conformance_tests.reports import matrix
+
+    try:
+        if args.junit:
+            matrix.write_junit_dir(runs, args.junit)
+            console.print(f"JUnit reports written to {args.junit}/ (one per target)")
+        for path, write in ((args.json, matrix.write_json), (args.html, matrix.write_html)):
+            if path:
+                write(args.targets, targets, runs, code, path)
+                console.print(f"report written to {path}")
+    except OSError as exc:
+        raise CommandError(f"cannot write a report: {exc}") from None
