@@ -16,8 +16,8 @@ Rules:
   ``idle_drop`` closes a client that sent nothing for so many seconds; ``malformed`` "close" closes on a malformed
   frame or an unknown command (after the replies owed for the frames before it), "skip" drops such a frame and
   goes on ("": the target behind decides; both the reference server and the emulator close, E-WIRE-006).
-- ``silent`` (row 9): requests other than CMD_CONNECT_TO_PLTF are swallowed while the platform is not connected
-  (the chart of guide 4.2 followed from the commands, bugs.PlatformView): nothing is answered before it.
+- ``silent`` (row 9): on a connection, every request before its CMD_CONNECT_TO_PLTF is swallowed unanswered (a
+  gateway that wants a greeting first; spec/errata/behaviour.yaml E-BEH-009 has the platform-wide reading too).
 - ``backlog`` is the listen backlog (row 6: 1); ``host`` the address it listens on by default (row 12: ::1);
   ``restart_every`` (row 10): every so many seconds the member drops every connection, stops listening for
   ``restart_down`` seconds and starts the target behind it afresh (state lost).
@@ -156,8 +156,8 @@ MEMBERS: dict[str, Member] = {
         ),
         Member(
             "silent-until-connect",
-            "answers nothing before CMD_CONNECT_TO_PLTF: while the platform is not connected every other request "
-            "is swallowed (matrix row 9)",
+            "answers nothing before CMD_CONNECT_TO_PLTF: on a connection, every request before it is swallowed "
+            "(matrix row 9)",
             True,
             silent=True,
         ),

@@ -31,12 +31,13 @@ from collections.abc import Callable, Coroutine, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from pltf.zoo.bugs import NAME, NC, Bug, Fault, PlatformView
+from pltf.zoo.bugs import ID, Bug, Fault
 from pltf.zoo.frames import FrameCutter, Piece, well_formed
 from pltf.zoo.members import Member
 from pltf.zoo.schedule import ReplySchedule, segments
 from pltf.zoo.values import rewrite
 
+CONNECT_TO_PLTF_ID = ID["CMD_CONNECT_TO_PLTF"]
 SEGMENT_GAP = 0.001  # s between two writes of one chunk (slow link)
 HALF_CLOSE_WAIT = 15.0  # s the target may take to answer and close after a client's end-of-stream
 
@@ -99,7 +100,6 @@ class Relay:
         self.hang_seconds = hang_seconds
         self.on_exit = on_exit
         self.on_restart = on_restart  # starts the target behind afresh; its new ports (empty: the same)
-        self.view = PlatformView()  # the platform's state from the commands relayed (silent members)
         self.log = log
         self.ports: list[int] = []
         self.served = [0, 0]  # clients admitted, per port
@@ -281,10 +281,11 @@ class Relay:
     async def _to_target(self, reader: asyncio.StreamReader, writer: asyncio.StreamWriter) -> None:
         cutter = FrameCutter() if self.member.cuts_requests else None
         idle = self.member.idle_drop or None
+        greeted = [not self.member.silent]  # this connection has sent CMD_CONNECT_TO_PLTF (silent members)
         while data := await asyncio.wait_for(reader.read(65536), idle):
             if cutter is None:
                 writer.write(data)
-            elif not self._requests(cutter.feed(data), writer):
+            elif not self._requests(cutter.feed(data), writer, greeted):
                 break  # a strict member closes: the target answers what came before, then the client is closed
             await writer.drain()
         else:
@@ -294,8 +295,9 @@ class Relay:
         with contextlib.suppress(OSError):
             writer.write_eof()
 
-    def _requests(self, pieces: list[Piece], writer: asyncio.StreamWriter) -> bool:
-        """Pass the pieces on through the member's rules; False when a strict member ends the connection."""
+    def _requests(self, pieces: list[Piece], writer: asyncio.StreamWriter, greeted: list[bool]) -> bool:
+        """Pass the pieces on through the member's rules; False when a strict member ends the connection.
+        ``greeted[0]``: the connection has sent CMD_CONNECT_TO_PLTF (before it a silent member swallows the rest)."""
         for piece in pieces:
             if self.member.malformed and not well_formed(piece):
                 if self.member.malformed == "close":
@@ -306,10 +308,9 @@ class Relay:
                 fault = self.bug.on_request(piece, time.monotonic())
                 if fault is not None:
                     self._fault(fault)
-            name = NAME.get(-1 if piece.ident is None else piece.ident, "")
-            swallowed = self.member.silent and self.view.state == NC and name != "CMD_CONNECT_TO_PLTF"
-            self.view.on_request(name, piece)
-            if not swallowed:
+            if not greeted[0] and piece.ident == CONNECT_TO_PLTF_ID:
+                greeted[0] = True
+            if greeted[0]:
                 writer.write(piece.data)
         return True
 
