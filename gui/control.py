@@ -8,7 +8,8 @@ Rules:
   commands (moves, modes, outputs, documents, parameters, CAN, sounds, CMD_EXIT). Derived from the spec, not a
   second list (erratum E-GUI-006).
 - Nobody holds control at first; the first tab to send a command takes it, and keeps it until it leaves or
-  another tab takes it by an explicit action (``take``). A viewer's command is refused, never sent.
+  another tab takes it by an explicit action (``take``). A viewer's command is refused, never sent (erratum
+  E-GUI-007).
 - ``read_only``: nobody holds control and every command is refused; reads are served as before.
 Sans-IO: tabs are any hashable, labels are text; the caller tells the tabs (``view``).
 """
