@@ -766,9 +766,9 @@ local function header_ok(tvb, offset, avail)
 end
 
 -- Streams found by the heuristic (any port): "<tcp stream>" -> the server's port, the destination of the stream's
--- first PlatformCtrl bytes. Guide 6.1: the platform serves clients and answers their requests; it never speaks
--- first, so the side that sends the first frame is the client (a capture that starts after the first request
--- may show a reply first: then the directions are swapped, see proxy/README.md).
+-- first PlatformCtrl bytes. Guide 6.1: "This interface accepts commands and returns data only on request." The
+-- platform never speaks first, so the side that sends the first frame is the client (a capture that starts
+-- after a request may show a reply first: then that stream's directions are swapped, see proxy/README.md).
 local heur_server = {}
 
 local function direction_of(pinfo, stream)
