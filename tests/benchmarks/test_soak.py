@@ -7,6 +7,7 @@ The hour itself is `make soak`; its figures go to benchmarks/results/soak.md.
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -142,3 +143,28 @@ def test_a_short_soak_samples_every_process_and_finds_nothing_lost(tmp_path: Pat
     samples = [json.loads(line) for line in (tmp_path / "work" / "samples.jsonl").read_text().splitlines()]
     assert len(samples) >= 6 and not any(s["dead"] for s in samples)
     assert samples[-1]["recording"]["telegrams"] > samples[0]["recording"]["telegrams"]
+
+
+# ---------------------------------------------------------------------------------------------- the tracer
+LEAKY = """
+import os, pathlib, time
+kept, end = [], time.monotonic() + 60
+while len(list(pathlib.Path(os.environ["SNAPS"]).glob("snap-*"))) < 4 and time.monotonic() < end:
+    kept.append(bytearray(50_000))  # the leak
+    time.sleep(0.05)
+"""  # leaks until the tracer has taken four snapshots, however slow the machine
+
+
+def test_the_tracer_names_the_line_that_keeps_memory(tmp_path: Path) -> None:
+    (tmp_path / "leaky.py").write_text(LEAKY)
+    snaps = tmp_path / "snaps"
+    env = {**os.environ, "PYTHONPATH": f"{tmp_path}{os.pathsep}{os.environ.get('PYTHONPATH', '')}", "SNAPS": str(snaps)}
+    run = [sys.executable, "-m", "benchmarks.soak.trace", "run", "--out", str(snaps), "--every", "0.4"]
+    done = subprocess.run([*run, "--", "-m", "leaky"], cwd=ROOT, env=env, timeout=120, check=False)
+    assert done.returncode == 0
+    assert len(list(snaps.glob("snap-*.tracemalloc"))) >= 4
+    compare = [sys.executable, "-m", "benchmarks.soak.trace", "compare", str(snaps), "--top", "3"]
+    out = subprocess.run(compare, cwd=ROOT, capture_output=True, text=True, timeout=120, check=True).stdout
+    first_site = out.split(" kB ", 1)[1].split("\n      ")[1:]
+    assert any("leaky.py" in line and "line 5" in line for line in first_site), out
+    assert "bytearray" in out  # the gc's count by type grew too (bytearray is tracked)
