@@ -44,6 +44,13 @@ def add_gui_arguments(p: argparse.ArgumentParser) -> None:
     )
 
 
+def _token(text: str) -> str:
+    """argparse type of ``--token``: a secret worth the name (a URL's query carries it: no spaces)."""
+    if len(text) < 8 or not text.isprintable() or " " in text or "&" in text or "#" in text:
+        raise argparse.ArgumentTypeError("a token of at least 8 characters, without spaces, '&' or '#'")
+    return text
+
+
 def add_door_arguments(p: argparse.ArgumentParser) -> None:
     """Who may drive the platform (issue 33, docs/security.md)."""
     g = p.add_argument_group("who may come in (docs/security.md)")
@@ -70,6 +77,7 @@ def add_door_arguments(p: argparse.ArgumentParser) -> None:
     tokens = g.add_mutually_exclusive_group()
     tokens.add_argument(
         "--token",
+        type=_token,
         default=None,
         metavar="TOKEN",
         help="the token every request must carry (default beyond loopback: a new one, printed in the URL)",

@@ -93,6 +93,15 @@ def test_beyond_loopback_every_request_needs_the_token(tmp_path: Path) -> None:
         assert request(port, f"/?token={token}", {"Host": f"evil.example:{port}"})[0] == 403
 
 
+def test_a_given_token_is_asked_for_on_loopback_too(tmp_path: Path) -> None:
+    """--token on a loopback --listen: for a machine shared with other users (docs/security.md)."""
+    with _gateway(tmp_path, "127.0.0.1:1", "--token", "s3cret-of-ours") as gw:
+        port, own = _port(gw), {"Host": f"127.0.0.1:{_port(gw)}"}
+        assert gw.token == "s3cret-of-ours"  # printed in the URL
+        assert request(port, "/", own)[0] == 401
+        assert request(port, "/?token=s3cret-of-ours", own)[0] == 200
+
+
 def test_no_token_beyond_loopback_is_warned_about(tmp_path: Path) -> None:
     with _gateway(tmp_path, "127.0.0.1:1", "--no-token", listen="0.0.0.0:0") as gw:
         assert gw.token is None
