@@ -79,6 +79,14 @@ PLANTED: dict[str, tuple[str, str, tuple[str, ...], tuple[str, ...], tuple[int, 
         (134,),
     ),
 }
+for _row in ("fin-ends-session", "close-rst", "slow-accept"):  # behaviour matrix rows 1, 3, 5 (issue 32)
+    PLANTED[f"zoo {_row} --bug crash-after-start"] = (
+        zoo(_row, args="--bug crash-after-start"),
+        "dead",
+        ("CMD_MOVE_",),
+        AFTER_START,
+        (134,),
+    )
 for _b in BEHIND:
     PLANTED |= {
         f"zoo crash-after-start ({_b})": (zoo("crash-after-start", _b), "dead", ("CMD_MOVE_",), AFTER_START, (134,)),
@@ -97,7 +105,7 @@ for _b in BEHIND:
 def campaign(tmp_path: Path, launch: str, duration: float, **changes: object) -> Campaign:
     launch = launch_of(launch)
     opts = Options(
-        host="127.0.0.1",
+        host="::1" if " ipv6-only " in launch else "127.0.0.1",  # behaviour matrix row 12: IPv6 only
         port=0,
         second_port=0,
         duration=duration,
@@ -125,6 +133,10 @@ def finds_nothing(tmp_path: Path, launch: str, duration: float, record: Record =
     assert status == 0, c.stats.findings
     assert not c.stats.findings
     load = [u for u in c.stats.unconfirmed if u["kind"] == "stall" and set(u["evidence"]["replays"]) == {"ok"}]
+    if " restarts " in launch:  # row 10: the units in flight when it restarts lose their replies, and replay clean
+        load += [u for u in c.stats.unconfirmed if u not in load and "ok" in u["evidence"].get("replays", [])]
+        assert len(load) == len(c.stats.unconfirmed), c.stats.unconfirmed
+        return c
     assert len(load) == len(c.stats.unconfirmed) <= 2, c.stats.unconfirmed
     assert c.stats.cases > (100 if "slow-link" in launch else 300)  # slow-link: each reply 50-200 ms late
     return c
@@ -132,15 +144,35 @@ def finds_nothing(tmp_path: Path, launch: str, duration: float, record: Record =
 
 @pytest.mark.parametrize("target", list(SHORT))
 def test_a_short_campaign_against_a_conforming_foreign_target_finds_nothing(tmp_path: Path, target: str) -> None:
+    """What a user sees: exit 0, no finding, the cases run (finds_nothing) and the target's manners named in the
+    profile. How the campaign got there (connections run again, units pipelined, probes) is timing: a loaded
+    machine moves it (``not_admitted == 0`` saw 1 once in CI, issue 32); the slow tier holds it with a tolerance."""
+    c = finds_nothing(tmp_path, SHORT[target], 10.0)
+    summary = c.stats.profile["summary"]
+    assert MANNERS[target] in summary, summary
+
+
+MANNERS = {  # what the profile says of each target (pltf.fuzz.profile)
+    "zoo slow-release (FIN)": "turns newcomers away with FIN",
+    "zoo slow-release-rst (RST)": "turns newcomers away with RST",
+    "zoo slow-release, connect refused": "refuses newcomers",
+    "zoo accept-once, newcomers in the backlog": "keeps newcomers waiting in the listen backlog",
+    "the Go emulator": "keeps newcomers waiting in the listen backlog",
+}
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(300)
+@pytest.mark.parametrize("target", ["zoo slow-release (FIN)", "zoo accept-once, newcomers in the backlog"])
+def test_how_a_campaign_meets_newcomers_turned_away_or_kept_waiting(tmp_path: Path, target: str) -> None:
+    """The campaign's own counters, with a tolerance (slow tier: they move with the machine's load)."""
     c = finds_nothing(tmp_path, SHORT[target], 10.0)
     if "slow-release" in target:  # every fresh connection right after our last one is turned away at first
         assert c.stats.not_admitted > 10 and c.stats.dear
         assert c.stats.skipped > 0 and c.stats.batches > 10  # batches on a kept connection
-    elif "accept-once" in target:  # pipelined newcomers wait their turn in the backlog and are served
-        assert c.stats.pipelined > 100 and c.stats.not_admitted == 0
-        assert 0 < c.stats.probes < c.stats.units  # nobody turned away: after the warm-up most go without the lead
-        assert set(c.stats.ways) == {"fresh", "dear", "fresh singles", "dear singles"}  # nobody turned away: both
-        # ways measured (fuzz.trial)
+    else:  # pipelined newcomers wait their turn in the backlog and are served: hardly any runs again
+        assert c.stats.pipelined > 100 and c.stats.not_admitted <= max(2, c.stats.units // 100)
+        assert 0 < c.stats.probes < c.stats.units  # after the warm-up most units go without the lead
 
 
 @pytest.mark.slow

@@ -47,8 +47,9 @@ def test_short_campaign_reaches_every_state_and_finds_nothing(tmp_path: Path) ->
     assert names >= {"not_connected", "connected", "ready", "running", "breaked"}, c.stats.states
     assert c.stats.cases >= 6000
     # the reference server reads a leaving client's last bytes before it judges the next (E-WIRE-007): every port
-    # takes clients back to back, so the fuzzer pipelines and never has to run a unit again
-    assert c.stats.pipelined > 1000 and (c.stats.not_admitted, c.stats.turn_aways) == (0, 0)
+    # takes clients back to back, so the fuzzer pipelines throughout (how many units ran again is the machine's:
+    # issue 32, no exact count of a timing-dependent counter in the default tier)
+    assert c.stats.pipelined > 1000
 
 
 def free_ports() -> tuple[int, int]:
