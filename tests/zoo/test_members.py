@@ -58,7 +58,7 @@ def conform(
         target = launch.target(kind, time_scale=scale)
     with target:
         config = Config(
-            "127.0.0.1", target.ports[0], target.ports[1], time_scale=scale, simulator=True, profile=profile, tier=tier
+            target.host, target.ports[0], target.ports[1], time_scale=scale, simulator=True, profile=profile, tier=tier
         )
         config.run_budget = pace.run_budget(config)
         run = Runner(config, select(load_all().values(), tier=tier, keyword=keyword)).run()
