@@ -32,7 +32,8 @@ Subjects, each for the same wall time (10 s), three times, interleaved; the medi
 What bounds the rates, beside them (``benchmarks.proc_cpu``, the target's process group read from /proc while it
 runs): ``target CPU per case`` (ms of the target's CPU per case it served, ours with boofuzz's as its baseline) and
 ``target busy`` (the cores it kept busy): how much of the ratio is the target's cost and how much each tool's own
-(zoo/README.md, runs 7 and 8: on a free machine ours keeps the reference server three quarters busy, boofuzz a fifth),
+(benchmarks/results/zoo.md, runs 7 and 8: on a free machine ours keeps the reference server three quarters busy,
+boofuzz a fifth),
 and ``ratio ceiling, target never idle``: the ratio to boofuzz the target would give if its threads (the reference
 server's one loop; a zoo member's relay and the server behind it, at most the machine's cores) never waited -
 the most any fuzzer with this mix could reach on the machine of the run.

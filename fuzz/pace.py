@@ -20,7 +20,8 @@ Rules:
 - The bound of the kept way: its singles have one port where fresh connections have two, so where the chain
   of a connection (not the target's CPU) sets the singles' rate it serves at most about half of the fresh
   way's singles per second, the trial's floor (``SINGLES_KEPT``). Measured against ``accept-once`` at load 6-8
-  (zoo/README.md): paced, 0.33-0.58 of the fresh way's singles (unpaced 0.1-0.26) at 0.65-1.1 times its rate.
+  (benchmarks/results/zoo.md): paced, 0.33-0.58 of the fresh way's singles (unpaced 0.1-0.26) at 0.65-1.1 times
+  its rate.
 """
 
 from __future__ import annotations

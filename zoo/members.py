@@ -62,7 +62,6 @@ class Member:
     host: str = "127.0.0.1"  # the address it listens on unless --host says otherwise
     restart_every: float = 0.0  # s between two restarts (0: never)
     restart_down: float = 2.0  # s the ports are gone at a restart
-    row: str = ""  # the row of the behaviour matrix (zoo/README.md)
 
     @property
     def shapes_replies(self) -> bool:

@@ -125,7 +125,7 @@ def finds_nothing(tmp_path: Path, launch: str, duration: float, record: Record =
     allowed here are units that timed out once and replayed clean (a machine loaded beyond the deadline)."""
     c = campaign(tmp_path, launch, duration, deadline=5.0)
     status = c.run()
-    if record is not None:  # the table of zoo/README.md (pytest --junitxml F)
+    if record is not None:  # the tables of benchmarks/results/zoo.md (pytest --junitxml F)
         record("exit", status)
         record("findings", len(c.stats.findings))
         record("unconfirmed", len(c.stats.unconfirmed))
