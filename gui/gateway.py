@@ -98,7 +98,7 @@ async def websocket(request: web.Request) -> web.StreamResponse:
             if msg.type == WSMsgType.BINARY:
                 link.submit(tab, msg.data)
             elif msg.type == WSMsgType.TEXT:
-                _command(link, tab, msg.data, queue.put_nowait, truth)
+                _command(link, tab, msg.data, queue.put_nowait, truth, request.app[TARGETS])
     finally:
         for reader in truth:
             reader.stop()
@@ -108,14 +108,16 @@ async def websocket(request: web.Request) -> web.StreamResponse:
     return ws
 
 
-def _command(link: PlatformLink, tab: object, text: str, send: Any, truth: list[TruthReader]) -> None:
+def _command(
+    link: PlatformLink, tab: object, text: str, send: Any, truth: list[TruthReader], allowed: TargetList
+) -> None:
     try:
         body = json.loads(text)
         op = body.get("op")
     except (ValueError, AttributeError):
         op = None
     if op == "truth":
-        _truth(link, str(body.get("control", "")), send, truth)
+        _truth(str(body.get("control", "")), send, truth, allowed)
     elif op == "open":
         link.open()
     elif op == "close":
@@ -129,11 +131,15 @@ def _command(link: PlatformLink, tab: object, text: str, send: Any, truth: list[
         send({"event": "bad_request", "target": link.target, "message": f"unknown operation in {text[:80]!r}"})
 
 
-def _truth(link: PlatformLink, control: str, send: Any, truth: list[TruthReader]) -> None:
+def _truth(control: str, send: Any, truth: list[TruthReader], allowed: TargetList) -> None:
+    """The ground truth's reader; its control channel is a target like any other: on the list (targets.py), or
+    a page could probe this machine's ports through it."""
     for reader in truth:
         reader.stop()
     truth.clear()
     try:
+        if (why := allowed.refusal(control)) is not None:
+            raise ValueError(why)
         truth.append(TruthReader(control, send))
     except ValueError as exc:
         send({"event": "truth_lost", "control": control, "detail": str(exc), "message": str(exc)})

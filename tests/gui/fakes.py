@@ -22,6 +22,7 @@ from typing import Any, TypeVar
 import aiohttp
 
 from pltf.spec.codec import TelegramDecoder, build, encode
+from pltf.spec.errors import RemoteProtocolError
 from tests.clients.client_fakes import LoopbackServer, status_telegram
 
 
@@ -117,11 +118,15 @@ class Recorder(_Listening):
         decoder = TelegramDecoder("request")
         with conn, contextlib.suppress(OSError):
             while data := conn.recv(65536):
-                decoder.receive_data(data)
-                while (telegram := decoder.next_telegram()) is not None:
-                    self.received.append(telegram.NAME)
-                    if telegram.NAME == "CMD_GET_STATUS":
-                        conn.sendall(encode(status_telegram()))
+                try:
+                    decoder.receive_data(data)
+                    while (telegram := decoder.next_telegram()) is not None:
+                        self.received.append(telegram.NAME)
+                        if telegram.NAME == "CMD_GET_STATUS":
+                            conn.sendall(encode(status_telegram()))
+                except RemoteProtocolError:
+                    self.received.append(f"not a telegram: {data[:40]!r}")
+                    return
 
 
 # ---------------------------------------------------------------- the doors tests' clients (issue 33)

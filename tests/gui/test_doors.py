@@ -97,7 +97,15 @@ def test_a_target_off_the_list_is_refused_before_any_connection_attempt(gui: Gat
             await tab.close()
             return event
 
+        async def truth() -> dict[str, object]:  # the ground truth's control channel is a target too
+            tab = await Tab.open(gui.base, "127.0.0.1:1")
+            await tab.op("truth", control=listening.target)
+            event = await tab.event("truth_lost")
+            await tab.close()
+            return event
+
         open_port, closed_port = run(lambda: ask(listening.target)), run(lambda: ask(closed))
+        assert "--allow-target" in str(run(truth)["message"])
         assert listening.connects == 0
         assert "--allow-target" in str(open_port["message"])
         # the page learns nothing about the port: both events say the same but for the address
