@@ -10,6 +10,9 @@ for per-connection INFO lines):
   newcomers away until then (FIN): what a foreign platform behind a proxy does. No read-ahead helps here.
 - ``zoo accept-once``: the zoo member ``accept-once``: newcomers wait in the listen backlog until the port's
   client has gone (the E-WIRE-007 alternative reading).
+- ``zoo fin-ends-session`` and ``zoo slow-accept``: rows 1 and 5 of the zoo's behaviour matrix (issue 32): the
+  client's FIN ends the session (the fuzzer then half-closes only once its replies came), and an accept loop on a
+  100 ms timer.
 
 Subjects, each for the same wall time (10 s), three times, interleaved; the median rate is reported:
 
@@ -36,7 +39,8 @@ runs): ``target CPU per case`` (ms of the target's CPU per case it served, ours 
 boofuzz a fifth),
 and ``ratio ceiling, target never idle``: the ratio to boofuzz the target would give if its threads (the reference
 server's one loop; a zoo member's relay and the server behind it, at most the machine's cores) never waited -
-the most any fuzzer with this mix could reach on the machine of the run.
+the most any fuzzer with this mix could reach on the machine of the run; ``share of the ratio ceiling``: the
+measured ratio over that ceiling.
 
 A case is one test case: one boofuzz mutation, one ``pltf fuzz`` case. Targets: >= 3,000 cases/s against the
 reference server, >= 10x boofuzz (time ratio <= 0.1) on every target, no false finding.
@@ -79,13 +83,18 @@ TARGETS = {
     "reference server": REFERENCE,
     "zoo slow-release": ZOO.format(member="slow-release"),
     "zoo accept-once": ZOO.format(member="accept-once"),
+    # the behaviour matrix (zoo/README.md, issue 32): row 1, the client's FIN ends the session; row 5, a 100 ms
+    # accept timer
+    "zoo fin-ends-session": ZOO.format(member="fin-ends-session"),
+    "zoo slow-accept": ZOO.format(member="slow-accept"),
 }
 DIRECT = "reference server"
 CPU_PER_CASE = "target CPU per case"
 BUSY = "target busy"
 CEILING = "ratio ceiling, target never idle"
+SHARE = "share of the ratio ceiling"
 # the threads that serve a case: the reference server is one asyncio loop; a zoo member adds its relay's loop
-TARGET_THREADS = {DIRECT: 1, "zoo slow-release": 2, "zoo accept-once": 2}
+TARGET_THREADS = dict.fromkeys(TARGETS, 2) | {DIRECT: 1}
 
 
 class TargetCpu:
@@ -422,6 +431,9 @@ def _ceiling_rows(name: str, rates: dict[tuple[str, str], float]) -> list[Row]:
             continue  # no /proc here, or boofuzz served nothing
         value = ceiling(rates[cpu_key], TARGET_THREADS[target], rates[target, BOOFUZZ], os.cpu_count() or 1)
         rows.append(make_row(name, f"{CEILING} ({target})", "ratio_ceiling", value, "x boofuzz", higher_is_better=True))
+        if rates.get((target, OURS)):  # how much of what the target allows the fuzzer reached
+            share = rates[target, OURS] / rates[target, BOOFUZZ] / value
+            rows.append(make_row(name, f"{SHARE} ({target})", "ceiling_share", share, "", higher_is_better=True))
     return rows
 
 

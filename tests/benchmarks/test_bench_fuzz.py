@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+
 import pytest
 
 from benchmarks.bench_fuzz import (
@@ -10,6 +12,7 @@ from benchmarks.bench_fuzz import (
     CPU_PER_CASE,
     DIRECT,
     OURS,
+    SHARE,
     TARGET_THREADS,
     TARGETS,
     _ceiling_rows,
@@ -38,5 +41,18 @@ def test_the_rows_name_each_target_and_skip_one_without_cpu_figures() -> None:
     assert row["value"] == pytest.approx(1 / 0.0005 / 200.0)
 
 
+def test_the_share_of_the_ceiling_is_the_measured_ratio_over_it() -> None:
+    rates = {
+        ("zoo fin-ends-session", f"{CPU_PER_CASE}, {OURS}"): 0.5,  # 2 threads, 2 cores: 4,000 cases/s at most
+        ("zoo fin-ends-session", BOOFUZZ): 200.0,  # ceiling 20x
+        ("zoo fin-ends-session", OURS): 1000.0,  # measured 5x: a quarter of what the target allows
+    }
+    ceiling_row, share = _ceiling_rows("fuzz.cases_per_second", rates)
+    assert ceiling_row["value"] == pytest.approx(min(2, os.cpu_count() or 1) / 0.0005 / 200.0)
+    assert share["subject"] == f"{SHARE} (zoo fin-ends-session)"
+    assert share["value"] == pytest.approx(5.0 / ceiling_row["value"])
+
+
 def test_every_target_says_how_many_threads_serve_it() -> None:
     assert set(TARGET_THREADS) == set(TARGETS)
+    assert {"zoo fin-ends-session", "zoo slow-accept"} <= set(TARGETS)  # behaviour matrix rows 1 and 5
