@@ -16,7 +16,7 @@ import pytest
 from pltf.client import OperationState
 from pltf.gui.launch import GatewayProcess
 from tests.gui.conftest import VIEWPORT, Platform, expect_text, wait_for
-from tests.gui.fakes import request, upgrade
+from tests.gui.fakes import free_port, request, upgrade
 
 READY, RUNNING = OperationState.ST_OP_READY, OperationState.ST_OP_RUNNING
 
@@ -143,6 +143,18 @@ def test_read_only_offers_no_command_and_the_gateway_refuses_one_sent_by_hand(
         assert all(e["reason"] == "read_only" for e in refused)
         after = platform.other.get_status()
         assert (after.est_x_mm, after.est_y_mm) == (before.est_x_mm, before.est_y_mm) != (1234, 5678)
+        # this gateway has no --allow-any-target: Open Socket At offers the known addresses only ...
+        page.keyboard.press("Escape")
+        page.get_by_role("menuitem", name="Socket", exact=True).click()
+        page.get_by_role("menuitem", name="Open Socket At", exact=True).click()
+        dialog = page.get_by_role("dialog", name="Open Socket At")
+        expect_text(dialog, "--allow-any-target")
+        assert dialog.get_by_role("textbox").count() == 0
+        dialog.get_by_role("button", name="Cancel", exact=True).click()
+        # ... and a page naming another target is told so, once, in words
+        off_list = f"127.0.0.1:{free_port()}"
+        page.goto(f"{gw.base}/?target={off_list}")
+        expect_text(page.get_by_role("status", name="Connection"), f"{off_list} is not on this GUI's list")
 
 
 def _viewing(control: dict[str, Any]) -> bool:
