@@ -3,14 +3,19 @@
 Rules:
 - One asyncio loop in one thread. Port i of the relay leads to port i of the upstream; each client admitted
   gets its own upstream connection, opened when it is admitted and closed when it leaves (members.py: admit).
-- Client -> target: a member without a bug passes the bytes on as they come (a split frame stays split); a
-  member with a bug cuts whole frames first, shows each to the bug, then passes it on - so the bug acts before
+- Client -> target: a member that does not look at requests passes the bytes on as they come (a split frame
+  stays split); one with a bug, a ``malformed`` rule or ``silent`` cuts whole frames first, shows each to the
+  bug, closes at or skips a malformed one, swallows what comes before CMD_CONNECT_TO_PLTF - so it acts before
   the target does. A stream out of step is passed on raw (frames.py): the target behind judges it.
 - Target -> client: passed on as it comes, or, for a member that shapes replies, cut into frames, held until
   due and written coalesced and in segments (schedule.py): with TCP_NODELAY and a gap between them each write
   is one send(), one segment on the wire.
-- Half-close travels (a client's end-of-stream is passed on and the target may still answer); when the target
-  closes, the client is closed after the replies still held for it.
+- Half-close travels (a client's end-of-stream is passed on and the target may still answer) unless the member
+  ends the session at it (``on_fin`` "end": both connections closed at once, replies not yet written lost); when
+  the target closes, the client is closed after the replies still held for it - with a reset for ``close``
+  "rst" (SO_LINGER 0, set when the client is admitted); a client silent for ``idle_drop`` seconds is closed.
+- ``restart_every``: the accept loops and every client are cancelled, the ports closed, ``on_restart`` starts
+  the target behind afresh (its new ports), and after ``restart_down`` seconds the same ports listen again.
 - A member with ``accept_every`` accepts on a timer: every tick it takes all newcomers waiting in the backlog.
 - A member with ``absurd`` rewrites the doubles of the position and status replies (values.py) as it passes them.
 - A crash calls ``on_exit`` (the member stops the target it started) and ends the process with status 134; a
