@@ -23,7 +23,7 @@ import select
 import socket
 import statistics
 import time
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, replace
 
 from pltf.fuzz.replies import reply_decoder
 from pltf.fuzz.target import LEAD, Session, connect
@@ -37,6 +37,7 @@ REPLY_SAMPLES = 5
 BACKLOG_PROBES = 4  # connects tried while the port is busy and keeps newcomers waiting
 BACKLOG_WAIT = 0.5  # s a connect may take before its SYN counts as dropped
 NEWCOMER_WAIT = 1.0  # s a newcomer on a busy port is watched at most
+NO_REPLY = "the target sent no reply"
 SERVED_RETRIES = 20  # fresh connections tried while a port that frees slowly turns us away
 TURN_AWAY = {  # what a newcomer on a busy port met -> how the profile says it
     "served": "serves a second client on a port",
@@ -59,7 +60,6 @@ class Profile:
     silent_before_connect: bool = False  # nothing is answered before CMD_CONNECT_TO_PLTF
     newcomer: str = ""  # a key of TURN_AWAY
     backlog: int | None = None  # connects that complete while the port is busy (a backlog target), else None
-    notes: list[str] = field(default_factory=list)
 
     def describe(self) -> str:
         parts = ["ends the session at our FIN" if self.fin_ends else "answers after our FIN"]
@@ -131,8 +131,8 @@ def _first_served(host: str, port: int, deadline: float, where: str, prof: Profi
                 return s, (time.monotonic() - t0) * 1000
             s.close()
             seen = how
-            if how == "timed out":
-                break  # unanswered: try the next lead (a backlog would not have let us connect twice)
+            if how == NO_REPLY:
+                break  # unanswered: try the next lead (a port held by another client turns us away at once)
             time.sleep(0.005 * (1 + k % 4))  # a port that frees slowly turned us away: again
     raise ProfileError(
         f"the target does not answer on {where}: connected, sent CMD_GET_POSITION (also behind "
@@ -155,7 +155,7 @@ def _ask(s: socket.socket, data: bytes, want: int, deadline: float, fin: bool = 
     while got < want:
         left = end - time.monotonic()
         if left <= 0:
-            return got, "the target sent no reply" if not got else f"{got} of {want} replies came"
+            return got, NO_REPLY if not got else f"{got} of {want} replies came"
         s.settimeout(left)
         try:
             data = s.recv(1 << 16)
@@ -197,7 +197,7 @@ def _newcomer(host: str, port: int, deadline: float) -> tuple[str, int | None]:
         t.close()
     if got:
         return "served", None
-    if how.startswith("the target sent no reply"):
+    if how == NO_REPLY:
         return "backlog", _backlog(host, port)
     return ("rst" if "reset" in how else "fin"), None
 
