@@ -8,6 +8,7 @@ without sockets.
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -187,3 +188,31 @@ def test_imports_reach_the_generator_child_once_and_tagged() -> None:
     child.update(dict(parent.light()), {})
     child.update(dict(parent.light()), {})
     assert child.pool == [case] and source_of(child.pool[0]) == 1
+
+
+def test_a_launch_that_fails_in_every_worker_is_one_line_and_status_2(tmp_path: Path) -> None:
+    run = fuzz(tmp_path / "out", "--jobs", "2", "--target", "127.0.0.1:0", "--launch", "false {ports}", timeout=120)
+    assert run.returncode == 2, run.stderr
+    assert run.stderr.count("\n") == 1 and "worker 0" in run.stderr and "false" in run.stderr
+
+
+def test_without_the_ray_extra_ray_is_one_line_naming_the_extra(tmp_path: Path) -> None:
+    """A ``ray`` that cannot be imported (a package that raises ImportError, first on the path) stands for a
+    machine without the extra; without --ray the parallel campaign never imports it."""
+    fake = tmp_path / "site" / "ray"
+    fake.mkdir(parents=True)
+    (fake / "__init__.py").write_text("raise ImportError('No module named ray')\n")
+    env = {**os.environ, "PYTHONPATH": str(tmp_path / "site")}
+    args = ["--jobs", "2", "--ray", "auto", "--target", "127.0.0.1:0", "--launch", "false {ports}"]
+    run = subprocess.run(
+        [PLTF, "fuzz", "--quiet", "--out", str(tmp_path / "out"), *args],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        env=env,
+        check=False,
+    )
+    assert run.returncode == 2
+    assert run.stderr.count("\n") == 1 and "pip install 'pltf-toolkit[ray]'" in run.stderr
+    check = "import sys, pltf.fuzz.parallel, pltf.cli.fuzz_cmd; assert 'ray' not in sys.modules"
+    assert subprocess.run([sys.executable, "-c", check], env=env, check=False).returncode == 0
