@@ -364,12 +364,12 @@ def test_absurd_values_rewrite_the_doubles_of_position_and_status(upstream: laun
     raw = struct.Struct(">d")
     for name in ("angle", "vel_trans", "vel_rot"):  # the platform stands: the same pose, each double reversed
         assert raw.pack(getattr(swapped, name)) == raw.pack(getattr(plain, name))[::-1]
-    for style, check in (("nan", math.isnan), ("inf", math.isinf)):
-        with member(upstream, "absurd-values", "--absurd", style) as z, connect(z) as s:
-            s.sendall(POSITION + STATUS)
-            pos, status = replies(s, 2)
-        assert (pos.x, pos.y) == (plain.x, plain.y)
-        assert all(check(v) for v in (pos.angle, pos.vel_trans, pos.vel_rot, status.gps_latitude, status.gps_longitude))
+    with member(upstream, "absurd-values", "--absurd", "nan") as z, connect(z) as s:  # inf: test_values.py
+        s.sendall(POSITION + STATUS)
+        pos, status = replies(s, 2)
+    assert (pos.x, pos.y) == (plain.x, plain.y)
+    doubles = (pos.angle, pos.vel_trans, pos.vel_rot, status.gps_latitude, status.gps_longitude)
+    assert all(math.isnan(v) for v in doubles)
 
 
 def _until_closed(s: socket.socket, within: float = 5.0) -> tuple[bytes, str]:
@@ -387,10 +387,6 @@ def _until_closed(s: socket.socket, within: float = 5.0) -> tuple[bytes, str]:
 
 
 def test_fin_ends_session_loses_the_replies_owed_at_the_clients_fin(upstream: launch.Launched) -> None:
-    with member(upstream, "faithful") as z, connect(z) as s:  # the control: the half-close travels
-        s.sendall(STATUS * 3)
-        s.shutdown(socket.SHUT_WR)
-        assert [t.NAME for t in replies(s, 3)] == ["CMD_GET_STATUS"] * 3
     with member(upstream, "fin-ends-session") as z, connect(z) as s:
         s.sendall(STATUS)
         replies(s)  # answered while the client's write half is open
