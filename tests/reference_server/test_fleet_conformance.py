@@ -37,9 +37,19 @@ SMALL = "6.1/* or 6.2/framing/no-header or 6.2/framing/bad-header or 6.3/CMD_STA
 
 
 class FleetProcess:
-    def __init__(self, tmp: Path, count: int) -> None:
+    def __init__(
+        self,
+        tmp: Path,
+        count: int,
+        platforms: list[dict[str, object]] | None = None,
+        *extra: str,
+        time_scale: float = TIME_SCALE,
+    ) -> None:
+        """``count`` platforms along the corridor 2.5 m apart, or those of ``platforms`` (the file's entries);
+        ``extra``: more options of ``pltf serve``."""
         doc = {
-            "platforms": [
+            "platforms": platforms
+            or [
                 {"name": f"p{k:02d}", "ports": [0, 0], "pose": {"x": 2000 + 2500 * k, "y": 10000, "angle": 0}}
                 for k in range(count)
             ]
@@ -49,7 +59,7 @@ class FleetProcess:
         self.log_path = tmp / "fleet.log"
         self.log_file = self.log_path.open("wb")
         cmd = [sys.executable, "-m", "pltf.reference_server", "--fleet", str(path), "--data-dir", str(tmp / "data")]
-        cmd += ["--time-scale", f"{TIME_SCALE:g}"]
+        cmd += ["--time-scale", f"{time_scale:g}", *extra]
         self.proc = subprocess.Popen(cmd, cwd=REPO, stdout=self.log_file, stderr=subprocess.STDOUT)
         self.count = count
         try:
