@@ -31,6 +31,7 @@ from pltf.zoo.launch import REPO, Launched, LaunchError, python, reference
 CHROMIUM = "/usr/bin/chromium"
 CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run", "--disable-background-networking"]
 LISTENING = re.compile(r"proxy listening at [^:\s]+:(\d+)")
+CHILDREN = {"pltf proxy": "recorder"}  # what a part's child process is (proxy/offload.py forks the recorder)
 PROXY_STOP_GRACE = 300.0  # s: the proxy's exit waits until its recorder has written everything
 
 
@@ -106,7 +107,7 @@ class Parts:
             if part.pid is not None:
                 out[part.pid] = name
                 for child in descendants(part.pid):
-                    out[child] = f"{name}: {comm(child)}"
+                    out[child] = f"{name}: {CHILDREN.get(name, comm(child))}"
         for pid in descendants(os.getpid()):
             if pid not in out:
                 out[pid] = _browser_name(pid)
