@@ -73,6 +73,7 @@ class Config:
     case_budget: float | None = None  # wall seconds one case may take (None: pace.case_budget)
     run_budget: float | None = None  # wall seconds the whole run may take (None: no limit)
     reply_time: float | None = None  # the target's GET_STATUS round trip measured at the start (pace.measure)
+    setup_time: float = 0.0  # wall s a new connection is answered after its connect, beyond a reply (pace.measure)
     pipeline: bool = False  # the target answers pipelined requests in order (pace.measure, erratum E-WIRE-008)
 
     @property
@@ -251,6 +252,12 @@ class CaseContext:
 
     def wall(self, sim_seconds: float) -> float:
         return max(self.config.min_wall, sim_seconds / self.config.time_scale)
+
+    def newcomer_wait(self, sim_seconds: float) -> float:
+        """Wall seconds to wait for what a new connection meets (served, turned away, closed): ``wall(sim_seconds)``
+        plus the connection's measured set-up (pace.py: a timer-driven accept serves a newcomer up to a tick after
+        its connect, issue 32)."""
+        return self.wall(sim_seconds) + self.config.setup_time
 
     def close_wait(self, sim_seconds: float) -> float:
         """Wall seconds to wait for a close a case requires: ``wall(sim_seconds)``, never under the reply timeout.

@@ -8,12 +8,16 @@ Rules:
   the target's reply time (None when nothing came). Then three GET_* requests in one write: when their replies
   come in the order asked, the run pipelines its requests (``Config.pipeline``, erratum E-WIRE-008); when not,
   it sends one request at a time, as a client that waits for each reply.
+- The connection's set-up is measured too (issue 32): how long after its connect a new connection's first request
+  is answered, beyond a reply time - on that first connection and on a second one (the larger: a GUI
+  application's timer-driven accept serves a newcomer up to a tick after it connects). ``Config.setup_time``.
 - ``apply`` scales the run's waits to it: a reply time up to ``MAX_SCALED`` raises the wall floor of every wait
   derived from simulated time (``Config.min_wall``) to ``WAIT_SCALE`` and the connection probe's patience to
   ``SCALE`` times the reply time (a wait floor of two reply times, not four: the standard tier has hundreds of
   such waits, and at four a slow link's run did not fit its budget), so a slow but conforming target (a slow
   link) is judged on what it does, not on how fast it does it. A slower target keeps the configured waits, and
-  the run says at its start why its cases will fail.
+  the run says at its start why its cases will fail. The connection probe's patience scales to the reply time
+  plus the set-up, and so does every wait that spans a new connection (``CaseContext.newcomer_wait``).
 - Budgets (wall seconds): a case's waits end at its budget, ``CASE_WALL + CASE_SIM / time scale`` unless given;
   the case is then INCONCLUSIVE "case budget spent" and not re-run. The run's budget (``Config.run_budget``) ends
   the run: the cases left are INCONCLUSIVE "not run"; a case begun late gets what is left of it (at least
@@ -50,6 +54,7 @@ class Pace:
     reply: float | None  # the median GET_STATUS round trip, s (None: no reply within PATIENCE)
     error: str = ""
     pipeline: str = ""  # "" when pipelined requests were answered in order, else why the run does not pipeline
+    setup: float = 0.0  # s a new connection's first reply comes after its connect, beyond a reply time
 
     def describe(self, config: Config) -> str:
         if self.reply is None:
@@ -62,6 +67,7 @@ class Pace:
             )
         elif self.reply > MAX_SCALED:
             text += f"; the waits are not scaled beyond {MAX_SCALED:g} s"
+        text += f"; a new connection is answered {self.setup * 1000:.0f} ms after its connect, beyond that"
         if self.pipeline:
             text += f"; requests are sent one at a time ({self.pipeline})"
         else:
@@ -74,14 +80,17 @@ def measure(target: Target, samples: int = 3) -> Pace:
     deadline = time.monotonic() + cfg.connect_window
     while True:
         times: list[float] = []
-        pipeline = "not measured"
+        first, pipeline = 0.0, "not measured"
         s = Session(cfg.host, target.port_of("A"), label="A", log=WireLog(max_entries=50), timeout=PATIENCE)
         try:
+            connected = time.monotonic()
             s.connect(timeout=min(cfg.reply_timeout, 5.0))
             for i in range(samples):
                 t0 = time.monotonic()
                 s.request(build("request", "CMD_GET_STATUS"), timeout=PATIENCE if i == 0 else max(3 * times[0], 1.0))
                 times.append(time.monotonic() - t0)
+                if i == 0:
+                    first = time.monotonic() - connected
                 if times[0] > MAX_SCALED:
                     break  # too slow to scale to: one sample says enough
             pipeline = _pipelined(s, max(3 * times[0], 1.0)) if times[0] <= MAX_SCALED else "a slow target"
@@ -99,7 +108,31 @@ def measure(target: Target, samples: int = 3) -> Pace:
             pipeline = f"not measured: {exc}"
         finally:
             s.close()
-        return Pace(statistics.median(times), pipeline=pipeline)
+        reply = statistics.median(times)
+        again = _answered_after_connect(target, min(PATIENCE, max(3 * first, 1.0))) if reply <= MAX_SCALED else None
+        setup = max(first, again or 0.0) - reply
+        return Pace(reply, pipeline=pipeline, setup=max(0.0, setup))
+
+
+def _answered_after_connect(target: Target, timeout: float) -> float | None:
+    """Wall s from the connect of a new connection to port A to the reply to its first CMD_GET_STATUS (a port
+    that turns the newcomer away while it notices our last close is tried again); None when none came."""
+    cfg = target.config
+    deadline = time.monotonic() + cfg.connect_window
+    while time.monotonic() < deadline:
+        s = Session(cfg.host, target.port_of("A"), label="A", log=WireLog(max_entries=50), timeout=timeout)
+        try:
+            t0 = time.monotonic()
+            s.connect(timeout=min(cfg.reply_timeout, 5.0))
+            s.request(build("request", "CMD_GET_STATUS"))
+            return time.monotonic() - t0
+        except (ConnectionClosed, Unreachable):
+            time.sleep(0.05)
+        except TargetFailure:
+            return None
+        finally:
+            s.close()
+    return None
 
 
 PIPELINE_PROBE = ("CMD_GET_STATUS", "CMD_GET_POSITION", "CMD_GET_POSITION")
@@ -119,8 +152,9 @@ def apply(pace: Pace, config: Config) -> None:
     config.reply_time = pace.reply
     config.pipeline = pace.reply is not None and not pace.pipeline
     if pace.reply is not None and pace.reply <= MAX_SCALED:
+        config.setup_time = min(pace.setup, MAX_SCALED)
         config.min_wall = max(config.min_wall, WAIT_SCALE * pace.reply)
-        config.probe_timeout = max(config.probe_timeout, SCALE * pace.reply)
+        config.probe_timeout = max(config.probe_timeout, SCALE * (pace.reply + config.setup_time))
 
 
 def run_budget(config: Config) -> float:

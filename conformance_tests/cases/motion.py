@@ -154,6 +154,9 @@ def hold(
     fell behind a stream of unpaced requests and reported velocity 0).
     When the suite itself fell behind (the gap between two sends, in simulated time, reached ``limit``: the
     target's watchdog) the measurement is void, not the target's fault: Inconclusive, and the runner re-runs.
+    Every send goes on the one connection held (issue 32): were it lost, a new one would be answered only after
+    the link's set-up (a timer-driven accept: 100 ms, a simulated second at time scale 10, past the watchdog), so
+    a lost connection ends the hold (the target closed it) instead of a silent reconnect.
     """
     session = ctx.session()
     reply = ctx.config.reply_time or 0.0
@@ -161,13 +164,15 @@ def hold(
     samples: list[Pose] = []
     sent, worst_gap, asked = time.monotonic(), 0.0, 0
     sends = max(1, round(seconds / period))
+    command = build("request", name, **fields)
+    ask, ask_status = build("request", "CMD_GET_POSITION"), build("request", "CMD_GET_STATUS")
     for i in range(sends):
-        ctx.send(name, **fields)
+        session.send(command)  # on the connection held: a new one would starve the watchdog for its set-up
         now = time.monotonic()
         worst_gap, sent = max(worst_gap, (now - sent) * ctx.config.time_scale), now
-        ctx.send("CMD_GET_POSITION")
+        session.send(ask)
         if status is not None and i == sends - 1:
-            ctx.send("CMD_GET_STATUS")
+            session.send(ask_status)
         asked += 1
         ctx.sleep(period)
         while asked and (session.pending() or not late):

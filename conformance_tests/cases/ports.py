@@ -50,7 +50,7 @@ def _second_client(ctx: CaseContext, label: str) -> None:
     first = ctx.session(label)
     try:
         second = ctx.extra(label + "2")
-        closed = second.wait_closed(ctx.wall(1.0))
+        closed = second.wait_closed(ctx.newcomer_wait(1.0))
     except ConnectionClosed as exc:
         if "reset" not in str(exc).lower():
             raise
@@ -63,7 +63,7 @@ def _second_client(ctx: CaseContext, label: str) -> None:
         return
     second.send(build("request", "CMD_GET_STATUS"))
     try:
-        second.read_reply("CMD_GET_STATUS", timeout=ctx.wall(1.0))
+        second.read_reply("CMD_GET_STATUS", timeout=ctx.newcomer_wait(1.0))
     except TargetFailure:
         ctx.deviate("E-WIRE-007", 0, f"port {label}: the second client was neither closed nor served (backlog)")
         return

@@ -12,9 +12,10 @@ import pytest
 
 from pltf.conformance_tests import pace
 from pltf.conformance_tests.catalogue import Case, Level, Tier, Verdict
-from pltf.conformance_tests.context import CaseContext, Config
+from pltf.conformance_tests.context import CaseContext, Config, Target
 from pltf.conformance_tests.runner import Runner, RunResult
 from tests.conformance_tests.fakes import TinyTarget
+from tests.conformance_tests.relays import Relay
 
 
 class SlowTarget(TinyTarget):
@@ -149,3 +150,23 @@ def test_the_run_budget_leaves_the_rest_not_run(slow: SlowTarget) -> None:
 def test_the_default_run_budget_is_five_minutes_unless_the_time_scale_needs_more() -> None:
     assert pace.run_budget(Config("h", 1, time_scale=10.0)) == 280.0
     assert pace.run_budget(Config("h", 1, time_scale=1.0)) == 680.0
+
+
+def test_the_connection_set_up_is_measured_and_scales_the_newcomer_waits(tiny: TinyTarget) -> None:
+    """Issue 32: behind a timer-driven accept (every 0.3 s) a new connection is answered up to a tick after its
+    connect; the run says so, and the probe of a new connection and the waits on a newcomer allow for it."""
+    with Relay(tiny.ports, accept_every=0.3) as relay:
+        cfg = Config("127.0.0.1", relay.ports[0], relay.ports[1], time_scale=10.0, min_wall=0.05)
+        p = pace.measure(Target(cfg))
+    assert 0.05 < p.setup < 1.0, p
+    assert p.reply is not None and p.reply < p.setup
+    assert "a new connection is answered" in p.describe(cfg)
+    pace.apply(p, cfg)
+    assert cfg.probe_timeout >= pace.SCALE * p.setup
+    ctx = CaseContext(Target(cfg), cases(1)[0])
+    assert ctx.newcomer_wait(1.0) == pytest.approx(0.1 + p.setup)
+
+
+def test_a_target_that_serves_at_once_has_no_set_up_to_speak_of(tiny: TinyTarget) -> None:
+    p = pace.measure(Target(config(tiny)))
+    assert p.setup < 0.05, p
