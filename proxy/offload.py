@@ -56,8 +56,9 @@ class RecorderPipe:
         with contextlib.suppress(OSError):  # a bigger pipe: fewer stalls when the child falls behind
             fcntl.fcntl(w, getattr(fcntl, "F_SETPIPE_SZ", 1031), _PIPE_SIZE)
         pid = os.fork()
-        if pid == 0:  # the child: Ctrl-C is the parent's to act on (it ends the pipe, and so the child)
+        if pid == 0:  # the child: Ctrl-C and SIGTERM (to the group too) are the parent's to act on (it ends the pipe)
             signal.signal(signal.SIGINT, signal.SIG_IGN)
+            signal.signal(signal.SIGTERM, signal.SIG_IGN)  # a group's SIGTERM lost the recording's tail (issue 32)
             os.close(w)
             with contextlib.suppress(OSError):
                 os.nice(NICE)
