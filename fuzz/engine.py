@@ -123,7 +123,7 @@ class Campaign:
                 if e is None or e.verdict is None or e.verdict.suspicious or not e.flight.out.replies:
                     raise HarnessError(self._unanswered(k, e))
                 self._learn(e.flight.out.replies)
-        if self.o.lanes < 2 or any(g.dear for g in lanes.gates[: self.o.lanes]):
+        if self.o.lanes < 2 or self.profile.slow_setup or any(g.dear for g in lanes.gates[: self.o.lanes]):
             self.trial.settle(self.o.lanes > 1)  # one lane has no other port for the fresh connections
         lanes.dear = self.trial.way()
         lanes.pace = None if self.trial.settled else Pace()

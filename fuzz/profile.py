@@ -38,6 +38,8 @@ BACKLOG_PROBES = 4  # connects tried while the port is busy and keeps newcomers 
 BACKLOG_WAIT = 0.5  # s a connect may take before its SYN counts as dropped
 NEWCOMER_WAIT = 1.0  # s a newcomer on a busy port is watched at most
 NO_REPLY = "the target sent no reply"
+SLOW_SETUP_MS = 20.0  # a fresh connection served this much later than a reply, and ...
+SLOW_SETUP_RATIO = 10.0  # ... this many replies' time later, is dear
 SERVED_RETRIES = 20  # fresh connections tried while a port that frees slowly turns us away
 TURN_AWAY = {  # what a newcomer on a busy port met -> how the profile says it
     "served": "serves a second client on a port",
@@ -61,6 +63,12 @@ class Profile:
     newcomer: str = ""  # a key of TURN_AWAY
     backlog: int | None = None  # connects that complete while the port is busy (a backlog target), else None
 
+    @property
+    def slow_setup(self) -> bool:
+        """A fresh connection costs much more than a reply (a timer-driven accept, a slow handshake): the campaign
+        runs its batches on a kept connection from the start (``pltf.fuzz.trial`` settled)."""
+        return self.setup_ms >= SLOW_SETUP_MS and self.setup_ms >= SLOW_SETUP_RATIO * self.reply_ms
+
     def describe(self) -> str:
         parts = ["ends the session at our FIN" if self.fin_ends else "answers after our FIN"]
         if self.silent_before_connect:
@@ -70,6 +78,8 @@ class Profile:
         if self.backlog is not None:
             parts.append(f"{self.backlog} connect(s) complete while the port is busy (its listen backlog)")
         parts.append(f"replies in {self.reply_ms:.3g} ms, a fresh connection is served in {self.setup_ms:.3g} ms more")
+        if self.slow_setup:
+            parts.append("fresh connections are dear: batches on a kept connection")
         return "; ".join(parts)
 
     def adapt(self, session: Session) -> Session:
@@ -98,13 +108,14 @@ def learn(host: str, port: int, flag: str, deadline: float) -> Profile:
     where = f"{host}:{port} ({flag})"
     prof = Profile()
     first, setup = _first_served(host, port, deadline, where, prof)
+    setups = [setup]
     try:
         prof.reply_ms = _reply_ms(first, deadline)
-        prof.setup_ms = round(max(0.0, setup - prof.reply_ms), 3)
         prof.newcomer, prof.backlog = _newcomer(host, port, deadline)
     finally:
         _close(first, deadline)
-    prof.fin_ends = any(_fin_loses(host, port, deadline, prof) for _ in range(FIN_TRIES))
+    prof.fin_ends = any(_fin_loses(host, port, deadline, prof, setups) for _ in range(FIN_TRIES))
+    prof.setup_ms = round(max(0.0, statistics.median(setups) - prof.reply_ms), 3)
     return prof
 
 
@@ -220,10 +231,13 @@ def _backlog(host: str, port: int) -> int:
             s.close()
 
 
-def _fin_loses(host: str, port: int, deadline: float, prof: Profile) -> bool:
+def _fin_loses(host: str, port: int, deadline: float, prof: Profile, setups: list[float]) -> bool:
     """Whether the replies owed at our FIN are lost: served (its lead answered), then ``FIN_REPLIES`` leads and
-    our FIN in one write."""
+    our FIN in one write. ``setups`` gets the ms from the connect to the lead's reply (a port that frees slowly
+    and turns us away first is dear anyway: ``pltf.fuzz.gate``)."""
+    t0 = time.monotonic()
     s = _served_again(host, port, deadline, prof)
+    setups.append((time.monotonic() - t0) * 1000)
     if s is None:
         return False  # the port did not serve us again: nothing learnt (the campaign's start will say so)
     try:

@@ -1,0 +1,124 @@
+"""fuzz/profile: what the opening phase learns, and the sessions it adapts, against a real loopback server whose
+FIN ends the session (matrix row 1) - the replies owed at our FIN are lost unless the FIN waits for them."""
+
+from __future__ import annotations
+
+import socket
+import threading
+import time
+from collections.abc import Iterator
+
+import pytest
+
+from pltf.fuzz.flight import Flight, fly
+from pltf.fuzz.profile import CONNECT_TO_PLTF, SHUTDOWN_PLTF, Profile, learn
+from pltf.fuzz.target import LEAD, Session, play
+from pltf.spec.codec import REPLIES, TelegramDecoder, encode
+
+POSITION_REPLY = encode(REPLIES.CMD_GET_POSITION(x=1, y=2, angle=0.0, vel_trans=0.0, vel_rot=0.0))
+LATE = 0.05  # s each reply takes: our FIN, sent with the requests, always comes first
+
+
+class FinEndsSession:
+    """A loopback server that answers every GET_POSITION LATE s after it read it, and ends the session (closes,
+    unanswered replies lost) when the client half-closes: one thread per connection."""
+
+    def __init__(self) -> None:
+        self.sock = socket.create_server(("127.0.0.1", 0))
+        self.port = self.sock.getsockname()[1]
+        self.sock.settimeout(0.2)
+        self.running = True
+        self.thread = threading.Thread(target=self._accept, daemon=True)
+        self.thread.start()
+
+    def _accept(self) -> None:
+        while self.running:
+            try:
+                conn, _ = self.sock.accept()
+            except TimeoutError:
+                continue
+            except OSError:
+                return
+            threading.Thread(target=self._serve, args=(conn,), daemon=True).start()
+
+    def _serve(self, conn: socket.socket) -> None:
+        dec = TelegramDecoder("request")
+        owed: list[float] = []
+        conn.settimeout(0.005)
+        with conn:
+            while True:
+                try:
+                    data = conn.recv(65536)
+                except TimeoutError:
+                    data = None
+                except OSError:
+                    return
+                if data == b"":
+                    return  # the FIN ends the session: what is still owed is lost
+                if data:
+                    dec.receive_data(data)
+                    owed += [time.monotonic() + LATE for t in dec if t.NAME == "CMD_GET_POSITION"]
+                while owed and owed[0] <= time.monotonic():
+                    owed.pop(0)
+                    conn.sendall(POSITION_REPLY)
+
+    def close(self) -> None:
+        self.running = False
+        self.thread.join(2.0)
+        self.sock.close()
+
+
+@pytest.fixture
+def server() -> Iterator[FinEndsSession]:
+    s = FinEndsSession()
+    yield s
+    s.close()
+
+
+def session(fin_waits: bool) -> Session:
+    return Session([LEAD, LEAD, LEAD], half_close=True, led=True, fin_waits=fin_waits)
+
+
+def test_a_flight_whose_fin_waits_gets_every_reply_the_fin_would_lose(server: FinEndsSession) -> None:
+    hasty, patient = Flight("127.0.0.1", server.port, session(False), 2.0), None
+    fly([hasty])
+    patient = Flight("127.0.0.1", server.port, session(True), 2.0)
+    fly([patient])
+    assert len(hasty.out.replies) == 0 and hasty.out.closed  # request and FIN in one write: all lost
+    assert [r.NAME for r in patient.out.replies] == ["CMD_GET_POSITION"] * 3 and patient.out.closed
+
+
+def test_play_and_replays_wait_too(server: FinEndsSession) -> None:
+    assert len(play("127.0.0.1", server.port, session(False), 2.0).replies) == 0
+    assert len(play("127.0.0.1", server.port, session(True), 2.0).replies) == 3
+
+
+def test_the_opening_phase_says_the_fin_ends_the_session(server: FinEndsSession) -> None:
+    prof = learn("127.0.0.1", server.port, "--target", 2.0)
+    assert prof.fin_ends and not prof.silent_before_connect
+    assert prof.newcomer == "served"  # this server takes every client
+    assert prof.describe().startswith("ends the session at our FIN; serves a second client on a port")
+    assert prof.adapt(session(False)).fin_waits
+
+
+def test_nothing_learnt_from_a_port_nobody_listens_on_names_port_and_flag() -> None:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    with pytest.raises(RuntimeError, match=rf"nothing listening on 127.0.0.1:{port} \(--second-port\)"):
+        learn("127.0.0.1", port, "--second-port", 1.0)
+
+
+def test_a_silent_target_gets_connect_to_pltf_in_its_lead_and_after_every_shutdown() -> None:
+    prof = Profile(silent_before_connect=True)
+    s = prof.adapt(Session([LEAD, SHUTDOWN_PLTF, LEAD], half_close=True, led=True))
+    assert s.frames == [CONNECT_TO_PLTF + LEAD, SHUTDOWN_PLTF + CONNECT_TO_PLTF, LEAD]
+    assert not s.fin_waits  # its FIN does not end the session
+    plain = Session([LEAD], half_close=True, led=True)
+    assert Profile().adapt(plain) is plain  # a target with no such manners: the session as it was
+
+
+def test_a_slow_set_up_makes_fresh_connections_dear_only_when_it_dwarfs_a_reply() -> None:
+    assert Profile(setup_ms=50.0, reply_ms=0.3).slow_setup  # a 100 ms accept timer
+    assert not Profile(setup_ms=50.0, reply_ms=40.0).slow_setup  # a slow link: every reply is as slow
+    assert not Profile(setup_ms=0.4, reply_ms=0.02).slow_setup  # the reference server
