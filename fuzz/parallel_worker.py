@@ -31,6 +31,7 @@ from pltf.fuzz.options import Options, Stats
 from pltf.fuzz.unit import Unit
 from pltf.zoo.launch import LaunchError
 
+SEED_MIN = 9  # bytes of each frame of an imported input at least: header, length and id (guide 6.2)
 SYNC_EVERY = 0.5  # s between exchanges with the driver
 IMPORTS_SENT = 256  # imported inputs the generator child gets at most per window (the newest)
 TAG = "from:w"  # Case.tags entry of an input imported from worker N: "from:wN"
@@ -51,6 +52,13 @@ def worker_seed(seed: int, index: int) -> int:
 
 def digest(case: Case) -> str:
     return hashlib.sha1(b"".join(case.frames)).hexdigest()
+
+
+def seedable(case: Case) -> bool:
+    """A mutator takes a seed's frames apart at header, length and id (``pltf.fuzz.mutate``: "the seed is valid
+    traffic"): an input with an empty or shorter frame (a fragment a mutation cut) made the generator child raise
+    (IndexError, an empty randrange) and ended its worker. Such inputs are not passed on as seeds."""
+    return bool(case.frames) and all(len(f) >= SEED_MIN for f in case.frames)
 
 
 def source_of(case: Case) -> int | None:
@@ -158,7 +166,7 @@ class WorkerCampaign(Campaign):
         for e in entries:
             case = Case.from_json(e["case"])
             key = digest(case)
-            if key in seen:
+            if key in seen or not seedable(case):
                 continue
             seen.add(key)
             state = str(tuple(e["state"]))
@@ -235,7 +243,9 @@ def run_worker(opts: Options, index: int, link: Link) -> int:
         code = campaign.run()
     except (HarnessError, LaunchError, OSError, RuntimeError) as exc:
         campaign.close()
-        campaign.events.append({"kind": "failed", "error": str(exc).splitlines()[0][:500]})
+        lines = str(exc).strip().splitlines() or [type(exc).__name__]
+        why = lines[0] if len(lines) == 1 else f"{lines[0]} {lines[-1]}"  # a traceback's last line names it
+        campaign.events.append({"kind": "failed", "error": why[:500]})
         campaign.tick(force=True)
         return 2
     campaign.events.append({"kind": "done", "code": code})

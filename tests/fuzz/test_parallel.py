@@ -9,8 +9,11 @@ from __future__ import annotations
 
 import json
 import os
+import signal
 import subprocess
 import sys
+import threading
+import time
 from pathlib import Path
 from typing import Any
 
@@ -216,3 +219,60 @@ def test_without_the_ray_extra_ray_is_one_line_naming_the_extra(tmp_path: Path) 
     assert run.stderr.count("\n") == 1 and "pip install 'pltf-toolkit[ray]'" in run.stderr
     check = "import sys, pltf.fuzz.parallel, pltf.cli.fuzz_cmd; assert 'ray' not in sys.modules"
     assert subprocess.run([sys.executable, "-c", check], env=env, check=False).returncode == 0
+
+
+@pytest.mark.slow
+@pytest.mark.timeout(300)
+def test_a_worker_process_killed_mid_campaign_is_reported_and_the_others_go_on(tmp_path: Path) -> None:
+    from pltf.fuzz.options import Options
+    from pltf.fuzz.parallel import LocalCampaign
+
+    binary = emulator_or_skip()
+    opts = Options(
+        host="127.0.0.1",
+        port=0,
+        second_port=0,
+        duration=15.0,
+        seed=1,
+        out=tmp_path / "out",
+        launch=f"{binary} --ports {{ports}} --data-dir {{tmpdir}}",
+        deadline=3.0,
+    )
+    campaign = LocalCampaign(opts, 2)
+    campaign.start()  # forked here, before the driver's thread exists
+    result: dict[str, Any] = {}
+    driver = threading.Thread(target=lambda: result.update(code=campaign.run()), daemon=True)
+    driver.start()
+    view = campaign.view
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and not all(w.figures.get("cases", 0) > 0 for w in view.workers):
+        time.sleep(0.2)
+    before = view.workers[0].figures.get("cases", 0)
+    os.kill(campaign.procs[1].pid, signal.SIGKILL)
+    driver.join(timeout=200)
+    assert not driver.is_alive() and result["code"] == 0
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert len(summary["lost_workers"]) == 1, summary["lost_workers"]
+    assert summary["lost_workers"][0].startswith("worker 1 (seed 2): the worker process exited (status -9)")
+    w0, w1 = summary["workers"]
+    assert w0["status"] == "done" and w0["cases"] > before and w1["status"] == "lost", (w0["error"], w1["error"])
+
+
+def test_an_import_with_a_cut_frame_is_not_made_a_mutation_seed(tmp_path: Path) -> None:
+    """The mutators take a seed's frames apart at header, length and id; a fragment a mutation cut (here 3 bytes)
+    made the worker's generator raise IndexError and end the worker. Whole frames are imported, tagged."""
+    from pltf.fuzz.options import Options
+    from pltf.fuzz.parallel_worker import WorkerCampaign
+    from pltf.spec.codec import REQUESTS, encode
+
+    whole = encode(REQUESTS.CMD_GET_STATUS())
+    opts = Options(host="127.0.0.1", port=1, second_port=2, duration=1.0, seed=1, out=tmp_path / "out")
+    worker = WorkerCampaign(opts, 1, link=None)  # type: ignore[arg-type]  # no exchange here
+    entries = [
+        {"case": Case((whole,), "gen.boundary", "CMD_GET_STATUS").to_json(), "state": ["ready", 0]},
+        {"case": Case((whole, whole[:3]), "mut.truncate", "CMD_GET_STATUS").to_json(), "state": ["ready", 0]},
+    ]
+    worker.receive({"corpus": entries, "source": 0})
+    assert [c.frames for c in worker.sched.pool] == [(whole,)]
+    assert worker.sched.pool[0].tags == ("from:w0", "state:('ready', 0)")
+    assert worker.snapshot()["imported"] == {"w0": 1}
