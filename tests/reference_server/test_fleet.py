@@ -48,7 +48,9 @@ platforms:
 class FleetThread:
     """The fleet's network shell with its own event loop in a daemon thread."""
 
-    def __init__(self, data_dir: Path, spec: config.FleetSpec, time_scale: float = 5.0, **fleet: Any) -> None:
+    def __init__(
+        self, data_dir: Path, spec: config.FleetSpec, time_scale: float = 5.0, *, hardware: bool = True, **fleet: Any
+    ) -> None:
         platforms: list[Platform] = []
         for k, p in enumerate(spec.platforms):
             storage = Storage(data_dir / p.name)
@@ -59,7 +61,7 @@ class FleetThread:
                     seed=k + 1,
                     motion=world_factory(k + 1),
                     program=program_factory,
-                    hardware=hardware_link.factory(),
+                    hardware=hardware_link.factory() if hardware else None,
                 )
             )
         self.fleet = Fleet(spec, platforms, **fleet)
@@ -204,3 +206,22 @@ def test_each_platform_serves_its_own_ports(head_on: FleetThread) -> None:
         a.send(R.CMD_CONNECT_TO_PLTF(), R.CMD_INIT_PLTF())
         wait(a, lambda s: s.operation_state == OP_READY, "alpha Ready")
         assert b.status().operation_state == OP_NOT_INIT  # bravo's state chart is its own
+
+
+PILLAR = '<circle><center x="6000" y="10000"/><radius r="200"/></circle>'  # between alpha and bravo
+
+
+@pytest.mark.parametrize("shared", [True, False], ids=["--shared-map", "maps of their own"])
+def test_shared_map_reaches_every_platform(tmp_path: Path, shared: bool) -> None:
+    spec = config.parse(__import__("yaml").safe_load(HEAD_ON))
+    srv = FleetThread(tmp_path / "data", spec, hardware=False, shared_map=shared).start()
+    try:
+        with Client(srv.ports("alpha")[0]) as a, Client(srv.ports("bravo")[0]) as b:
+            office = a.request(R.CMD_GET_MAP())
+            xml = office.xml.replace('<layer index="1">', f'<layer index="1">{PILLAR}', 1)
+            a.send(R.CMD_SET_MAP(name="hall.map", xml=xml))
+            assert a.request(R.CMD_GET_MAP()).name == "hall.map"
+            got = b.request(R.CMD_GET_MAP())
+            assert (got.name == "hall.map") is shared and (PILLAR in got.xml) is shared
+    finally:
+        srv.stop()
