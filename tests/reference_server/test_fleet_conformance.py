@@ -132,6 +132,7 @@ def test_ten_platforms_pass_the_port_framing_and_state_cases_at_once(fleet: Flee
 
 
 @pytest.mark.slow
+@pytest.mark.timeout(3600)  # ten standard tiers at once on two loaded cores: more than 17 minutes at load 20
 def test_ten_platforms_pass_the_standard_tier_at_once(fleet: FleetProcess) -> None:
     runs = run_all(fleet, None)
     judge(runs)
