@@ -142,7 +142,7 @@ class Flight:
         self.out.refused, self.out.timed_out = refused, timed_out
         self.out.closed = closed or (self.want is not None and len(self.out.replies) < self.want)
         if self.out.bad_reply is None and not refused:
-            self.out.bad_reply = check_order(self.out.replies, self.expected)
+            self.out.bad_reply = check_order(self.out.replies, self.expected, self.data)
         clean = not (refused or timed_out or self.out.closed or self.out.bad_reply or self.decoder.pending)
         if self.want is not None and clean:
             self.kept = self.sock  # a kept connection: the next flight goes on with it

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field, replace
 from pltf.fuzz.case import WHOLE, Delivery
 from pltf.fuzz.gate import BACKOFF_FIRST, BACKOFF_GROWTH, BACKOFF_MAX
 from pltf.fuzz.replies import reply_decoder
-from pltf.fuzz.wire import answered_ids
+from pltf.fuzz.wire import answered_ids, skipping_ids
 from pltf.spec import errors
 from pltf.spec.codec import REQUESTS, encode
 from pltf.spec.telegram import Telegram
@@ -212,11 +212,16 @@ class Conn:
         return replies, None, False
 
 
-def check_order(replies: list[Telegram], expected: list[int]) -> str | None:
+def check_order(replies: list[Telegram], expected: list[int], data: bytes = b"") -> str | None:
+    """Why the replies do not answer the requests in order, or None. Replies past a malformed frame are allowed
+    where they answer the well-formed frames of ``data`` in order: a target that skips a malformed frame and
+    goes on (errata E-WIRE-006 and E-BEH-005, zoo lenient-framing) answers what follows it."""
     got = [r.ID for r in replies]
-    if got != expected[: len(got)] or len(got) > len(expected):
-        return f"reply ids {got[:20]} do not follow the answered requests {expected[:20]}"
-    return None
+    if got == expected[: len(got)] and len(got) <= len(expected):
+        return None
+    if data and len(got) > len(expected) and got == skipping_ids(data)[: len(got)]:
+        return None
+    return f"reply ids {got[:20]} do not follow the answered requests {expected[:20]}"
 
 
 def play(host: str, port: int, session: Session, deadline_s: float, record: bool = False) -> Outcome:
@@ -262,7 +267,7 @@ def play_on(conn: Conn, session: Session, deadline_s: float, out: Outcome) -> No
             out.replies.extend(owed)
             if bad is not None or timed_out or conn.eof:
                 out.bad_reply, out.timed_out, out.closed, out.got = bad, timed_out, conn.eof, conn.got
-                out.bad_reply = out.bad_reply or check_order(out.replies, expected)
+                out.bad_reply = out.bad_reply or check_order(out.replies, expected, data)
                 return
         if session.half_close:
             conn.shut_write()
@@ -271,7 +276,7 @@ def play_on(conn: Conn, session: Session, deadline_s: float, out: Outcome) -> No
     want = len(expected) - len(out.replies) if session.sync and not session.half_close else None
     replies, bad, timed_out = conn.read_replies(want, deadline)
     out.replies.extend(replies)
-    out.bad_reply = bad or check_order(out.replies, expected)
+    out.bad_reply = bad or check_order(out.replies, expected, session.data)
     out.timed_out = timed_out
     out.closed = conn.eof or (want is not None and len(replies) < want)
     out.got = conn.got

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from pltf.spec import errors
-from pltf.spec.codec import HEADER, REQUESTS, TelegramDecoder, frame
+from pltf.spec.codec import HEADER, REQUESTS, TelegramDecoder, decode_frame, frame
 from pltf.spec.model import FieldDef, load_telegrams
 
 KEEP, CLOSE, PARTIAL = "keep", "close", "partial"
@@ -140,6 +140,20 @@ def survey(data: bytes) -> tuple[str, list[int]]:
     return expect or (PARTIAL if dec.pending else KEEP), ids
 
 
+def skipping_ids(data: bytes) -> list[int]:
+    """Ids of the answered requests among the frames of ``data`` that decode, each frame on its own: what a target
+    that skips a malformed frame and goes on answers (E-WIRE-006's alternative reading)."""
+    ids = []
+    for f in split_frames(data):
+        try:
+            ident = decode_frame(f, "request").ID
+        except errors.ProtocolError:
+            continue
+        if ident in ANSWERED:
+            ids.append(ident)
+    return ids
+
+
 def frame_ids(data: bytes) -> list[int]:
     """Ids of the frames a length-walking reader sees, up to the first bad header or incomplete frame."""
     ids, pos, end = [], 0, len(data)
@@ -194,6 +208,7 @@ __all__ = [
     "frame",
     "frame_ids",
     "frame_lie",
+    "skipping_ids",
     "pack_fields",
     "pack_length",
     "pack_value",

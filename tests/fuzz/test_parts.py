@@ -317,3 +317,23 @@ def test_a_cases_answered_ids_are_those_a_session_would_decode() -> None:
     assert classify(status + bad) == CLOSE and expected_reply_ids(status + bad) == [REQUESTS.CMD_GET_STATUS.ID]
     assert classify(encode(REQUESTS.CMD_CLOSE_SOCKET()) + status) == CLOSE
     assert classify(status[:-1]) == PARTIAL and classify(status) == KEEP
+
+
+def test_replies_past_a_malformed_frame_are_in_order_when_the_target_skipped_it() -> None:
+    """E-WIRE-006's two readings: a target closes at the unknown id (the replies before it), or skips it and
+    answers what follows (zoo lenient-framing); neither is a bad reply, replies out of order still are."""
+    from pltf.fuzz.target import LEAD, check_order
+    from pltf.fuzz.wire import answered_ids
+    from pltf.spec.codec import REPLIES
+
+    vectors = json.loads((Path(__file__).resolve().parents[2] / "fixtures/vectors/replies.json").read_text())
+    unknown = bytes.fromhex("ff01fe0200000001fa")
+    data = LEAD + unknown + LEAD + encode(REQUESTS.CMD_GET_STATUS())
+    expected = answered_ids(data)
+    assert expected == [LEAD[8]]  # a strict reader stops at the unknown id
+    position = REPLIES.CMD_GET_POSITION(x=0, y=0, angle=0.0, vel_trans=0.0, vel_rot=0.0)
+    status = decode_frame(bytes.fromhex(next(v["hex"] for v in vectors if v["name"] == "reply_status_empty")), "reply")
+    assert check_order([position], expected, data) is None  # closed at the unknown id
+    assert check_order([position, position, status], expected, data) is None  # skipped it
+    assert check_order([position, status], expected, data) is not None  # a reply lost in between
+    assert check_order([position, position], expected) is not None  # without the session's bytes: strict
