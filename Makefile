@@ -6,7 +6,7 @@ STAMP := $(VENV)/.installed
 
 SUDO := $(if $(filter 0,$(shell id -u)),,sudo)
 
-.PHONY: demo test test-slow test-ray ray lint typecheck docs docs-check bench soak clean install emulator gui chromium tshark
+.PHONY: demo test test-slow test-ray ray lint typecheck docs docs-check site bench soak clean install emulator gui chromium tshark
 
 # The GUI's front end (gui/web, TypeScript + vite) is built into gui/static/ with the machine's node and npm.
 GUI_WEB := gui/web
@@ -65,6 +65,8 @@ test: $(STAMP) $(GUI_BUILT) chromium tshark emulator
 	$(BIN)/python -m pltf.spec.docgen --check
 	$(BIN)/python -m pltf.gui.specgen --check
 	$(BIN)/python -m pltf.proxy.dissector --check
+	$(BIN)/python docs/gen/architecture.py --check
+	$(MAKE) --no-print-directory site
 	cd $(GUI_WEB) && npm test --silent
 	PLTF_REQUIRE_EMULATOR=1 $(BIN)/python -m pytest -q -m "not slow and not ray" -n 2 --dist loadfile
 
@@ -92,10 +94,19 @@ typecheck: $(STAMP)
 docs: $(STAMP)
 	$(BIN)/python -m pltf.spec.docgen
 	$(BIN)/python -m pltf.proxy.dissector
+	$(BIN)/python docs/gen/architecture.py
+	$(MAKE) --no-print-directory site
 
 docs-check: $(STAMP)
 	$(BIN)/python -m pltf.spec.docgen --check
 	$(BIN)/python -m pltf.proxy.dissector --check
+	$(BIN)/python docs/gen/architecture.py --check
+
+# The documentation site (mkdocs.yml, docs/) into site/: every warning is an error (no --quiet: it would hide them
+# from --strict), then every link of the built pages, into the site and to files of the checkout, is checked.
+site: $(STAMP)
+	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict
+	$(BIN)/python docs/gen/linkcheck.py site
 
 bench: $(STAMP) $(GUI_BUILT) chromium tshark
 	$(BIN)/python -m benchmarks --json benchmarks/results.json
