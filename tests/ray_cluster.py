@@ -32,6 +32,9 @@ NODE_ARGS: dict[str, Any] = {
 
 def ray_or_skip() -> Any:
     """The ray module, or skip the test (fail under PLTF_REQUIRE_RAY=1) when the extra is not installed."""
+    # before the first import: Ray reads it once, at import (ray_constants.ENABLE_RAY_CLUSTER); set later, Ray
+    # resolves 127.0.0.1 in ray.init(address=...) to this machine's outward address, where no node listens
+    os.environ["RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER"] = "0"
     try:
         import ray
     except ImportError:
