@@ -75,10 +75,19 @@ class Config:
     reply_time: float | None = None  # the target's GET_STATUS round trip measured at the start (pace.measure)
     setup_time: float = 0.0  # wall s a new connection is answered after its connect, beyond a reply (pace.measure)
     pipeline: bool = False  # the target answers pipelined requests in order (pace.measure, erratum E-WIRE-008)
+    greeting: bool = False  # every connection sends CMD_CONNECT_TO_PLTF first (pace.measure, erratum E-BEH-006)
 
     @property
     def motion_allowed(self) -> bool:
         return self.allow_motion or self.simulator
+
+
+def greet(s: Session, config: Config) -> Session:
+    """``s``, its first telegram CMD_CONNECT_TO_PLTF where the target answers nothing on a connection before it
+    (``Config.greeting``, erratum E-BEH-006; on a platform already connected it changes nothing, guide 4.2)."""
+    if config.greeting:
+        s.send(build("request", "CMD_CONNECT_TO_PLTF"))
+    return s
 
 
 @dataclass(frozen=True)
@@ -170,7 +179,7 @@ class Target:
                 budget=self.budget,
             )
             try:
-                s.connect()
+                greet(s.connect(), cfg)
                 if not probe:
                     return s
                 reply = s.request(
@@ -322,9 +331,11 @@ class CaseContext:
             budget=self.target.budget,
         )
         try:
-            s.connect()
+            greet(s.connect(), self.config)
         except Unreachable as exc:
             raise ConnectionClosed(str(exc)) from None
+        except TargetFailure:  # the greeting could not be sent: the newcomer was closed at once
+            s.eof = True
         self._extra.append(s)
         return s
 

@@ -11,6 +11,10 @@ Rules:
 - The connection's set-up is measured too (issue 32): how long after its connect a new connection's first request
   is answered, beyond a reply time - on that first connection and on a second one (the larger: a GUI
   application's timer-driven accept serves a newcomer up to a tick after it connects). ``Config.setup_time``.
+- A target that answers nothing within ``PATIENCE`` is asked once more on a new connection: GET_STATUS,
+  CMD_CONNECT_TO_PLTF, GET_STATUS in one write. When only the second GET_STATUS is answered, the target answers
+  nothing on a connection before its CMD_CONNECT_TO_PLTF (erratum E-BEH-006, zoo matrix row 9): every connection
+  of the run then sends CMD_CONNECT_TO_PLTF first (``Config.greeting``), and the run says so.
 - ``apply`` scales the run's waits to it: a reply time up to ``MAX_SCALED`` raises the wall floor of every wait
   derived from simulated time (``Config.min_wall``) to ``WAIT_SCALE`` and the connection probe's patience to
   ``SCALE`` times the reply time (a wait floor of two reply times, not four: the standard tier has hundreds of
@@ -31,11 +35,12 @@ Rules:
 
 from __future__ import annotations
 
+import dataclasses
 import statistics
 import time
 from dataclasses import dataclass, field
 
-from pltf.conformance_tests.context import Config, Target
+from pltf.conformance_tests.context import Config, Target, greet
 from pltf.conformance_tests.outcome import ConnectionClosed, TargetFailure, Unreachable
 from pltf.conformance_tests.wire import NullObserver, Session, WireLog
 from pltf.spec.codec import build
@@ -55,6 +60,7 @@ class Pace:
     error: str = ""
     pipeline: str = ""  # "" when pipelined requests were answered in order, else why the run does not pipeline
     setup: float = 0.0  # s a new connection's first reply comes after its connect, beyond a reply time
+    greeting: bool = False  # nothing is answered on a connection before its CMD_CONNECT_TO_PLTF (E-BEH-006)
 
     def describe(self, config: Config) -> str:
         if self.reply is None:
@@ -68,6 +74,12 @@ class Pace:
         elif self.reply > MAX_SCALED:
             text += f"; the waits are not scaled beyond {MAX_SCALED:g} s"
         text += f"; a new connection is answered {self.setup * 1000:.0f} ms after its connect, beyond that"
+        if self.greeting:
+            text += (
+                "; it answers nothing on a connection before that connection's CMD_CONNECT_TO_PLTF (erratum "
+                "E-BEH-006, an alternative reading; zoo behaviour matrix row 9): every connection of the run sends "
+                "CMD_CONNECT_TO_PLTF first"
+            )
         if self.pipeline:
             text += f"; requests are sent one at a time ({self.pipeline})"
         else:
@@ -75,19 +87,49 @@ class Pace:
         return text
 
 
-def measure(target: Target, samples: int = 3) -> Pace:
+def measure(target: Target, samples: int = 3, patience: float | None = None) -> Pace:
+    """The target's pace (module rules); where nothing is answered within ``PATIENCE`` but a connection that greets
+    with CMD_CONNECT_TO_PLTF is answered, the run greets on every connection (``Config.greeting``, E-BEH-006)."""
+    patience = PATIENCE if patience is None else patience
+    p = _measure(target, samples, patience)
+    if p.reply is None and not target.config.greeting and _greets(target):
+        target.config.greeting = True
+        p = dataclasses.replace(_measure(target, samples, patience), greeting=True)
+    return p
+
+
+def _greets(target: Target) -> bool:
+    """Whether a new connection answers CMD_GET_STATUS only after its CMD_CONNECT_TO_PLTF: of GET_STATUS,
+    CONNECT_TO_PLTF, GET_STATUS in one write exactly one is answered (erratum E-BEH-006, zoo matrix row 9)."""
+    cfg = target.config
+    s = Session(cfg.host, target.port_of("A"), label="A", log=WireLog(max_entries=50), timeout=cfg.reply_timeout)
+    answered = 0
+    try:
+        s.connect(timeout=min(cfg.reply_timeout, 5.0))
+        s.send_many([build("request", n) for n in GREETING_PROBE], "GET_STATUS + CONNECT_TO_PLTF + GET_STATUS")
+        for _ in range(2):
+            s.read_reply("CMD_GET_STATUS")
+            answered += 1
+    except (TargetFailure, Unreachable):
+        pass
+    finally:
+        s.close()
+    return answered == 1
+
+
+def _measure(target: Target, samples: int, patience: float) -> Pace:
     cfg = target.config
     deadline = time.monotonic() + cfg.connect_window
     while True:
         times: list[float] = []
         first, pipeline = 0.0, "not measured"
-        s = Session(cfg.host, target.port_of("A"), label="A", log=WireLog(max_entries=50), timeout=PATIENCE)
+        s = Session(cfg.host, target.port_of("A"), label="A", log=WireLog(max_entries=50), timeout=patience)
         try:
             connected = time.monotonic()
-            s.connect(timeout=min(cfg.reply_timeout, 5.0))
+            greet(s.connect(timeout=min(cfg.reply_timeout, 5.0)), cfg)
             for i in range(samples):
                 t0 = time.monotonic()
-                s.request(build("request", "CMD_GET_STATUS"), timeout=PATIENCE if i == 0 else max(3 * times[0], 1.0))
+                s.request(build("request", "CMD_GET_STATUS"), timeout=patience if i == 0 else max(3 * times[0], 1.0))
                 times.append(time.monotonic() - t0)
                 if i == 0:
                     first = time.monotonic() - connected
@@ -109,7 +151,7 @@ def measure(target: Target, samples: int = 3) -> Pace:
         finally:
             s.close()
         reply = statistics.median(times)
-        again = _answered_after_connect(target, min(PATIENCE, max(3 * first, 1.0))) if reply <= MAX_SCALED else None
+        again = _answered_after_connect(target, min(patience, max(3 * first, 1.0))) if reply <= MAX_SCALED else None
         setup = max(first, again or 0.0) - reply
         return Pace(reply, pipeline=pipeline, setup=max(0.0, setup))
 
@@ -123,7 +165,7 @@ def _answered_after_connect(target: Target, timeout: float) -> float | None:
         s = Session(cfg.host, target.port_of("A"), label="A", log=WireLog(max_entries=50), timeout=timeout)
         try:
             t0 = time.monotonic()
-            s.connect(timeout=min(cfg.reply_timeout, 5.0))
+            greet(s.connect(timeout=min(cfg.reply_timeout, 5.0)), cfg)
             s.request(build("request", "CMD_GET_STATUS"))
             return time.monotonic() - t0
         except (ConnectionClosed, Unreachable):
@@ -136,6 +178,7 @@ def _answered_after_connect(target: Target, timeout: float) -> float | None:
 
 
 PIPELINE_PROBE = ("CMD_GET_STATUS", "CMD_GET_POSITION", "CMD_GET_POSITION")
+GREETING_PROBE = ("CMD_GET_STATUS", "CMD_CONNECT_TO_PLTF", "CMD_GET_STATUS")
 
 
 def _pipelined(s: Session, timeout: float) -> str:

@@ -1,0 +1,59 @@
+"""The behaviours the guide allows (the zoo's behaviour matrix, zoo/README.md; errata E-BEH-*) are judged as such:
+NON-STRICT or a run note naming the erratum or the matrix row, never FAIL, never ERROR (issue 32)."""
+
+from __future__ import annotations
+
+import pytest
+
+from pltf.conformance_tests import pace
+from pltf.conformance_tests.catalogue import Tier, Verdict, load_all, select
+from pltf.conformance_tests.context import Config
+from pltf.conformance_tests.runner import Runner, RunResult
+from pltf.zoo import launch
+from pltf.zoo.members import MEMBERS
+
+SCALE = 10.0
+FEW = ("6.2/framing/header-and-length", "6.1/ports/reconnect", "6.3/CMD_SET_MODE/in-running")
+
+
+def _run(member: str, upstream: str, cases: list[str] | None = None, **kw: object) -> RunResult:
+    with launch.zoo(member, upstream=upstream, time_scale=SCALE) as target:
+        host = MEMBERS[member].host
+        config = Config(host, target.ports[0], target.ports[1], time_scale=SCALE, simulator=True, **kw)  # type: ignore[arg-type]
+        chosen = (
+            [load_all()[c] for c in cases] if cases is not None else select(load_all().values(), tier=Tier.STANDARD)
+        )
+        return Runner(config, chosen).run()
+
+
+def _bad(run: RunResult) -> list[str]:
+    return [
+        f"{r.case.id}: {r.verdict} {r.message.splitlines()[0] if r.message else ''}"
+        for r in run.results
+        if r.verdict in (Verdict.FAIL, Verdict.ERROR)
+    ]
+
+
+def test_a_target_that_answers_nothing_before_connect_is_greeted_on_every_connection(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Row 9 (E-BEH-006): the run notices at its start, says so, and greets on every connection it opens - a
+    reconnections included; before, every case failed on a reply timeout and the rest were not run."""
+    monkeypatch.setattr(pace, "PATIENCE", 1.5)  # the first GET_STATUS's patience: the run's 15 s, shortened here
+    run = _run("silent-until-connect", "emulator", list(FEW), reply_timeout=1.5)
+    assert not _bad(run), _bad(run)
+    assert [r.verdict for r in run.results] == [Verdict.PASS] * len(FEW), [(r.case.id, r.message) for r in run.results]
+    assert any("E-BEH-006" in n and "matrix row 9" in n for n in run.notes), run.notes
+
+
+BEHAVIOURS = sorted(m for m, member in MEMBERS.items() if member.conforming and m not in ("absurd-values",))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("member", BEHAVIOURS)
+def test_the_standard_tier_through_each_conforming_behaviour_has_no_fail_and_no_error(member: str) -> None:
+    """What must hold for every row: the standard tier ends with no FAIL and no ERROR the behaviour causes (the
+    velocity cases of a loaded machine may end INCONCLUSIVE: re-run, never FAIL); the original profile where the
+    member's reading needs it."""
+    run = _run(member, "reference", profile=MEMBERS[member].profile)
+    assert not _bad(run), _bad(run)
