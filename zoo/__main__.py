@@ -15,7 +15,7 @@ import dataclasses
 import json
 import signal
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import NoReturn
 
@@ -175,6 +175,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     m = configured(args)
     signal.signal(signal.SIGTERM, _terminate)
     behind: launch.Launched | None = None
+    targets: Spare | None = None
     relay: Relay | None = None
     try:
         if args.serve:
@@ -183,6 +184,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             print(f"zoo {m.name}: {behind.name} behind at {host}:{ports[0]},{ports[1]} (pid {behind.pid})", flush=True)
         else:
             host, ports = args.upstream
+        targets = Spare(args, behind, m.restart_every > 0)
         relay = Relay(
             m,
             host,
@@ -191,8 +193,8 @@ def main(argv: Sequence[str] | None = None) -> int:
             ports=args.ports,
             seed=args.seed,
             hang_seconds=args.hang_seconds,
-            on_exit=behind.cleanup if behind else lambda: None,
-            on_restart=_restarter(behind),
+            on_exit=targets.cleanup,
+            on_restart=targets.restart,
             log=lambda line: print(line, flush=True),
         )
         _serve(relay, m.name, args.host or m.host)
@@ -200,7 +202,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     finally:
         if args.stats and relay is not None:
             Path(args.stats).write_text(json.dumps(relay.stats))
-        if behind is not None:
+        if targets is not None:
+            targets.cleanup()
+        elif behind is not None:
             behind.cleanup()
 
 
@@ -229,16 +233,41 @@ def _start_behind(args: argparse.Namespace) -> launch.Launched:
     return behind
 
 
-def _restarter(behind: launch.Launched | None) -> Callable[[], Sequence[int]]:
-    """What a restart does to the target behind: a fresh instance (state lost) on new ports; nothing with
-    --upstream (the member only drops its connections and ports)."""
+class Spare:
+    """A fresh target behind a member that restarts, started ahead (spawned at once, its ports read at the
+    restart): a restart then takes the member's ``restart_down``, not a start-up of the target, however loaded the
+    machine is. With --upstream there is nothing to restart (the member only drops its connections and ports)."""
 
-    def restart() -> Sequence[int]:
-        if behind is None:
+    def __init__(self, args: argparse.Namespace, behind: launch.Launched | None, restarts: bool) -> None:
+        self.args, self.current = args, behind
+        self.spare = self._spawn() if behind is not None and restarts else None
+
+    def _spawn(self) -> launch.Launched:
+        level = {"log_level": self.args.log_level} if self.args.serve == "reference" else {}
+        spare = launch.target(self.args.serve, time_scale=self.args.time_scale, seed=self.args.seed, **level)
+        spare.new_session = False
+        spare.begin()
+        return spare
+
+    def restart(self) -> Sequence[int]:
+        """The fresh target's ports (the old one stopped: its state is lost); () with --upstream."""
+        if self.current is None:
             return ()
-        return behind.start()
+        old, fresh = self.current, self.spare
+        try:
+            ports = fresh.ports_when_ready() if fresh is not None else old.start()
+        except launch.LaunchError:  # the spare did not come up: start one now
+            ports, fresh = old.start(), None
+        if fresh is not None:
+            self.current = fresh
+            old.cleanup()
+        self.spare = self._spawn()
+        return ports
 
-    return restart
+    def cleanup(self) -> None:
+        for target in (self.current, self.spare):
+            if target is not None:
+                target.cleanup()
 
 
 def _serve(relay: Relay, name: str, listen_host: str) -> None:

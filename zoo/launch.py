@@ -83,6 +83,15 @@ class Launched:
         self._spawn()
         return self._ready()
 
+    def begin(self) -> None:
+        """A fresh instance, not waited for: ``ports_when_ready`` reads its ports later (a spare started ahead)."""
+        self.cleanup()
+        self._spawn()
+
+    def ports_when_ready(self) -> tuple[int, int]:
+        """The ports of the instance ``begin`` started, once it serves them (LaunchError when it does not)."""
+        return self._ready()
+
     def _spawn(self) -> None:
         self._tmp = tempfile.mkdtemp(prefix="pltf-target-")
         self._log = tempfile.NamedTemporaryFile(prefix="pltf-target-", suffix=".log", delete=False)  # noqa: SIM115

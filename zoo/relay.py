@@ -135,6 +135,8 @@ class Relay:
                 await asyncio.wait({asyncio.ensure_future(loops)}, timeout=self.member.restart_every)
             finally:
                 loops.cancel()
+                with contextlib.suppress(asyncio.CancelledError):
+                    await loops
                 for ls in listeners:
                     ls.close()
             listeners = await self._restart()
