@@ -19,7 +19,7 @@ from pltf.conformance_tests.runner import CaseResult, RunResult
 if TYPE_CHECKING:
     from pltf.conformance_tests.reports.differential import Differential
 
-_COLOURS = {
+COLOURS = {
     Verdict.PASS: "#2e7d32",
     Verdict.FAIL: "#c62828",
     Verdict.NON_STRICT: "#ef6c00",
@@ -29,7 +29,7 @@ _COLOURS = {
     Verdict.SKIPPED: "#757575",
 }
 
-_CSS = """
+CSS = """
 body{font:14px/1.4 system-ui,sans-serif;margin:1.5em;color:#222}
 table{border-collapse:collapse;margin:.8em 0}td,th{border:1px solid #ccc;padding:.2em .5em;text-align:right}
 td:first-child,th:first-child,td.l{text-align:left}
@@ -48,7 +48,7 @@ d.style.display=(v==='all'||d.dataset.verdict===v)?'':'none';});}
 
 
 def _badge(v: Verdict) -> str:
-    return f'<span class="v" style="background:{_COLOURS[v]}">{escape(v.value)}</span>'
+    return f'<span class="v" style="background:{COLOURS[v]}">{escape(v.value)}</span>'
 
 
 def _case(r: CaseResult) -> str:
@@ -122,7 +122,7 @@ def render(run: RunResult, differential: Differential | None = None) -> str:
     stale = "".join(f"<li>{escape(s)}</li>" for s in run.stale)
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>pltf conform - {escape(cfg.host)}:{cfg.port}</title>
-<style>{_CSS}</style><script>{_JS}</script></head><body>
+<style>{CSS}</style><script>{_JS}</script></head><body>
 <h1>PlatformCtrl conformance report</h1>
 <p>Target <b>{escape(cfg.host)}:{cfg.port}</b>{f" (second port {cfg.second_port})" if cfg.second_port else ""},
 profile <b>{escape(cfg.profile)}</b>, tier <b>{cfg.tier.name.lower()}</b>, time scale {cfg.time_scale:g};

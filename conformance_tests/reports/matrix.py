@@ -28,7 +28,7 @@ import yaml
 from pltf.conformance_tests.catalogue import Verdict
 from pltf.conformance_tests.fleet import FleetTarget, TargetRun, as_plain
 from pltf.conformance_tests.reports import ORDER, first_line, write_atomic
-from pltf.conformance_tests.reports.html import _COLOURS, _CSS
+from pltf.conformance_tests.reports.html import COLOURS, CSS
 
 
 @dataclass(frozen=True)
@@ -174,7 +174,7 @@ t.style.display=(!d||t.classList.contains('d'))?'':'none';});}
 def _cell(c: Cell | None) -> str:
     if c is None:
         return '<td class="c" style="background:#bbb">-</td>'
-    colour = _COLOURS.get(Verdict(c.verdict), "#000")
+    colour = COLOURS.get(Verdict(c.verdict), "#000")
     return f'<td class="c" style="background:{colour}" title="{escape(first_line(c.message))}">{escape(c.verdict)}</td>'
 
 
@@ -230,7 +230,7 @@ def render(fleet: str, targets: Sequence[FleetTarget], runs: Sequence[TargetRun]
     differing = sum(row.differs for row in table)
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>pltf conform - fleet {escape(fleet)}</title>
-<style>{_CSS}{_MATRIX_CSS}</style><script>{_MATRIX_JS}</script></head><body>
+<style>{CSS}{_MATRIX_CSS}</style><script>{_MATRIX_JS}</script></head><body>
 <h1>PlatformCtrl conformance report: {len(runs)} targets</h1>
 <p>Fleet <b>{escape(fleet)}</b>; {len(table)} cases; <b>{differing}</b> case(s) where the targets' verdicts differ
 (highlighted); exit status <b>{code}</b>.</p>
