@@ -26,7 +26,7 @@ CPUS = 0.25
 
 
 class RayMissing(RuntimeError):
-    """Ray is not installed (one line naming the extra)."""
+    """Ray is not installed (one line naming the extra), or its cluster cannot be reached (one line: why)."""
 
 
 def _ray() -> Any:
@@ -52,7 +52,10 @@ def run_ray(
     ray = _ray()
     connected_here = not ray.is_initialized()
     if connected_here:
-        ray.init(address=address, log_to_driver=False)
+        try:
+            ray.init(address=address, log_to_driver=False)
+        except Exception as exc:  # ConnectionError, or Ray's own: no cluster at that address
+            raise RayMissing(f"cannot connect to the Ray cluster at {address}: {' '.join(str(exc).split())}") from None
     try:
         remote = ray.remote(num_cpus=CPUS, max_retries=RETRIES, retry_exceptions=False)(_task)
         pending = {remote.remote(t, options): i for i, t in enumerate(targets)}

@@ -339,8 +339,6 @@ def _fleet_runs(args: argparse.Namespace, targets: list[Any], options: Any, view
         return run_ray(targets, options, args.ray, view.on_target_end)
     except RayMissing as exc:
         raise CommandError(str(exc)) from None
-    except ConnectionError as exc:
-        raise CommandError(f"cannot reach the Ray cluster at {args.ray}: {exc}") from None
 
 
 def _write_fleet_reports(

@@ -182,3 +182,18 @@ def test_an_unreachable_target_is_named_and_the_others_are_reported(
     ref, gone = report["targets"]
     assert (ref["exit_code"], [c["verdict"] for c in ref["report"]["cases"]]) == (0, ["PASS"])
     assert gone["exit_code"] == 2 and gone["error"]
+
+
+def test_ray_is_optional_and_its_absence_is_one_line(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import sys
+
+    (tmp_path / "F").write_text(f"targets:\n- {{name: a, target: '127.0.0.1:{_closed_port()}'}}\n", encoding="utf-8")
+    monkeypatch.setitem(sys.modules, "ray", None)  # import ray raises ImportError: as without the extra
+    args = ["conform", "--targets", str(tmp_path / "F"), "-k", "6.2/framing/header-and-length"]
+    assert main(args) == 2  # without --ray the fleet runs (its one target is unreachable) and nothing imports ray
+    assert "1 of 1 target(s) could not be checked: a (" in capsys.readouterr().err
+    assert main([*args, "--ray", "auto"]) == 2
+    err = capsys.readouterr().err
+    assert "pip install 'pltf-toolkit[ray]'" in err and err.count("\n") == 1
