@@ -1,13 +1,14 @@
 """The fleet in one world (issue 30): real-time factor, CPU cost and memory of N platforms stepped together.
 
 Subjects (each N in a fresh child process running ``child(N, SECONDS)``, so its memory is its own):
-- "fleet of N": one process, one ``Fleet`` (reference_server/fleet/) as ``pltf serve --fleet N`` builds it, at full
-  fidelity: every platform with the world, the seven fake CAN boards on a virtual bus of its own, the S300 on
-  ``sim://`` at 10 Hz, the 541-beam laser and the 16 ultrasonic sensors every 0.1 s; each brought up through
-  ``Platform.handle`` (CONNECT, INIT and its self test, START_ULTRASONIC on all channels, Automatic, START) and
-  then sent back and forth with CMD_MOVE_ABS between its free place and another platform's, so the platforms
-  meet, see and block each other. Timed: ``Fleet.tick`` for SECONDS of simulated time (what the fleet's control
-  loop does; the sockets are idle and not part of it).
+- "fleet of N": one process, one ``Fleet`` (reference_server/fleet/) as ``pltf serve --fleet N`` builds it, in the
+  office fixture scaled to 64 x 40 m (the office itself has free places for 165 platforms), at full fidelity: every
+  platform with the world, the seven fake CAN boards on a virtual bus of its own, the S300 on ``sim://`` at 10 Hz,
+  the 541-beam laser and the 16 ultrasonic sensors every 0.1 s; each brought up through ``Platform.handle``
+  (CONNECT, INIT and its self test, START_ULTRASONIC on all channels, Automatic, START) and then sent back and forth
+  with CMD_MOVE_ABS between its free place and another platform's, so the platforms meet, see and block each
+  other. Timed: ``Fleet.tick`` for SECONDS of simulated time (what the fleet's control loop does; the sockets are
+  idle and not part of it).
 - baseline "N processes of one platform": N child processes at once, each the same run with a fleet of 1 (what N
   separate ``pltf serve`` processes compute; no sockets either), for N up to ``BASELINE_MAX``. Their CPU seconds
   are summed; the wall time is that of the slowest on this machine's cores.
@@ -40,12 +41,41 @@ BASELINE_MAX = 10
 DT = 0.02
 RTF_TARGETS = {100: 1.0, 250: 0.5}
 MB_TARGET = 15.0
+HALL = 2.0  # the office fixture scaled by this
 ROOT = Path(__file__).resolve().parents[1]
 
 
 def _rss_mb() -> float:
     with open("/proc/self/statm", encoding="ascii") as f:
         return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 1e6
+
+
+def _scaled(data: bytes, factor: float) -> bytes:
+    """A map or roadmap document with every coordinate and radius times ``factor``."""
+    from lxml import etree
+
+    tree = etree.fromstring(data)
+    for el in tree.iter():
+        for key in ("x", "y", "r"):
+            if key in el.attrib:
+                el.set(key, f"{float(el.get(key)) * factor:g}")
+    return bytes(etree.tostring(tree, xml_declaration=True, encoding="UTF-8"))
+
+
+def _hall(root: Path, names: list[str]) -> None:
+    """Every platform's data dir with the office map and roadmap at twice their size (64 x 40 m): the office's
+    free places hold 165 platforms, the hall's several hundred."""
+    from pltf.fixtures import DIR
+    from pltf.reference_server.storage import Storage
+
+    hall = _scaled((DIR / "maps/office.map").read_bytes(), HALL)
+    roads = _scaled((DIR / "roadmaps/office.rm").read_bytes(), HALL)
+    for name in names:
+        d = root / name
+        Storage(d).seed_from_fixtures()
+        (d / "Map/PltfMap.map").write_bytes(hall)
+        (d / "Roadmap/PltfRoadmap.rm").write_bytes(roads)
+        (d / "StartupPosition.dat").write_text("4000 20000 0\n", encoding="ascii")
 
 
 def _fleet(count: int, root: Path) -> Any:
@@ -56,6 +86,7 @@ def _fleet(count: int, root: Path) -> Any:
     from pltf.reference_server.fleet.fleet import Fleet
 
     spec = of_count(count, [0, 0])
+    _hall(root, [p.name for p in spec.platforms])
     args = argparse.Namespace(data_dir=str(root), seed=1, no_hardware=False, can_interface="virtual")
     return Fleet(spec, build_platforms(spec, args))
 
