@@ -116,6 +116,9 @@ class Campaign:
                 raise HarnessError(str(exc)) from None
             self.stats.profile = self.profile.to_json()
         lanes.adapt = self.profile.adapt
+        if self.profile.small_backlog:  # SYNs past the backlog are dropped: a pipelined connect would wait seconds
+            for gate in lanes.gates:
+                gate.pipelining = False
         status = Unit([], [])
         for k in range(len(self.ports)):
             for _ in range(MEASURE if k < self.o.lanes else 1):

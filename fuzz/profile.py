@@ -25,6 +25,7 @@ import statistics
 import time
 from dataclasses import asdict, dataclass, replace
 
+from pltf.fuzz.gate import DEPTH
 from pltf.fuzz.replies import reply_decoder
 from pltf.fuzz.target import LEAD, Session, connect
 from pltf.spec.codec import REQUESTS, encode
@@ -69,6 +70,12 @@ class Profile:
         runs its batches on a kept connection from the start (``pltf.fuzz.trial`` settled)."""
         return self.setup_ms >= SLOW_SETUP_MS and self.setup_ms >= SLOW_SETUP_RATIO * self.reply_ms
 
+    @property
+    def small_backlog(self) -> bool:
+        """The listen backlog holds fewer connects than the campaign pipelines on a port (``pltf.fuzz.gate.DEPTH``):
+        the SYNs beyond it are dropped and a connect waits for the kernel's retry (a second or more)."""
+        return self.backlog is not None and self.backlog <= DEPTH
+
     def describe(self) -> str:
         parts = ["ends the session at our FIN" if self.fin_ends else "answers after our FIN"]
         if self.silent_before_connect:
@@ -77,6 +84,8 @@ class Profile:
             parts.append(TURN_AWAY[self.newcomer])
         if self.backlog is not None:
             parts.append(f"{self.backlog} connect(s) complete while the port is busy (its listen backlog)")
+            if self.small_backlog:
+                parts.append("no pipelining")
         parts.append(f"replies in {self.reply_ms:.3g} ms, a fresh connection is served in {self.setup_ms:.3g} ms more")
         if self.slow_setup:
             parts.append("fresh connections are dear: batches on a kept connection")

@@ -208,10 +208,10 @@ __all__ = [
     "frame",
     "frame_ids",
     "frame_lie",
-    "skipping_ids",
     "pack_fields",
     "pack_length",
     "pack_value",
+    "skipping_ids",
     "split_frames",
     "survey",
 ]
