@@ -122,3 +122,9 @@ def test_a_slow_set_up_makes_fresh_connections_dear_only_when_it_dwarfs_a_reply(
     assert Profile(setup_ms=50.0, reply_ms=0.3).slow_setup  # a 100 ms accept timer
     assert not Profile(setup_ms=50.0, reply_ms=40.0).slow_setup  # a slow link: every reply is as slow
     assert not Profile(setup_ms=0.4, reply_ms=0.02).slow_setup  # the reference server
+
+
+def test_a_backlog_no_deeper_than_the_pipelining_turns_it_off() -> None:
+    assert Profile(backlog=2).small_backlog and "no pipelining" in Profile(backlog=2).describe()
+    assert not Profile(backlog=5).small_backlog  # accept-once, the emulator: the kernel's backlog holds them
+    assert not Profile().small_backlog  # a target that turns newcomers away: no backlog measured
