@@ -148,6 +148,8 @@ class Campaign:
             seen = "no reply"
         else:
             how = self.lanes.live.failing.get(k, "timed-out")
+            if how == "refused":
+                return f"nothing listening on {where}: connection refused each time for {self.lanes.patience:g} s"
             seen = f"{HOW[how]} each time for {self.lanes.patience:g} s"
         return f"the target does not answer on {where}: connected, sent CMD_GET_POSITION, {seen}"
 

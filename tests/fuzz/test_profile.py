@@ -7,9 +7,11 @@ import socket
 import threading
 import time
 from collections.abc import Iterator
+from pathlib import Path
 
 import pytest
 
+from pltf.fuzz.engine import Campaign, HarnessError, Options
 from pltf.fuzz.flight import Flight, fly
 from pltf.fuzz.profile import CONNECT_TO_PLTF, SHUTDOWN_PLTF, Profile, learn
 from pltf.fuzz.target import LEAD, Session, play
@@ -128,3 +130,17 @@ def test_a_backlog_no_deeper_than_the_pipelining_turns_it_off() -> None:
     assert Profile(backlog=2).small_backlog and "no pipelining" in Profile(backlog=2).describe()
     assert not Profile(backlog=5).small_backlog  # accept-once, the emulator: the kernel's backlog holds them
     assert not Profile().small_backlog  # a target that turns newcomers away: no backlog measured
+
+
+def test_a_dead_second_port_is_named_by_its_flag(server: FinEndsSession, tmp_path: Path) -> None:
+    """Issue 32: the start blamed --second-port for the --target port; now each port by its own flag."""
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        dead = s.getsockname()[1]
+    opts = Options("127.0.0.1", server.port, dead, duration=1.0, seed=1, out=tmp_path / "o", deadline=0.5)
+    campaign = Campaign(opts)
+    try:
+        with pytest.raises(HarnessError, match=rf"nothing listening on 127.0.0.1:{dead} \(--second-port\)"):
+            campaign.run()
+    finally:
+        campaign.close()
