@@ -9,7 +9,9 @@ Rules:
 - Nothing here is a finding: each behaviour is a reading the guide allows (spec/errata/behaviour.yaml). The
   campaign then relies on none the target lacks: where our FIN ends the session, a session waits for the replies
   it is owed before it half-closes (``Session.fin_waits``); where nothing is answered before CMD_CONNECT_TO_PLTF,
-  every lead carries it (``pltf.fuzz.target.lead``).
+  every lead carries it (``Profile.adapt``, applied by the lanes and the replays); a fresh connection that costs
+  far more than a reply makes the ports dear from the start, a listen backlog no deeper than the pipelining turns
+  pipelining off (``pltf.fuzz.engine``).
 - ``describe`` is the line the console and summary.json show: "ends the session at our FIN; turns newcomers away
   with RST; replies in 2 ms".
 - Every failure to learn says what was seen and where: the port, the flag that named it, and what the target did
