@@ -255,6 +255,7 @@ class FindingWriter:
             "minimized": fresh.get("minimized", False),
             "minimize_tests": fresh.get("tests", 0),
             "target_output_tail": tail,
+            "target_profile": getattr(c.stats, "profile", None) or None,  # what the opening phase learnt
         }
         where = c.o.out if believed else c.o.out / "unconfirmed"
         directory = write_finding(
