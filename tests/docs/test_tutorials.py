@@ -1,8 +1,9 @@
 """Every page a user follows step by step runs as a test: its marked shell blocks (tests/docs/blocks.py), in order,
 against the reference server or the emulator the page itself starts, so a tutorial cannot rot.
 
-The default tier runs each page's quick blocks (about 25 s for all of them on an idle machine); the slow tier
-runs every block, the long ones too (a fuzz campaign that finds a planted bug and minimises it).
+The default tier runs each page's quick blocks (about 25 s of CPU for all five pages); the slow tier runs every
+block, the long ones too (the standard tier with motion, a zoo target that fails the suite, a fuzz campaign that
+finds a planted bug and minimises it, its reproducer).
 """
 
 from __future__ import annotations
