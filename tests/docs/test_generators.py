@@ -71,6 +71,11 @@ def test_the_diagram_draws_each_layer_and_each_exception() -> None:
     assert "spec --> " not in diagram and "L0 --> L1" in diagram
     assert "proxy -.-> fuzz" in diagram  # proxy.capture imports fuzz.pcapng: a listed exception
     assert architecture.may_import(contract, "pltf.gui") == ["spec"]  # the forbidden contract narrows the layers
+    picture = architecture.svg(contract)
+    assert picture.count('class="band"') == len(contract.layers)
+    assert all(f'class="name">{p.removeprefix("pltf.")}<' in picture for row in contract.layers for p in row)
+    pairs = {(architecture._package(e.importer), architecture._package(e.imported)) for e in contract.exceptions}
+    assert picture.count('class="exception"') == len(pairs)
 
 
 # ---- cli_reference.py
