@@ -11,8 +11,9 @@ Rules (Jupyter's answer to the same three problems):
   any port. A request without an Origin is not a page's and passes on to the token.
 - **Token**: with a token set (``--listen`` beyond loopback, or ``--token``) every request must carry it: in the
   query (``?token=``), an ``Authorization: token T`` header, or the cookie the gateway sets after the first
-  visit (HttpOnly, SameSite=Strict). Compared with ``hmac.compare_digest``. Loopback clients are no exception:
-  behind a local reverse proxy every client looks local.
+  visit (HttpOnly, SameSite=Strict, named with the gateway's port: two gateways on one machine keep theirs).
+  Compared with ``hmac.compare_digest``. Loopback clients are no exception: behind a local reverse proxy every
+  client looks local.
 - Each refusal is one line that says why and which flag allows it; nothing past the door runs.
 """
 
@@ -29,7 +30,7 @@ from urllib.parse import urlsplit
 from aiohttp import web
 from aiohttp.typedefs import Middleware
 
-COOKIE = "pltf_gui_token"
+COOKIE = "pltf_gui_token"  # + the gateway's port: browsers keep one cookie jar per host, whatever the port
 WILDCARDS = frozenset({"", "0.0.0.0", "::"})
 Handler = Callable[[web.Request], Awaitable[web.StreamResponse]]
 
@@ -117,7 +118,7 @@ class Doors:
             f"--allow-host {host or 'NAME'} if that page may drive the platform"
         )
 
-    def token_ok(self, request: web.Request) -> bool:
+    def token_ok(self, request: web.Request, own_port: int) -> bool:
         if self.token is None:
             return True
         given = request.query.get("token")
@@ -126,25 +127,27 @@ class Doors:
             given = value.strip() if scheme.lower() == "token" else None
         if given is not None:
             return hmac.compare_digest(given.encode(), self.token.encode())
-        return hmac.compare_digest(request.cookies.get(COOKIE, "").encode(), self._cookie.encode())
+        return hmac.compare_digest(request.cookies.get(f"{COOKIE}_{own_port}", "").encode(), self._cookie.encode())
 
     def middleware(self) -> Middleware:
         @web.middleware
         async def doors(request: web.Request, handler: Handler) -> web.StreamResponse:
+            sockname = request.transport.get_extra_info("sockname") if request.transport else None
+            own_port = int(sockname[1]) if sockname else -1
             why = self.host_refusal(request.headers.get("Host"))
             if why is None:
-                sockname = request.transport.get_extra_info("sockname") if request.transport else None
-                why = self.origin_refusal(request.headers.get("Origin"), sockname[1] if sockname else -1)
+                why = self.origin_refusal(request.headers.get("Origin"), own_port)
             if why is not None:
                 raise web.HTTPForbidden(text=why + "\n")
-            if not self.token_ok(request):
+            if not self.token_ok(request, own_port):
                 raise web.HTTPUnauthorized(
                     text="this GUI needs its token: open the URL `pltf gui` printed (…/?token=…), "
                     "or send `Authorization: token TOKEN`\n"
                 )
             response = await handler(request)
             if self.token is not None and "token" in request.query and not response.prepared:
-                response.set_cookie(COOKIE, self._cookie, httponly=True, samesite="Strict", path="/")
+                cookie = f"{COOKIE}_{own_port}"
+                response.set_cookie(cookie, self._cookie, httponly=True, samesite="Strict", path="/")
             return response
 
         return doors

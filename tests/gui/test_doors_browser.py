@@ -102,6 +102,11 @@ def test_beyond_loopback_every_request_needs_the_token(tmp_path: Path) -> None:
         assert "HttpOnly" in cookie and "SameSite=Strict" in cookie and token not in cookie
         jar = {**own, "Cookie": cookie.split(";", 1)[0]}
         assert request(port, "/api/targets", jar)[0] == 200
+        # the cookie is named with the port: one browser, two gateways on one machine, each keeps its own
+        name, value = jar["Cookie"].split("=", 1)
+        assert name.endswith(f"_{port}")
+        other = {**own, "Cookie": f"{name.removesuffix(str(port))}{port + 1}={value}"}
+        assert request(port, "/api/targets", other)[0] == 401
         assert upgrade(port, "127.0.0.1:1", jar)[0] == 101
         # the token does not open the door for a foreign Host
         assert request(port, f"/?token={token}", {"Host": f"evil.example:{port}"})[0] == 403
