@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import asyncio
 import math
+import socket
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -223,5 +224,26 @@ def test_shared_map_reaches_every_platform(tmp_path: Path, shared: bool) -> None
             assert a.request(R.CMD_GET_MAP()).name == "hall.map"
             got = b.request(R.CMD_GET_MAP())
             assert (got.name == "hall.map") is shared and (PILLAR in got.xml) is shared
+    finally:
+        srv.stop()
+
+
+def test_cmd_exit_ends_one_platform_and_the_others_serve_on(tmp_path: Path) -> None:
+    """Erratum E-FLEET-001: CMD_EXIT on one platform's port closes its ports only; the last one ends the fleet."""
+    spec = config.parse(__import__("yaml").safe_load(HEAD_ON))
+    srv = FleetThread(tmp_path / "data", spec, hardware=False).start()
+    try:
+        (a0, a1), (b0, _) = srv.ports("alpha"), srv.ports("bravo")
+        with Client(a0) as a:
+            a.send(R.CMD_EXIT())
+            assert a.closed_by_server()
+        with pytest.raises(ConnectionRefusedError):
+            socket.create_connection(("127.0.0.1", a1), timeout=5).close()
+        with Client(b0) as b:
+            assert b.status().operation_state == OP_NOT_INIT  # bravo still serves
+            b.send(R.CMD_EXIT())
+            assert b.closed_by_server()
+        srv._thread.join(20)
+        assert srv.exit_code == 0  # the last platform gone: the fleet's shell returned
     finally:
         srv.stop()

@@ -1,5 +1,5 @@
-"""The fleet file and ``--fleet N`` (reference_server/fleet/config.py, places.py), and ``pltf serve --fleet`` as a
-user runs it: one-line errors with exit status 2, the start-up lines of every platform."""
+"""The fleet file and ``--fleet N`` (reference_server/fleet/config.py, places.py), and ``pltf serve --fleet``'s
+usage errors: one line, exit status 2."""
 
 from __future__ import annotations
 
@@ -13,11 +13,8 @@ from pltf.reference_server import cli
 from pltf.reference_server.fleet import config
 from pltf.reference_server.fleet.places import free_places
 from pltf.reference_server.world.geometry import MapGeometry
-from pltf.spec.codec import REQUESTS
 from pltf.spec.documents import DocumentKind, validate_document
-from tests.reference_server.conftest import Client
 from tests.reference_server.helpers import REPO
-from tests.reference_server.test_fleet_conformance import FleetProcess
 
 GOOD = {
     "platforms": [
@@ -100,27 +97,3 @@ def test_a_bad_yaml_file_is_one_line(tmp_path: Path) -> None:
         config.load(tmp_path / "f.yaml")
     (tmp_path / "g.yaml").write_text(yaml.safe_dump(GOOD), encoding="utf-8")
     assert len(config.load(tmp_path / "g.yaml")) == 2
-
-
-def test_cmd_exit_ends_one_platform_and_the_others_serve_on(tmp_path: Path) -> None:
-    """Erratum E-FLEET-001; and each platform logs its ports as ``pltf serve`` does."""
-    srv = FleetProcess(tmp_path, 2, None, "--no-hardware")
-    try:
-        log = srv.log()
-        assert log.count("server started at port") == 4
-        (a0, a1), (b0, _) = srv.ports["p00"], srv.ports["p01"]
-        with Client(a0) as a:
-            a.send(REQUESTS.CMD_EXIT())
-            assert a.closed_by_server()
-        with pytest.raises(OSError):
-            Client(a1).status()
-        with Client(b0) as b:
-            assert b.status().operation_state == 3  # still serving
-        assert "platform p00 left the fleet (1 live)" in srv.log()
-        assert srv.proc.poll() is None
-        with Client(b0) as b:
-            b.send(REQUESTS.CMD_EXIT())
-            assert b.closed_by_server()
-        assert srv.proc.wait(20) == 0  # the last one gone: the fleet exits
-    finally:
-        srv.stop()
