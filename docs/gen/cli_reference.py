@@ -15,11 +15,13 @@ Rules:
 from __future__ import annotations
 
 import argparse
+import contextlib
 import functools
 import logging
 import os
 import re
 import sys
+from collections.abc import Iterator
 from typing import Any
 
 PAGE = "reference/cli.md"
@@ -78,8 +80,23 @@ def _exit_table(epilog: str | None) -> list[str]:
     return [*rows, *(f"| {code} | {_cell(text)} |" for code, text in statuses), ""]
 
 
+@contextlib.contextmanager
+def _fixed_width() -> Iterator[None]:
+    """argparse wraps the usage at the terminal's width (COLUMNS): a fixed one while formatting, then the old."""
+    old = os.environ.get("COLUMNS")
+    os.environ["COLUMNS"] = WIDTH
+    try:
+        yield
+    finally:
+        if old is None:
+            del os.environ["COLUMNS"]
+        else:
+            os.environ["COLUMNS"] = old
+
+
 def _body(parser: argparse.ArgumentParser, help_text: str) -> list[str]:
-    usage = parser.format_usage().rstrip()
+    with _fixed_width():
+        usage = parser.format_usage().rstrip()
     out = [_cell(help_text), "", "```text", usage, "```", ""]
     if parser.description and parser.description != help_text:
         out += [_cell(parser.description), ""]
@@ -91,7 +108,6 @@ def _body(parser: argparse.ArgumentParser, help_text: str) -> list[str]:
 @functools.cache
 def _parsers() -> dict[str, tuple[argparse.ArgumentParser, str]]:
     """Command name -> (its parser, its one-line help), every command loaded."""
-    os.environ["COLUMNS"] = WIDTH  # argparse wraps the usage at the terminal's width
     from pltf.cli.main import COMMANDS, make_parser
 
     parser = make_parser(load=COMMANDS)
