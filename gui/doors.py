@@ -14,7 +14,8 @@ Rules (Jupyter's answer to the same three problems):
   visit (HttpOnly, SameSite=Strict, named with the gateway's port: two gateways on one machine keep theirs).
   Compared with ``hmac.compare_digest``. Loopback clients are no exception: behind a local reverse proxy every
   client looks local.
-- Each refusal is one line that says why and which flag allows it; nothing past the door runs.
+- Each refusal is one line that says why and which flag allows it; nothing past the door runs. The gateway's log
+  says each distinct refusal once (a page that keeps knocking does not fill it).
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from __future__ import annotations
 import hashlib
 import hmac
 import ipaddress
+import logging
 import secrets
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
@@ -30,6 +32,8 @@ from urllib.parse import urlsplit
 from aiohttp import web
 from aiohttp.typedefs import Middleware
 
+log = logging.getLogger("pltf.gui")
+LOGGED_AT_MOST = 100  # distinct refusals written to the log
 COOKIE = "pltf_gui_token"  # + the gateway's port: browsers keep one cookie jar per host, whatever the port
 WILDCARDS = frozenset({"", "0.0.0.0", "::"})
 Handler = Callable[[web.Request], Awaitable[web.StreamResponse]]
@@ -79,6 +83,7 @@ class Doors:
     allow_hosts: frozenset[str] = frozenset()
     token: str | None = None
     _cookie: str = field(init=False, repr=False, default="")
+    _logged: set[str] = field(init=False, repr=False, default_factory=set, compare=False)
 
     def __post_init__(self) -> None:
         hosts = frozenset(h.strip("[]").lower().rstrip(".") for h in self.allow_hosts)
@@ -129,6 +134,11 @@ class Doors:
             return hmac.compare_digest(given.encode(), self.token.encode())
         return hmac.compare_digest(request.cookies.get(f"{COOKIE}_{own_port}", "").encode(), self._cookie.encode())
 
+    def _say_once(self, why: str) -> None:
+        if why not in self._logged and len(self._logged) < LOGGED_AT_MOST:
+            self._logged.add(why)
+            log.warning("%s", why)
+
     def middleware(self) -> Middleware:
         @web.middleware
         async def doors(request: web.Request, handler: Handler) -> web.StreamResponse:
@@ -138,8 +148,10 @@ class Doors:
             if why is None:
                 why = self.origin_refusal(request.headers.get("Origin"), own_port)
             if why is not None:
+                self._say_once(why)
                 raise web.HTTPForbidden(text=why + "\n")
             if not self.token_ok(request, own_port):
+                self._say_once(f"refused a request without the token from {request.remote or 'an unknown address'}")
                 raise web.HTTPUnauthorized(
                     text="this GUI needs its token: open the URL `pltf gui` printed (…/?token=…), "
                     "or send `Authorization: token TOKEN`\n"

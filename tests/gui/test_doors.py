@@ -71,6 +71,8 @@ def test_a_foreign_host_is_refused_and_nothing_reaches_the_platform(gui: Gateway
 
     assert run(rebinding_tab_then_ours) == []  # nothing had reached the platform before our own tab
     assert recorder.connects == 1 and recorder.received == ["CMD_GET_STATUS"]
+    said = [line.split("WARNING", 1)[-1].strip() for line in gui.output if "evil.example" in line]
+    assert said and len(said) == len(set(said))  # the gateway's log says each refusal, once
 
 
 def test_an_origin_is_checked_against_the_allowed_hosts_not_the_host_header(gui: GatewayProcess) -> None:
