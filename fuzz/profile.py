@@ -42,7 +42,7 @@ BACKLOG_WAIT = 0.5  # s a connect may take before its SYN counts as dropped
 NEWCOMER_WAIT = 1.0  # s a newcomer on a busy port is watched at most
 NO_REPLY = "the target sent no reply"
 SLOW_SETUP_MS = 20.0  # a fresh connection served this much later than a reply, and ...
-SLOW_SETUP_RATIO = 10.0  # ... this many replies' time later, is dear
+SLOW_SETUP_RATIO = 2.0  # ... this many replies' time later, is dear
 SERVED_RETRIES = 20  # fresh connections tried while a port that frees slowly turns us away
 TURN_AWAY = {  # what a newcomer on a busy port met -> how the profile says it
     "served": "serves a second client on a port",
@@ -59,7 +59,7 @@ class ProfileError(RuntimeError):
 
 @dataclass
 class Profile:
-    setup_ms: float = 0.0  # median connect-to-first-reply of a fresh connection, less a reply's time
+    setup_ms: float = 0.0  # median over fresh connections: connect-to-first-reply less the same one's next reply
     reply_ms: float = 0.0  # median reply time on a kept connection
     fin_ends: bool = False  # our half-close ends the session: replies still owed are lost
     silent_before_connect: bool = False  # nothing is answered before CMD_CONNECT_TO_PLTF
@@ -68,7 +68,8 @@ class Profile:
 
     @property
     def slow_setup(self) -> bool:
-        """A fresh connection costs much more than a reply (a timer-driven accept, a slow handshake): the campaign
+        """A fresh connection costs much more than a reply (a timer-driven accept, a slow handshake; the set-up is
+        measured against the same connection's next reply, so a loaded machine inflates both alike): the campaign
         runs its batches on a kept connection from the start (``pltf.fuzz.trial`` settled)."""
         return self.setup_ms >= SLOW_SETUP_MS and self.setup_ms >= SLOW_SETUP_RATIO * self.reply_ms
 
@@ -119,14 +120,14 @@ def learn(host: str, port: int, flag: str, deadline: float) -> Profile:
     where = f"{host}:{port} ({flag})"
     prof = Profile()
     first, setup = _first_served(host, port, deadline, where, prof)
-    setups = [setup]
+    setups: list[float] = []
     try:
-        prof.reply_ms = _reply_ms(first, deadline)
+        prof.reply_ms = _reply_ms(first, deadline, setup, setups)
         prof.newcomer, prof.backlog = _newcomer(host, port, deadline)
     finally:
         _close(first, deadline)
     prof.fin_ends = any(_fin_loses(host, port, deadline, prof, setups) for _ in range(FIN_TRIES))
-    prof.setup_ms = round(max(0.0, statistics.median(setups) - prof.reply_ms), 3)
+    prof.setup_ms = round(statistics.median(setups), 3) if setups else 0.0
     return prof
 
 
@@ -194,13 +195,17 @@ def _ask(s: socket.socket, data: bytes, want: int, deadline: float, fin: bool = 
     return got, "answered"
 
 
-def _reply_ms(s: socket.socket, deadline: float) -> float:
+def _reply_ms(s: socket.socket, deadline: float, first_ms: float, setups: list[float]) -> float:
+    """The median reply time on ``s``; ``setups`` gets its first reply's time over its second's (``first_ms``:
+    the connect to the first reply), measured side by side so that the machine's load cancels out."""
     times = []
     for _ in range(REPLY_SAMPLES):
         t0 = time.monotonic()
         if _ask(s, LEAD, 1, deadline)[0] != 1:
             break
         times.append((time.monotonic() - t0) * 1000)
+    if times:
+        setups.append(max(0.0, first_ms - times[0]))
     return round(statistics.median(times), 3) if times else 0.0
 
 
@@ -244,14 +249,17 @@ def _backlog(host: str, port: int) -> int:
 
 def _fin_loses(host: str, port: int, deadline: float, prof: Profile, setups: list[float]) -> bool:
     """Whether the replies owed at our FIN are lost: served (its lead answered), then ``FIN_REPLIES`` leads and
-    our FIN in one write. ``setups`` gets the ms from the connect to the lead's reply (a port that frees slowly
-    and turns us away first is dear anyway: ``pltf.fuzz.gate``)."""
+    our FIN in one write. ``setups`` gets the ms the connection's first reply took over its second's (a port that
+    frees slowly and turns us away first is dear anyway: ``pltf.fuzz.gate``)."""
     t0 = time.monotonic()
     s = _served_again(host, port, deadline, prof)
-    setups.append((time.monotonic() - t0) * 1000)
     if s is None:
         return False  # the port did not serve us again: nothing learnt (the campaign's start will say so)
+    first_ms = (time.monotonic() - t0) * 1000
     try:
+        t1 = time.monotonic()
+        if _ask(s, LEAD, 1, deadline)[0] == 1:  # the same connection's second reply: the set-up is the difference
+            setups.append(max(0.0, first_ms - (time.monotonic() - t1) * 1000))
         got, _ = _ask(s, LEAD * FIN_REPLIES, FIN_REPLIES, deadline, fin=True)
     finally:
         s.close()
