@@ -12,8 +12,9 @@ Subjects (each N in a fresh child process running ``child(N, SECONDS)``, so its 
 - baseline "N processes of one platform": N child processes at once, each the same run with a fleet of 1 (what N
   separate ``pltf serve`` processes compute; no sockets either), for N up to ``BASELINE_MAX``. Their CPU seconds
   are summed; the wall time is that of the slowest on this machine's cores.
-- memory: the child's resident set after building and bringing up its platforms, minus that before (MB per added
-  platform); the baseline's is one ``pltf serve`` process's resident set after start-up, times N.
+- memory: the child's resident set after building and bringing up its platforms; per added platform: (that of N -
+  that of 1) / (N - 1); the baseline's is one ``pltf serve`` process's resident set after start-up (what each
+  further platform costs when each is a process of its own).
 Figures: real-time factor (simulated s per wall s), CPU seconds per platform per simulated second (what sizes a
 machine or a cluster), MB per platform.
 """
@@ -200,12 +201,15 @@ def scaling(config: Config) -> list[Row]:
     seconds = 1.0 if config.quick else 5.0
     rows: list[Row] = []
     serve_mb = serve_rss_mb()
+    one = 0.0  # the resident set a fleet of one built (the modules and one platform)
     for n in sizes:
         repeats = 1 if config.quick or n > BASELINE_MAX else max(1, min(config.repeats, 3))
         runs = [fleet_run(n, seconds) for _ in range(repeats)]
         wall = statistics.median(r["wall"] for r in runs)
         cpu = statistics.median(r["cpu"] for r in runs)
-        mb = statistics.median((r["rss_built"] - r["rss_before"]) / n for r in runs)
+        built = statistics.median(r["rss_built"] for r in runs)
+        one = one or built
+        mb = (built - one) / (n - 1) if n > 1 else built  # per added platform; a fleet of one: the whole process
         base = separate_runs(n, seconds) if n <= BASELINE_MAX else None
         name, subject = "fleet.scaling", f"fleet of {n}"
         baseline = f"{n} processes of one platform" if base else None
@@ -239,7 +243,7 @@ def scaling(config: Config) -> list[Row]:
             make_row(
                 name,
                 subject,
-                "mb_per_platform",
+                "mb_per_added_platform" if n > 1 else "mb_process",
                 mb,
                 "MB",
                 higher_is_better=False,
