@@ -10,7 +10,9 @@ Rules:
 - The known state: ``ensure(state, mode)`` drives the target there through the chart (chart.PATH_FROM_READY)
   and checks it through CMD_GET_STATUS; when it cannot, the case fails as a precondition failure.
 - A new connection is probed with CMD_GET_STATUS and retried for ``connect_window`` seconds: the target may
-  not yet have noticed that our previous client on that port is gone (one client per port).
+  not yet have noticed that our previous client on that port is gone (one client per port). A refused connect is
+  retried too once the run has been served (a restart: the port is gone for a while, erratum E-BEH-007, zoo
+  matrix row 10); served again, ``Target.restarts`` counts it and the runner runs the case in flight again.
 - The last status read stands for the current one while nothing was sent, connected or closed since
   (``wire.Session.events``) and it is under ``STATUS_FRESH`` wall s old - across cases too, and a probe's reply
   counts: each round trip counts against a slow link (issue 17).
@@ -132,6 +134,9 @@ class Target:
         self.last_status: tuple[int, float, Status] | None = None  # (Session.events, when, status) of the last read
         self.prompt = True  # every commanded state showed at the first status after the command (see the rules)
         self.notes: list[str] = []  # about the run as a whole
+        self.reached = False  # a connection was served in this run: a refused connect since is waited out
+        self.restarts = 0  # times the target restarted (a port refused connections, then served again: E-BEH-007)
+        self.restart_seen = ""  # how the last restart showed
 
     def record(self, reply: Telegram) -> Status:
         """A CMD_GET_STATUS reply just read, nothing asked after it: the current status until something moves."""
@@ -166,7 +171,7 @@ class Target:
         cfg = self.config
         window = cfg.connect_window if window is None else window
         deadline = time.monotonic() + window
-        delay, last = 0.01, "no attempt"
+        delay, last, refused = 0.01, "no attempt", False
         while True:
             s = Session(
                 cfg.host,
@@ -180,17 +185,19 @@ class Target:
             )
             try:
                 greet(s.connect(), cfg)
-                if not probe:
-                    return s
-                reply = s.request(
-                    build("request", "CMD_GET_STATUS"),
-                    timeout=probe_timeout or min(cfg.reply_timeout, cfg.probe_timeout),
-                )
-                self.record(reply)
+                if probe:
+                    self.record(
+                        s.request(
+                            build("request", "CMD_GET_STATUS"),
+                            timeout=probe_timeout or min(cfg.reply_timeout, cfg.probe_timeout),
+                        )
+                    )
+                self._served(label, refused)
                 return s
             except Unreachable as exc:
-                if "refused" in str(exc).lower():
+                if "refused" in str(exc).lower() and not self.reached:
                     raise  # nothing listens: a busy port accepts and closes, it does not refuse
+                refused = refused or "refused" in str(exc).lower()  # gone since: a restart, or a crash
                 last = str(exc)
                 s.close()
             except TargetFailure as exc:
@@ -204,6 +211,20 @@ class Target:
             self.budget.check()
             time.sleep(delay)
             delay = min(delay * 2, 0.2)
+
+    def _served(self, label: str, refused: bool) -> None:
+        """A connection was served; one refused before it means the target restarted (erratum E-BEH-007)."""
+        self.reached = True
+        if refused:
+            self.restarted(f"port {label} refused connections, then served again")
+
+    def restarted(self, seen: str) -> None:
+        """The target restarted (``seen`` says how it showed): counted and noted; the runner runs the case again."""
+        self.restarts, self.restart_seen = self.restarts + 1, seen
+        self.notes.append(
+            f"{seen}: the target restarted (erratum E-BEH-007, an alternative reading; zoo behaviour matrix row 10); "
+            "the case in flight is run again"
+        )
 
     def session(self, label: str, log: WireLog, observer: Any) -> Session:
         s = self._sessions.get(label)

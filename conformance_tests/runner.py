@@ -10,6 +10,9 @@ Rules:
   too. Attempts that disagree (one PASS, one FAIL) make the case INCONCLUSIVE: a flake is reported, not hidden.
 - After every ``abuse`` case the runner checks liveness: a new client is served on each port and the operation
   state and motion mode are what they were before the abuse.
+- A case during which the target restarted (a port refused connections, then served again; or a lost connection
+  after which the platform had lost its initialisation: erratum E-BEH-007, zoo matrix row 10) is INCONCLUSIVE with
+  that reason and run again, whatever it saw meanwhile.
 - A SHOULD or MAY case during which the target stopped answering (a reply timeout, and then no new client
   served) is FAIL: whatever the case's level, a target must keep serving.
 - Bounds (pace.py): the target's reply time is measured once before the first case and scales the waits; every
@@ -21,6 +24,7 @@ Rules:
 
 from __future__ import annotations
 
+import contextlib
 import time
 import traceback
 from collections.abc import Sequence
@@ -34,6 +38,7 @@ from pltf.conformance_tests.context import CaseContext, Config, Status, Target
 from pltf.conformance_tests.outcome import (
     Absurd,
     BudgetSpent,
+    ConnectionClosed,
     Deviation,
     Fail,
     Inconclusive,
@@ -304,21 +309,13 @@ class Runner:
     def _attempt(self, c: Case) -> Attempt:
         ctx = CaseContext(self.target, c)
         t0 = time.monotonic()
-        verdict, message, pre, silent = Verdict.PASS, "", False, False
         budget = self._case_budget()
         self._budget(budget)
+        restarts = self.target.restarts
         try:
-            c.func(ctx)
-        except Fail as exc:
-            verdict, message, pre = _fail_verdict(c, exc), str(exc), exc.precondition
-            silent = isinstance(exc, (ReplyTimeout, NoConnection))
-        except NotApplicable as exc:
-            verdict, message = Verdict.NA, str(exc)
-        except Inconclusive as exc:
-            verdict, message, silent = Verdict.INCONCLUSIVE, str(exc), isinstance(exc, BudgetSpent)
-        except Exception as exc:
-            tb = traceback.format_exception(exc)
-            verdict, message = Verdict.ERROR, f"harness error: {exc!r}\n{''.join(tb[-6:])}"
+            verdict, message, pre, silent, lost = _outcome(c, ctx)
+            if lost and self.target.restarts == restarts:
+                _back(self.target)  # a lost connection: was it a restart? (before the clean-up initialises again)
         finally:
             self._budget(max(10.0, budget / 4))  # the clean-up's own budget
             ctx.finish()
@@ -335,6 +332,12 @@ class Runner:
                 verdict = worst(verdict, dv)
             else:
                 ctx.note(f"informative: {dev.describe()}")
+        if self.target.restarts > restarts and verdict not in (Verdict.PASS, Verdict.ERROR):
+            verdict, silent, pre = Verdict.INCONCLUSIVE, False, False
+            message = (
+                f"the target restarted during this case ({self.target.restart_seen}: erratum "
+                f"E-BEH-007, zoo behaviour matrix row 10), so the case is run again; it said: {message}"
+            )
         if ctx.unsolicited:
             ctx.note(f"{len(ctx.unsolicited)} unsolicited frame(s) received (guide 6.1, erratum E-CMD-013)")
         return Attempt(
@@ -348,6 +351,40 @@ class Runner:
             silent,
             final=silent and verdict is Verdict.INCONCLUSIVE,
         )
+
+
+def _outcome(c: Case, ctx: CaseContext) -> tuple[Verdict, str, bool, bool, bool]:
+    """Run the case: its verdict and message, whether it failed a precondition, whether the target answered nothing
+    (silent) and whether a connection was lost (closed or reset by the target: a restart, perhaps; a reply timeout
+    is not looked into - a stuck target would cost a connect window a case)."""
+    try:
+        c.func(ctx)
+    except Fail as exc:
+        lost = isinstance(exc, ConnectionClosed) and not isinstance(exc, NoConnection)  # not a silent target's
+        return _fail_verdict(c, exc), str(exc), exc.precondition, isinstance(exc, (ReplyTimeout, NoConnection)), lost
+    except NotApplicable as exc:
+        return Verdict.NA, str(exc), False, False, False
+    except Inconclusive as exc:
+        return Verdict.INCONCLUSIVE, str(exc), False, isinstance(exc, BudgetSpent), False
+    except Exception as exc:
+        tb = traceback.format_exception(exc)
+        return Verdict.ERROR, f"harness error: {exc!r}\n{''.join(tb[-6:])}", False, False, False
+    return Verdict.PASS, "", False, False, False
+
+
+def _back(target: Target) -> None:
+    """After a lost connection, connect to port A again (a port that refuses is waited out for the connect
+    window: Target.connect counts that as a restart) and read the status: a platform that was initialised and
+    now is not lost its state with the connection - it restarted too (erratum E-BEH-007). Whatever else happens
+    is the next case's to find."""
+    before = target.last_status[2] if target.last_status is not None else None
+    target.close()  # one client per port: our sessions would keep the port busy
+    restarts = target.restarts
+    with contextlib.suppress(Unreachable, Fail):
+        target.connect("A", WireLog(max_entries=50), NullObserver()).close()
+    now = target.last_status[2] if target.last_status is not None else None
+    if target.restarts == restarts and before is not None and now is not None and before.initialized > now.initialized:
+        target.restarted(f"port A lost our connection and the platform its initialisation ({now.describe()})")
 
 
 def _fail_verdict(c: Case, exc: Fail) -> Verdict:
