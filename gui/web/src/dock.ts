@@ -14,7 +14,13 @@ export class Dock {
   }
 
   add(id: string, key: Key, content: HTMLElement, onShow?: (shown: boolean) => void): void {
-    const tab = h("button", { type: "button", role: "tab", id: `tab-${id}`, "aria-controls": `pane-${id}`, "aria-selected": "false" });
+    const tab = h("button", {
+      type: "button",
+      role: "tab",
+      id: `tab-${id}`,
+      "aria-controls": `pane-${id}`,
+      "aria-selected": "false",
+    });
     bind(tab, key);
     const pane = h("section", { role: "tabpanel", id: `pane-${id}`, class: "pane", hidden: true }, content);
     bind(pane, key, { text: false });
@@ -46,6 +52,9 @@ export class Dock {
       }
     }
     this.current = id;
-    this.panes.get(id)?.pane.querySelector<HTMLElement>("button, input, select, [tabindex]")?.focus({ preventScroll: true });
+    this.panes
+      .get(id)
+      ?.pane.querySelector<HTMLElement>("button, input, select, [tabindex]")
+      ?.focus({ preventScroll: true });
   }
 }

@@ -82,24 +82,44 @@ session.conn.subscribe((ev) => {
 });
 
 const menus: Array<[Key, MenuItem[]]> = [
-  ["menu.socket", [
-    { key: "menu.openSocket", run: () => session.open(), shortcut: "Control+O" },
-    { key: "menu.openSocketAt", run: () => void openSocketAt(session, say) },
-    // issue 33: Close Socket ends the link of every tab (refused to a viewer while another tab drives), Shutdown
-    // Platform is a command
-    { key: "menu.closeSocket", run: () => closeSocket(session), enabled: () => session.drive?.read_only === true || session.mayCommand },
-    { key: "menu.shutdownPlatform", run: () => void shutdownPlatform(session, say), enabled: () => session.mayCommand },
-  ]],
-  ["menu.view", [
-    { key: "menu.map", run: () => map.canvas.focus() },
-    { key: "menu.hardwareMonitor", run: () => dock.show("hardware") },
-    { key: "menu.viewOptions", run: () => dock.show("view-options") },
-    { key: "menu.plots", run: () => dock.show("plots") },
-    { key: "menu.log", run: () => dock.show("log") },
-    { key: "menu.wire", run: () => dock.show("wire") },
-  ]],
+  [
+    "menu.socket",
+    [
+      { key: "menu.openSocket", run: () => session.open(), shortcut: "Control+O" },
+      { key: "menu.openSocketAt", run: () => void openSocketAt(session, say) },
+      // issue 33: Close Socket ends the link of every tab (refused to a viewer while another tab drives), Shutdown
+      // Platform is a command
+      {
+        key: "menu.closeSocket",
+        run: () => closeSocket(session),
+        enabled: () => session.drive?.read_only === true || session.mayCommand,
+      },
+      {
+        key: "menu.shutdownPlatform",
+        run: () => void shutdownPlatform(session, say),
+        enabled: () => session.mayCommand,
+      },
+    ],
+  ],
+  [
+    "menu.view",
+    [
+      { key: "menu.map", run: () => map.canvas.focus() },
+      { key: "menu.hardwareMonitor", run: () => dock.show("hardware") },
+      { key: "menu.viewOptions", run: () => dock.show("view-options") },
+      { key: "menu.plots", run: () => dock.show("plots") },
+      { key: "menu.log", run: () => dock.show("log") },
+      { key: "menu.wire", run: () => dock.show("wire") },
+    ],
+  ],
   ["menu.parameter", [{ key: "menu.platformParameters", run: () => dock.show("parameters") }]],
-  ["menu.edit", [{ key: "menu.editMap", run: () => dock.show("edit-map") }, { key: "menu.editRoadmap", run: () => dock.show("edit-roadmap") }]],
+  [
+    "menu.edit",
+    [
+      { key: "menu.editMap", run: () => dock.show("edit-map") },
+      { key: "menu.editRoadmap", run: () => dock.show("edit-roadmap") },
+    ],
+  ],
 ];
 
 const header = h("header", { class: "top" }, menubar(menus), controlPanel(session), h("h1", { class: "title" }));

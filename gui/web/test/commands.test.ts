@@ -136,14 +136,23 @@ describe("object commands", () => {
     const h = fresh();
     const start = writeMapDoc(h.doc);
     const n = h.doc.scene.objects.length;
-    h.run(addReplacing(h.doc, { kind: "workarea", layer: 0, points: [0, 0, 10, 0, 10, 10], attrs: {} }, [0], "workarea replaced"));
+    h.run(
+      addReplacing(
+        h.doc,
+        { kind: "workarea", layer: 0, points: [0, 0, 10, 0, 10, 10], attrs: {} },
+        [0],
+        "workarea replaced",
+      ),
+    );
     const areas = h.doc.scene.objects.filter((o) => o.kind === "workarea");
     expect(areas.map((o) => o.points)).toEqual([[0, 0, 10, 0, 10, 10]]);
     expect(h.doc.scene.objects.length).toBe(n);
     h.undo();
     expect(writeMapDoc(h.doc)).toBe(start);
     h.redo();
-    expect(h.doc.scene.objects.filter((o) => o.kind === "workarea").map((o) => o.points)).toEqual([[0, 0, 10, 0, 10, 10]]);
+    expect(h.doc.scene.objects.filter((o) => o.kind === "workarea").map((o) => o.points)).toEqual([
+      [0, 0, 10, 0, 10, 10],
+    ]);
   });
 });
 
@@ -163,7 +172,10 @@ describe("vertices of polygons", () => {
       h.run(del.value);
     }
     expect(pointsOf(h, zone.id)).toEqual([14500, 1000, 14500, 5500, 11000, 5500]);
-    expect(deleteVertex(h.doc, zone.id, 0)).toEqual({ ok: false, reason: "a polygon keeps at least 3 vertices: delete the polygon instead" });
+    expect(deleteVertex(h.doc, zone.id, 0)).toEqual({
+      ok: false,
+      reason: "a polygon keeps at least 3 vertices: delete the polygon instead",
+    });
     expect(insertVertex(h.doc, 1, 0, { x: 1, y: 1 })).toEqual({
       ok: false,
       reason: "a <line> has a fixed number of points: only a polygon gets new vertices",

@@ -13,7 +13,12 @@ import type { Result } from "../src/editor/geometry";
 function layersOf(xml: string): Array<[string | undefined, string[]]> {
   return elementsOf(parseXml(xml)).map((l: XmlElement) => [
     l.attrs.find(([k]) => k === "index")?.[1],
-    elementsOf(l).map((o) => `${o.name}@${elementsOf(o)[0]?.attrs.map(([, v]) => v).join(",")}`),
+    elementsOf(l).map(
+      (o) =>
+        `${o.name}@${elementsOf(o)[0]
+          ?.attrs.map(([, v]) => v)
+          .join(",")}`,
+    ),
   ]);
 }
 
@@ -37,21 +42,39 @@ describe("the layer for new objects", () => {
     expect(defaultLayer(newMapDoc())).toBe(0);
     expect(layerChoices(newMapDoc(), 0)).toEqual([{ index: 0, fresh: true }]);
     // the first layer in document order, not the lowest index; an empty layer counts
-    const doc2 = parseMapDoc(`<map><layer index="5"/><layer index="2"><line><point x="0" y="0"/><point x="1" y="0"/></line></layer></map>`);
+    const doc2 = parseMapDoc(
+      `<map><layer index="5"/><layer index="2"><line><point x="0" y="0"/><point x="1" y="0"/></line></layer></map>`,
+    );
     expect(defaultLayer(doc2)).toBe(5);
     expect(layerChoices(doc2, 5).map((c) => c.index)).toEqual([2, 5, 6]);
   });
   it("keeps a chosen new layer on offer after its objects are undone", () => {
     const h = new History(parseMapDoc(office));
     h.run(addObject(h.doc, value(segmentObject("line", { x: 0, y: 0 }, { x: 100, y: 0 }, 3))));
-    expect(layerChoices(h.doc, 3).map((c) => [c.index, c.fresh])).toEqual([[0, false], [1, false], [2, false], [3, false], [4, true]]);
+    expect(layerChoices(h.doc, 3).map((c) => [c.index, c.fresh])).toEqual([
+      [0, false],
+      [1, false],
+      [2, false],
+      [3, false],
+      [4, true],
+    ]);
     h.run(addObject(h.doc, value(segmentObject("line", { x: 0, y: 0 }, { x: 100, y: 0 }, 4))));
     h.undo();
     h.undo();
-    expect(layerChoices(h.doc, 4).map((c) => [c.index, c.fresh])).toEqual([[0, false], [1, false], [2, false], [3, true], [4, true]]);
+    expect(layerChoices(h.doc, 4).map((c) => [c.index, c.fresh])).toEqual([
+      [0, false],
+      [1, false],
+      [2, false],
+      [3, true],
+      [4, true],
+    ]);
   });
   it("builds every kind of new object in the chosen layer", () => {
-    const [a, b, c] = [{ x: 0, y: 0 }, { x: 1000, y: 0 }, { x: 0, y: 1000 }];
+    const [a, b, c] = [
+      { x: 0, y: 0 },
+      { x: 1000, y: 0 },
+      { x: 0, y: 1000 },
+    ];
     expect(value(segmentObject("line", a, b, 2)).layer).toBe(2);
     expect(value(segmentObject("reflmark", a, b, 2)).layer).toBe(2);
     expect(value(circleObject(a, b, 10, 2)).layer).toBe(2);
@@ -86,7 +109,12 @@ describe("the layer for new objects", () => {
       tools.up(tool, 41000, 0);
     }
     tools.down("label", 40000, 500, 1, 0);
-    for (const p of [[40000, 1000], [41000, 1000], [41000, 2000]]) tools.down("prohibit", p[0], p[1], 1, 0);
+    for (const p of [
+      [40000, 1000],
+      [41000, 1000],
+      [41000, 2000],
+    ])
+      tools.down("prohibit", p[0], p[1], 1, 0);
     tools.finish("prohibit");
     expect(h.doc.scene.objects.slice(48).map((o) => [o.kind, o.layer])).toEqual([
       ["reflmark", 1],

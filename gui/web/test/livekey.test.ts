@@ -12,7 +12,15 @@ const NONE: OverlayOptions = {
   localization: false,
   planObstacles: false,
 };
-const ALL: OverlayOptions = { ...NONE, showDesired: true, scan: true, ultrasonic: true, path: true, localization: true, planObstacles: true };
+const ALL: OverlayOptions = {
+  ...NONE,
+  showDesired: true,
+  scan: true,
+  ultrasonic: true,
+  path: true,
+  localization: true,
+  planObstacles: true,
+};
 
 function status(init: Partial<GetStatusReply> = {}): GetStatusReply {
   return new GetStatusReply({ estX: 2000, estY: 10000, estAngle: 0, timestamp: 100, ...init });

@@ -17,7 +17,8 @@ function walls(n: number, seed = 3): string {
   const rnd = (): number => (s = (s * 1103515245 + 12345) % 2147483648) / 2147483648;
   const lines: string[] = [];
   for (let i = 0; i < n; i++) {
-    const x = Math.round(rnd() * 250000), y = Math.round(rnd() * 250000);
+    const x = Math.round(rnd() * 250000),
+      y = Math.round(rnd() * 250000);
     lines.push(`<line><point x="${x}" y="${y}"/><point x="${x + Math.round(rnd() * 3000)}" y="${y - 17}"/></line>`);
   }
   return `<?xml version="1.0"?><map Version="1.0"><layer index="0">${lines.join("")}</layer></map>`;

@@ -17,9 +17,16 @@ function randomDoc(n: number, rnd: () => number): History {
   const h = new History(newMapDoc());
   const objs: Array<Omit<MapObject, "id">> = [];
   for (let i = 0; i < n; i++) {
-    const x = Math.round(rnd() * 60000), y = Math.round(rnd() * 40000), pick = rnd();
+    const x = Math.round(rnd() * 60000),
+      y = Math.round(rnd() * 40000),
+      pick = rnd();
     if (pick < 0.55) {
-      objs.push({ kind: "line", layer: 0, points: [x, y, x + Math.round((rnd() - 0.5) * 6000), y + Math.round((rnd() - 0.5) * 6000)], attrs: {} });
+      objs.push({
+        kind: "line",
+        layer: 0,
+        points: [x, y, x + Math.round((rnd() - 0.5) * 6000), y + Math.round((rnd() - 0.5) * 6000)],
+        attrs: {},
+      });
     } else if (pick < 0.7) {
       objs.push({ kind: "circle", layer: 0, points: [x, y], r: Math.round(rnd() * 3000), attrs: {} });
     } else if (pick < 0.8) {
@@ -40,7 +47,9 @@ function randomDoc(n: number, rnd: () => number): History {
 }
 
 function endpoints(objects: readonly MapObject[]): Pt[] {
-  return objects.flatMap((o) => Array.from({ length: Math.floor(o.points.length / 2) }, (_, k) => ({ x: o.points[2 * k], y: o.points[2 * k + 1] })));
+  return objects.flatMap((o) =>
+    Array.from({ length: Math.floor(o.points.length / 2) }, (_, k) => ({ x: o.points[2 * k], y: o.points[2 * k + 1] })),
+  );
 }
 
 /** Every hit test on the objects the index gives equals the same test over the whole document. */
@@ -80,7 +89,14 @@ describe("the editor's spatial index", () => {
       } else if (what < 0.55) {
         h.run(deleteObjects(h.doc, [id]));
       } else if (what < 0.7) {
-        h.run(addObject(h.doc, { kind: "line", layer: 0, points: [rnd() * 60000, rnd() * 40000, rnd() * 60000, rnd() * 40000], attrs: {} }));
+        h.run(
+          addObject(h.doc, {
+            kind: "line",
+            layer: 0,
+            points: [rnd() * 60000, rnd() * 40000, rnd() * 60000, rnd() * 40000],
+            attrs: {},
+          }),
+        );
       } else if (what < 0.9) {
         h.undo();
       } else {

@@ -34,7 +34,10 @@ describe("roadmap document", () => {
     const doc = parseRoadmapDoc(src);
     expect(doc.edges[0].points).toEqual([5, 6]);
     const back = parseXml(writeRoadmapDoc(doc));
-    expect(back.attrs).toEqual([["Version", "1.0"], ["v", "x"]]);
+    expect(back.attrs).toEqual([
+      ["Version", "1.0"],
+      ["v", "x"],
+    ]);
     expect(writeRoadmapDoc(doc)).toContain('<station id="a" name="A" angle="0" prio="2">');
     expect(writeRoadmapDoc(doc)).toContain('<edge startstation="a" endstation="b" speed="3">');
     expect(writeRoadmapDoc(doc)).toContain('<points><point x="5" y="6"/></points>');
@@ -75,7 +78,8 @@ describe("roadmap document", () => {
 
 describe("the object at a line of the written map", () => {
   it("names the object on each object line, null elsewhere, layers in document order", () => {
-    const doc = parseMapDoc(`<map Version="1.0"><layer index="1"><circle><center x="1" y="1"/><radius r="5"/></circle></layer>
+    const doc =
+      parseMapDoc(`<map Version="1.0"><layer index="1"><circle><center x="1" y="1"/><radius r="5"/></circle></layer>
       <layer index="0"><line><point x="0" y="0"/></line><line><point x="0" y="0"/><point x="9" y="9"/></line></layer></map>`);
     const xml = writeMapDoc(doc);
     const lines = xml.split("\n");

@@ -1,7 +1,14 @@
 import { describe, expect, it } from "vitest";
 import office from "../../../fixtures/roadmaps/office.rm?raw";
 import { parseRoadmapDoc, RoadmapHistory, writeRoadmapDoc } from "../src/editor/roadmapdoc";
-import { deletePathPoint, edgeAt, edgePath, insertPathPoint, movePathPoint, pathPointAt } from "../src/editor/roadmappath";
+import {
+  deletePathPoint,
+  edgeAt,
+  edgePath,
+  insertPathPoint,
+  movePathPoint,
+  pathPointAt,
+} from "../src/editor/roadmappath";
 
 const fresh = (): RoadmapHistory => new RoadmapHistory(parseRoadmapDoc(office));
 // edge 0: c_west (1000,10000) -> c_01 (5000,10000), no path points; edge 9: c_01 -> r_kitchen via (5000,11200)

@@ -1,14 +1,37 @@
 import { describe, expect, it } from "vitest";
-import { changedWindow, dirtyPart, HeadTailBoxes, patchCounts, union, windowBox, windowSize } from "../src/view/scenediff";
+import {
+  changedWindow,
+  dirtyPart,
+  HeadTailBoxes,
+  patchCounts,
+  union,
+  windowBox,
+  windowSize,
+} from "../src/view/scenediff";
 import { toScreen } from "../src/view/camera";
 import { applyPatch, lineParts, pack, preparePacked, type Prepared } from "../src/view/maprender";
 import { countKinds, type MapObject, type MapScene, sceneBounds } from "../src/scene/map";
 
-const line = (id: number, x: number, kind = "line"): MapObject => ({ id, kind, layer: 0, points: [x, 0, x + 10, 5], attrs: {} });
-const area = (id: number, x: number): MapObject => ({ id, kind: "prohibit", layer: 0, points: [x, 0, x + 5, 0, x, 5], attrs: {} });
+const line = (id: number, x: number, kind = "line"): MapObject => ({
+  id,
+  kind,
+  layer: 0,
+  points: [x, 0, x + 10, 5],
+  attrs: {},
+});
+const area = (id: number, x: number): MapObject => ({
+  id,
+  kind: "prohibit",
+  layer: 0,
+  points: [x, 0, x + 5, 0, x, 5],
+  attrs: {},
+});
 
 describe("changedWindow", () => {
-  const a = line(0, 0), b = line(1, 10), c = line(2, 20), d = line(3, 30);
+  const a = line(0, 0),
+    b = line(1, 10),
+    c = line(2, 20),
+    d = line(3, 30);
   it("is empty for the same list", () => {
     expect(changedWindow([a, b, c], [a, b, c])).toEqual({ start: 3, baseEnd: 3, curEnd: 3 });
     expect(windowSize(changedWindow([a, b, c], [a, b, c]))).toBe(0);
@@ -56,7 +79,7 @@ function drawnSet(p: Prepared, view: { minX: number; minY: number; maxX: number;
 describe("applyPatch", () => {
   it("draws what a full rebuild of the edited scene draws, in every view", () => {
     let seed = 11;
-    const rnd = () => ((seed = (seed * 1103515245 + 12345) % 2147483648) / 2147483648);
+    const rnd = () => (seed = (seed * 1103515245 + 12345) % 2147483648) / 2147483648;
     const kinds = ["line", "auxline", "reflmark"];
     const objects: MapObject[] = [];
     for (let i = 0; i < 400; i++) {
@@ -80,9 +103,18 @@ describe("applyPatch", () => {
       }
       const w = changedWindow(snapshot, objects);
       const added = pack({ ...scene, objects: objects.slice(w.start, w.curEnd) });
-      const patched = applyPatch(basePrep, { bounds: sceneBounds(scene), hideFrom: w.start, hideTo: w.baseEnd, added, addedCount: w.curEnd - w.start });
+      const patched = applyPatch(basePrep, {
+        bounds: sceneBounds(scene),
+        hideFrom: w.start,
+        hideTo: w.baseEnd,
+        added,
+        addedCount: w.curEnd - w.start,
+      });
       const full = preparePacked(pack(scene));
-      for (const view of [{ minX: 100, minY: 100, maxX: 400, maxY: 600 }, { minX: -5000, minY: -5000, maxX: 5000, maxY: 5000 }]) {
+      for (const view of [
+        { minX: 100, minY: 100, maxX: 400, maxY: 600 },
+        { minX: -5000, minY: -5000, maxX: 5000, maxY: 5000 },
+      ]) {
         expect(drawnSet(patched, view, false)).toEqual(drawnSet(full, view, false));
       }
       expect(drawnSet(patched, full.bounds!, true)).toEqual(drawnSet(full, full.bounds!, true));
@@ -105,7 +137,11 @@ describe("dirty regions", () => {
     expect(part.x).toBe(390);
     expect(part.y).toBe(260);
     expect([part.cam.width, part.cam.height]).toEqual([70, 50]);
-    for (const [x, y] of [[1000, 2000], [1500, 2300], [1234, 2111]]) {
+    for (const [x, y] of [
+      [1000, 2000],
+      [1500, 2300],
+      [1234, 2111],
+    ]) {
       const [lx, ly] = toScreen(cam, x, y);
       const [px, py] = toScreen(part.cam, x, y);
       expect(px + part.x).toBeCloseTo(lx, 6);

@@ -18,7 +18,10 @@ describe("object tools", () => {
       ok: true,
       value: { kind: "reflmark", layer: 0, points: [100, 200, 100, 700], attrs: {} },
     });
-    expect(segmentObject("reflmark", { x: 5, y: 5 }, { x: 5, y: 5 })).toEqual({ ok: false, reason: "the reflector has zero length" });
+    expect(segmentObject("reflmark", { x: 5, y: 5 }, { x: 5, y: 5 })).toEqual({
+      ok: false,
+      reason: "the reflector has zero length",
+    });
     expect(segmentObject("line", { x: 0, y: 0 }, { x: 3e9, y: 0 })).toEqual({
       ok: false,
       reason: "3000000000 mm is outside the map's range (±2147483647 mm)",
@@ -47,8 +50,17 @@ describe("object tools", () => {
       ok: true,
       value: { kind: "prohibit", layer: 0, points: [0, 0, 1000, 0, 1000, 500], attrs: {} },
     });
-    expect(polygonObject("workarea", clicks.slice(0, 3))).toEqual({ ok: false, reason: "a polygon needs 3 vertices or more (got 2)" });
-    expect(polygonObject("hiddenpolygon", [{ x: 0, y: 0 }, { x: 10, y: 10 }, { x: 20, y: 20 }])).toEqual({
+    expect(polygonObject("workarea", clicks.slice(0, 3))).toEqual({
+      ok: false,
+      reason: "a polygon needs 3 vertices or more (got 2)",
+    });
+    expect(
+      polygonObject("hiddenpolygon", [
+        { x: 0, y: 0 },
+        { x: 10, y: 10 },
+        { x: 20, y: 20 },
+      ]),
+    ).toEqual({
       ok: false,
       reason: "the polygon has no area: its vertices lie on one line",
     });
@@ -59,7 +71,10 @@ describe("object tools", () => {
       ok: true,
       value: { kind: "hiddenlabel", layer: 0, points: [10, 20], text: "Kitchen", attrs: { text: "Kitchen" } },
     });
-    expect(labelObject({ x: 0, y: 0 }, " ")).toEqual({ ok: false, reason: "a label needs a text: type it in the label field first" });
+    expect(labelObject({ x: 0, y: 0 }, " ")).toEqual({
+      ok: false,
+      reason: "a label needs a text: type it in the label field first",
+    });
   });
 });
 

@@ -117,7 +117,8 @@ export class ShapeTools {
 
   private click(kind: PolygonKind, p: Pt, pxPerMm: number, button: number): void {
     const first = this.draft[0];
-    const closes = first !== undefined && this.draft.length >= 3 && Math.hypot(p.x - first.x, p.y - first.y) <= HIT_PX / pxPerMm;
+    const closes =
+      first !== undefined && this.draft.length >= 3 && Math.hypot(p.x - first.x, p.y - first.y) <= HIT_PX / pxPerMm;
     if (button === 2 || closes) {
       this.finish(kind);
       return;
@@ -135,7 +136,10 @@ export class ShapeTools {
     }
     const doc = this.c.doc();
     const old = kind === "workarea" ? doc.scene.objects.filter((o) => o.kind === "workarea").map((o) => o.id) : [];
-    this.c.run({ ok: true, value: old.length > 0 ? addReplacing(doc, r.value, old, "workarea replaced") : addObject(doc, r.value) });
+    this.c.run({
+      ok: true,
+      value: old.length > 0 ? addReplacing(doc, r.value, old, "workarea replaced") : addObject(doc, r.value),
+    });
   }
 
   move(tool: ShapeTool, x: number, y: number): void {

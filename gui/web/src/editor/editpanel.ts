@@ -11,7 +11,17 @@ import type { MapView } from "../panels/mapview";
 import type { PlatformSession } from "../session/session";
 import { guard } from "../panels/control";
 import { toScreen } from "../view/camera";
-import { addObject, addObjects, clearMap, deleteObjects, History, invertLine, lineOp, moveObjects, setGeometry } from "./commands";
+import {
+  addObject,
+  addObjects,
+  clearMap,
+  deleteObjects,
+  History,
+  invertLine,
+  lineOp,
+  moveObjects,
+  setGeometry,
+} from "./commands";
 import { clean, extend, orthogonal, parallel, snap, type Pt, type Seg, trim } from "./geometry";
 import { newMapDoc, parseMapDoc, sameObjects, writeMapDoc } from "./mapdoc";
 import { download, fileInput, fileNameOf } from "./files";
@@ -106,7 +116,11 @@ export function mapEditor(
     }
     const o = many.size > 0 ? undefined : history.byId(selected);
     state.textContent =
-      many.size > 0 ? t("edit.selectedN", { n: many.size }) : o === undefined ? "" : t("edit.selected", { what: `${o.kind} ${o.points.join(", ")}` });
+      many.size > 0
+        ? t("edit.selectedN", { n: many.size })
+        : o === undefined
+          ? ""
+          : t("edit.selected", { what: `${o.kind} ${o.points.join(", ")}` });
     state.dataset.selectedCount = String(selection().size);
     typed.show(o ?? null);
     state.dataset.objects = String(history.doc.scene.objects.length);
@@ -208,7 +222,10 @@ export function mapEditor(
         return;
       }
       if (drag !== null && (tool === "select" || tool === "addLine")) {
-        drag.to = tool === "select" ? { x, y } : snap({ x, y }, endpoints({ x, y }, SNAP_PX / drag.pxPerMm), SNAP_PX / drag.pxPerMm, GRID_MM);
+        drag.to =
+          tool === "select"
+            ? { x, y }
+            : snap({ x, y }, endpoints({ x, y }, SNAP_PX / drag.pxPerMm), SNAP_PX / drag.pxPerMm, GRID_MM);
       }
     },
     up(x, y) {
@@ -245,7 +262,8 @@ export function mapEditor(
       ctx.lineWidth = 3;
       const sel = selection();
       // a few selected: looked up by id (no pass over 50,000 objects per frame); many: in document order
-      const drawn = sel.size > 16 ? history.doc.scene.objects.filter((o) => sel.has(o.id)) : [...sel].map((id) => history.byId(id));
+      const drawn =
+        sel.size > 16 ? history.doc.scene.objects.filter((o) => sel.has(o.id)) : [...sel].map((id) => history.byId(id));
       for (const o of drawn) {
         if (o === undefined || o.points.length < 2) {
           continue;
@@ -332,7 +350,10 @@ export function mapEditor(
   const saveAsB = act("edit.saveAs", () => {
     const nameIn = h("input", { type: "text", value: fileNameOf(history.doc.scene.name, "map", ".map") });
     bind(nameIn, "edit.fileName", { text: false });
-    nameIn.addEventListener("keydown", (e) => e.key === "Enter" && (nameIn.closest(".dialog")?.querySelector("button") as HTMLElement | null)?.click());
+    nameIn.addEventListener(
+      "keydown",
+      (e) => e.key === "Enter" && (nameIn.closest(".dialog")?.querySelector("button") as HTMLElement | null)?.click(),
+    );
     void dialog("edit.saveAsTitle", nameIn, ["edit.saveAs", "dialog.cancel"]).then((k) => {
       const fileName = fileNameOf(nameIn.value, "map", ".map");
       if (k === 0) {
@@ -513,7 +534,13 @@ export function mapEditor(
     b.addEventListener("blur", back);
   }
   document.addEventListener("keydown", (e) => {
-    if (!open || view.tool !== "edit" || e.ctrlKey || e.metaKey || (e.target as HTMLElement).closest?.("input, select, .dialog")) {
+    if (
+      !open ||
+      view.tool !== "edit" ||
+      e.ctrlKey ||
+      e.metaKey ||
+      (e.target as HTMLElement).closest?.("input, select, .dialog")
+    ) {
       return;
     }
     if (e.key === "Enter") {

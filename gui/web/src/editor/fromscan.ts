@@ -35,7 +35,11 @@ export function linesFromScan(
   layer = 0,
 ): Array<Omit<MapObject, "id">> {
   const origin = { x: s.estX, y: s.estY };
-  const lines = fitScan(scanToWorld(s), { origin, minLineLenAux: lens.MinLineLenAux, minLineLenMap: lens.MinLineLenMap });
+  const lines = fitScan(scanToWorld(s), {
+    origin,
+    minLineLenAux: lens.MinLineLenAux,
+    minLineLenMap: lens.MinLineLenMap,
+  });
   return lines.map((l) => ({
     kind: l.kind,
     layer,

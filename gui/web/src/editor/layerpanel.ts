@@ -35,7 +35,8 @@ export function layerPanel(): {
     const key = choices.map((c) => `${c.index}:${c.fresh ? 1 : 0}`).join(",");
     if (key !== shown || force) {
       shown = key;
-      const name = (index: number, fresh: boolean): string => (fresh ? t("edit.layerNew", { n: index }) : String(index));
+      const name = (index: number, fresh: boolean): string =>
+        fresh ? t("edit.layerNew", { n: index }) : String(index);
       select.replaceChildren(...choices.map((c) => h("option", { value: c.index }, name(c.index, c.fresh))));
     }
     select.value = String(chosen);

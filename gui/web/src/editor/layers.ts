@@ -47,7 +47,8 @@ export function layerChoices(doc: MapDoc, chosen: number): LayerChoice[] {
   const have = documentLayers(doc);
   const next = have.length === 0 ? 0 : Math.max(0, have[have.length - 1] + 1);
   const fresh = new Set([next, chosen].filter((k) => !have.includes(k)));
-  return [...have.map((index) => ({ index, fresh: false })), ...[...fresh].map((index) => ({ index, fresh: true }))].sort(
-    (a, b) => a.index - b.index,
-  );
+  return [
+    ...have.map((index) => ({ index, fresh: false })),
+    ...[...fresh].map((index) => ({ index, fresh: true })),
+  ].sort((a, b) => a.index - b.index);
 }

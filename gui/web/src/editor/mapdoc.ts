@@ -117,7 +117,15 @@ function fromObject(o: EditorObject): XmlElement {
   const tag = o.kind === "circle" ? "center" : "point";
   const children: XmlElement[] = [];
   for (let i = 0; i + 1 < o.points.length; i += 2) {
-    children.push({ type: "element", name: tag, attrs: [["x", fmt(o.points[i])], ["y", fmt(o.points[i + 1])]], children: [] });
+    children.push({
+      type: "element",
+      name: tag,
+      attrs: [
+        ["x", fmt(o.points[i])],
+        ["y", fmt(o.points[i + 1])],
+      ],
+      children: [],
+    });
   }
   if (o.r !== undefined) {
     children.push({ type: "element", name: "radius", attrs: [["r", fmt(o.r)]], children: [] });
@@ -173,7 +181,14 @@ export function sameObjects(a: string, b: string): boolean {
   const key = (src: string): string | null => {
     try {
       return JSON.stringify(
-        parseMapDoc(src).scene.objects.map((o: EditorObject) => [o.kind, o.layer, o.points, o.r ?? null, o.text ?? null, o.attrs]),
+        parseMapDoc(src).scene.objects.map((o: EditorObject) => [
+          o.kind,
+          o.layer,
+          o.points,
+          o.r ?? null,
+          o.text ?? null,
+          o.attrs,
+        ]),
       );
     } catch {
       return null;

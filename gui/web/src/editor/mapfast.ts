@@ -277,7 +277,13 @@ function readObject(src: string, i: number, layer: number, objects: EditorObject
     return -1;
   }
   // mapdoc.ts toObject, property for property
-  const obj: EditorObject = { id: objects.length, kind: t.name, layer, points: parts.points, attrs: Object.fromEntries(t.attrs) };
+  const obj: EditorObject = {
+    id: objects.length,
+    kind: t.name,
+    layer,
+    points: parts.points,
+    attrs: Object.fromEntries(t.attrs),
+  };
   if (parts.r !== undefined) {
     obj.r = parts.r;
   }
@@ -308,7 +314,6 @@ function readLayer(src: string, i: number, layer: number, objects: EditorObject[
     }
   }
 }
-
 
 /** The layers from `i` (after <map ...>) to </map>: the end, or -1. */
 function readLayers(src: string, i: number, objects: EditorObject[], entries: RootEntry[]): number {

@@ -29,14 +29,22 @@ function cellBox(o: MapObject): CellBox | null {
     return null;
   }
   const r = Math.abs(o.r ?? 0);
-  let minX = p[0], maxX = p[0], minY = p[1], maxY = p[1];
+  let minX = p[0],
+    maxX = p[0],
+    minY = p[1],
+    maxY = p[1];
   for (let i = 2; i + 1 < p.length; i += 2) {
     minX = Math.min(minX, p[i]);
     maxX = Math.max(maxX, p[i]);
     minY = Math.min(minY, p[i + 1]);
     maxY = Math.max(maxY, p[i + 1]);
   }
-  const b = { c0: Math.floor((minX - r) / CELL), r0: Math.floor((minY - r) / CELL), c1: Math.floor((maxX + r) / CELL), r1: Math.floor((maxY + r) / CELL) };
+  const b = {
+    c0: Math.floor((minX - r) / CELL),
+    r0: Math.floor((minY - r) / CELL),
+    c1: Math.floor((maxX + r) / CELL),
+    r1: Math.floor((maxY + r) / CELL),
+  };
   const inRange = [b.c0, b.r0, b.c1, b.r1].every((v) => Number.isFinite(v) && Math.abs(v) < SPAN);
   return inRange ? b : null;
 }
@@ -112,9 +120,14 @@ export class ObjectIndex {
    * with a point or an outline within `tol`); null when the query covers too many cells to be worth it.
    */
   near(x: number, y: number, tol: number): MapObject[] | null {
-    const c0 = Math.floor((x - tol) / CELL), c1 = Math.floor((x + tol) / CELL);
-    const r0 = Math.floor((y - tol) / CELL), r1 = Math.floor((y + tol) / CELL);
-    if (!((c1 - c0 + 1) * (r1 - r0 + 1) <= QUERY_CELLS) || !(Math.abs(c0) < SPAN && Math.abs(c1) < SPAN && Math.abs(r0) < SPAN && Math.abs(r1) < SPAN)) {
+    const c0 = Math.floor((x - tol) / CELL),
+      c1 = Math.floor((x + tol) / CELL);
+    const r0 = Math.floor((y - tol) / CELL),
+      r1 = Math.floor((y + tol) / CELL);
+    if (
+      !((c1 - c0 + 1) * (r1 - r0 + 1) <= QUERY_CELLS) ||
+      !(Math.abs(c0) < SPAN && Math.abs(c1) < SPAN && Math.abs(r0) < SPAN && Math.abs(r1) < SPAN)
+    ) {
       return null;
     }
     const out = new Set<MapObject>(this.big);
@@ -133,10 +146,16 @@ export class ObjectIndex {
  * `candidates` (objects of `objects`) in document order; objects no longer in the document are dropped, and
  * `stale` says whether there were any.
  */
-export function inDocumentOrder(objects: readonly MapObject[], candidates: readonly MapObject[]): { list: MapObject[]; stale: boolean } {
+export function inDocumentOrder(
+  objects: readonly MapObject[],
+  candidates: readonly MapObject[],
+): { list: MapObject[]; stale: boolean } {
   if (candidates.length <= 16) {
     const at = candidates.map((o) => ({ o, k: objects.indexOf(o) }));
-    const list = at.filter((e) => e.k >= 0).sort((a, b) => a.k - b.k).map((e) => e.o);
+    const list = at
+      .filter((e) => e.k >= 0)
+      .sort((a, b) => a.k - b.k)
+      .map((e) => e.o);
     return { list, stale: list.length !== candidates.length };
   }
   const want = new Set(candidates);

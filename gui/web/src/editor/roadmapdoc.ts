@@ -37,7 +37,8 @@ export interface RoadmapDoc {
 export class RoadmapDocError extends Error {}
 
 const attr = (el: XmlElement, name: string): string | undefined => el.attrs.find(([k]) => k === name)?.[1];
-const others = (el: XmlElement, known: string[]): Array<[string, string]> => el.attrs.filter(([k]) => !known.includes(k));
+const others = (el: XmlElement, known: string[]): Array<[string, string]> =>
+  el.attrs.filter(([k]) => !known.includes(k));
 
 function coord(el: XmlElement, name: string, owner: string): number {
   const raw = attr(el, name);
@@ -72,7 +73,14 @@ function station(el: XmlElement): RmStation {
     throw new RoadmapDocError(`${owner} has an angle that is not a number`);
   }
   const name = attr(el, "name") ?? id;
-  return { id, name, x: coord(p, "x", owner), y: coord(p, "y", owner), angle, attrs: others(el, ["id", "name", "angle"]) };
+  return {
+    id,
+    name,
+    x: coord(p, "x", owner),
+    y: coord(p, "y", owner),
+    angle,
+    attrs: others(el, ["id", "name", "angle"]),
+  };
 }
 
 function edge(el: XmlElement): RmEdge {
@@ -99,9 +107,17 @@ export function parseRoadmapDoc(src: string): RoadmapDoc {
   const doc: RoadmapDoc = { rootAttrs: root.attrs, stations: [], edges: [], kept: [] };
   for (const el of elementsOf(root)) {
     if (el.name === "stations") {
-      doc.stations.push(...elementsOf(el).filter((c) => c.name === "station").map(station));
+      doc.stations.push(
+        ...elementsOf(el)
+          .filter((c) => c.name === "station")
+          .map(station),
+      );
     } else if (el.name === "edges") {
-      doc.edges.push(...elementsOf(el).filter((c) => c.name === "edge").map(edge));
+      doc.edges.push(
+        ...elementsOf(el)
+          .filter((c) => c.name === "edge")
+          .map(edge),
+      );
     } else {
       doc.kept.push(el);
     }
@@ -115,7 +131,11 @@ const el = (name: string, attrs: Array<[string, string]>, children: XmlElement[]
   attrs,
   children,
 });
-const point = (x: number, y: number): XmlElement => el("point", [["x", String(x)], ["y", String(y)]]);
+const point = (x: number, y: number): XmlElement =>
+  el("point", [
+    ["x", String(x)],
+    ["y", String(y)],
+  ]);
 
 /** The document as XML (the <points> wrapper of E-XML-003 for every edge's path points). */
 export function writeRoadmapDoc(doc: RoadmapDoc): string {

@@ -113,7 +113,8 @@ export function roadmapEditor(
     state.dataset.dirty = String(history.dirty);
     const e = edgeSel === null ? undefined : doc.edges[edgeSel];
     state.dataset.edge = e === undefined ? "" : JSON.stringify({ start: e.start, end: e.end, points: e.points });
-    state.dataset.selected = s === undefined ? "" : JSON.stringify({ id: s.id, name: s.name, x: s.x, y: s.y, angle: s.angle });
+    state.dataset.selected =
+      s === undefined ? "" : JSON.stringify({ id: s.id, name: s.name, x: s.x, y: s.y, angle: s.angle });
     if (s !== undefined) {
       nameIn.value = s.name;
       xIn.value = String(s.x);
@@ -208,7 +209,8 @@ export function roadmapEditor(
       const pd = pointDrag;
       pointDrag = null;
       if (pd !== null && pd.moved) {
-        if (run(movePathPoint(pd.edge, pd.k, grid(x), grid(y)), "") === null) say(t("rm.pathChanged", edgeWords(pd.edge)));
+        if (run(movePathPoint(pd.edge, pd.k, grid(x), grid(y)), "") === null)
+          say(t("rm.pathChanged", edgeWords(pd.edge)));
       }
       const d = drag;
       drag = null;

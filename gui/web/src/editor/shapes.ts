@@ -168,7 +168,10 @@ export function polygonEdgeAt(
     for (let i = 0; i + 1 < p.length; i += 2) {
       const j = (i + 2) % p.length;
       const len2 = (p[j] - p[i]) ** 2 + (p[j + 1] - p[i + 1]) ** 2;
-      const u = len2 === 0 ? 0 : Math.max(0, Math.min(1, ((x - p[i]) * (p[j] - p[i]) + (y - p[i + 1]) * (p[j + 1] - p[i + 1])) / len2));
+      const u =
+        len2 === 0
+          ? 0
+          : Math.max(0, Math.min(1, ((x - p[i]) * (p[j] - p[i]) + (y - p[i + 1]) * (p[j + 1] - p[i + 1])) / len2));
       const d = Math.hypot(x - (p[i] + u * (p[j] - p[i])), y - (p[i + 1] + u * (p[j + 1] - p[i + 1])));
       if (d <= bestD) {
         bestD = d;

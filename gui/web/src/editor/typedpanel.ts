@@ -13,7 +13,12 @@ function nameOf(k: string): string {
   if (m !== null) {
     return t(m[1] === "x" ? "edit.fx" : "edit.fy", { n: m[2] });
   }
-  const keys: Record<string, Key> = { r: "edit.fr", text: "edit.ftext", length: "edit.flength", direction: "edit.fdirection" };
+  const keys: Record<string, Key> = {
+    r: "edit.fr",
+    text: "edit.ftext",
+    length: "edit.flength",
+    direction: "edit.fdirection",
+  };
   return t(keys[k] ?? "edit.coords");
 }
 

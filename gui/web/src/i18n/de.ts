@@ -11,7 +11,8 @@ export const de: Record<Key, string> = {
   "conn.ev.refused": "{target} hat die Verbindung abgelehnt: an diesem Port lauscht niemand",
   "conn.ev.unreachable": "{target} ist nicht erreichbar: {detail}",
   "conn.ev.unreachableTimeout": "{target} hat die Verbindung nicht innerhalb von {timeout} s angenommen",
-  "conn.ev.turnedAway": "{target} hat die Verbindung sofort geschlossen: sein Port hat schon einen Client (ein Client je Port, Handbuch 4.2)",
+  "conn.ev.turnedAway":
+    "{target} hat die Verbindung sofort geschlossen: sein Port hat schon einen Client (ein Client je Port, Handbuch 4.2)",
   "conn.ev.dropped": "{target} hat die Verbindung abgebrochen: {detail}",
   "conn.ev.droppedClosed": "{target} hat die Verbindung geschlossen",
   "conn.ev.timeout": "{target} antwortet nicht mehr: keine Antwort seit {timeout} s",
@@ -24,7 +25,8 @@ export const de: Record<Key, string> = {
   "conn.ev.gatewayLost": "Verbindung zum GUI-Gateway verloren; neuer Versuch in {delay} s",
   "socket.onlyKnown": "Andere Adressen: in Network.ini eintragen oder pltf gui mit --allow-any-target starten",
   "conn.ev.notSent": "nicht gesendet: der Socket ist nicht offen",
-  "conn.ev.targetRefused": "{target} steht nicht auf der Liste dieser GUI: wer pltf gui gestartet hat, kann es erlauben (--allow-target oder Network.ini)",
+  "conn.ev.targetRefused":
+    "{target} steht nicht auf der Liste dieser GUI: wer pltf gui gestartet hat, kann es erlauben (--allow-target oder Network.ini)",
   "conn.ev.refusedViewer": "{telegram} nicht gesendet: {holder} steuert; erst Steuerung übernehmen",
   "conn.ev.refusedReadOnly": "{telegram} nicht gesendet: diese GUI ist nur zur Ansicht",
   "control.caption": "Steuerung",
@@ -63,7 +65,8 @@ export const de: Record<Key, string> = {
   "socket.noList": "Die Liste der bekannten Adressen konnte nicht gelesen werden",
   "socket.badAddress": "Keine Adresse HOST:PORT: {target}",
   "socket.shutdown": "Plattform herunterfahren",
-  "socket.shutdownQuestion": "Das verbundene PlatformControl herunterfahren (CMD_EXIT)? Es bedient dann keinen Client mehr.",
+  "socket.shutdownQuestion":
+    "Das verbundene PlatformControl herunterfahren (CMD_EXIT)? Es bedient dann keinen Client mehr.",
   "socket.shutdownSent": "CMD_EXIT gesendet: die Plattform fährt herunter",
   "view.map": "Kartenansicht",
   "map.messages": "Kartenmeldungen",

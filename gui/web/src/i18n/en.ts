@@ -10,7 +10,8 @@ export const en = {
   "conn.ev.refused": "{target} refused the connection: nothing listens on that port",
   "conn.ev.unreachable": "{target} cannot be reached: {detail}",
   "conn.ev.unreachableTimeout": "{target} did not answer the connection within {timeout} s",
-  "conn.ev.turnedAway": "{target} closed the connection at once: its port already has a client (one client per port, guide 4.2)",
+  "conn.ev.turnedAway":
+    "{target} closed the connection at once: its port already has a client (one client per port, guide 4.2)",
   "conn.ev.dropped": "{target} dropped the connection: {detail}",
   "conn.ev.droppedClosed": "{target} closed the connection",
   "conn.ev.timeout": "{target} stopped answering: no reply for {timeout} s",
@@ -23,7 +24,8 @@ export const en = {
   "conn.ev.gatewayLost": "lost the connection to the GUI gateway; retrying in {delay} s",
   "socket.onlyKnown": "Other addresses: add them to Network.ini, or start pltf gui with --allow-any-target",
   "conn.ev.notSent": "not sent: the socket is not open",
-  "conn.ev.targetRefused": "{target} is not on this GUI's list of platforms: whoever started pltf gui can allow it (--allow-target, or Network.ini)",
+  "conn.ev.targetRefused":
+    "{target} is not on this GUI's list of platforms: whoever started pltf gui can allow it (--allow-target, or Network.ini)",
   "conn.ev.refusedViewer": "{telegram} not sent: {holder} drives; take control first",
   "conn.ev.refusedReadOnly": "{telegram} not sent: this GUI is read-only",
   "control.caption": "Control",
@@ -266,10 +268,14 @@ export const en = {
   "edit.extend": "Extend",
   "edit.parallel": "Make parallel",
   "edit.orthogonal": "Make orthogonal",
-  "edit.tipTrim": "Trim a line in respect of another line. Click the line you want to trim and then select another line as a reference line, which will trim the first one.",
-  "edit.tipExtend": "Extend a line to reach another line. Click the line you want to extend, then click on a reference line that the first line will be extended to.",
-  "edit.tipParallel": "Make lines parallel. Click on the line you want to be parallel to the reference line and click the reference line.",
-  "edit.tipOrthogonal": "Make lines orthogonal. Click on the line you want to make orthogonal, then click on a reference line.",
+  "edit.tipTrim":
+    "Trim a line in respect of another line. Click the line you want to trim and then select another line as a reference line, which will trim the first one.",
+  "edit.tipExtend":
+    "Extend a line to reach another line. Click the line you want to extend, then click on a reference line that the first line will be extended to.",
+  "edit.tipParallel":
+    "Make lines parallel. Click on the line you want to be parallel to the reference line and click the reference line.",
+  "edit.tipOrthogonal":
+    "Make lines orthogonal. Click on the line you want to make orthogonal, then click on a reference line.",
   "edit.invalid": "Not sent: the document is invalid ({why})",
   "rm.tools": "Roadmap editor",
   "rm.new": "New roadmap",

@@ -1,9 +1,11 @@
 /** English labels of the editors' tools added by issue 20's second part (guide 5.4, 5.5 words where it names them). */
 export const enEditors = {
   "edit.active": "Map sent to the platform and active (CMD_GET_MAP returns it): {n} objects",
-  "edit.notTaken": "The platform did not take the map: CMD_GET_MAP after CMD_SET_MAP returns another map (CMD_SET_MAP has no reply to say why)",
+  "edit.notTaken":
+    "The platform did not take the map: CMD_GET_MAP after CMD_SET_MAP returns another map (CMD_SET_MAP has no reply to say why)",
   "rm.active": "Roadmap sent to the platform and active (CMD_GET_ROADMAP returns it): {n} stations, {e} edges",
-  "rm.notTaken": "The platform did not take the roadmap: CMD_GET_ROADMAP after CMD_SET_ROADMAP returns another one (CMD_SET_ROADMAP has no reply to say why)",
+  "rm.notTaken":
+    "The platform did not take the roadmap: CMD_GET_ROADMAP after CMD_SET_ROADMAP returns another one (CMD_SET_ROADMAP has no reply to say why)",
   "edit.saveAs": "Save as",
   "edit.saveAsTitle": "Save the map as a new file",
   "edit.fileName": "File name",
@@ -37,14 +39,20 @@ export const enEditors = {
   "edit.ftext": "Text",
   "edit.flength": "Length (mm)",
   "edit.fdirection": "Direction (degrees)",
-  "edit.tipVertex": "Edit vertices of a polygon: drag a vertex (of the selected object first) to its new place; press on a polygon's edge to add a vertex there; right-click a vertex to delete it.",
+  "edit.tipVertex":
+    "Edit vertices of a polygon: drag a vertex (of the selected object first) to its new place; press on a polygon's edge to add a vertex there; right-click a vertex to delete it.",
   "edit.tipReflector": "Add a reflector. Left-click to begin and drag to draw a reflector line.",
   "edit.tipCircle": "Add a circle. Left-click to begin and drag to draw a circle.",
-  "edit.tipWorkarea": "Define a workspace for an application by drawing a polygon: click each vertex; right-click, click the first vertex or press Enter to finish (Escape drops it). A new workarea replaces the old one.",
-  "edit.tipProhibit": "Define prohibited zones by drawing a polygon: click each vertex; right-click, click the first vertex or press Enter to finish.",
-  "edit.tipHiddenpolygon": "Insert a hidden Polygon for indicating special areas in the map. These objects have no effect on the platform. Click each vertex; right-click or Enter finishes.",
-  "edit.tipLabel": "Insert a label to indicate special areas for better understanding the map: type its text in the label field, then click where it goes. Labels do not affect localization of the platform.",
-  "edit.tipMeasure": "Measure: drag from one point to another; the ends snap to the ends of lines. Distance and direction are shown in the messages.",
+  "edit.tipWorkarea":
+    "Define a workspace for an application by drawing a polygon: click each vertex; right-click, click the first vertex or press Enter to finish (Escape drops it). A new workarea replaces the old one.",
+  "edit.tipProhibit":
+    "Define prohibited zones by drawing a polygon: click each vertex; right-click, click the first vertex or press Enter to finish.",
+  "edit.tipHiddenpolygon":
+    "Insert a hidden Polygon for indicating special areas in the map. These objects have no effect on the platform. Click each vertex; right-click or Enter finishes.",
+  "edit.tipLabel":
+    "Insert a label to indicate special areas for better understanding the map: type its text in the label field, then click where it goes. Labels do not affect localization of the platform.",
+  "edit.tipMeasure":
+    "Measure: drag from one point to another; the ends snap to the ends of lines. Distance and direction are shown in the messages.",
   "edit.tipLoad": "Load the current map from the platform into the map editor.",
   "edit.tipOpen": "Load a map from the hard disk of the PC. For selecting a file a browser window will be opened.",
   "edit.tipNew": "Create a new map.",
@@ -55,12 +63,14 @@ export const enEditors = {
   "edit.tipUndo": "Undo (Ctrl+Z)",
   "edit.tipRedo": "Redo (Ctrl+Y)",
   "edit.tipDelete": "Delete objects on a map: the selected ones.",
-  "edit.tipInvert": "Invert direction of the line. The Scanner only recognizes the \"front\" of the line (drawn with a tick on its left).",
+  "edit.tipInvert":
+    'Invert direction of the line. The Scanner only recognizes the "front" of the line (drawn with a tick on its left).',
   "edit.tipSelectAll": "Select all objects in map.",
   "edit.tipFromScan": "Convert line from scan.",
   "edit.tipClose": "Closes the toolbar and asks for saving if necessary.",
   "rm.pathPoints": "Edit path points",
-  "rm.tipPathPoints": "Click an edge to select it, then click on the map to add a path point to it; drag a path point to move it, right-click it to delete it.",
+  "rm.tipPathPoints":
+    "Click an edge to select it, then click on the map to add a path point to it; drag a path point to move it, right-click it to delete it.",
   "rm.edgeSelected": "Edge {from} -> {to} selected: {n} path points",
   "rm.pathChanged": "Path points of edge {from} -> {to}: {n}",
   "rm.noEdge": "Click an edge first",

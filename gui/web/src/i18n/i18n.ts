@@ -42,7 +42,11 @@ export function onLanguage(apply: () => void): void {
 }
 
 /** An element whose text and accessible name are the catalog's `key` (`text: false`: name only, e.g. icons). */
-export function bind<E extends HTMLElement>(el: E, key: Key, opts: { text?: boolean; name?: boolean; title?: Key } = {}): E {
+export function bind<E extends HTMLElement>(
+  el: E,
+  key: Key,
+  opts: { text?: boolean; name?: boolean; title?: Key } = {},
+): E {
   onLanguage(() => {
     const s = t(key);
     if (opts.text !== false) {

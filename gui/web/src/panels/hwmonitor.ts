@@ -30,11 +30,20 @@ import { commands } from "./control";
 
 /** erratum E-HW-005: the board status word; -1 = the node is not connected. */
 const STATUS_BITS: Array<[number, string]> = [
-  [0x01, "not initialized"], [0x02, "self test failed"], [0x04, "emergency stop"], [0x08, "over-temperature"],
-  [0x100, "node timeout"], [0x200, "frames lost"], [0x400, "CAN bus-off"],
+  [0x01, "not initialized"],
+  [0x02, "self test failed"],
+  [0x04, "emergency stop"],
+  [0x08, "over-temperature"],
+  [0x100, "node timeout"],
+  [0x200, "frames lost"],
+  [0x400, "CAN bus-off"],
 ];
 const BOARD_BITS: Record<string, Array<[number, string]>> = {
-  motor: [[0x10, "brake engaged"], [0x20, "setpoint timeout"], [0x40, "stall"]],
+  motor: [
+    [0x10, "brake engaged"],
+    [0x20, "setpoint timeout"],
+    [0x40, "stall"],
+  ],
   io: [[0x10, "low battery"]],
   us: [[0x10, "measuring"]],
 };
@@ -75,7 +84,11 @@ function send(session: PlatformSession, tg: Telegram, say: (s: string) => void):
   }
 }
 
-function checkboxes(n: number, label: (i: number) => string, onToggle: (i: number, on: boolean) => void): { root: HTMLElement; boxes: HTMLInputElement[] } {
+function checkboxes(
+  n: number,
+  label: (i: number) => string,
+  onToggle: (i: number, on: boolean) => void,
+): { root: HTMLElement; boxes: HTMLInputElement[] } {
   const boxes: HTMLInputElement[] = [];
   const root = h("div", { class: "bits" });
   for (let i = 0; i < n; i++) {
@@ -87,7 +100,12 @@ function checkboxes(n: number, label: (i: number) => string, onToggle: (i: numbe
   return { root, boxes };
 }
 
-function leds(n: number, label: (i: number) => string, get: (s: GetStatusReply) => number, session: PlatformSession): HTMLElement {
+function leds(
+  n: number,
+  label: (i: number) => string,
+  get: (s: GetStatusReply) => number,
+  session: PlatformSession,
+): HTMLElement {
   const { root, boxes } = checkboxes(n, label, () => undefined);
   boxes.forEach((b) => (b.disabled = true));
   session.status.subscribe((s) => boxes.forEach((b, i) => (b.checked = ((get(s) >> i) & 1) === 1)));
@@ -107,55 +125,122 @@ function motorTab(session: PlatformSession, say: (s: string) => void): HTMLEleme
     b.addEventListener("click", () => send(session, new SetBrakeRequest({ motor, state }), say));
     return b;
   };
-  return h("div", {},
-    table([
-      ["hw.motorRight", (s) => statusWords(s.motorRightStatus, "motor")],
-      ["hw.motorLeft", (s) => statusWords(s.motorLeftStatus, "motor")],
-      ["hw.tempRight", (s) => `${s.motorRightTemp} °C`],
-      ["hw.tempLeft", (s) => `${s.motorLeftTemp} °C`],
-      ["hw.velocity", (s) => `${s.velTrans} mm/s, ${s.velRot} mrad/s`],
-    ], session),
-    commands(session, h("div", { class: "row" },
-      brake(MotorIndex.CANNODE_MOTORRIGHT, BrakeState.BRAKE_ENABLED, "hw.brakeRightOn"),
-      brake(MotorIndex.CANNODE_MOTORRIGHT, BrakeState.BRAKE_DISABLED, "hw.brakeRightOff"),
-      brake(MotorIndex.CANNODE_MOTORLEFT, BrakeState.BRAKE_ENABLED, "hw.brakeLeftOn"),
-      brake(MotorIndex.CANNODE_MOTORLEFT, BrakeState.BRAKE_DISABLED, "hw.brakeLeftOff"))),
+  return h(
+    "div",
+    {},
+    table(
+      [
+        ["hw.motorRight", (s) => statusWords(s.motorRightStatus, "motor")],
+        ["hw.motorLeft", (s) => statusWords(s.motorLeftStatus, "motor")],
+        ["hw.tempRight", (s) => `${s.motorRightTemp} °C`],
+        ["hw.tempLeft", (s) => `${s.motorLeftTemp} °C`],
+        ["hw.velocity", (s) => `${s.velTrans} mm/s, ${s.velRot} mrad/s`],
+      ],
+      session,
+    ),
+    commands(
+      session,
+      h(
+        "div",
+        { class: "row" },
+        brake(MotorIndex.CANNODE_MOTORRIGHT, BrakeState.BRAKE_ENABLED, "hw.brakeRightOn"),
+        brake(MotorIndex.CANNODE_MOTORRIGHT, BrakeState.BRAKE_DISABLED, "hw.brakeRightOff"),
+        brake(MotorIndex.CANNODE_MOTORLEFT, BrakeState.BRAKE_ENABLED, "hw.brakeLeftOn"),
+        brake(MotorIndex.CANNODE_MOTORLEFT, BrakeState.BRAKE_DISABLED, "hw.brakeLeftOff"),
+      ),
+    ),
   );
 }
 
 function ioTab(session: PlatformSession, say: (s: string) => void): HTMLElement {
-  const outs = checkboxes(16, (i) => `${t("hw.digitalOut")} ${i + 1}`, (i, on) =>
-    send(session, new SetDigoutRequest({ board: BoardType.TYPE_IOBOARD, channel: i, value: on ? OutputLevel.OUTPUT_HIGH : OutputLevel.OUTPUT_LOW }), say));
-  session.status.subscribe((s) => outs.boxes.forEach((b, i) => {
-    if (document.activeElement !== b) {
-      b.checked = ((s.ioDigitalOut >> i) & 1) === 1;
-    }
-  }));
-  return h("div", {},
-    table([
-      ["hw.status", (s) => statusWords(s.ioStatus, "io")],
-      ["status.battery", (s) => `${(s.ioBatteryVoltage / 1000).toFixed(2)} V`],
-      ["hw.analogIn", (s) => s.ioAnalogIn.join(", ")],
-    ], session),
-    heading("hw.digitalIn"), leds(16, (i) => `${t("hw.digitalIn")} ${i + 1}`, (s) => s.ioDigitalIn, session),
-    heading("hw.digitalOut"), commands(session, outs.root),
+  const outs = checkboxes(
+    16,
+    (i) => `${t("hw.digitalOut")} ${i + 1}`,
+    (i, on) =>
+      send(
+        session,
+        new SetDigoutRequest({
+          board: BoardType.TYPE_IOBOARD,
+          channel: i,
+          value: on ? OutputLevel.OUTPUT_HIGH : OutputLevel.OUTPUT_LOW,
+        }),
+        say,
+      ),
+  );
+  session.status.subscribe((s) =>
+    outs.boxes.forEach((b, i) => {
+      if (document.activeElement !== b) {
+        b.checked = ((s.ioDigitalOut >> i) & 1) === 1;
+      }
+    }),
+  );
+  return h(
+    "div",
+    {},
+    table(
+      [
+        ["hw.status", (s) => statusWords(s.ioStatus, "io")],
+        ["status.battery", (s) => `${(s.ioBatteryVoltage / 1000).toFixed(2)} V`],
+        ["hw.analogIn", (s) => s.ioAnalogIn.join(", ")],
+      ],
+      session,
+    ),
+    heading("hw.digitalIn"),
+    leds(
+      16,
+      (i) => `${t("hw.digitalIn")} ${i + 1}`,
+      (s) => s.ioDigitalIn,
+      session,
+    ),
+    heading("hw.digitalOut"),
+    commands(session, outs.root),
   );
 }
 
 function relayTab(session: PlatformSession, say: (s: string) => void): HTMLElement {
   // erratum E-HW-010: 8 relays, no readback in the status telegram: the boxes show what this GUI set
-  const outs = checkboxes(8, (i) => `${t("hw.relayOut")} ${i + 1}`, (i, on) =>
-    send(session, new SetDigoutRequest({ board: BoardType.TYPE_RELAYBOARD, channel: i, value: on ? OutputLevel.OUTPUT_HIGH : OutputLevel.OUTPUT_LOW }), say));
-  return h("div", {},
-    table([
-      ["hw.status", (s) => statusWords(s.relayStatus)],
-      ["hw.analogIn", (s) => s.relayAnalogIn.join(", ")],
-      ["hw.opto", (s) => s.relayOptoDistance.map((d) => `${d} mm`).join(", ")],
-    ], session),
-    heading("hw.relayOut"), commands(session, outs.root),
-    heading("hw.digitalIn"), leds(8, (i) => `${t("hw.digitalIn")} ${i + 1}`, (s) => s.relayDigitalIn & 0xff, session),
+  const outs = checkboxes(
+    8,
+    (i) => `${t("hw.relayOut")} ${i + 1}`,
+    (i, on) =>
+      send(
+        session,
+        new SetDigoutRequest({
+          board: BoardType.TYPE_RELAYBOARD,
+          channel: i,
+          value: on ? OutputLevel.OUTPUT_HIGH : OutputLevel.OUTPUT_LOW,
+        }),
+        say,
+      ),
+  );
+  return h(
+    "div",
+    {},
+    table(
+      [
+        ["hw.status", (s) => statusWords(s.relayStatus)],
+        ["hw.analogIn", (s) => s.relayAnalogIn.join(", ")],
+        ["hw.opto", (s) => s.relayOptoDistance.map((d) => `${d} mm`).join(", ")],
+      ],
+      session,
+    ),
+    heading("hw.relayOut"),
+    commands(session, outs.root),
+    heading("hw.digitalIn"),
+    leds(
+      8,
+      (i) => `${t("hw.digitalIn")} ${i + 1}`,
+      (s) => s.relayDigitalIn & 0xff,
+      session,
+    ),
     // erratum E-HW-011: the keypad keys are bits 8-15 of relay_digital_in
-    heading("hw.keypad"), leds(8, (i) => `${t("hw.key")} ${i + 1}`, (s) => (s.relayDigitalIn >> 8) & 0xff, session),
+    heading("hw.keypad"),
+    leds(
+      8,
+      (i) => `${t("hw.key")} ${i + 1}`,
+      (s) => (s.relayDigitalIn >> 8) & 0xff,
+      session,
+    ),
   );
 }
 
@@ -164,10 +249,14 @@ function usTab(session: PlatformSession, say: (s: string) => void): HTMLElement 
   // erratum E-CMD-005: the active channels are a bit mask (bit n = sensor n+1)
   let mask: number | null = null;
   const start = () => send(session, new StartUltrasonicRequest({ activeChannels: mask ?? 0xffff }), say);
-  const sensors = checkboxes(16, (i) => `${t("hw.sensor")} ${i + 1}`, (i, on) => {
-    mask = ((mask ?? 0xffff) & ~(1 << i)) | (on ? 1 << i : 0);
-    start();
-  });
+  const sensors = checkboxes(
+    16,
+    (i) => `${t("hw.sensor")} ${i + 1}`,
+    (i, on) => {
+      mask = ((mask ?? 0xffff) & ~(1 << i)) | (on ? 1 << i : 0);
+      start();
+    },
+  );
   const distances = sensors.boxes.map(() => h("span", { class: "distance" }));
   sensors.boxes.forEach((b, i) => b.parentElement!.append(distances[i]));
   session.status.subscribe((s) => {
@@ -186,21 +275,30 @@ function usTab(session: PlatformSession, say: (s: string) => void): HTMLElement 
   const stopBtn = h("button", { type: "button" });
   bind(stopBtn, "hw.stopUs");
   stopBtn.addEventListener("click", () => send(session, new StopUltrasonicRequest(), say));
-  return h("div", {},
-    table([
-      ["hw.status", (s) => statusWords(s.usStatus, "us")],
-      ["hw.analogIn", (s) => s.usAnalogIn.join(", ")],
-    ], session),
+  return h(
+    "div",
+    {},
+    table(
+      [
+        ["hw.status", (s) => statusWords(s.usStatus, "us")],
+        ["hw.analogIn", (s) => s.usAnalogIn.join(", ")],
+      ],
+      session,
+    ),
     commands(session, h("div", { class: "row" }, startBtn, stopBtn)),
-    heading("hw.sensors"), commands(session, sensors.root),
+    heading("hw.sensors"),
+    commands(session, sensors.root),
   );
 }
 
 function radarTab(session: PlatformSession): HTMLElement {
-  return table([
-    ["hw.status", (s) => statusWords(s.radarStatus)],
-    ...[0, 1, 2, 3].map((i): Row => [`Radar ${i + 1}`, (s) => `${s.radarVelocity[i]} mm/s`]),
-  ], session);
+  return table(
+    [
+      ["hw.status", (s) => statusWords(s.radarStatus)],
+      ...[0, 1, 2, 3].map((i): Row => [`Radar ${i + 1}`, (s) => `${s.radarVelocity[i]} mm/s`]),
+    ],
+    session,
+  );
 }
 
 function hex(bytes: number[]): string {
@@ -235,7 +333,11 @@ function canTab(session: PlatformSession, say: (s: string) => void): { root: HTM
   bind(sendBtn, "hw.sendFrame");
   sendBtn.addEventListener("click", () => {
     const id = parseId(sendId.value);
-    const data = sendData.value.trim().split(/[\s,]+/).filter(Boolean).map((b) => Number.parseInt(b, 16));
+    const data = sendData.value
+      .trim()
+      .split(/[\s,]+/)
+      .filter(Boolean)
+      .map((b) => Number.parseInt(b, 16));
     if (id === null) {
       say(t("hw.badCanId"));
     } else if (data.length > 8 || data.some((b) => !(b >= 0 && b <= 255))) {
@@ -252,8 +354,20 @@ function canTab(session: PlatformSession, say: (s: string) => void): { root: HTM
     // the id as shown, three hex digits: "0x02." matches 0x020 .. 0x02f
     const pattern = new RegExp(`^${f.replace(/[^0-9a-f.]/g, "").replace(/\./g, "[0-9a-f]")}$`);
     const shown = frames.filter((m) => f === "" || pattern.test(m.canId.toString(16).padStart(f.length, "0")));
-    body.replaceChildren(...shown.slice(-200).reverse().map((m) =>
-      h("tr", {}, h("td", {}, m.timestamp.toFixed(3)), h("td", {}, `0x${m.canId.toString(16).padStart(3, "0")}`), h("td", {}, hex(m.data)))));
+    body.replaceChildren(
+      ...shown
+        .slice(-200)
+        .reverse()
+        .map((m) =>
+          h(
+            "tr",
+            {},
+            h("td", {}, m.timestamp.toFixed(3)),
+            h("td", {}, `0x${m.canId.toString(16).padStart(3, "0")}`),
+            h("td", {}, hex(m.data)),
+          ),
+        ),
+    );
   };
   filter.addEventListener("input", render);
   session.can.subscribe((r) => {
@@ -262,9 +376,19 @@ function canTab(session: PlatformSession, say: (s: string) => void): { root: HTM
     render();
   });
   const head = h("tr", {}, h("th", {}, "t (s)"), h("th", {}, "id"), h("th", {}, "data"));
-  const root = h("div", {},
-    commands(session, h("div", { class: "row" }, field("hw.canId", listenId), idBtn("hw.listen", (id) => new AddCanListeningIdRequest({ canId: id })),
-      idBtn("hw.unlisten", (id) => new RemoveCanListeningIdRequest({ canId: id })))),
+  const root = h(
+    "div",
+    {},
+    commands(
+      session,
+      h(
+        "div",
+        { class: "row" },
+        field("hw.canId", listenId),
+        idBtn("hw.listen", (id) => new AddCanListeningIdRequest({ canId: id })),
+        idBtn("hw.unlisten", (id) => new RemoveCanListeningIdRequest({ canId: id })),
+      ),
+    ),
     h("div", { class: "row" }, field("hw.filter", filter)),
     h("table", { "aria-label": "CAN" }, h("thead", {}, head), body),
     commands(session, h("div", { class: "row" }, field("hw.canId", sendId), field("hw.canData", sendData), sendBtn)),
@@ -283,9 +407,20 @@ function tcpClientTab(session: PlatformSession): HTMLElement {
     const dt = Math.max((now - last.at) / 1000, 1e-3);
     const rtt = [...tr.rtt].sort((a, b) => a - b);
     mine.replaceChildren(
-      row(t("hw.sentPerS"), `${((tr.telegramsOut - last.telegramsOut) / dt).toFixed(1)} telegrams, ${((tr.bytesOut - last.bytesOut) / dt).toFixed(0)} B`),
-      row(t("hw.receivedPerS"), `${((tr.telegramsIn - last.telegramsIn) / dt).toFixed(1)} telegrams, ${((tr.bytesIn - last.bytesIn) / dt).toFixed(0)} B`),
-      row(t("hw.rtt"), rtt.length ? `${rtt[Math.floor(rtt.length / 2)].toFixed(1)} ms median, ${rtt[rtt.length - 1].toFixed(1)} ms max` : "-"),
+      row(
+        t("hw.sentPerS"),
+        `${((tr.telegramsOut - last.telegramsOut) / dt).toFixed(1)} telegrams, ${((tr.bytesOut - last.bytesOut) / dt).toFixed(0)} B`,
+      ),
+      row(
+        t("hw.receivedPerS"),
+        `${((tr.telegramsIn - last.telegramsIn) / dt).toFixed(1)} telegrams, ${((tr.bytesIn - last.bytesIn) / dt).toFixed(0)} B`,
+      ),
+      row(
+        t("hw.rtt"),
+        rtt.length
+          ? `${rtt[Math.floor(rtt.length / 2)].toFixed(1)} ms median, ${rtt[rtt.length - 1].toFixed(1)} ms max`
+          : "-",
+      ),
       row(t("hw.errors"), String(tr.errors)),
       row(t("hw.reconnects"), String(tr.reconnects)),
     );
@@ -293,7 +428,11 @@ function tcpClientTab(session: PlatformSession): HTMLElement {
     session.askStats();
   };
   session.gatewayStats.subscribe((s) => {
-    gw.replaceChildren(...Object.entries(s).filter(([k]) => k !== "event" && k !== "target").map(([k, v]) => row(k, v === null ? "-" : String(typeof v === "number" ? Math.round(v * 10) / 10 : v))));
+    gw.replaceChildren(
+      ...Object.entries(s)
+        .filter(([k]) => k !== "event" && k !== "target")
+        .map(([k, v]) => row(k, v === null ? "-" : String(typeof v === "number" ? Math.round(v * 10) / 10 : v))),
+    );
   });
   window.setInterval(tick, 1000);
   const h1 = heading("hw.thisTab");
@@ -319,7 +458,10 @@ function tcpPlatformTab(session: PlatformSession): HTMLElement {
   return h("div", {}, h("table", {}, body));
 }
 
-export function hardwareMonitor(session: PlatformSession, say: (s: string) => void): { root: HTMLElement; onShow: (on: boolean) => void } {
+export function hardwareMonitor(
+  session: PlatformSession,
+  say: (s: string) => void,
+): { root: HTMLElement; onShow: (on: boolean) => void } {
   const can = canTab(session, say);
   const tabs: Array<[string, Key, HTMLElement, string?]> = [
     ["motor", "hw.motor", motorTab(session, say)],

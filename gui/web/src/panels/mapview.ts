@@ -30,8 +30,26 @@ import {
   type ScenePatch,
   transfers,
 } from "../view/maprender";
-import { type Box, changedWindow, dirtyPart, HeadTailBoxes, patchCounts, union, windowBox, windowSize } from "../view/scenediff";
-import { drawFlag, drawPlatform, drawStatus, footprint, type Footprint, type OverlayOptions, type Pose, type UsSensor } from "../view/overlay";
+import {
+  type Box,
+  changedWindow,
+  dirtyPart,
+  HeadTailBoxes,
+  patchCounts,
+  union,
+  windowBox,
+  windowSize,
+} from "../view/scenediff";
+import {
+  drawFlag,
+  drawPlatform,
+  drawStatus,
+  footprint,
+  type Footprint,
+  type OverlayOptions,
+  type Pose,
+  type UsSensor,
+} from "../view/overlay";
 import { liveKey } from "../view/livekey";
 import { guard } from "./control";
 import type { ViewOptions } from "./viewoptions";
@@ -172,7 +190,15 @@ export class MapView {
     guard(session, this.toolButtons.get("flag")!);
     this.truthText = h("p", { class: "map-truth", role: "status", hidden: true });
     bind(this.truthText, "truth.title", { text: false });
-    this.root = h("section", { class: "map-view" }, toolbar, h("div", { class: "map-frame" }, this.canvas), this.message, this.summary, this.truthText);
+    this.root = h(
+      "section",
+      { class: "map-view" },
+      toolbar,
+      h("div", { class: "map-frame" }, this.canvas),
+      this.message,
+      this.summary,
+      this.truthText,
+    );
     bind(this.root, "view.map", { text: false });
     this.startWorker();
     this.wire();
@@ -240,10 +266,14 @@ export class MapView {
       this.invalidate();
     });
     new ResizeObserver(() => this.resize()).observe(this.canvas);
-    this.canvas.addEventListener("wheel", (e) => {
-      e.preventDefault();
-      this.zoom(e.deltaY < 0 ? 1.2 : 1 / 1.2, e.offsetX, e.offsetY);
-    }, { passive: false });
+    this.canvas.addEventListener(
+      "wheel",
+      (e) => {
+        e.preventDefault();
+        this.zoom(e.deltaY < 0 ? 1.2 : 1 / 1.2, e.offsetX, e.offsetY);
+      },
+      { passive: false },
+    );
     this.canvas.addEventListener("pointerdown", (e) => this.down(e));
     this.canvas.addEventListener("pointermove", (e) => this.move(e));
     this.canvas.addEventListener("pointerup", (e) => this.up(e));
@@ -296,14 +326,18 @@ export class MapView {
       const s = this.scene;
       const packed = s === null ? null : pack(s, this.bounds); // one pass: segments, counts per kind (bounds known)
       this.counts = packed === null ? {} : packed.kinds;
-      this.base = s === null ? null : { scene: s, objects: s.objects.slice(), counts: this.counts, bounds: this.bounds };
+      this.base =
+        s === null ? null : { scene: s, objects: s.objects.slice(), counts: this.counts, bounds: this.bounds };
       // while the editor shows its document the page keeps a copy of the packed arrays (its own index of the base,
       // grids built later): an edit is drawn on the page from the first one on (issue 20)
       const kept = packed !== null && this.worker !== null && this.editHooks !== null ? copyPacked(packed) : null;
       this.pageBase = kept === null || this.base === null ? null : { of: this.base.objects, prep: preparePacked(kept) };
       this.patchBox = null;
       if (this.worker !== null) {
-        this.worker.postMessage({ type: "scene", scene: packed, roadmap: this.roadmap }, packed === null ? [] : transfers(packed));
+        this.worker.postMessage(
+          { type: "scene", scene: packed, roadmap: this.roadmap },
+          packed === null ? [] : transfers(packed),
+        );
       }
     }
     this.invalidate();
@@ -325,7 +359,13 @@ export class MapView {
     }
     this.counts = patchCounts(b.counts, b.objects, s.objects, w);
     const added = pack({ ...s, objects: s.objects.slice(w.start, w.curEnd) });
-    const patch: ScenePatch = { bounds: this.bounds, hideFrom: w.start, hideTo: w.baseEnd, added, addedCount: w.curEnd - w.start };
+    const patch: ScenePatch = {
+      bounds: this.bounds,
+      hideFrom: w.start,
+      hideTo: w.baseEnd,
+      added,
+      addedCount: w.curEnd - w.start,
+    };
     const box = windowBox(b.objects, s.objects, w);
     this.patchLayer(patch, union(box, this.patchBox));
     this.patchBox = box;
@@ -358,7 +398,10 @@ export class MapView {
       drawStatic(ctx, part.cam, applyPatch(pb.prep, patch), this.roadmap, this.layers());
       patches.push({ image, x: part.x, y: part.y, width: part.cam.width, height: part.cam.height });
     }
-    this.layer = patches.length > PATCHES_MAX ? this.flatten(l, patches) : { image: l.image, cam: l.cam, version: this.version, patches };
+    this.layer =
+      patches.length > PATCHES_MAX
+        ? this.flatten(l, patches)
+        : { image: l.image, cam: l.cam, version: this.version, patches };
     this.countsStale = true; // what is in view per kind: the worker's layer of this version says
   }
 
@@ -384,7 +427,13 @@ export class MapView {
     if (this.worker !== null && !this.syncLayers && this.inFlight === null) {
       this.inFlight = { id: ++this.requestId, version: this.version };
       const dpr = window.devicePixelRatio || 1;
-      this.worker.postMessage({ type: "render", id: this.requestId, cam: this.layerCamera(), layers: this.layers(), dpr });
+      this.worker.postMessage({
+        type: "render",
+        id: this.requestId,
+        cam: this.layerCamera(),
+        layers: this.layers(),
+        dpr,
+      });
     }
   }
 
@@ -464,7 +513,8 @@ export class MapView {
     const [x, y, a] = ev.true;
     const faults = (ev.faults ?? []).map((f) => `${f.kind} ${f.target}${f.value == null ? "" : ` ${f.value}`}`);
     this.truthText.textContent = `${t("truth.pose", { x: Math.round(x), y: Math.round(y), angle: a.toFixed(1) })}; ${
-      faults.length === 0 ? t("truth.noFaults") : t("truth.faults", { list: faults.join(", ") })}`;
+      faults.length === 0 ? t("truth.noFaults") : t("truth.faults", { list: faults.join(", ") })
+    }`;
   }
 
   private say(text: string): void {
@@ -478,7 +528,9 @@ export class MapView {
     }
     if (tool === "flag" && this.flag === null) {
       const st = this.status;
-      this.flag = st ? { x: st.estX, y: st.estY, angle: st.estAngle / 1000 } : { x: this.cam.cx, y: this.cam.cy, angle: 0 };
+      this.flag = st
+        ? { x: st.estX, y: st.estY, angle: st.estAngle / 1000 }
+        : { x: this.cam.cx, y: this.cam.cy, angle: 0 };
     }
     this.canvas.dataset.tool = tool;
     this.invalidate();
@@ -605,7 +657,11 @@ export class MapView {
     if (this.tool === "shift") {
       this.ghost = null;
       // guide 5.3: "The platform can be shifted by drag and drop. The frame is rotated with a right-click."
-      this.send(new SetFrmPltfRequest({ x: pose.x, y: pose.y, angle: Math.round(pose.angle * 1000) }), "map.sentShift", pose);
+      this.send(
+        new SetFrmPltfRequest({ x: pose.x, y: pose.y, angle: Math.round(pose.angle * 1000) }),
+        "map.sentShift",
+        pose,
+      );
     } else if (this.tool === "flag") {
       this.flag = pose;
       this.sendFlag();
@@ -651,7 +707,13 @@ export class MapView {
 
   private layers(): Layers {
     const o = this.options;
-    return { grid: o.grid, map: o.mapLayers.map, roadmap: o.mapLayers.roadmap, labels: o.mapLayers.hiddenlabel, kinds: o.mapLayers };
+    return {
+      grid: o.grid,
+      map: o.mapLayers.map,
+      roadmap: o.mapLayers.roadmap,
+      labels: o.mapLayers.hiddenlabel,
+      kinds: o.mapLayers,
+    };
   }
 
   /** Does the layer show the current view at its own scale, margin included? */
@@ -660,8 +722,12 @@ export class MapView {
     if (l === null || l.version !== this.version || l.cam.scale !== c.scale) {
       return false;
     }
-    return Math.abs((c.cx - l.cam.cx) * c.scale) <= MARGIN && Math.abs((c.cy - l.cam.cy) * c.scale) <= MARGIN &&
-      l.cam.width >= c.width + 2 * MARGIN && l.cam.height >= c.height + 2 * MARGIN;
+    return (
+      Math.abs((c.cx - l.cam.cx) * c.scale) <= MARGIN &&
+      Math.abs((c.cy - l.cam.cy) * c.scale) <= MARGIN &&
+      l.cam.width >= c.width + 2 * MARGIN &&
+      l.cam.height >= c.height + 2 * MARGIN
+    );
   }
 
   private layerCamera(): Camera {
@@ -719,7 +785,8 @@ export class MapView {
   private countVisible(drawnAll: Record<string, number>): void {
     const whole = this.bounds;
     const v = viewBounds(this.cam);
-    const inView = whole != null && v.minX <= whole.minX && v.minY <= whole.minY && v.maxX >= whole.maxX && v.maxY >= whole.maxY;
+    const inView =
+      whole != null && v.minX <= whole.minX && v.minY <= whole.minY && v.maxX >= whole.maxX && v.maxY >= whole.maxY;
     this.drawn = drawnAll;
     this.canvas.dataset.complete = String(inView);
     for (const k of [...KINDS, "station", "edge", "pathpoint"]) {
@@ -735,7 +802,9 @@ export class MapView {
       return;
     }
     const counts = this.counts;
-    const parts = KINDS.filter((k) => counts[k] > 0).map((k) => `${t(`kind.${k}` as Key)}: ${this.drawn[k] ?? 0}/${counts[k]}`);
+    const parts = KINDS.filter((k) => counts[k] > 0).map(
+      (k) => `${t(`kind.${k}` as Key)}: ${this.drawn[k] ?? 0}/${counts[k]}`,
+    );
     if (this.roadmap) {
       parts.push(`${t("kind.station")}: ${this.drawn.station ?? 0}/${this.roadmap.stations.length}`);
       parts.push(`${t("kind.edge")}: ${this.drawn.edge ?? 0}/${this.roadmap.edges.length}`);
@@ -790,7 +859,26 @@ export class MapView {
     }
     if (this.ghost) {
       ctx.globalAlpha = 0.6;
-      drawStatus(ctx, c, Object.assign(new GetStatusReply(), { estX: this.ghost.x, estY: this.ghost.y, estAngle: this.ghost.angle * 1000 }), this.footprint, [], { ...overlay, showDesired: false, scan: false, ultrasonic: false, path: false, localization: false, planObstacles: false });
+      drawStatus(
+        ctx,
+        c,
+        Object.assign(new GetStatusReply(), {
+          estX: this.ghost.x,
+          estY: this.ghost.y,
+          estAngle: this.ghost.angle * 1000,
+        }),
+        this.footprint,
+        [],
+        {
+          ...overlay,
+          showDesired: false,
+          scan: false,
+          ultrasonic: false,
+          path: false,
+          localization: false,
+          planObstacles: false,
+        },
+      );
       ctx.globalAlpha = 1;
     }
     if (this.flag && this.tool === "flag") {
@@ -805,7 +893,13 @@ export class MapView {
       ctx.strokeRect(Math.min(a.x0, a.x1), Math.min(a.y0, a.y1), Math.abs(a.x1 - a.x0), Math.abs(a.y1 - a.y0));
       ctx.setLineDash([]);
     }
-    this.canvas.dataset.camera = JSON.stringify({ cx: c.cx, cy: c.cy, scale: c.scale, width: c.width, height: c.height });
+    this.canvas.dataset.camera = JSON.stringify({
+      cx: c.cx,
+      cy: c.cy,
+      scale: c.scale,
+      width: c.width,
+      height: c.height,
+    });
     this.frameTimes.push(performance.now() - t0);
     this.canvas.dataset.layer = this.covers(this.layer) ? "current" : "stale";
     if (this.frameTimes.length > 1000) {

@@ -125,7 +125,12 @@ export async function openSocketAt(session: PlatformSession, say: (s: string) =>
   bind(input, "socket.address", { text: false });
   const hint = h("p", { class: "hint" });
   bind(hint, "socket.onlyKnown", { name: false });
-  const body = h("div", { class: "form" }, h("label", { class: "field" }, sel, select), any ? h("label", { class: "field" }, cap, input) : hint);
+  const body = h(
+    "div",
+    { class: "form" },
+    h("label", { class: "field" }, sel, select),
+    any ? h("label", { class: "field" }, cap, input) : hint,
+  );
   const choice = await dialog("socket.openAt", body, ["socket.connect", "dialog.cancel"]);
   if (choice !== 0) {
     return;
@@ -136,7 +141,11 @@ export async function openSocketAt(session: PlatformSession, say: (s: string) =>
     return;
   }
   if (input.value.trim()) {
-    fetch("api/targets", { method: "POST", headers: { "Content-Type": "application/json" }, body: JSON.stringify({ target }) }).catch(() => undefined);
+    fetch("api/targets", {
+      method: "POST",
+      headers: { "Content-Type": "application/json" },
+      body: JSON.stringify({ target }),
+    }).catch(() => undefined);
   }
   localStorage.setItem("pltf.lastTarget", target);
   const url = new URL(window.location.href);

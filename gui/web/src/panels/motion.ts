@@ -28,7 +28,14 @@ import type { MapView } from "./mapview";
 
 export const RESEND_MS = 100;
 const KEYS: Record<string, [number, number]> = {
-  ArrowUp: [1, 0], w: [1, 0], ArrowDown: [-1, 0], s: [-1, 0], ArrowLeft: [0, 1], a: [0, 1], ArrowRight: [0, -1], d: [0, -1],
+  ArrowUp: [1, 0],
+  w: [1, 0],
+  ArrowDown: [-1, 0],
+  s: [-1, 0],
+  ArrowLeft: [0, 1],
+  a: [0, 1],
+  ArrowRight: [0, -1],
+  d: [0, -1],
 };
 
 function numberInput(value: number, attrs: Record<string, string> = {}): HTMLInputElement {
@@ -164,20 +171,53 @@ export function motionPanel(session: PlatformSession, map: MapView, say: (text: 
       /* the map view says why */
     }
   });
-  const ax = numberInput(0), ay = numberInput(0), aa = numberInput(0);
-  const rx = numberInput(1000), ry = numberInput(0), ra = numberInput(0);
+  const ax = numberInput(0),
+    ay = numberInput(0),
+    aa = numberInput(0);
+  const rx = numberInput(1000),
+    ry = numberInput(0),
+    ra = numberInput(0);
   const int = (i: HTMLInputElement, k = 1) => Math.round(Number(i.value) * k);
   const automatic = h(
     "div",
     { class: "mode-controls", "data-mode": "automatic" },
-    h("div", { class: "row" }, field("motion.station", station), btn("motion.moveToStation", () => send(new MoveToStationRequest({ station: station.value }), "motion.sent"))),
-    h("div", { class: "row" }, field("motion.x", ax), field("motion.y", ay), field("motion.angle", aa),
-      btn("motion.moveAbs", () => send(new MoveAbsRequest({ x: int(ax), y: int(ay), angle: int(aa, 1000) }), "motion.sent"))),
-    h("div", { class: "row" }, field("motion.dx", rx), field("motion.dy", ry), field("motion.dangle", ra),
-      btn("motion.moveRel", () => send(new MoveRelRequest({ x: int(rx), y: int(ry), angle: int(ra, 1000) }), "motion.sent"))),
-    h("div", { class: "row" }, btn("motion.goFlag", () => (map.setTool("flag"), map.sendFlag()))),
+    h(
+      "div",
+      { class: "row" },
+      field("motion.station", station),
+      btn("motion.moveToStation", () => send(new MoveToStationRequest({ station: station.value }), "motion.sent")),
+    ),
+    h(
+      "div",
+      { class: "row" },
+      field("motion.x", ax),
+      field("motion.y", ay),
+      field("motion.angle", aa),
+      btn("motion.moveAbs", () =>
+        send(new MoveAbsRequest({ x: int(ax), y: int(ay), angle: int(aa, 1000) }), "motion.sent"),
+      ),
+    ),
+    h(
+      "div",
+      { class: "row" },
+      field("motion.dx", rx),
+      field("motion.dy", ry),
+      field("motion.dangle", ra),
+      btn("motion.moveRel", () =>
+        send(new MoveRelRequest({ x: int(rx), y: int(ry), angle: int(ra, 1000) }), "motion.sent"),
+      ),
+    ),
+    h(
+      "div",
+      { class: "row" },
+      btn("motion.goFlag", () => (map.setTool("flag"), map.sendFlag())),
+    ),
   );
-  for (const [box, key] of [[ax, "motion.x"], [ay, "motion.y"], [aa, "motion.angle"]] as const) {
+  for (const [box, key] of [
+    [ax, "motion.x"],
+    [ay, "motion.y"],
+    [aa, "motion.angle"],
+  ] as const) {
     bind(box, key, { text: false });
   }
 
@@ -190,8 +230,11 @@ export function motionPanel(session: PlatformSession, map: MapView, say: (text: 
     [Event.EV_BREAK_POST_PROCESS_REPLAY, "ev.5"],
     [Event.EV_CONTINUE_POST_PROCESS_REPLAY, "ev.6"],
   ];
-  const replay = h("div", { class: "mode-controls", "data-mode": "replay" },
-    ...events.map(([ev, key]) => btn(key, () => send(new SetEventRequest({ event: ev }), "motion.sent"))));
+  const replay = h(
+    "div",
+    { class: "mode-controls", "data-mode": "replay" },
+    ...events.map(([ev, key]) => btn(key, () => send(new SetEventRequest({ event: ev }), "motion.sent"))),
+  );
   const note = h("p", { class: "mode-controls hint", "data-mode": "note" });
   root.append(commands(session, velocity, automatic, replay), note);
 

@@ -28,7 +28,12 @@ import {
 import type { PlatformSession } from "../session/session";
 import { commands } from "./control";
 
-const { ST_OP_READY: READY, ST_OP_RUNNING: RUNNING, ST_OP_BREAKED: BREAKED, ST_OP_NOT_INITIALIZED: NOT_INIT } = OperationState;
+const {
+  ST_OP_READY: READY,
+  ST_OP_RUNNING: RUNNING,
+  ST_OP_BREAKED: BREAKED,
+  ST_OP_NOT_INITIALIZED: NOT_INIT,
+} = OperationState;
 
 interface Command {
   key: Key;
@@ -40,22 +45,48 @@ interface Command {
 }
 
 export const COMMANDS: Command[] = [
-  { key: "op.init", shortcut: "Alt+I", send: () => [new ConnectToPltfRequest(), new InitPltfRequest()], from: [NOT_INIT], blockedByEmergency: false },
+  {
+    key: "op.init",
+    shortcut: "Alt+I",
+    send: () => [new ConnectToPltfRequest(), new InitPltfRequest()],
+    from: [NOT_INIT],
+    blockedByEmergency: false,
+  },
   // guide 6.3 CMD_START / 4.2: "In the state 'Initialized' the platform can be started"
   { key: "op.start", shortcut: "Alt+S", send: () => [new StartRequest()], from: [READY], blockedByEmergency: true },
   { key: "op.break", shortcut: "Alt+B", send: () => [new BreakRequest()], from: [RUNNING], blockedByEmergency: false },
-  { key: "op.continue", shortcut: "Alt+C", send: () => [new ContinueRequest()], from: [BREAKED], blockedByEmergency: true },
+  {
+    key: "op.continue",
+    shortcut: "Alt+C",
+    send: () => [new ContinueRequest()],
+    from: [BREAKED],
+    blockedByEmergency: true,
+  },
   // guide 6.3 CMD_STOP: "The operation state changes into the state 'Ready'"
-  { key: "op.stop", shortcut: "Alt+X", send: () => [new StopRequest()], from: [RUNNING, BREAKED], blockedByEmergency: false },
+  {
+    key: "op.stop",
+    shortcut: "Alt+X",
+    send: () => [new StopRequest()],
+    from: [RUNNING, BREAKED],
+    blockedByEmergency: false,
+  },
   // guide 6.3 CMD_SHUTDOWN_PLTF: "Used to shutdown the CAN communication"
-  { key: "op.shutdownCan", shortcut: "", send: () => [new ShutdownPltfRequest()], from: [NOT_INIT, READY, RUNNING, BREAKED], blockedByEmergency: false },
+  {
+    key: "op.shutdownCan",
+    shortcut: "",
+    send: () => [new ShutdownPltfRequest()],
+    from: [NOT_INIT, READY, RUNNING, BREAKED],
+    blockedByEmergency: false,
+  },
 ];
 
 export function allowed(c: Command, s: GetStatusReply | null): boolean {
   if (s === null) {
     return false;
   }
-  return c.from.includes(s.operationState) && !(c.blockedByEmergency && s.emergencyState === EmergencyState.ST_EM_ACTIVE);
+  return (
+    c.from.includes(s.operationState) && !(c.blockedByEmergency && s.emergencyState === EmergencyState.ST_EM_ACTIVE)
+  );
 }
 
 export const MODES: Array<[MotionMode, Key]> = [

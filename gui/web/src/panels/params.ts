@@ -23,10 +23,19 @@ import { commands } from "./control";
 const TYPES = ["BOOLEAN", "INTEGER", "DOUBLE"] as const;
 
 function definition(e: ParamEntry): ParamDef {
-  return PARAM_BY_NAME.get(e.key) ?? {
-    name: e.key, category: ParamCategory[e.category], type: TYPES[e.dataType], default: 0, unit: null,
-    min: e.minimum, max: e.maximum, description: "", writable: true,
-  };
+  return (
+    PARAM_BY_NAME.get(e.key) ?? {
+      name: e.key,
+      category: ParamCategory[e.category],
+      type: TYPES[e.dataType],
+      default: 0,
+      unit: null,
+      min: e.minimum,
+      max: e.maximum,
+      description: "",
+      writable: true,
+    }
+  );
 }
 
 export function parametersWindow(session: PlatformSession): { root: HTMLElement; onShow: (on: boolean) => void } {
@@ -36,7 +45,12 @@ export function parametersWindow(session: PlatformSession): { root: HTMLElement;
   const list = h("div", { role: "tablist", class: "dock-tabs" });
   bind(list, "menu.platformParameters", { text: false });
   const body = h("tbody");
-  const grid = h("table", { role: "grid" }, h("thead", {}, h("tr", {}, h("th", {}, "parameter"), h("th", {}, "value"), h("th", {}, "range"))), body);
+  const grid = h(
+    "table",
+    { role: "grid" },
+    h("thead", {}, h("tr", {}, h("th", {}, "parameter"), h("th", {}, "value"), h("th", {}, "range"))),
+    body,
+  );
   bind(grid, "param.table", { text: false });
   const value = h("input", { type: "text", disabled: true });
   const valueCaption = h("span");
@@ -59,15 +73,17 @@ export function parametersWindow(session: PlatformSession): { root: HTMLElement;
   };
   refresh.addEventListener("click", load);
   const renderTabs = () => {
-    list.replaceChildren(...PARAM_TABS.map(([cat, label]) => {
-      const b = h("button", { type: "button", role: "tab", "aria-selected": String(cat === tab) }, label);
-      b.addEventListener("click", () => {
-        tab = cat;
-        renderTabs();
-        render();
-      });
-      return b;
-    }));
+    list.replaceChildren(
+      ...PARAM_TABS.map(([cat, label]) => {
+        const b = h("button", { type: "button", role: "tab", "aria-selected": String(cat === tab) }, label);
+        b.addEventListener("click", () => {
+          tab = cat;
+          renderTabs();
+          render();
+        });
+        return b;
+      }),
+    );
   };
   const select = (key: string) => {
     selected = key;
@@ -85,15 +101,23 @@ export function parametersWindow(session: PlatformSession): { root: HTMLElement;
   };
   const render = () => {
     const shown = entries.filter((e) => ParamCategory[e.category] === tab);
-    body.replaceChildren(...shown.map((e) => {
-      const def = definition(e);
-      const range = def.type === "BOOLEAN" ? "true / false" : `${def.min} .. ${def.max}${def.unit ? ` ${def.unit}` : ""}`;
-      const row = h("tr", { tabindex: "0", "data-key": e.key, "aria-selected": String(e.key === selected) },
-        h("td", {}, e.key), h("td", { class: "value" }, e.value), h("td", {}, range));
-      row.addEventListener("click", () => select(e.key));
-      row.addEventListener("keydown", (ev) => ev.key === "Enter" && select(e.key));
-      return row;
-    }));
+    body.replaceChildren(
+      ...shown.map((e) => {
+        const def = definition(e);
+        const range =
+          def.type === "BOOLEAN" ? "true / false" : `${def.min} .. ${def.max}${def.unit ? ` ${def.unit}` : ""}`;
+        const row = h(
+          "tr",
+          { tabindex: "0", "data-key": e.key, "aria-selected": String(e.key === selected) },
+          h("td", {}, e.key),
+          h("td", { class: "value" }, e.value),
+          h("td", {}, range),
+        );
+        row.addEventListener("click", () => select(e.key));
+        row.addEventListener("keydown", (ev) => ev.key === "Enter" && select(e.key));
+        return row;
+      }),
+    );
   };
   const set = () => {
     const key = selected;
@@ -113,13 +137,16 @@ export function parametersWindow(session: PlatformSession): { root: HTMLElement;
       answer.textContent = (err as Error).message;
       return;
     }
-    session.request<GetPltfParamReply>(new GetPltfParamRequest({ key })).then((r) => {
-      e.value = r.value;
-      render();
-      const ok = r.value === checked.text || Number(r.value) === Number(checked.text);
-      answer.textContent = t(ok ? "param.accepted" : "param.notTaken", { key, sent: checked.text, value: r.value });
-      answer.dataset.outcome = ok ? "accepted" : "not-taken";
-    }, (err: Error) => (answer.textContent = err.message));
+    session.request<GetPltfParamReply>(new GetPltfParamRequest({ key })).then(
+      (r) => {
+        e.value = r.value;
+        render();
+        const ok = r.value === checked.text || Number(r.value) === Number(checked.text);
+        answer.textContent = t(ok ? "param.accepted" : "param.notTaken", { key, sent: checked.text, value: r.value });
+        answer.dataset.outcome = ok ? "accepted" : "not-taken";
+      },
+      (err: Error) => (answer.textContent = err.message),
+    );
   };
   setBtn.addEventListener("click", set);
   value.addEventListener("keydown", (e) => e.key === "Enter" && set());
@@ -135,8 +162,16 @@ export function parametersWindow(session: PlatformSession): { root: HTMLElement;
       value.setAttribute("aria-label", t("param.value"));
     }
   });
-  const root = h("div", { class: "params" }, list, h("div", { class: "row" }, refresh), grid, description,
-    h("div", { class: "row" }, commands(session, h("label", { class: "field" }, valueCaption, value), setBtn)), answer);
+  const root = h(
+    "div",
+    { class: "params" },
+    list,
+    h("div", { class: "row" }, refresh),
+    grid,
+    description,
+    h("div", { class: "row" }, commands(session, h("label", { class: "field" }, valueCaption, value), setBtn)),
+    answer,
+  );
   return { root, onShow: (on) => on && session.connected && load() };
 }
 

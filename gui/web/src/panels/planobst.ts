@@ -20,7 +20,11 @@ export function paramTrue(value: string): boolean {
   return v === "true" || v === "1";
 }
 
-export function planObstacleSwitch(session: PlatformSession, options: ViewOptions, say: (s: string) => void): HTMLElement {
+export function planObstacleSwitch(
+  session: PlatformSession,
+  options: ViewOptions,
+  say: (s: string) => void,
+): HTMLElement {
   const input = h("input", { type: "checkbox" });
   const caption = h("span");
   bind(caption, "opt.planObstacles", { name: false });

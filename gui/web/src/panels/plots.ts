@@ -20,7 +20,11 @@ class Plot {
   readonly root: HTMLElement;
   readonly canvas = h("canvas", { class: "plot", role: "img" });
   readonly latest = h("output");
-  constructor(readonly key: Key, readonly unit: string, readonly series: Series[]) {
+  constructor(
+    readonly key: Key,
+    readonly unit: string,
+    readonly series: Series[],
+  ) {
     const title = h("h3");
     bind(title, key, { name: false });
     bind(this.canvas, key, { text: false });
@@ -46,7 +50,8 @@ class Plot {
     if (all.length === 0) {
       return;
     }
-    let lo = Math.min(...all), hi = Math.max(...all);
+    let lo = Math.min(...all),
+      hi = Math.max(...all);
     if (hi - lo < 1e-9) {
       lo -= 1;
       hi += 1;
@@ -69,7 +74,9 @@ class Plot {
       });
       ctx.stroke();
     }
-    this.latest.textContent = this.series.map((s) => `${s.label} ${s.points.at(-1)?.[1].toFixed(1) ?? "-"} ${this.unit}`).join(", ");
+    this.latest.textContent = this.series
+      .map((s) => `${s.label} ${s.points.at(-1)?.[1].toFixed(1) ?? "-"} ${this.unit}`)
+      .join(", ");
   }
 }
 

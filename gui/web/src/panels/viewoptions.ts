@@ -24,7 +24,15 @@ export class ViewOptions {
   readonly changed = new Topic<void>();
 }
 
-type Flag = "centerPlatform" | "showDesired" | "showEstimated" | "truth" | "grid" | "localization" | "ultrasonic" | "planning";
+type Flag =
+  | "centerPlatform"
+  | "showDesired"
+  | "showEstimated"
+  | "truth"
+  | "grid"
+  | "localization"
+  | "ultrasonic"
+  | "planning";
 
 export function viewOptionsPanel(o: ViewOptions, ...planning: HTMLElement[]): HTMLElement {
   const check = (key: Key, get: () => boolean, set: (v: boolean) => void) => {
@@ -39,14 +47,22 @@ export function viewOptionsPanel(o: ViewOptions, ...planning: HTMLElement[]): HT
     bind(input, key, { text: false });
     return h("label", { class: "check" }, input, caption);
   };
-  const flag = (key: Key, name: Flag) => check(key, () => o[name], (v) => (o[name] = v));
+  const flag = (key: Key, name: Flag) =>
+    check(
+      key,
+      () => o[name],
+      (v) => (o[name] = v),
+    );
   const group = (key: Key, ...items: HTMLElement[]) => {
     const legend = h("legend");
     bind(legend, key, { name: false });
     const fs = h("fieldset", {}, legend, ...items);
     return fs;
   };
-  const langs: Array<[Lang, Key]> = [["en", "opt.english"], ["de", "opt.german"]];
+  const langs: Array<[Lang, Key]> = [
+    ["en", "opt.english"],
+    ["de", "opt.german"],
+  ];
   const langGroup = group(
     "opt.language",
     ...langs.map(([lang, key]) => {
@@ -64,13 +80,25 @@ export function viewOptionsPanel(o: ViewOptions, ...planning: HTMLElement[]): HT
   const root = h(
     "div",
     { class: "view-options" },
-    group("opt.platform", flag("opt.centerPlatform", "centerPlatform"), flag("opt.showDesired", "showDesired"), flag("opt.showEstimated", "showEstimated"), flag("opt.truth", "truth")),
+    group(
+      "opt.platform",
+      flag("opt.centerPlatform", "centerPlatform"),
+      flag("opt.showDesired", "showDesired"),
+      flag("opt.showEstimated", "showEstimated"),
+      flag("opt.truth", "truth"),
+    ),
     group("opt.grid", flag("opt.showGrid", "grid")),
     group("opt.localization", flag("opt.scan", "localization"), flag("opt.ultrasonic", "ultrasonic")),
     group("opt.planning", flag("opt.path", "planning"), ...planning),
     group(
       "opt.map",
-      ...["map", "roadmap", ...KINDS].map((k) => check(`kind.${k}` as Key, () => o.mapLayers[k], (v) => (o.mapLayers[k] = v))),
+      ...["map", "roadmap", ...KINDS].map((k) =>
+        check(
+          `kind.${k}` as Key,
+          () => o.mapLayers[k],
+          (v) => (o.mapLayers[k] = v),
+        ),
+      ),
     ),
     langGroup,
   );

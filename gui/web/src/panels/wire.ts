@@ -20,11 +20,16 @@ function value(v: unknown): string {
     return Array.from(v.slice(0, 16), (b) => b.toString(16).padStart(2, "0")).join("") + (v.length > 16 ? "..." : "");
   }
   if (Array.isArray(v)) {
-    const head = v.slice(0, typeof v[0] === "object" ? 1 : 8).map(value).join(",");
+    const head = v
+      .slice(0, typeof v[0] === "object" ? 1 : 8)
+      .map(value)
+      .join(",");
     return `[${v.length}${v.length > 0 ? `: ${head}${v.length > (typeof v[0] === "object" ? 1 : 8) ? ",..." : ""}` : ""}]`;
   }
   if (typeof v === "object" && v !== null) {
-    return `{${Object.entries(v).map(([k, x]) => `${k}=${value(x)}`).join(" ")}}`;
+    return `{${Object.entries(v)
+      .map(([k, x]) => `${k}=${value(x)}`)
+      .join(" ")}}`;
   }
   return String(v);
 }
@@ -65,7 +70,10 @@ export function wirePanel(session: PlatformSession): { root: HTMLElement; onShow
       text = `${text.slice(0, MAX_TEXT)}... (${r.bytes} bytes)`;
     }
     const name = r.telegram.telegramName;
-    return { name, text: `${new Date(r.t).toISOString().slice(11, 23)} ${r.dir === "out" ? "->" : "<-"} ${name} ${text}` };
+    return {
+      name,
+      text: `${new Date(r.t).toISOString().slice(11, 23)} ${r.dir === "out" ? "->" : "<-"} ${name} ${text}`,
+    };
   };
   session.wire.subscribe((r) => {
     records.push(line(r));
@@ -87,7 +95,17 @@ export function wirePanel(session: PlatformSession): { root: HTMLElement; onShow
   hide.addEventListener("change", () => ((dirty = true), render()));
   window.setInterval(render, 300);
   return {
-    root: h("div", {}, h("div", { class: "row" }, h("label", { class: "check" }, hide, hideCap), h("label", { class: "check" }, pause, pauseCap)), pre),
+    root: h(
+      "div",
+      {},
+      h(
+        "div",
+        { class: "row" },
+        h("label", { class: "check" }, hide, hideCap),
+        h("label", { class: "check" }, pause, pauseCap),
+      ),
+      pre,
+    ),
     onShow: (on) => {
       shown = on;
       dirty = true;

@@ -36,7 +36,8 @@ function key(event: string, ev: ConnEvent): Key | null {
     not_sent: "conn.ev.notSent",
     target_refused: "conn.ev.targetRefused",
     refused_command: ev.reason === "read_only" ? "conn.ev.refusedReadOnly" : "conn.ev.refusedViewer",
-    closed: ev.by === "viewer" ? "conn.ev.closedByViewer" : ev.by === "gateway" ? "conn.ev.gatewayStopped" : "conn.ev.closed",
+    closed:
+      ev.by === "viewer" ? "conn.ev.closedByViewer" : ev.by === "gateway" ? "conn.ev.gatewayStopped" : "conn.ev.closed",
   };
   return variants[event] ?? null;
 }

@@ -140,7 +140,15 @@ export class PlatformSession {
   /** Events about single requests (not sent, refused by the gateway): shown, but not the connection's state. */
   readonly notices = new Topic<ConnEvent>();
   /** This tab's own traffic (TCP Client tab). */
-  readonly traffic = { bytesOut: 0, bytesIn: 0, telegramsOut: 0, telegramsIn: 0, errors: 0, reconnects: 0, rtt: [] as number[] };
+  readonly traffic = {
+    bytesOut: 0,
+    bytesIn: 0,
+    telegramsOut: 0,
+    telegramsIn: 0,
+    errors: 0,
+    reconnects: 0,
+    rtt: [] as number[],
+  };
 
   connected = false;
   private ws: WebSocket | null = null;
@@ -282,7 +290,12 @@ export class PlatformSession {
     if (ev.event === "target_refused") {
       this.refusedTarget = true;
     }
-    if (ev.event === "lost" || ev.event === "not_sent" || ev.event === "bad_request" || ev.event === "refused_command") {
+    if (
+      ev.event === "lost" ||
+      ev.event === "not_sent" ||
+      ev.event === "bad_request" ||
+      ev.event === "refused_command"
+    ) {
       const id = ev.id as number | undefined;
       if (id !== undefined && this.waiting.length > 0 && this.waiting[0].id === id) {
         this.waiting.shift()!.reject(new Error(ev.message));
@@ -296,7 +309,19 @@ export class PlatformSession {
     }
     if (ev.event === "connected") {
       this.setConnected(true);
-    } else if (["closed", "connecting", "retry", "refused", "unreachable", "turned_away", "dropped", "timeout", "malformed"].includes(ev.event)) {
+    } else if (
+      [
+        "closed",
+        "connecting",
+        "retry",
+        "refused",
+        "unreachable",
+        "turned_away",
+        "dropped",
+        "timeout",
+        "malformed",
+      ].includes(ev.event)
+    ) {
       if (ev.event !== "closed" && ev.event !== "connecting" && ev.event !== "retry") {
         this.traffic.errors++;
       }
@@ -398,7 +423,9 @@ export class PlatformSession {
       throw new Error(`${t.telegramName} not sent: the socket is not open`);
     }
     if (!this.mayCommand && !ANSWERED.has(t.telegramId)) {
-      throw new Error(`${t.telegramName} ${this.drive?.read_only ? tr("control.refusedReadOnly") : tr("control.refusedViewer", { holder: this.drive?.holder ?? "" })}`);
+      throw new Error(
+        `${t.telegramName} ${this.drive?.read_only ? tr("control.refusedReadOnly") : tr("control.refusedViewer", { holder: this.drive?.holder ?? "" })}`,
+      );
     }
     this.ws.send(bytes);
     this.traffic.bytesOut += bytes.length;

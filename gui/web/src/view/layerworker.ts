@@ -10,7 +10,16 @@
  */
 import type { Roadmap } from "../scene/roadmap";
 import type { Camera } from "./camera";
-import { applyPatch, buildGrids, drawStatic, type Layers, type PackedScene, preparePacked, type Prepared, type ScenePatch } from "./maprender";
+import {
+  applyPatch,
+  buildGrids,
+  drawStatic,
+  type Layers,
+  type PackedScene,
+  preparePacked,
+  type Prepared,
+  type ScenePatch,
+} from "./maprender";
 
 interface Scope {
   onmessage: ((e: MessageEvent) => void) | null;

@@ -190,7 +190,14 @@ export function preparePacked(p: PackedScene): Prepared {
       most = Math.max(most, segs.length / 4);
     }
   });
-  return { bounds: p.bounds, lines, others: p.others, othersAt: p.othersAt, scratch: new Uint32Array(most), patch: null };
+  return {
+    bounds: p.bounds,
+    lines,
+    others: p.others,
+    othersAt: p.othersAt,
+    scratch: new Uint32Array(most),
+    patch: null,
+  };
 }
 
 /**
@@ -278,8 +285,19 @@ export function visibleSegs(segs: Float64Array, view: Bounds, whole: boolean): S
   const idx = new Uint32Array(segs.length / 4);
   let m = 0;
   for (let s = 0; s < idx.length; s++) {
-    const x1 = segs[4 * s], y1 = segs[4 * s + 1], x2 = segs[4 * s + 2], y2 = segs[4 * s + 3];
-    if (whole || !(Math.max(x1, x2) < view.minX || Math.min(x1, x2) > view.maxX || Math.max(y1, y2) < view.minY || Math.min(y1, y2) > view.maxY)) {
+    const x1 = segs[4 * s],
+      y1 = segs[4 * s + 1],
+      x2 = segs[4 * s + 2],
+      y2 = segs[4 * s + 3];
+    if (
+      whole ||
+      !(
+        Math.max(x1, x2) < view.minX ||
+        Math.min(x1, x2) > view.maxX ||
+        Math.max(y1, y2) < view.minY ||
+        Math.min(y1, y2) > view.maxY
+      )
+    ) {
       idx[m++] = s;
     }
   }
@@ -432,7 +450,9 @@ export function drawStatic(
       }
       if (o.kind === "circle") {
         const r = o.r ?? 0;
-        if (!meets(view, { minX: o.points[0] - r, minY: o.points[1] - r, maxX: o.points[0] + r, maxY: o.points[1] + r })) {
+        if (
+          !meets(view, { minX: o.points[0] - r, minY: o.points[1] - r, maxX: o.points[0] + r, maxY: o.points[1] + r })
+        ) {
           continue;
         }
         const s = STYLES.circle;

@@ -45,7 +45,14 @@ export function poseToWorld(p: Pose, lx: number, ly: number): [number, number] {
   return [p.x + lx * Math.cos(a) - ly * Math.sin(a), p.y + lx * Math.sin(a) + ly * Math.cos(a)];
 }
 
-export function drawPlatform(ctx: CanvasRenderingContext2D, cam: Camera, p: Pose, fp: Footprint, color: string, dashed: boolean): void {
+export function drawPlatform(
+  ctx: CanvasRenderingContext2D,
+  cam: Camera,
+  p: Pose,
+  fp: Footprint,
+  color: string,
+  dashed: boolean,
+): void {
   const corners: Array<[number, number]> = [
     [fp.rear, -fp.halfWidth],
     [fp.front, -fp.halfWidth],
@@ -185,7 +192,15 @@ export function drawStatus(
     ctx.strokeStyle = "rgba(255,143,0,0.9)";
     ctx.lineWidth = 1;
     ctx.beginPath();
-    ctx.ellipse(cx, cy, Math.max(2, s.covMajor * cam.scale), Math.max(2, s.covMinor * cam.scale), (-s.covAxisAngle / 1000) * (Math.PI / 180), 0, 2 * Math.PI);
+    ctx.ellipse(
+      cx,
+      cy,
+      Math.max(2, s.covMajor * cam.scale),
+      Math.max(2, s.covMinor * cam.scale),
+      (-s.covAxisAngle / 1000) * (Math.PI / 180),
+      0,
+      2 * Math.PI,
+    );
     ctx.stroke();
   }
   if (o.showDesired) {

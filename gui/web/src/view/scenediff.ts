@@ -66,7 +66,12 @@ function grow(b: Box | null, o: Shape): Box | null {
     const x = o.points[i];
     const y = o.points[i + 1];
     b ??= { minX: x - r, minY: y - r, maxX: x + r, maxY: y + r };
-    b = { minX: Math.min(b.minX, x - r), minY: Math.min(b.minY, y - r), maxX: Math.max(b.maxX, x + r), maxY: Math.max(b.maxY, y + r) };
+    b = {
+      minX: Math.min(b.minX, x - r),
+      minY: Math.min(b.minY, y - r),
+      maxX: Math.max(b.maxX, x + r),
+      maxY: Math.max(b.maxY, y + r),
+    };
   }
   return b;
 }
@@ -87,7 +92,12 @@ export function union(a: Box | null, b: Box | null): Box | null {
   if (a === null || b === null) {
     return a ?? b;
   }
-  return { minX: Math.min(a.minX, b.minX), minY: Math.min(a.minY, b.minY), maxX: Math.max(a.maxX, b.maxX), maxY: Math.max(a.maxY, b.maxY) };
+  return {
+    minX: Math.min(a.minX, b.minX),
+    minY: Math.min(a.minY, b.minY),
+    maxX: Math.max(a.maxX, b.maxX),
+    maxY: Math.max(a.maxY, b.maxY),
+  };
 }
 
 interface Cam {
@@ -171,7 +181,12 @@ export class HeadTailBoxes {
 
   /** The box of the objects before `start` and from `end` on; null when they have no point. */
   outside(start: number, end: number): Box | null {
-    const part = (a: Float64Array, k: number): Box => ({ minX: a[4 * k], minY: a[4 * k + 1], maxX: a[4 * k + 2], maxY: a[4 * k + 3] });
+    const part = (a: Float64Array, k: number): Box => ({
+      minX: a[4 * k],
+      minY: a[4 * k + 1],
+      maxX: a[4 * k + 2],
+      maxY: a[4 * k + 3],
+    });
     return union(this.headAny[start] ? part(this.head, start) : null, this.tailAny[end] ? part(this.tail, end) : null);
   }
 }

@@ -53,9 +53,14 @@ export class SegmentGrid {
 
   private forCells(segs: Float64Array, fn: (cell: number, seg: number) => void): void {
     for (let s = 0; s < this.n; s++) {
-      const x1 = segs[4 * s], y1 = segs[4 * s + 1], x2 = segs[4 * s + 2], y2 = segs[4 * s + 3];
-      const c0 = this.clampCol(Math.min(x1, x2)), c1 = this.clampCol(Math.max(x1, x2));
-      const r0 = this.clampRow(Math.min(y1, y2)), r1 = this.clampRow(Math.max(y1, y2));
+      const x1 = segs[4 * s],
+        y1 = segs[4 * s + 1],
+        x2 = segs[4 * s + 2],
+        y2 = segs[4 * s + 3];
+      const c0 = this.clampCol(Math.min(x1, x2)),
+        c1 = this.clampCol(Math.max(x1, x2));
+      const r0 = this.clampRow(Math.min(y1, y2)),
+        r1 = this.clampRow(Math.max(y1, y2));
       for (let r = r0; r <= r1; r++) {
         for (let c = c0; c <= c1; c++) {
           fn(r * this.cols + c, s);
@@ -71,8 +76,10 @@ export class SegmentGrid {
       this.stamps.fill(0);
       this.stamp = 1;
     }
-    const c0 = this.clampCol(b.minX), c1 = this.clampCol(b.maxX);
-    const r0 = this.clampRow(b.minY), r1 = this.clampRow(b.maxY);
+    const c0 = this.clampCol(b.minX),
+      c1 = this.clampCol(b.maxX);
+    const r0 = this.clampRow(b.minY),
+      r1 = this.clampRow(b.maxY);
     let k = 0;
     const segs = this.segs;
     for (let r = r0; r <= r1; r++) {
@@ -84,8 +91,16 @@ export class SegmentGrid {
             continue;
           }
           this.stamps[s] = this.stamp;
-          const x1 = segs[4 * s], y1 = segs[4 * s + 1], x2 = segs[4 * s + 2], y2 = segs[4 * s + 3];
-          if (Math.max(x1, x2) < b.minX || Math.min(x1, x2) > b.maxX || Math.max(y1, y2) < b.minY || Math.min(y1, y2) > b.maxY) {
+          const x1 = segs[4 * s],
+            y1 = segs[4 * s + 1],
+            x2 = segs[4 * s + 2],
+            y2 = segs[4 * s + 3];
+          if (
+            Math.max(x1, x2) < b.minX ||
+            Math.min(x1, x2) > b.maxX ||
+            Math.max(y1, y2) < b.minY ||
+            Math.min(y1, y2) > b.maxY
+          ) {
             continue;
           }
           out[k++] = s;
