@@ -422,6 +422,7 @@ def test_backlog_one_drops_the_syns_beyond_its_backlog(upstream: launch.Launched
             s.close()
 
 
+@pytest.mark.slow  # waits by design (an idle period, a restart and its 2 s down): the default tier's budget
 def test_idle_drop_closes_a_silent_client_only(upstream: launch.Launched) -> None:
     with member(upstream, "idle-drop", "--idle-seconds", "1.5") as z, connect(z) as quiet, connect(z, 1) as busy:
         t0 = time.monotonic()
@@ -457,6 +458,7 @@ def test_silent_until_connect_answers_nothing_before_connect_to_pltf(upstream: l
         assert "CMD_GET_POSITION" in [t.NAME for t in replies(s, 1)]
 
 
+@pytest.mark.slow  # waits by design (an idle period, a restart and its 2 s down): the default tier's budget
 def test_restarts_drop_every_connection_and_the_ports_are_gone_for_a_while(upstream: launch.Launched) -> None:
     with member(upstream, "restarts", "--restart-every", "2") as z, connect(z) as s:
         s.sendall(POSITION)
