@@ -26,7 +26,7 @@ from typing import Any
 
 from pltf.fuzz.engine import HarnessError
 from pltf.fuzz.options import Options
-from pltf.fuzz.parallel import CUT_GRACE, END_MINIMIZE, STOP_GRACE, TICK, state_targets, worker_options
+from pltf.fuzz.parallel import CUT_GRACE, END_MINIMIZE, TICK, campaign_end, state_targets, worker_options
 from pltf.fuzz.parallel_store import Store
 from pltf.fuzz.parallel_view import CampaignView
 from pltf.fuzz.parallel_worker import run_worker, worker_seed
@@ -149,7 +149,7 @@ class RayCampaign:
 
     def _loop(self) -> None:
         ray, view, o = self.ray, self.view, self.o
-        stop_at = view.started + o.duration + STOP_GRACE
+        stop_at = campaign_end(view.started, o)
         give_up = stop_at + END_MINIMIZE * o.minimize_seconds + 60.0
         stopping, last_tick = False, 0.0
         while self.polls:
