@@ -201,7 +201,7 @@ class Target:
                 last = str(exc)
                 s.close()
             except TargetFailure as exc:
-                last = str(exc)
+                last = str(exc).removeprefix(f"port {label} ({cfg.host}:{self.port_of(label)}): ")
                 s.close()
             if time.monotonic() + delay > deadline:
                 raise Unreachable(

@@ -331,7 +331,10 @@ class Session:
         expect = REQUESTS[name].ID
         ahead = {REQUESTS[n].ID for n in later} - {expect}
         while True:
-            data, headerless = self.read_frame(timeout, expect)
+            try:
+                data, headerless = self.read_frame(timeout, expect)
+            except (ConnectionClosed, ReplyTimeout) as exc:
+                raise type(exc)(self._awaited(name, exc)) from None
             if data[0] in ahead:
                 raise BadReply(
                     f"port {self.label}: the reply to {REQUESTS.by_id[data[0]].NAME} came before the reply to "
@@ -348,6 +351,14 @@ class Session:
                 self.observer.on_deviation(dev)
             self.observer.on_received(telegram)
             return telegram
+
+    def _awaited(self, name: str, exc: Exception) -> str:
+        """What a failed read of the reply to ``name`` saw, naming the port and what was sent (issue 32):
+        "port A (127.0.0.1:10000): sent CMD_GET_POSITION, the target closed the connection without a reply"."""
+        seen = str(exc).removeprefix(f"port {self.label}: ")
+        if isinstance(exc, ConnectionClosed) and "inside" not in seen:
+            seen += " without a reply"
+        return f"port {self.label} ({self.host}:{self.port}): sent {name}, {seen}"
 
     def exchange(self, items: Sequence[Telegram | Pause], timeout: float | None = None) -> list[Telegram]:
         """Pipelining (erratum E-WIRE-008): send ``items`` back to back (one write between two pauses), then read

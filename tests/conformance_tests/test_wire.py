@@ -82,6 +82,18 @@ def test_no_reply_is_a_timeout_and_a_torn_reply_a_closed_connection() -> None:
         assert s.log.entries[-1].note == "incomplete reply frame"
 
 
+def test_a_failed_read_names_the_port_and_what_was_sent() -> None:
+    """Issue 32: "connected, sent GET_POSITION, the target closed without a reply" - and which port it was."""
+    with serve(b"", close=True) as srv, session(srv) as s:
+        where = f"port A (127.0.0.1:{srv.ports[0]}): sent CMD_GET_POSITION, "
+        with pytest.raises(ConnectionClosed) as closed:
+            s.request(build("request", "CMD_GET_POSITION"))
+    assert str(closed.value) == where + "the target closed the connection without a reply"
+    with serve(b"") as srv, session(srv) as s, pytest.raises(ReplyTimeout) as late:
+        s.request(build("request", "CMD_GET_STATUS"))
+    assert str(late.value).startswith(f"port A (127.0.0.1:{srv.ports[0]}): sent CMD_GET_STATUS, no complete reply")
+
+
 def test_wait_closed_and_silence() -> None:
     with serve(b"xyz", close=True) as srv, session(srv) as s:
         s.send_raw(b"\x00")
