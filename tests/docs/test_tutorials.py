@@ -14,6 +14,9 @@ import pytest
 
 from tests.docs.blocks import REPO, Block, PageRun, parse
 
+CHROMIUM = Path("/usr/bin/chromium")
+PATIENCE_MS = 60_000  # a guard against a hang on a loaded machine, not a speed assertion
+
 DOCS = REPO / "docs"
 PAGES = ["getting-started.md", *sorted(p.relative_to(DOCS).as_posix() for p in (DOCS / "tutorials").glob("*.md"))]
 
@@ -48,3 +51,38 @@ def test_tutorial(page: str, tmp_path: Path) -> None:
 @pytest.mark.parametrize("page", [p for p in PAGES if any(b.slow for b in _blocks(p))])
 def test_tutorial_with_its_long_steps(page: str, tmp_path: Path) -> None:
     _run(page, tmp_path, slow=True)
+
+
+@pytest.mark.slow
+def test_the_gui_tutorial_steps_in_a_browser(tmp_path: Path) -> None:
+    """Section 2 of the GUI tutorial as a person does it, in Debian's chromium: Init, mode Automatic, Start, each
+    control found by the name the page gives it; what the platform did is read over its other port."""
+    sync_api = pytest.importorskip("playwright.sync_api")
+    from pltf.client import MotionMode, OperationState, PlatformClient
+
+    assert CHROMIUM.exists(), "make chromium installs Debian's chromium"
+    run = PageRun(tmp_path)
+    try:
+        for block in _blocks("tutorials/gui.md"):
+            run.run(block)
+        url = f"http://127.0.0.1:{run.ports[8080]}/?target=127.0.0.1:{run.ports[10000]}"
+        with sync_api.sync_playwright() as pw:
+            browser = pw.chromium.launch(executable_path=str(CHROMIUM), args=["--no-sandbox", "--disable-gpu"])
+            page = browser.new_page()
+            page.goto(url, timeout=PATIENCE_MS)
+            status = page.get_by_role("status", name="System state", exact=True)
+            page.get_by_role("button", name="Init", exact=True).click()
+            sync_api.expect(status).to_contain_text("Ready", timeout=PATIENCE_MS)
+            page.get_by_role("combobox", name="Motion mode").select_option(label="Automatic")
+            sync_api.expect(page.get_by_role("status", name="Motion mode", exact=True)).to_contain_text(
+                "Automatic", timeout=PATIENCE_MS
+            )
+            page.get_by_role("button", name="Start", exact=True).click()
+            sync_api.expect(status).to_contain_text("Running", timeout=PATIENCE_MS)
+            browser.close()
+        with PlatformClient("127.0.0.1", run.ports[10002], timeout=10.0) as other:
+            seen = other.get_status()
+        assert seen.operation_state == OperationState.ST_OP_RUNNING
+        assert seen.motion_mode == MotionMode.MODE_MOTION_AUTOMATIC
+    finally:
+        run.close()
