@@ -19,6 +19,8 @@ from __future__ import annotations
 
 import argparse
 import collections
+import contextlib
+import ctypes
 import gc
 import json
 import runpy
@@ -28,7 +30,31 @@ import time
 import tracemalloc
 from pathlib import Path
 
+MALLINFO2 = ("arena", "ordblks", "smblks", "hblks", "hblkhd", "usmblks", "fsmblks", "uordblks", "fordblks", "keepcost")
 IGNORED = (tracemalloc.__file__, "<frozen importlib._bootstrap>", "<frozen importlib._bootstrap_external>", "<unknown>")
+
+
+class _Mallinfo2(ctypes.Structure):
+    _fields_ = [(name, ctypes.c_size_t) for name in MALLINFO2]
+
+
+def _mallinfo() -> dict[str, float] | None:
+    """glibc's mallinfo2 in MB: ``arena`` (heap from brk), ``hblkhd`` (mmapped blocks), ``uordblks`` (in use),
+    ``fordblks`` (free in the heap): in use growing is memory kept, free growing is fragmentation. None elsewhere."""
+    try:
+        fn = ctypes.CDLL(None).mallinfo2
+    except (OSError, AttributeError):
+        return None
+    fn.restype = _Mallinfo2
+    info = fn()
+    return {k: round(getattr(info, k) / 1e6, 3) for k in ("arena", "hblkhd", "uordblks", "fordblks")}
+
+
+def _rss_mb() -> float | None:
+    with contextlib.suppress(OSError, StopIteration):
+        line = next(x for x in Path("/proc/self/status").read_text().splitlines() if x.startswith("VmRSS:"))
+        return round(int(line.split()[1]) / 1024, 3)
+    return None
 
 
 def _snapshots(out: Path, every: float, start: float) -> None:
@@ -47,6 +73,8 @@ def _snapshots(out: Path, every: float, start: float) -> None:
             "gc_counts": gc.get_count(),
             "gc_objects": len(objects),
             "types": dict(types.most_common(40)),
+            "rss_mb": _rss_mb(),
+            "malloc": _mallinfo(),
         }
         del objects
         with (out / "gc.jsonl").open("a", encoding="utf-8") as fh:
@@ -79,9 +107,9 @@ def compare(args: argparse.Namespace) -> int:
     if len(snaps) < 2:
         print(f"trace: error: {args.dir} holds {len(snaps)} snapshots, compare needs two", file=sys.stderr)
         return 2
-    first = tracemalloc.Snapshot.load(str(snaps[args.skip if args.skip < len(snaps) - 1 else 0]))
-    last = tracemalloc.Snapshot.load(str(snaps[-1]))
-    print(f"{snaps[args.skip].name} -> {snaps[-1].name}: the {args.top} sites that grew most")
+    start = snaps[args.skip if args.skip < len(snaps) - 1 else 0]
+    first, last = tracemalloc.Snapshot.load(str(start)), tracemalloc.Snapshot.load(str(snaps[-1]))
+    print(f"{start.name} -> {snaps[-1].name}: the {args.top} sites that grew most")
     for stat in last.compare_to(first, "traceback")[: args.top]:
         print(f"{stat.size_diff / 1e3:+10.1f} kB {stat.count_diff:+8d} blocks (now {stat.size / 1e3:.1f} kB)")
         for line in stat.traceback.format(limit=args.frames)[-2 * args.frames :]:
