@@ -174,6 +174,7 @@ HEADER = """# Soak: the toolkit for an hour
 --record` in front of it, the GUI open in Debian's chromium on the first port, the patrol example on the second
 and a client that connects to the second port every few seconds (turned away while the patrol holds it, guide 6.1).
 Every minute the RSS, open descriptors and threads of every process (/proc) and the recording's size and
-telegram count; at the end the slopes after the warm-up against their bounds and a replay of the recording.
-Newest run last.
+telegram count; at the end the slopes after the warm-up against their bounds and a check that nothing was lost
+(every frame decodes again, every reply has its request, every connection the clients made is in the recording;
+`pltf replay` of it with `--replay`, short runs only). Newest run last.
 """
