@@ -33,6 +33,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "stubs": ("pltf.cli.stubs_cmd", "generate the client stubs of one language (or --check a generated copy)"),
     "proxy": ("pltf.cli.proxy_cmd", "a transparent TCP proxy: decode both directions live, record the session"),
     "replay": ("pltf.cli.replay_cmd", "replay a recorded session against a target and name every reply that differs"),
+    "export": ("pltf.cli.export_cmd", "write a recorded session as MCAP (Foxglove's schemas), for Foxglove and ROS 2"),
     "dissector": ("pltf.cli.dissector_cmd", "write the Wireshark Lua dissector generated from spec/ (or --check it)"),
     "completion": ("pltf.cli.completion", "print the bash or zsh completion script of pltf"),
 }

@@ -161,6 +161,9 @@ ROWS = [
         "{dead}",
     ),
     ("replay/port-out-of-range", "replay {tmp}/session.jsonl --target 127.0.0.1:99999", USAGE, "PORT 1..65535"),
+    ("export/not-a-session", "export {tmp}/bad.xml --mcap {tmp}/s.mcap", USAGE, "bad.xml:1"),
+    ("export/bad-json", "export {tmp}/bad.jsonl --mcap {tmp}/s.mcap", USAGE, "bad.jsonl:1"),
+    ("export/unwritable", "export {tmp}/session.jsonl --mcap {tmp}/no/such/s.mcap", USAGE, "cannot write"),
     ("dissector/unwritable", "dissector --out {tmp}/no/such/pltf.lua", USAGE, "cannot write"),
     ("dissector/check-missing", "dissector --check {tmp}/missing.lua", USAGE, "no such file"),
 ]

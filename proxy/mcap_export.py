@@ -1,0 +1,323 @@
+"""A pltf proxy recording as MCAP (issue 35): for Foxglove, Lichtblick and the ROS 2 tools.
+
+Sans-IO apart from the stream it is given: records in (proxy/tap.py), MCAP out through the ``mcap`` library's
+writer (chunked, zstd, with a summary section and its indexes: the library's defaults). Used by ``pltf export
+SESSION --mcap OUT`` (a whole session, sorted by time) and, live, by ``pltf proxy --mcap OUT`` (a sink of the
+recorder).
+
+Channels (topic: schema, from what):
+- ``/pltf/telegrams``: pltf.Telegram, every frame and every run of marked bytes, both directions, with its
+  connection, port, direction and bytes (hex): the recording itself, nothing dropped.
+- ``/pltf/wire``: foxglove.Log, one line per telegram as ``pltf proxy`` shows it (decoded, enums by name), and per
+  connection event; malformed bytes at level WARNING.
+- ``/pose``: foxglove.PoseInFrame and ``/tf``: foxglove.FrameTransform (map -> base_link), from each
+  CMD_GET_POSITION reply (guide 6.4: x, y mm, angle rad).
+- ``/scan``: foxglove.LaserScan, from the ``scan`` of each CMD_GET_STATUS reply (guide 6.4: points x, y in mm in
+  the platform's frame, base_link). LaserScan holds ranges at equally spaced bearings, the protocol sends
+  points: each point goes into the 0.5 degree bin of its bearing seen from the platform's origin (the nearest
+  point wins a bin; a bin without a point has range 0, Foxglove draws it at the origin), from the first
+  point's bin to the last's. A point is off by at most 0.25 degrees of bearing; its range is exact.
+- ``/map``: foxglove.SceneUpdate, from CMD_GET_MAP replies (entity ``map``: the lines of every layer, guide 6.5)
+  and CMD_GET_ROADMAP replies (entity ``roadmap``: each station's name and heading), documents parsed and
+  validated with pltf.spec.documents; a document that does not validate is a WARNING line on ``/pltf/wire``.
+
+Times: a message's log time and publish time are the record's time (ns). Within a channel log times never go
+back: a record earlier than the channel's last message (a close, written when both sides are done, with the
+time of the first end; only live, the export sorts) is logged at the channel's last time, its publish time
+keeps the recorded one.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import math
+import os
+import tempfile
+from collections.abc import Callable, Iterable
+from pathlib import Path
+from typing import IO, Any
+
+from mcap.writer import Writer
+
+from pltf.proxy.mcap_schemas import ENCODING, schema_bytes
+from pltf.proxy.tap import CLOSE, OPEN, Record
+from pltf.proxy.view import format_record
+from pltf.spec.documents import DocumentError, DocumentKind, validate_document
+
+NS = 1_000_000_000
+MM = 0.001  # Foxglove's unit is the metre
+SCAN_STEP = math.radians(0.5)
+INFO, WARNING = 2, 3  # foxglove.LogLevel
+MAP_FRAME, PLATFORM_FRAME = "map", "base_link"
+CHANNELS = {  # topic: schema
+    "/pltf/telegrams": "pltf.Telegram",
+    "/pltf/wire": "foxglove.Log",
+    "/pose": "foxglove.PoseInFrame",
+    "/tf": "foxglove.FrameTransform",
+    "/scan": "foxglove.LaserScan",
+    "/map": "foxglove.SceneUpdate",
+}
+Message = tuple[str, dict[str, Any]]  # (topic, message)
+
+
+def stamp(t: float) -> dict[str, int]:
+    ns = max(0, round(t * NS))
+    return {"sec": ns // NS, "nsec": ns % NS}
+
+
+def _vector(x: float = 0.0, y: float = 0.0) -> dict[str, float]:
+    return {"x": x, "y": y, "z": 0.0}
+
+
+def quaternion(angle: float) -> dict[str, float]:
+    """A rotation by ``angle`` (rad) about z."""
+    return {"x": 0.0, "y": 0.0, "z": math.sin(angle / 2), "w": math.cos(angle / 2)}
+
+
+def _pose(x: float = 0.0, y: float = 0.0, angle: float = 0.0) -> dict[str, Any]:
+    return {"position": _vector(x, y), "orientation": quaternion(angle)}
+
+
+# ------------------------------------------------------------------------------------- telegram -> messages
+
+
+def _position(rec: Record, t: Any) -> list[Message]:
+    # guide 6.4 CMD_GET_POSITION: x, y [mm] (erratum E-REP-012), angle [rad]
+    ts = stamp(rec.time)
+    pose = {"timestamp": ts, "frame_id": MAP_FRAME, "pose": _pose(t.x * MM, t.y * MM, t.angle)}
+    tf = {
+        "timestamp": ts,
+        "parent_frame_id": MAP_FRAME,
+        "child_frame_id": PLATFORM_FRAME,
+        "translation": _vector(t.x * MM, t.y * MM),
+        "rotation": quaternion(t.angle),
+    }
+    return [("/pose", pose), ("/tf", tf)]
+
+
+def scan_ranges(points: Any) -> tuple[float, float, list[float]]:
+    """(start_angle, end_angle, ranges in m) of scan points (x, y in mm), binned by bearing (SCAN_STEP)."""
+    bins: dict[int, float] = {}
+    for p in points:
+        r = math.hypot(p.x, p.y) * MM
+        i = round(math.atan2(p.y, p.x) / SCAN_STEP)
+        if i not in bins or r < bins[i]:
+            bins[i] = r
+    lo, hi = min(bins), max(bins)
+    return lo * SCAN_STEP, hi * SCAN_STEP, [bins.get(i, 0.0) for i in range(lo, hi + 1)]
+
+
+def _status(rec: Record, t: Any) -> list[Message]:
+    # guide 6.4 CMD_GET_STATUS: "Observed scan (platform coordinates)", points x, y [mm]
+    if not t.scan:
+        return []
+    start, end, ranges = scan_ranges(t.scan)
+    scan = {
+        "timestamp": stamp(rec.time),
+        "frame_id": PLATFORM_FRAME,
+        "pose": _pose(),
+        "start_angle": start,
+        "end_angle": end,
+        "ranges": ranges,
+        "intensities": [],
+    }
+    return [("/scan", scan)]
+
+
+def _entity(rec: Record, ident: str, lines: list[dict[str, Any]], texts: list[dict[str, Any]]) -> dict[str, Any]:
+    return {
+        "deletions": [],
+        "entities": [
+            {
+                "timestamp": stamp(rec.time),
+                "frame_id": MAP_FRAME,
+                "id": ident,
+                "lifetime": {"sec": 0, "nsec": 0},
+                "frame_locked": False,
+                "metadata": [],
+                **{k: [] for k in ("arrows", "cubes", "spheres", "cylinders", "triangles", "models")},
+                "lines": lines,
+                "texts": texts,
+            }
+        ],
+    }
+
+
+def _line_list(points: list[dict[str, float]], color: tuple[float, ...], thickness: float) -> dict[str, Any]:
+    r, g, b = color
+    return {
+        "type": 2,  # LINE_LIST: each pair of points is a segment
+        "pose": _pose(),
+        "thickness": thickness,
+        "scale_invariant": True,
+        "points": points,
+        "color": {"r": r, "g": g, "b": b, "a": 1.0},
+        "colors": [],
+        "indices": [],
+    }
+
+
+def _xy(el: Any) -> dict[str, float]:
+    return _vector(float(el.get("x")) * MM, float(el.get("y")) * MM)
+
+
+def map_scene(rec: Record, xml: bytes) -> dict[str, Any]:
+    """guide 6.5 map: <layer><line><point x y/><point x y/></line>...; the lines of every layer."""
+    tree = validate_document(DocumentKind.MAP, xml)
+    points = [_xy(p) for line in tree.iter("line") for p in line.findall("point")[:2]]
+    return _entity(rec, "map", [_line_list(points, (0.2, 0.2, 0.2), 2.0)] if points else [], [])
+
+
+def roadmap_scene(rec: Record, xml: bytes) -> dict[str, Any]:
+    """guide 6.5 roadmap: <station name angle><point x y/></station>; angle in degrees (erratum E-XML-007)."""
+    tree = validate_document(DocumentKind.ROADMAP, xml)
+    texts, heads = [], []
+    for st in tree.iter("station"):
+        pos, angle = _xy(st.find("point")), math.radians(float(st.get("angle", "0")))
+        texts.append(
+            {
+                "pose": {"position": pos, "orientation": quaternion(0.0)},
+                "billboard": True,
+                "font_size": 12.0,
+                "scale_invariant": True,
+                "color": {"r": 0.1, "g": 0.3, "b": 0.8, "a": 1.0},
+                "text": str(st.get("name", st.get("id", ""))),
+            }
+        )
+        tip = _vector(pos["x"] + 0.5 * math.cos(angle), pos["y"] + 0.5 * math.sin(angle))
+        heads += [pos, tip]
+    return _entity(rec, "roadmap", [_line_list(heads, (0.1, 0.3, 0.8), 3.0)] if heads else [], texts)
+
+
+def _document(scene: Callable[[Record, bytes], dict[str, Any]]) -> Callable[[Record, Any], list[Message]]:
+    def convert(rec: Record, t: Any) -> list[Message]:
+        try:
+            return [("/map", scene(rec, t.xml.encode("utf-8")))]
+        except (DocumentError, TypeError, ValueError) as exc:
+            return [("/pltf/wire", _log(rec, WARNING, f"{t.NAME} reply: the document is not shown: {exc}"))]
+
+    return convert
+
+
+REPLY_MESSAGES: dict[str, Callable[[Record, Any], list[Message]]] = {  # telegram name: its messages
+    "CMD_GET_POSITION": _position,
+    "CMD_GET_STATUS": _status,
+    "CMD_GET_MAP": _document(map_scene),
+    "CMD_GET_ROADMAP": _document(roadmap_scene),
+}
+
+
+def _log(rec: Record, level: int, message: str) -> dict[str, Any]:
+    return {
+        "timestamp": stamp(rec.time),
+        "level": level,
+        "message": message,
+        "name": f"port {rec.port}",
+        "file": "",
+        "line": 0,
+    }
+
+
+def telegram_message(rec: Record) -> dict[str, Any]:
+    return {
+        "timestamp": stamp(rec.time),
+        "conn": rec.conn,
+        "port": rec.port,
+        "direction": rec.direction,
+        "kind": rec.kind,
+        "name": rec.name,
+        "hex": rec.raw.hex(),
+        "error": rec.error,
+    }
+
+
+def messages(rec: Record) -> list[Message]:
+    """The MCAP messages of one record."""
+    line = format_record(rec, t0=rec.time)[1].lstrip().split(" ", 1)[1]  # the view's line without its clock
+    if rec.kind in (OPEN, CLOSE):
+        return [("/pltf/wire", _log(rec, INFO, line))]
+    out: list[Message] = [
+        ("/pltf/telegrams", telegram_message(rec)),
+        ("/pltf/wire", _log(rec, INFO if rec.error is None else WARNING, line)),
+    ]
+    t = rec.telegram
+    if t is not None and rec.direction == "reply" and t.NAME in REPLY_MESSAGES:
+        out += REPLY_MESSAGES[t.NAME](rec, t)
+    return out
+
+
+# --------------------------------------------------------------------------------------------- the writer
+
+
+class McapSink:
+    """Writes records as MCAP to ``stream`` (binary, seekable or not); ``write`` is a recorder sink; ``finish``
+    writes the summary section and the footer (the stream stays open)."""
+
+    def __init__(self, stream: IO[bytes], library: str = "pltf") -> None:
+        self._writer = Writer(stream)
+        self._writer.start(profile="", library=library)
+        schema_ids: dict[str, int] = {}
+        self._channels: dict[str, int] = {}
+        for topic, schema in CHANNELS.items():
+            if schema not in schema_ids:
+                schema_ids[schema] = self._writer.register_schema(schema, ENCODING, schema_bytes(schema))
+            self._channels[topic] = self._writer.register_channel(topic, "json", schema_ids[schema])
+        self._last: dict[str, int] = dict.fromkeys(CHANNELS, 0)
+        self._sequence: dict[str, int] = dict.fromkeys(CHANNELS, 0)
+        self.counts: dict[str, int] = dict.fromkeys(CHANNELS, 0)
+
+    def write(self, rec: Record) -> None:
+        publish = max(0, round(rec.time * NS))
+        for topic, message in messages(rec):
+            log_time = max(publish, self._last[topic])  # never back within a channel
+            self._last[topic] = log_time
+            self._sequence[topic] += 1
+            self.counts[topic] += 1
+            data = json.dumps(message, separators=(",", ":"), allow_nan=False).encode()
+            self._writer.add_message(self._channels[topic], log_time, data, publish, self._sequence[topic])
+
+    def finish(self) -> None:
+        self._writer.finish()
+
+
+class McapFile:
+    """An MCAP file written atomically: into a temporary file beside ``path``, renamed over it by ``close``
+    (a reader never sees half a file; ``abort`` removes the temporary file). OSError when it cannot be made."""
+
+    def __init__(self, path: Path, library: str = "pltf") -> None:
+        self.path = path
+        fd, self._tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+        self._fh = os.fdopen(fd, "wb")
+        self.sink = McapSink(self._fh, library)
+
+    def write(self, rec: Record) -> None:
+        self.sink.write(rec)
+
+    def close(self) -> None:
+        try:
+            self.sink.finish()
+            self._fh.close()
+            os.replace(self._tmp, self.path)
+        except BaseException:
+            self.abort()
+            raise
+
+    def abort(self) -> None:
+        self._fh.close()
+        with contextlib.suppress(OSError):
+            os.unlink(self._tmp)
+
+
+def export(records: Iterable[Record], path: Path, library: str = "pltf") -> dict[str, int]:
+    """Write ``records`` to ``path`` as MCAP, sorted by time (stable: records of one time keep their order);
+    the message count of each channel."""
+    out = McapFile(path, library)
+    try:
+        for rec in sorted(records, key=lambda r: r.time):
+            out.write(rec)
+    except BaseException:
+        out.abort()
+        raise
+    out.close()
+    return out.sink.counts

@@ -1,0 +1,185 @@
+"""The well-known schemas of the MCAP export (proxy/mcap_export.py): JSON schemas, JSON-encoded messages.
+
+Foxglove's schemas (foxglove.PoseInFrame, FrameTransform, LaserScan, SceneUpdate, Log) are written out here from
+their published JSON-schema definitions (github foxglove/schemas, schemas/jsonschema/*.json), the parts a viewer
+needs: Foxglove, Lichtblick and the ROS 2 tools recognise a channel by the schema's name and read its JSON by the
+field names below. ``pltf.Telegram``, the raw channel's, is this toolkit's own.
+
+Units: Foxglove's are metres and radians; the protocol's are mm (guide 6.4), so positions are divided by 1000.
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+ENCODING = "jsonschema"  # the schemas' encoding; the messages' is "json"
+
+_NUMBER: dict[str, Any] = {"type": "number"}
+TIME: dict[str, Any] = {
+    "type": "object",
+    "title": "time",
+    "properties": {
+        "sec": {"type": "integer", "minimum": 0},
+        "nsec": {"type": "integer", "minimum": 0, "maximum": 999999999},
+    },
+}
+DURATION: dict[str, Any] = {
+    "type": "object",
+    "title": "duration",
+    "properties": {"sec": {"type": "integer"}, "nsec": {"type": "integer", "minimum": 0, "maximum": 999999999}},
+}
+VECTOR3: dict[str, Any] = {
+    "title": "foxglove.Vector3",
+    "type": "object",
+    "properties": {"x": _NUMBER, "y": _NUMBER, "z": _NUMBER},
+}
+QUATERNION: dict[str, Any] = {
+    "title": "foxglove.Quaternion",
+    "type": "object",
+    "properties": {"x": _NUMBER, "y": _NUMBER, "z": _NUMBER, "w": _NUMBER},
+}
+POSE: dict[str, Any] = {
+    "title": "foxglove.Pose",
+    "type": "object",
+    "properties": {"position": VECTOR3, "orientation": QUATERNION},
+}
+COLOR: dict[str, Any] = {
+    "title": "foxglove.Color",
+    "type": "object",
+    "properties": {"r": _NUMBER, "g": _NUMBER, "b": _NUMBER, "a": _NUMBER},
+}
+_ARRAY_OF = lambda item: {"type": "array", "items": item}  # noqa: E731
+
+
+def _schema(title: str, description: str, properties: dict[str, Any]) -> dict[str, Any]:
+    return {"title": title, "description": description, "type": "object", "properties": properties}
+
+
+POSE_IN_FRAME = _schema(
+    "foxglove.PoseInFrame",
+    "A timestamped pose for an object or reference frame in 3D space",
+    {"timestamp": TIME, "frame_id": {"type": "string"}, "pose": POSE},
+)
+FRAME_TRANSFORM = _schema(
+    "foxglove.FrameTransform",
+    "A transform between two reference frames in 3D space",
+    {
+        "timestamp": TIME,
+        "parent_frame_id": {"type": "string"},
+        "child_frame_id": {"type": "string"},
+        "translation": VECTOR3,
+        "rotation": QUATERNION,
+    },
+)
+LASER_SCAN = _schema(
+    "foxglove.LaserScan",
+    "A single scan from a planar laser range-finder",
+    {
+        "timestamp": TIME,
+        "frame_id": {"type": "string"},
+        "pose": POSE,
+        "start_angle": _NUMBER,
+        "end_angle": _NUMBER,
+        "ranges": _ARRAY_OF(_NUMBER),
+        "intensities": _ARRAY_OF(_NUMBER),
+    },
+)
+LINE_PRIMITIVE: dict[str, Any] = {
+    "title": "foxglove.LinePrimitive",
+    "type": "object",
+    "properties": {
+        "type": {
+            "title": "foxglove.LineType",
+            "oneOf": [{"title": t, "const": i} for i, t in enumerate(("LINE_STRIP", "LINE_LOOP", "LINE_LIST"))],
+        },
+        "pose": POSE,
+        "thickness": _NUMBER,
+        "scale_invariant": {"type": "boolean"},
+        "points": _ARRAY_OF(VECTOR3 | {"title": "foxglove.Point3"}),
+        "color": COLOR,
+        "colors": _ARRAY_OF(COLOR),
+        "indices": _ARRAY_OF({"type": "integer", "minimum": 0}),
+    },
+}
+TEXT_PRIMITIVE: dict[str, Any] = {
+    "title": "foxglove.TextPrimitive",
+    "type": "object",
+    "properties": {
+        "pose": POSE,
+        "billboard": {"type": "boolean"},
+        "font_size": _NUMBER,
+        "scale_invariant": {"type": "boolean"},
+        "color": COLOR,
+        "text": {"type": "string"},
+    },
+}
+SCENE_ENTITY: dict[str, Any] = {
+    "title": "foxglove.SceneEntity",
+    "type": "object",
+    "properties": {
+        "timestamp": TIME,
+        "frame_id": {"type": "string"},
+        "id": {"type": "string"},
+        "lifetime": DURATION,
+        "frame_locked": {"type": "boolean"},
+        "metadata": _ARRAY_OF(
+            {
+                "title": "foxglove.KeyValuePair",
+                "type": "object",
+                "properties": {"key": {"type": "string"}, "value": {"type": "string"}},
+            }
+        ),
+        **{
+            k: _ARRAY_OF({"type": "object"}) for k in ("arrows", "cubes", "spheres", "cylinders", "triangles", "models")
+        },
+        "lines": _ARRAY_OF(LINE_PRIMITIVE),
+        "texts": _ARRAY_OF(TEXT_PRIMITIVE),
+    },
+}
+SCENE_UPDATE = _schema(
+    "foxglove.SceneUpdate",
+    "An update to the entities displayed in a 3D scene",
+    {
+        "deletions": _ARRAY_OF(
+            {
+                "title": "foxglove.SceneEntityDeletion",
+                "type": "object",
+                "properties": {"timestamp": TIME, "type": {"type": "integer"}, "id": {"type": "string"}},
+            }
+        ),
+        "entities": _ARRAY_OF(SCENE_ENTITY),
+    },
+)
+LOG_LEVELS = ("UNKNOWN", "DEBUG", "INFO", "WARNING", "ERROR", "FATAL")
+LOG = _schema(
+    "foxglove.Log",
+    "A log message",
+    {
+        "timestamp": TIME,
+        "level": {"title": "foxglove.LogLevel", "oneOf": [{"title": t, "const": i} for i, t in enumerate(LOG_LEVELS)]},
+        "message": {"type": "string"},
+        "name": {"type": "string"},
+        "file": {"type": "string"},
+        "line": {"type": "integer", "minimum": 0},
+    },
+)
+TELEGRAM = _schema(
+    "pltf.Telegram",
+    "One frame of a pltf proxy recording as it passed (guide 6.2), or bytes marked malformed",
+    {
+        "timestamp": TIME,
+        "conn": {"type": "integer", "description": "connection number, from 1, in the proxy's order"},
+        "port": {"type": "integer", "description": "the target's port (10000, 10002)"},
+        "direction": {"enum": ["request", "reply"], "description": "request: client to platform"},
+        "kind": {"enum": ["frame", "raw"], "description": "raw: bytes after a framing error"},
+        "name": {"type": "string", "description": "the telegram's name, or malformed"},
+        "hex": {"type": "string", "description": "the bytes as they passed"},
+        "error": {"type": ["string", "null"], "description": "<codec error class>: reason, when malformed"},
+    },
+)
+SCHEMAS = {s["title"]: s for s in (POSE_IN_FRAME, FRAME_TRANSFORM, LASER_SCAN, SCENE_UPDATE, LOG, TELEGRAM)}
+
+
+def schema_bytes(name: str) -> bytes:
+    return json.dumps(SCHEMAS[name], separators=(",", ":")).encode()
