@@ -51,13 +51,20 @@ $(GUI_BUILT): $(GUI_MODULES) $(GUI_SOURCES)
 
 gui: $(GUI_BUILT)
 
+# tests/proxy/test_mcap_export.py reads the exported MCAP a second time with @mcap/core (npm), as Foxglove does.
+MCAP_READER := tests/proxy/mcap_reader
+MCAP_MODULES := $(MCAP_READER)/node_modules/.installed
+$(MCAP_MODULES): $(MCAP_READER)/package.json $(MCAP_READER)/package-lock.json
+	cd $(MCAP_READER) && npm ci --no-audit --no-fund
+	@touch $@
+
 # The browser tests drive Debian's chromium (tests/gui); CI runs as root and reaches Debian's packages.
 chromium:
 	@command -v chromium >/dev/null 2>&1 || (apt-get update -qq && apt-get install -y -qq chromium)
 
 # The emulator is built first and its tests may not skip (PLTF_REQUIRE_EMULATOR=1, tests/emulator_gate.py): without
 # Go make test fails at the build, not by quietly skipping the emulator's checks.
-test: $(STAMP) $(GUI_BUILT) chromium tshark emulator
+test: $(STAMP) $(GUI_BUILT) $(MCAP_MODULES) chromium tshark emulator
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .
 	$(BIN)/mypy
@@ -124,4 +131,4 @@ demo: $(STAMP)
 	$(BIN)/python -m pltf.cli.demo
 
 clean:
-	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache gui/static $(GUI_WEB)/node_modules
+	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache gui/static $(GUI_WEB)/node_modules $(MCAP_READER)/node_modules
