@@ -32,11 +32,16 @@ CHROMIUM = "/usr/bin/chromium"
 CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run", "--disable-background-networking"]
 LISTENING = re.compile(r"proxy listening at [^:\s]+:(\d+)")
 CHILDREN = {"pltf proxy": "recorder"}  # what a part's child process is (proxy/offload.py forks the recorder)
+PAGE_TIMEOUT_MS = 120_000  # a loaded 2-core machine (load 20-40) took over 30 s to show the GUI connected
 PROXY_STOP_GRACE = 300.0  # s: the proxy's exit waits until its recorder has written everything
 
 
 class Plain(Launched):
     """A child that is ready as soon as it runs (a client)."""
+
+    def whole_output(self) -> list[str]:
+        """Every line it wrote so far (``output`` keeps only the last 200)."""
+        return self._read_log(1 << 30).splitlines()
 
     def _ready(self) -> tuple[int, int]:
         self.starts += 1
@@ -162,14 +167,21 @@ def started(workdir: Path, time_scale: float, reconnect_every: float) -> Iterato
 
 @contextlib.contextmanager
 def _browser(url: str) -> Iterator[Any]:
+    from playwright.sync_api import Error as PlaywrightError
     from playwright.sync_api import expect, sync_playwright
 
     with sync_playwright() as pw:
         browser = pw.chromium.launch(executable_path=CHROMIUM, args=CHROMIUM_ARGS)
         try:
             page = browser.new_page(viewport={"width": 1400, "height": 900})
-            page.goto(url)
-            expect(page.get_by_role("status", name="Connection")).to_contain_text("connected", timeout=30_000)
+            try:
+                page.goto(url, timeout=PAGE_TIMEOUT_MS)
+                expect(page.get_by_role("status", name="Connection")).to_contain_text(
+                    "connected", timeout=PAGE_TIMEOUT_MS
+                )
+            except (AssertionError, PlaywrightError) as exc:
+                first = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+                raise LaunchError(f"the GUI at {url} did not show 'connected' in chromium: {first}") from None
             yield page
         finally:
             browser.close()

@@ -91,7 +91,7 @@ def soak(args: argparse.Namespace, workdir: Path) -> Outcome:
         reconnect_log, patrol_log = p.reconnect, p.patrol
         p.reconnect.stop()
         reconnect = _last(reconnect_log.output, "reconnect:")
-        patrol = _patrol_summary(patrol_log.output)
+        patrol = _patrol_summary(patrol_log.whole_output())
     outcome = Outcome(samples, dead, reconnect=reconnect, patrol=patrol, second_port=p.server.ports[1])
     final = sampling.RecordingMeter(p.record).read()
     outcome.samples.append({**samples[-1], "recording": final, "t": samples[-1]["t"], "final": True})
@@ -123,7 +123,7 @@ def _patrol_summary(lines: list[str]) -> str:
     reached = sum(line.startswith("reached ") for line in lines)
     refused = sum(line.startswith("refused ") for line in lines)
     rounds = sum(line.startswith("round ") for line in lines)
-    return f"{reached} stations reached, {refused} refusals, {rounds} rounds (the log's last 200 lines)"
+    return f"{reached} stations reached, {refused} refusals, {rounds} rounds"
 
 
 def _replay(args: argparse.Namespace, record: Path, outcome: Outcome) -> None:
