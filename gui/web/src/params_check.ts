@@ -27,7 +27,7 @@ export function checkParam(p: ParamDef, raw: string): Checked {
   }
   const value = Number(text);
   if (!Number.isFinite(value) || value < p.min || value > p.max) {
-    return { ok: false, reason: `${p.name}: ${text} is outside ${p.min} .. ${p.max}${p.unit ? " " + p.unit : ""}` };
+    return { ok: false, reason: `${p.name}: ${text} is outside ${p.min} .. ${p.max}${p.unit ? ` ${p.unit}` : ""}` };
   }
   return { ok: true, text: p.type === "INTEGER" ? String(value) : text };
 }

@@ -6,7 +6,7 @@
  */
 import { h } from "../dom";
 import { bind, type Key, t } from "../i18n/i18n";
-import { GetMapReply, GetMapRequest, SetMapRequest } from "../pltf";
+import { type GetMapReply, GetMapRequest, SetMapRequest } from "../pltf";
 import type { MapView } from "../panels/mapview";
 import type { PlatformSession } from "../session/session";
 import { guard } from "../panels/control";

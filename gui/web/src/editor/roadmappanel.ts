@@ -7,7 +7,7 @@
  */
 import { h } from "../dom";
 import { bind, type Key, t } from "../i18n/i18n";
-import { GetRoadmapReply, GetRoadmapRequest, SetRoadmapRequest } from "../pltf";
+import { type GetRoadmapReply, GetRoadmapRequest, SetRoadmapRequest } from "../pltf";
 import type { MapView } from "../panels/mapview";
 import type { Roadmap } from "../scene/roadmap";
 import type { PlatformSession } from "../session/session";
@@ -208,13 +208,13 @@ export function roadmapEditor(
     up(x, y) {
       const pd = pointDrag;
       pointDrag = null;
-      if (pd !== null && pd.moved) {
+      if (pd?.moved) {
         if (run(movePathPoint(pd.edge, pd.k, grid(x), grid(y)), "") === null)
           say(t("rm.pathChanged", edgeWords(pd.edge)));
       }
       const d = drag;
       drag = null;
-      if (d !== null && d.moved) {
+      if (d?.moved) {
         run(moveStation(d.id, grid(x), grid(y)), t("rm.moved"));
       }
     },

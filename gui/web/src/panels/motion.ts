@@ -11,7 +11,7 @@ import { field, h } from "../dom";
 import { bind, type Key, onLanguage, t } from "../i18n/i18n";
 import {
   Event,
-  GetStatusReply,
+  type GetStatusReply,
   MotionMode,
   MoveAbsRequest,
   MoveRelRequest,
@@ -210,7 +210,10 @@ export function motionPanel(session: PlatformSession, map: MapView, say: (text: 
     h(
       "div",
       { class: "row" },
-      btn("motion.goFlag", () => (map.setTool("flag"), map.sendFlag())),
+      btn("motion.goFlag", () => {
+        map.setTool("flag");
+        map.sendFlag();
+      }),
     ),
   );
   for (const [box, key] of [

@@ -15,7 +15,7 @@ import {
   ConnectToPltfRequest,
   ContinueRequest,
   EmergencyState,
-  GetStatusReply,
+  type GetStatusReply,
   InitPltfRequest,
   MotionMode,
   OperationState,

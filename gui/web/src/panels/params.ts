@@ -10,7 +10,7 @@ import { checkParam } from "../params_check";
 import {
   GetPltfParamReply,
   GetPltfParamRequest,
-  GetPltfParamVecReply,
+  type GetPltfParamVecReply,
   GetPltfParamVecRequest,
   ParamCategory,
   type ParamEntry,

@@ -92,7 +92,10 @@ export function wirePanel(session: PlatformSession): { root: HTMLElement; onShow
     pre.textContent = shownRecords.map((r) => r.text).join("\n");
     pre.scrollTop = pre.scrollHeight;
   };
-  hide.addEventListener("change", () => ((dirty = true), render()));
+  hide.addEventListener("change", () => {
+    dirty = true;
+    render();
+  });
   window.setInterval(render, 300);
   return {
     root: h(

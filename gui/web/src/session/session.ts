@@ -27,8 +27,8 @@ import {
   GetStatusRequest,
   GetMapRequest,
   GetRoadmapRequest,
-  ProtocolError,
-  Telegram,
+  type ProtocolError,
+  type Telegram,
 } from "../pltf";
 import { Topic } from "./bus";
 import { t as tr } from "../i18n/i18n";
