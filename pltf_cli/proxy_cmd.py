@@ -1,7 +1,8 @@
 """``pltf proxy``: a transparent TCP proxy in front of one or both ports of a PlatformCtrl (proxy/).
 
 It forwards bytes unchanged, shows every telegram of both directions live, and with ``--record FILE`` keeps the
-session (FILE, JSON lines) and a pcapng beside it. The decoding, the view and the files run in a process of
+session (FILE, JSON lines) and a pcapng beside it; with ``--mcap OUT`` the same as ``pltf export --mcap`` writes,
+live (renamed into place when the proxy stops). The decoding, the view and the files run in a process of
 their own (proxy/offload.py), so they never hold up a forwarded byte. Runs until Ctrl-C (or SIGTERM). Exit
 status 0, or 2 for a user error (bad address, port in use, unwritable file).
 """
@@ -10,8 +11,10 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import os
 import signal
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -61,6 +64,12 @@ def add_proxy_arguments(p: argparse.ArgumentParser) -> None:
         help="write the session to FILE (JSON lines) and the traffic to FILE with suffix .pcapng",
     )
     p.add_argument("--pcapng", type=Path, metavar="FILE", help="the pcapng file (default: beside --record)")
+    p.add_argument(
+        "--mcap",
+        type=Path,
+        metavar="OUT",
+        help="also write the traffic as MCAP, as `pltf export --mcap` does (OUT appears when the proxy stops)",
+    )
     p.add_argument(
         "--filter",
         action="append",
@@ -114,6 +123,16 @@ def _summary(recorder: Recorder) -> str:
     return text + (f", {counts['malformed']} malformed" if counts["malformed"] else "")
 
 
+def _check_writable(path: Path) -> None:
+    """--mcap is written beside OUT and renamed: fail here, in one line, if its folder does not take a file."""
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+    except OSError as exc:
+        raise CommandError(f"cannot write the MCAP file: {path}: {exc.strerror}") from None
+    os.close(fd)
+    os.unlink(tmp)
+
+
 def run_proxy(args: argparse.Namespace) -> int:
     (lhost, lport), (thost, tport) = args.listen, args.target
     if args.spin_us > MAX_SPIN_US:
@@ -129,6 +148,8 @@ def run_proxy(args: argparse.Namespace) -> int:
                 path.open("wb").close()
             except OSError as exc:
                 raise CommandError(f"cannot write the recording: {path}: {exc.strerror}") from None
+    if args.mcap is not None:
+        _check_writable(args.mcap)
 
     def make() -> Recorder:  # in the recorder process
         sinks: list[Sink] = []
@@ -144,7 +165,14 @@ def run_proxy(args: argparse.Namespace) -> int:
             flushes.append(view.flush)
         session = SessionWriter(args.record) if args.record is not None else None
         pcapng = PcapngWriter(pcapng_path) if pcapng_path is not None else None
-        return Recorder(sinks, pcapng, session, max_length=args.max_length, flushes=flushes)
+        closes = []
+        if args.mcap is not None:
+            from pltf.proxy.mcap_export import McapFile  # the mcap library only when asked for
+
+            mcap = McapFile(args.mcap)
+            sinks.append(mcap.write)
+            closes.append(mcap.close)
+        return Recorder(sinks, pcapng, session, max_length=args.max_length, flushes=flushes, closes=closes)
 
     pipe = RecorderPipe(make, _summary)
     sys.stdout.flush()

@@ -46,7 +46,7 @@ from pltf.proxy.view import format_record
 from pltf.spec.documents import DocumentError, DocumentKind, validate_document
 
 NS = 1_000_000_000
-MM = 0.001  # Foxglove's unit is the metre
+MM = 1000  # mm per metre, Foxglove's unit (division: the nearest float to the exact value)
 SCAN_STEP = math.radians(0.5)
 INFO, WARNING = 2, 3  # foxglove.LogLevel
 MAP_FRAME, PLATFORM_FRAME = "map", "base_link"
@@ -85,12 +85,12 @@ def _pose(x: float = 0.0, y: float = 0.0, angle: float = 0.0) -> dict[str, Any]:
 def _position(rec: Record, t: Any) -> list[Message]:
     # guide 6.4 CMD_GET_POSITION: x, y [mm] (erratum E-REP-012), angle [rad]
     ts = stamp(rec.time)
-    pose = {"timestamp": ts, "frame_id": MAP_FRAME, "pose": _pose(t.x * MM, t.y * MM, t.angle)}
+    pose = {"timestamp": ts, "frame_id": MAP_FRAME, "pose": _pose(t.x / MM, t.y / MM, t.angle)}
     tf = {
         "timestamp": ts,
         "parent_frame_id": MAP_FRAME,
         "child_frame_id": PLATFORM_FRAME,
-        "translation": _vector(t.x * MM, t.y * MM),
+        "translation": _vector(t.x / MM, t.y / MM),
         "rotation": quaternion(t.angle),
     }
     return [("/pose", pose), ("/tf", tf)]
@@ -100,7 +100,7 @@ def scan_ranges(points: Any) -> tuple[float, float, list[float]]:
     """(start_angle, end_angle, ranges in m) of scan points (x, y in mm), binned by bearing (SCAN_STEP)."""
     bins: dict[int, float] = {}
     for p in points:
-        r = math.hypot(p.x, p.y) * MM
+        r = math.hypot(p.x, p.y) / MM
         i = round(math.atan2(p.y, p.x) / SCAN_STEP)
         if i not in bins or r < bins[i]:
             bins[i] = r
@@ -159,7 +159,7 @@ def _line_list(points: list[dict[str, float]], color: tuple[float, ...], thickne
 
 
 def _xy(el: Any) -> dict[str, float]:
-    return _vector(float(el.get("x")) * MM, float(el.get("y")) * MM)
+    return _vector(float(el.get("x")) / MM, float(el.get("y")) / MM)
 
 
 def map_scene(rec: Record, xml: bytes) -> dict[str, Any]:
@@ -278,7 +278,7 @@ class McapSink:
             self._writer.add_message(self._channels[topic], log_time, data, publish, self._sequence[topic])
 
     def finish(self) -> None:
-        self._writer.finish()
+        self._writer.finish()  # type: ignore[no-untyped-call]  # mcap 1.6: finish() is not annotated
 
 
 class McapFile:

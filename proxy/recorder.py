@@ -35,9 +35,11 @@ class Recorder:
         session: SessionWriter | None = None,
         max_length: int | None = None,
         flushes: list[Callable[[], None]] | None = None,
+        closes: list[Callable[[], None]] | None = None,
     ) -> None:
         self.sinks = list(sinks)
         self.flushes = list(flushes or [])  # e.g. the view's output
+        self.closes = list(closes or [])  # e.g. the MCAP file's (pltf proxy --mcap), after the last record
         self.pcapng, self.session = pcapng, session
         if session is not None:
             self.sinks.append(session.write)
@@ -106,5 +108,7 @@ class Recorder:
         for w in (self.pcapng, self.session):
             if w is not None:
                 w.close()
+        for f in self.closes:
+            f()
         for f in self.flushes:
             f()
