@@ -49,7 +49,10 @@ COLOR: dict[str, Any] = {
     "type": "object",
     "properties": {"r": _NUMBER, "g": _NUMBER, "b": _NUMBER, "a": _NUMBER},
 }
-_ARRAY_OF = lambda item: {"type": "array", "items": item}  # noqa: E731
+
+
+def _array(item: dict[str, Any]) -> dict[str, Any]:
+    return {"type": "array", "items": item}
 
 
 def _schema(title: str, description: str, properties: dict[str, Any]) -> dict[str, Any]:
@@ -81,8 +84,8 @@ LASER_SCAN = _schema(
         "pose": POSE,
         "start_angle": _NUMBER,
         "end_angle": _NUMBER,
-        "ranges": _ARRAY_OF(_NUMBER),
-        "intensities": _ARRAY_OF(_NUMBER),
+        "ranges": _array(_NUMBER),
+        "intensities": _array(_NUMBER),
     },
 )
 LINE_PRIMITIVE: dict[str, Any] = {
@@ -96,10 +99,10 @@ LINE_PRIMITIVE: dict[str, Any] = {
         "pose": POSE,
         "thickness": _NUMBER,
         "scale_invariant": {"type": "boolean"},
-        "points": _ARRAY_OF(VECTOR3 | {"title": "foxglove.Point3"}),
+        "points": _array(VECTOR3 | {"title": "foxglove.Point3"}),
         "color": COLOR,
-        "colors": _ARRAY_OF(COLOR),
-        "indices": _ARRAY_OF({"type": "integer", "minimum": 0}),
+        "colors": _array(COLOR),
+        "indices": _array({"type": "integer", "minimum": 0}),
     },
 }
 TEXT_PRIMITIVE: dict[str, Any] = {
@@ -123,32 +126,30 @@ SCENE_ENTITY: dict[str, Any] = {
         "id": {"type": "string"},
         "lifetime": DURATION,
         "frame_locked": {"type": "boolean"},
-        "metadata": _ARRAY_OF(
+        "metadata": _array(
             {
                 "title": "foxglove.KeyValuePair",
                 "type": "object",
                 "properties": {"key": {"type": "string"}, "value": {"type": "string"}},
             }
         ),
-        **{
-            k: _ARRAY_OF({"type": "object"}) for k in ("arrows", "cubes", "spheres", "cylinders", "triangles", "models")
-        },
-        "lines": _ARRAY_OF(LINE_PRIMITIVE),
-        "texts": _ARRAY_OF(TEXT_PRIMITIVE),
+        **{k: _array({"type": "object"}) for k in ("arrows", "cubes", "spheres", "cylinders", "triangles", "models")},
+        "lines": _array(LINE_PRIMITIVE),
+        "texts": _array(TEXT_PRIMITIVE),
     },
 }
 SCENE_UPDATE = _schema(
     "foxglove.SceneUpdate",
     "An update to the entities displayed in a 3D scene",
     {
-        "deletions": _ARRAY_OF(
+        "deletions": _array(
             {
                 "title": "foxglove.SceneEntityDeletion",
                 "type": "object",
                 "properties": {"timestamp": TIME, "type": {"type": "integer"}, "id": {"type": "string"}},
             }
         ),
-        "entities": _ARRAY_OF(SCENE_ENTITY),
+        "entities": _array(SCENE_ENTITY),
     },
 )
 LOG_LEVELS = ("UNKNOWN", "DEBUG", "INFO", "WARNING", "ERROR", "FATAL")
