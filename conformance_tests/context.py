@@ -11,8 +11,9 @@ Rules:
   and checks it through CMD_GET_STATUS; when it cannot, the case fails as a precondition failure.
 - A new connection is probed with CMD_GET_STATUS and retried for ``connect_window`` seconds: the target may
   not yet have noticed that our previous client on that port is gone (one client per port). A refused connect is
-  retried too once the run has been served (a restart: the port is gone for a while, erratum E-BEH-007, zoo
-  matrix row 10); served again, ``Target.restarts`` counts it and the runner runs the case in flight again.
+  retried too once the run has been served, for ``RESTART_WINDOW`` s (a restart: the port is gone while the
+  program starts again, erratum E-BEH-007, zoo matrix row 10); served again, ``Target.restarts`` counts it and the
+  runner runs the case in flight again.
 - The last status read stands for the current one while nothing was sent, connected or closed since
   (``wire.Session.events``) and it is under ``STATUS_FRESH`` wall s old - across cases too, and a probe's reply
   counts: each round trip counts against a slow link (issue 17).
@@ -46,6 +47,7 @@ from pltf.spec.telegram import Telegram
 T = TypeVar("T")
 Then = Callable[[], list[Telegram]]  # the replies to what a case sends once in a state (CaseContext.enter)
 STATUS_FRESH = 0.5  # wall s a status read stands for the current one when nothing was sent since
+RESTART_WINDOW = 15.0  # wall s a refused port of a target served before is waited for (a restart, E-BEH-007)
 PACED = 0.8  # simulated s: a target whose reply takes longer is sampled at the platform's pace (link_paced)
 # (at 0.25 a loaded reference server behind a fast link was paced and failed a program case; at 0.8 the slow link
 # at time scale 5 - 126 ms replies, 0.63 simulated s - is polled reply by reply and its watchdog and program-stop
@@ -169,8 +171,10 @@ class Target:
     ) -> Session:
         """A new session on the port of ``label``, probed with GET_STATUS and retried (see the module rules)."""
         cfg = self.config
+        waits_restart = window is None  # a refused port of a target served before: waited out (RESTART_WINDOW)
         window = cfg.connect_window if window is None else window
-        deadline = time.monotonic() + window
+        began = time.monotonic()
+        deadline = began + window
         delay, last, refused = 0.01, "no attempt", False
         while True:
             s = Session(
@@ -198,6 +202,8 @@ class Target:
                 if "refused" in str(exc).lower() and not self.reached:
                     raise  # nothing listens: a busy port accepts and closes, it does not refuse
                 refused = refused or "refused" in str(exc).lower()  # gone since: a restart, or a crash
+                if refused and waits_restart:
+                    deadline = max(deadline, began + RESTART_WINDOW)
                 last = str(exc)
                 s.close()
             except TargetFailure as exc:

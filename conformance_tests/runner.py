@@ -50,7 +50,7 @@ from pltf.conformance_tests.outcome import (
     verdict_for_level,
     worst,
 )
-from pltf.conformance_tests.wire import NullObserver, WireEntry, WireLog
+from pltf.conformance_tests.wire import NullObserver, Session, WireEntry, WireLog
 
 
 def first_line(text: str) -> str:
@@ -355,12 +355,11 @@ class Runner:
 
 def _outcome(c: Case, ctx: CaseContext) -> tuple[Verdict, str, bool, bool, bool]:
     """Run the case: its verdict and message, whether it failed a precondition, whether the target answered nothing
-    (silent) and whether a connection was lost (closed or reset by the target: a restart, perhaps; a reply timeout
-    is not looked into - a stuck target would cost a connect window a case)."""
+    (silent) and whether a connection was lost (closed, reset, or no reply: a restart, perhaps)."""
     try:
         c.func(ctx)
     except Fail as exc:
-        lost = isinstance(exc, ConnectionClosed) and not isinstance(exc, NoConnection)  # not a silent target's
+        lost = isinstance(exc, (ConnectionClosed, ReplyTimeout)) and not isinstance(exc, NoConnection)
         return _fail_verdict(c, exc), str(exc), exc.precondition, isinstance(exc, (ReplyTimeout, NoConnection)), lost
     except NotApplicable as exc:
         return Verdict.NA, str(exc), False, False, False
@@ -378,6 +377,8 @@ def _back(target: Target) -> None:
     now is not lost its state with the connection - it restarted too (erratum E-BEH-007). Whatever else happens
     is the next case's to find."""
     before = target.last_status[2] if target.last_status is not None else None
+    if not _refused(target):
+        return  # a port that takes connections (a stuck target's too): nothing restarted that a connect would show
     target.close()  # one client per port: our sessions would keep the port busy
     restarts = target.restarts
     with contextlib.suppress(Unreachable, Fail):
@@ -385,6 +386,18 @@ def _back(target: Target) -> None:
     now = target.last_status[2] if target.last_status is not None else None
     if target.restarts == restarts and before is not None and now is not None and before.initialized > now.initialized:
         target.restarted(f"port A lost our connection and the platform its initialisation ({now.describe()})")
+
+
+def _refused(target: Target) -> bool:
+    """Whether port A refuses a connection now (one attempt, no probe: cheap against a stuck target)."""
+    s = Session(target.config.host, target.port_of("A"), log=WireLog(max_entries=5), timeout=1.0)
+    try:
+        s.connect()
+    except Unreachable as exc:
+        return "refused" in str(exc).lower()
+    finally:
+        s.close()
+    return False
 
 
 def _fail_verdict(c: Case, exc: Fail) -> Verdict:
