@@ -84,3 +84,13 @@ def test_a_case_during_which_the_target_restarts_is_run_again() -> None:
     assert "the target restarted during this case" in result.attempts[0].message
     assert "E-BEH-007" in result.attempts[0].message and "matrix row 10" in result.attempts[0].message
     assert any("E-BEH-007" in n for n in run.notes), run.notes
+
+
+def test_a_fin_that_ends_the_session_is_named_as_the_reading_it_is() -> None:
+    """Row 1 (E-BEH-001): the MAY case that half-closes after a request is N/A and says which reading the target
+    follows and what was seen, never FAIL."""
+    run = _run("fin-ends-session", "emulator", ["6.2/framing/half-close-complete"])
+    result = run.results[0]
+    assert result.verdict is Verdict.NA, result.message
+    assert result.message.startswith("the target ends the session at our FIN (erratum E-BEH-001"), result.message
+    assert "matrix row 1" in result.message and "sent CMD_GET_STATUS, the target closed" in result.message
