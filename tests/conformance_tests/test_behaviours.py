@@ -18,10 +18,10 @@ SCALE = 10.0
 FEW = ("6.2/framing/header-and-length", "6.1/ports/reconnect", "6.3/CMD_SET_MODE/in-running")
 
 
-def _run(member: str, upstream: str, cases: list[str] | None = None, **kw: object) -> RunResult:
-    with launch.zoo(member, upstream=upstream, time_scale=SCALE) as target:
+def _run(member: str, upstream: str, cases: list[str] | None = None, scale: float = SCALE, **kw: object) -> RunResult:
+    with launch.zoo(member, upstream=upstream, time_scale=scale) as target:
         host = MEMBERS[member].host
-        config = Config(host, target.ports[0], target.ports[1], time_scale=SCALE, simulator=True, **kw)  # type: ignore[arg-type]
+        config = Config(host, target.ports[0], target.ports[1], time_scale=scale, simulator=True, **kw)  # type: ignore[arg-type]
         chosen = (
             [load_all()[c] for c in cases] if cases is not None else select(load_all().values(), tier=Tier.STANDARD)
         )
@@ -94,3 +94,10 @@ def test_a_fin_that_ends_the_session_is_named_as_the_reading_it_is() -> None:
     assert result.verdict is Verdict.NA, result.message
     assert result.message.startswith("the target ends the session at our FIN (erratum E-BEH-001"), result.message
     assert "matrix row 1" in result.message and "sent CMD_GET_STATUS, the target closed" in result.message
+
+
+@pytest.mark.slow
+def test_the_standard_tier_through_a_100_ms_accept_loop_passes_at_time_scale_1() -> None:
+    """Row 5 at a real platform's pace (time scale 10: the parametrized test above); about 5 minutes."""
+    run = _run("slow-accept", "reference", scale=1.0)
+    assert run.exit_code == 0, _bad(run) + [f"{r.case.id}: {r.message}" for r in run.results if r.blocking]
