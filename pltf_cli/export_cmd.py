@@ -10,8 +10,8 @@ import argparse
 from pathlib import Path
 
 from pltf.cli.options import CommandError, exit_status
-from pltf.proxy.mcap_export import export
-from pltf.proxy.session import SessionError, read_session
+from pltf.proxy.mcap_export import export, read_records
+from pltf.proxy.session import SessionError
 
 
 def add_export_arguments(p: argparse.ArgumentParser) -> None:
@@ -28,11 +28,9 @@ def add_export_arguments(p: argparse.ArgumentParser) -> None:
 
 def run_export(args: argparse.Namespace) -> int:
     try:
-        session = read_session(args.session)
+        counts = export(read_records(args.session), args.mcap)
     except SessionError as exc:
         raise CommandError(str(exc)) from None
-    try:
-        counts = export(session.records, args.mcap)
     except OSError as exc:
         raise CommandError(f"cannot write {args.mcap}: {exc.strerror or exc}") from None
     channels = ", ".join(f"{topic} {n}" for topic, n in counts.items())

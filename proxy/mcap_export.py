@@ -1,9 +1,9 @@
 """A pltf proxy recording as MCAP (issue 35): for Foxglove, Lichtblick and the ROS 2 tools.
 
-Sans-IO apart from the stream it is given: records in (proxy/tap.py), MCAP out through the ``mcap`` library's
+Sans-IO apart from the files it is given: records in (proxy/tap.py), MCAP out through the ``mcap`` library's
 writer (chunked, zstd, with a summary section and its indexes: the library's defaults). Used by ``pltf export
-SESSION --mcap OUT`` (a whole session, sorted by time) and, live, by ``pltf proxy --mcap OUT`` (a sink of the
-recorder).
+SESSION --mcap OUT`` (a session file read line by line, put in time order) and, live, by ``pltf proxy --mcap
+OUT`` (a sink of the recorder).
 
 Channels (topic: schema, from what):
 - ``/pltf/telegrams``: pltf.Telegram, every frame and every run of marked bytes, both directions, with its
@@ -23,31 +23,37 @@ Channels (topic: schema, from what):
 
 Times: a message's log time and publish time are the record's time (ns). Within a channel log times never go
 back: a record earlier than the channel's last message (a close, written when both sides are done, with the
-time of the first end; only live, the export sorts) is logged at the channel's last time, its publish time
-keeps the recorded one.
+time of the first end; live, or more than REORDER_S late in a session file) is logged at the channel's last
+time; its publish time keeps the recorded one.
 """
 
 from __future__ import annotations
 
 import contextlib
+import heapq
+import itertools
 import json
 import math
 import os
 import tempfile
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import IO, Any
 
+import numpy as np
 from mcap.writer import Writer
 
 from pltf.proxy.mcap_schemas import ENCODING, schema_bytes
-from pltf.proxy.tap import CLOSE, OPEN, Record
-from pltf.proxy.view import format_record
+from pltf.proxy.session import FORMAT, VERSION, SessionError, _lines, _record
+from pltf.proxy.tap import CLOSE, MEMO_BYTES, OPEN, Record
+from pltf.proxy.view import ARROW, ITEMS_SHOWN, format_fields, format_record
 from pltf.spec.documents import DocumentError, DocumentKind, validate_document
+from pltf.spec.jsonio import telegram_to_json
 
 NS = 1_000_000_000
 MM = 1000  # mm per metre, Foxglove's unit (division: the nearest float to the exact value)
 SCAN_STEP = math.radians(0.5)
+REORDER_S = 10.0  # how late a record may come and still be put in its place (in_time_order)
 INFO, WARNING = 2, 3  # foxglove.LogLevel
 MAP_FRAME, PLATFORM_FRAME = "map", "base_link"
 CHANNELS = {  # topic: schema
@@ -97,15 +103,15 @@ def _position(rec: Record, t: Any) -> list[Message]:
 
 
 def scan_ranges(points: Any) -> tuple[float, float, list[float]]:
-    """(start_angle, end_angle, ranges in m) of scan points (x, y in mm), binned by bearing (SCAN_STEP)."""
-    bins: dict[int, float] = {}
-    for p in points:
-        r = math.hypot(p.x, p.y) / MM
-        i = round(math.atan2(p.y, p.x) / SCAN_STEP)
-        if i not in bins or r < bins[i]:
-            bins[i] = r
-    lo, hi = min(bins), max(bins)
-    return lo * SCAN_STEP, hi * SCAN_STEP, [bins.get(i, 0.0) for i in range(lo, hi + 1)]
+    """(start_angle, end_angle, ranges in m) of scan points ((x, y) in mm), binned by bearing (SCAN_STEP)."""
+    xy = np.fromiter(itertools.chain.from_iterable(points), float, count=2 * len(points)).reshape(-1, 2)
+    ranges = np.hypot(xy[:, 0], xy[:, 1]) / MM
+    bins = np.rint(np.arctan2(xy[:, 1], xy[:, 0]) / SCAN_STEP).astype(int)
+    lo, hi = int(bins.min()), int(bins.max())
+    out = np.zeros(hi - lo + 1)
+    order = np.argsort(-ranges, kind="stable")  # farthest first: the nearest point of a bin is written last
+    out[bins[order] - lo] = ranges[order]
+    return lo * SCAN_STEP, hi * SCAN_STEP, out.tolist()
 
 
 def _status(rec: Record, t: Any) -> list[Message]:
@@ -219,6 +225,37 @@ def _log(rec: Record, level: int, message: str) -> dict[str, Any]:
     }
 
 
+class _Counted(list[Any]):
+    """The first items of a group that says how many it has (the view prints ``[541: {..}, {..}, {..}, ...]``)."""
+
+    def __init__(self, items: list[Any], total: int) -> None:
+        super().__init__(items)
+        self.total = total
+
+    def __len__(self) -> int:
+        return self.total
+
+
+def _is_group(value: Any) -> bool:
+    return isinstance(value, tuple) and len(value) > ITEMS_SHOWN and hasattr(value[0], "_fields")
+
+
+def wire_line(rec: Record) -> str:
+    """The line ``pltf proxy`` shows for the record, without its clock. A long group (a status's 541 scan points)
+    is cut to the items the view shows before the telegram is turned into JSON: the same line, at a fraction of
+    the cost."""
+    t = rec.telegram
+    if t is None or len(rec.raw) <= MEMO_BYTES or not any(_is_group(v) for v in t):
+        return format_record(rec, t0=rec.time)[1].lstrip().split(" ", 1)[1]
+    short = t._make(v[:ITEMS_SHOWN] if _is_group(v) else v for v in t)  # type: ignore[attr-defined]
+    shape = telegram_to_json(short)
+    for name, value in zip(t._fields, t, strict=True):
+        if _is_group(value):
+            shape["fields"][name] = _Counted(shape["fields"][name], len(value))
+    arrow = ARROW[rec.direction or "request"]
+    return f"#{rec.conn:<3} :{rec.port:<5} {arrow} {t.NAME} {format_fields(shape)}".rstrip()
+
+
 def telegram_message(rec: Record) -> dict[str, Any]:
     return {
         "timestamp": stamp(rec.time),
@@ -234,7 +271,7 @@ def telegram_message(rec: Record) -> dict[str, Any]:
 
 def messages(rec: Record) -> list[Message]:
     """The MCAP messages of one record."""
-    line = format_record(rec, t0=rec.time)[1].lstrip().split(" ", 1)[1]  # the view's line without its clock
+    line = wire_line(rec)
     if rec.kind in (OPEN, CLOSE):
         return [("/pltf/wire", _log(rec, INFO, line))]
     out: list[Message] = [
@@ -309,12 +346,51 @@ class McapFile:
             os.unlink(self._tmp)
 
 
+def read_records(path: Path) -> Iterator[Record]:
+    """The records of a session file one by one, as ``read_session`` reads them (its header check, its line
+    parser and its one-line errors, SessionError), without holding the session in memory: an hour of 20 Hz
+    GET_STATUS with scans is about 5 GB as decoded records."""
+    header = False
+    for n, line in _lines(path):
+        if not line.strip():
+            continue
+        try:
+            obj = json.loads(line)
+            if header:
+                yield _record(obj)
+                continue
+            if not isinstance(obj, dict) or obj.get("format") != FORMAT:
+                raise ValueError(f'not a {FORMAT} file (its first line has no "format": "{FORMAT}")')
+            if obj.get("version") != VERSION:
+                raise ValueError(f"version {obj.get('version')!r}, this pltf reads version {VERSION}")
+            header = True
+        except (ValueError, KeyError, TypeError) as exc:
+            what = f"missing {exc}" if isinstance(exc, KeyError) else str(exc)
+            raise SessionError(f"{path}:{n}: {what}") from None
+    if not header:
+        raise SessionError(f"{path}: empty, not a {FORMAT} file")
+
+
+def in_time_order(records: Iterable[Record], window: float = REORDER_S) -> Iterator[Record]:
+    """``records`` sorted by time, holding back only those of the last ``window`` seconds: a session is in
+    order within a connection, and a close (written when both sides are done, with the time of the first end)
+    comes at most seconds late. Records of one time keep their order; one later than the window is passed on
+    as it comes (McapSink keeps its channel's log times monotonic)."""
+    held: list[tuple[float, int, Record]] = []
+    for seq, rec in enumerate(records):
+        heapq.heappush(held, (rec.time, seq, rec))
+        while held and held[0][0] < rec.time - window:
+            yield heapq.heappop(held)[2]
+    while held:
+        yield heapq.heappop(held)[2]
+
+
 def export(records: Iterable[Record], path: Path, library: str = "pltf") -> dict[str, int]:
-    """Write ``records`` to ``path`` as MCAP, sorted by time (stable: records of one time keep their order);
-    the message count of each channel."""
+    """Write ``records`` to ``path`` as MCAP in time order (``in_time_order``); the message count of each
+    channel. On any error (SessionError of a record read lazily, OSError) nothing is left at ``path``."""
     out = McapFile(path, library)
     try:
-        for rec in sorted(records, key=lambda r: r.time):
+        for rec in in_time_order(records):
             out.write(rec)
     except BaseException:
         out.abort()

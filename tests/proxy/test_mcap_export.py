@@ -26,10 +26,21 @@ from mcap.reader import NonSeekingReader, SeekingReader
 
 from pltf.cli.main import main as pltf
 from pltf.client import PlatformClient
-from pltf.proxy.mcap_export import CHANNELS, McapSink, quaternion, scan_ranges, stamp
+from pltf.conformance_tests.readings import canonical
+from pltf.proxy.mcap_export import (
+    CHANNELS,
+    McapSink,
+    in_time_order,
+    quaternion,
+    read_records,
+    scan_ranges,
+    stamp,
+    wire_line,
+)
 from pltf.proxy.mcap_schemas import SCHEMAS
 from pltf.proxy.session import Session, read_session
 from pltf.proxy.tap import CLOSE, FRAME, OPEN, RAW, Record, Tap
+from pltf.proxy.view import format_record
 from pltf.spec.codec import REPLIES, REQUESTS, encode
 from pltf.zoo import launch
 
@@ -292,21 +303,16 @@ def test_malformed_bytes_are_on_the_raw_channel_with_their_error_and_a_warning_l
     assert log["level"] == 3 and "MALFORMED BadHeader" in log["message"]
 
 
-class _P:
-    def __init__(self, x: int, y: int) -> None:
-        self.x, self.y = x, y
-
-
 def test_scan_points_go_into_half_degree_bins_by_bearing_with_exact_ranges() -> None:
     # 1 m ahead, 2 m at +1 degree (bin 2), nothing at +0.5 degree (bin 1), 3 m to the left (+90: bin 180)
     ahead, one_degree = (
-        _P(1000, 0),
-        _P(round(2000 * math.cos(math.radians(1))), round(2000 * math.sin(math.radians(1)))),
+        (1000, 0),
+        (round(2000 * math.cos(math.radians(1))), round(2000 * math.sin(math.radians(1)))),
     )
-    start, end, ranges = scan_ranges([ahead, one_degree, _P(0, 3000)])
+    start, end, ranges = scan_ranges([ahead, one_degree, (0, 3000)])
     assert (start, end) == (0.0, 180 * math.radians(0.5)) and len(ranges) == 181
     assert ranges[0] == 1.0 and ranges[1] == 0.0 and ranges[2] == pytest.approx(2.0, abs=1e-3) and ranges[180] == 3.0
-    assert scan_ranges([_P(1000, 0), _P(500, 0)])[2] == [0.5]  # the nearest point wins a bin
+    assert scan_ranges([(1000, 0), (500, 0)])[2] == [0.5]  # the nearest point wins a bin
 
 
 def test_the_map_and_the_roadmap_become_scene_entities() -> None:
@@ -343,3 +349,26 @@ def test_a_request_makes_no_scene_message() -> None:
     sink.finish()
     assert sink.counts == {**dict.fromkeys(CHANNELS, 0), "/pltf/telegrams": 1, "/pltf/wire": 1}
     assert quaternion(0.0) == {"x": 0.0, "y": 0.0, "z": 0.0, "w": 1.0}
+
+
+def test_the_wire_line_of_a_status_with_its_scan_is_the_views_line() -> None:
+    status = canonical("CMD_GET_STATUS", {}).replace(scan=[(i, -i) for i in range(541)], est_x=12)
+    (rec,) = Tap("reply", 2, 10002).feed(encode(status), 7.25)
+    assert wire_line(rec) == format_record(rec, t0=7.25)[1].lstrip().split(" ", 1)[1]
+    assert " scan=[541: {x=0 y=0}, {x=1 y=-1}, {x=2 y=-2}, ...] " in wire_line(rec)
+
+
+def test_records_are_put_in_time_order_within_the_window_and_a_session_reads_as_read_session_reads_it(
+    recorded: Path,
+) -> None:
+    late = [Record(t, 1, 10000, OPEN) for t in (1.0, 2.0, 3.0)] + [Record(1.5, 1, 10000, CLOSE)]
+    assert [r.time for r in in_time_order(late)] == [1.0, 1.5, 2.0, 3.0]
+    assert [r.time for r in in_time_order([*late, Record(20.0, 2, 10000, OPEN), Record(1.2, 2, 10000, CLOSE)])] == [
+        1.0,
+        1.5,
+        2.0,
+        3.0,
+        1.2,  # more than the window late (3.0 was passed on already): passed on at once
+        20.0,
+    ]
+    assert tuple(read_records(recorded / "session.jsonl")) == read_session(recorded / "session.jsonl").records
