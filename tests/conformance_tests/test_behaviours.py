@@ -3,6 +3,7 @@ NON-STRICT or a run note naming the erratum or the matrix row, never FAIL, never
 
 from __future__ import annotations
 
+import socket
 import time
 
 import pytest
@@ -13,6 +14,7 @@ from pltf.conformance_tests.context import CaseContext, Config
 from pltf.conformance_tests.runner import Runner, RunResult
 from pltf.zoo import launch
 from pltf.zoo.members import MEMBERS
+from tests.conformance_tests.fakes import TinyTarget
 
 SCALE = 10.0
 FEW = ("6.2/framing/header-and-length", "6.1/ports/reconnect", "6.3/CMD_SET_MODE/in-running")
@@ -101,3 +103,24 @@ def test_the_standard_tier_through_a_100_ms_accept_loop_passes_at_time_scale_1()
     """Row 5 at a real platform's pace (time scale 10: the parametrized test above); about 5 minutes."""
     run = _run("slow-accept", "reference", scale=1.0)
     assert run.exit_code == 0, _bad(run) + [f"{r.case.id}: {r.message}" for r in run.results if r.blocking]
+
+
+class LateClose(TinyTarget):
+    """TinyTarget that closes on malformed input only ``delay`` s later (a relay on a loaded machine)."""
+
+    def __init__(self, delay: float) -> None:
+        super().__init__()
+        self.delay = delay
+
+    def _serve(self, conn: socket.socket) -> None:
+        super()._serve(conn)
+        time.sleep(self.delay)
+
+
+def test_a_close_on_malformed_input_that_comes_after_the_wait_is_still_the_close() -> None:
+    """Through slow-accept at load 21 two framing cases were NON-STRICT 'the connection stayed open but the target
+    stopped answering': the close came after the 0.25 s wait, while the suite asked for the status."""
+    with LateClose(0.6) as tiny:
+        config = Config("127.0.0.1", tiny.ports[0], tiny.ports[1], time_scale=10.0, reply_timeout=2.0)
+        run = Runner(config, [load_all()["6.2/framing/trailing-bytes"]]).run()
+    assert run.results[0].verdict is Verdict.PASS, run.results[0].message
