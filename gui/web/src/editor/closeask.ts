@@ -5,7 +5,7 @@
  */
 import { h } from "../dom";
 import { bind, type Key } from "../i18n/i18n";
-import { dialog } from "../panels/menubar";
+import { dialog } from "../ui/dialog";
 
 export type Closing = "closed" | "saved" | "discarded" | "cancelled";
 

@@ -34,7 +34,7 @@ import { layerPanel } from "./layerpanel";
 import { objectsAt } from "./shapes";
 import { askToClose } from "./closeask";
 import { applyFields } from "./typed";
-import { dialog } from "../panels/menubar";
+import { dialog } from "../ui/dialog";
 
 type RefTool = "trim" | "extend" | "parallel" | "orthogonal";
 type EditTool = "select" | "addLine" | RefTool | ShapeTool;

@@ -31,7 +31,7 @@ import { validateDocument } from "./validate";
 import { deletePathPoint, edgeAt, edgePath, insertPathPoint, movePathPoint, pathPointAt } from "./roadmappath";
 import { download, fileInput, fileNameOf } from "./files";
 import { Toolbar } from "./toolbar";
-import { dialog } from "../panels/menubar";
+import { dialog } from "../ui/dialog";
 import { askToClose } from "./closeask";
 
 type RmTool = "select" | "addStation" | "addEdge" | "pathPoints";
