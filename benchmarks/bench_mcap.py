@@ -1,0 +1,166 @@
+"""``pltf export --mcap`` of a one-hour recording (issue 35): wall time (goal <= 10 s) and the file's size.
+
+The recording is made here, with the codec: an application polling CMD_GET_STATUS at 20 Hz on the second port
+for an hour (72,000 requests and 72,000 replies), the platform driving a circle in a 20 x 12 m room, each reply
+with its 541-point scan (guide 6.4, as the reference server's scanner gives), written with the proxy's own
+SessionWriter. ``--quick``: one minute.
+
+Rows: ``pltf export`` (a subprocess, as a user runs it), wall and CPU seconds, beside reading the session alone
+(``read_records``, what the export reads it with: every line parsed and decoded again from its hex); the MCAP
+file's size beside the session file's. An hour's export takes minutes on a loaded machine: one run of each,
+interleaved (``--quick``: a minute).
+"""
+
+from __future__ import annotations
+
+import io
+import math
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from benchmarks.harness import Config, Row, Target, benchmark, make_row
+from pltf.conformance_tests.readings import canonical
+from pltf.proxy.mcap_export import read_records
+from pltf.proxy.session import Route, SessionWriter
+from pltf.proxy.tap import OPEN, Record, Tap
+from pltf.spec.codec import REQUESTS, encode
+
+HZ = 20
+HOUR_S = 3600.0
+TARGET_S = 10.0
+ROOM = (20000.0, 12000.0)  # mm
+SCAN = [math.radians(-135 + 0.5 * i) for i in range(541)]  # the scanner's bearings (fake_hardware)
+T0 = 1_795_000_000.0
+LAP = 60 * HZ  # a lap of the circle a minute
+REPLY_AFTER = 0.002  # s
+EXPORT, READ = "pltf export --mcap", "reading the session alone (read_records)"
+
+
+def _wall(p: float, d: float, size: float) -> float:
+    """How far along a ray from ``p`` in direction ``d`` the walls at 0 and ``size`` are (inf: parallel)."""
+    if d > 1e-9:
+        return (size - p) / d
+    if d < -1e-9:
+        return -p / d
+    return math.inf
+
+
+def _scan(x: float, y: float, heading: float) -> list[tuple[int, int]]:
+    """Points (platform frame, mm) where the scanner's rays from (x, y) meet the room's walls."""
+    points = []
+    for bearing in SCAN:
+        a = heading + bearing
+        r = min(_wall(x, math.cos(a), ROOM[0]), _wall(y, math.sin(a), ROOM[1]), 30000.0)
+        points.append((round(r * math.cos(bearing)), round(r * math.sin(bearing))))
+    return points
+
+
+def write_recording(path: Path, seconds: float) -> int:
+    """The session file of ``seconds`` of 20 Hz status polling; the number of telegrams. A lap of the circle
+    takes a minute: its 1,200 replies are made with the codec and turned into the session's JSON once (by the
+    proxy's SessionWriter), and the hour repeats their lines with new times."""
+    status = canonical("CMD_GET_STATUS", {})
+    request = encode(REQUESTS.CMD_GET_STATUS())
+    req_tap, rep_tap = Tap("request", 1, 10002), Tap("reply", 1, 10002)
+    lap = io.StringIO()
+    writer = SessionWriter(path)
+    writer._fh = lap  # the lap's lines into memory
+    writer.start([Route("127.0.0.1:10000", "127.0.0.1:10000"), Route("127.0.0.1:10002", "127.0.0.1:10002")], T0)
+    writer.write(Record(T0, 1, 10002, OPEN, detail="client 127.0.0.1:40000"))
+    for i in range(LAP):
+        phase = 2 * math.pi * i / LAP
+        x, y, heading = 10000 + 4000 * math.cos(phase), 6000 + 4000 * math.sin(phase), phase + math.pi / 2
+        angle = round(math.degrees(heading) * 1000) % 360000
+        reply = status.replace(est_x=round(x), est_y=round(y), est_angle=angle, scan=_scan(x, y, heading))
+        for rec in req_tap.feed(request, 0.0) + rep_tap.feed(encode(reply), REPLY_AFTER):
+            writer.write(rec)
+    head, opened, *body = lap.getvalue().splitlines()
+    tails = [line.split(", ", 1)[1] for line in body]  # after '{"time": T'
+    ticks = int(seconds * HZ)
+    with path.open("w", encoding="ascii") as fh:
+        fh.write(f"{head}\n{opened}\n")
+        for i in range(ticks):
+            now = T0 + i / HZ
+            req, rep = tails[2 * (i % LAP)], tails[2 * (i % LAP) + 1]
+            fh.write(f'{{"time": {round(now, 6)!r}, {req}\n{{"time": {round(now + REPLY_AFTER, 6)!r}, {rep}\n')
+        end = round(T0 + ticks / HZ, 6)
+        fh.write(f'{{"time": {end!r}, "conn": 1, "port": 10002, "kind": "close", "detail": "by client (FIN)"}}\n')
+    return 2 * ticks
+
+
+def _export(session: Path, out: Path) -> tuple[float, float]:
+    """Wall and CPU seconds of ``pltf export`` as a user runs it."""
+    before, t = resource.getrusage(resource.RUSAGE_CHILDREN), time.perf_counter()
+    cmd = [sys.executable, "-m", "pltf.cli.main", "export", str(session), "--mcap", str(out)]
+    subprocess.run(cmd, check=True, capture_output=True)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return time.perf_counter() - t, after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime
+
+
+def _read(session: Path) -> tuple[float, float]:
+    t, cpu = time.perf_counter(), time.process_time()
+    for _ in read_records(session):
+        pass
+    return time.perf_counter() - t, time.process_time() - cpu
+
+
+@benchmark()
+def export_hour(config: Config) -> list[Row]:
+    """pltf export --mcap of an hour of 20 Hz GET_STATUS with scans (<= 10 s), beside reading the session."""
+    seconds = 60.0 if config.quick else HOUR_S
+    repeats = 1  # an hour's export is minutes on a loaded machine: one run of each, interleaved
+    with tempfile.TemporaryDirectory() as tmp:
+        session, out = Path(tmp) / "hour.jsonl", Path(tmp) / "hour.mcap"
+        telegrams = write_recording(session, seconds)
+        times: dict[str, list[tuple[float, float]]] = {EXPORT: [], READ: []}
+        for _ in range(repeats):  # interleaved
+            times[EXPORT].append(_export(session, out))
+            times[READ].append(_read(session))
+        size, session_size = out.stat().st_size, session.stat().st_size
+    name = f"mcap.export_hour ({seconds / 60:g} min, {telegrams} telegrams)"
+    wall = {k: statistics.median(w for w, _ in v) for k, v in times.items()}
+    cpu = {k: statistics.median(c for _, c in v) for k, v in times.items()}
+    target = None if config.quick else Target("value", "<=", TARGET_S)
+    rows = [
+        make_row(
+            name,
+            EXPORT,
+            "wall_seconds",
+            wall[EXPORT],
+            "s",
+            higher_is_better=False,
+            baseline_subject=READ,
+            baseline_value=wall[READ],
+            target=target,
+        ),
+        make_row(
+            name,
+            EXPORT,
+            "cpu_seconds",
+            cpu[EXPORT],
+            "s",
+            higher_is_better=False,
+            baseline_subject=READ,
+            baseline_value=cpu[READ],
+        ),
+        make_row(name, READ, "wall_seconds", wall[READ], "s", higher_is_better=False),
+        make_row(name, READ, "cpu_seconds", cpu[READ], "s", higher_is_better=False),
+    ]
+    rows.append(
+        make_row(
+            name,
+            "the MCAP file",
+            "size",
+            size / 1e6,
+            "MB",
+            higher_is_better=False,
+            baseline_subject="the session file",
+            baseline_value=session_size / 1e6,
+        )
+    )
+    return rows
