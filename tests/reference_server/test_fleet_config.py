@@ -84,8 +84,10 @@ def test_free_places_are_stations_first_then_apart_and_off_the_walls() -> None:
     ],
 )
 def test_pltf_serve_fleet_usage_errors_exit_2(
-    args: list[str], message: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+    args: list[str], message: str, tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
 ) -> None:
+    # in-process: the server's logging set-up would point the root logger at this test's captured stderr for good
+    monkeypatch.setattr(cli.logging, "basicConfig", lambda **kw: None)
     assert cli.main(["--data-dir", str(tmp_path), *args]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and message in err and "Traceback" not in err
