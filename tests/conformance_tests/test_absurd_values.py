@@ -18,7 +18,7 @@ from pltf.conformance_tests.catalogue import Tier, Verdict, load_all, select
 from pltf.conformance_tests.context import Config
 from pltf.conformance_tests.runner import Runner, RunResult
 from pltf.spec.codec import REPLIES
-from pltf.spec.compiler import WIRE
+from pltf.spec.compiler import WIRE, value_range
 from pltf.spec.model import FieldDef
 from pltf.spec.strategies import _INT_BOUNDS
 from pltf.spec.telegram import user_fields
@@ -31,12 +31,16 @@ ABSURD_DOUBLES = (math.nan, math.inf, -math.inf, MAX, -MAX)
 
 
 def extremes(f: FieldDef) -> st.SearchStrategy[float]:
-    """The values at the edge of ``f``'s wire type (spec/compiler.WIRE): an INT's bounds, a DOUBLE's NaN,
-    infinities and largest magnitudes."""
+    """The values at the edge of ``f``'s domain (spec/compiler.WIRE and the field's declared range): an INT's
+    bounds, a DOUBLE's NaN, infinities and largest magnitudes."""
     char = WIRE[f.type][0]
     if char == "d":
         return st.sampled_from(ABSURD_DOUBLES)
-    return st.sampled_from(_INT_BOUNDS[char])
+    lo, hi = _INT_BOUNDS[char]
+    declared = value_range(f)  # a field with a declared range (lookup_percent 0..99): its own extremes
+    if declared is not None:
+        lo, hi = max(lo, declared[0]), min(hi, declared[1])
+    return st.sampled_from((lo, hi))
 
 
 def numeric(name: str) -> dict[str, FieldDef]:
