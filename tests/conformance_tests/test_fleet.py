@@ -11,6 +11,7 @@ import socket
 import xml.etree.ElementTree as ET
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 import yaml
@@ -59,9 +60,19 @@ def _single(target: launch.Launched, profile: str, keyword: str | None, out: Pat
 
 
 def check_fleet_against_single_runs(
-    fleet_file: Path, started: dict[str, launch.Launched], keyword: str | None, out: Path, *extra: str
-) -> dict[str, object]:
-    """Run the fleet, then each target alone; assert the verdicts and exit statuses agree; the fleet's JSON."""
+    fleet_file: Path,
+    started: dict[str, launch.Launched],
+    keyword: str | None,
+    out: Path,
+    *extra: str,
+    timing_may_be_inconclusive: bool = False,
+) -> dict[str, Any]:
+    """Run the fleet, then each target alone; assert the verdicts and exit statuses agree; the fleet's JSON.
+
+    ``timing_may_be_inconclusive`` (the whole tier on a loaded machine): a case that judges what the platform did in
+    time (flag timing or moves_platform) may be INCONCLUSIVE on one side - at time scale 10 a server that cannot
+    keep up in one run and could in the other, which two single runs show as well - but a definite verdict (PASS,
+    FAIL, NON-STRICT, N/A) must be the same on both sides, and every other case identical."""
     args = ["conform", "--targets", str(fleet_file), "--json", str(out / "fleet.json"), *extra]
     args += ["--junit", str(out / "junit"), "--html", str(out / "fleet.html")]
     code = main(args + (["-k", keyword] if keyword else []))
@@ -69,11 +80,19 @@ def check_fleet_against_single_runs(
     fleet = {t["name"]: t for t in report["targets"]}
     assert list(fleet) == list(PROFILES)
     singles = {n: _single(t, PROFILES[n], keyword, out / f"{n}.json") for n, t in started.items()}
+    timed = {c["id"] for c in fleet["reference"]["report"]["cases"] if {"timing", "moves_platform"} & set(c["flags"])}
     for name, (single_code, verdicts) in singles.items():
         got = {c["id"]: c["verdict"] for c in fleet[name]["report"]["cases"]}
+        assert got.keys() == verdicts.keys(), name
+        if timing_may_be_inconclusive:
+            excused = {k for k in got if k in timed and "INCONCLUSIVE" in (got[k], verdicts[k])}
+            got = {k: v for k, v in got.items() if k not in excused}
+            verdicts = {k: v for k, v in verdicts.items() if k not in excused}
         assert got == verdicts, name
-        assert fleet[name]["exit_code"] == single_code, name
-    assert code == report["exit_code"] == max(c for c, _ in singles.values())
+        if not timing_may_be_inconclusive:
+            assert fleet[name]["exit_code"] == single_code, name
+    if not timing_may_be_inconclusive:
+        assert code == report["exit_code"] == max(c for c, _ in singles.values())
     for name in PROFILES:  # JUnit per target, each a whole single-run report
         root = ET.parse(out / "junit" / f"{name}.xml").getroot()
         assert root.get("name") == f"pltf conform {name}"
@@ -109,7 +128,7 @@ def test_the_standard_tier_across_the_fleet_matches_single_runs(
     four: tuple[Path, dict[str, launch.Launched]], tmp_path: Path
 ) -> None:
     fleet_file, started = four
-    report = check_fleet_against_single_runs(fleet_file, started, None, tmp_path)
+    report = check_fleet_against_single_runs(fleet_file, started, None, tmp_path, timing_may_be_inconclusive=True)
     assert len(report["matrix"]) > 150
 
 
