@@ -16,7 +16,7 @@ Channels (topic: schema, from what):
   the platform's frame, base_link). LaserScan holds ranges at equally spaced bearings, the protocol sends
   points: each point goes into the 0.5 degree bin of its bearing seen from the platform's origin (the nearest
   point wins a bin; a bin without a point has range 0, Foxglove draws it at the origin), from the first
-  point's bin to the last's. A point is off by at most 0.25 degrees of bearing; its range is exact.
+  point's bin to the last's. A point is off by at most 0.25 degrees of bearing; its range is rounded to the mm.
 - ``/map``: foxglove.SceneUpdate, from CMD_GET_MAP replies (entity ``map``: the lines of every layer, guide 6.5)
   and CMD_GET_ROADMAP replies (entity ``roadmap``: each station's name and heading), documents parsed and
   validated with pltf.spec.documents; a document that does not validate is a WARNING line on ``/pltf/wire``.
@@ -111,7 +111,7 @@ def scan_ranges(points: Any) -> tuple[float, float, list[float]]:
     out = np.zeros(hi - lo + 1)
     order = np.argsort(-ranges, kind="stable")  # farthest first: the nearest point of a bin is written last
     out[bins[order] - lo] = ranges[order]
-    return lo * SCAN_STEP, hi * SCAN_STEP, out.tolist()
+    return lo * SCAN_STEP, hi * SCAN_STEP, out.round(3).tolist()  # to the mm, as the points: half the JSON
 
 
 def _status(rec: Record, t: Any) -> list[Message]:
