@@ -39,13 +39,16 @@ def fuzz(member: str, out: Path, seconds: float) -> subprocess.Popen[str]:
 
 
 def clean(status: int, output: str, out: Path) -> dict[str, object]:
-    """summary.json of a campaign that exited 0 with no finding; the load's unconfirmed stalls (replayed clean) are
-    allowed, as in test_foreign_targets.finds_nothing."""
+    """summary.json of a campaign that exited 0 with no finding. A suspicion the fuzzer could not confirm is reported
+    apart and sets no exit status; each one here must have replayed clean at least once (the row's manner or the
+    load: an RST that cuts a 70 KB reply in flight, a session ended by the relay while a unit was on the wire), never
+    a failure that every replay repeats."""
     assert status == 0, output[-2000:]
     summary = json.loads((out / "summary.json").read_text())
     assert summary["findings"] == [], summary["findings"]
-    load = [u for u in summary.get("unconfirmed", []) if u["kind"] == "stall"]
-    assert len(load) == len(summary.get("unconfirmed", [])) <= 2, summary.get("unconfirmed")
+    unconfirmed = summary.get("unconfirmed", [])
+    replayed_clean = [u for u in unconfirmed if "ok" in u.get("evidence", {}).get("replays", [])]
+    assert len(replayed_clean) == len(unconfirmed), unconfirmed
     return dict(summary)
 
 
