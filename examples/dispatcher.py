@@ -31,53 +31,10 @@ import sys
 import threading
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
-from typing import NamedTuple
 
-from pltf.client import CommandRejected, MotionMode, OperationState, PlatformClient, PlatformError, Timeout
+from patrol import Station, running_in_automatic, stations_of, target  # the patrol's platform helpers
 
-RUNNING, READY = OperationState.ST_OP_RUNNING, OperationState.ST_OP_READY
-
-
-class Station(NamedTuple):
-    name: str
-    x_mm: int
-    y_mm: int
-    angle_deg: float  # roadmap angles are degrees (toolkit erratum E-XML-007)
-
-
-def target(text: str) -> tuple[str, int]:
-    host, _, port = text.rpartition(":")
-    if not host or not port.isdigit() or not 0 < int(port) < 65536:
-        raise argparse.ArgumentTypeError(f"expected HOST:PORT, got {text!r}")
-    return host.strip("[]"), int(port)
-
-
-def stations_of(roadmap_xml: bytes) -> dict[str, Station]:
-    """The stations of a roadmap document (guide 6.5 Roadmap), by name."""
-    out = {}
-    for st in ET.fromstring(roadmap_xml).iterfind("stations/station"):
-        point = st.find("point")
-        if point is None:
-            continue
-        name = st.get("name") or st.get("id") or ""
-        out[name] = Station(
-            name, int(float(point.get("x", "0"))), int(float(point.get("y", "0"))), float(st.get("angle", "0"))
-        )
-    return out
-
-
-def running_in_automatic(pltf: PlatformClient) -> None:
-    """Bring the platform up and to state Running in mode Automatic (the mode only changes in Ready)."""
-    status = pltf.bring_up(timeout=30)
-    if status.motion_mode != MotionMode.MODE_MOTION_AUTOMATIC:
-        if status.operation_state != READY:
-            pltf.stop()
-            pltf.wait_state(READY)
-        pltf.set_mode(MotionMode.MODE_MOTION_AUTOMATIC)
-        pltf.wait_mode(MotionMode.MODE_MOTION_AUTOMATIC)
-    if pltf.get_status().operation_state != RUNNING:
-        pltf.start()
-        pltf.wait_state(RUNNING)
+from pltf.client import CommandRejected, PlatformClient, PlatformError, Timeout
 
 
 def say(line: str) -> None:
