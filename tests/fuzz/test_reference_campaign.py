@@ -46,10 +46,8 @@ def test_short_campaign_reaches_every_state_and_finds_nothing(tmp_path: Path) ->
     names = {s for s, _ in c.stats.states}
     assert names >= {"not_connected", "connected", "ready", "running", "breaked"}, c.stats.states
     assert c.stats.cases >= 6000
-    # the reference server reads a leaving client's last bytes before it judges the next (E-WIRE-007): every port
-    # takes clients back to back, so the fuzzer pipelines throughout (how many units ran again is the machine's:
-    # issue 32, no exact count of a timing-dependent counter in the default tier)
-    assert c.stats.pipelined > 1000
+    # how many units were pipelined is the machine's (a unit turned away under load stops pipelining): issue 32, no
+    # timing-dependent counter in the default tier; the slow tier's test_foreign_targets holds it with a tolerance
 
 
 def free_ports() -> tuple[int, int]:
