@@ -100,14 +100,21 @@ def test_two_workers_find_the_planted_bug_once_and_share_their_corpus(tmp_path: 
         Path(summary["findings"][0]["dir"]).name
     ]
     finding = summary["findings"][0]
-    assert finding["kind"] == "dead" and finding["reproduced"]
+    assert finding["kind"] == "dead" and finding["confirmed"], finding
     workers = summary["workers"]
     assert [w["seed"] for w in workers] == [1, 2]
     assert all(w["cases"] > 0 for w in workers), workers
     # each worker received the other's inputs; whether one was drawn before the crash stopped the campaign is timing
     # (a clean clone's make test saw imports of 143 and 534 and none used yet): the slow tier's prelude test holds use
     assert all(w["imported"] for w in workers), [(w["imported"], w["used"]) for w in workers]
-    kills_a_fresh_instance(Path(finding["dir"]))
+    # the crash needs Running (zoo/bugs.py CrashAfterStart), which the target's view tracks across both lanes: a
+    # death reached through the two lanes' interleaving (the culprit's state 'ready', seen once in a clean clone's
+    # make test and once in six runs beside a CPU hog) may not replay on one lane, and the report says so
+    if finding["reproduced"]:
+        kills_a_fresh_instance(Path(finding["dir"]))
+    else:
+        described = json.loads((Path(finding["dir"]) / "finding.json").read_text())
+        assert described["reproduced_on_fresh_target"] is False and described["state"]["target"][0] != "running"
 
 
 @pytest.mark.slow
