@@ -37,7 +37,7 @@ import logging
 import signal
 import socket
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import Any, Protocol, TypeVar
 
 from pltf.reference_server.control_loop import CONTROL_PERIOD, MAX_CATCH_UP, ControlLoop
 from pltf.reference_server.platform import Platform
@@ -487,6 +487,9 @@ class _Connection:
         self._close()
 
 
+R = TypeVar("R", bound="Runnable")
+
+
 async def serve(
     platform: Platform,
     host: str,
@@ -500,18 +503,33 @@ async def serve(
 ) -> int:
     """Listen on ``ports`` and run the platform until CMD_EXIT (or SIGINT/SIGTERM); returns the exit code."""
     server = Server(platform, host, ports, time_scale, stall_timeout=stall_timeout, max_length=max_length)
+    return await serve_until_stopped(server, ready, handle_signals)
+
+
+class Runnable(Protocol):
+    """What ``serve_until_stopped`` runs: a server of one platform or of a fleet."""
+
+    async def start(self) -> object: ...
+    async def run(self) -> int: ...
+    def stop(self) -> None: ...
+
+
+async def serve_until_stopped(
+    server: R, ready: Callable[[R], None] | None, handle_signals: bool, what: str = "server"
+) -> int:
+    """Start ``server``, stop it at SIGINT/SIGTERM (``handle_signals``), tell ``ready``, run it to its exit code."""
     await server.start()
     if handle_signals:
         loop = asyncio.get_running_loop()
         for sig in (signal.SIGINT, signal.SIGTERM):
-            loop.add_signal_handler(sig, _on_signal, server, sig)
+            loop.add_signal_handler(sig, _on_signal, server, sig, what)
     if ready is not None:
         ready(server)
     return await server.run()
 
 
-def _on_signal(server: Server, sig: signal.Signals) -> None:
-    log.info("%s received: server exits", sig.name)
+def _on_signal(server: Runnable, sig: signal.Signals, what: str) -> None:
+    log.info("%s received: %s exits", sig.name, what)
     server.stop()
 
 
@@ -520,4 +538,14 @@ def run(platform: Platform, host: str, ports: Sequence[int], time_scale: float =
     return asyncio.run(serve(platform, host, ports, time_scale, **options))  # type: ignore[arg-type]
 
 
-__all__ = ["CONTROL_PERIOD", "MAX_CATCH_UP", "STALL_TIMEOUT", "Server", "SimClock", "run", "serve"]
+__all__ = [
+    "CONTROL_PERIOD",
+    "MAX_CATCH_UP",
+    "STALL_TIMEOUT",
+    "Runnable",
+    "Server",
+    "SimClock",
+    "run",
+    "serve",
+    "serve_until_stopped",
+]

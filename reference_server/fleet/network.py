@@ -16,12 +16,11 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
-import signal
 from collections.abc import Callable
 
 from pltf.reference_server.control_loop import BURST, ControlLoop
 from pltf.reference_server.fleet.fleet import Fleet, Member
-from pltf.reference_server.network import Server
+from pltf.reference_server.network import Server, serve_until_stopped
 
 log = logging.getLogger("pltf.server")
 
@@ -100,20 +99,7 @@ async def serve(
     ready: Callable[[FleetServer], None] | None = None,
     handle_signals: bool = True,
 ) -> int:
-    server = FleetServer(fleet, host, time_scale)
-    await server.start()
-    if handle_signals:
-        loop = asyncio.get_running_loop()
-        for sig in (signal.SIGINT, signal.SIGTERM):
-            loop.add_signal_handler(sig, _on_signal, server, sig)
-    if ready is not None:
-        ready(server)
-    return await server.run()
-
-
-def _on_signal(server: FleetServer, sig: signal.Signals) -> None:
-    log.info("%s received: fleet exits", sig.name)
-    server.stop()
+    return await serve_until_stopped(FleetServer(fleet, host, time_scale), ready, handle_signals, "fleet")
 
 
 def run(fleet: Fleet, host: str, time_scale: float = 1.0) -> int:
