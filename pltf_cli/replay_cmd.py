@@ -8,16 +8,13 @@ file, the arguments, a target that cannot be reached at all).
 from __future__ import annotations
 
 import argparse
-import asyncio
 import sys
-import time
 from pathlib import Path
 
 from pltf.cli.options import FAILED, CommandError, exit_status, port, positive, target
-from pltf.proxy.replay import counts, judge, plan
-from pltf.proxy.replay_io import Settings, replay
+from pltf.proxy.replay_io import Settings, run, survey
 from pltf.proxy.report import render, write_junit
-from pltf.proxy.session import SessionError, read_session
+from pltf.proxy.session import SessionError, open_session
 
 
 def add_replay_arguments(p: argparse.ArgumentParser) -> None:
@@ -44,10 +41,10 @@ def add_replay_arguments(p: argparse.ArgumentParser) -> None:
 
 def run_replay(args: argparse.Namespace) -> int:
     try:
-        session = read_session(args.session)
+        session = open_session(args.session)
+        scripts, t0 = survey(session)
     except SessionError as exc:
         raise CommandError(str(exc)) from None
-    scripts = plan(session)
     if not scripts:
         raise CommandError(f"{args.session}: no connection to replay")
     host, port = args.target
@@ -58,16 +55,16 @@ def run_replay(args: argparse.Namespace) -> int:
             raise CommandError(f"the session used two ports ({session.routes[1].target} too): give --second-port")
         ports.append(args.second_port or port)
     settings = Settings(host, ports, args.time_scale, args.reply_timeout)
-    t0 = time.monotonic()
-    outcomes = asyncio.run(replay(scripts, settings))
-    seconds = time.monotonic() - t0
-    if all(o.error is not None for o in outcomes.values()):
-        raise CommandError(next(iter(outcomes.values())).error or "no connection")
-    differences = judge(scripts, outcomes)
-    sys.stdout.write(render(differences, counts(scripts, outcomes)))
+    try:
+        result, seconds = run(session, scripts, t0, settings)
+    except SessionError as exc:  # a line of the file changed since the survey read it
+        raise CommandError(str(exc)) from None
+    if not result.connected and result.errors:
+        raise CommandError(result.errors[0])
+    sys.stdout.write(render(result.differences, result.counts))
     if args.junit is not None:
         try:
-            write_junit(args.junit, differences, scripts, seconds)
+            write_junit(args.junit, result.differences, result.telegrams, seconds)
         except OSError as exc:
             raise CommandError(f"cannot write {args.junit}: {exc.strerror}") from None
-    return FAILED if differences else 0
+    return FAILED if result.differences else 0

@@ -5,6 +5,13 @@ volatile-field table (spec/volatile.yaml) decides per top-level field: ignored, 
 group's tolerance applies to its items' numbers), or exact. A group whose item counts differ is one difference
 (its count), not one per item. Enum values are named, long strings cut, so that a difference reads as what a
 person would check: ``motion_mode: recorded MODE_MOTION_VEL (3), replayed MODE_MOTION_NO (0)``.
+
+A watcher's replies (``diff_watched``, erratum E-REP-022): on a connection that only reads, a reply in
+``WATCHED`` (the platform's state and motion: guide 6.4 CMD_GET_STATUS, CMD_GET_POSITION, CMD_GET_DEBUG_DATA)
+tells where the platform stood when the watcher asked, and what another connection made it do by then; a
+replay keeps each connection's timing, not the instant of another's motion, so such a reply is compared by
+kind (its telegram) and by the fields that report a fault (``WATCHED``'s list), never by its other values.
+Every other reply of a watcher (a parameter, the map) is compared as any other.
 """
 
 from __future__ import annotations
@@ -47,8 +54,23 @@ def _strings(a: str, b: str) -> tuple[str, str]:
     )
 
 
-def diff_telegrams(recorded: Telegram, replayed: Telegram) -> list[FieldDiff]:
-    """The fields of two replies that differ beyond the volatile-field table (an empty list: the same reply)."""
+# A watcher's replies that depend on when it asked: the fields still compared (faults, not motion or time).
+WATCHED: dict[str, tuple[str, ...]] = {
+    "CMD_GET_STATUS": ("app_error", "emergency_state", "collision", "localization_lost"),
+    "CMD_GET_POSITION": (),
+    "CMD_GET_DEBUG_DATA": (),
+}
+
+
+def diff_watched(recorded: Telegram, replayed: Telegram) -> list[FieldDiff]:
+    """``diff_telegrams`` for a connection that only reads: a ``WATCHED`` reply by its kind and fault fields."""
+    only = WATCHED.get(recorded.NAME)
+    return diff_telegrams(recorded, replayed, only)
+
+
+def diff_telegrams(recorded: Telegram, replayed: Telegram, only: tuple[str, ...] | None = None) -> list[FieldDiff]:
+    """The fields of two replies that differ beyond the volatile-field table (an empty list: the same reply);
+    ``only``: just these fields (the telegram's kind always)."""
     if recorded.NAME != replayed.NAME:
         return [FieldDiff("(telegram)", recorded.NAME, replayed.NAME)]
     a, b = telegram_to_json(recorded), telegram_to_json(replayed)
@@ -59,7 +81,7 @@ def diff_telegrams(recorded: Telegram, replayed: Telegram) -> list[FieldDiff]:
     for field, va in a["fields"].items():
         vb = b["fields"][field]
         r = rule(recorded.NAME, field)
-        if r.ignored:
+        if r.ignored or (only is not None and field not in only):
             continue
         if field in groups:
             out += _diff_group(field, va, vb, r.tolerance, names)

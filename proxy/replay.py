@@ -1,5 +1,6 @@
-"""The replay of a recorded session: what to send when (``plan``), and how the replies compare (``judge``).
-Sans-IO: replay_io.py does the sending and hands back an ``Outcome`` per connection.
+"""The replay of a recorded session: what to send when (``Survey``, ``Builder``), and how the replies compare
+(``judge_step``, ``judge_wait``, ``judge_end``). Sans-IO: replay_io.py reads the session file, does the sending
+and judges each reply as soon as both sides of it are known, so that nothing of a long recording is kept.
 
 Rules:
 - A connection is replayed on the route it was recorded on (the order of the session header's routes), as a
@@ -16,19 +17,29 @@ Rules:
   something changes). How many polls see each state depends on timing, so a wait is judged by where it ended:
   its final reply is compared, the polls before it are counted. The replay polls at the recorded pace until a
   reply matches the recorded final one (possibly before the recorded number of polls) or, past the recorded
-  number, until twice the wait's recorded duration plus ``WAIT_GRACE`` has passed.
+  number, until twice the wait's recorded duration plus ``WAIT_GRACE`` has passed. A run longer than
+  ``WAIT_SPAN`` recorded seconds or ``WAIT_POLLS`` polls is cut into waits of that size (each judged by its own
+  final reply): the replay needs a wait's final reply before it sends its first poll, and a reader that looks
+  that far ahead is what bounds the replay's memory.
+- A watcher (``Script.reads_only``: every request a well-formed query, the telegrams the guide answers) has no
+  waits: each poll is sent and judged on its own, and its replies whose values depend on when it asked are
+  compared by kind (compare.py ``WATCHED``, erratum E-REP-022).
 - Every other reply is compared field by field (compare.py, spec/volatile.yaml). A missing reply, an extra
   one, and a connection the target closes where it did not in the recording (or keeps open where it closed
   it) are differences too.
+- Memory: a connection's summary (``Survey``, a pass over the file before the replay) is kept for the whole
+  replay (a few hundred bytes a connection); steps, replies and waits only until they are judged.
 """
 
 from __future__ import annotations
 
 import itertools
 import statistics
+from collections import deque
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 
-from pltf.proxy.compare import diff_telegrams
+from pltf.proxy.compare import diff_telegrams, diff_watched
 from pltf.proxy.session import Session
 from pltf.proxy.tap import CLOSE, FRAME, OPEN, RAW, Record
 from pltf.proxy.view import format_fields
@@ -37,9 +48,12 @@ from pltf.spec.jsonio import telegram_to_json
 
 WAIT_GRACE = 2.0  # s (wall, unscaled) a wait may poll beyond twice its recorded duration
 MIN_WAIT_POLLS = 2  # a run of this many identical requests is a wait
+WAIT_SPAN = 30.0  # recorded s: a longer run of polls is cut into waits of this span
+WAIT_POLLS = 2000  # ... or of this many polls
+KEPT = 50  # replies nobody asked for kept (beyond it they are counted)
 
 
-@dataclass
+@dataclass(eq=False)
 class Step:
     """One recorded request: what to send, when, and what came back."""
 
@@ -48,10 +62,12 @@ class Step:
     gap: float  # recorded seconds after the later of the previous request and the replies below
     after_replies: int  # replies this connection had received when it was sent
     answered: bool  # a reply is due (guide 6.1: only requests with a reply table are answered)
-    reply: Record | None = None  # the recorded reply
+    reply: Record | None = None  # the recorded reply (dropped for a poll that is not its wait's final one)
     wait: int | None = None  # the wait it is a poll of
     ident: int = -1  # the telegram identifier (-1: no frame)
     at: float = 0.0  # recorded seconds since the session began
+    index: int = 0  # its place among the connection's requests
+    superseded: bool = False  # a poll followed by another of its run: its reply is not kept
 
     @property
     def label(self) -> str:
@@ -62,35 +78,41 @@ class Step:
         return f"{t.NAME} {fields}".strip() if len(fields) < 80 else f"{t.NAME} {fields[:77]}..."
 
 
-@dataclass
+@dataclass(eq=False)
 class Wait:
     id: int
     steps: list[int]  # indices of its polls in the script
     interval: float  # recorded seconds between polls (median)
     duration: float  # recorded seconds from the first poll to the last reply
+    last: Step | None = None  # the final poll
+    complete: bool = True  # its final reply is known (or known never to come)
 
     @property
     def final(self) -> int:
         return self.steps[-1]
 
 
-@dataclass
+@dataclass(eq=False)
 class Script:
-    """One recorded connection, ready to replay."""
+    """One recorded connection, ready to replay: its summary, and (``plan``) its steps."""
 
     conn: int
     route: int  # index of the session's route (0: first port, 1: second)
     port: int  # the recorded target port
     start: float  # recorded seconds since the session began
     after_closes: list[int] = field(default_factory=list)  # connections (either port) that must be closed first
-    steps: list[Step] = field(default_factory=list)
-    waits: dict[int, Wait] = field(default_factory=dict)
-    unsolicited: list[Record] = field(default_factory=list)  # recorded replies no request asked for
+    steps: list[Step] = field(default_factory=list)  # plan() only: the replay streams them (Builder)
+    waits: dict[int, Wait] = field(default_factory=dict)  # the waits not judged yet
+    unsolicited: list[Record] = field(default_factory=list)  # recorded replies no request asked for (KEPT)
+    unsolicited_count: int = 0
     closed_by: str = "client"  # who ended it in the recording: client, target (or proxy: as client)
     closed: bool = False  # the recording has its close
     close_gap: float = 0.0  # recorded seconds from its last request or reply to the close
     last_time: float = 0.0
     last_data: float = 0.0  # recorded seconds of its last request or reply (its start when it had none)
+    requests: int = 0  # recorded requests
+    replied: bool = False  # the recording has a reply on it
+    reads_only: bool = True  # every request a well-formed query (a watcher)
 
     def wait_of(self, index: int) -> Wait | None:
         w = self.steps[index].wait
@@ -105,10 +127,16 @@ class Outcome:
     replies: dict[int, Record] = field(default_factory=dict)  # step index -> its reply
     wait_final: dict[int, Record] = field(default_factory=dict)  # wait id -> the reply the wait ended on
     polls: dict[int, int] = field(default_factory=dict)  # wait id -> polls sent
-    extra: list[Record] = field(default_factory=list)  # replies no request asked for, malformed bytes
+    extra: list[Record] = field(default_factory=list)  # replies no request asked for, malformed bytes (KEPT)
+    extra_count: int = 0
     sent: int = 0  # steps sent
     closed_by_target_after: int | None = None  # steps sent when the target closed (None: it did not)
     error: str | None = None  # the connection could not be made
+
+    def add_extra(self, rec: Record) -> None:
+        self.extra_count += 1
+        if len(self.extra) < KEPT:
+            self.extra.append(rec)
 
 
 @dataclass(frozen=True)
@@ -136,73 +164,76 @@ def _closer(detail: str) -> str:
     return "target" if len(words) > 1 and words[1] == "target" else "client"
 
 
-def _script(conn: int, records: list[Record], route: int, t0: float) -> Script:
-    first = records[0]
-    script = Script(conn, route, first.port, first.time - t0, last_data=first.time - t0)
-    pending: dict[int, list[int]] = {}
-    replies_seen, last_reply_time, last_request_time = 0, first.time, first.time
-    for rec in records:
-        if rec.kind in (FRAME, RAW):
-            script.last_data = rec.time - t0
-        if rec.kind in (FRAME, RAW) and rec.direction == "request":
-            ident = _ident(rec.raw)
-            ref = max(last_reply_time, last_request_time)
-            step = Step(rec.raw, rec, rec.time - ref, replies_seen, _answered(rec), ident=ident, at=rec.time - t0)
-            if step.answered:
-                pending.setdefault(ident, []).append(len(script.steps))
-            script.steps.append(step)
-            last_request_time = rec.time
-        elif rec.kind in (FRAME, RAW) and rec.direction == "reply":
-            replies_seen += 1
-            last_reply_time = rec.time
-            waiting = pending.get(_ident(rec.raw))
-            if waiting:
-                script.steps[waiting.pop(0)].reply = rec
+def _is_data(rec: Record) -> bool:
+    return rec.kind in (FRAME, RAW)
+
+
+# ---------------------------------------------------------------------------------------------- the survey
+
+
+@dataclass
+class _Clock:
+    first: float
+    last_reply: float
+    last_request: float
+
+
+class Survey:
+    """A pass over the session's records: every connection's summary (``Script`` without steps), in the order
+    they opened, and the session's first time. What the order of connections needs (when each closed, who closed
+    it, whether it was answered) lies in the future of a streamed replay, so it is read first."""
+
+    def __init__(self, ports: list[int]) -> None:
+        self.route_of = {p: i for i, p in enumerate(ports)}
+        self.scripts: dict[int, Script] = {}
+        self.skipped: set[int] = set()  # connections cut short at the start of the file: nothing to replay
+        self._clocks: dict[int, _Clock] = {}
+        self.t0: float | None = None
+
+    def feed(self, rec: Record) -> None:
+        self.t0 = rec.time if self.t0 is None else min(self.t0, rec.time)
+        s = self.scripts.get(rec.conn)
+        if s is None:
+            if rec.conn in self.skipped or rec.kind != OPEN:
+                self.skipped.add(rec.conn)
+                return
+            s = self.scripts[rec.conn] = Script(rec.conn, self.route_of.get(rec.port, 0), rec.port, rec.time)
+            s.last_data = rec.time
+            self._clocks[rec.conn] = _Clock(rec.time, rec.time, rec.time)
+        clock = self._clocks[rec.conn]
+        if _is_data(rec):
+            s.last_data = rec.time
+            if rec.direction == "request":
+                s.requests += 1
+                s.reads_only = s.reads_only and _answered(rec)
+                clock.last_request = rec.time
             else:
-                script.unsolicited.append(rec)
+                s.replied = True
+                clock.last_reply = rec.time
         elif rec.kind == CLOSE:
-            script.closed, script.closed_by = True, _closer(rec.detail)
-            script.close_gap = max(0.0, rec.time - max(last_reply_time, last_request_time))
-        script.last_time = rec.time - t0
-    _find_waits(script)
-    return script
+            s.closed, s.closed_by = True, _closer(rec.detail)
+            s.close_gap = max(0.0, rec.time - max(clock.last_reply, clock.last_request))
+        s.last_time = rec.time
+
+    def done(self) -> list[Script]:
+        """The scripts with their times relative to the session's first record, in the order they opened."""
+        t0 = self.t0 or 0.0
+        for s in self.scripts.values():
+            s.start, s.last_time, s.last_data = s.start - t0, s.last_time - t0, s.last_data - t0
+        self._clocks.clear()
+        return sorted(self.scripts.values(), key=lambda s: s.start)
 
 
-def _find_waits(script: Script) -> None:
-    steps, k = script.steps, 0
-    while k < len(steps):
-        end = k
-        while end + 1 < len(steps) and steps[end + 1].raw == steps[k].raw:
-            end += 1
-        run = list(range(k, end + 1))
-        if len(run) >= MIN_WAIT_POLLS and steps[k].answered:
-            wid = len(script.waits)
-            times = [steps[i].request.time for i in run]
-            last = steps[run[-1]].reply
-            duration = (last.time if last is not None else times[-1]) - times[0]
-            gaps = [b - a for a, b in itertools.pairwise(times)]
-            script.waits[wid] = Wait(wid, run, statistics.median(gaps), duration)
-            for i in run:
-                steps[i].wait = wid
-        k = end + 1
+def survey(records: Iterable[Record], ports: list[int]) -> tuple[list[Script], float]:
+    sv = Survey(ports)
+    for rec in records:
+        sv.feed(rec)
+    return sv.done(), sv.t0 or 0.0
 
 
-def plan(session: Session) -> list[Script]:
-    """The session's connections as scripts, in the order they opened."""
-    by_conn: dict[int, list[Record]] = {}
-    for rec in session.records:
-        by_conn.setdefault(rec.conn, []).append(rec)
-    route_of = {p: i for i, p in enumerate(session.ports)}
-    t0 = min((r.time for r in session.records), default=session.started)
-    scripts = []
-    for conn, records in by_conn.items():
-        if records[0].kind != OPEN:
-            continue  # a connection cut short at the start of the file: nothing to replay it from
-        scripts.append(_script(conn, records, route_of.get(records[0].port, 0), t0))
-    scripts.sort(key=lambda s: s.start)
-    for s in scripts:
-        s.after_closes = [o.conn for o in scripts if o is not s and _closes_before(o, s)]
-    return scripts
+def closes_first(scripts: Iterable[Script], s: Script) -> list[int]:
+    """The connections that must be closed in the replay before ``s`` opens."""
+    return [o.conn for o in scripts if o is not s and _closes_before(o, s)]
 
 
 def _closes_before(o: Script, s: Script) -> bool:
@@ -221,9 +252,142 @@ def _closes_before(o: Script, s: Script) -> bool:
 def turned_away(newcomer: Script, holder: Script) -> bool:
     """``newcomer`` was turned away while ``holder`` had the port (E-WIRE-007): the target closed it unanswered,
     and ``holder`` still talked after that."""
-    unanswered = not newcomer.unsolicited and all(step.reply is None for step in newcomer.steps)
     closed_by_target = newcomer.closed and newcomer.closed_by == "target"
-    return closed_by_target and unanswered and holder.last_data > newcomer.last_time
+    return closed_by_target and not newcomer.replied and holder.last_data > newcomer.last_time
+
+
+# ---------------------------------------------------------------------------------------------- the steps
+
+
+class Builder:
+    """One connection's records in (``feed``, ``end``), its steps out in order as each becomes ready to send
+    (``ready``): a step when the next request shows it starts no run, a wait when its run is over and its final
+    reply is known. ``keep`` also keeps every step and wait in the script (``plan``)."""
+
+    def __init__(self, script: Script, t0: float, keep: bool = False) -> None:
+        self.s, self.t0, self.keep = script, t0, keep
+        start = script.start + t0
+        self.last_reply, self.last_request = start, start
+        self.pending: dict[int, deque[Step]] = {}
+        self.replies_seen = 0
+        self.run: list[Step] = []
+        self.closed: deque[Step] = deque()  # steps whose run is over, not yet ready (behind an incomplete wait)
+        self.ready: deque[Step] = deque()
+        self.ended = False
+        self.count = 0
+        self.waits = 0  # waits formed
+        self.compared = 0  # replies that will be compared (answered steps that are not polls, wait finals)
+        self.names: dict[str, None] = {}  # the recorded reply telegrams
+
+    def feed(self, rec: Record) -> None:
+        if self.ended:
+            return
+        if _is_data(rec) and rec.direction == "request":
+            self._request(rec)
+        elif _is_data(rec):
+            self._reply(rec)
+        elif rec.kind == CLOSE:
+            self.end()
+
+    def _request(self, rec: Record) -> None:
+        ref = max(self.last_reply, self.last_request)
+        step = Step(rec.raw, rec, rec.time - ref, self.replies_seen, _answered(rec), ident=_ident(rec.raw))
+        step.at, step.index = rec.time - self.t0, self.count
+        self.count += 1
+        self.last_request = rec.time
+        if step.answered:
+            self.pending.setdefault(step.ident, deque()).append(step)
+        if self.keep:
+            self.s.steps.append(step)
+        if self._joins_run(step):
+            self.run[-1].superseded = True
+            self.run[-1].reply = None
+            self.run.append(step)
+            return
+        self._close_run()
+        self.run = [step]
+
+    def _joins_run(self, step: Step) -> bool:
+        if self.s.reads_only or not self.run or not step.answered or step.raw != self.run[0].raw:
+            return False
+        return len(self.run) < WAIT_POLLS and step.request.time - self.run[0].request.time <= WAIT_SPAN
+
+    def _reply(self, rec: Record) -> None:
+        self.replies_seen += 1
+        self.last_reply = rec.time
+        waiting = self.pending.get(_ident(rec.raw))
+        if not waiting:
+            self.s.unsolicited_count += 1
+            if len(self.s.unsolicited) < KEPT:
+                self.s.unsolicited.append(rec)
+            return
+        step = waiting.popleft()
+        if rec.telegram is not None:
+            self.names[rec.telegram.NAME] = None
+        if not step.superseded:
+            step.reply = rec
+        self._release()
+
+    def _close_run(self) -> None:
+        run, self.run = self.run, []
+        if len(run) >= MIN_WAIT_POLLS and run[0].answered:
+            times = [st.request.time for st in run]
+            wait = Wait(
+                self.waits,
+                [st.index for st in run],
+                statistics.median([b - a for a, b in itertools.pairwise(times)]),
+                0.0,
+                last=run[-1],
+                complete=False,
+            )
+            self.waits += 1
+            self.s.waits[wait.id] = wait
+            for st in run:
+                st.wait = wait.id
+            self.compared += 1
+        else:
+            self.compared += sum(st.answered for st in run)
+        self.closed.extend(run)
+        self._release()
+
+    def _release(self) -> None:
+        while self.closed:
+            head = self.closed[0]
+            wait = None if head.wait is None else self.s.waits.get(head.wait)
+            if wait is not None and not wait.complete:
+                last = wait.last
+                assert last is not None
+                if last.reply is None and not self.ended:
+                    return
+                end = last.reply.time if last.reply is not None else last.request.time
+                wait.duration = end - self.closed[0].request.time
+                wait.complete = True
+            self.ready.append(self.closed.popleft())
+
+    def end(self) -> None:
+        """The connection's close (or the end of the file): what is left is ready."""
+        if self.ended:
+            return
+        self._close_run()
+        self.ended = True
+        self._release()
+        self.pending.clear()
+
+
+def plan(session: Session) -> list[Script]:
+    """The session's connections as scripts with all their steps, in the order they opened (in memory: for
+    tests and short sessions; ``pltf replay`` streams, replay_io.py)."""
+    scripts, t0 = survey(session.records, session.ports)
+    builders = {s.conn: Builder(s, t0, keep=True) for s in scripts}
+    for rec in session.records:
+        b = builders.get(rec.conn)
+        if b is not None:
+            b.feed(rec)
+    for b in builders.values():
+        b.end()
+    for s in scripts:
+        s.after_closes = closes_first(scripts, s)
+    return scripts
 
 
 def final_matches(step: Step, reply: Record) -> bool:
@@ -263,60 +427,78 @@ def _compare(script: Script, step: Step, got: Record | None, note: str = "") -> 
             same = (rec.error or "").split(":")[0] == (got.error or "").split(":")[0]
             return [] if same else [d("(reply)", _describe(rec), _describe(got))]
         return [d("(reply)", _describe(rec), _describe(got))]
-    return [d(f.path, f.recorded, f.replayed) for f in diff_telegrams(rec.telegram, got.telegram)]
+    diff = diff_watched if script.reads_only else diff_telegrams
+    return [d(f.path, f.recorded, f.replayed) for f in diff(rec.telegram, got.telegram)]
+
+
+def judge_step(script: Script, step: Step, got: Record | None) -> list[Difference]:
+    """A sent request that is no poll of a wait, against the reply the replay got for it (None: none)."""
+    if step.answered or step.reply is not None or got is not None:
+        return _compare(script, step, got)
+    return []
+
+
+def judge_wait(script: Script, wait: Wait, final: Record | None, polls: int) -> list[Difference]:
+    """A wait by the reply it ended on in the replay."""
+    assert wait.last is not None
+    note = f" (a wait: {len(wait.steps)} polls recorded, {polls} replayed; its final reply)"
+    return _compare(script, wait.last, final, note)
+
+
+def _conn_diff(s: Script, path: str, a: str, b: str, when: float | None = None) -> Difference:
+    return Difference("(connection)", s.conn, s.port, s.start if when is None else when, f"connection #{s.conn}",
+                      path, a, b)  # fmt: skip
+
+
+def judge_end(script: Script, o: Outcome, next_label: str = "", next_at: float = 0.0) -> list[Difference]:
+    """How the connection went as a whole: cut short, replies nobody asked for, who ended it. ``next_label`` and
+    ``next_at``: the first request not sent (when the target closed before all were)."""
+    s, out = script, []
+    if o.error is not None:
+        return [_conn_diff(s, "connect", "connected", o.error)]
+    if o.sent < s.requests:
+        what = f"{o.sent} sent: the target closed the connection before {next_label}"
+        out.append(_conn_diff(s, "requests", f"{s.requests} sent", what, when=next_at))
+    if o.extra_count != s.unsolicited_count or any(
+        _describe(a) != _describe(b) for a, b in zip(s.unsolicited, o.extra, strict=False)
+    ):
+        out.append(
+            _conn_diff(
+                s,
+                "replies nobody asked for",
+                _list(s.unsolicited, s.unsolicited_count),
+                _list(o.extra, o.extra_count),
+            )
+        )
+    target_closed = o.closed_by_target_after is not None
+    if s.closed_by == "target" and not target_closed:
+        out.append(_conn_diff(s, "end", "closed by the target", "kept open by the target", when=s.last_time))
+    elif s.closed_by != "target" and target_closed and o.sent == s.requests:
+        out.append(_conn_diff(s, "end", f"closed by the {s.closed_by}", "closed by the target", when=s.last_time))
+    return out
+
+
+def _list(records: list[Record], count: int) -> str:
+    shown = ", ".join(map(_describe, records)) or "none"
+    return shown if count <= len(records) else f"{shown} and {count - len(records)} more"
 
 
 def judge(scripts: list[Script], outcomes: dict[int, Outcome]) -> list[Difference]:
+    """Every difference of the planned scripts (``plan``) against the outcomes, at once."""
     out: list[Difference] = []
     for s in scripts:
         o = outcomes.get(s.conn, Outcome(s.conn))
-        at = s.start
-
-        def conn_diff(path: str, a: str, b: str, script: Script = s, when: float = at) -> Difference:
-            return Difference("(connection)", script.conn, script.port, when, f"connection #{script.conn}", path, a, b)
-
         if o.error is not None:
-            out.append(conn_diff("connect", "connected", o.error))
+            out += judge_end(s, o)
             continue
         for i, step in enumerate(s.steps[: o.sent]):
             wait = s.wait_of(i)
-            if wait is not None:
-                if i == wait.final:
-                    polls = o.polls.get(wait.id, 0)
-                    out += _compare(
-                        s,
-                        step,
-                        o.wait_final.get(wait.id),
-                        f" (a wait: {len(wait.steps)} polls recorded, {polls} replayed; its final reply)",
-                    )
-                continue
-            if step.answered or step.reply is not None or i in o.replies:
-                out += _compare(s, step, o.replies.get(i))
-        if o.sent < len(s.steps):
-            step = s.steps[o.sent]
-            out.append(
-                conn_diff(
-                    "requests",
-                    f"{len(s.steps)} sent",
-                    f"{o.sent} sent: the target closed the connection before {step.label}",
-                    when=step.at,
-                )
-            )
-        if len(o.extra) != len(s.unsolicited) or any(
-            _describe(a) != _describe(b) for a, b in zip(s.unsolicited, o.extra, strict=False)
-        ):
-            out.append(
-                conn_diff(
-                    "replies nobody asked for",
-                    ", ".join(map(_describe, s.unsolicited)) or "none",
-                    ", ".join(map(_describe, o.extra)) or "none",
-                )
-            )
-        target_closed = o.closed_by_target_after is not None
-        if s.closed_by == "target" and not target_closed:
-            out.append(conn_diff("end", "closed by the target", "kept open by the target", when=s.last_time))
-        elif s.closed_by != "target" and target_closed and o.sent == len(s.steps):
-            out.append(conn_diff("end", f"closed by the {s.closed_by}", "closed by the target", when=s.last_time))
+            if wait is None:
+                out += judge_step(s, step, o.replies.get(i))
+            elif i == wait.final:
+                out += judge_wait(s, wait, o.wait_final.get(wait.id), o.polls.get(wait.id, 0))
+        nxt = s.steps[o.sent] if o.sent < len(s.steps) else None
+        out += judge_end(s, o, nxt.label if nxt else "", nxt.at if nxt else 0.0)
     return out
 
 
@@ -339,7 +521,7 @@ def counts(scripts: list[Script], outcomes: dict[int, Outcome]) -> dict[str, int
     )
     return {
         "connections": len(scripts),
-        "requests": sum(len(s.steps) for s in scripts),
+        "requests": sum(s.requests for s in scripts),
         "sent": sent,
         "replies compared": compared,
         "waits": sum(len(s.waits) for s in scripts),

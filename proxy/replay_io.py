@@ -1,10 +1,16 @@
 """The sending side of ``pltf replay``: asyncio, and the only module of the replay with sockets and a clock.
 
 Rules (the timing and the waits are replay.py's; this module carries them out):
-- Every recorded connection is a task with its own socket; replies are decoded as they come (tap.py) and
-  answer the oldest request of their identifier still open.
+- The session file is read twice, as a stream: once for every connection's summary (replay.py ``Survey``),
+  once during the replay, by a reader that hands each connection its steps as they become ready (replay.py
+  ``Builder``) and stops while ``AHEAD`` steps are ready and not yet taken, unless a connection that replays
+  waits for one (a wait's final reply can lie ``WAIT_SPAN`` seconds ahead). A reply is judged as soon as the
+  replay has it and the recorded one is read, then dropped: memory does not grow with the recording's length.
+- Every recorded connection is a task with its own socket, started when the reader reaches its open; replies
+  are decoded as they come (tap.py) and answer the oldest request of their identifier still open.
 - Times are the loop's monotonic clock; recorded gaps are divided by the time scale. No wait is unbounded: a
   reply is waited for ``reply_timeout`` s at most, a connection's turn (the closes before it) ``connect_timeout``.
+  A reply still missing ``LATE`` s after its request is judged missing (one that comes later is dropped).
 - The replay's client ends a connection the way the recorded client did (FIN after the replies it was owed);
   where the recorded target ended it, the replay waits for the target to.
 """
@@ -13,16 +19,35 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import time
 from collections import deque
-from collections.abc import Callable
-from dataclasses import dataclass
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
 from typing import Any
 
-from pltf.proxy.replay import WAIT_GRACE, Outcome, Script, Wait, final_matches
-from pltf.proxy.tap import FRAME, Record, Tap
+from pltf.proxy.replay import (
+    WAIT_GRACE,
+    Builder,
+    Difference,
+    Outcome,
+    Script,
+    Step,
+    Survey,
+    Wait,
+    closes_first,
+    final_matches,
+    judge_end,
+    judge_step,
+    judge_wait,
+)
+from pltf.proxy.session import SessionFile
+from pltf.proxy.tap import FRAME, OPEN, Record, Tap
 
 READ_SIZE = 65536
 CLOSE_PAUSE_MAX = 1.0  # s: the recorded pause before a client's close, at most
+AHEAD = 512  # steps ready and not yet taken, over all connections, before the reader pauses
+BATCH = 64  # records read between two turns of the event loop
+ARRIVALS_KEPT = 4096  # arrival times of replies kept per connection (the replay looks back a few)
 
 
 @dataclass(frozen=True)
@@ -33,23 +58,101 @@ class Settings:
     reply_timeout: float = 3.0
     connect_timeout: float = 5.0
 
+    @property
+    def late(self) -> float:
+        """Seconds after which a reply not come is judged missing."""
+        return max(30.0, 4 * self.reply_timeout)
+
+
+@dataclass
+class Result:
+    differences: list[Difference] = field(default_factory=list)
+    counts: dict[str, int] = field(default_factory=dict)
+    telegrams: list[str] = field(default_factory=list)  # the recorded reply telegrams, in order of appearance
+    errors: list[str] = field(default_factory=list)  # connections that could not be made
+    connected: int = 0  # connections made
+
+
+class _Run:
+    """What the connections of one replay share: their closes, the reader's pace, the findings."""
+
+    def __init__(self, scripts: list[Script], settings: Settings) -> None:
+        self.scripts, self.cfg = scripts, settings
+        self.loop = asyncio.get_running_loop()
+        self.t0 = self.loop.time()
+        self.closed = {s.conn: asyncio.Event() for s in scripts}
+        self.out = Result()
+        self.names: dict[str, None] = {}
+        self.ready = 0  # steps ready, not yet taken
+        self.starving = 0  # connections waiting for a step not ready yet
+        self.changed = asyncio.Event()
+
+    def notify(self) -> None:
+        self.changed.set()
+        self.changed = asyncio.Event()
+
+    def report(self, diffs: list[Difference]) -> None:
+        self.out.differences += diffs
+
+
+class _Arrivals:
+    """The arrival times of a connection's replies: their count, and the last ``ARRIVALS_KEPT`` of them."""
+
+    def __init__(self) -> None:
+        self.count = 0
+        self.times: deque[float] = deque(maxlen=ARRIVALS_KEPT)
+
+    def add(self, t: float) -> None:
+        self.count += 1
+        self.times.append(t)
+
+    def __len__(self) -> int:
+        return self.count
+
+    def at(self, index: int) -> float:
+        """The time of reply ``index`` (0-based), or of the oldest kept."""
+        return self.times[max(0, index - (self.count - len(self.times)))]
+
 
 class _Conn:
-    def __init__(self, script: Script, settings: Settings, t0: float, closed: dict[int, asyncio.Event]) -> None:
-        self.s, self.cfg, self.t0, self.closed = script, settings, t0, closed
-        self.loop = asyncio.get_running_loop()
+    def __init__(self, script: Script, builder: Builder, run: _Run) -> None:
+        self.s, self.b, self.run, self.cfg = script, builder, run, run.cfg
+        self.loop = run.loop
         self.out = Outcome(script.conn)
-        self.port = settings.ports[script.route]
+        self.port = self.cfg.ports[script.route]
         self.tap = Tap("reply", script.conn, self.port)
         self.pending: dict[int, deque[Any]] = {}  # identifier -> keys of the requests it may answer
         self.got: dict[Any, Record] = {}  # key -> reply
-        self.arrivals: list[float] = []
+        self.arrivals = _Arrivals()
         self.changed = asyncio.Event()
         self.eof = False
         self.closing = False
         self.skipped = 0  # replies the recording has and the replay will not (polls a wait did not need)
         self.extended = 0  # replies the replay has and the recording does not (polls past the recorded ones)
         self.last_send = 0.0
+        self.unjudged: dict[int, tuple[Step, float]] = {}  # sent steps (no polls) -> (step, when sent)
+        self.waits_open: dict[int, Wait] = {}  # waits sent, not judged
+        self.dead: set[Any] = set()  # keys judged missing: a reply that comes for one later is dropped
+        self.unsent: Step | None = None  # the first step not sent (the target closed first)
+
+    # ------------------------------------------------------------------ steps from the reader
+    def feed_changed(self) -> None:
+        self._notify()
+
+    async def _next(self) -> Step | None:
+        """The next step to send, when the reader has it ready; None when the connection's steps are over."""
+        if not self.b.ready and not self.b.ended:
+            self.run.starving += 1
+            self.run.notify()
+            try:
+                await self._until(lambda: bool(self.b.ready) or self.b.ended, float("inf"))
+            finally:
+                self.run.starving -= 1
+        if not self.b.ready:
+            return None
+        self.run.ready -= 1
+        self.run.notify()
+        return self.b.ready.popleft()
 
     # ------------------------------------------------------------------ reading
     async def _read(self, reader: asyncio.StreamReader) -> None:
@@ -66,14 +169,18 @@ class _Conn:
 
     def _take(self, records: list[Record]) -> None:
         for rec in records:
-            self.arrivals.append(rec.time)
+            self.arrivals.add(rec.time)
             ident = rec.raw[8] if rec.kind == FRAME and len(rec.raw) > 8 else -1
             keys = self.pending.get(ident)
             if keys:
-                self.got[keys.popleft()] = rec
+                key = keys.popleft()
+                if key not in self.dead:
+                    self.got[key] = rec
+                self.dead.discard(key)
             else:
-                self.out.extra.append(rec)
+                self.out.add_extra(rec)
         if records:
+            self._judge_ready()
             self._notify()
 
     def _answered(self, key: Any) -> Callable[[], bool]:
@@ -93,11 +200,47 @@ class _Conn:
             if left <= 0:
                 return False
             with contextlib.suppress(TimeoutError):
-                await asyncio.wait_for(self.changed.wait(), left)
+                await asyncio.wait_for(self.changed.wait(), None if left == float("inf") else left)
         return True
 
     async def _sleep_until(self, when: float) -> None:
         await asyncio.sleep(max(0.0, when - self.loop.time()))
+
+    # ------------------------------------------------------------------ judging as we go
+    def _settled(self, step: Step) -> bool:
+        """Is the recorded reply of ``step`` known (read, or known never to come)?"""
+        return step.reply is not None or not step.answered or self.b.ended
+
+    def _judge_ready(self, final: bool = False) -> None:
+        now = self.loop.time()
+        for index, (step, sent) in list(self.unjudged.items()):
+            got = self.got.get(index)
+            late = now - sent > self.cfg.late
+            if final or (self._settled(step) and (got is not None or late or not step.answered)):
+                if got is None and not final and index in self._pending_keys():
+                    self.dead.add(index)
+                del self.unjudged[index]
+                self.got.pop(index, None)
+                self.run.report(judge_step(self.s, step, got))
+
+    def _pending_keys(self) -> set[Any]:
+        return {k for keys in self.pending.values() for k in keys}
+
+    def _judge_wait(self, wait: Wait) -> None:
+        final = self.out.wait_final.get(wait.id)
+        if final is None:
+            polls = [("poll", wait.id, n) for n in range(self.out.polls.get(wait.id, 0), 0, -1)]
+            final = next((self.got[k] for k in [*polls, *reversed(wait.steps)] if k in self.got), None)
+        self.run.report(judge_wait(self.s, wait, final, self.out.polls.get(wait.id, 0)))
+        for k in [*wait.steps, *(("poll", wait.id, n) for n in range(1, self.out.polls.get(wait.id, 0) + 1))]:
+            if k in self.got:
+                del self.got[k]
+            elif any(k in keys for keys in self.pending.values()):
+                self.dead.add(k)
+        self.out.wait_final.pop(wait.id, None)
+        self.out.polls.pop(wait.id, None)
+        self.s.waits.pop(wait.id, None)
+        self.waits_open.pop(wait.id, None)
 
     # ------------------------------------------------------------------ sending
     def _send(self, writer: asyncio.StreamWriter, raw: bytes, ident: int, key: Any, answered: bool) -> None:
@@ -111,14 +254,16 @@ class _Conn:
         if wait.id in self.out.wait_final:
             return True
         prev = self.got.get(index - 1)
-        if index > wait.steps[0] and prev is not None and final_matches(self.s.steps[wait.final], prev):
+        assert wait.last is not None
+        if index > wait.steps[0] and prev is not None and final_matches(wait.last, prev):
             self.out.wait_final[wait.id] = prev
             return True
         return False
 
     async def _finish_wait(self, wait: Wait, writer: asyncio.StreamWriter, started: float) -> None:
         """After the last recorded poll: poll on at the recorded pace until the final reply comes or time is up."""
-        final = self.s.steps[wait.final]
+        final = wait.last
+        assert final is not None
         scale = self.cfg.time_scale
         deadline = started + 2 * wait.duration / scale + WAIT_GRACE
         key: Any = wait.final
@@ -138,27 +283,37 @@ class _Conn:
     async def _steps(self, writer: asyncio.StreamWriter) -> None:
         scale = self.cfg.time_scale
         wait_started: dict[int, float] = {}
-        for i, step in enumerate(self.s.steps):
+        while (step := await self._next()) is not None:
+            i = step.index
             due = step.after_replies - self.skipped + self.extended
             await self._until(self._arrived(due), self.cfg.reply_timeout)
             ref = self.last_send
             if 0 < due <= len(self.arrivals):
-                ref = max(ref, self.arrivals[due - 1])
+                ref = max(ref, self.arrivals.at(due - 1))
             await self._sleep_until(ref + step.gap / scale)
             if self.eof:
+                self.unsent = step
                 return
-            wait = self.s.wait_of(i)
+            wait = None if step.wait is None else self.s.waits[step.wait]
             if wait is not None and self._wait_done(wait, i):
                 self.skipped += 1
                 self.out.sent = i + 1
+                if i == wait.final:
+                    self._judge_wait(wait)
                 continue
             if wait is not None:
                 wait_started.setdefault(wait.id, self.loop.time())
                 self.out.polls[wait.id] = self.out.polls.get(wait.id, 0) + 1
+                self.waits_open[wait.id] = wait
+            else:
+                self.unjudged[i] = (step, self.loop.time())
             self._send(writer, step.raw, step.ident, i, step.answered)
             self.out.sent = i + 1
             if wait is not None and i == wait.final:
-                await self._finish_wait(wait, writer, wait_started[wait.id])
+                await self._finish_wait(wait, writer, wait_started.pop(wait.id))
+                if wait.id in self.out.wait_final:
+                    self._judge_wait(wait)
+            self._judge_ready()
 
     async def _end(self, writer: asyncio.StreamWriter) -> None:
         if self.s.closed_by == "target":
@@ -173,32 +328,38 @@ class _Conn:
                 writer.write_eof()
             await self._until(lambda: self.eof, self.cfg.reply_timeout)
 
-    def _collect(self) -> None:
-        """The replies by step; a wait whose final reply came only after its time ends on its last poll's reply."""
-        for key, rec in self.got.items():
-            if isinstance(key, int):
-                self.out.replies[key] = rec
-        for wait in self.s.waits.values():
-            if wait.id not in self.out.wait_final:
-                polls = [("poll", wait.id, n) for n in range(self.out.polls.get(wait.id, 0), 0, -1)]
-                late = next((self.got[k] for k in [*polls, *reversed(wait.steps)] if k in self.got), None)
-                if late is not None:
-                    self.out.wait_final[wait.id] = late
+    async def _drain(self) -> None:
+        """Take the steps not sent (the target closed first, or no connection), so that the reader goes on."""
+        while (step := await self._next()) is not None:
+            if self.unsent is None:
+                self.unsent = step
 
-    async def run(self) -> Outcome:
+    def _finish(self) -> None:
+        self._judge_ready(final=True)
+        for wait in list(self.waits_open.values()):
+            self._judge_wait(wait)
+        nxt = self.unsent
+        self.run.report(judge_end(self.s, self.out, nxt.label if nxt else "", nxt.at if nxt else 0.0))
+        self.run.out.counts["sent"] += self.out.sent
+
+    async def run_conn(self) -> None:
         s, cfg = self.s, self.cfg
         try:
-            for other in s.after_closes:
+            for other in closes_first((o for o in self.run.scripts if not self.run.closed[o.conn].is_set()), s):
                 with contextlib.suppress(TimeoutError):
-                    await asyncio.wait_for(self.closed[other].wait(), cfg.connect_timeout)
-            await self._sleep_until(self.t0 + s.start / cfg.time_scale)
+                    await asyncio.wait_for(self.run.closed[other].wait(), cfg.connect_timeout)
+            await self._sleep_until(self.run.t0 + s.start / cfg.time_scale)
             try:
                 reader, writer = await asyncio.wait_for(
                     asyncio.open_connection(cfg.host, self.port), cfg.connect_timeout
                 )
             except (OSError, TimeoutError) as exc:
                 self.out.error = f"cannot connect to {cfg.host}:{self.port}: {getattr(exc, 'strerror', None) or exc}"
-                return self.out
+                self.run.out.errors.append(self.out.error)
+                await self._drain()
+                self.run.report(judge_end(s, self.out))
+                return
+            self.run.out.connected += 1
             self.last_send = self.loop.time()
             reading = asyncio.create_task(self._read(reader))
             try:
@@ -214,15 +375,79 @@ class _Conn:
                 reading.cancel()
                 with contextlib.suppress(asyncio.CancelledError):
                     await reading
-            self._collect()
-            return self.out
+            await self._drain()
+            self._finish()
         finally:
-            self.closed[s.conn].set()
+            self.run.closed[s.conn].set()
 
 
-async def replay(scripts: list[Script], settings: Settings) -> dict[int, Outcome]:
-    """Replay every connection of the session (concurrently, each on its schedule); their outcomes by number."""
-    t0 = asyncio.get_running_loop().time()
-    closed = {s.conn: asyncio.Event() for s in scripts}
-    outcomes = await asyncio.gather(*(_Conn(s, settings, t0, closed).run() for s in scripts))
-    return {o.conn: o for o in outcomes}
+def survey(f: SessionFile) -> tuple[list[Script], float]:
+    """The first pass: every connection's summary (SessionError for a line that is not a record)."""
+    sv = Survey(f.ports)
+    for rec in f.records():
+        sv.feed(rec)
+    return sv.done(), sv.t0 or 0.0
+
+
+async def _read_session(records: Iterator[Record], run: _Run, t0: float) -> list[asyncio.Task[None]]:
+    """The second pass: each connection's records to its builder, its task started at its open."""
+    by_conn = {s.conn: s for s in run.scripts}
+    builders: dict[int, Builder] = {}
+    conns: dict[int, _Conn] = {}
+    tasks: list[asyncio.Task[None]] = []
+    for n, rec in enumerate(records):
+        if n % BATCH == 0:
+            await asyncio.sleep(0)
+            while run.ready >= AHEAD and not run.starving:
+                await run.changed.wait()
+        b = builders.get(rec.conn)
+        if b is None and rec.kind == OPEN and rec.conn in by_conn:
+            b = builders[rec.conn] = Builder(by_conn[rec.conn], t0)
+            conns[rec.conn] = c = _Conn(by_conn[rec.conn], b, run)
+            tasks.append(asyncio.create_task(c.run_conn()))
+        if b is None:
+            continue
+        before = len(b.ready)
+        b.feed(rec)
+        _after(b, before, conns[rec.conn], run)
+        if b.ended:
+            del builders[rec.conn]
+    for conn, b in builders.items():
+        before = len(b.ready)
+        b.end()
+        _after(b, before, conns[conn], run)
+    return tasks
+
+
+def _after(b: Builder, before: int, conn: _Conn, run: _Run) -> None:
+    run.ready += len(b.ready) - before
+    if len(b.ready) != before or b.ended:
+        conn.feed_changed()
+    if b.ended:
+        for name in b.names:
+            run.names.setdefault(name, None)
+        run.out.counts["replies compared"] += b.compared
+        run.out.counts["waits"] += b.waits
+
+
+async def replay(f: SessionFile, scripts: list[Script], t0: float, settings: Settings) -> Result:
+    """Replay every connection of the session (concurrently, each on its schedule), judging as it goes."""
+    run = _Run(scripts, settings)
+    run.out.counts = {"connections": len(scripts), "requests": sum(s.requests for s in scripts), "sent": 0}
+    run.out.counts |= {"replies compared": 0, "waits": 0}
+    tasks = await _read_session(f.records(), run, t0)
+    try:
+        await asyncio.gather(*tasks)
+    finally:
+        for t in tasks:
+            t.cancel()
+    out = run.out
+    out.telegrams = list(run.names)
+    return out
+
+
+def run(f: SessionFile, scripts: list[Script], t0: float, settings: Settings) -> tuple[Result, float]:
+    """``replay`` in its own event loop; the result and the seconds it took."""
+    start = time.monotonic()
+    result = asyncio.run(replay(f, scripts, t0, settings))
+    return result, time.monotonic() - start

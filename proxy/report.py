@@ -12,7 +12,7 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
-from pltf.proxy.replay import Difference, Script, group
+from pltf.proxy.replay import Difference, group
 
 SHOWN = 20
 
@@ -42,18 +42,10 @@ def render(differences: list[Difference], counts: dict[str, int]) -> str:
     return "\n".join(blocks) + "\n"
 
 
-def replayed_telegrams(scripts: list[Script]) -> list[str]:
-    names: dict[str, None] = {}
-    for s in scripts:
-        for step in s.steps:
-            if step.reply is not None and step.reply.telegram is not None:
-                names[step.reply.telegram.NAME] = None
-    return list(names)
-
-
-def write_junit(path: Path, differences: list[Difference], scripts: list[Script], seconds: float) -> None:
+def write_junit(path: Path, differences: list[Difference], telegrams: list[str], seconds: float) -> None:
+    """``telegrams``: the reply telegrams the recording has, in the order they first came."""
     by_name = group(differences)
-    names = replayed_telegrams(scripts)
+    names = list(telegrams)
     names += [n for n in by_name if n not in names and n != "(connection)"]
     names.append("(connection)")
     failures = sum(1 for n in names if n in by_name)

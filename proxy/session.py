@@ -15,6 +15,7 @@ Format (version 1):
 
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 from collections.abc import Iterator
@@ -159,31 +160,64 @@ def _lines(path: Path) -> Iterator[tuple[int, str]]:
         raise SessionError(f"{path}: not a text file") from None
 
 
-def read_session(path: Path) -> Session:
-    """The session of ``path``; SessionError names the first line that is not one."""
-    header: dict[str, Any] | None = None
-    records: list[Record] = []
-    for n, line in _lines(path):
-        if not line.strip():
-            continue
-        try:
-            obj = json.loads(line)
-            if header is None:
-                if not isinstance(obj, dict) or obj.get("format") != FORMAT:
-                    raise ValueError(f'not a {FORMAT} file (its first line has no "format": "{FORMAT}")')
-                if obj.get("version") != VERSION:
-                    raise ValueError(f"version {obj.get('version')!r}, this pltf reads version {VERSION}")
-                header = obj
+@dataclass(frozen=True)
+class SessionFile:
+    """A session file read as a stream: its header at once, its records one by one on each ``records()`` (the
+    file read again each time, nothing kept: an hour of 20 Hz GET_STATUS with scans is gigabytes)."""
+
+    path: Path
+    started: float
+    routes: tuple[Route, ...]
+    header_line: int = 1
+
+    @property
+    def ports(self) -> list[int]:
+        """The target ports in route order."""
+        return [r.target_port for r in self.routes]
+
+    def records(self) -> Iterator[Record]:
+        """The records; SessionError names the first line that is not one."""
+        for n, line in _lines(self.path):
+            if n <= self.header_line or not line.strip():
                 continue
-            records.append(_record(obj))
-        except (ValueError, KeyError, TypeError) as exc:
-            what = f"missing {exc}" if isinstance(exc, KeyError) else str(exc)
-            raise SessionError(f"{path}:{n}: {what}") from None
-    if header is None:
+            yield _parse(self.path, n, line, _record)
+
+
+def _parse(path: Path, n: int, line: str, make: Any) -> Any:
+    try:
+        return make(json.loads(line))
+    except (ValueError, KeyError, TypeError) as exc:
+        what = f"missing {exc}" if isinstance(exc, KeyError) else str(exc)
+        raise SessionError(f"{path}:{n}: {what}") from None
+
+
+def _header(obj: Any) -> dict[str, Any]:
+    if not isinstance(obj, dict) or obj.get("format") != FORMAT:
+        raise ValueError(f'not a {FORMAT} file (its first line has no "format": "{FORMAT}")')
+    if obj.get("version") != VERSION:
+        raise ValueError(f"version {obj.get('version')!r}, this pltf reads version {VERSION}")
+    return obj
+
+
+def open_session(path: Path) -> SessionFile:
+    """The session file's header (its first line that is not blank); SessionError when it is not one. The
+    records are read by ``SessionFile.records``."""
+    with contextlib.closing(_lines(path)) as lines:
+        first = next(((n, line) for n, line in lines if line.strip()), None)
+    if first is None:
         raise SessionError(f"{path}: empty, not a {FORMAT} file")
+    header = _parse(path, first[0], first[1], _header)
     try:
         routes = tuple(Route(str(r["listen"]), str(r["target"])) for r in header["routes"])
         _ = [r.target_port for r in routes]
     except (KeyError, TypeError, ValueError, IndexError):
-        raise SessionError(f"{path}:1: the header's routes are not a list of {{listen, target: HOST:PORT}}") from None
-    return Session(float(header.get("started", 0.0)), routes, tuple(records))
+        raise SessionError(
+            f"{path}:{first[0]}: the header's routes are not a list of {{listen, target: HOST:PORT}}"
+        ) from None
+    return SessionFile(path, float(header.get("started", 0.0)), routes, first[0])
+
+
+def read_session(path: Path) -> Session:
+    """The session of ``path``, all in memory; SessionError names the first line that is not one."""
+    f = open_session(path)
+    return Session(f.started, f.routes, tuple(f.records()))

@@ -141,6 +141,7 @@ def test_a_newcomer_turned_away_while_the_port_was_taken_does_not_wait_for_it() 
 def test_the_judgement_names_each_difference() -> None:
     s = session(
         event(0.0, 1, OPEN),
+        rec(0.5, 1, "request", "CMD_STOP"),  # it drives: its replies are compared field by field
         rec(1.0, 1, "request", "CMD_GET_STATUS"),
         rec(1.1, 1, "reply", "STATUS"),
         rec(2.0, 1, "request", "CMD_GET_PLTF_PARAM", key="IpoTransVel"),
@@ -160,34 +161,31 @@ def test_the_judgement_names_each_difference() -> None:
         event(4.0, 1, CLOSE, "by target (FIN)"),
     )
     (script,) = plan(s)
+    assert not script.reads_only
     same = Outcome(
         1,
         replies={
-            0: script.steps[0].reply,
             1: script.steps[1].reply,
-            2: rec(3.1, 1, "reply", "CMD_GET_CAMERA", ip="a", camera_id="b"),
+            2: script.steps[2].reply,
+            3: rec(3.1, 1, "reply", "CMD_GET_CAMERA", ip="a", camera_id="b"),
         },
-        sent=3,
-        closed_by_target_after=3,
+        sent=4,
+        closed_by_target_after=4,
     )  # type: ignore[dict-item]
     assert [d.path for d in judge([script], {1: same})] == ["(reply)"]  # the camera was never answered on record
-    other = Outcome(
-        1,
-        replies={
-            0: rec(1.1, 1, "reply", "STATUS").__class__(
-                **{**rec(1.1, 1, "reply", "STATUS").__dict__, "telegram": STATUS.replace(motion_mode=3)}
-            )
-        },
-        sent=3,
-    )
+    other = Outcome(1, replies={1: _with(rec(1.1, 1, "reply", "STATUS"), STATUS.replace(motion_mode=3))}, sent=4)
     diffs = judge([script], {1: other})
     assert [(d.telegram, d.path, d.recorded, d.replayed) for d in diffs] == [
         ("CMD_GET_STATUS", "motion_mode", f"{_mode(STATUS.motion_mode)}", "MODE_MOTION_VEL (3)"),
         ("CMD_GET_PLTF_PARAM", "(reply)", "CMD_GET_PLTF_PARAM", "no reply"),
         ("(connection)", "end", "closed by the target", "kept open by the target"),
     ]
-    cut = judge([script], {1: Outcome(1, replies=same.replies, sent=1, closed_by_target_after=1)})
+    cut = judge([script], {1: Outcome(1, replies=same.replies, sent=2, closed_by_target_after=2)})
     assert any(d.path == "requests" and "before CMD_GET_PLTF_PARAM key='IpoTransVel'" in d.replayed for d in cut)
+
+
+def _with(r: Record, telegram: Any) -> Record:
+    return Record(**{**r.__dict__, "telegram": telegram})
 
 
 def _mode(value: int) -> str:
