@@ -142,12 +142,19 @@ class Relay:
             listeners = await self._restart()
 
     async def _restart(self) -> list[socket.socket]:
-        """Row 10: every connection dropped, the ports gone for ``restart_down`` s, a fresh target behind."""
-        for task in list(self._tasks):
-            task.cancel()
-        self.log(f"zoo {self.member.name}: restarting")
+        """Row 10: every connection dropped, the ports gone for ``restart_down`` s, a fresh target behind.
+
+        Every task but this one is cancelled and awaited: the clients and the pumps each runs (a client's pumps
+        outlived it before, still registered with the selector for sockets its clean-up had closed; the numbers,
+        reused by the next connections, then failed with ENOENT from epoll_ctl - "upstream port N unreachable:
+        [Errno 2]" - and the member accepted and closed every newcomer after its first restart)."""
         loop = asyncio.get_running_loop()
         began = loop.time()
+        stale = [task for task in asyncio.all_tasks() if task is not asyncio.current_task()]
+        for task in stale:
+            task.cancel()
+        await asyncio.gather(*stale, return_exceptions=True)
+        self.log(f"zoo {self.member.name}: restarting")
         ports = await loop.run_in_executor(None, self.on_restart)
         if ports:
             self.upstream = (self.upstream[0], list(ports))
