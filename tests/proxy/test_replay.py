@@ -19,7 +19,7 @@ from pltf.cli.main import main as pltf
 from pltf.conformance_tests.readings import canonical
 from pltf.proxy.capture import PcapngWriter
 from pltf.proxy.recorder import Recorder
-from pltf.proxy.replay import Outcome, judge, plan
+from pltf.proxy.replay import Outcome, Script, judge, plan
 from pltf.proxy.session import Route, Session, SessionWriter, read_session
 from pltf.proxy.tap import CLOSE, OPEN, Record, Tap
 from pltf.spec.codec import build, encode
@@ -288,3 +288,81 @@ def test_replay_errors_are_one_line(tmp_path: Path, recorded: Path, capsys: pyte
     err = capsys.readouterr().err.splitlines()
     assert len(err) == 3 and all(line.startswith("pltf replay: error: ") for line in err), err
     assert "--second-port" in err[1] and "cannot connect" in err[2]
+
+
+# ---------------------------------------------------------------------------------------------- a watcher
+
+
+def _watcher(*extra: Record) -> Script:
+    """A connection that only reads: GET_STATUS, GET_POSITION, GET_STATUS polled, and a parameter."""
+    position = {"x": 2000, "y": 10000, "angle": 0.0, "vel_trans": 0.0, "vel_rot": 0.0}
+    (script,) = plan(
+        session(
+            event(0.0, 1, OPEN),
+            rec(1.0, 1, "request", "CMD_GET_STATUS"),
+            rec(1.1, 1, "reply", "STATUS"),
+            rec(1.2, 1, "request", "CMD_GET_STATUS"),
+            rec(1.3, 1, "reply", "STATUS"),
+            rec(1.4, 1, "request", "CMD_GET_POSITION"),
+            rec(1.5, 1, "reply", "CMD_GET_POSITION", **position),
+            rec(2.0, 1, "request", "CMD_GET_PLTF_PARAM", key="IpoTransVel"),
+            rec(
+                2.1,
+                1,
+                "reply",
+                "CMD_GET_PLTF_PARAM",
+                key="IpoTransVel",
+                value="800",
+                category=2,
+                data_type=1,
+                minimum=50,
+                maximum=1500,
+            ),
+            *extra,
+            event(4.0, 1, CLOSE, "by client (FIN)"),
+        )
+    )
+    return script
+
+
+def _outcome(script: Script, **replaced: Any) -> Outcome:
+    """The recorded replies as the replay's, with ``replaced`` (step index -> telegram, or None: no reply)."""
+    replies = {i: st.reply for i, st in enumerate(script.steps) if st.reply is not None}
+    for i, t in replaced.items():
+        if t is None:
+            del replies[int(i[1:])]
+        else:
+            replies[int(i[1:])] = _with(script.steps[int(i[1:])].reply, t)  # type: ignore[arg-type]
+    return Outcome(script.conn, replies=replies, sent=len(script.steps))  # type: ignore[arg-type]
+
+
+def test_a_watcher_is_judged_by_what_a_replay_can_reproduce_and_still_by_every_real_difference() -> None:
+    script = _watcher()
+    assert script.reads_only and script.waits == {}  # no wait: every poll is sent and judged
+    moved = STATUS.replace(est_x=7017, est_y=5000, cmd_x=7000, vel_trans=400, motion_mode=4, operation_state=2)
+    pos = script.steps[2].reply
+    assert pos is not None and pos.telegram is not None
+    elsewhere = pos.telegram.replace(x=9000, y=1000, angle=1.5)
+    assert judge([script], {1: _outcome(script, s0=moved, s1=moved, s2=elsewhere)}) == []  # where and when it asked
+    faulty = judge([script], {1: _outcome(script, s1=STATUS.replace(app_error=2, emergency_state=1))})
+    assert sorted(d.path for d in faulty) == ["app_error", "emergency_state"]  # a fault is a fault, whenever it asked
+    param = script.steps[3].reply
+    assert param is not None and param.telegram is not None
+    changed = judge([script], {1: _outcome(script, s3=param.telegram.replace(value="500"))})
+    assert [(d.path, d.recorded, d.replayed) for d in changed] == [("value", "'800'", "'500'")]  # not motion
+    missing = judge([script], {1: _outcome(script, s1=None)})
+    assert [(d.telegram, d.path, d.replayed) for d in missing] == [("CMD_GET_STATUS", "(reply)", "no reply")]
+    wrong = judge([script], {1: _outcome(script, s2=STATUS)})  # GET_STATUS's reply where GET_POSITION's was
+    assert [(d.path, d.recorded, d.replayed) for d in wrong] == [("(telegram)", "CMD_GET_POSITION", "CMD_GET_STATUS")]
+
+
+def test_a_connection_that_sends_one_command_is_a_driver_judged_field_by_field() -> None:
+    script = _watcher(rec(3.0, 1, "request", "CMD_STOP"))
+    assert not script.reads_only and len(script.waits) == 1  # the two GET_STATUS are a wait again
+    moved = STATUS.replace(est_x=7017)
+    outcome = _outcome(script)
+    final = script.steps[1].reply
+    assert final is not None
+    outcome.wait_final = {0: _with(final, moved)}  # the wait ended on a reply with the platform elsewhere
+    diffs = judge([script], {1: outcome})
+    assert [(d.path, d.replayed) for d in diffs] == [("est_x", "7017")]
