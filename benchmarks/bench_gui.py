@@ -146,8 +146,8 @@ class MapPlatform:
 PAN_ZOOM_JS = """async ([frames, cache]) => {
   const m = window.pltf.map;
   const ctx = m.canvas.getContext("2d");
-  m.syncLayers = !cache;
-  m.layerTimes.length = 0;
+  m.setSyncLayers(!cache);
+  m.takeLayerTimes();
   const out = { pan: [], zoom: [] };
   const frame = (kind) => {
     const t0 = performance.now();
@@ -163,11 +163,11 @@ PAN_ZOOM_JS = """async ([frames, cache]) => {
   for (let i = 0; i < frames; i++) {
     const a = (i / frames) * 2 * Math.PI;
     const c = m.cam;
-    m.cam = { ...c, cx: c.cx + (12 * Math.cos(a)) / c.scale, cy: c.cy + (12 * Math.sin(a)) / c.scale };
+    m.setCamera({ ...c, cx: c.cx + (12 * Math.cos(a)) / c.scale, cy: c.cy + (12 * Math.sin(a)) / c.scale });
     frame("pan"); await tick();
   }
-  m.syncLayers = false;
-  out.layer = [...m.layerTimes];
+  m.setSyncLayers(false);
+  out.layer = m.takeLayerTimes();
   return out;
 }"""
 

@@ -15,7 +15,6 @@ import { plotsPanel } from "./panels/plots";
 import { wirePanel } from "./panels/wire";
 import { mapEditor } from "./editor/editpanel";
 import { roadmapEditor } from "./editor/roadmappanel";
-import { footprint } from "./view/overlay";
 import { closeSocket, type MenuItem, menubar, openSocketAt, shutdownPlatform } from "./panels/menubar";
 import { motionPanel } from "./panels/motion";
 import { operationPanel } from "./panels/operation";
@@ -62,17 +61,6 @@ dock.add("edit-map", "menu.editMap", editor.root, editor.onShow);
 const rmEditor = roadmapEditor(session, map, say, () => dock.close("edit-roadmap"));
 dock.add("edit-roadmap", "menu.editRoadmap", rmEditor.root, rmEditor.onShow);
 
-// The platform's own geometry (guide 5.9 Geometry, UltraSonic) for the footprint and the ultrasonic sensors.
-session.params.subscribe((r) => {
-  const v = new Map(r.parameters.map((p) => [p.key, Number(p.value)]));
-  const num = (k: string, d: number) => (Number.isFinite(v.get(k)) ? v.get(k)! : d);
-  map.footprint = footprint(num("PltfLength", 650), num("DistWheels", 430), num("DistPltfCenterToWheelAxis", 100));
-  map.usSensors = Array.from({ length: 16 }, (_, i) => {
-    const n = String(i + 1).padStart(2, "0");
-    return { x: num(`USSensor${n}PosX`, 0), y: num(`USSensor${n}PosY`, 0), angle: num(`USSensor${n}Angle`, 0) };
-  });
-  map.invalidate();
-});
 session.poll("debug", () => new GetDebugDataRequest(), 1);
 session.setPolling("debug", true);
 session.conn.subscribe((ev) => {
@@ -143,8 +131,8 @@ document.addEventListener("keydown", (e) => {
   }
 });
 
-// Exposed for the browser tests and the benchmark (read-only use).
-(window as unknown as { pltf: unknown }).pltf = { session, map, options, dock };
+// Exposed for the browser tests and the benchmark (read-only use; the map view's surface: MapDebug in mapview.ts).
+(window as unknown as { pltf: unknown }).pltf = { session, map: map.debug, options, dock };
 
 // The optional ground-truth layer: ?control=HOST:PORT names a reference server's control channel (loopback).
 const control = params.get("control");

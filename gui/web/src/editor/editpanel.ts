@@ -8,6 +8,7 @@ import { h } from "../dom";
 import { bind, type Key, t } from "../i18n/i18n";
 import { type GetMapReply, GetMapRequest, SetMapRequest } from "../pltf";
 import type { MapView } from "../panels/mapview";
+import type { EditHooks } from "../session/edited";
 import type { PlatformSession } from "../session/session";
 import { guard } from "../panels/control";
 import { toScreen } from "../view/camera";
@@ -112,7 +113,7 @@ export function mapEditor(
 
   const refresh = (): void => {
     if (open) {
-      view.showScene(history.doc.scene);
+      session.edited.publish({ shows: "map", scene: history.doc.scene, hooks });
     }
     const o = many.size > 0 ? undefined : history.byId(selected);
     state.textContent =
@@ -177,8 +178,7 @@ export function mapEditor(
     run(g.ok ? { ok: true, value: setGeometry(history.doc, o.id, g.value) } : g);
   });
 
-  const hooks: NonNullable<MapView["editHooks"]> = {
-    shows: "map",
+  const hooks: EditHooks = {
     down(x, y, pxPerMm, button) {
       if (isShape(tool)) {
         shapes.down(tool, x, y, pxPerMm, button);
@@ -566,10 +566,12 @@ export function mapEditor(
   refresh();
   const onShow = (shown: boolean): void => {
     open = shown;
-    view.editHooks = shown ? hooks : null;
+    if (!shown) {
+      session.edited.publish(null);
+    }
     view.setTool(shown ? "edit" : "pan");
     if (shown) {
-      refresh();
+      refresh(); // publishes the document with the editor's hold on the pointer
     } else {
       session.refreshDocuments(); // the view shows the platform's map again
     }

@@ -10,6 +10,7 @@ import { bind, type Key, t } from "../i18n/i18n";
 import { type GetRoadmapReply, GetRoadmapRequest, SetRoadmapRequest } from "../pltf";
 import type { MapView } from "../panels/mapview";
 import type { Roadmap } from "../scene/roadmap";
+import type { EditHooks } from "../session/edited";
 import type { PlatformSession } from "../session/session";
 import { guard } from "../panels/control";
 import { toScreen } from "../view/camera";
@@ -103,8 +104,7 @@ export function roadmapEditor(
   const refresh = (): void => {
     const doc = history.doc;
     if (open) {
-      view.roadmap = toScene(doc, name);
-      view.showScene(view.scene); // redraws the static layer with the editor's roadmap
+      session.edited.publish({ shows: "roadmap", roadmap: toScene(doc, name), hooks });
     }
     const s = doc.stations.find((x) => x.id === selected);
     state.textContent = s === undefined ? "" : t("edit.selected", { what: `${s.name} (${s.x}, ${s.y}, ${s.angle}°)` });
@@ -163,8 +163,7 @@ export function roadmapEditor(
     }
   };
 
-  const hooks: NonNullable<MapView["editHooks"]> = {
-    shows: "roadmap",
+  const hooks: EditHooks = {
     down(x, y, pxPerMm, button) {
       if (tool === "pathPoints") {
         pathDown(x, y, pxPerMm, button);
@@ -386,10 +385,12 @@ export function roadmapEditor(
   refresh();
   const onShow = (shown: boolean): void => {
     open = shown;
-    view.editHooks = shown ? hooks : null;
+    if (!shown) {
+      session.edited.publish(null);
+    }
     view.setTool(shown ? "edit" : "pan");
     if (shown) {
-      refresh();
+      refresh(); // publishes the document with the editor's hold on the pointer
     } else {
       session.refreshDocuments(); // the view shows the platform's roadmap again
     }

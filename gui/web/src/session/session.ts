@@ -31,6 +31,7 @@ import {
   type Telegram,
 } from "../pltf";
 import { Topic } from "./bus";
+import type { EditedDocument } from "./edited";
 import { t as tr } from "../i18n/i18n";
 
 export const DEFAULT_STATUS_HZ = 20;
@@ -139,6 +140,8 @@ export class PlatformSession {
   private refusedTarget = false;
   /** Events about single requests (not sent, refused by the gateway): shown, but not the connection's state. */
   readonly notices = new Topic<ConnEvent>();
+  /** The document an open editor shows on the map view (editor/*panel.ts publish, panels/mapview.ts draws). */
+  readonly edited = new Topic<EditedDocument | null>();
   /** This tab's own traffic (TCP Client tab). */
   readonly traffic = {
     bytesOut: 0,

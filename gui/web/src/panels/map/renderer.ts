@@ -1,0 +1,221 @@
+/**
+ * The map view's frames: the static layer (layercache.ts) moved to the camera, then the live layer (overlay.ts):
+ * platform, scan, ultrasonic, path, the ground truth, the shift's ghost, the flag, the open editor's drawing and
+ * the "zoom to area" rectangle. Frames are drawn on requestAnimationFrame only when something changed.
+ *
+ * Rules: drawing reads the camera, the documents and the options and changes none of them. The canvas says what
+ * it drew (data-drawn-*, data-camera, data-layer, data-flag, data-truth, an accessible summary), so tests and
+ * assistive tools can read the view without reaching into it.
+ */
+import { type Key, t } from "../../i18n/i18n";
+import { GetStatusReply, type GetPltfParamVecReply } from "../../pltf";
+import { KINDS } from "../../scene/map";
+import { viewBounds } from "../../view/camera";
+import type { Layers } from "../../view/maprender";
+import {
+  drawFlag,
+  drawPlatform,
+  drawStatus,
+  type Footprint,
+  footprint,
+  type OverlayOptions,
+  type UsSensor,
+} from "../../view/overlay";
+import type { ViewOptions } from "../viewoptions";
+import type { Area, MapController } from "./controller";
+import type { LayerCache } from "./layercache";
+import { platformGeometry } from "./platform";
+import type { Shown } from "./shown";
+
+/** The static layers the view options show (guide 5.7: grid, map, roadmap, map layers per kind). */
+export function layersOf(o: ViewOptions): Layers {
+  return {
+    grid: o.grid,
+    map: o.mapLayers.map,
+    roadmap: o.mapLayers.roadmap,
+    labels: o.mapLayers.hiddenlabel,
+    kinds: o.mapLayers,
+  };
+}
+
+/** The live layers the view options show (guide 5.2 View). */
+export function overlayOf(o: ViewOptions): OverlayOptions {
+  return {
+    showEstimated: o.showEstimated,
+    showDesired: o.showDesired,
+    scan: o.localization,
+    ultrasonic: o.ultrasonic,
+    path: o.planning,
+    localization: o.localization,
+    planObstacles: o.planObstacles,
+  };
+}
+
+/** The live layer of the shift's ghost: the footprint alone. */
+const GHOST_ONLY: Partial<OverlayOptions> = {
+  showDesired: false,
+  scan: false,
+  ultrasonic: false,
+  path: false,
+  localization: false,
+  planObstacles: false,
+};
+
+export class MapRenderer {
+  private dirty = true;
+  private scheduled = false;
+  private platform: Footprint = footprint(650, 430, 100);
+  private usSensors: UsSensor[] = [];
+  /** what the last static layer drew per kind */
+  private drawn: Record<string, number> = {};
+
+  constructor(
+    private readonly canvas: HTMLCanvasElement,
+    private readonly summary: HTMLElement,
+    private readonly truthText: HTMLElement,
+    private readonly shown: Shown,
+    private readonly options: ViewOptions,
+    private readonly controller: MapController,
+    private readonly cache: LayerCache,
+  ) {}
+
+  /** Take the platform's geometry from its parameters (GET_PLTF_PARAM_VEC). */
+  setGeometry(r: Pick<GetPltfParamVecReply, "parameters">): void {
+    const g = platformGeometry(r);
+    this.platform = g.footprint;
+    this.usSensors = g.usSensors;
+    this.invalidate();
+  }
+
+  /** Ask for a frame (drawn at the next animation frame, once however often this is called before). */
+  invalidate(): void {
+    this.dirty = true;
+    if (!this.scheduled) {
+      this.scheduled = true;
+      requestAnimationFrame(() => {
+        this.scheduled = false;
+        if (this.dirty) {
+          this.render();
+        }
+      });
+    }
+  }
+
+  /** What lies in the view itself (the static layer also draws the margin). */
+  countVisible(drawnAll: Record<string, number>): void {
+    const whole = this.shown.bounds;
+    const v = viewBounds(this.controller.cam);
+    const inView =
+      whole != null && v.minX <= whole.minX && v.minY <= whole.minY && v.maxX >= whole.maxX && v.maxY >= whole.maxY;
+    this.drawn = drawnAll;
+    this.canvas.dataset.complete = String(inView);
+    for (const k of [...KINDS, "station", "edge", "pathpoint"]) {
+      this.canvas.dataset[`drawn${k[0].toUpperCase()}${k.slice(1)}`] = String(drawnAll[k] ?? 0);
+    }
+    this.updateSummary();
+  }
+
+  /** The accessible summary: the map's name and, per kind, the objects drawn of those there are. */
+  updateSummary(): void {
+    const { scene, roadmap } = this.shown;
+    if (scene === null) {
+      this.summary.textContent = t("map.none");
+      return;
+    }
+    const counts = this.cache.counts;
+    const parts = KINDS.filter((k) => counts[k] > 0).map(
+      (k) => `${t(`kind.${k}` as Key)}: ${this.drawn[k] ?? 0}/${counts[k]}`,
+    );
+    if (roadmap) {
+      parts.push(`${t("kind.station")}: ${this.drawn.station ?? 0}/${roadmap.stations.length}`);
+      parts.push(`${t("kind.edge")}: ${this.drawn.edge ?? 0}/${roadmap.edges.length}`);
+    }
+    this.summary.textContent = `${t("map.summary", { name: scene.name || "-" })} ${parts.join(", ")}`;
+  }
+
+  /** The true pose beside the estimate and the injected faults, in words (guide units: mm, degrees). */
+  showTruth(): void {
+    const ev = this.shown.truth;
+    if (ev === null) {
+      return;
+    }
+    this.truthText.hidden = false;
+    if (ev.event === "truth_lost" || ev.true === undefined) {
+      this.truthText.textContent = t("truth.lost", { control: ev.control, detail: ev.detail ?? "" });
+      return;
+    }
+    const [x, y, a] = ev.true;
+    const faults = (ev.faults ?? []).map((f) => `${f.kind} ${f.target}${f.value == null ? "" : ` ${f.value}`}`);
+    this.truthText.textContent = `${t("truth.pose", { x: Math.round(x), y: Math.round(y), angle: a.toFixed(1) })}; ${
+      faults.length === 0 ? t("truth.noFaults") : t("truth.faults", { list: faults.join(", ") })
+    }`;
+  }
+
+  /** Draw one frame now. */
+  render(): void {
+    this.dirty = false;
+    const ctx = this.canvas.getContext("2d");
+    if (ctx === null) {
+      return;
+    }
+    const c = this.controller.cam;
+    const dpr = window.devicePixelRatio || 1;
+    ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
+    this.cache.update();
+    this.cache.draw(ctx);
+    this.drawLive(ctx);
+    const area = this.controller.area;
+    if (area !== null) {
+      drawArea(ctx, area);
+    }
+    this.canvas.dataset.camera = JSON.stringify({
+      cx: c.cx,
+      cy: c.cy,
+      scale: c.scale,
+      width: c.width,
+      height: c.height,
+    });
+    this.canvas.dataset.layer = this.cache.current ? "current" : "stale";
+  }
+
+  private drawLive(ctx: CanvasRenderingContext2D): void {
+    const c = this.controller.cam;
+    const overlay = overlayOf(this.options);
+    const { status, truth: tr, hooks } = this.shown;
+    if (status) {
+      const live = drawStatus(ctx, c, status, this.platform, this.usSensors, overlay);
+      this.canvas.dataset.drawnScan = String(live.scan);
+      this.canvas.dataset.drawnUltrasonic = String(live.ultrasonic);
+      this.canvas.dataset.drawnPath = String(live.path);
+      this.canvas.dataset.drawnPlanobst = String(live.planobst);
+    }
+    if (tr?.event === "truth" && tr.true !== undefined && this.options.truth) {
+      const [x, y, angle] = tr.true;
+      drawPlatform(ctx, c, { x, y, angle }, this.platform, "#757575", true);
+      this.canvas.dataset.truth = `${x},${y},${angle}`;
+    } else {
+      delete this.canvas.dataset.truth;
+    }
+    const ghost = this.controller.ghost;
+    if (ghost) {
+      ctx.globalAlpha = 0.6;
+      const st = Object.assign(new GetStatusReply(), { estX: ghost.x, estY: ghost.y, estAngle: ghost.angle * 1000 });
+      drawStatus(ctx, c, st, this.platform, [], { ...overlay, ...GHOST_ONLY });
+      ctx.globalAlpha = 1;
+    }
+    const flag = this.controller.flag;
+    if (flag && this.controller.tool === "flag") {
+      drawFlag(ctx, c, flag);
+      this.canvas.dataset.flag = `${flag.x},${flag.y},${flag.angle}`;
+    }
+    hooks?.draw(ctx, c);
+  }
+}
+
+/** The rectangle of a "zoom to area" drag, dashed. */
+function drawArea(ctx: CanvasRenderingContext2D, a: Readonly<Area>): void {
+  ctx.strokeStyle = "#1565c0";
+  ctx.setLineDash([4, 3]);
+  ctx.strokeRect(Math.min(a.x0, a.x1), Math.min(a.y0, a.y1), Math.abs(a.x1 - a.x0), Math.abs(a.y1 - a.y0));
+  ctx.setLineDash([]);
+}
