@@ -12,8 +12,10 @@ Rules:
 - A new connection is probed with CMD_GET_STATUS and retried for ``connect_window`` seconds: the target may
   not yet have noticed that our previous client on that port is gone (one client per port). A refused connect is
   retried too once the run has been served, for ``RESTART_WINDOW`` s (a restart: the port is gone while the
-  program starts again, erratum E-BEH-007, zoo matrix row 10); served again, ``Target.restarts`` counts it and the
-  runner runs the case in flight again.
+  program starts again, erratum E-BEH-007, zoo matrix row 10); served again, ``Target.restarts`` counts it, a run
+  note names the case in flight (``Target.case``) and how long the port refused, and the runner runs that case
+  again. A port that still refuses at the end of the window is named so: "refused connections for N s after it
+  had served this run" (a restart that did not come back, or a crash).
 - The last status read stands for the current one while nothing was sent, connected or closed since
   (``wire.Session.events``) and it is under ``STATUS_FRESH`` wall s old - across cases too, and a probe's reply
   counts: each round trip counts against a slow link (issue 17).
@@ -139,6 +141,8 @@ class Target:
         self.reached = False  # a connection was served in this run: a refused connect since is waited out
         self.restarts = 0  # times the target restarted (a port refused connections, then served again: E-BEH-007)
         self.restart_seen = ""  # how the last restart showed
+        self.restart_cases: list[str] = []  # the case in flight at each restart (run notes, the run's summary)
+        self.case = ""  # the case in flight (set by the runner; named in the notes)
 
     def record(self, reply: Telegram) -> Status:
         """A CMD_GET_STATUS reply just read, nothing asked after it: the current status until something moves."""
@@ -175,7 +179,7 @@ class Target:
         window = cfg.connect_window if window is None else window
         began = time.monotonic()
         deadline = began + window
-        delay, last, refused = 0.01, "no attempt", False
+        delay, last, refused = 0.01, "no attempt", None  # refused: when the first connect was refused
         while True:
             s = Session(
                 cfg.host,
@@ -201,8 +205,9 @@ class Target:
             except Unreachable as exc:
                 if "refused" in str(exc).lower() and not self.reached:
                     raise  # nothing listens: a busy port accepts and closes, it does not refuse
-                refused = refused or "refused" in str(exc).lower()  # gone since: a restart, or a crash
-                if refused and waits_restart:
+                if refused is None and "refused" in str(exc).lower():  # gone since: a restart, or a crash
+                    refused = time.monotonic()
+                if refused is not None and waits_restart:
                     deadline = max(deadline, began + RESTART_WINDOW)
                 last = str(exc)
                 s.close()
@@ -210,26 +215,37 @@ class Target:
                 last = str(exc).removeprefix(f"port {label} ({cfg.host}:{self.port_of(label)}): ")
                 s.close()
             if time.monotonic() + delay > deadline:
-                raise Unreachable(
-                    f"port {label} ({cfg.host}:{self.port_of(label)}): no working connection "
-                    f"within {window:.0f} s: {last}"
-                )
+                raise Unreachable(self._gone(label, window, refused if waits_restart else None, last))
             self.budget.check()
             time.sleep(delay)
             delay = min(delay * 2, 0.2)
 
-    def _served(self, label: str, refused: bool) -> None:
+    def _gone(self, label: str, window: float, refused: float | None, last: str) -> str:
+        """Why no connection came: a port refused since it had served this run says so, with how long."""
+        where = f"port {label} ({self.config.host}:{self.port_of(label)})"
+        if refused is None:
+            return f"{where}: no working connection within {window:.0f} s: {last}"
+        return (
+            f"{where}: refused connections for {time.monotonic() - refused:.1f} s after it had served this run (a "
+            f"restart that did not come back within {RESTART_WINDOW:g} s, erratum E-BEH-007, or a crash): {last}"
+        )
+
+    def _served(self, label: str, refused: float | None) -> None:
         """A connection was served; one refused before it means the target restarted (erratum E-BEH-007)."""
         self.reached = True
-        if refused:
-            self.restarted(f"port {label} refused connections, then served again")
+        if refused is not None:
+            self.restarted(
+                f"port {label} refused connections for {time.monotonic() - refused:.1f} s, then served again"
+            )
 
     def restarted(self, seen: str) -> None:
         """The target restarted (``seen`` says how it showed): counted and noted; the runner runs the case again."""
         self.restarts, self.restart_seen = self.restarts + 1, seen
+        self.restart_cases.append(self.case)
+        during = f" during {self.case}" if self.case else ""
         self.notes.append(
-            f"{seen}: the target restarted (erratum E-BEH-007, an alternative reading; zoo behaviour matrix row 10); "
-            "the case in flight is run again"
+            f"{seen}{during}: the target restarted (erratum E-BEH-007, an alternative reading; zoo behaviour matrix "
+            "row 10); the case in flight is run again"
         )
 
     def session(self, label: str, log: WireLog, observer: Any) -> Session:
@@ -260,12 +276,14 @@ class CaseContext:
     notes: list[str] = field(default_factory=list)
     unsolicited: list[tuple[str, bytes]] = field(default_factory=list)
     abuse_from: Status | None = None  # the status just before a case sent malformed input
+    sent: set[str] = field(default_factory=set)  # the names of the telegrams the case sent (a restart's judge)
     _finalizers: list[tuple[str, Callable[[], object]]] = field(default_factory=list)
     _extra: list[Session] = field(default_factory=list)
 
     # ---- observer hooks (wire.Observer)
     def on_sent(self, telegram: Telegram) -> None:
         self.target.coverage.sent(telegram)
+        self.sent.add(telegram.NAME)
 
     def on_received(self, telegram: Telegram) -> None:
         self.target.coverage.received(telegram)

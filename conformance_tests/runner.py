@@ -12,7 +12,15 @@ Rules:
   state and motion mode are what they were before the abuse.
 - A case during which the target restarted (a port refused connections, then served again; or a lost connection
   after which the platform had lost its initialisation: erratum E-BEH-007, zoo matrix row 10) is INCONCLUSIVE with
-  that reason and run again, whatever it saw meanwhile.
+  that reason and run again, whatever it saw meanwhile: a restart is an event of the platform, not a failure of
+  its protocol. After an attempt that failed or lost its connection the runner looks: a port A that refuses now
+  is waited out (``RESTART_WINDOW``; the wait and what was seen are named); a connection lost during a case that
+  sent nothing that uninitialises the platform (``UNINITIALISING``) nor malformed input, after which a new one is
+  served at once but the platform lost its initialisation, is a restart too. The re-run starts from scratch: the
+  case's own set-up brings the fresh target to the state it needs (``CaseContext.ensure``), and a way to a state
+  that the restart made the pipelined run abandon is taken for granted again. A re-run that a restart cuts again
+  stays INCONCLUSIVE with that reason, never FAIL; a FAIL of a re-run that no restart cut is the case's verdict.
+  The run's notes name each restart and the case in flight, and sum them up at the end.
 - A SHOULD or MAY case during which the target stopped answering (a reply timeout, and then no new client
   served) is FAIL: whatever the case's level, a target must keep serving.
 - Bounds (pace.py): the target's reply time is measured once before the first case and scales the waits; every
@@ -24,7 +32,6 @@ Rules:
 
 from __future__ import annotations
 
-import contextlib
 import time
 import traceback
 from collections.abc import Sequence
@@ -218,6 +225,8 @@ class Runner:
                 self._emit("on_case_end", result)
         self.target.close()
         self.notes += self.target.notes
+        if self.target.restarts:
+            self.notes.append(_restarts_summary(self.target))
         ran = {r.case.id: r for r in results}
         stale = self.baseline.stale(ran)
         for r in results:
@@ -260,6 +269,7 @@ class Runner:
             return
         ctx = CaseContext(self.target, c)
         self._budget(pace.case_budget(self.config))
+        self.target.case = f"the reset before {c.id}"
         try:
             ctx.ready()
         except Exception:
@@ -311,11 +321,15 @@ class Runner:
         t0 = time.monotonic()
         budget = self._case_budget()
         self._budget(budget)
-        restarts = self.target.restarts
+        restarts, prompt = self.target.restarts, self.target.prompt
+        self.target.case = c.id
         try:
             verdict, message, pre, silent, lost = _outcome(c, ctx)
-            if lost and self.target.restarts == restarts:
-                _back(self.target)  # a lost connection: was it a restart? (before the clean-up initialises again)
+            if (lost or verdict in (Verdict.FAIL, Verdict.NON_STRICT)) and self.target.restarts == restarts:
+                gone = _back(self.target, ctx, lost == "closed")  # a restart? (before the clean-up initialises)
+                if gone:
+                    message = f"{message}; then {gone}"
+
         finally:
             self._budget(max(10.0, budget / 4))  # the clean-up's own budget
             ctx.finish()
@@ -334,6 +348,7 @@ class Runner:
                 ctx.note(f"informative: {dev.describe()}")
         if self.target.restarts > restarts and verdict not in (Verdict.PASS, Verdict.ERROR):
             verdict, silent, pre = Verdict.INCONCLUSIVE, False, False
+            self.target.prompt = self.target.prompt or prompt  # the state the restart showed was no slow target's
             message = (
                 f"the target restarted during this case ({self.target.restart_seen}: erratum "
                 f"E-BEH-007, zoo behaviour matrix row 10), so the case is run again; it said: {message}"
@@ -353,39 +368,71 @@ class Runner:
         )
 
 
-def _outcome(c: Case, ctx: CaseContext) -> tuple[Verdict, str, bool, bool, bool]:
+def _outcome(c: Case, ctx: CaseContext) -> tuple[Verdict, str, bool, bool, str]:
     """Run the case: its verdict and message, whether it failed a precondition, whether the target answered nothing
-    (silent) and whether a connection was lost (closed, reset, or no reply: a restart, perhaps)."""
+    (silent) and how a connection was lost: "closed" (closed or reset), "silent" (no reply) or "" (a restart,
+    perhaps)."""
     try:
         c.func(ctx)
     except Fail as exc:
-        lost = isinstance(exc, (ConnectionClosed, ReplyTimeout)) and not isinstance(exc, NoConnection)
-        return _fail_verdict(c, exc), str(exc), exc.precondition, isinstance(exc, (ReplyTimeout, NoConnection)), lost
+        silent = isinstance(exc, (ReplyTimeout, NoConnection))
+        return _fail_verdict(c, exc), str(exc), exc.precondition, silent, _lost(exc)
     except NotApplicable as exc:
-        return Verdict.NA, str(exc), False, False, False
+        return Verdict.NA, str(exc), False, False, ""
     except Inconclusive as exc:
-        return Verdict.INCONCLUSIVE, str(exc), False, isinstance(exc, BudgetSpent), False
+        return Verdict.INCONCLUSIVE, str(exc), False, isinstance(exc, BudgetSpent), ""
     except Exception as exc:
         tb = traceback.format_exception(exc)
-        return Verdict.ERROR, f"harness error: {exc!r}\n{''.join(tb[-6:])}", False, False, False
-    return Verdict.PASS, "", False, False, False
+        return Verdict.ERROR, f"harness error: {exc!r}\n{''.join(tb[-6:])}", False, False, ""
+    return Verdict.PASS, "", False, False, ""
 
 
-def _back(target: Target) -> None:
-    """After a lost connection, connect to port A again (a port that refuses is waited out for the connect
-    window: Target.connect counts that as a restart) and read the status: a platform that was initialised and
-    now is not lost its state with the connection - it restarted too (erratum E-BEH-007). Whatever else happens
-    is the next case's to find."""
+def _lost(exc: Fail) -> str:
+    """How the case's connection was lost: "closed" (a close or a reset), "silent" (no reply), "" (not lost, or
+    never had: a port that served no connection is the restart window's to judge)."""
+    if isinstance(exc, NoConnection):
+        return ""
+    return "closed" if isinstance(exc, ConnectionClosed) else "silent" if isinstance(exc, ReplyTimeout) else ""
+
+
+UNINITIALISING = frozenset({"CMD_SHUTDOWN_PLTF", "CMD_EXIT", "CMD_SHUTDOWN_HOST"})  # a lost initialisation's causes
+BACK_AT_ONCE = 1.0  # wall s a port that takes connections gets to serve again after a lost connection
+
+
+def _back(target: Target, ctx: CaseContext, closed: bool) -> str:
+    """After an attempt that failed or lost its connection: was it a restart (erratum E-BEH-007)? A port A that
+    refuses now is waited out (``RESTART_WINDOW``: Target.connect counts the restart when it serves again). After a
+    connection closed or reset (not a silent one: a hung target is not waited for twice) on a port that takes
+    connections, a new one is served (within ``BACK_AT_ONCE`` s) and its status read: a platform that was
+    initialised and now is not lost its state with the connection - it restarted, unless the case sent what
+    uninitialises it or malformed input. Whatever else happens is the next case's. Returns what was seen when a
+    refusing port did not come back within the window, else ''."""
     before = target.last_status[2] if target.last_status is not None else None
-    if not _refused(target):
-        return  # a port that takes connections (a stuck target's too): nothing restarted that a connect would show
+    refused = _refused(target)
+    if not (refused or (closed and not ctx.case.abuse and not ctx.sent & UNINITIALISING)):
+        return ""  # a port that takes connections (a stuck target's too), nothing lost: no restart a connect shows
     target.close()  # one client per port: our sessions would keep the port busy
     restarts = target.restarts
-    with contextlib.suppress(Unreachable, Fail):
-        target.connect("A", WireLog(max_entries=50), NullObserver()).close()
+    window = None if refused else BACK_AT_ONCE
+    try:
+        target.connect("A", WireLog(max_entries=50), NullObserver(), window=window).close()
+    except Unreachable as exc:
+        return str(exc) if refused else ""
+    except Fail:
+        return ""
     now = target.last_status[2] if target.last_status is not None else None
     if target.restarts == restarts and before is not None and now is not None and before.initialized > now.initialized:
         target.restarted(f"port A lost our connection and the platform its initialisation ({now.describe()})")
+    return ""
+
+
+def _restarts_summary(target: Target) -> str:
+    """The run's note on the restarts: how many, during which cases (erratum E-BEH-007, zoo matrix row 10)."""
+    cases = ", ".join(dict.fromkeys(c or "between cases" for c in target.restart_cases))
+    return (
+        f"the target restarted {target.restarts} time(s) during the run (erratum E-BEH-007, an alternative reading; "
+        f"zoo behaviour matrix row 10), during: {cases}; each case a restart cut was run again"
+    )
 
 
 def _refused(target: Target) -> bool:

@@ -3,13 +3,17 @@ NON-STRICT or a run note naming the erratum or the matrix row, never FAIL, never
 
 from __future__ import annotations
 
+import contextlib
 import socket
+import threading
 import time
+from collections.abc import Callable
 
 import pytest
 
-from pltf.conformance_tests import pace
+from pltf.conformance_tests import context, pace
 from pltf.conformance_tests.catalogue import Case, Level, Tier, Verdict, load_all, select
+from pltf.conformance_tests.chart import St
 from pltf.conformance_tests.context import CaseContext, Config
 from pltf.conformance_tests.runner import Runner, RunResult
 from pltf.zoo import launch
@@ -63,32 +67,32 @@ def test_the_standard_tier_through_each_conforming_behaviour_has_no_fail_and_no_
     assert not _bad(run), _bad(run)
 
 
-# slow: two clean-clone make test runs of 2026-11-28 (one loaded, one quiet) found the restarting relay not serving
-# again within the connection probe's 5 s (erratum E-BEH-007's detection holds, the relay's timing does not yet)
-@pytest.mark.slow
+# back in the default tier: the two clean-clone make test runs of 2026-11-28 that saw the relay not serving again
+# within the probe's 5 s met the member's own fault (a restart left the dropped clients' pumps in its selector and
+# it accepted and closed newcomers after its first restart: tests/zoo/test_relay), not the suite's
 def test_a_case_during_which_the_target_restarts_is_run_again() -> None:
-    """Row 10 (E-BEH-007): the restart drops the connection (or leaves it unanswered) and the port refuses while the
-    target starts again; the suite waits it out, counts the restart and runs the case again (before: FAIL 'the
-    target closed the connection')."""
+    """Row 10 (E-BEH-007) through the zoo member: the restart drops the connection (or leaves it unanswered) and the
+    port refuses while the target starts again; the suite waits it out, counts the restart and runs the case again
+    (before: FAIL 'the target closed the connection'). About 6 s: a restart 2 s after the start, 2 s down."""
     attempts: list[str] = []
 
     def until_restart(ctx: CaseContext) -> None:
         attempts.append(ctx.case.id)
-        deadline = time.monotonic() + 20.0  # the member restarts every 6 s
+        deadline = time.monotonic() + 20.0  # the member restarts every 2 s (its start-up and a loaded machine: more)
         while len(attempts) == 1 and time.monotonic() < deadline:
             ctx.status()
             time.sleep(0.05)
         ctx.status()
 
     case = Case("6.1/t/restart", until_restart, "a test case", Level.MUST, Tier.SMOKE, "state")
-    with launch.zoo("restarts", upstream="emulator", time_scale=SCALE, extra=["--restart-every", "6"]) as target:
+    with launch.zoo("restarts", upstream="emulator", time_scale=SCALE, extra=["--restart-every", "2"]) as target:
         config = Config("127.0.0.1", target.ports[0], target.ports[1], time_scale=SCALE, simulator=True)
         run = Runner(config, [case]).run()
     result = run.results[0]
     assert result.verdict is Verdict.PASS and result.message.startswith("passed on attempt"), result.message
     assert "the target restarted during this case" in result.attempts[0].message
     assert "E-BEH-007" in result.attempts[0].message and "matrix row 10" in result.attempts[0].message
-    assert any("E-BEH-007" in n for n in run.notes), run.notes
+    assert any("E-BEH-007" in n and "during 6.1/t/restart" in n for n in run.notes), run.notes
 
 
 def test_a_fin_that_ends_the_session_is_named_as_the_reading_it_is() -> None:
@@ -127,3 +131,140 @@ def test_a_close_on_malformed_input_that_comes_after_the_wait_is_still_the_close
         config = Config("127.0.0.1", tiny.ports[0], tiny.ports[1], time_scale=10.0, reply_timeout=2.0)
         run = Runner(config, [load_all()["6.2/framing/trailing-bytes"]]).run()
     assert run.results[0].verdict is Verdict.PASS, run.results[0].message
+
+
+class Restarting(TinyTarget):
+    """TinyTarget that restarts on ``restart(down)``: every connection dropped, the ports refused for ``down`` s
+    (0: listening again at once), the state lost (Not connected) - zoo matrix row 10 in-process, timed by the test.
+    ``close_on`` names a command at which it closes the connection without a reply and without a restart (a fault
+    the suite must still FAIL)."""
+
+    def __init__(self, close_on: str = "") -> None:
+        super().__init__()
+        self.close_on = close_on
+        self.conns: set[socket.socket] = set()
+
+    def _run(self, conn: socket.socket, index: int) -> None:
+        self.conns.add(conn)
+        try:
+            super()._run(conn, index)
+        finally:
+            self.conns.discard(conn)
+
+    def handle(self, t: object) -> object:
+        if getattr(t, "NAME", "") == self.close_on:
+            raise ConnectionAbortedError("closed at " + self.close_on)  # _run closes the connection
+        return super().handle(t)
+
+    def restart(self, down: float) -> None:
+        for ls in self._listeners:
+            with contextlib.suppress(OSError):
+                ls.shutdown(socket.SHUT_RDWR)  # wakes the accept loop: the port stops listening at once
+            ls.close()
+        for conn in list(self.conns):
+            with contextlib.suppress(OSError):
+                conn.shutdown(socket.SHUT_RDWR)
+        with self.lock:
+            self.state, self.mode = St.NOT_CONNECTED, 0
+        if down:
+            threading.Timer(down, self._listen_again).start()
+        else:
+            self._listen_again()
+
+    def _listen_again(self) -> None:
+        self._listeners = []
+        for port in self.ports:
+            ls = socket.socket()
+            ls.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            ls.bind(("127.0.0.1", port))
+            ls.listen(8)
+            self._listeners.append(ls)
+        for i, ls in enumerate(self._listeners):
+            threading.Thread(target=self._accept, args=(ls, i), daemon=True).start()
+
+
+def _tiny_run(target: Restarting, func: Callable[[CaseContext], None], level: Level = Level.MUST) -> RunResult:
+    case = Case("6.1/t/restart", func, "a test case", level, Tier.SMOKE, "state")
+    config = Config(
+        "127.0.0.1",
+        target.ports[0],
+        target.ports[1],
+        time_scale=10.0,
+        reply_timeout=1.0,
+        connect_window=1.0,
+        min_wall=0.05,
+    )
+    return Runner(config, [case]).run()
+
+
+def _cut(target: Restarting, down: float, times: int = 1) -> tuple[Callable[[CaseContext], None], list[int]]:
+    """A case that needs Ready and reads the status; the target restarts in its first ``times`` attempts."""
+    attempts: list[int] = []
+
+    def case(ctx: CaseContext) -> None:
+        ctx.ready()
+        attempts.append(1)
+        if len(attempts) <= times:
+            target.restart(down)
+        s = ctx.status()
+        assert s.op == context.OperationState.ST_OP_READY, s.describe()
+
+    return case, attempts
+
+
+@pytest.mark.parametrize("down", [0.6, 0.0], ids=["refused-for-a-while", "back-at-once"])
+def test_a_case_a_restart_cut_is_run_again_from_scratch_and_passes(down: float) -> None:
+    """Row 10 (E-BEH-007) in-process: the connection dropped, the port refused for a while (or listening again at
+    once: then the lost initialisation tells the restart), the state lost. The cut attempt is INCONCLUSIVE naming
+    the restart, the re-run brings the fresh target to Ready itself and passes; the notes name the case."""
+    with Restarting() as target:
+        func, attempts = _cut(target, down)
+        run = _tiny_run(target, func)
+    result = run.results[0]
+    assert (result.verdict, result.message, len(attempts)) == (Verdict.PASS, "passed on attempt 2", 2), result.message
+    first = result.attempts[0].message
+    assert first.startswith("the target restarted during this case") and "matrix row 10" in first, first
+    seen = "refused connections for" if down else "lost our connection and the platform its initialisation"
+    assert seen in first, first
+    assert any("during 6.1/t/restart" in n and "E-BEH-007" in n for n in run.notes), run.notes
+    assert run.notes[-1].startswith("the target restarted 1 time(s) during the run"), run.notes[-1]
+    assert run.exit_code == 0
+
+
+def test_a_case_a_restart_cuts_every_time_stays_inconclusive_never_fail() -> None:
+    with Restarting() as target:
+        func, attempts = _cut(target, 0.3, times=99)
+        run = _tiny_run(target, func)
+    result = run.results[0]
+    assert result.verdict is Verdict.INCONCLUSIVE and len(attempts) == 3, (result.verdict, result.message)
+    assert result.message.startswith("the target restarted during this case"), result.message
+
+
+@pytest.mark.parametrize("how", ["closes", "closes-after-shutdown"])
+def test_a_closed_connection_that_is_no_restart_still_fails(how: str) -> None:
+    """The restart check must not excuse a real fault: a target that closes the connection at CMD_GET_POSITION (its
+    state kept), or one that closes it after the case's CMD_SHUTDOWN_PLTF (the initialisation lost by the case's
+    own command, not by a restart), FAILs."""
+
+    def case(ctx: CaseContext) -> None:
+        ctx.ready()
+        if how == "closes-after-shutdown":
+            ctx.send("CMD_SHUTDOWN_PLTF")
+        ctx.position()
+
+    with Restarting(close_on="CMD_GET_POSITION") as target:
+        run = _tiny_run(target, case)
+    result = run.results[0]
+    assert result.verdict is Verdict.FAIL, (result.verdict, result.message)
+    assert "closed the connection" in result.message and "restarted" not in result.message, result.message
+    assert not any("E-BEH-007" in n for n in run.notes), run.notes
+
+
+def test_a_port_that_does_not_come_back_is_named_with_how_long_it_refused(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(context, "RESTART_WINDOW", 1.5)
+    with Restarting() as target:
+        func, _ = _cut(target, 60.0)
+        run = _tiny_run(target, func)
+    message = run.results[0].message
+    assert run.results[0].verdict in (Verdict.FAIL, Verdict.INCONCLUSIVE), message
+    assert "refused connections for 1." in message and "after it had served this run" in message, message
