@@ -26,7 +26,9 @@ Rules:
   compared by kind (compare.py ``WATCHED``, erratum E-REP-022).
 - Every other reply is compared field by field (compare.py, spec/volatile.yaml). A missing reply, an extra
   one, and a connection the target closes where it did not in the recording (or keeps open where it closed
-  it) are differences too.
+  it) are differences too; a connection the target closed unanswered (turned away) is not cut short by a close
+  that came before its requests went out, and a request still owed its reply when the recorded client closed
+  (``Step.cut``) may have it in the replay.
 - Memory: a connection's summary (``Survey``, a pass over the file before the replay) is kept for the whole
   replay (a few hundred bytes a connection); steps, replies and waits only until they are judged.
 """
@@ -68,6 +70,7 @@ class Step:
     at: float = 0.0  # recorded seconds since the session began
     index: int = 0  # its place among the connection's requests
     superseded: bool = False  # a poll followed by another of its run: its reply is not kept
+    cut: bool = False  # still owed its reply when the client (or the recording's end) closed the connection
 
     @property
     def label(self) -> str:
@@ -371,6 +374,10 @@ class Builder:
         self._close_run()
         self.ended = True
         self._release()
+        if self.s.closed_by != "target":
+            for waiting in self.pending.values():
+                for step in waiting:
+                    step.cut = True
         self.pending.clear()
 
 
@@ -409,7 +416,7 @@ def _describe(rec: Record | None) -> str:
     return rec.telegram.NAME
 
 
-def _compare(script: Script, step: Step, got: Record | None, note: str = "") -> list[Difference]:
+def _compare(script: Script, step: Step, got: Record | None, note: str = "", watched: bool = False) -> list[Difference]:
     rec = step.reply
     name = (
         rec.telegram.NAME
@@ -427,22 +434,44 @@ def _compare(script: Script, step: Step, got: Record | None, note: str = "") -> 
             same = (rec.error or "").split(":")[0] == (got.error or "").split(":")[0]
             return [] if same else [d("(reply)", _describe(rec), _describe(got))]
         return [d("(reply)", _describe(rec), _describe(got))]
-    diff = diff_watched if script.reads_only else diff_telegrams
+    diff = diff_watched if script.reads_only or watched else diff_telegrams
     return [d(f.path, f.recorded, f.replayed) for f in diff(rec.telegram, got.telegram)]
 
 
 def judge_step(script: Script, step: Step, got: Record | None) -> list[Difference]:
-    """A sent request that is no poll of a wait, against the reply the replay got for it (None: none)."""
+    """A sent request that is no poll of a wait, against the reply the replay got for it (None: none). A request
+    the recording has no reply for because its client closed first (``Step.cut``) may have one in the replay
+    (whose client reads what it is owed before it closes): judged by its kind."""
+    if step.cut and step.reply is None and (got is None or got.name == step.request.name):
+        return []
     if step.answered or step.reply is not None or got is not None:
         return _compare(script, step, got)
     return []
 
 
 def judge_wait(script: Script, wait: Wait, final: Record | None, polls: int) -> list[Difference]:
-    """A wait by the reply it ended on in the replay."""
+    """A wait by the reply it ended on in the replay; a wait the client's end cut (``cut_by_end``) by kind."""
     assert wait.last is not None
-    note = f" (a wait: {len(wait.steps)} polls recorded, {polls} replayed; its final reply)"
-    return _compare(script, wait.last, final, note)
+    cut = cut_by_end(script, wait)
+    what = "the connection's end cut it with the platform moving" if cut else "its final reply"
+    note = f" (a wait: {len(wait.steps)} polls recorded, {polls} replayed; {what})"
+    return _compare(script, wait.last, final, note, watched=cut)
+
+
+MOTION = ("vel_trans", "vel_rot")  # fields of a reply that say the platform is moving
+
+
+def cut_by_end(script: Script, wait: Wait) -> bool:
+    """Was ``wait`` cut by its client's end rather than ended by a state reached? It is the connection's last
+    request and its final recorded reply shows the platform moving (a velocity not 0): the client stopped while
+    the platform drove (the soak stops its patrol mid-drive), so where the platform was then is a matter of
+    timing; judged like a watcher's reply (compare.py ``WATCHED``). A wait that ends with the platform at rest,
+    or that more requests follow, is judged field by field."""
+    rec = None if wait.last is None else wait.last.reply
+    if wait.final != script.requests - 1 or rec is None or rec.telegram is None:
+        return False
+    values = telegram_to_json(rec.telegram)["fields"]
+    return any(values.get(name) not in (None, 0, 0.0) for name in MOTION)
 
 
 def _conn_diff(s: Script, path: str, a: str, b: str, when: float | None = None) -> Difference:
@@ -456,7 +485,7 @@ def judge_end(script: Script, o: Outcome, next_label: str = "", next_at: float =
     s, out = script, []
     if o.error is not None:
         return [_conn_diff(s, "connect", "connected", o.error)]
-    if o.sent < s.requests:
+    if o.sent < s.requests and not (_turned_away(s) and o.closed_by_target_after is not None):
         what = f"{o.sent} sent: the target closed the connection before {next_label}"
         out.append(_conn_diff(s, "requests", f"{s.requests} sent", what, when=next_at))
     if o.extra_count != s.unsolicited_count or any(
@@ -476,6 +505,13 @@ def judge_end(script: Script, o: Outcome, next_label: str = "", next_at: float =
     elif s.closed_by != "target" and target_closed and o.sent == s.requests:
         out.append(_conn_diff(s, "end", f"closed by the {s.closed_by}", "closed by the target", when=s.last_time))
     return out
+
+
+def _turned_away(s: Script) -> bool:
+    """Closed by the target with no reply in the recording (a newcomer turned away, E-WIRE-007): it is judged by
+    being closed by the target unanswered again, not by how many of its requests went out before the close (a
+    race between the client's first send and the target's close)."""
+    return s.closed and s.closed_by == "target" and not s.replied
 
 
 def _list(records: list[Record], count: int) -> str:

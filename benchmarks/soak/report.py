@@ -26,6 +26,7 @@ if TYPE_CHECKING:
     from benchmarks.soak.run import Outcome
 
 QUANTITIES = ("rss_mb", "fds", "threads")
+SHOWN_LINES = 20  # of pltf replay's output
 
 
 def judged(args: argparse.Namespace, samples: list[dict[str, Any]]) -> list[tuple[str, str, list[slopes.Slope]]]:
@@ -40,7 +41,7 @@ def judged(args: argparse.Namespace, samples: list[dict[str, Any]]) -> list[tupl
 
 def passed(args: argparse.Namespace, outcome: Outcome) -> bool:
     within = all(s.within for _, _, ss in judged(args, outcome.samples) for s in ss)
-    replay_ok = outcome.replay_status == 0 if args.replay else True
+    replay_ok = outcome.replayed.status == 0 if outcome.replayed is not None else not args.replay
     return within and not outcome.dead and not lost(outcome) and replay_ok
 
 
@@ -86,7 +87,7 @@ def render(args: argparse.Namespace, outcome: Outcome, workdir: Path) -> str:
     loads = [s["load"] for s in samples]
     now = datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC")
     verdict = "PASSED" if passed(args, outcome) else "FAILED"
-    replay = f" --replay --replay-scale {args.replay_scale:g}" if args.replay else ""
+    replay = f" --replay-scale {args.replay_scale:g}" if args.replay else " --no-replay"
     lines = [
         f"## {now}: {args.duration / 60:g} minutes at time scale {args.time_scale:g}: {verdict}",
         "",
@@ -141,13 +142,17 @@ def _recording(args: argparse.Namespace, outcome: Outcome) -> list[str]:
         f"The reconnecting client made {reconnects(outcome)} connections, the patrol 1: "
         + ("all of them are in the recording, nothing lost." if not missing else "**" + "; ".join(missing) + "**.")
     )
-    if args.replay:
-        replay = "did not end" if outcome.replay_status is None else f"exit status {outcome.replay_status}"
-        out += ["", f"`pltf replay` of the recording against a fresh reference server: {replay}."]
+    r = outcome.replayed
+    if r is not None:
+        out += [
+            "",
+            f"`pltf replay` of the recording against a fresh reference server (benchmarks/soak/replay.py): "
+            f"{r.summary()}.",
+        ]
+        if r.lines:
+            out += ["", "```", *r.lines[:SHOWN_LINES], "```"]
     else:
-        out += ["", "`pltf replay` not run (`--replay`: short runs only, see benchmarks/soak/run.py)."]
-    if outcome.replay_lines:
-        out += ["", "```", *outcome.replay_lines[:20], "```"]
+        out += ["", "`pltf replay` not run (`--no-replay`)."]
     return out
 
 
@@ -175,6 +180,7 @@ HEADER = """# Soak: the toolkit for an hour
 and a client that connects to the second port every few seconds (turned away while the patrol holds it, guide 6.1).
 Every minute the RSS, open descriptors and threads of every process (/proc) and the recording's size and
 telegram count; at the end the slopes after the warm-up against their bounds and a check that nothing was lost
-(every frame decodes again, every reply has its request, every connection the clients made is in the recording;
-`pltf replay` of it with `--replay`, short runs only). Newest run last.
+(every frame decodes again, every reply has its request, every connection the clients made is in the recording)
+and `pltf replay` of the recording against a fresh reference server, with its peak RSS and duration. Newest run
+last.
 """

@@ -1,40 +1,37 @@
 """The soak's run: start the parts, sample every ``interval`` s for ``duration`` s, stop, replay, judge, report.
 
     python -m benchmarks.soak --duration 3600 --interval 60 --out benchmarks/results/soak.md   # make soak
+    python -m benchmarks.soak --minutes 10                                                   # a shorter one
 
-Exit status 0 when every slope is within its bound, no part ended and nothing was lost: every frame of the recording
-decodes again, every reply has its request, and the reconnecting client's connections are all in it (and, with
-``--replay``, ``pltf replay`` of the recording passes); 1 otherwise; 2 when a part cannot be started.
-
-``pltf replay`` is an option, not the default: it keeps the whole session in memory (about 7 bytes of RSS per byte
-of session file: 878 MB for the 127 MB of two minutes here) and takes longer than the recording (a GUI's polling is
-one long wait), so an hour's recording of several GB is out of its reach on this machine.
+Exit status 0 when every slope is within its bound, no part ended, nothing was lost (every frame of the recording
+decodes again, every reply has its request, and the reconnecting client's connections are all in it) and ``pltf
+replay`` of the recording against a fresh reference server passes (benchmarks/soak/replay.py: its peak RSS and
+duration are reported; ``--no-replay`` leaves it out); 1 otherwise; 2 when a part cannot be started.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import subprocess
 import sys
 import tempfile
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from benchmarks.soak import integrity, parts, report, sampling
-from pltf.zoo.launch import LaunchError, python, reference
+from benchmarks.soak.replay import Replayed, replay
+from pltf.zoo.launch import LaunchError
 
-REPLAY_TIMEOUT_PAD = 600.0  # s beyond the recorded duration over the replay's time scale
+REPLAY_TIMEOUT_PAD = 600.0  # s beyond twice the recorded duration over the replay's time scale
 
 
 @dataclass
 class Outcome:
     samples: list[dict[str, Any]]
     dead: list[str]
-    replay_status: int | None = None
-    replay_lines: list[str] = field(default_factory=list)
+    replayed: Replayed | None = None  # None: not replayed (--no-replay)
     reconnect: str = ""
     patrol: str = ""
     recording_check: integrity.Integrity | None = None
@@ -44,15 +41,21 @@ class Outcome:
 def options(argv: list[str] | None) -> argparse.Namespace:
     p = argparse.ArgumentParser(prog="python -m benchmarks.soak", description=__doc__.split("\n\n")[0])
     p.add_argument("--duration", type=float, default=3600.0, help="seconds of wall time (default 3600)")
+    p.add_argument("--minutes", type=float, help="minutes of wall time (instead of --duration)")
     p.add_argument("--interval", type=float, default=60.0, help="seconds between samples (default 60)")
     p.add_argument("--warmup", type=float, default=600.0, help="seconds left out of the slopes (default 600)")
     p.add_argument("--time-scale", type=float, default=10.0, help="the server's time scale (default 10)")
     p.add_argument("--reconnect-every", type=float, default=3.0, help="seconds between reconnects (default 3)")
-    p.add_argument("--replay", action="store_true", help="also `pltf replay` the recording (short runs only)")
+    p.add_argument("--no-replay", dest="replay", action="store_false", help="leave out `pltf replay` of the recording")
     p.add_argument("--replay-scale", type=float, default=1.0, help="replay X times as fast (its server too)")
     p.add_argument("--workdir", type=Path, help="where the recording and the samples go (default: a new temp dir)")
     p.add_argument("--out", type=Path, help="append the results to this markdown file")
-    return p.parse_args(argv)
+    args = p.parse_args(argv)
+    if args.minutes is not None:
+        args.duration = 60.0 * args.minutes
+    if args.duration <= 0 or args.interval <= 0 or args.replay_scale <= 0:
+        p.error("--duration, --minutes, --interval and --replay-scale must be positive")
+    return args
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -128,22 +131,10 @@ def _patrol_summary(lines: list[str]) -> str:
 
 def _replay(args: argparse.Namespace, record: Path, outcome: Outcome) -> None:
     """``pltf replay`` of the recording against a fresh reference server (same seed, fixtures' data)."""
-    scale = args.replay_scale
-    server = reference(time_scale=args.time_scale * scale, seed=1)
-    with server:
-        p1, p2 = server.ports
-        cmd = python("pltf.cli.main", "replay", str(record), "--target", f"127.0.0.1:{p1}", "--second-port", str(p2))
-        cmd += ["--time-scale", f"{scale:g}"]
-        recorded = outcome.samples[-1]["t"]
-        try:
-            done = subprocess.run(
-                cmd, capture_output=True, text=True, timeout=recorded / scale + REPLAY_TIMEOUT_PAD, check=False
-            )
-        except subprocess.TimeoutExpired:
-            outcome.replay_lines = ["the replay did not end in time"]
-            return
-    outcome.replay_status = done.returncode
-    outcome.replay_lines = (done.stdout + done.stderr).splitlines()
+    recorded = outcome.samples[-1]["t"]
+    timeout = 2 * recorded / args.replay_scale + REPLAY_TIMEOUT_PAD
+    outcome.replayed = replay(record, args.time_scale, args.replay_scale, timeout)
+    print(f"soak: replay: {outcome.replayed.summary()}", flush=True)
 
 
 def samples_of(path: Path) -> list[dict[str, Any]]:
