@@ -200,6 +200,20 @@ def apply(pace: Pace, config: Config) -> None:
         config.probe_timeout = max(config.probe_timeout, SCALE * (pace.reply + config.setup_time))
 
 
+def link(config: Config) -> str:
+    """The link as measured at the start (``measure``), in wall and in simulated time: the reason an INCONCLUSIVE
+    of a timed case names when the link may have kept the case from judging the target (issue 32: "where the link
+    cannot keep a timed behaviour (the velocity watchdog) at the declared time scale, the case is INCONCLUSIVE with
+    that reason")."""
+    if config.reply_time is None:
+        return f"the link's reply time was not measured (time scale {config.time_scale:g})"
+    reply, setup, scale = config.reply_time, config.setup_time, config.time_scale
+    return (
+        f"the link answers in {reply * 1000:.0f} ms and a new connection {setup * 1000:.0f} ms after that, "
+        f"measured at the start: {reply * scale:.2f} and {setup * scale:.2f} simulated s at time scale {scale:g}"
+    )
+
+
 def run_budget(config: Config) -> float:
     """The default budget of a smoke or standard run: 280 s (a run ends within 5 minutes), or twice what the
     standard tier needs against a healthy target at the declared time scale when that is more (about 40 s of

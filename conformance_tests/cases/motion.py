@@ -13,16 +13,18 @@ from __future__ import annotations
 
 import math
 import time
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NoReturn
 
-from pltf.conformance_tests import docdata, reported
+from pltf.conformance_tests import docdata, pace, reported
 from pltf.conformance_tests.cases._common import MotionMode, angle_diff, expect_state, no_unsolicited
 from pltf.conformance_tests.catalogue import Level, case
 from pltf.conformance_tests.chart import St
 from pltf.conformance_tests.context import CaseContext
 from pltf.conformance_tests.outcome import Fail, Inconclusive
+from pltf.conformance_tests.wire import Session
 from pltf.spec.codec import build
 from pltf.spec.telegram import Telegram
 
@@ -31,6 +33,7 @@ AUTO, JOYHARD = MotionMode.MODE_MOTION_AUTOMATIC, MotionMode.MODE_MOTION_JOYHARD
 POS_TOL, ANG_TOL = 100.0, math.radians(5.0)
 # "still": what a standing platform's estimate may do under localization noise (E-MOT-004), far below any move
 STILL_POS, STILL_ANG, STILL_V, STILL_W = 20.0, math.radians(1.0), 5.0, 0.02
+MOVED = 50.0  # mm from where it stood: the platform moved (beyond localization noise, STILL_POS)
 STOP_WITHIN = 3.0  # simulated s a halted platform may take to come to rest
 
 
@@ -134,6 +137,42 @@ def watchdog(ctx: CaseContext, key: str = "VelWatchdogTime", default: float = 0.
     return default
 
 
+DISTINCT = 4  # distinct poses a hold needs to judge a platform that moved (``_held``)
+IN_FLIGHT = 3  # CMD_GET_POSITIONs a hold keeps in flight at most on a fast link (more on a slow one: ``hold``)
+
+
+@dataclass(frozen=True)
+class Held:
+    """What ``hold`` saw: the poses sampled, the CMD_GET_STATUS asked with the last send (when asked for), and why
+    the samples may not show what the target does (``void``, '' when they do; ``stale`` when they may not show it
+    at all, else only a stop the suite's own late resend could have let the watchdog make)."""
+
+    samples: list[Pose]
+    status: Telegram | None = None
+    void: str = ""
+    stale: bool = False
+
+    def reached(self, want: float, axis: str) -> bool:
+        """Some sample showed the commanded velocity ``want`` (``axis`` "v": mm/s, "w": rad/s)."""
+        near = _NEAR[axis]
+        return any(near(getattr(p, axis), want) for p in self.samples)
+
+    def dipped(self, value: float, want: float, axis: str) -> bool:
+        """``value`` fell short of ``want`` (between standing and it) though some sample reached ``want``: what a
+        watchdog stop between two late resends makes of a target that keeps the velocity."""
+        return -_STILL[axis] < value < want and self.reached(want, axis)
+
+    def fail(self, message: str, *, dipped: bool, erratum: str | None = None) -> NoReturn:
+        """Judge against the target: FAIL, or INCONCLUSIVE naming why the samples cannot tell (the link or the
+        machine, not the target). Stale samples (a burst) excuse any verdict; a late resend excuses only what the
+        watchdog can make of a target that keeps the velocity - a dip (``dipped``: short of the commanded value,
+        though some sample reached it). A target that never moves, or never reaches the velocity, FAILs
+        whatever the suite's pace."""
+        if self.void and (self.stale or dipped):
+            raise Inconclusive(f"{message}; but {self.void}")
+        raise Fail(message, erratum=erratum)
+
+
 def hold(
     ctx: CaseContext,
     name: str,
@@ -141,60 +180,119 @@ def hold(
     seconds: float,
     period: float = 0.1,
     limit: float | None = None,
-    status: list[Telegram] | None = None,
-) -> list[Pose]:
-    """Send ``name`` every ``period`` simulated seconds for ``seconds``; the poses sampled in between. ``status``:
-    a CMD_GET_STATUS leaves with the last send, and its reply is appended there (a status asked once the poses
-    were read came a reply time after the last send: through a slow link past the watchdog, issue 17).
+    status: bool = False,
+) -> Held:
+    """Send ``name`` every ``period`` simulated seconds for ``seconds`` on the connection held; the poses sampled in
+    between. ``status``: a CMD_GET_STATUS leaves with the last send (a status asked once the poses were read came a
+    reply time after the last send: through a slow link past the watchdog, issue 17).
 
-    Each send is followed by a CMD_GET_POSITION. Where the target's measured reply time would stretch the gap
-    between two sends past half the watchdog (a slow link, issue 17), its reply is read once it is there (a
-    target answers a connection's requests in order, so each pose is the one after its send); else at once,
-    as before (a fast target paced by its replies: at time scale 10 on a loaded machine the reference server
-    fell behind a stream of unpaced requests and reported velocity 0).
-    When the suite itself fell behind (the gap between two sends, in simulated time, reached ``limit``: the
-    target's watchdog) the measurement is void, not the target's fault: Inconclusive, and the runner re-runs.
-    Every send goes on the one connection held (issue 32): were it lost, a new one would be answered only after
-    the link's set-up (a timer-driven accept: 100 ms, a simulated second at time scale 10, past the watchdog), so
-    a lost connection ends the hold (the target closed it) instead of a silent reconnect.
+    The sends keep to their schedule whatever the replies do: the poses (a CMD_GET_POSITION after a send while
+    fewer than ``IN_FLIGHT`` are unanswered - on a slow link as many as its measured reply time spans, so one still
+    leaves every period) are read as they come, between two sends, never waited for (before, a fast target's
+    reply was waited for after each send: on a loaded machine the gap between two sends grew past the watchdog
+    and the case was INCONCLUSIVE). A target answers a connection's requests in order, so each pose is the one
+    after its send; the few in flight keep a loaded simulator from falling behind a stream of requests.
+    Every send goes on the one connection held (issue 32): a new one would be answered only after the link's
+    set-up (a timer-driven accept: 100 ms, a simulated second at time scale 10, past the watchdog), so a lost
+    connection ends the hold (the target closed it) instead of a silent reconnect.
+    When the suite fell behind (the gap between two sends, in simulated time, reached 0.8 of ``limit``, the
+    target's watchdog) or the target answered in bursts of one stale pose, ``Held.void`` says so, naming the
+    link as measured and the time scale; the case judges as it would, and a verdict against the target that the
+    void explains is INCONCLUSIVE (the runner re-runs), not FAIL.
     """
     session = ctx.session()
-    reply = ctx.config.reply_time or 0.0
-    late = limit is not None and reply * ctx.config.time_scale > limit / 2  # replies slower than the resends
-    samples: list[Pose] = []
-    sent, worst_gap, asked = time.monotonic(), 0.0, 0
-    sends = max(1, round(seconds / period))
+    scale = ctx.config.time_scale
+    tick = period / scale  # wall s between two sends
+    in_flight = max(IN_FLIGHT, math.ceil((ctx.config.reply_time or 0.0) / tick) + 1)
     command = build("request", name, **fields)
-    ask, ask_status = build("request", "CMD_GET_POSITION"), build("request", "CMD_GET_STATUS")
-    for i in range(sends):
-        session.send(command)  # on the connection held: a new one would starve the watchdog for its set-up
+    ask = build("request", "CMD_GET_POSITION")
+    samples: list[Pose] = []
+    asked: deque[float] = deque()  # when each CMD_GET_POSITION still unanswered left
+    waited: list[float] = []  # wall s each answered one took
+    worst_gap, last = 0.0, None
+    due = time.monotonic()
+    for _ in range(max(1, round(seconds / period))):
+        _read_until(session, due, asked, samples, waited)
         now = time.monotonic()
-        worst_gap, sent = max(worst_gap, (now - sent) * ctx.config.time_scale), now
-        session.send(ask)
-        if status is not None and i == sends - 1:
-            session.send(ask_status)
-        asked += 1
-        ctx.sleep(period)
-        while asked and (session.pending() or not late):
-            samples.append(_pose_of(session.read_reply("CMD_GET_POSITION")))
-            asked -= 1
-    for _ in range(asked):
+        session.send(command)  # on the connection held: a new one would starve the watchdog for its set-up
+        worst_gap, last = max(worst_gap, (now - (last or now)) * scale), now
+        if len(asked) < in_flight:
+            session.send(ask)
+            asked.append(time.monotonic())
+        due = max(due + tick, now + tick / 2)  # fallen behind: on from now, no burst of sends to catch up
+    if status:
+        session.send(build("request", "CMD_GET_STATUS"))
+    _read_until(session, due, asked, samples, waited)
+    while asked:
         samples.append(_pose_of(session.read_reply("CMD_GET_POSITION")))
-    if status is not None:
-        status.append(session.read_reply("CMD_GET_STATUS"))
-    if limit is not None and worst_gap >= 0.8 * limit:
-        raise Inconclusive(
-            f"the suite could not resend {name} within the watchdog ({worst_gap:.2f} of {limit:.2f} "
-            "simulated s): a loaded machine, not the target"
+        waited.append(time.monotonic() - asked.popleft())
+    st = session.read_reply("CMD_GET_STATUS") if status else None
+    spread = (min(waited) * scale, max(waited) * scale)
+    return _held(ctx, name, samples, st, worst_gap, spread, limit)
+
+
+def _read_until(session: Session, until: float, asked: deque[float], samples: list[Pose], waited: list[float]) -> None:
+    """Read the poses that come before wall time ``until`` (none waited for past it), and how long each took."""
+    while True:
+        now = time.monotonic()
+        if asked and session.pending():
+            samples.append(_pose_of(session.read_reply("CMD_GET_POSITION")))
+            waited.append(time.monotonic() - asked.popleft())
+        elif now >= until:
+            return
+        else:
+            time.sleep(min(0.002, until - now))
+
+
+def _distinct(samples: list[Pose]) -> list[Pose]:
+    """``samples`` without a pose answered again (the same x, y and angle as the one before: read late)."""
+    return [
+        p
+        for i, p in enumerate(samples)
+        if i == 0 or (p.x, p.y, p.th) != (samples[i - 1].x, samples[i - 1].y, samples[i - 1].th)
+    ]
+
+
+def _held(
+    ctx: CaseContext,
+    name: str,
+    samples: list[Pose],
+    st: Telegram | None,
+    worst_gap: float,
+    spread: tuple[float, float],
+    limit: float | None,
+) -> Held:
+    """``Held``, void when the samples may not show the target (``hold``): only where the platform moved at all -
+    a target that does not move is judged on that, whatever the suite's pace. A pose answered again (the same
+    x, y, angle as the one before) is the same observation, read late: a loaded simulator answers the requests
+    between two of its ticks with one pose; only the first counts, and fewer than ``DISTINCT`` cannot tell."""
+    first = samples[0]
+    moved = any(
+        p.dist(first) > STILL_POS or abs(angle_diff(p.th, first.th)) > STILL_ANG or abs(p.v) > STILL_V for p in samples
+    )
+    seen = _distinct(samples)
+    link = pace.link(ctx.config)
+    if moved and len(seen) < DISTINCT:
+        why = (
+            f"{len(samples)} poses read, only {len(seen)} distinct: the target answered in bursts (it fell behind "
+            f"the requests: a loaded machine or a slow target), its motion was not sampled while {name} was resent "
+            f"({link})"
         )
-    distinct = len({(p.x, p.y, p.th) for p in samples})
-    if late and 2 * distinct < len(samples):
-        raise Inconclusive(
-            f"{len(samples)} poses read late, only {distinct} distinct: the target answered the requests in bursts "
-            "(it fell behind them: a slow target or a loaded machine, not a slow link), so its motion could not be "
-            f"sampled while {name} was resent"
+        return Held(seen, st, why, stale=True)
+    if moved and limit is not None and worst_gap >= 0.8 * limit:
+        why = (
+            f"the suite resent {name} {worst_gap:.2f} simulated s apart at worst, against the target's watchdog of "
+            f"{limit:.2f} s: the machine ran the suite late, the watchdog may have stopped the platform ({link})"
         )
-    return samples
+        return Held(seen, st, why)
+    if moved and limit is not None and spread[1] - spread[0] >= 0.8 * limit:
+        why = (
+            f"the target's poses came {spread[0]:.2f} to {spread[1]:.2f} simulated s after they were asked: its "
+            f"commands may have come as unevenly, and its watchdog of {limit:.2f} s may have stopped the platform "
+            f"between two of them (a loaded machine or a jittery link; {link})"
+        )
+        return Held(seen, st, why)
+    return Held(seen, st)
 
 
 def settled(samples: list[Pose], n: int = 4) -> Pose:
@@ -211,6 +309,10 @@ def _vel_near(value: float, want: float) -> bool:
 
 def _rot_near(value: float, want: float) -> bool:
     return abs(value - want) <= 0.15 * abs(want) + 0.03
+
+
+_NEAR: dict[str, Callable[[float, float], bool]] = {"v": _vel_near, "w": _rot_near}
+_STILL = {"v": STILL_V, "w": STILL_W}
 
 
 def _dist_wheels(ctx: CaseContext) -> float | None:
@@ -237,24 +339,32 @@ _GATE: dict[str, Any] = {"moves_platform": True, "group": "motion"}
 def move_vel_wheel(ctx: CaseContext) -> None:
     start = begin(ctx, VEL)
     wd = watchdog(ctx)
-    samples = hold(ctx, "CMD_MOVE_VEL_WHEEL", {"vel_right": 200, "vel_left": 200}, 1.5, limit=wd)
+    held = hold(ctx, "CMD_MOVE_VEL_WHEEL", {"vel_right": 200, "vel_left": 200}, 1.5, limit=wd)
+    samples = held.samples
     late = samples[len(samples) // 2 :]
-    if not _vel_near(settled(late).v, 200) or sum(_vel_near(p.v, 200) for p in late) < 0.6 * len(late):
-        raise Fail(f"wheels at 200 mm/s: translational velocity {[round(p.v) for p in late]} (expected 200)")
+    v = settled(late).v
+    if not _vel_near(v, 200) or sum(_vel_near(p.v, 200) for p in late) < 0.6 * len(late):
+        held.fail(
+            f"wheels at 200 mm/s: translational velocity {[round(p.v) for p in late]} (expected 200)",
+            dipped=held.dipped(v, 200, "v"),
+        )
     moved = samples[-1].dist(start)
     heading = math.atan2(samples[-1].y - start.y, samples[-1].x - start.x)
     if moved < 100 or abs(angle_diff(heading, start.th)) > math.radians(10):
-        raise Fail(
+        held.fail(
             f"wheels at 200 mm/s for 1.5 s: moved {moved:.0f} mm in direction "
-            f"{math.degrees(heading):.0f} deg (heading {math.degrees(start.th):.0f} deg)"
+            f"{math.degrees(heading):.0f} deg (heading {math.degrees(start.th):.0f} deg)",
+            dipped=moved < 100 and held.reached(200, "v"),
         )
     dist = _dist_wheels(ctx)
-    spin = settled(hold(ctx, "CMD_MOVE_VEL_WHEEL", {"vel_right": 100, "vel_left": -100}, 1.0, limit=wd))
+    spun = hold(ctx, "CMD_MOVE_VEL_WHEEL", {"vel_right": 100, "vel_left": -100}, 1.0, limit=wd)
+    spin = settled(spun.samples)
     want = 200.0 / dist if dist else None
     if spin.w <= 0.02 or (want is not None and not _rot_near(spin.w, want)):
-        raise Fail(
+        spun.fail(
             f"right wheel +100, left -100 mm/s: rotation {spin.w:.3f} rad/s (expected "
-            f"{'counter-clockwise' if want is None else f'{want:.3f}'})"
+            f"{'counter-clockwise' if want is None else f'{want:.3f}'})",
+            dipped=spun.dipped(spin.w, want or 0.05, "w"),
         )
     ctx.send("CMD_MOVE_VEL_WHEEL", vel_right=0, vel_left=0)
     rest(ctx)
@@ -274,18 +384,25 @@ def move_vel_wheel(ctx: CaseContext) -> None:
 def move_vel(ctx: CaseContext) -> None:
     begin(ctx, VEL)
     wd = watchdog(ctx)
-    p = settled(hold(ctx, "CMD_MOVE_VEL", {"vel_trans": 300, "vel_rot": 0}, 1.5, limit=wd))
+    held = hold(ctx, "CMD_MOVE_VEL", {"vel_trans": 300, "vel_rot": 0}, 1.5, limit=wd)
+    p = settled(held.samples)
     if not _vel_near(p.v, 300):
-        raise Fail(f"CMD_MOVE_VEL(300 mm/s): velocity {p.v:.0f} mm/s")
-    status: list[Telegram] = []  # asked right after the last CMD_MOVE_VEL
-    p = settled(hold(ctx, "CMD_MOVE_VEL", {"vel_trans": 0, "vel_rot": 400}, 1.5, limit=wd, status=status))
+        held.fail(f"CMD_MOVE_VEL(300 mm/s): velocity {p.v:.0f} mm/s", dipped=held.dipped(p.v, 300, "v"))
+    held = hold(ctx, "CMD_MOVE_VEL", {"vel_trans": 0, "vel_rot": 400}, 1.5, limit=wd, status=True)
+    p = settled(held.samples)
     if not _rot_near(p.w, 0.4):
-        raise Fail(f"CMD_MOVE_VEL(rotation 400 mrad/s): rotation {p.w:.3f} rad/s (expected 0.4)", erratum="E-REP-005")
-    st = status[0]
-    if abs(st.vel_rot - 400) > 60 or abs(st.vel_trans) > 30:  # type: ignore[attr-defined]
-        raise Fail(
-            f"CMD_GET_STATUS commanded velocities {st.vel_trans} mm/s, {st.vel_rot} mrad/s "  # type: ignore[attr-defined]
+        held.fail(
+            f"CMD_MOVE_VEL(rotation 400 mrad/s): rotation {p.w:.3f} rad/s (expected 0.4)",
+            dipped=held.dipped(p.w, 0.4, "w"),
+            erratum="E-REP-005",
+        )
+    st = held.status  # asked right after the last CMD_MOVE_VEL: the commanded velocities, whatever the suite's pace
+    if abs(st.vel_rot - 400) > 60 or abs(st.vel_trans) > 30:  # type: ignore[union-attr]
+        held.fail(
+            f"CMD_GET_STATUS commanded velocities {st.vel_trans} mm/s, {st.vel_rot} mrad/s "  # type: ignore[union-attr]
             "(expected 0 and 400)",
+            # none commanded: the stop of a watchdog that fired while a target behind its clock took the command
+            dipped=st.vel_rot == 0 and st.vel_trans == 0 and held.reached(0.4, "w"),  # type: ignore[union-attr]
             erratum="E-REP-005",
         )
     ctx.send("CMD_MOVE_VEL", vel_trans=0, vel_rot=0)
@@ -319,19 +436,21 @@ def track(ctx: CaseContext, until: Callable[[Pose], bool], within: float, period
         ctx.sleep(period)
 
 
+def _set_moving(start: Pose) -> Callable[[Pose], bool]:
+    return lambda q: abs(q.v) > 50 or q.dist(start) > MOVED
+
+
 def _watchdog(
     ctx: CaseContext, mode: int, name: str, fields: dict[str, Any], back: dict[str, Any], within: float
 ) -> None:
     p = begin(ctx, mode)
     for f in (fields, back):  # forward, then the same backward: the platform ends near its start
         ctx.send(name, **f)
-        moving = track(ctx, lambda q: abs(q.v) > 50, within=2.0)
-        if abs(moving.v) <= 50 and moving.dist(p) > 20:
-            raise Inconclusive(
-                f"one {name} moved the platform from {p.describe()} to {moving.describe()}, but no pose read showed "
-                "it moving: the target answered in bursts (a loaded machine), the motion was not sampled"
-            )
-        if abs(moving.v) <= 50:
+        # set moving: a pose read shows the velocity, or the way covered - on a loaded machine a target stalled for
+        # the half second one command moves it answers the polls of that half second late, with one stale pose, and
+        # the pose after it shows the platform elsewhere (before: INCONCLUSIVE "no pose read showed it moving")
+        moving = track(ctx, _set_moving(p), within=2.0)
+        if abs(moving.v) <= 50 and moving.dist(p) <= MOVED:
             raise Fail(
                 f"precondition: one {name} did not set the platform moving ({moving.describe()})", precondition=True
             )
@@ -386,9 +505,10 @@ def joysoft_decays(ctx: CaseContext) -> None:
 def joysoft(ctx: CaseContext) -> None:
     begin(ctx, JOYSOFT)
     wd = watchdog(ctx, "JoySoftVelTimeout", 2.0)
-    p = settled(hold(ctx, "CMD_MOVE_VEL", {"vel_trans": 250, "vel_rot": 0}, 1.2, limit=wd))
+    held = hold(ctx, "CMD_MOVE_VEL", {"vel_trans": 250, "vel_rot": 0}, 1.2, limit=wd)
+    p = settled(held.samples)
     if not _vel_near(p.v, 250):
-        raise Fail(f"CMD_MOVE_VEL(250 mm/s) in JOYSOFT: velocity {p.v:.0f} mm/s")
+        held.fail(f"CMD_MOVE_VEL(250 mm/s) in JOYSOFT: velocity {p.v:.0f} mm/s", dipped=held.dipped(p.v, 250, "v"))
     hold(ctx, "CMD_MOVE_VEL", {"vel_trans": -250, "vel_rot": 0}, 1.2, limit=wd)
     ctx.send("CMD_MOVE_VEL", vel_trans=0, vel_rot=0)
     here = rest(ctx)
