@@ -58,6 +58,7 @@ STATEFUL_EVERY = 4  # one single about an operation or motion command in so many
 SWITCH_INTERVAL = 0.0002  # s
 SAVE_EVERY = 30.0  # s between saves of the corpus progress (a killed run resumes from there)
 HISTORY = 64  # sessions kept for a finding that needs more than its last unit
+TARGET_LINES = 6  # lines of a launched target's output in a message about its start
 STOPS = ("dead", "hang", "deaf", "stall")  # without --launch, the campaign ends with such a finding
 
 
@@ -70,6 +71,7 @@ class Suspicion:
     unit: Unit
     port: int
     verdict: Verdict
+    exchange: dict[str, Any]  # what the campaign's connection carried (``exchange``): the replays cannot show it
 
 
 class Campaign:
@@ -113,7 +115,7 @@ class Campaign:
             try:
                 self.profile = profile.learn(self.o.host, self.ports[0], self._flag(0), self.o.deadline)
             except profile.ProfileError as exc:
-                raise HarnessError(str(exc)) from None
+                raise HarnessError(f"{exc}{self._target_said()}") from None
             self.stats.profile = self.profile.to_json()
         lanes.adapt = self.profile.adapt
         if self.profile.small_backlog:  # SYNs past the backlog are dropped: a pipelined connect would wait seconds
@@ -124,13 +126,18 @@ class Campaign:
             for _ in range(MEASURE if k < self.o.lanes else 1):
                 e = lanes.alone(k, status)
                 if e is None or e.verdict is None or e.verdict.suspicious or not e.flight.out.replies:
-                    raise HarnessError(self._unanswered(k, e))
+                    raise HarnessError(self._unanswered(k, e) + self._target_said())
                 self._learn(e.flight.out.replies)
         if self.o.lanes < 2 or self.profile.slow_setup or any(g.dear for g in lanes.gates[: self.o.lanes]):
             self.trial.settle(self.o.lanes > 1)  # one lane has no other port for the fresh connections
         lanes.dear = self.trial.way()
         lanes.pace = None if self.trial.settled else Pace()
         self._gate_stats()
+
+    def _target_said(self) -> str:
+        """The last lines a launched target wrote (for a message about its start), or nothing."""
+        lines = list(self.launcher.output)[-TARGET_LINES:] if self.launcher is not None else []
+        return f"; the target's last lines: {' | '.join(lines)}" if lines else ""
 
     def _flag(self, k: int) -> str:
         """The option that named port ``k`` (for messages)."""
@@ -308,7 +315,7 @@ class Campaign:
             ):
                 st.states.add(unit.target)
         if v.suspicious:
-            self.suspicions.append(Suspicion(unit, e.port, v))
+            self.suspicions.append(Suspicion(unit, e.port, v, exchange(e)))
             return False
         self._count(unit.cases, ("kept" if unit.batch else "closed") if out.closed or unit.batch else "open")
         return True
@@ -372,7 +379,7 @@ class Campaign:
                 self.gone(gone, culprit=s.unit)
                 return
         ok = confirmed(kind, seen, needed)
-        self.failure(kind, reason, [s.unit], ok, {"replays": seen, "port": self.ports[s.port]})
+        self.failure(kind, reason, [s.unit], ok, {"replays": seen, "port": self.ports[s.port], "exchange": s.exchange})
         if not ok:
             self._count(s.unit.cases, "closed")
 
@@ -436,6 +443,28 @@ class Campaign:
             self.plan.documents_due = True
         elif kind in STOPS:
             self.stop = True  # a target we cannot restart is gone (or its port is)
+
+
+def exchange(e: InFlight) -> dict[str, Any]:
+    """What a suspicious unit's connection carried in the campaign, for finding.json: the replies asked for, owed
+    and received, the bytes each way, when our FIN went and when and how the connection ended (ms from the
+    connect), and how it was connected (pipelined behind another unit, on the kept connection)."""
+    f, out = e.flight, e.flight.out
+    how = "deadline" if out.timed_out else "reset" if out.reset else "closed" if out.closed else "open"
+    return {
+        "asked": len(f.expected),
+        "owed": e.unit.owed(f.session, len(f.expected)),
+        "replies": [r.NAME for r in out.replies][:40],
+        "bytes_sent": f.pos,
+        "bytes_received": out.got,
+        "our_fin_ms": out.fin_ms,
+        "ended_ms": out.end_ms,
+        "ended_by": how,
+        "fin_waits": f.session.fin_waits,
+        "pipelined": e.behind,
+        "kept": e.kept,
+        "led": e.led,
+    }
 
 
 __all__ = ["Campaign", "HarnessError", "Options", "Stats"]

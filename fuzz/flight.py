@@ -129,8 +129,12 @@ class Flight:
         """Our FIN once it is due: at once, or where it ends the session once every reply asked for came."""
         if self.fin_due and (not self.session.fin_waits or len(self.out.replies) >= len(self.expected)):
             self.fin_due = False
+            self.out.fin_ms = self._ms()
             with contextlib.suppress(OSError):
                 self.sock.shutdown(socket.SHUT_WR)
+
+    def _ms(self) -> float:
+        return round((time.monotonic() - self.started) * 1000, 1)
 
     def fileno(self) -> int:
         return self.sock.fileno()
@@ -140,6 +144,7 @@ class Flight:
             return
         self.done = True
         self.out.refused, self.out.timed_out = refused, timed_out
+        self.out.end_ms, self.out.reset = self._ms(), self.reset
         self.out.closed = closed or (self.want is not None and len(self.out.replies) < self.want)
         if self.out.bad_reply is None and not refused:
             self.out.bad_reply = check_order(self.out.replies, self.expected, self.data)

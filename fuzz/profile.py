@@ -25,6 +25,7 @@ import select
 import socket
 import statistics
 import time
+from collections.abc import Iterator
 from dataclasses import asdict, dataclass, replace
 
 from pltf.fuzz.gate import DEPTH
@@ -43,7 +44,10 @@ NEWCOMER_WAIT = 1.0  # s a newcomer on a busy port is watched at most
 NO_REPLY = "the target sent no reply"
 SLOW_SETUP_MS = 20.0  # a fresh connection served this much later than a reply, and ...
 SLOW_SETUP_RATIO = 2.0  # ... this many replies' time later, is dear
-SERVED_RETRIES = 20  # fresh connections tried while a port that frees slowly turns us away
+SERVED_RETRIES = 20  # fresh connections tried at least while a port that frees slowly turns us away, ...
+# ... and for as long as the deadline lasts: on a loaded machine a target (and a relay in front of it) may take
+# far longer than twenty quick tries (0.1-0.4 s) to let our last client go (2026-11-28, load 18-25: two of 56
+# starts of four campaigns side by side ended in a harness error, every try closed or reset without a reply)
 TURN_AWAY = {  # what a newcomer on a busy port met -> how the profile says it
     "served": "serves a second client on a port",
     "fin": "turns newcomers away with FIN",
@@ -141,7 +145,7 @@ def _first_served(host: str, port: int, deadline: float, where: str, prof: Profi
     seen = ""
     for lead in (LEAD, CONNECT_TO_PLTF + LEAD):
         prof.silent_before_connect = lead != LEAD
-        for k in range(SERVED_RETRIES):
+        for k in _tries(deadline):
             t0 = time.monotonic()
             try:
                 s = connect(host, port, deadline)
@@ -266,8 +270,17 @@ def _fin_loses(host: str, port: int, deadline: float, prof: Profile, setups: lis
     return got < FIN_REPLIES
 
 
+def _tries(deadline: float) -> Iterator[int]:
+    """0, 1, 2, ...: ``SERVED_RETRIES`` tries at least, and more until ``deadline`` seconds have passed."""
+    end = time.monotonic() + deadline
+    k = 0
+    while k < SERVED_RETRIES or time.monotonic() < end:
+        yield k
+        k += 1
+
+
 def _served_again(host: str, port: int, deadline: float, prof: Profile) -> socket.socket | None:
-    for k in range(SERVED_RETRIES):
+    for k in _tries(deadline):
         try:
             s = connect(host, port, deadline)
         except OSError:

@@ -92,6 +92,9 @@ class Outcome:
     replies: list[Telegram] = field(default_factory=list)
     got: int = 0  # bytes the peer sent us (none at all: it never served the connection)
     sent: list[tuple[float, bytes]] = field(default_factory=list)  # (time, bytes) for the pcapng
+    fin_ms: float | None = None  # ms from the connect to our FIN (None: not sent); flights only
+    end_ms: float | None = None  # ms from the connect to the end of the flight (the peer's close, the deadline)
+    reset: bool = False  # the peer reset the connection
     received: list[tuple[float, bytes]] = field(default_factory=list)
 
 

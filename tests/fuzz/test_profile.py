@@ -11,10 +11,12 @@ from pathlib import Path
 
 import pytest
 
-from pltf.fuzz.engine import Campaign, HarnessError, Options
+from pltf.fuzz.engine import Campaign, HarnessError, Options, exchange
 from pltf.fuzz.flight import Flight, fly
+from pltf.fuzz.lanes import InFlight
 from pltf.fuzz.profile import CONNECT_TO_PLTF, SHUTDOWN_PLTF, Profile, learn
 from pltf.fuzz.target import LEAD, Session, play
+from pltf.fuzz.unit import Unit
 from pltf.spec.codec import REPLIES, TelegramDecoder, encode
 
 POSITION_REPLY = encode(REPLIES.CMD_GET_POSITION(x=1, y=2, angle=0.0, vel_trans=0.0, vel_rot=0.0))
@@ -25,7 +27,8 @@ class FinEndsSession:
     """A loopback server that answers every GET_POSITION LATE s after it read it, and ends the session (closes,
     unanswered replies lost) when the client half-closes: one thread per connection."""
 
-    def __init__(self) -> None:
+    def __init__(self, closed_for: float = 0.0) -> None:
+        self.open_at = time.monotonic() + closed_for  # before it every client is closed at once, unanswered
         self.sock = socket.create_server(("127.0.0.1", 0))
         self.port = self.sock.getsockname()[1]
         self.sock.settimeout(0.2)
@@ -41,6 +44,9 @@ class FinEndsSession:
                 continue
             except OSError:
                 return
+            if time.monotonic() < self.open_at:
+                conn.close()
+                continue
             threading.Thread(target=self._serve, args=(conn,), daemon=True).start()
 
     def _serve(self, conn: socket.socket) -> None:
@@ -90,6 +96,17 @@ def test_a_flight_whose_fin_waits_gets_every_reply_the_fin_would_lose(server: Fi
     assert [r.NAME for r in patient.out.replies] == ["CMD_GET_POSITION"] * 3 and patient.out.closed
 
 
+def test_a_suspicions_evidence_says_when_our_fin_went_and_how_the_connection_ended(server: FinEndsSession) -> None:
+    """finding.json's ``exchange``: what the campaign's connection carried, which the replays cannot show."""
+    flights = {waits: Flight("127.0.0.1", server.port, session(waits), 2.0) for waits in (False, True)}
+    fly(list(flights.values()))
+    hasty, patient = (exchange(InFlight(f, Unit([]), 0, False, False, True, f.started)) for f in flights.values())
+    assert hasty["replies"] == [] and hasty["asked"] == 3 and hasty["ended_by"] == "closed"
+    assert hasty["bytes_sent"] == 3 * len(LEAD) and hasty["bytes_received"] == 0 and not hasty["fin_waits"]
+    assert patient["replies"] == ["CMD_GET_POSITION"] * 3 and patient["fin_waits"]
+    assert patient["our_fin_ms"] >= LATE * 1000 and patient["ended_ms"] >= patient["our_fin_ms"]  # after the replies
+
+
 def test_play_and_replays_wait_too(server: FinEndsSession) -> None:
     assert len(play("127.0.0.1", server.port, session(False), 2.0).replies) == 0
     assert len(play("127.0.0.1", server.port, session(True), 2.0).replies) == 3
@@ -101,6 +118,16 @@ def test_the_opening_phase_says_the_fin_ends_the_session(server: FinEndsSession)
     assert prof.newcomer == "served"  # this server takes every client
     assert prof.describe().startswith("ends the session at our FIN; serves a second client on a port")
     assert prof.adapt(session(False)).fin_waits
+
+
+def test_a_port_that_turns_us_away_for_a_second_is_learnt_within_the_deadline() -> None:
+    """A loaded target (or the relay in front of it) may turn fresh connections away for longer than the twenty
+    quick tries of the opening phase took (0.1-0.4 s): it keeps trying for the deadline."""
+    s = FinEndsSession(closed_for=1.0)
+    try:
+        assert learn("127.0.0.1", s.port, "--target", 3.0).fin_ends
+    finally:
+        s.close()
 
 
 def test_nothing_learnt_from_a_port_nobody_listens_on_names_port_and_flag() -> None:
