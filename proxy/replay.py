@@ -116,6 +116,7 @@ class Script:
     requests: int = 0  # recorded requests
     replied: bool = False  # the recording has a reply on it
     reads_only: bool = True  # every request a well-formed query (a watcher)
+    offset: int = 0  # where its open is in the session file (bytes)
 
     def wait_of(self, index: int) -> Wait | None:
         w = self.steps[index].wait
@@ -193,7 +194,8 @@ class Survey:
         self._clocks: dict[int, _Clock] = {}
         self.t0: float | None = None
 
-    def feed(self, rec: Record) -> None:
+    def feed(self, rec: Record, offset: int = 0) -> None:
+        """One record; ``offset``: where its line starts in the session file."""
         self.t0 = rec.time if self.t0 is None else min(self.t0, rec.time)
         s = self.scripts.get(rec.conn)
         if s is None:
@@ -201,6 +203,7 @@ class Survey:
                 self.skipped.add(rec.conn)
                 return
             s = self.scripts[rec.conn] = Script(rec.conn, self.route_of.get(rec.port, 0), rec.port, rec.time)
+            s.offset = offset
             s.last_data = rec.time
             self._clocks[rec.conn] = _Clock(rec.time, rec.time, rec.time)
         clock = self._clocks[rec.conn]

@@ -1,12 +1,15 @@
 """The sending side of ``pltf replay``: asyncio, and the only module of the replay with sockets and a clock.
 
 Rules (the timing and the waits are replay.py's; this module carries them out):
-- The session file is read twice, as a stream: once for every connection's summary (replay.py ``Survey``),
-  once during the replay, by a reader that hands each connection its steps as they become ready (replay.py
-  ``Builder``) and stops while ``AHEAD`` steps are ready and not yet taken, unless a connection that replays
-  waits for one (a wait's final reply can lie ``WAIT_SPAN`` seconds ahead). A reply is judged as soon as the
-  replay has it and the recorded one is read, then dropped: memory does not grow with the recording's length.
-- Every recorded connection is a task with its own socket, started when the reader reaches its open; replies
+- The session file is read as a stream: once for every connection's summary and where its open is (replay.py
+  ``Survey``), then by each connection for itself during the replay, from its open on (the other connections'
+  lines skipped unparsed), into its steps as they become ready (replay.py ``Builder``); a connection's reader
+  stops while ``AHEAD`` of its steps are ready and not taken, unless the connection waits for one (a wait's
+  final reply can lie ``WAIT_SPAN`` seconds ahead), and ends at its close. A reply is judged as soon as the
+  replay has it and the recorded one is read, then dropped. So memory does not grow with the recording's
+  length, nor when one connection's replay falls behind another's (a reader shared by all would have to
+  keep what lies between them).
+- Every recorded connection is a task with its own socket, started shortly before its recorded time; replies
   are decoded as they come (tap.py) and answer the oldest request of their identifier still open.
 - Times are the loop's monotonic clock; recorded gaps are divided by the time scale. No wait is unbounded: a
   reply is waited for ``reply_timeout`` s at most, a connection's turn (the closes before it) ``connect_timeout``.
@@ -21,7 +24,7 @@ import asyncio
 import contextlib
 import time
 from collections import deque
-from collections.abc import Callable, Iterator
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -41,12 +44,13 @@ from pltf.proxy.replay import (
     judge_wait,
 )
 from pltf.proxy.session import SessionFile
-from pltf.proxy.tap import FRAME, OPEN, Record, Tap
+from pltf.proxy.tap import FRAME, Record, Tap
 
 READ_SIZE = 65536
 CLOSE_PAUSE_MAX = 1.0  # s: the recorded pause before a client's close, at most
-AHEAD = 512  # steps ready and not yet taken, over all connections, before the reader pauses
-BATCH = 64  # records read between two turns of the event loop
+AHEAD = 256  # steps of a connection ready and not yet taken before its reader pauses
+BATCH = 256  # lines read between two turns of the event loop
+EARLY = 1.0  # s before its recorded time (scaled) a connection's task starts
 ARRIVALS_KEPT = 4096  # arrival times of replies kept per connection (the replay looks back a few)
 
 
@@ -83,13 +87,6 @@ class _Run:
         self.closed = {s.conn: asyncio.Event() for s in scripts}
         self.out = Result()
         self.names: dict[str, None] = {}
-        self.ready = 0  # steps ready, not yet taken
-        self.starving = 0  # connections waiting for a step not ready yet
-        self.changed = asyncio.Event()
-
-    def notify(self) -> None:
-        self.changed.set()
-        self.changed = asyncio.Event()
 
     def report(self, diffs: list[Difference]) -> None:
         self.out.differences += diffs
@@ -115,8 +112,10 @@ class _Arrivals:
 
 
 class _Conn:
-    def __init__(self, script: Script, builder: Builder, run: _Run) -> None:
-        self.s, self.b, self.run, self.cfg = script, builder, run, run.cfg
+    def __init__(self, script: Script, f: SessionFile, t0: float, run: _Run) -> None:
+        self.s, self.f, self.run, self.cfg = script, f, run, run.cfg
+        self.b = Builder(script, t0)
+        self.starving = False  # waiting for a step its reader has not made ready yet
         self.loop = run.loop
         self.out = Outcome(script.conn)
         self.port = self.cfg.ports[script.route]
@@ -135,24 +134,43 @@ class _Conn:
         self.dead: set[Any] = set()  # keys judged missing: a reply that comes for one later is dropped
         self.unsent: Step | None = None  # the first step not sent (the target closed first)
 
-    # ------------------------------------------------------------------ steps from the reader
-    def feed_changed(self) -> None:
+    # ------------------------------------------------------------------ steps from its reader
+    async def _reader(self) -> None:
+        """This connection's records, from its open on, into its builder; paused while ``AHEAD`` steps are ready
+        and not taken (unless the connection waits for one), done at its close."""
+        b = self.b
+        for n, (_, rec) in enumerate(self.f.records_at(self.s.offset, self.s.conn)):
+            before = len(b.ready)
+            b.feed(rec)
+            if len(b.ready) != before or b.ended:
+                self._notify()
+            if b.ended:
+                break
+            if n % BATCH == BATCH - 1:
+                await asyncio.sleep(0)
+            while len(b.ready) >= AHEAD and not self.starving:
+                await self._until(lambda: len(b.ready) < AHEAD or self.starving, float("inf"))
+        b.end()
         self._notify()
+        for name in b.names:
+            self.run.names.setdefault(name, None)
+        self.run.out.counts["replies compared"] += b.compared
+        self.run.out.counts["waits"] += b.waits
 
     async def _next(self) -> Step | None:
         """The next step to send, when the reader has it ready; None when the connection's steps are over."""
         if not self.b.ready and not self.b.ended:
-            self.run.starving += 1
-            self.run.notify()
+            self.starving = True
+            self._notify()
             try:
                 await self._until(lambda: bool(self.b.ready) or self.b.ended, float("inf"))
             finally:
-                self.run.starving -= 1
+                self.starving = False
         if not self.b.ready:
             return None
-        self.run.ready -= 1
-        self.run.notify()
-        return self.b.ready.popleft()
+        step = self.b.ready.popleft()
+        self._notify()
+        return step
 
     # ------------------------------------------------------------------ reading
     async def _read(self, reader: asyncio.StreamReader) -> None:
@@ -343,104 +361,76 @@ class _Conn:
         self.run.out.counts["sent"] += self.out.sent
 
     async def run_conn(self) -> None:
-        s, cfg = self.s, self.cfg
+        reading = asyncio.create_task(self._reader())
         try:
-            for other in closes_first((o for o in self.run.scripts if not self.run.closed[o.conn].is_set()), s):
-                with contextlib.suppress(TimeoutError):
-                    await asyncio.wait_for(self.run.closed[other].wait(), cfg.connect_timeout)
-            await self._sleep_until(self.run.t0 + s.start / cfg.time_scale)
-            try:
-                reader, writer = await asyncio.wait_for(
-                    asyncio.open_connection(cfg.host, self.port), cfg.connect_timeout
-                )
-            except (OSError, TimeoutError) as exc:
-                self.out.error = f"cannot connect to {cfg.host}:{self.port}: {getattr(exc, 'strerror', None) or exc}"
-                self.run.out.errors.append(self.out.error)
-                await self._drain()
-                self.run.report(judge_end(s, self.out))
-                return
-            self.run.out.connected += 1
-            self.last_send = self.loop.time()
-            reading = asyncio.create_task(self._read(reader))
-            try:
-                await self._steps(writer)
-                await self._end(writer)
-            except (ConnectionError, OSError):
-                pass
-            finally:
-                self.closing = True
-                writer.close()
-                with contextlib.suppress(ConnectionError, OSError):
-                    await writer.wait_closed()
-                reading.cancel()
-                with contextlib.suppress(asyncio.CancelledError):
-                    await reading
-            await self._drain()
-            self._finish()
+            await self._run()
         finally:
-            self.run.closed[s.conn].set()
+            if not reading.done():
+                reading.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await reading
+            self.run.closed[self.s.conn].set()
+
+    async def _run(self) -> None:
+        s, cfg = self.s, self.cfg
+        for other in closes_first((o for o in self.run.scripts if not self.run.closed[o.conn].is_set()), s):
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(self.run.closed[other].wait(), cfg.connect_timeout)
+        await self._sleep_until(self.run.t0 + s.start / cfg.time_scale)
+        try:
+            reader, writer = await asyncio.wait_for(asyncio.open_connection(cfg.host, self.port), cfg.connect_timeout)
+        except (OSError, TimeoutError) as exc:
+            why = getattr(exc, "strerror", None) or str(exc) or f"no connection within {cfg.connect_timeout:g} s"
+            self.out.error = f"cannot connect to {cfg.host}:{self.port}: {why}"
+            self.run.out.errors.append(self.out.error)
+            await self._drain()
+            self.run.report(judge_end(s, self.out))
+            return
+        self.run.out.connected += 1
+        self.last_send = self.loop.time()
+        reading = asyncio.create_task(self._read(reader))
+        try:
+            await self._steps(writer)
+            await self._end(writer)
+        except (ConnectionError, OSError):
+            pass
+        finally:
+            self.closing = True
+            writer.close()
+            with contextlib.suppress(ConnectionError, OSError):
+                await writer.wait_closed()
+            reading.cancel()
+            with contextlib.suppress(asyncio.CancelledError):
+                await reading
+        await self._drain()
+        self._finish()
 
 
 def survey(f: SessionFile) -> tuple[list[Script], float]:
     """The first pass: every connection's summary (SessionError for a line that is not a record)."""
     sv = Survey(f.ports)
-    for rec in f.records():
-        sv.feed(rec)
+    for offset, rec in f.records_at():
+        sv.feed(rec, offset)
     return sv.done(), sv.t0 or 0.0
 
 
-async def _read_session(records: Iterator[Record], run: _Run, t0: float) -> list[asyncio.Task[None]]:
-    """The second pass: each connection's records to its builder, its task started at its open."""
-    by_conn = {s.conn: s for s in run.scripts}
-    builders: dict[int, Builder] = {}
-    conns: dict[int, _Conn] = {}
-    tasks: list[asyncio.Task[None]] = []
-    for n, rec in enumerate(records):
-        if n % BATCH == 0:
-            await asyncio.sleep(0)
-            while run.ready >= AHEAD and not run.starving:
-                await run.changed.wait()
-        b = builders.get(rec.conn)
-        if b is None and rec.kind == OPEN and rec.conn in by_conn:
-            b = builders[rec.conn] = Builder(by_conn[rec.conn], t0)
-            conns[rec.conn] = c = _Conn(by_conn[rec.conn], b, run)
-            tasks.append(asyncio.create_task(c.run_conn()))
-        if b is None:
-            continue
-        before = len(b.ready)
-        b.feed(rec)
-        _after(b, before, conns[rec.conn], run)
-        if b.ended:
-            del builders[rec.conn]
-    for conn, b in builders.items():
-        before = len(b.ready)
-        b.end()
-        _after(b, before, conns[conn], run)
-    return tasks
-
-
-def _after(b: Builder, before: int, conn: _Conn, run: _Run) -> None:
-    run.ready += len(b.ready) - before
-    if len(b.ready) != before or b.ended:
-        conn.feed_changed()
-    if b.ended:
-        for name in b.names:
-            run.names.setdefault(name, None)
-        run.out.counts["replies compared"] += b.compared
-        run.out.counts["waits"] += b.waits
-
-
 async def replay(f: SessionFile, scripts: list[Script], t0: float, settings: Settings) -> Result:
-    """Replay every connection of the session (concurrently, each on its schedule), judging as it goes."""
+    """Replay every connection of the session (concurrently, each on its schedule), judging as it goes. A
+    connection's task starts ``EARLY`` s before its recorded time (scaled), so that few wait at once."""
     run = _Run(scripts, settings)
     run.out.counts = {"connections": len(scripts), "requests": sum(s.requests for s in scripts), "sent": 0}
     run.out.counts |= {"replies compared": 0, "waits": 0}
-    tasks = await _read_session(f.records(), run, t0)
+    tasks: list[asyncio.Task[None]] = []
     try:
+        for s in scripts:  # in the order they opened
+            await asyncio.sleep(max(0.0, run.t0 + s.start / settings.time_scale - EARLY - run.loop.time()))
+            tasks.append(asyncio.create_task(_Conn(s, f, t0, run).run_conn()))
+            if tasks[0].done():  # a connection that failed ends the replay at once (SessionError)
+                tasks.pop(0).result()
         await asyncio.gather(*tasks)
     finally:
-        for t in tasks:
-            t.cancel()
+        for task in tasks:
+            task.cancel()
     out = run.out
     out.telegrams = list(run.names)
     return out

@@ -18,7 +18,8 @@ from __future__ import annotations
 import contextlib
 import json
 import math
-from collections.abc import Iterator
+import re
+from collections.abc import Generator, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any
@@ -150,7 +151,7 @@ def _record(obj: Any) -> Record:
     return Record(time, conn, port, kind, direction, raw, telegram, None if error is None else str(error))
 
 
-def _lines(path: Path) -> Iterator[tuple[int, str]]:
+def _lines(path: Path) -> Generator[tuple[int, str], None, None]:
     try:
         with path.open(encoding="utf-8") as fh:
             yield from enumerate(fh, 1)
@@ -177,13 +178,37 @@ class SessionFile:
 
     def records(self) -> Iterator[Record]:
         """The records; SessionError names the first line that is not one."""
-        for n, line in _lines(self.path):
-            if n <= self.header_line or not line.strip():
-                continue
-            yield _parse(self.path, n, line, _record)
+        for _, rec in self.records_at():
+            yield rec
+
+    def records_at(self, offset: int = 0, conn: int | None = None) -> Iterator[tuple[int, Record]]:
+        """The records from byte ``offset`` on (the start of a line), each with the offset of its line; with
+        ``conn``, only that connection's (the others' lines skipped unparsed where they have the layout
+        SessionWriter writes)."""
+        start, n = offset, 0
+        try:
+            with self.path.open("rb") as fh:
+                fh.seek(start)
+                for raw in fh:
+                    at, offset, n = offset, offset + len(raw), n + 1
+                    if (not start and n <= self.header_line) or not raw.strip():
+                        continue
+                    if conn is not None and (found := _CONN.match(raw)) is not None and int(found[1]) != conn:
+                        continue
+                    where = str(n) if not start else f"byte {at}"  # line numbers are counted from the start
+                    rec = _parse(self.path, where, raw.decode("utf-8"), _record)
+                    if conn is None or rec.conn == conn:
+                        yield at, rec
+        except OSError as exc:
+            raise SessionError(f"{self.path}: {exc.strerror or exc}") from None
+        except UnicodeDecodeError:
+            raise SessionError(f"{self.path}: not a text file") from None
 
 
-def _parse(path: Path, n: int, line: str, make: Any) -> Any:
+_CONN = re.compile(rb'\{"time": [-0-9.e+a-zA-Z]+, "conn": (\d+),')  # the start of a line SessionWriter wrote
+
+
+def _parse(path: Path, n: int | str, line: str, make: Any) -> Any:
     try:
         return make(json.loads(line))
     except (ValueError, KeyError, TypeError) as exc:
