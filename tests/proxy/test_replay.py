@@ -366,3 +366,62 @@ def test_a_connection_that_sends_one_command_is_a_driver_judged_field_by_field()
     outcome.wait_final = {0: _with(final, moved)}  # the wait ended on a reply with the platform elsewhere
     diffs = judge([script], {1: outcome})
     assert [(d.path, d.replayed) for d in diffs] == [("est_x", "7017")]
+
+
+# ---------------------------------------------------------------------------------------------- where a recording ends
+
+
+def test_what_the_recording_s_end_cut_is_not_held_against_the_target_and_the_rest_still_is() -> None:
+    pos = {"x": 2000, "y": 10000, "angle": 0.0, "vel_trans": 0.0, "vel_rot": 0.0}
+    s = session(
+        event(0.0, 1, OPEN, port=10002),
+        rec(0.1, 1, "request", "CMD_SET_MODE", port=10002, mode=4),  # a driver
+        rec(0.2, 1, "request", "CMD_GET_STATUS", port=10002),
+        rec(0.3, 1, "reply", "STATUS", port=10002),
+        rec(0.4, 1, "request", "CMD_GET_STATUS", port=10002),
+        rec(0.5, 1, "reply", "STATUS", port=10002),  # the platform still turning: see below
+        event(0.6, 2, OPEN, port=10002),
+        rec(0.61, 2, "request", "CMD_GET_POSITION", port=10002),
+        event(0.62, 2, CLOSE, "by target (FIN)", port=10002),  # turned away, one client per port
+        rec(0.7, 1, "request", "CMD_GET_POSITION", port=10002),
+        event(0.75, 1, CLOSE, "by client (FIN)", port=10002),  # the client stopped, its last reply not come
+    )
+    scripts = {sc.conn: sc for sc in plan(s)}
+    driver, newcomer = scripts[1], scripts[2]
+    (wait,) = driver.waits.values()
+    turning = _with(driver.steps[wait.final].reply, STATUS.replace(vel_rot=50, est_angle=30000))  # type: ignore[arg-type]
+    driver.steps[wait.final].reply = turning
+    last = driver.steps[3]
+    assert last.cut and last.reply is None and not driver.steps[2].cut
+    answered = rec(0.8, 1, "reply", "CMD_GET_POSITION", port=10002, **pos)
+    rested = _with(turning, STATUS)
+    ok = Outcome(1, replies={3: answered}, wait_final={0: rested}, sent=4)
+    turned_again = Outcome(2, sent=0, closed_by_target_after=0)  # closed before its request went out
+    # the last wait is not the connection's last request here: it is judged field by field
+    assert [d.path for d in judge([driver, newcomer], {1: ok, 2: turned_again})] == ["est_angle", "vel_rot"]
+    served = Outcome(2, replies={0: answered}, sent=1)  # the newcomer answered and kept: real differences
+    assert {d.path for d in judge([newcomer], {2: served})} == {"(reply)", "end"}
+    wrong = Outcome(1, replies={3: rec(0.8, 1, "reply", "STATUS", port=10002)}, wait_final={0: turning}, sent=4)
+    assert [(d.path, d.replayed) for d in judge([driver], {1: wrong})] == [("(reply)", "CMD_GET_STATUS")]
+
+
+def test_a_connection_s_last_wait_cut_while_the_platform_moved_is_judged_by_kind() -> None:
+    s = session(
+        event(0.0, 1, OPEN),
+        rec(0.1, 1, "request", "CMD_SET_MODE", mode=4),
+        rec(0.2, 1, "request", "CMD_GET_STATUS"),
+        rec(0.3, 1, "reply", "STATUS"),
+        rec(0.4, 1, "request", "CMD_GET_STATUS"),
+        rec(0.5, 1, "reply", "STATUS"),
+        event(0.6, 1, CLOSE, "by client (FIN)"),
+    )
+    (driver,) = plan(s)
+    (wait,) = driver.waits.values()
+    final = driver.steps[wait.final]
+    assert final.reply is not None
+    final.reply = _with(final.reply, STATUS.replace(vel_rot=50, est_x=4000))  # stopped mid-drive
+    elsewhere = _with(final.reply, STATUS.replace(est_x=9000))
+    assert judge([driver], {1: Outcome(1, wait_final={0: elsewhere}, sent=3)}) == []
+    fault = _with(final.reply, STATUS.replace(est_x=9000, app_error=3))
+    assert [d.path for d in judge([driver], {1: Outcome(1, wait_final={0: fault}, sent=3)})] == ["app_error"]
+    assert [d.path for d in judge([driver], {1: Outcome(1, sent=3)})] == ["(reply)"]  # no reply at all
