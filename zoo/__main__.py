@@ -27,7 +27,7 @@ from pltf.zoo.relay import Relay
 from pltf.zoo.schedule import for_ident, jitter
 from pltf.zoo.values import STYLES
 
-RETIRE_WAIT = 15.0  # s a restart or the exit waits for the old target's stop and the next spare's spawn
+RETIRE_WAIT = 15.0  # s a restart or the exit waits for the old target's stop
 
 
 def _pair(text: str, what: str, cast: type = int) -> tuple[float, float]:
@@ -239,15 +239,16 @@ def _start_behind(args: argparse.Namespace) -> launch.Launched:
 class Spare:
     """A fresh target behind a member that restarts, started ahead (spawned at once, its ports read at the
     restart): a restart then takes the member's ``restart_down``, not a start-up of the target, however loaded the
-    machine is. The old target is stopped and the next spare spawned in a thread of their own once the fresh
-    target's ports are known: a reference server's exit (SIGTERM, up to its 3 s grace) kept the ports gone for
-    3.5-4.8 s instead of 2 at --restart-every 5. With --upstream there is nothing to restart (the member only
-    drops its connections and ports)."""
+    machine is. The next spare is spawned at the restart, in the caller's thread (the relay's executor, which lives
+    as long as the member: a target dies with the thread that started it, launch._pdeathsig); the old target is
+    stopped in a thread of its own, so its exit (SIGTERM, up to a 3 s grace) does not keep the ports gone (it did:
+    3.5-4.8 s instead of 2 behind the reference server at --restart-every 5). With --upstream there is nothing to
+    restart (the member only drops its connections and ports)."""
 
     def __init__(self, args: argparse.Namespace, behind: launch.Launched | None, restarts: bool) -> None:
         self.args, self.current = args, behind
         self.spare = self._spawn() if behind is not None and restarts else None
-        self._retiring: threading.Thread | None = None
+        self._stopping: threading.Thread | None = None
 
     def _spawn(self) -> launch.Launched:
         level = {"log_level": self.args.log_level} if self.args.serve == "reference" else {}
@@ -262,28 +263,22 @@ class Spare:
             return ()
         self._settled()
         old, fresh = self.current, self.spare
-        self.spare = None
         try:
             ports = fresh.ports_when_ready() if fresh is not None else old.start()
         except launch.LaunchError:  # the spare did not come up: start one now
             ports, fresh = old.start(), None
-        retired = None
         if fresh is not None:
-            self.current, retired = fresh, old
-        self._retiring = threading.Thread(target=self._retire, args=(retired,), daemon=True)
-        self._retiring.start()
+            self.current = fresh
+            self._stopping = threading.Thread(target=old.cleanup, daemon=True)
+            self._stopping.start()
+        self.spare = self._spawn()
         return ports
 
-    def _retire(self, old: launch.Launched | None) -> None:
-        """Stop the old target and spawn the next spare (in a thread: the ports come back meanwhile)."""
-        if old is not None:
-            old.cleanup()
-        self.spare = self._spawn()
-
     def _settled(self) -> None:
-        if self._retiring is not None:
-            self._retiring.join(RETIRE_WAIT)
-            self._retiring = None
+        """The old target's stop is over (a restart or the exit waits for it, at most ``RETIRE_WAIT`` s)."""
+        if self._stopping is not None:
+            self._stopping.join(RETIRE_WAIT)
+            self._stopping = None
 
     def cleanup(self) -> None:
         self._settled()

@@ -22,6 +22,7 @@ import pytest
 from pltf.spec.codec import TelegramDecoder, build, encode
 from pltf.spec.telegram import Telegram
 from pltf.zoo import launch
+from tests.emulator_gate import emulator_or_skip
 
 STATUS = encode(build("request", "CMD_GET_STATUS"))
 POSITION = encode(build("request", "CMD_GET_POSITION"))
@@ -506,6 +507,23 @@ def test_restarts_serve_every_newcomer_again_after_each_restart(upstream: launch
             for index in (0, 1):
                 _back(z, index, within=10.0)
         assert "Errno" not in "\n".join(z.output), z.output
+
+
+@pytest.mark.slow  # three restarts, each 2 s down: about 12 s
+def test_restarts_behind_the_target_it_serves_come_back_with_a_fresh_target_each_time() -> None:
+    """--serve: each restart swaps in the spare started ahead and spawns the next. A spare spawned from a thread that
+    then ended died with it (launch._pdeathsig: the parent is the thread) - after its ports were known, so the
+    member's second restart led to a dead target: every newcomer accepted and closed ('upstream port N
+    unreachable: [Errno 111]') for the rest of its life."""
+    emulator_or_skip()
+    with launch.zoo("restarts", upstream="emulator", extra=["--restart-every", "1.5"]) as z:
+        for _ in range(3):
+            with connect(z) as held:
+                held.sendall(STATUS)
+                replies(held)
+                assert _until_closed(held, within=10.0)[1] in ("fin", "rst")
+            assert _back(z, 0, within=10.0) < 5.0  # the ports gone for 2 s (a loaded machine: a little more)
+        assert "unreachable" not in "\n".join(z.output), z.output
 
 
 def test_ipv6_only_listens_on_the_ipv6_loopback_only(upstream: launch.Launched) -> None:
