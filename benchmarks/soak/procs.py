@@ -1,6 +1,8 @@
 """What a process holds, read from /proc: resident memory, open descriptors, threads; and a process's descendants.
 
 Rules:
+- ``peak_rss_mb``: the process's own high-water mark (VmHWM), which starts at its exec (the rusage of a child,
+  wait4's ``ru_maxrss``, also counts the parent's pages it was forked with).
 - One reading is ``Usage(rss_mb, fds, threads)`` from ``/proc/PID/status`` (VmRSS, Threads) and ``/proc/PID/fd``;
   None when the process is gone (or not ours to read).
 - ``descendants`` walks the parent links of every live process once per call (a soak samples once a minute).
@@ -41,6 +43,14 @@ def usage(pid: int) -> Usage | None:
         return None
     rss_kb = int(status["VmRSS"].split()[0])
     return Usage(rss_kb / 1024.0, fds, int(status["Threads"].strip()))
+
+
+def peak_rss_mb(pid: int) -> float | None:
+    """The high-water mark of ``pid``'s resident memory (VmHWM, MB) since it last exec'd; None when it is gone."""
+    status = _status(pid)
+    if status is None or "VmHWM" not in status:
+        return None
+    return int(status["VmHWM"].split()[0]) / 1024.0
 
 
 def _parents() -> dict[int, int]:

@@ -4,8 +4,10 @@ time scale), with the replay's peak RSS, its duration and the differences it fou
     python -m benchmarks.soak.replay SESSION [--time-scale 10] [--replay-scale 1]
 
 Rules:
-- ``pltf replay`` runs as a process of its own; its peak RSS is the kernel's (``os.wait4``'s ``ru_maxrss``, the
-  high-water mark of that process alone), its duration the wall time from its start to its exit.
+- ``pltf replay`` runs as a process of its own; its peak RSS is the kernel's high-water mark of that process
+  (VmHWM in /proc, read every ``POLL`` s until it exits; not wait4's ``ru_maxrss``, which counts the pages of the
+  harness it was forked from: 90.8 MB for a replay whose own mark was 56 MB), its duration the wall time from
+  its start to its exit.
 - ``--replay-scale X`` replays X times as fast and runs the server X times as fast too, so that the platform
   moves as far between two requests as it did when they were recorded.
 - Its output goes to a file beside the recording (never a pipe: an hour's differences would fill it).
@@ -14,18 +16,17 @@ Rules:
 from __future__ import annotations
 
 import argparse
-import os
 import re
-import signal
 import subprocess
 import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from benchmarks.soak.procs import peak_rss_mb
 from pltf.zoo.launch import LaunchError, python, reference
 
-POLL = 0.5  # s between looks at the replay process
+POLL = 0.2  # s between looks at the replay process
 COUNT = re.compile(r"^(\d+) differences? in \d+ telegram")
 
 
@@ -61,24 +62,23 @@ def replay(record: Path, time_scale: float, scale: float = 1.0, timeout: float =
         with out.open("w", encoding="utf-8") as fh:
             start = time.monotonic()
             proc = subprocess.Popen(cmd, stdout=fh, stderr=subprocess.STDOUT)
-            status, rss_kb = _wait(proc, start + timeout)
+            status, peak = _wait(proc, start + timeout)
             seconds = time.monotonic() - start
     lines = out.read_text(encoding="utf-8", errors="replace").splitlines()
-    return Replayed(status, rss_kb / 1024.0, seconds, lines)
+    return Replayed(status, peak, seconds, lines)
 
 
-def _wait(proc: subprocess.Popen[bytes], deadline: float) -> tuple[int | None, int]:
-    """Its exit status (None: killed at ``deadline``) and its peak RSS in kB, from wait4 (it reaps the child)."""
-    timed_out = False
-    while True:
-        pid, status, usage = os.wait4(proc.pid, os.WNOHANG)
-        if pid:
-            proc.returncode = os.waitstatus_to_exitcode(status)  # reaped here: Popen must not wait again
-            return (None if timed_out else proc.returncode), usage.ru_maxrss
-        if time.monotonic() >= deadline and not timed_out:
-            timed_out = True
-            os.kill(proc.pid, signal.SIGKILL)
+def _wait(proc: subprocess.Popen[bytes], deadline: float) -> tuple[int | None, float]:
+    """Its exit status (None: killed at ``deadline``) and its peak RSS in MB (the last VmHWM read before it ended)."""
+    peak = 0.0
+    while proc.poll() is None:
+        peak = max(peak, peak_rss_mb(proc.pid) or 0.0)
+        if time.monotonic() >= deadline:
+            proc.kill()
+            proc.wait()
+            return None, peak
         time.sleep(POLL)
+    return proc.returncode, peak
 
 
 def main(argv: list[str] | None = None) -> int:
