@@ -52,8 +52,6 @@ def clean(status: int, output: str, out: Path) -> dict[str, object]:
     return dict(summary)
 
 
-@pytest.mark.slow  # the clean-clone make test of 12865be: fin-ends-session raised an unconfirmed 'dropped' that no
-# replay cleared (the FIN-waiting close and the relay's session end still race once in a while); issue 32 stays open
 @pytest.mark.timeout(240)
 def test_ten_seconds_against_the_rows_a_user_meets_first_finds_nothing(tmp_path: Path) -> None:
     runs = {m: fuzz(m, tmp_path / m, SECONDS) for m in ROWS}  # side by side: one test's wall time for all
