@@ -11,7 +11,8 @@ Rules:
   while that one was there (``turned_away``): the stamps of two proxy threads do not order them.
 - Requests are sent as recorded, byte for byte (malformed ones too), each frame whole. A request waits for the
   replies that had arrived before it in the recording, then for its recorded gap after the later of those
-  replies and the previous request, divided by the time scale: a client that waited for a reply still does.
+  replies and the previous request, divided by the time scale: a client that waited for a reply still does;
+  and never before its recorded time since its connection opened (scaled).
 - Replies answer requests by identifier, oldest first (guide 6.1: "returns data only on request").
 - A wait is a run of the same request, sent again and again on one connection (a client polling until
   something changes). How many polls see each state depends on timing, so a wait is judged by where it ended:

@@ -11,7 +11,11 @@ Rules (the timing and the waits are replay.py's; this module carries them out):
   keep what lies between them).
 - Every recorded connection is a task with its own socket, started shortly before its recorded time; replies
   are decoded as they come (tap.py) and answer the oldest request of their identifier still open.
-- Times are the loop's monotonic clock; recorded gaps are divided by the time scale. No wait is unbounded: a
+- Times are the loop's monotonic clock; recorded gaps are divided by the time scale. A request is never sent
+  before its recorded time since its connection opened (scaled): a wait that ends sooner than recorded does not
+  bring the connection's later requests forward, so the connections stay in step (the soak's patrol, whose
+  waits ended early, closed its port seconds before the recording's end and the reconnecting client's last
+  four connections were served instead of turned away). No wait is unbounded: a
   reply is waited for ``reply_timeout`` s at most, a connection's turn (the closes before it) ``connect_timeout``.
   A reply still missing ``LATE`` s after its request is judged missing (one that comes later is dropped).
 - The replay's client ends a connection the way the recorded client did (FIN after the replies it was owed);
@@ -129,6 +133,7 @@ class _Conn:
         self.skipped = 0  # replies the recording has and the replay will not (polls a wait did not need)
         self.extended = 0  # replies the replay has and the recording does not (polls past the recorded ones)
         self.last_send = 0.0
+        self.opened = 0.0  # when the replay's connection was made
         self.unjudged: dict[int, tuple[Step, float]] = {}  # sent steps (no polls) -> (step, when sent)
         self.waits_open: dict[int, Wait] = {}  # waits sent, not judged
         self.dead: set[Any] = set()  # keys judged missing: a reply that comes for one later is dropped
@@ -308,7 +313,8 @@ class _Conn:
             ref = self.last_send
             if 0 < due <= len(self.arrivals):
                 ref = max(ref, self.arrivals.at(due - 1))
-            await self._sleep_until(ref + step.gap / scale)
+            not_before = self.opened + (step.at - self.s.start) / scale  # never ahead of its recorded time
+            await self._sleep_until(max(ref + step.gap / scale, not_before))
             if self.eof:
                 self.unsent = step
                 return
@@ -387,7 +393,7 @@ class _Conn:
             self.run.report(judge_end(s, self.out))
             return
         self.run.out.connected += 1
-        self.last_send = self.loop.time()
+        self.last_send = self.opened = self.loop.time()
         reading = asyncio.create_task(self._read(reader))
         try:
             await self._steps(writer)
