@@ -127,6 +127,21 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "at free places of the map on ports A+4k,B+4k from --ports A,B; data dirs DATA_DIR/NAME",
     )
     p.add_argument(
+        "--ray",
+        default=None,
+        metavar="ADDRESS|auto",
+        help="with --fleet FILE: serve the fleet as shards on a Ray cluster (one shard per node; a platform's 'node' "
+        "in the file picks its node, else round-robin); needs the ray extra",
+    )
+    p.add_argument(
+        "--ray-lag",
+        type=int,
+        default=1,
+        metavar="N",
+        help="with --ray: at each tick a shard sees the other shards' platforms where they were N periods before "
+        "(default 1: lockstep one period behind)",
+    )
+    p.add_argument(
         "--shared-map",
         action="store_true",
         help="with --fleet: a CMD_SET_MAP one platform accepts is sent to every other one too",
@@ -161,9 +176,10 @@ def run(args: argparse.Namespace, prog: str = "pltf serve") -> int:
         from pltf.reference_server.fleet.cli import run as run_fleet
 
         return run_fleet(args, prog)
-    if getattr(args, "shared_map", False):
-        print(f"{prog}: error: --shared-map needs --fleet", file=sys.stderr)
-        return 2
+    for option in ("shared_map", "ray"):
+        if getattr(args, option, None):
+            print(f"{prog}: error: --{option.replace('_', '-')} needs --fleet", file=sys.stderr)
+            return 2
     try:
         storage = Storage(args.data_dir)
     except OSError as exc:

@@ -3,7 +3,8 @@
 Rules: the options are those of ``pltf serve`` (reference_server/cli.py); ``--fleet`` is a fleet file
 (reference_server/fleet/config.py) or a count. Each platform's data dir is the file's ``data_dir`` or
 ``--data-dir``/NAME, seeded from the repository's fixtures when empty; its seed the file's or ``--seed`` plus its
-index. What a single platform has and a fleet cannot share (one CAN channel, one fault-control port, the ideal
+index. ``--ray ADDRESS``: the fleet as shards on a Ray cluster (reference_server/fleet/ray_shards.py). What a
+single platform has and a fleet cannot share (one CAN channel, one fault-control port, the ideal
 wheels that have no body) is refused with one line. User errors exit 2, as ``pltf serve``'s.
 """
 
@@ -13,6 +14,7 @@ import argparse
 import gc
 import logging
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 from pltf.reference_server import hardware_link
@@ -27,11 +29,17 @@ from pltf.reference_server.world.model import factory as world_factory
 log = logging.getLogger("pltf.server")
 
 # what a fleet refuses: (option is set, the one-line reason)
-_REFUSED = (
+_REFUSED: tuple[tuple[Callable[[argparse.Namespace], bool], str], ...] = (
     (lambda a: a.motion != "world", "--fleet needs --motion world: the platforms are bodies in one world"),
     (lambda a: a.control_port is not None, "--control-port serves one platform; it is not available with --fleet"),
     (lambda a: a.can_channel is not None, "--can-channel would put every platform's boards on one bus"),
+    (lambda a: _ray(a) and a.shared_map, "--shared-map hands a map on within one process; not with --ray"),
+    (lambda a: _ray(a) and getattr(a, "ray_lag", 1) < 1, "--ray-lag must be at least 1 (period)"),
 )
+
+
+def _ray(args: argparse.Namespace) -> bool:
+    return getattr(args, "ray", None) is not None
 
 
 def spec_of(args: argparse.Namespace) -> FleetSpec:
@@ -66,6 +74,10 @@ def run(args: argparse.Namespace, prog: str) -> int:
     except FleetError as exc:
         print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2
+    if _ray(args):
+        from pltf.reference_server.fleet import ray_shards  # Ray only under --ray
+
+        return ray_shards.run(spec, args, prog)
     platforms: list[Platform] = []
     try:
         platforms = build_platforms(spec, args)

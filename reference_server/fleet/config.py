@@ -5,8 +5,10 @@ Rules:
   ``-`` and ``_``; unique), ``ports`` (one or two, as ``--ports``; 0: any free port), and optionally ``pose``
   (``{x: mm, y: mm, angle: degrees}``: where the body starts, truth and estimate; without it the platform
   starts at its data dir's StartupPosition.dat), ``seed`` (default: the fleet's seed plus the platform's
-  index) and ``data_dir`` (default: the fleet's data dir / name). Unknown keys are refused: a misspelt key
-  would otherwise be silently ignored.
+  index), ``data_dir`` (default: the fleet's data dir / name) and ``node`` (with ``--ray``: the index of the
+  Ray node whose shard serves it, 0 the head; without it Ray's nodes take the platforms round-robin; without
+  ``--ray`` it is ignored: one process serves them all). Unknown keys are refused: a misspelt key would
+  otherwise be silently ignored.
 - ``--fleet N``: N platforms named ``p01``..; ports ``A+4k, B+4k`` from ``--ports A,B`` (0 stays 0; E-FLEET-003); the
   poses are chosen at free places of the map at start (reference_server/fleet/places.py).
 - Every error is a ``FleetError`` with a one-line message naming the file and the platform.
@@ -25,7 +27,7 @@ import yaml
 
 PORT_STRIDE = 4  # --fleet N: platform k listens on A + 4k and B + 4k (the example: 10000, 10002, 10004, ...)
 _NAME = re.compile(r"[A-Za-z0-9_-]{1,64}")
-_KEYS = {"name", "ports", "pose", "seed", "data_dir"}
+_KEYS = {"name", "ports", "pose", "seed", "data_dir", "node"}
 _POSE_KEYS = {"x", "y", "angle"}
 
 Pose = tuple[float, float, float]  # mm, mm, rad
@@ -42,6 +44,7 @@ class PlatformSpec:
     pose: Pose | None = None  # None: the data dir's start pose (a file) or a free place (--fleet N)
     seed: int | None = None
     data_dir: str | None = None
+    node: int | None = None  # --ray: the node (index, 0 the head) whose shard serves it; None: round-robin
 
 
 @dataclass(frozen=True)
@@ -109,8 +112,11 @@ def _platform(item: Any, where: str) -> PlatformSpec:
     data_dir = item.get("data_dir")
     if data_dir is not None and not isinstance(data_dir, str):
         raise FleetError(f"{where}: 'data_dir' must be a path, not {data_dir!r}")
+    node = item.get("node")
+    if node is not None and (not isinstance(node, int) or isinstance(node, bool) or node < 0):
+        raise FleetError(f"{where}: 'node' must be a node index 0, 1, ... (0: Ray's head node), not {node!r}")
     pose = None if item.get("pose") is None else _pose(item["pose"], where)
-    return PlatformSpec(name, _ports(item.get("ports"), where), pose, seed, data_dir)
+    return PlatformSpec(name, _ports(item.get("ports"), where), pose, seed, data_dir, node)
 
 
 def _ports(value: Any, where: str) -> tuple[int, ...]:

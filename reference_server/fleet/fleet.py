@@ -11,13 +11,16 @@ Rules:
 - ``--shared-map`` (``shared_map``): a CMD_SET_MAP a platform accepts is handed to every other live platform as
   if a fleet manager had sent it to each (their state charts still decide).
 - A member whose server exits (CMD_EXIT) is ``retire``d: no longer ticked, no longer a body; the rest go on.
+- A shard of a fleet spread over Ray nodes (reference_server/fleet/shards.py) is a ``Fleet`` of its own platforms
+  whose ``bodies`` hold the whole fleet's (``indices``: its members' places among them); the other shards'
+  platforms are bodies it places from their snapshots.
 - Sans-IO: ``now`` comes from the caller (reference_server/fleet/network.py).
 """
 
 from __future__ import annotations
 
 import logging
-from collections.abc import MutableMapping
+from collections.abc import MutableMapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -69,12 +72,21 @@ class Member:
 
 
 class Fleet:
-    def __init__(self, spec: FleetSpec, platforms: list[Platform], *, shared_map: bool = False) -> None:
+    def __init__(
+        self,
+        spec: FleetSpec,
+        platforms: list[Platform],
+        *,
+        shared_map: bool = False,
+        bodies: Bodies | None = None,
+        indices: Sequence[int] | None = None,
+    ) -> None:
         self.spec = spec
-        self.bodies = Bodies(len(platforms))
+        self.bodies = bodies if bodies is not None else Bodies(len(platforms))
+        where = range(len(platforms)) if indices is None else indices
         self.members = [
             Member(p.name, k, platform, p.ports, p.pose)
-            for k, (p, platform) in enumerate(zip(spec.platforms, platforms, strict=True))
+            for k, p, platform in zip(where, spec.platforms, platforms, strict=True)
         ]
         self.live = list(self.members)
         self.shared_map = shared_map

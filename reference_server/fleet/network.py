@@ -18,7 +18,7 @@ import contextlib
 import logging
 from collections.abc import Callable
 
-from pltf.reference_server.control_loop import BURST, ControlLoop
+from pltf.reference_server.control_loop import BURST, ControlLoop, Ticked
 from pltf.reference_server.fleet.fleet import Fleet, Member
 from pltf.reference_server.network import Server, serve_until_stopped
 
@@ -26,8 +26,9 @@ log = logging.getLogger("pltf.server")
 
 
 class FleetServer:
-    def __init__(self, fleet: Fleet, host: str, time_scale: float = 1.0) -> None:
+    def __init__(self, fleet: Fleet, host: str, time_scale: float = 1.0, *, ticked: Ticked | None = None) -> None:
         self.fleet = fleet
+        self.ticked: Ticked = fleet if ticked is None else ticked  # what the control loop ticks (a shard: more)
         self.host = host
         self.time_scale = time_scale
         self.servers: dict[str, Server] = {}
@@ -39,7 +40,7 @@ class FleetServer:
         # a burst of ticks is the whole fleet's: as many platform periods between two looks at the sockets as a
         # single platform's server runs (control_loop.BURST), so a client of any platform waits no longer
         burst = max(1, BURST // max(1, len(self.fleet.members)))
-        self.control = ControlLoop(self.fleet, self.time_scale, loop.time(), burst=burst)
+        self.control = self.control_loop(loop.time(), burst)
         try:
             for m in self.fleet.members:
                 srv = Server(m.platform, self.host, m.ports, self.time_scale, control=self.control)
@@ -51,6 +52,15 @@ class FleetServer:
                 srv.close()
             raise
 
+    def control_loop(self, wall: float, burst: int) -> ControlLoop:
+        """The fleet's one clock: simulated time 0 at ``wall`` (a shard's: at the fleet's common origin)."""
+        return ControlLoop(self.ticked, self.time_scale, wall, burst=burst)
+
+    def boot(self, control: ControlLoop, wall: float) -> None:
+        """Boot the fleet at the simulated time of ``wall`` (a shard's fleet booted at 0 before its ports opened)."""
+        self.fleet.boot(control.begin(wall))
+        control.begin(asyncio.get_running_loop().time())  # the boot took its time: the first tick one period on
+
     def stop(self) -> None:
         self._stopped.set()
 
@@ -58,8 +68,7 @@ class FleetServer:
         """Boot the fleet, tick it until every member exited or ``stop``, then close everything."""
         control, loop = self.control, asyncio.get_running_loop()
         assert control is not None, "FleetServer.start first"
-        self.fleet.boot(control.begin(loop.time()))
-        control.begin(loop.time())  # the boot took its time: the first tick is one period after it
+        self.boot(control, loop.time())
         tasks = [asyncio.create_task(self._simulate(control))]
         tasks += [asyncio.create_task(self._watch(m)) for m in self.fleet.members]
         try:

@@ -1,0 +1,364 @@
+"""``pltf serve --fleet FILE --ray ADDRESS|auto``: the fleet's shards as Ray actors, one per node (issue 30).
+
+Rules (the shards' rules, the lag and the snapshots: reference_server/fleet/shards.py, erratum E-FLEET-004):
+- The driver (this process) connects to the cluster, plans one shard per node (``shards.plan``), starts each as
+  a ``ShardActor`` pinned to its node (``NodeAffinitySchedulingStrategy``, not soft), and hands every shard the
+  others' handles. Each actor builds its platforms as ``pltf serve --fleet`` does (data dirs on its node, the path
+  the driver resolved), boots them at simulated time 0, and on ``go(epoch)`` serves their ports on its node with
+  the fleet's asyncio shell in a thread of its own: the one clock is simulated time 0 at the wall-clock ``epoch``
+  (``time.time()`` of the driver: the nodes' clocks are assumed in step, as NTP keeps them; a skew only makes
+  the faster shard wait within the lag).
+- Every control period each shard sends its snapshot to every other shard directly (``receive``, fire and
+  forget: an actor method run on one of the actor's threads), and the control loop's tick waits for the peers'
+  (``shards.Exchange``).
+- The driver logs "server started at port N" for every port and "platform NAME at HOST:PORT,PORT on node K
+  (NODE_ID)" for every platform, then watches the shards: a shard whose platforms all exited ends normally; a
+  shard whose actor or node dies is LOST: the driver logs "shard K on node K lost (...): platforms A, B stopped
+  serving" and tells the others to drop its bodies; the others keep serving. The driver exits when no shard is
+  left (status 0; 1 when one was lost) or on SIGINT/SIGTERM (it stops every shard, status 0).
+- Ray is imported here only, and this module only under ``--ray``: without the extra the user gets one line.
+  Loopback stays loopback: ``RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER=0`` is set (unless set) before Ray is imported,
+  or Ray would resolve 127.0.0.1 to this machine's outward address.
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import logging
+import os
+import signal
+import socket
+import sys
+import threading
+import time
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+from pltf.reference_server.control_loop import ControlLoop
+from pltf.reference_server.fleet.bodies import Bodies
+from pltf.reference_server.fleet.config import FleetError, FleetSpec
+from pltf.reference_server.fleet.fleet import Fleet
+from pltf.reference_server.fleet.network import FleetServer
+from pltf.reference_server.fleet.shards import LAG, STALL, Exchange, ShardPlan, ShardWorld, Snapshot, plan
+from pltf.reference_server.network import serve_until_stopped
+from pltf.reference_server.platform import Platform
+
+log = logging.getLogger("pltf.server")
+
+INSTALL = "pip install 'pltf-toolkit[ray]'"
+CPUS = 1.0  # a shard is a busy simulation loop: a whole CPU of its node
+THREADS = 8  # the actor's threads: wait, receive (one per peer at a time), stats, stop
+START_TIMEOUT = 120.0  # s for every shard to build, boot and open its ports
+STOP_GRACE = 10.0  # s the shards have to stop at SIGINT/SIGTERM before they are killed
+WATCH = 0.5  # s between two looks at the shards
+PROBE_TIMEOUT = 5.0  # s for the cluster's GCS port to accept a connection
+
+
+class RayMissing(RuntimeError):
+    """Ray is not installed (one line naming the extra), or its cluster cannot be reached (one line: why)."""
+
+
+def import_ray() -> Any:
+    os.environ.setdefault("RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER", "0")
+    try:
+        import ray
+    except ImportError:
+        raise RayMissing(f"--ray needs Ray, an optional extra: {INSTALL}") from None
+    return ray
+
+
+# ------------------------------------------------------------------------------------------ a shard (the actor)
+class ShardServer(FleetServer):
+    """The fleet's asyncio shell for a shard: its clock starts at the fleet's epoch, its fleet is already booted."""
+
+    def __init__(self, fleet: Fleet, world: ShardWorld, host: str, time_scale: float, epoch: float) -> None:
+        super().__init__(fleet, host, time_scale, ticked=world)
+        self.epoch = epoch
+
+    def control_loop(self, wall: float, burst: int) -> ControlLoop:
+        # simulated time 0 at the epoch: loop.time() and time.time() differ by a constant in this process
+        return ControlLoop(self.ticked, self.time_scale, wall - (time.time() - self.epoch), burst=burst)
+
+    def boot(self, control: ControlLoop, wall: float) -> None:
+        """Booted at simulated time 0 already (``ShardActor.prepare``): the ticks from 0 on are due."""
+
+
+class ShardActor:
+    """One shard on its node (``ray.remote`` is applied in ``Driver``, so that this module imports without Ray)."""
+
+    def __init__(self) -> None:
+        self.plan: ShardPlan | None = None
+        self.fleet: Fleet | None = None
+        self.world: ShardWorld | None = None
+        self.exchange: Exchange | None = None
+        self.peers: dict[int, Any] = {}
+        self.server: FleetServer | None = None
+        self.loop: asyncio.AbstractEventLoop | None = None
+        self.thread: threading.Thread | None = None
+        self.exit_code: int | None = None
+        self.error: str | None = None
+        self._ready = threading.Event()
+
+    def prepare(self, shard: ShardPlan, options: dict[str, Any], lag: int) -> tuple[str, int]:
+        """Build and boot this shard's platforms (simulated time 0); this node's id and this process's."""
+        from pltf.reference_server.fleet.cli import build_platforms
+
+        logging.basicConfig(level=options.get("log_level", "INFO"), stream=sys.stderr, force=True)
+        import ray
+
+        self.plan = shard
+        args = argparse.Namespace(**options)
+        platforms: list[Platform] = build_platforms(FleetSpec(shard.platforms), args)
+        self.fleet = Fleet(FleetSpec(shard.platforms), platforms, bodies=Bodies(shard.total), indices=shard.indices)
+        self.fleet.boot(0.0)
+        self.exchange = Exchange(shard.peers, time.time, lag, options.get("stall", STALL))
+        self.world = ShardWorld(self.fleet, shard.shard, self.exchange, shard.owners, self._send, time.time)
+        return ray.get_runtime_context().get_node_id(), os.getpid()
+
+    def connect(self, peers: dict[int, Any]) -> None:
+        self.peers = {k: h for k, h in peers.items() if self.plan is not None and k != self.plan.shard}
+
+    def _send(self, snap: Snapshot) -> None:
+        for handle in self.peers.values():
+            handle.receive.remote(snap)  # fire and forget: a dead peer's call fails on its own
+
+    def receive(self, snap: Snapshot) -> None:
+        if self.exchange is not None:
+            self.exchange.put(snap)
+
+    def drop(self, shard: int) -> None:
+        if self.exchange is not None:
+            self.exchange.drop(shard)
+
+    def go(self, epoch: float, host: str, time_scale: float) -> dict[str, list[int]]:
+        """Serve the platforms' ports with simulated time 0 at ``epoch``; each platform's ports."""
+        assert self.fleet is not None and self.world is not None, "prepare first"
+        self.world.publish(0)
+        server = ShardServer(self.fleet, self.world, host, time_scale, epoch)
+        self.thread = threading.Thread(target=self._serve, args=(server,), name="shard", daemon=True)
+        self.thread.start()
+        if not self._ready.wait(START_TIMEOUT) or self.error is not None:
+            raise RuntimeError(self.error or "the shard's ports did not open")
+        return {name: srv.ports for name, srv in server.servers.items()}
+
+    def _serve(self, server: ShardServer) -> None:
+        def ready(srv: FleetServer) -> None:
+            self.server, self.loop = srv, asyncio.get_running_loop()
+            self._ready.set()
+
+        try:
+            self.exit_code = asyncio.run(serve_until_stopped(server, ready, False, "shard"))
+        except OSError as exc:
+            self.error = f"cannot listen: {exc.strerror or exc}"
+            self.exit_code = 2
+        finally:
+            self._ready.set()
+            if self.world is not None:
+                self.world.publish(1 << 40, done=True)  # the others stop waiting for us
+            if self.fleet is not None:
+                self.fleet.close()
+
+    def wait(self) -> int:
+        """Block until the shard has ended (its platforms all exited, or ``stop``); its exit status."""
+        if self.thread is not None:
+            self.thread.join()
+        return self.exit_code if self.exit_code is not None else 2
+
+    def stop(self) -> None:
+        if self.loop is not None and self.server is not None:
+            self.loop.call_soon_threadsafe(self.server.stop)
+
+    def stats(self) -> dict[str, Any]:
+        """The exchange's figures and the simulated time reached (benchmarks/bench_fleet_ray.py)."""
+        out: dict[str, Any] = self.exchange.stats.as_dict() if self.exchange is not None else {}
+        control = self.server.control if self.server is not None else None
+        out["ticks"] = control.ticks if control is not None else 0
+        out["held"] = control.held if control is not None else 0.0
+        return out
+
+
+# ------------------------------------------------------------------------------------------ the driver
+def _nodes(ray: Any) -> list[dict[str, Any]]:
+    """The cluster's alive nodes in the order of the fleet file's ``node: K``: the head first, then by address,
+    the nodes of one machine in the order they started (their raylet sockets: raylet, raylet.1, raylet.2, ...)."""
+    return sorted((n for n in ray.nodes() if n.get("Alive")), key=_node_order)
+
+
+def _node_order(node: dict[str, Any]) -> tuple[bool, tuple[int, ...], int]:
+    head = "node:__internal_head__" in node.get("Resources", {})
+    address = tuple(int(x) if x.isdigit() else 0 for x in str(node.get("NodeManagerAddress", "")).split("."))
+    suffix = str(node.get("RayletSocketName", "")).rsplit(".", 1)[-1]
+    return not head, address, int(suffix) if suffix.isdigit() else 0
+
+
+class Driver:
+    def __init__(self, spec: FleetSpec, args: argparse.Namespace) -> None:
+        self.ray = import_ray()
+        self.spec, self.args = spec, args
+        self.actors: dict[int, Any] = {}
+        self.plans: dict[int, ShardPlan] = {}
+        self.node_ids: dict[int, str] = {}
+        self.ports: dict[str, list[int]] = {}
+        self.connected_here = False
+        self._stopping = threading.Event()
+
+    # ---- start
+    def connect(self) -> None:
+        ray = self.ray
+        if ray.is_initialized():
+            return
+        _probe(self.args.ray)
+        try:
+            ray.init(address=self.args.ray, log_to_driver=False, logging_level="ERROR")
+        except Exception as exc:  # ConnectionError, or Ray's own: no cluster at that address
+            raise RayMissing(f"cannot connect to the Ray cluster at {self.args.ray}: {_first_line(exc)}") from None
+        self.connected_here = True
+
+    def start(self) -> None:
+        ray = self.ray
+        from ray.util.scheduling_strategies import NodeAffinitySchedulingStrategy
+
+        nodes = _nodes(ray)
+        plans = plan(self.spec, len(nodes), self.args.seed)
+        options = _options(self.args)
+        actor_class = ray.remote(num_cpus=CPUS, max_concurrency=THREADS, max_restarts=0)(ShardActor)
+        for p in plans:
+            node_id = nodes[p.node]["NodeID"]
+            strategy = NodeAffinitySchedulingStrategy(node_id=node_id, soft=False)
+            self.actors[p.shard] = actor_class.options(scheduling_strategy=strategy).remote()
+            self.plans[p.shard] = p
+            self.node_ids[p.shard] = node_id
+        refs = [self.actors[p.shard].prepare.remote(p, options, self.args.ray_lag) for p in plans]
+        for p, (node_id, _pid) in zip(plans, ray.get(refs, timeout=START_TIMEOUT), strict=True):
+            assert node_id == self.node_ids[p.shard], "Ray placed a shard on another node than asked"
+        handles = dict(self.actors)
+        ray.get([a.connect.remote(handles) for a in self.actors.values()], timeout=START_TIMEOUT)
+        epoch = time.time()
+        served = ray.get(
+            [a.go.remote(epoch, self.args.host, self.args.time_scale) for a in self.actors.values()],
+            timeout=START_TIMEOUT,
+        )
+        for shard, ports in zip(self.actors, served, strict=True):
+            for name, pair in ports.items():
+                self.ports[name] = pair
+                for port in pair:
+                    log.info("server started at port %d", port)
+                where = ",".join(f"{self.args.host}:{port}" for port in pair)
+                log.info("platform %s at %s on node %d (%s)", name, where, shard, self.node_ids[shard][:12])
+
+    # ---- run
+    def watch(self) -> int:
+        """Until every shard has ended: report the lost ones, tell the others."""
+        ray = self.ray
+        waits = {self.actors[s].wait.remote(): s for s in self.actors}
+        lost = 0
+        while waits:
+            if self._stopping.is_set():
+                return self._stop(waits)
+            done, _ = ray.wait(list(waits), num_returns=1, timeout=WATCH)
+            for ref in done:
+                shard = waits.pop(ref)
+                try:
+                    ray.get(ref)
+                    log.info("shard %d on node %d ended: its platforms exited", shard, self.plans[shard].node)
+                except Exception as exc:  # RayActorError, NodeDiedError, ...: the actor or its node died
+                    lost += 1
+                    self._lost(shard, exc)
+        log.info("fleet stopped")
+        return 1 if lost else 0
+
+    def _lost(self, shard: int, exc: Exception) -> None:
+        names = ", ".join(p.name for p in self.plans[shard].platforms)
+        why = type(exc).__name__
+        log.error("shard %d on node %d lost (%s): platforms %s stopped serving", shard, shard, why, names)
+        self.actors.pop(shard)
+        for actor in self.actors.values():
+            actor.drop.remote(shard)
+
+    def stop(self) -> None:
+        self._stopping.set()
+
+    def _stop(self, waits: dict[Any, int]) -> int:
+        ray = self.ray
+        for actor in self.actors.values():
+            actor.stop.remote()
+        ray.wait(list(waits), num_returns=len(waits), timeout=STOP_GRACE)
+        log.info("fleet stopped")
+        return 0
+
+    def close(self) -> None:
+        for actor in self.actors.values():
+            try:
+                self.ray.kill(actor)
+            except Exception:  # an actor already gone: nothing more to end
+                continue
+        if self.connected_here:
+            self.ray.shutdown()
+
+
+def _probe(address: str) -> None:
+    """A HOST:PORT where nothing listens is one line at once (Ray itself retries for minutes)."""
+    host, _, port = address.rpartition(":")
+    if not host or not port.isdigit():
+        return  # 'auto', ray://...: Ray's own lookup
+    try:
+        socket.create_connection((host, int(port)), timeout=PROBE_TIMEOUT).close()
+    except OSError as exc:
+        raise RayMissing(f"cannot connect to the Ray cluster at {address}: {exc.strerror or exc}") from None
+
+
+def _options(args: argparse.Namespace) -> dict[str, Any]:
+    """What a shard needs of the command line (plain data): the data dir resolved here, as the user meant it."""
+    return {
+        "data_dir": str(Path(args.data_dir).resolve()),
+        "seed": args.seed,
+        "no_hardware": args.no_hardware,
+        "can_interface": args.can_interface,
+        "log_level": args.log_level,
+    }
+
+
+def settled(spec: FleetSpec, args: argparse.Namespace) -> FleetSpec:
+    """The fleet file's data dirs resolved against this directory (a shard's worker runs elsewhere)."""
+    platforms = tuple(
+        replace(p, data_dir=None if p.data_dir is None else str(Path(p.data_dir).resolve())) for p in spec.platforms
+    )
+    return replace(spec, platforms=platforms)
+
+
+def run(spec: FleetSpec, args: argparse.Namespace, prog: str) -> int:
+    """``pltf serve --fleet FILE --ray ADDRESS``: user errors are one line and status 2, as ``pltf serve``'s."""
+    if not spec.placed:
+        print(f"{prog}: error: --ray needs a fleet file (the platforms' poses), not --fleet N", file=sys.stderr)
+        return 2
+    try:
+        driver = Driver(settled(spec, args), args)
+        driver.connect()
+    except RayMissing as exc:
+        print(f"{prog}: error: {exc}", file=sys.stderr)
+        return 2
+    previous = {sig: signal.signal(sig, lambda *_: driver.stop()) for sig in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        driver.start()
+        return driver.watch()
+    except FleetError as exc:
+        print(f"{prog}: error: {exc}", file=sys.stderr)
+        return 2
+    except Exception as exc:  # a shard that could not start (a port taken, a data dir refused): Ray's error
+        print(f"{prog}: error: a shard did not start: {_first_line(exc)}", file=sys.stderr)
+        return 2
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+        driver.close()
+
+
+def _first_line(exc: BaseException) -> str:
+    lines = [line.strip() for line in str(exc).splitlines() if line.strip()]
+    mine = [line for line in lines if "cannot listen" in line or "Error:" in line]
+    return (mine or lines or [type(exc).__name__])[-1][:300]
+
+
+__all__ = ["LAG", "Driver", "RayMissing", "ShardActor", "run"]
