@@ -1,7 +1,8 @@
 """A fleet spread over shards (``pltf serve --fleet FILE --ray``): which shard serves which platform, the snapshots
 the shards exchange every control period, and one shard's world of its own platforms and the others' bodies.
 
-Rules (decision E-FLEET-004; the Ray shell is reference_server/fleet/ray_shards.py):
+Rules (decision E-FLEET-004 on guide 4.3 "CollCheckEnabled Enable the collision check with all sensors": how fresh
+what a platform senses of a platform on another node is; the Ray shell is reference_server/fleet/ray_shards.py):
 - ``plan``: one shard per Ray node that serves a platform. A platform's ``node`` (fleet file) names its node by
   index (0 the head, then the others as Ray lists them); the platforms without one go round-robin over all the
   nodes in the file's order. Every shard knows the whole fleet's count: platform k is body k in every shard.
