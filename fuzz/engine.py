@@ -44,7 +44,6 @@ from pltf.fuzz.pace import Pace
 from pltf.fuzz.prefetch import Prefetcher
 from pltf.fuzz.preludes import STATEFUL, StatePlan
 from pltf.fuzz.schedule import BIG_CASE, Scheduler
-from pltf.fuzz.target import Session
 from pltf.fuzz.trial import Trial
 from pltf.fuzz.unit import Unit, rarest, window_units
 from pltf.fuzz.verdict import HOW, NEEDED, REPLAYS, TIMED_OUT, Verdict, confirm, confirmed, patient
@@ -57,7 +56,6 @@ STATEFUL_EVERY = 4  # one single about an operation or motion command in so many
 # behind it for milliseconds per unit with the default 5 ms GIL switch interval; a short one keeps it low.
 SWITCH_INTERVAL = 0.0002  # s
 SAVE_EVERY = 30.0  # s between saves of the corpus progress (a killed run resumes from there)
-HISTORY = 64  # sessions kept for a finding that needs more than its last unit
 TARGET_LINES = 6  # lines of a launched target's output in a message about its start
 STOPS = ("dead", "hang", "deaf", "stall")  # without --launch, the campaign ends with such a finding
 
@@ -89,7 +87,6 @@ class Campaign:
         self.launcher = Launcher(opts.launch, opts.host, opts.port, opts.second_port) if opts.launch else None
         self.ports = (opts.port, opts.second_port)
         self.lanes: Lanes | None = None
-        self.history: collections.deque[Session] = collections.deque(maxlen=HISTORY)
         self.suspicions: list[Suspicion] = []
         self.not_admitted_before = 0  # connections not served by the targets before the last restart
         self.stateful = 0  # singles about an operation or motion command drawn so far
@@ -305,7 +302,6 @@ class Campaign:
         st.batches += unit.batch
         st.singles += not unit.batch
         st.cut_replies += v.cut
-        self.history.append(e.flight.session)
         self._learn(out.replies)
         at = None if unit.check_at is None else unit.check_at - (not e.led)
         if at is not None and unit.target is not None and len(out.replies) > at:
@@ -424,7 +420,7 @@ class Campaign:
 
     def failure(self, kind: str, reason: str, units: list[Unit], ok: bool, evidence: dict[str, Any]) -> None:
         assert self.lanes is not None
-        finding = self.writer.handle(kind, reason, units, list(self.history), ok, evidence)
+        finding = self.writer.handle(kind, reason, units, self.lanes.sent(), ok, evidence)
         if finding is None:
             self.stats.duplicates += 1
         elif finding["confirmed"]:
@@ -439,7 +435,6 @@ class Campaign:
             self.stats.restarts += 1
             self.lanes.close()
             self.start_target()
-            self.history.clear()
             self.plan.documents_due = True
         elif kind in STOPS:
             self.stop = True  # a target we cannot restart is gone (or its port is)

@@ -5,7 +5,9 @@ Rules:
   death) and whether the campaign believes it (replays on the live target, or a target no port serves). Only
   a believed failure is a finding; the rest is written under ``unconfirmed/`` and never sets the exit status.
 - With ``--launch`` a believed failure is reproduced on fresh instances: each unit alone after the full state
-  prelude of its target (the last first), then the units together, then everything since the last restart;
+  prelude of its target (the last first), then the units together, then what both lanes sent lately in the
+  order it was written (``pltf.fuzz.sent``: the last ``RECENT_SENT`` sessions, then all ``pltf.fuzz.lanes.LOG``
+  flights), each behind the full prelude of the plan's state: units in flight at a death among them;
   for a death none of those causes (a leak: the target dies of what piles up), the units are repeated until the
   instance dies (``REPEAT_MAX`` rounds, ``REPEAT_SECONDS``): all of them, then the biggest and the busiest alone. ddmin
   (``pltf.fuzz.minimize``) then removes frames across sessions, the lead of each kept: it tells a
@@ -37,6 +39,7 @@ REPEAT_SECONDS = 30.0  # s a repeated candidate may take
 GONE = ("dead", "hang", "deaf")
 INCONCLUSIVE = "inconclusive"  # a replay the machine did not let run
 FRESH_TRIES = 3  # fresh instances a replay gets at most while it is inconclusive
+RECENT_SENT = 128  # sessions of what was sent last, in send order: the first such candidate (then all of them)
 
 
 def led(s: Session) -> Session:
@@ -170,8 +173,10 @@ class FindingWriter:
         candidates = [list(pair) for pair in reversed(sessions_of[-4:])]
         if len(units) > 1:
             candidates.append([sessions_of[-1][0], *(s for _, s in sessions_of)])
-        if history:
-            candidates.append([prelude_session(c.plan.current), *(led(s) for s in history)])
+        # what both lanes sent lately, in the order it was written (``pltf.fuzz.sent``): a state fed by every
+        # connection (a platform has one) may have been reached by the lanes together, in no unit alone
+        sent = [history[-RECENT_SENT:], history] if len(history) > RECENT_SENT else [history]
+        candidates += [[prelude_session(c.plan.current), *map(led, h)] for h in sent if h]
         got: dict[str, Any] = {"sessions": None, "repeat": 1, "minimized": False, "tests": 0}
         for candidate in candidates:
             if self.reproduce(candidate)[0] == kind:

@@ -15,6 +15,7 @@ from __future__ import annotations
 import collections
 import contextlib
 import errno
+import itertools
 import select
 import socket
 import time
@@ -27,6 +28,7 @@ from pltf.spec.codec import REQUESTS
 CHUNK = 1 << 16
 AWAIT = -1.0  # the pause of a piece that waits for the peer's first byte (the rest of a gated session)
 _RESET = (errno.ECONNRESET, errno.EPIPE)
+_WRITES = itertools.count()  # one order over every write of every flight (``Flight.sends``, ``pltf.fuzz.sent``)
 
 
 class Flight:
@@ -48,6 +50,7 @@ class Flight:
             pieces.append((GET_STATUS, 0.0))
             self.expected.append(REQUESTS.CMD_GET_STATUS.ID)
         self.data, self.pos = data, 0
+        self.sends: list[tuple[int, int]] = []  # (place in the order of all flights' writes, end offset) per write
         self.pieces: collections.deque[tuple[int, float]] = collections.deque()  # (end offset, pause before it)
         end = 0
         for piece, pause in pieces:
@@ -107,6 +110,7 @@ class Flight:
             return
         self.connected = True
         self.pos += sent
+        self.sends.append((next(_WRITES), self.pos))
         if self.pos < end:
             return
         self.pieces.popleft()

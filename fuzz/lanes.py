@@ -23,6 +23,9 @@ Rules:
   that serves its ports in turn comes back to it after one of them. Unbounded, the kept connection's batches,
   one after the other, would push a stalled single's deadline on for as long as they come, and the stall
   would never show.
+- Every flight, in the lanes or alone (replays, checks), goes into ``log`` (the last ``LOG``) as it starts:
+  ``sent()`` is what the target was sent lately, in the order it was written (``pltf.fuzz.sent``), units still
+  in flight and units not admitted too (a target that reads every connection may have seen them).
 - Every admitted unit is handed to the campaign's ``judge`` in its port's order; a False answer stops new units,
   the ones in flight run out (and are judged too) and ``run`` returns: the ports are then free for replays.
 """
@@ -39,11 +42,13 @@ from dataclasses import dataclass
 from pltf.fuzz.flight import Flight, fly, step_flights
 from pltf.fuzz.gate import DEPTH, Gate
 from pltf.fuzz.pace import Pace
+from pltf.fuzz.sent import segments
 from pltf.fuzz.target import LEAD_IDS, Session, session_deadline
 from pltf.fuzz.unit import PIPELINE_BYTES, Unit
 from pltf.fuzz.verdict import NOT_ADMITTED, Liveness, Verdict, judge
 
 RECENT = 16  # units remembered as "sent last"
+LOG = 1024  # flights remembered for ``sent`` (about eight windows of cases)
 WARMUP = 256  # units served, none turned away, before some may go without a lead
 SHARED_UNITS = 2  # allowances of units started on other ports that a unit in flight gets at most
 LEAD_EVERY = 4  # then: one unit in so many on a port keeps it (the liveness probe), and every unit that owes replies
@@ -96,6 +101,7 @@ class Lanes:
         self.flights: list[collections.deque[InFlight]] = [collections.deque() for _ in ports]
         self.todo: collections.deque[Unit] = collections.deque()
         self.recent: collections.deque[InFlight] = collections.deque(maxlen=RECENT)
+        self.log: collections.deque[Flight] = collections.deque(maxlen=LOG)  # every flight, as it started
         self.kept: socket.socket | None = None
         self.dear = False  # set by the campaign from the gates' release
         self.pace: Pace | None = None  # the dear way's batches take turns with the singles (``pltf.fuzz.pace``)
@@ -227,6 +233,7 @@ class Lanes:
         led = self._led(k, unit, sock is None)
         session = self.adapt(unit.session(lead=led, kept=kept))
         flight = self.connect(self.host, self.ports[k], session, self.deadline, sock=sock)
+        self.log.append(flight)
         q = self.flights[k]
         behind = bool(q)
         if behind:
@@ -331,6 +338,7 @@ class Lanes:
                 time.sleep(gate.retry_at - now)
             session = self.adapt(unit.session())
             flight = self.connect(self.host, self.ports[k], session, deadline or self.deadline, sock=None)
+            self.log.append(flight)
             e = InFlight(flight, unit, k, False, False, True, flight.started)
             fly([flight])
             v = judge(flight.out, unit.owed(flight.session, len(flight.expected)), True, unit.keep)
@@ -345,6 +353,11 @@ class Lanes:
             if now >= end:
                 self.live.turned_away(k, v.how, now)
                 return None
+
+    def sent(self) -> list[Session]:
+        """What the target was sent lately, in the order it was written, as sessions to replay one after the
+        other (``pltf.fuzz.sent``)."""
+        return segments((f.session, f.data, f.sends) for f in self.log)
 
     def release(self) -> None:
         """Give the kept connection back in order (our end-of-stream, the target's close)."""
