@@ -6,8 +6,9 @@
 import { h } from "../dom";
 import { bind, type Key } from "../i18n/i18n";
 import { dialog } from "../ui/dialog";
+import type { Closing } from "./shell";
 
-export type Closing = "closed" | "saved" | "discarded" | "cancelled";
+export type { Closing };
 
 export async function askToClose(dirty: boolean, question: Key): Promise<Closing> {
   if (!dirty) {

@@ -8,6 +8,7 @@
  */
 import { KINDS, type MapObject } from "../scene/map";
 import * as g from "./geometry";
+import type { EditHistory } from "./history";
 import type { MapDoc } from "./mapdoc";
 import { inDocumentOrder, ObjectIndex } from "./objindex";
 
@@ -41,7 +42,7 @@ function applyChanges(doc: MapDoc, changes: readonly Change[]): void {
 const inverse = (changes: readonly Change[]): Change[] =>
   changes.map((c) => ({ index: c.index, before: c.after, after: c.before })).reverse();
 
-export class History {
+export class History implements EditHistory {
   private done: Command[] = [];
   private undone: Command[] = [];
   private saved: Command | null = null;
@@ -149,6 +150,10 @@ export class History {
 
   get canRedo(): boolean {
     return this.undone.length > 0;
+  }
+
+  get label(): string | null {
+    return this.done[this.done.length - 1]?.label ?? null;
   }
 
   /** Mark the document saved (or sent): `dirty` is false until the next change, undo or redo. */

@@ -2,6 +2,8 @@ import { h } from "../dom";
 import { bind, type Key, t } from "../i18n/i18n";
 import { MAX_XML_CHARS } from "./xml";
 
+export { fileNameOf } from "./shell";
+
 /** guide 5.4/5.5 "Save the current map (roadmap) to the local harddrive": the document as a download. */
 export function download(fileName: string, text: string): void {
   const url = URL.createObjectURL(new Blob([text], { type: "application/xml" }));
@@ -12,12 +14,6 @@ export function download(fileName: string, text: string): void {
   a.click();
   a.remove();
   setTimeout(() => URL.revokeObjectURL(url), 1000);
-}
-
-/** A file name for a document named `name` (the platform's name, or "map"/"roadmap"), with its extension. */
-export function fileNameOf(name: string, fallback: string, ext: string): string {
-  const base = name.replace(/[\\/:*?"<>|]+/g, "_").trim() || fallback;
-  return base.endsWith(ext) ? base : `${base}${ext}`;
 }
 
 /** guide 5.4/5.5 "Load a map (roadmap) from the hard disk": the editors' file input. A file over MAX_XML_CHARS is

@@ -6,6 +6,7 @@
  * The history keeps whole snapshots: a roadmap is small (tens of stations), so an edit, its undo and its redo
  * are exact copies, unbounded while the editor is open.
  */
+import type { EditHistory } from "./history";
 import { elementsOf, parseXml, writeDocument, type XmlElement } from "./xml";
 
 export interface RmStation {
@@ -184,45 +185,57 @@ export function nextStationId(doc: RoadmapDoc): string {
 
 export type Edit = (doc: RoadmapDoc) => string | null;
 
-/** Edits of a roadmap with unbounded undo and redo (guide 5.5, like the map editor's 5.4). */
-export class RoadmapHistory {
-  private done: RoadmapDoc[] = [];
-  private undone: RoadmapDoc[] = [];
-  private savedDepth: number | null = 0;
+/** One step of a RoadmapHistory: the documents before and after it and the label of the edit. */
+interface Step {
+  readonly before: RoadmapDoc;
+  readonly after: RoadmapDoc;
+  readonly label: string;
+}
+
+/**
+ * Edits of a roadmap with unbounded undo and redo (guide 5.5, like the map editor's 5.4). A step keeps the whole
+ * documents on both sides of it (a roadmap is a few hundred stations), so an edit is any function of a copy; a
+ * step moves between the undo and the redo stack as it is, as the map's commands do.
+ */
+export class RoadmapHistory implements EditHistory {
+  private done: Step[] = [];
+  private undone: Step[] = [];
+  /** the step that led to the saved document (null: the document as loaded) */
+  private saved: Step | null = null;
 
   constructor(public doc: RoadmapDoc) {}
 
   /** Apply `edit` to a copy; it returns null when done or the reason it cannot be done (nothing changes). */
-  run(edit: Edit): string | null {
+  run(edit: Edit, label = "edit"): string | null {
     const next = copy(this.doc);
     const why = edit(next);
     if (why !== null) {
       return why;
     }
-    this.done.push(this.doc);
+    this.done.push({ before: this.doc, after: next, label });
     this.undone = [];
     this.doc = next;
     return null;
   }
 
-  undo(): boolean {
-    const prev = this.done.pop();
-    if (prev === undefined) {
-      return false;
+  undo(): string | null {
+    const step = this.done.pop();
+    if (step === undefined) {
+      return null;
     }
-    this.undone.push(this.doc);
-    this.doc = prev;
-    return true;
+    this.undone.push(step);
+    this.doc = step.before;
+    return step.label;
   }
 
-  redo(): boolean {
-    const next = this.undone.pop();
-    if (next === undefined) {
-      return false;
+  redo(): string | null {
+    const step = this.undone.pop();
+    if (step === undefined) {
+      return null;
     }
-    this.done.push(this.doc);
-    this.doc = next;
-    return true;
+    this.done.push(step);
+    this.doc = step.after;
+    return step.label;
   }
 
   get canUndo(): boolean {
@@ -233,12 +246,16 @@ export class RoadmapHistory {
     return this.undone.length > 0;
   }
 
+  get label(): string | null {
+    return this.done[this.done.length - 1]?.label ?? null;
+  }
+
   markSaved(): void {
-    this.savedDepth = this.done.length;
+    this.saved = this.done[this.done.length - 1] ?? null;
   }
 
   get dirty(): boolean {
-    return this.savedDepth !== this.done.length;
+    return (this.done[this.done.length - 1] ?? null) !== this.saved;
   }
 }
 
