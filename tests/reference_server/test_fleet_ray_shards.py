@@ -167,3 +167,27 @@ def test_two_shards_block_each_other_and_run_the_same_every_time(tmp_path: Path)
     assert gaps[-1] < 900 and abs(gaps[-1] - gaps[-50]) < 1, "not held back in front of each other"
     again = _head_on_in_two_shards(tmp_path / "b")
     assert again == xs  # deterministic: same seeds, same telegrams at the same ticks
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--ray", "auto"], "--ray needs --fleet"),
+        (
+            ["--fleet", "FILE", "--ray", "auto", "--shared-map"],
+            "--shared-map hands a map on within one process; not with --ray",
+        ),
+        (["--fleet", "FILE", "--ray", "auto", "--ray-lag", "0"], "--ray-lag must be at least 1 (period)"),
+        (["--fleet", "3", "--ray", "auto"], "--ray needs a fleet file (the platforms' poses), not --fleet N"),
+    ],
+)
+def test_what_ray_refuses_is_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], argv: list[str], message: str
+) -> None:
+    from pltf.reference_server.cli import main
+
+    (tmp_path / "fleet.yaml").write_text(HEAD_ON, encoding="utf-8")
+    argv = [str(tmp_path / "fleet.yaml") if a == "FILE" else a for a in argv]
+    assert main([*argv, "--data-dir", str(tmp_path / "data")]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1] == f"python -m pltf.reference_server: error: {message}", err
