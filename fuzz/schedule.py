@@ -51,9 +51,11 @@ class Scheduler:
         self._gen_weights = [gens[n][0] for n in self._gen_names]
         self._mut_names = list(mutate.MUTATORS)
         self._mut_weights = [mutate.MUTATORS[n][0] for n in self._mut_names]
+        self._rng = random.Random()  # seeded again for each case: the stream of ``random.Random(f"{seed}:{i}")``
 
     def case(self, i: int) -> Case:
-        rng = random.Random(f"{self.seed}:{i}")
+        rng = self._rng
+        rng.seed(f"{self.seed}:{i}")
         for _ in range(MAX_DRAWS):
             case = self._draw(rng)
             if not case.frames or not case.data:
@@ -64,7 +66,7 @@ class Scheduler:
                 self.dropped += 1
                 continue
             kind, answered = survey(case.data)
-            return replace(case, expect=CLOSE if case.half_close else kind, answered=tuple(answered))
+            return case.judged(CLOSE if case.half_close else kind, tuple(answered))
         return Case((_enc("CMD_GET_STATUS"),), "gen.fallback", "CMD_GET_STATUS", expect=KEEP)
 
     def _draw(self, rng: random.Random) -> Case:

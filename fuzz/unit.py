@@ -53,13 +53,13 @@ class Unit:
     tries: int = 0  # connections that were not admitted so far
     pin: int | None = None  # the port it must run again on (it was left unanswered there)
 
-    @property
+    @functools.cached_property
     def keep(self) -> bool:
         """Every case accepted by the strict codec (a unit without cases - a lead alone - is not: it owes only
-        the lead's reply)."""
+        the lead's reply). Its cases never change: asked for many times per unit, computed once."""
         return bool(self.cases) and all(c.expect == KEEP for c in self.cases)
 
-    @property
+    @functools.cached_property
     def batch(self) -> bool:
         return len(self.cases) > 1 or (bool(self.cases) and batchable(self.cases[0]))
 
