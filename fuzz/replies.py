@@ -62,16 +62,16 @@ class StatusMemo:
             telegram = REPLIES.decode_data(data)
             self.data, self.telegram = data, telegram
             return telegram
-        telegram = self.small.get(data)
-        if telegram is not None:
+        known = self.small.get(data)
+        if known is not None:
             self.hits += 1
-            return telegram
-        telegram = REPLIES.decode_data(data)
+            return known
+        decoded = REPLIES.decode_data(data)
         if len(data) <= SMALL:
             if len(self.small) >= SMALL_ENTRIES:
                 self.small.clear()
-            self.small[data] = telegram
-        return telegram
+            self.small[data] = decoded
+        return decoded
 
 
 MEMO = StatusMemo()
