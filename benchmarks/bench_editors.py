@@ -23,7 +23,7 @@ the arming timer of ARM_JS, so the resolving frame is the one after it (two vsyn
 baseline's empty patch included). The load is about 0.6-0.7 s from the click until the 4 MB GET_MAP reply is
 decoded on the page (the gateway's relay and the page's frame decoding), then 0.1-0.3 s of reading
 (editor/mapfast.ts), 0.05-0.1 s of packing, and the worker's first drawing (no grid built for it). Figures and
-the A/B against main: gui/README.md "Editor benchmarks".
+the A/B against main: benchmarks/results/gui.md.
 """
 
 from __future__ import annotations
