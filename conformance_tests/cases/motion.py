@@ -228,7 +228,7 @@ def hold(
         waited.append(time.monotonic() - asked.popleft())
     st = session.read_reply("CMD_GET_STATUS") if status else None
     spread = (min(waited) * scale, max(waited) * scale)
-    return _held(ctx, name, samples, st, worst_gap, spread, limit)
+    return _held(ctx, name, samples, st, worst_gap, spread, limit, held_for=seconds)
 
 
 def _read_until(session: Session, until: float, asked: deque[float], samples: list[Pose], waited: list[float]) -> None:
@@ -261,17 +261,29 @@ def _held(
     worst_gap: float,
     spread: tuple[float, float],
     limit: float | None,
+    held_for: float | None = None,
 ) -> Held:
     """``Held``, void when the samples may not show the target (``hold``): only where the platform moved at all -
     a target that does not move is judged on that, whatever the suite's pace. A pose answered again (the same
     x, y, angle as the one before) is the same observation, read late: a loaded simulator answers the requests
-    between two of its ticks with one pose; only the first counts, and fewer than ``DISTINCT`` cannot tell."""
+    between two of its ticks with one pose; only the first counts, and fewer than ``DISTINCT`` cannot tell. A
+    platform that did not move is judged so unless the target answered nothing for longer than the hold beyond
+    the link's reply time (``held_for``): a target that stood still for the whole hold (a loaded machine) cannot
+    be told from one that does not move - a target that answers on time and does not move FAILs."""
     first = samples[0]
     moved = any(
         p.dist(first) > STILL_POS or abs(angle_diff(p.th, first.th)) > STILL_ANG or abs(p.v) > STILL_V for p in samples
     )
     seen = _distinct(samples)
     link = pace.link(ctx.config)
+    stalled = spread[1] - (ctx.config.reply_time or 0.0) * ctx.config.time_scale  # beyond the link's reply time
+    if not moved and held_for is not None and stalled >= held_for:
+        why = (
+            f"the target answered a pose {spread[1]:.2f} simulated s after it was asked, {stalled:.2f} s more than "
+            f"the link takes and longer than the {held_for:g} s {name} was held: it did not run meanwhile (a loaded "
+            f"machine; {link})"
+        )
+        return Held(seen, st, why, stale=True)
     if moved and len(seen) < DISTINCT:
         why = (
             f"{len(samples)} poses read, only {len(seen)} distinct: the target answered in bursts (it fell behind "

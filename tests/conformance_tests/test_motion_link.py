@@ -89,6 +89,14 @@ def test_a_target_that_answered_in_bursts_of_one_stale_pose_is_inconclusive_only
     assert standing.void == ""
 
 
+def test_a_target_that_stood_still_answering_nothing_for_the_whole_hold_is_not_judged_one_that_answers_is() -> None:
+    standing = [Pose(0.0, 0.0, 0.0)] * 12
+    stalled = motion._held(_ctx(), "CMD_MOVE_VEL", standing, None, 0.1, spread=(0.3, 2.0), limit=0.5, held_for=1.5)
+    assert stalled.stale and "answered a pose 2.00 simulated s after it was asked, 1.60 s more than" in stalled.void
+    prompt = motion._held(_ctx(), "CMD_MOVE_VEL", standing, None, 0.1, spread=(0.3, 0.6), limit=0.5, held_for=1.5)
+    assert prompt.void == ""
+
+
 def test_the_link_as_measured_is_described_in_wall_and_simulated_time() -> None:
     cfg = Config("h", 1, time_scale=SCALE, reply_time=0.036, setup_time=0.118)
     assert pace.link(cfg) == (
