@@ -8,9 +8,9 @@ Rules (the shards' rules, the lag and the snapshots: reference_server/fleet/shar
   the fleet's asyncio shell in a thread of its own: the one clock is simulated time 0 at the wall-clock ``epoch``
   (``time.time()`` of the driver: the nodes' clocks are assumed in step, as NTP keeps them; a skew only makes
   the faster shard wait within the lag).
-- Every control period each shard sends its snapshot to every other shard directly (``receive``, fire and
-  forget: an actor method run on one of the actor's threads), and the control loop's tick waits for the peers'
-  (``shards.Exchange``).
+- Every ``lag`` control periods each shard sends its snapshots to every other shard directly (``receive``, fire
+  and forget: an actor method run on one of the actor's threads), and the control loop's tick waits for the
+  peers' (``shards.Exchange``).
 - The driver logs "server started at port N" for every port and "platform NAME at HOST:PORT,PORT on node K
   (NODE_ID)" for every platform, then watches the shards: a shard whose platforms all exited ends normally; a
   shard whose actor or node dies is LOST: the driver logs "shard K on node K lost (...): platforms A, B stopped
@@ -120,13 +120,13 @@ class ShardActor:
     def connect(self, peers: dict[int, Any]) -> None:
         self.peers = {k: h for k, h in peers.items() if self.plan is not None and k != self.plan.shard}
 
-    def _send(self, snap: Snapshot) -> None:
+    def _send(self, snaps: list[Snapshot]) -> None:
         for handle in self.peers.values():
-            handle.receive.remote(snap)  # fire and forget: a dead peer's call fails on its own
+            handle.receive.remote(snaps)  # fire and forget: a dead peer's call fails on its own
 
-    def receive(self, snap: Snapshot) -> None:
+    def receive(self, snaps: list[Snapshot]) -> None:
         if self.exchange is not None:
-            self.exchange.put(snap)
+            self.exchange.put_all(snaps)
 
     def drop(self, shard: int) -> None:
         if self.exchange is not None:

@@ -19,6 +19,8 @@ what a platform senses of a platform on another node is; the Ray shell is refere
   costs the others one ``stall``, not one per tick; the lag bound is broken for that while (counted: ``late``).
 - A peer that said it is ``done`` (its platforms all exited) or that the driver ``drop``ped (its actor or node
   died) is GONE: its bodies leave the world at the next tick and nobody waits for it any more.
+- A shard sends its snapshots in batches of ``lag`` ticks (``publish``): one message per peer every ``lag``
+  periods, and still in time - a peer at tick k needs our tick k - lag, sent at our tick k - 1 at the latest.
 - A platform that exits (CMD_EXIT) is ``alive=False`` in its shard's next snapshot: its body leaves every world.
 - Sans-IO: no clock of its own (``clock`` is passed in, for the latency figures and the stall); it blocks only
   in ``Exchange.view``, on a condition the receiving thread signals.
@@ -148,7 +150,13 @@ class Exchange:
 
     def put(self, snap: Snapshot) -> None:
         """A peer's snapshot arrived (any thread; snapshots may arrive out of order)."""
-        delay = max(0.0, self.clock() - snap.sent)
+        self.put_all([snap])
+
+    def put_all(self, snaps: Sequence[Snapshot]) -> None:
+        """A peer's batch of snapshots arrived: one latency sample, from the newest's making to now."""
+        if not snaps:
+            return
+        delay = max(0.0, self.clock() - max(s.sent for s in snaps))
         with self._cond:
             s = self.stats
             s.received += 1
@@ -157,14 +165,18 @@ class Exchange:
             s.latencies.append(delay)
             if len(s.latencies) > LATENCIES_KEPT:
                 del s.latencies[: LATENCIES_KEPT // 2]
-            got = self._got.setdefault(snap.shard, {})
-            got[snap.tick] = snap
-            if len(got) > KEEP:
-                for t in sorted(got)[: len(got) - KEEP]:
-                    del got[t]
-            if snap.done:
-                self._gone.add(snap.shard)
+            for snap in snaps:
+                self._store(snap)
             self._cond.notify_all()
+
+    def _store(self, snap: Snapshot) -> None:
+        got = self._got.setdefault(snap.shard, {})
+        got[snap.tick] = snap
+        if len(got) > KEEP:
+            for t in sorted(got)[: len(got) - KEEP]:
+                del got[t]
+        if snap.done:
+            self._gone.add(snap.shard)
 
     def drop(self, shard: int) -> None:
         """The shard is gone (its actor or node died): its bodies leave, nobody waits for it."""
@@ -229,7 +241,7 @@ class ShardWorld:
         shard: int,
         exchange: Exchange,
         owners: dict[int, tuple[int, ...]],
-        send: Callable[[Snapshot], None],
+        send: Callable[[list[Snapshot]], None],
         clock: Callable[[], float],
         period: float = CONTROL_PERIOD,
     ) -> None:
@@ -237,6 +249,7 @@ class ShardWorld:
         self.send, self.clock, self.period = send, clock, period
         self._outlines: dict[int, Outline] = {}
         self._retired: set[int] = set()
+        self._batch: list[Snapshot] = []
 
     def tick(self, now: float) -> None:
         k = round(now / self.period)
@@ -279,7 +292,12 @@ class ShardWorld:
         )
 
     def publish(self, tick: int, done: bool = False) -> None:
-        self.send(self.snapshot(tick, done))
+        """This tick's snapshot; sent with the ones before it every ``lag`` ticks (and at the end): a peer at
+        tick k needs our k - lag, which the batch sent at our tick k - 1 or earlier holds."""
+        self._batch.append(self.snapshot(tick, done))
+        if done or tick % self.exchange.lag == 0:
+            batch, self._batch = self._batch, []
+            self.send(batch)
 
 
 def _outline(fp: Footprint) -> Outline:

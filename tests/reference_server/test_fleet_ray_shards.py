@@ -130,13 +130,14 @@ def _bring_up(worlds: list[ShardWorld], members: list[Any]) -> int:
     return k
 
 
-def _head_on_in_two_shards(tmp: Path) -> list[tuple[float, float]]:
+def _head_on_in_two_shards(tmp: Path, lag: int = 1) -> list[tuple[float, float]]:
     """alpha in shard 0, bravo in shard 1, stepped in lockstep; alpha's and bravo's true x every tick."""
     s = spec(HEAD_ON)
     fleets = [_shard(tmp, s, [0]), _shard(tmp, s, [1])]
-    exchanges = [Exchange([1], time.monotonic, stall=1.0), Exchange([0], time.monotonic, stall=1.0)]
+    exchanges = [Exchange([1], time.monotonic, lag, stall=1.0), Exchange([0], time.monotonic, lag, stall=1.0)]
     worlds = [
-        ShardWorld(fleets[i], i, exchanges[i], {1 - i: (1 - i,)}, exchanges[1 - i].put, time.monotonic) for i in (0, 1)
+        ShardWorld(fleets[i], i, exchanges[i], {1 - i: (1 - i,)}, exchanges[1 - i].put_all, time.monotonic)
+        for i in (0, 1)
     ]
     try:
         for f, w in zip(fleets, worlds, strict=True):
@@ -159,13 +160,14 @@ def _head_on_in_two_shards(tmp: Path) -> list[tuple[float, float]]:
             f.close()
 
 
-def test_two_shards_block_each_other_and_run_the_same_every_time(tmp_path: Path) -> None:
-    xs = _head_on_in_two_shards(tmp_path / "a")
+@pytest.mark.parametrize("lag", [1, 3])
+def test_two_shards_block_each_other_and_run_the_same_every_time(tmp_path: Path, lag: int) -> None:
+    xs = _head_on_in_two_shards(tmp_path / "a", lag)
     assert xs[-1][0] > xs[0][0] + 500 and xs[-1][1] < xs[0][1] - 500, "they did not drive"
     gaps = [(xb - FRONT) - (xa + FRONT) for xa, xb in xs]
     assert min(gaps) > -40, "alpha's front passed bravo's"
     assert gaps[-1] < 900 and abs(gaps[-1] - gaps[-50]) < 1, "not held back in front of each other"
-    again = _head_on_in_two_shards(tmp_path / "b")
+    again = _head_on_in_two_shards(tmp_path / "b", lag)
     assert again == xs  # deterministic: same seeds, same telegrams at the same ticks
 
 
