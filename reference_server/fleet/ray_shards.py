@@ -13,9 +13,11 @@ Rules (the shards' rules, the lag and the snapshots: reference_server/fleet/shar
   peers' (``shards.Exchange``).
 - The driver logs "server started at port N" for every port and "platform NAME at HOST:PORT,PORT on node K
   (NODE_ID)" for every platform, then watches the shards: a shard whose platforms all exited ends normally; a
-  shard whose actor or node dies is LOST: the driver logs "shard K on node K lost (...): platforms A, B stopped
-  serving" and tells the others to drop its bodies; the others keep serving. The driver exits when no shard is
-  left (status 0; 1 when one was lost) or on SIGINT/SIGTERM (it stops every shard, status 0).
+  shard whose actor or node dies (its ``wait`` fails and it does not answer a probe within ``ANSWER_TIMEOUT``:
+  Ray reports a killed node's actors as unavailable first) is LOST: the driver logs "shard K on node K lost
+  (...): platforms A, B stopped serving" and tells the others to drop its bodies; the others keep serving. The
+  driver exits when no shard is left (status 0; 1 when one was lost) or on SIGINT/SIGTERM (it stops every
+  shard, status 0).
 - Ray is imported here only, and this module only under ``--ray``: without the extra the user gets one line.
   Loopback stays loopback: ``RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER=0`` is set (unless set) before Ray is imported,
   or Ray would resolve 127.0.0.1 to this machine's outward address.
@@ -53,6 +55,7 @@ THREADS = 8  # the actor's threads: wait, receive (one per peer at a time), stat
 START_TIMEOUT = 120.0  # s for every shard to build, boot and open its ports
 STOP_GRACE = 10.0  # s the shards have to stop at SIGINT/SIGTERM before they are killed
 WATCH = 0.5  # s between two looks at the shards
+ANSWER_TIMEOUT = 5.0  # s a shard whose wait failed has to answer before it is called lost
 PROBE_TIMEOUT = 5.0  # s for the cluster's GCS port to accept a connection
 
 
@@ -263,11 +266,23 @@ class Driver:
                 try:
                     ray.get(ref)
                     log.info("shard %d on node %d ended: its platforms exited", shard, self.plans[shard].node)
-                except Exception as exc:  # RayActorError, NodeDiedError, ...: the actor or its node died
+                except Exception as exc:  # ActorDiedError, ActorUnavailableError, ...: the actor or its node
+                    if self._answers(shard):  # unreachable for a moment (a loaded node), not gone: watch on
+                        log.warning("shard %d did not answer for a moment (%s); it answers again", shard, exc)
+                        waits[self.actors[shard].wait.remote()] = shard
+                        continue
                     lost += 1
                     self._lost(shard, exc)
         log.info("fleet stopped")
         return 1 if lost else 0
+
+    def _answers(self, shard: int) -> bool:
+        """Whether the shard's actor still answers within ``ANSWER_TIMEOUT``."""
+        try:
+            self.ray.get(self.actors[shard].stats.remote(), timeout=ANSWER_TIMEOUT)
+        except Exception:  # Ray's: dead, unreachable or too slow
+            return False
+        return True
 
     def _lost(self, shard: int, exc: Exception) -> None:
         names = ", ".join(p.name for p in self.plans[shard].platforms)
