@@ -7,8 +7,10 @@ Rules:
   (platform -> tab), one frame per message; text messages are JSON: ``{"op": "open"}`` / ``{"op": "close"}``
   from the tab, events (link.py) to it. ``{"op": "truth", "control": "HOST:PORT"}`` starts the optional
   ground-truth reader of the tab (truth.py).
-- ``GET /api/targets`` lists the known addresses (guide 5.2: "Network.ini"), the default target first;
-  ``POST /api/targets`` with ``{"target": "HOST:PORT"}`` adds one to the file.
+- ``GET /api/targets`` lists the known addresses (guide 5.2: "Network.ini"), the default target first, and the
+  fleet (issue 30: ``pltf gui --target A --target B`` or ``--fleet FILE``) as ``{"name", "target"}`` each, the
+  page's names of its platforms; every platform of the fleet is on the list of targets. ``POST /api/targets``
+  with ``{"target": "HOST:PORT"}`` adds one to the file.
 - Who may come in (doors.py, issue 33): every request passes the Host, Origin and token checks first; a target
   not on the list (targets.py) is refused before any connection attempt; one tab drives, the others watch
   (control.py; ``{"op": "take"}`` is "Take control").
@@ -161,7 +163,8 @@ async def targets(request: web.Request) -> web.Response:
             raise web.HTTPBadRequest(text=f'expected {{"target": "HOST:PORT"}}: {exc}') from None
     default = request.app[CONFIG]["target"]
     known = [default, *(t for t in ini.targets() if t != default)]
-    return web.json_response({"default": default, "targets": known, "any": any_target})
+    fleet = [{"name": name, "target": t} for name, t in request.app[CONFIG]["fleet"]]
+    return web.json_response({"default": default, "targets": known, "any": any_target, "fleet": fleet})
 
 
 async def index(request: web.Request) -> web.StreamResponse:
@@ -185,6 +188,7 @@ def make_app(
     doors: Doors | None = None,
     allowed: TargetList | None = None,
     read_only: bool = False,
+    fleet: tuple[tuple[str, str], ...] = (),
 ) -> web.Application:
     """``doors`` and ``allowed`` (the targets) default to a loopback gateway that connects only to ``target`` and
     the addresses of Network.ini."""
@@ -196,7 +200,7 @@ def make_app(
     if backoff is not None:
         link_options["backoff"] = backoff
     app[LINKS] = {}
-    app[CONFIG] = {"target": target, "ini": ini, "link": link_options, "tabs": 0}
+    app[CONFIG] = {"target": target, "ini": ini, "link": link_options, "tabs": 0, "fleet": fleet}
     app.router.add_get("/", index)
     app.router.add_get("/ws", websocket)
     app.router.add_route("*", "/api/targets", targets)

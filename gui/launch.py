@@ -32,14 +32,15 @@ class GatewayProcess(Launched):
         self,
         ini: Path,
         *,
-        target: str = "127.0.0.1:1",
+        target: str | None = "127.0.0.1:1",
         reply_timeout: float | None = None,
         start_timeout: float = 30.0,
         listen: str = "127.0.0.1:0",
         allow_any_target: bool = True,
         args: tuple[str, ...] = (),
     ) -> None:
-        argv = python("pltf.cli.main", "gui", "--target", target, "--listen", listen, "--network-ini", str(ini))
+        argv = python("pltf.cli.main", "gui", "--listen", listen, "--network-ini", str(ini))
+        argv += ["--target", target] if target is not None else []  # None: `args` name the platforms (--fleet)
         if reply_timeout is not None:
             argv += ["--reply-timeout", f"{reply_timeout:g}"]
         if allow_any_target:

@@ -56,13 +56,18 @@ async def serve(
     open_browser: bool = False,
     reply_timeout: float | None = None,
     options: Options | None = None,
+    fleet: tuple[tuple[str, str], ...] = (),
 ) -> int:
+    """``fleet``: (name, HOST:PORT) of every platform when there are several (issue 30), ``target`` the first."""
     options = options or Options()
     host, port = parse_listen(listen)
     ini = NetworkIni(ini_path or default_path())
     doors = Doors(host, frozenset(options.allow_hosts), options.token_for(host))
-    targets = TargetList(target, ini, frozenset(options.allow_targets), options.allow_any_target)
-    app = make_app(target, ini, reply_timeout=reply_timeout, doors=doors, allowed=targets, read_only=options.read_only)
+    allowed = frozenset(options.allow_targets) | {t for _, t in fleet}  # every platform of the fleet: on the list
+    targets = TargetList(target, ini, allowed, options.allow_any_target)
+    app = make_app(
+        target, ini, reply_timeout=reply_timeout, doors=doors, allowed=targets, read_only=options.read_only, fleet=fleet
+    )
     runner = web.AppRunner(app, access_log=None, handle_signals=False)
     await runner.setup()
     site = web.TCPSite(runner, host, port)
@@ -74,7 +79,7 @@ async def serve(
         return 2
     sockets = getattr(site._server, "sockets", None) or []
     bound = sockets[0].getsockname()[1] if sockets else port
-    url = _url(host, bound, target, doors.token)
+    url = _url(host, bound, [t for _, t in fleet] or [target], doors.token)
     if not (STATIC / "index.html").is_file():
         log.warning("the web application is not built (%s missing): run `make gui`", STATIC / "index.html")
     _warn(host, bound, options, doors)
@@ -91,10 +96,11 @@ async def serve(
     return 0
 
 
-def _url(host: str, port: int, target: str, token: str | None) -> str:
+def _url(host: str, port: int, targets: list[str], token: str | None) -> str:
+    """The page's address: ``?target=A`` (a fleet: ``?target=A&target=B...``, the page opens one session each)."""
     shown = "127.0.0.1" if Doors(host).wildcard else host
     shown = f"[{shown}]" if ":" in shown else shown
-    query = {"target": target, **({"token": token} if token is not None else {})}
+    query = [("target", t) for t in targets] + ([("token", token)] if token is not None else [])
     return f"http://{shown}:{port}/?{urlencode(query, safe=':[]')}"
 
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import asyncio
 import logging
+import sys
 from pathlib import Path
 
 from pltf.cli.options import exit_status, format_host_port, positive, target, target_or_zero
@@ -12,8 +13,25 @@ from pltf.gui.serve import Options, serve
 
 
 def add_gui_arguments(p: argparse.ArgumentParser) -> None:
+    platforms = p.add_mutually_exclusive_group(required=True)
+    platforms.add_argument(
+        "--target",
+        type=target,
+        action="append",
+        metavar="HOST:PORT",
+        help="the platform (one of its two ports); repeated: a fleet, every platform on one map (issue 30)",
+    )
+    platforms.add_argument(
+        "--fleet",
+        type=Path,
+        metavar="FILE",
+        help="the fleet file of `pltf serve --fleet FILE`: each platform's first port on --fleet-host, by its name",
+    )
     p.add_argument(
-        "--target", type=target, required=True, metavar="HOST:PORT", help="the platform (one of its two ports)"
+        "--fleet-host",
+        default="127.0.0.1",
+        metavar="HOST",
+        help="where the fleet of --fleet listens (`pltf serve --host`; default 127.0.0.1)",
     )
     p.add_argument(
         "--listen",
@@ -92,11 +110,40 @@ def add_door_arguments(p: argparse.ArgumentParser) -> None:
     )
 
 
+def fleet_targets(path: Path, host: str) -> tuple[tuple[str, str], ...]:
+    """(name, HOST:PORT) of each platform of a ``pltf serve --fleet`` file: its first port (the GUI holds one of
+    the two, guide 4.2) on ``host``. The file is read by the fleet's own parser (reference_server/fleet/config.py,
+    imported here: the gateway in gui/ may not import the reference server, the import-linter's gui-codec-only)."""
+    from pltf.reference_server.fleet.config import FleetError, load  # only when --fleet is given
+
+    fleet = load(path)  # FleetError: a ValueError with a one-line message naming the file and the platform
+    zero = [p.name for p in fleet.platforms if p.ports[0] == 0]
+    if zero:
+        raise FleetError(
+            f"fleet file {path}: platform {zero[0]!r} has port 0 (any free port): the GUI needs "
+            "the port it took; give its port in the file, or --target HOST:PORT per platform"
+        )
+    return tuple((p.name, format_host_port(host, p.ports[0])) for p in fleet.platforms)
+
+
+def _platforms(args: argparse.Namespace) -> tuple[tuple[str, str], ...]:
+    """(name, target) of every platform; a single --target is named by its address."""
+    if args.fleet is not None:
+        return fleet_targets(args.fleet, args.fleet_host)
+    targets = [format_host_port(*t) for t in args.target]
+    return tuple((t, t) for t in dict.fromkeys(targets))
+
+
 def run_gui(args: argparse.Namespace) -> int:
+    try:
+        platforms = _platforms(args)
+    except ValueError as exc:
+        print(f"pltf gui: error: {exc}", file=sys.stderr)
+        return 2
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)-7s %(message)s")
     return asyncio.run(
         serve(
-            format_host_port(*args.target),
+            platforms[0][1],
             format_host_port(*args.listen),
             args.network_ini,
             args.open,
@@ -109,5 +156,6 @@ def run_gui(args: argparse.Namespace) -> int:
                 no_token=args.no_token,
                 read_only=args.read_only,
             ),
+            fleet=platforms if len(platforms) > 1 else (),
         )
     )
