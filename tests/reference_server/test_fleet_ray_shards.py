@@ -21,6 +21,7 @@ from pltf.reference_server.storage import Storage
 from pltf.reference_server.tasks.local import factory as program_factory
 from pltf.reference_server.world.model import factory as world_factory
 from pltf.spec.codec import REQUESTS as R
+from pltf.spec.codec import decode_frame, encode
 from tests.reference_server.test_fleet import FRONT, HEAD_ON, MODE_VEL
 
 DT = 0.02
@@ -110,12 +111,12 @@ def _shard(tmp: Path, spec_: config.FleetSpec, mine: list[int]) -> Fleet:
     return Fleet(sub, platforms, bodies=Bodies(len(spec_)), indices=mine)
 
 
-def _step(worlds: list[ShardWorld], k: int) -> None:
+def _step(worlds: list[Any], k: int) -> None:
     for w in worlds:
         w.tick(k * DT)
 
 
-def _bring_up(worlds: list[ShardWorld], members: list[Any]) -> int:
+def _bring_up(worlds: list[Any], members: list[Any]) -> int:
     """Both initialised (the boards' self test), velocity mode, Running; the tick reached."""
     for m in members:
         for t in (R.CMD_CONNECT_TO_PLTF(), R.CMD_INIT_PLTF()):
@@ -130,7 +131,51 @@ def _bring_up(worlds: list[ShardWorld], members: list[Any]) -> int:
     return k
 
 
-def _head_on_in_two_shards(tmp: Path, lag: int = 1) -> list[tuple[float, float]]:
+class _OneWorld:
+    """The whole fleet in one process (what ``pltf serve --fleet`` ticks), stepped like a shard."""
+
+    def __init__(self, fleet: Fleet) -> None:
+        self.fleet = fleet
+
+    def tick(self, now: float) -> None:
+        self.fleet.tick(now)
+
+
+def _ask(members: list[Any], now: float) -> list[bytes]:
+    """The bytes a client reads for GET_STATUS and GET_POSITION from each platform at ``now``."""
+    out = []
+    for m in members:
+        for t in (R.CMD_GET_STATUS(), R.CMD_GET_POSITION()):
+            outcome = m.platform.handle(t, now)
+            out.append(outcome.frame if outcome.frame is not None else encode(outcome.reply))
+    return out
+
+
+def _drive(worlds: list[Any], members: list[Any], replies: list[bytes] | None = None) -> list[tuple[float, float]]:
+    first = _bring_up(worlds, members)
+    go = R.CMD_MOVE_VEL(vel_trans=400, vel_rot=0)
+    xs = []
+    for k in range(first + 1, first + 1 + 600):  # 12 s simulated: they meet after ~4 s
+        if k % 5 == 0:
+            for m in members:
+                m.platform.handle(go, k * DT)
+        if replies is not None and k % 25 == 0:
+            replies += _ask(members, k * DT)
+        _step(worlds, k)
+        xs.append((members[0].world.truth[0], members[1].world.truth[0]))
+    return xs
+
+
+def _head_on_in_one_process(tmp: Path, replies: list[bytes] | None = None) -> list[tuple[float, float]]:
+    fleet = _shard(tmp, spec(HEAD_ON), [0, 1])
+    try:
+        fleet.boot(0.0)
+        return _drive([_OneWorld(fleet)], fleet.members, replies)
+    finally:
+        fleet.close()
+
+
+def _head_on_in_two_shards(tmp: Path, lag: int = 1, replies: list[bytes] | None = None) -> list[tuple[float, float]]:
     """alpha in shard 0, bravo in shard 1, stepped in lockstep; alpha's and bravo's true x every tick."""
     s = spec(HEAD_ON)
     fleets = [_shard(tmp, s, [0]), _shard(tmp, s, [1])]
@@ -143,16 +188,7 @@ def _head_on_in_two_shards(tmp: Path, lag: int = 1) -> list[tuple[float, float]]
         for f, w in zip(fleets, worlds, strict=True):
             f.boot(0.0)
             w.publish(0)
-        members = [f.members[0] for f in fleets]
-        first = _bring_up(worlds, members)
-        go = R.CMD_MOVE_VEL(vel_trans=400, vel_rot=0)
-        xs = []
-        for k in range(first + 1, first + 1 + 600):  # 12 s simulated: they meet after ~4 s
-            if k % 5 == 0:
-                for m in members:
-                    m.platform.handle(go, k * DT)
-            _step(worlds, k)
-            xs.append((members[0].world.truth[0], members[1].world.truth[0]))
+        xs = _drive(worlds, [f.members[0] for f in fleets], replies)
         assert exchanges[0].stats.late == 0 and exchanges[1].stats.late == 0
         return xs
     finally:
@@ -193,3 +229,37 @@ def test_what_ray_refuses_is_one_line(
     assert main([*argv, "--data-dir", str(tmp_path / "data")]) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert err[-1] == f"python -m pltf.reference_server: error: {message}", err
+
+
+# what may differ in bravo's replies: what its laser sees of alpha (one period, <= 8 mm, apart), and the
+# localization's estimate that matches those scans (E-FLEET-004)
+SEEN_OF_THE_OTHER = {"scan", "lines", "cov_axis_angle", "cov_x", "cov_y", "cov_xy", "x", "y", "angle"}
+
+
+def _fields(frame: bytes) -> dict[str, Any]:
+    t = decode_frame(frame, "reply")
+    return {n: getattr(t, n) for n in dir(t) if n.islower() and not n.startswith("_") and not callable(getattr(t, n))}
+
+
+def test_two_shards_answer_what_one_process_answers(tmp_path: Path) -> None:
+    """The same telegrams at the same ticks, one process against two shards (lag 1). alpha, ticked first in one
+    process, sees bravo's pose of the period before in both: every GET_STATUS and GET_POSITION reply the same
+    bytes. bravo in one process sees alpha's move of the same period, in a shard that of the period before: its
+    replies differ only in what it sees of alpha and in the estimate built on that, by less than a period's
+    travel. The true trajectories are the same: both stop at the same tick, at the same place."""
+    across: list[bytes] = []
+    alone: list[bytes] = []
+    sharded = _head_on_in_two_shards(tmp_path / "shards", replies=across)
+    one = _head_on_in_one_process(tmp_path / "one", replies=alone)
+    assert len(across) == len(alone) > 80
+    alpha = [k for k in range(len(across)) if k % 4 < 2]  # _ask: alpha's status, position, bravo's status, position
+    assert [k for k in alpha if across[k] != alone[k]] == []
+    for k in range(len(across)):
+        a, b = _fields(across[k]), _fields(alone[k])
+        differ = {n for n in a if a[n] != b[n]}
+        assert differ <= SEEN_OF_THE_OTHER, (k, differ)
+        for n in {"x", "y"} & differ:
+            assert abs(a[n] - b[n]) <= 10, (k, n, a[n], b[n])
+        if "angle" in differ:
+            assert abs(a["angle"] - b["angle"]) < 1e-3, (k, a["angle"], b["angle"])
+    assert sharded == one
