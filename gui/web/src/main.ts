@@ -24,6 +24,8 @@ import { ViewOptions, viewOptionsPanel } from "./panels/viewoptions";
 import { planObstacleSwitch } from "./panels/planobst";
 import { PlatformSession } from "./session/session";
 import { connText } from "./session/connwords";
+import { firstSelected, fleetTargets } from "./session/fleet";
+import { type Fleet, fleetPanel } from "./panels/fleet";
 
 const params = new URLSearchParams(window.location.search);
 // issue 33: the token of the printed URL has become a cookie (gui/doors.py): keep it out of the address bar,
@@ -33,7 +35,12 @@ if (params.has("token")) {
   clean.searchParams.delete("token");
   history.replaceState(null, "", clean);
 }
-const target = params.get("target") ?? localStorage.getItem("pltf.lastTarget") ?? "";
+// issue 30: ?target=A&target=B... is a fleet; the panels' one session talks to the selected platform
+const fleetList = fleetTargets(params);
+const target =
+  fleetList.length > 0
+    ? firstSelected(fleetList, params)
+    : (params.get("target") ?? localStorage.getItem("pltf.lastTarget") ?? "");
 const wsUrl = new URL("ws", window.location.href);
 wsUrl.protocol = wsUrl.protocol === "https:" ? "wss:" : "ws:";
 const session = new PlatformSession(wsUrl.href.split("?")[0], target);
@@ -111,14 +118,18 @@ const menus: Array<[Key, MenuItem[]]> = [
 ];
 
 const header = h("header", { class: "top" }, menubar(menus), controlPanel(session), h("h1", { class: "title" }));
-onLanguage(() => {
+const title = () => {
   header.querySelector("h1")!.textContent = `${t("app.title")} ${session.target}`;
   document.title = t("app.title");
-});
+};
+onLanguage(title);
+const fleet: Fleet | null =
+  fleetList.length > 0 ? fleetPanel(wsUrl.href.split("?")[0], fleetList, target, session, map, title) : null;
 const app = document.getElementById("app")!;
 app.append(
   header,
   operationPanel(session, say),
+  ...(fleet === null ? [] : [fleet.root]),
   h("main", { class: "workspace" }, h("div", { class: "center" }, map.root, motionPanel(session, map, say)), dock.root),
   notice,
   statusBar(session),
@@ -132,7 +143,7 @@ document.addEventListener("keydown", (e) => {
 });
 
 // Exposed for the browser tests and the benchmark (read-only use; the map view's surface: MapDebug in mapview.ts).
-(window as unknown as { pltf: unknown }).pltf = { session, map: map.debug, options, dock };
+(window as unknown as { pltf: unknown }).pltf = { session, map: map.debug, options, dock, fleet };
 
 // The optional ground-truth layer: ?control=HOST:PORT names a reference server's control channel (loopback).
 const control = params.get("control");
@@ -141,6 +152,8 @@ if (control !== null && control !== "") {
 }
 
 if (target !== "") {
-  localStorage.setItem("pltf.lastTarget", target);
+  if (fleet === null) {
+    localStorage.setItem("pltf.lastTarget", target);
+  }
   session.open();
 }

@@ -18,8 +18,9 @@ import type { GetMapReply, GetRoadmapReply, GetStatusReply } from "../pltf";
 import { MapParseError, type MapScene, parseMap, sceneBounds } from "../scene/map";
 import { parseRoadmap } from "../scene/roadmap";
 import type { EditedDocument } from "../session/edited";
+import { bodyAt, type FleetBody } from "../session/fleet";
 import type { PlatformSession } from "../session/session";
-import type { Camera } from "../view/camera";
+import { type Camera, toWorld } from "../view/camera";
 import { liveKey } from "../view/livekey";
 import { MapController, type Tool } from "./map/controller";
 import { LayerCache } from "./map/layercache";
@@ -28,6 +29,9 @@ import { nothingShown } from "./map/shown";
 import type { ViewOptions } from "./viewoptions";
 
 export type { Tool } from "./map/controller";
+
+/** a pointer that moved less than this (px) between down and up clicked */
+const CLICK_PX = 4;
 
 /**
  * The map view as the benchmarks and the browser tests see it (window.pltf.map): read-only state, and the few
@@ -70,6 +74,8 @@ export class MapView {
   private readonly controller: MapController;
   private readonly cache: LayerCache;
   private readonly renderer: MapRenderer;
+  /** a click on a fleet platform's body (issue 30) selects it: panels/fleet.ts sets this */
+  onPick: ((target: string) => void) | null = null;
 
   constructor(
     private readonly session: PlatformSession,
@@ -105,6 +111,7 @@ export class MapView {
     this.renderer = new MapRenderer(this.canvas, summary, truthText, this.shown, options, this.controller, this.cache);
     this.debug = this.debugSurface();
     this.subscribe();
+    this.pickOnClick();
     onLanguage(() => {
       this.renderer.updateSummary();
       this.renderer.showTruth();
@@ -122,6 +129,36 @@ export class MapView {
 
   zoomAll(): void {
     this.controller.zoomAll();
+  }
+
+  /** The fleet's platforms as the map draws them (issue 30; [] for one platform). */
+  setFleet(bodies: FleetBody[]): void {
+    this.shown.fleet = bodies;
+    this.renderer.updateSummary();
+    this.renderer.invalidate();
+  }
+
+  /** A click (no drag) with the pan tool on a platform's body selects it (panels/fleet.ts). */
+  private pickOnClick(): void {
+    let down: [number, number] | null = null;
+    this.canvas.addEventListener("pointerdown", (e) => {
+      down = e.button === 0 ? [e.offsetX, e.offsetY] : null;
+    });
+    this.canvas.addEventListener("pointerup", (e) => {
+      const from = down;
+      down = null;
+      if (from === null || this.onPick === null || this.tool !== "pan" || this.shown.fleet.length === 0) {
+        return;
+      }
+      if (Math.hypot(e.offsetX - from[0], e.offsetY - from[1]) > CLICK_PX) {
+        return; // a drag: the view moved
+      }
+      const [wx, wy] = toWorld(this.controller.cam, e.offsetX, e.offsetY);
+      const hit = bodyAt(this.shown.fleet, wx, wy, this.renderer.bodyRadius);
+      if (hit !== null && !hit.selected) {
+        this.onPick(hit.target);
+      }
+    });
   }
 
   /** guide 5.3: "Used in motion mode Automatic, the platform will move to a specified location." */

@@ -154,6 +154,8 @@ export class PlatformSession {
   };
 
   connected = false;
+  /** GET_MAP and GET_ROADMAP on connecting; false for a fleet's watched platforms (panels/fleet.ts: status only) */
+  fetchDocuments = true;
   private ws: WebSocket | null = null;
   private waiting: Waiting[] = [];
   private sentAt: number[] = [];
@@ -349,7 +351,7 @@ export class PlatformSession {
         p.stop();
       }
     }
-    if (up) {
+    if (up && this.fetchDocuments) {
       this.refreshDocuments();
     } else {
       this.status.last = undefined; // no stale readings after a reconnect

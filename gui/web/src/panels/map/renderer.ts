@@ -10,7 +10,8 @@
 import { type Key, t } from "../../i18n/i18n";
 import { GetStatusReply, type GetPltfParamVecReply } from "../../pltf";
 import { KINDS } from "../../scene/map";
-import { viewBounds } from "../../view/camera";
+import { type FleetBody, fleetData } from "../../session/fleet";
+import { type Camera, toScreen, viewBounds } from "../../view/camera";
 import type { Layers } from "../../view/maprender";
 import {
   drawFlag,
@@ -119,7 +120,7 @@ export class MapRenderer {
   updateSummary(): void {
     const { scene, roadmap } = this.shown;
     if (scene === null) {
-      this.summary.textContent = t("map.none");
+      this.summary.textContent = t("map.none") + this.fleetText();
       return;
     }
     const counts = this.cache.counts;
@@ -130,7 +131,27 @@ export class MapRenderer {
       parts.push(`${t("kind.station")}: ${this.drawn.station ?? 0}/${roadmap.stations.length}`);
       parts.push(`${t("kind.edge")}: ${this.drawn.edge ?? 0}/${roadmap.edges.length}`);
     }
-    this.summary.textContent = `${t("map.summary", { name: scene.name || "-" })} ${parts.join(", ")}`;
+    this.summary.textContent = `${t("map.summary", { name: scene.name || "-" })} ${parts.join(", ")}${this.fleetText()}`;
+  }
+
+  /** The fleet in words (issue 30): ". Platforms: alpha at x 4000 mm, y 10000 mm (selected), ..." */
+  private fleetText(): string {
+    const bodies = this.shown.fleet;
+    if (bodies.length === 0) {
+      return "";
+    }
+    const each = bodies.map((b) => {
+      const at =
+        b.pose === null ? t("fleet.noPose") : t("fleet.at", { x: Math.round(b.pose.x), y: Math.round(b.pose.y) });
+      return `${b.name} ${at}${b.selected ? ` (${t("fleet.selected")})` : ""}`;
+    });
+    return `. ${t("fleet.onMap", { list: each.join(", ") })}`;
+  }
+
+  /** The radius (mm) within which a click hits a platform's body. */
+  get bodyRadius(): number {
+    const f = this.platform;
+    return Math.hypot(Math.max(Math.abs(f.rear), Math.abs(f.front)), f.halfWidth);
   }
 
   /** The true pose beside the estimate and the injected faults, in words (guide units: mm, degrees). */
@@ -209,6 +230,33 @@ export class MapRenderer {
       this.canvas.dataset.flag = `${flag.x},${flag.y},${flag.angle}`;
     }
     hooks?.draw(ctx, c);
+    this.drawFleet(ctx, c, this.shown.fleet);
+  }
+
+  /** The fleet's other platforms in their colours, a name label on each (the selected one is drawn above). */
+  private drawFleet(ctx: CanvasRenderingContext2D, c: Camera, bodies: FleetBody[]): void {
+    if (bodies.length === 0) {
+      delete this.canvas.dataset.fleet;
+      return;
+    }
+    ctx.font = "12px sans-serif";
+    for (const b of bodies) {
+      if (b.pose === null) {
+        continue;
+      }
+      if (!b.selected) {
+        drawPlatform(ctx, c, b.pose, this.platform, b.colour, false);
+      }
+      const [sx, sy] = toScreen(c, b.pose.x, b.pose.y);
+      const label = b.selected ? `▶ ${b.name}` : b.name;
+      ctx.lineWidth = 3;
+      ctx.strokeStyle = "#ffffff";
+      ctx.strokeText(label, sx + 8, sy - 8);
+      ctx.fillStyle = b.colour;
+      ctx.fillText(label, sx + 8, sy - 8);
+    }
+    ctx.lineWidth = 1;
+    this.canvas.dataset.fleet = fleetData(bodies);
   }
 }
 

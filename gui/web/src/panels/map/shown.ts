@@ -7,6 +7,7 @@ import type { GetStatusReply } from "../../pltf";
 import type { Bounds, MapScene } from "../../scene/map";
 import type { Roadmap } from "../../scene/roadmap";
 import type { EditHooks } from "../../session/edited";
+import type { FleetBody } from "../../session/fleet";
 import type { TruthEvent } from "../../session/session";
 
 export interface Shown {
@@ -19,11 +20,13 @@ export interface Shown {
   readonly truth: TruthEvent | null;
   /** set while an editor is open: the view shows its document and hands it the pointer in the tool "edit" */
   readonly hooks: EditHooks | null;
+  /** a fleet's platforms (issue 30), the selected one among them; [] for a single platform */
+  readonly fleet: FleetBody[];
 }
 
 /** The view's own copy, the one it writes. */
 export type ShownState = { -readonly [K in keyof Shown]: Shown[K] };
 
 export function nothingShown(): ShownState {
-  return { scene: null, bounds: null, roadmap: null, status: null, truth: null, hooks: null };
+  return { scene: null, bounds: null, roadmap: null, status: null, truth: null, hooks: null, fleet: [] };
 }

@@ -1,0 +1,167 @@
+/**
+ * The fleet's status lines (issue 30): one line per platform (name, operation state, motion mode, position,
+ * connected or lost), its colour on the map; a click on a line (or on the platform's body on the map) selects it.
+ *
+ * Rules (session/fleet.ts): every platform is watched by a session of its own that reads GET_STATUS only (no
+ * documents, no command); the selected one is also the target of the page's one commanding session, the one
+ * every other panel holds, switched with `PlatformSession.open(target)`: motion, operation, menus and editors
+ * act on it alone, the others are watched. The selection is kept in the address (`?selected=`) over a reload.
+ */
+import { h } from "../dom";
+import { bind, type Key, onLanguage, t } from "../i18n/i18n";
+import type { GetStatusReply } from "../pltf";
+import {
+  type FleetBody,
+  type FleetMember,
+  fleetMembers,
+  type StatusLine,
+  selectedHref,
+  statusLine,
+} from "../session/fleet";
+import { PlatformSession } from "../session/session";
+import type { MapView } from "./mapview";
+import { poseText } from "./statusbar";
+
+/** GET_STATUS of a watched platform, Hz: the map's other bodies need no more (the selected one: 20 Hz) */
+const WATCH_HZ = 5;
+
+interface Watched {
+  member: FleetMember;
+  session: PlatformSession;
+  status: GetStatusReply | null;
+  everConnected: boolean;
+  line: HTMLButtonElement;
+}
+
+export interface Fleet {
+  readonly root: HTMLElement;
+  readonly selected: string;
+  select(target: string): void;
+}
+
+export function fleetPanel(
+  wsUrl: string,
+  targets: string[],
+  selected: string,
+  session: PlatformSession,
+  map: MapView,
+  onSelect: (target: string) => void,
+): Fleet {
+  const list = h("ul", { class: "fleet-lines" });
+  const root = h("section", { class: "fleet" }, list);
+  bind(root, "fleet.title", { text: false });
+  bind(list, "fleet.title", { text: false });
+  let current = selected;
+  const watched: Watched[] = fleetMembers(targets).map((member) => {
+    const line = h("button", { class: "fleet-line", type: "button", "data-target": member.target });
+    line.style.borderLeftColor = member.colour;
+    list.append(h("li", {}, line));
+    const w: Watched = {
+      member,
+      session: new PlatformSession(wsUrl, member.target),
+      status: null,
+      everConnected: false,
+      line,
+    };
+    w.session.fetchDocuments = false;
+    w.session.setPolling("status", true, WATCH_HZ);
+    w.session.status.subscribe((s) => {
+      w.status = s;
+      show(w);
+      drawn();
+    });
+    w.session.conn.subscribe((ev) => {
+      w.everConnected ||= ev.event === "connected";
+      show(w);
+      drawn();
+    });
+    line.addEventListener("click", () => select(member.target));
+    return w;
+  });
+
+  const words = (l: StatusLine, w: Watched): string[] => {
+    const conn = l.connected ? "fleet.connected" : w.everConnected ? "fleet.lost" : "fleet.waiting";
+    if (l.pose === null) {
+      return [l.name, t(conn)];
+    }
+    return [
+      l.name,
+      t(`opstate.${l.operationState}` as Key),
+      t(`mode.${l.motionMode}` as Key),
+      poseText(l.pose[0], l.pose[1], l.pose[2] * 1000),
+      t(conn),
+    ];
+  };
+
+  const show = (w: Watched) => {
+    const l = statusLine(w.member.name, w.session.connected, w.session.connected ? w.status : null);
+    w.line.replaceChildren(...words(l, w).map((text, i) => h("span", { class: i === 0 ? "name" : "part" }, text)));
+    w.line.setAttribute("aria-pressed", String(w.member.target === current));
+    const d = w.line.dataset;
+    d.name = w.member.name;
+    d.connected = String(l.connected);
+    d.operationState = l.operationState === null ? "" : String(l.operationState);
+    d.motionMode = l.motionMode === null ? "" : String(l.motionMode);
+    d.pose = l.pose === null ? "" : l.pose.join(",");
+  };
+
+  const drawn = () => {
+    const bodies: FleetBody[] = watched.map((w) => {
+      const st = w.session.connected ? w.status : null;
+      return {
+        name: w.member.name,
+        target: w.member.target,
+        colour: w.member.colour,
+        selected: w.member.target === current,
+        pose: st === null ? null : { x: st.estX, y: st.estY, angle: st.estAngle / 1000 },
+      };
+    });
+    map.setFleet(bodies);
+  };
+
+  const select = (target: string) => {
+    if (target === current || !targets.includes(target)) {
+      return;
+    }
+    current = target;
+    session.open(target); // the panels' session now talks to this platform alone
+    history.replaceState(null, "", selectedHref(window.location.href, target));
+    watched.forEach(show);
+    drawn();
+    onSelect(target);
+  };
+
+  map.onPick = select;
+  void fleetNames(window.location.href).then((named) => {
+    const names = new Map(named.map((n) => [n.target, n.name]));
+    for (const w of watched) {
+      w.member = { ...w.member, name: names.get(w.member.target) ?? w.member.name };
+      show(w);
+    }
+    drawn();
+  });
+  onLanguage(() => watched.forEach(show));
+  for (const w of watched) {
+    show(w);
+    w.session.open();
+  }
+  drawn();
+  return {
+    root,
+    get selected() {
+      return current;
+    },
+    select,
+  };
+}
+
+/** Names from the gateway's fleet (`GET /api/targets`: the fleet file's); the addresses stay when it says none. */
+export async function fleetNames(base: string): Promise<Array<{ name: string; target: string }>> {
+  try {
+    const r = await fetch(new URL("api/targets", base));
+    const body = (await r.json()) as { fleet?: Array<{ name: string; target: string }> };
+    return body.fleet ?? [];
+  } catch {
+    return [];
+  }
+}

@@ -1,0 +1,113 @@
+/**
+ * The fleet (issue 30: `pltf gui --target A --target B ...` or `--fleet FILE`): which platforms the page shows,
+ * their colours and names, which one is selected, what each status line says, and which body a click on the map
+ * hits. Pure functions and plain data; the sessions and the list live in panels/fleet.ts.
+ *
+ * Rules:
+ * - The page's address lists the platforms (`?target=A&target=B...`, as `pltf gui` prints it); the first is
+ *   selected at first, `?selected=HOST:PORT` selects another. One target (or none) is no fleet: the page is the
+ *   single-platform GUI it always was.
+ * - A name comes from the gateway (`GET /api/targets`: the fleet file's names); without one the address names it.
+ * - Colours are a fixed table, taken in the order of the address (the same platform, the same colour, on every
+ *   reload); past its end they repeat.
+ * - Only the selected platform is commanded: the one session the panels hold is switched to it
+ *   (`PlatformSession.open(target)`), the others are only watched (GET_STATUS).
+ */
+import type { GetStatusReply } from "../pltf";
+
+/** Distinct on the map's white and grey (Okabe-Ito, without yellow): blue, vermilion, green, purple, ... */
+export const FLEET_COLOURS = ["#0072b2", "#d55e00", "#009e73", "#cc79a7", "#e69f00", "#56b4e9", "#000000"];
+
+export interface FleetMember {
+  target: string;
+  name: string;
+  colour: string;
+}
+
+/** What the map draws of one platform: its pose (mm, mm, degrees) when known. */
+export interface FleetBody {
+  name: string;
+  target: string;
+  colour: string;
+  selected: boolean;
+  pose: { x: number; y: number; angle: number } | null;
+}
+
+/** The platforms the address lists, in order, each once; [] when it lists fewer than two (no fleet). */
+export function fleetTargets(params: URLSearchParams): string[] {
+  const targets = [...new Set(params.getAll("target").filter((t) => t !== ""))];
+  return targets.length > 1 ? targets : [];
+}
+
+/** The platform selected at first: `?selected=` when it is one of them, else the first. */
+export function firstSelected(targets: string[], params: URLSearchParams): string {
+  const wanted = params.get("selected");
+  return wanted !== null && targets.includes(wanted) ? wanted : (targets[0] ?? "");
+}
+
+/** The members: names from the gateway's fleet (`/api/targets`), else the address; colours in order. */
+export function fleetMembers(targets: string[], named: Array<{ name: string; target: string }> = []): FleetMember[] {
+  const names = new Map(named.map((n) => [n.target, n.name]));
+  return targets.map((target, i) => ({
+    target,
+    name: names.get(target) ?? target,
+    colour: FLEET_COLOURS[i % FLEET_COLOURS.length],
+  }));
+}
+
+/** The parts of a status line (guide 6.4 CMD_GET_STATUS): worded by the panel, read as data by the tests. */
+export interface StatusLine {
+  name: string;
+  connected: boolean;
+  operationState: number | null;
+  motionMode: number | null;
+  /** x mm, y mm, degrees */
+  pose: [number, number, number] | null;
+}
+
+export function statusLine(name: string, connected: boolean, s: GetStatusReply | null): StatusLine {
+  if (!connected || s === null) {
+    return { name, connected, operationState: null, motionMode: null, pose: null };
+  }
+  return {
+    name,
+    connected,
+    operationState: s.operationState,
+    motionMode: s.motionMode,
+    pose: [s.estX, s.estY, s.estAngle / 1000],
+  };
+}
+
+/** The body under a world point (mm): the nearest whose centre lies within `radius` mm (a tie: the first), or null. */
+export function bodyAt(bodies: FleetBody[], x: number, y: number, radius: number): FleetBody | null {
+  let best: FleetBody | null = null;
+  let bestD = radius;
+  for (const b of bodies) {
+    if (b.pose === null) {
+      continue;
+    }
+    const d = Math.hypot(b.pose.x - x, b.pose.y - y);
+    if (d < bestD || (best === null && d === bestD)) {
+      best = b;
+      bestD = d;
+    }
+  }
+  return best;
+}
+
+/** The canvas's `data-fleet`: one `name@x,y,angle` (or `name@-`: pose unknown) per body, `*` before the selected. */
+export function fleetData(bodies: FleetBody[]): string {
+  return bodies
+    .map((b) => {
+      const at = b.pose === null ? "-" : `${Math.round(b.pose.x)},${Math.round(b.pose.y)},${b.pose.angle.toFixed(1)}`;
+      return `${b.selected ? "*" : ""}${b.name}@${at}`;
+    })
+    .join(";");
+}
+
+/** The page's address with the platform `target` selected (kept over a reload). */
+export function selectedHref(href: string, target: string): string {
+  const url = new URL(href);
+  url.searchParams.set("selected", target);
+  return url.href;
+}
