@@ -130,7 +130,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "--ray",
         default=None,
         metavar="ADDRESS|auto",
-        help="with --fleet FILE: serve the fleet as shards on a Ray cluster (one shard per node; a platform's 'node' "
+        help="with --fleet: serve the fleet as shards on a Ray cluster (one shard per node; a platform's 'node' "
         "in the file picks its node, else round-robin); needs the ray extra",
     )
     p.add_argument(

@@ -110,13 +110,15 @@ class Fleet:
         for m in self.members:
             m.world.attach(self.bodies.member(m.index))
 
-    def _free_places(self) -> list[Pose]:
+    def _free_places(self, count: int | None = None) -> list[Pose]:
+        """``count`` (default: one per member) free places of the first member's map, stations first."""
         first = self.members[0]
         world, roadmap = first.world, first.platform.roadmap
         stations = [] if roadmap is None else [tuple(st.frame) for st in roadmap.stations.values()]
         geometry = world.geometry
         assert geometry is not None, "a fleet needs a map"
-        return free_places(geometry, stations, world.footprint.radius, len(self.members))  # type: ignore[arg-type]
+        wanted = len(self.members) if count is None else count
+        return free_places(geometry, stations, world.footprint.radius, wanted)  # type: ignore[arg-type]
 
     def retire(self, member: Member) -> None:
         if member in self.live:

@@ -343,10 +343,30 @@ def settled(spec: FleetSpec, args: argparse.Namespace) -> FleetSpec:
     return replace(spec, platforms=platforms)
 
 
+def placed(spec: FleetSpec, args: argparse.Namespace) -> FleetSpec:
+    """``--fleet N``: the poses chosen here, at free places of the first platform's map (as one process chooses
+    them after its boot), so that every shard knows them before it starts."""
+    if spec.placed:
+        return spec
+    from pltf.reference_server.fleet.cli import build_platforms
+
+    first = FleetSpec(spec.platforms[:1])
+    probe = argparse.Namespace(**{**vars(args), "no_hardware": True})
+    fleet = Fleet(first, build_platforms(first, probe))
+    try:
+        fleet.boot(0.0)
+        poses = fleet._free_places(len(spec.platforms))
+    finally:
+        fleet.close()
+    return FleetSpec(tuple(replace(p, pose=pose) for p, pose in zip(spec.platforms, poses, strict=True)))
+
+
 def run(spec: FleetSpec, args: argparse.Namespace, prog: str) -> int:
-    """``pltf serve --fleet FILE --ray ADDRESS``: user errors are one line and status 2, as ``pltf serve``'s."""
-    if not spec.placed:
-        print(f"{prog}: error: --ray needs a fleet file (the platforms' poses), not --fleet N", file=sys.stderr)
+    """``pltf serve --fleet FILE|N --ray ADDRESS``: user errors are one line and status 2, as ``pltf serve``'s."""
+    try:
+        spec = placed(spec, args)
+    except FleetError as exc:
+        print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2
     try:
         driver = Driver(settled(spec, args), args)

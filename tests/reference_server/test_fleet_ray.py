@@ -24,7 +24,7 @@ import pytest
 from pltf.spec.codec import REQUESTS as R
 from tests.ray_cluster import NODE_ARGS, ray_cluster, ray_or_skip  # noqa: F401  (the fixture)
 from tests.reference_server.conftest import Client
-from tests.reference_server.test_fleet import FRONT, OP_RUNNING, ahead, bring_up, front_echo, wait
+from tests.reference_server.test_fleet import FRONT, OP_NOT_INIT, OP_RUNNING, ahead, bring_up, front_echo, wait
 
 pytestmark = pytest.mark.ray
 
@@ -48,8 +48,10 @@ class Served:
     """``pltf serve --fleet FILE [--ray ADDRESS]`` in a child process; its stderr read in a thread."""
 
     def __init__(self, tmp: Path, fleet: str, ray: str | None, *extra: str) -> None:
-        (tmp / "fleet.yaml").write_text(fleet, encoding="utf-8")
-        cmd = [sys.executable, "-m", "pltf.reference_server", "--fleet", str(tmp / "fleet.yaml")]
+        if not fleet.isdigit():  # a count: --fleet N
+            (tmp / "fleet.yaml").write_text(fleet, encoding="utf-8")
+        where = fleet if fleet.isdigit() else str(tmp / "fleet.yaml")
+        cmd = [sys.executable, "-m", "pltf.reference_server", "--fleet", where, "--ports", "0,0"]
         cmd += ["--data-dir", str(tmp / "data"), "--time-scale", TIME_SCALE, *extra]
         if ray is not None:
             cmd += ["--ray", ray]
@@ -209,6 +211,18 @@ def test_killing_a_node_takes_only_its_platforms(cluster: Any, tmp_path: Path, s
             p0 = c.request(R.CMD_GET_POSITION())
             assert p0 is not None
     assert run.proc.poll() is None, run.text()
+    assert run.stop() == 0
+
+
+def test_a_count_of_platforms_goes_round_robin(cluster: Any, tmp_path: Path, served: list[Served]) -> None:
+    run = Served(tmp_path, "2", cluster.address)
+    served.append(run)
+    ports = run.platforms(["p01", "p02"])
+    assert (ports["p01"][2], ports["p02"][2]) == (0, 1)
+    for name in ports:
+        with Client(ports[name][0]) as c:
+            st = c.status()
+            assert st.operation_state == OP_NOT_INIT, f"{name}: {st.operation_state}"  # as booted
     assert run.stop() == 0
 
 

@@ -216,7 +216,6 @@ def test_two_shards_block_each_other_and_run_the_same_every_time(tmp_path: Path,
             "--shared-map hands a map on within one process; not with --ray",
         ),
         (["--fleet", "FILE", "--ray", "auto", "--ray-lag", "0"], "--ray-lag must be at least 1 (period)"),
-        (["--fleet", "3", "--ray", "auto"], "--ray needs a fleet file (the platforms' poses), not --fleet N"),
     ],
 )
 def test_what_ray_refuses_is_one_line(
