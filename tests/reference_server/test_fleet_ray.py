@@ -3,7 +3,9 @@
 Each test runs the real command line in a child process against the module's cluster (tests/ray_cluster.py, every
 node on 127.0.0.1) and looks at what a user sees: the CLI's lines, and the platforms' replies over TCP
 (GET_STATUS, GET_POSITION). The same head-on scenario runs in one process (``pltf serve --fleet FILE``) for the
-comparison.
+comparison of what is deterministic over TCP (parameters, what each sees at the start, held back Running with the
+other in its scan and echo); the exact mm and noise depend on the tick each telegram lands on, i.e. on wall-clock
+timing in both runs. The reply-by-reply comparison at the same ticks is test_fleet_ray_shards.py's (sans-IO).
 """
 
 from __future__ import annotations
