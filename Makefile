@@ -23,7 +23,7 @@ GUI_SOURCES := $(shell find $(GUI_WEB)/src -type f 2>/dev/null) $(GUI_WEB)/index
 # Python imports. With the marker mypy verifies the module path and picks errata.py as Python does.
 NSTREE := $(VENV)/namespace/pltf
 NSLINKS := spec:spec client:clients/pltf_client reference_server:reference_server fake_hardware:fake_hardware \
-	conformance_tests:conformance_tests fuzz:fuzz stubgen:clients/stubgen cli:pltf_cli fixtures:fixtures gui:gui zoo:zoo proxy:proxy
+	conformance_tests:conformance_tests fuzz:fuzz stubgen:clients/stubgen cli:pltf_cli fixtures:fixtures gui:gui zoo:zoo proxy:proxy harness:harness
 
 $(STAMP): pyproject.toml setup.py spec/pyproject.toml clients/pyproject.toml $(wildcard reference_server/world/*.c) $(wildcard proxy/*.c)
 	@test -x $(BIN)/python || $(PY) -m venv $(VENV)

@@ -31,6 +31,7 @@ FOLDERS = {
     "pltf.gui": "gui",
     "pltf.zoo": "zoo",
     "pltf.proxy": "proxy",
+    "pltf.harness": "harness",
 }
 
 

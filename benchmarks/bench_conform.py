@@ -17,7 +17,7 @@ from benchmarks.harness import Config, Row, Target, benchmark, make_row
 from pltf.conformance_tests.catalogue import Tier, load_all, select
 from pltf.conformance_tests.context import Config as SuiteConfig
 from pltf.conformance_tests.runner import Runner
-from pltf.zoo import launch
+from pltf.harness import launch
 
 TIME_SCALE = 10.0
 TARGET_S = 60.0

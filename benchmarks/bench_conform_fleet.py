@@ -21,7 +21,7 @@ from collections.abc import Callable
 from benchmarks.harness import Config, Row, benchmark, make_row
 from pltf.conformance_tests.catalogue import Tier, load_all, select
 from pltf.conformance_tests.fleet import FleetOptions, FleetTarget, run_local, run_target
-from pltf.zoo import launch
+from pltf.harness import launch
 
 TIME_SCALE = 10.0
 REPEATS = 3

@@ -64,8 +64,9 @@ from benchmarks.proc_cpu import group_cpu, pgid_of
 from pltf.fuzz.engine import Campaign, Options
 from pltf.fuzz.options import Stats
 from pltf.fuzz.schedule import BIG_SHARE
+from pltf.harness.launch import Launcher
+from pltf.harness.ports import free_ports
 from pltf.spec.model import FieldDef, load_telegrams
-from pltf.zoo.launch import Launcher, free_ports
 
 OURS = "pltf fuzz"
 OURS_PLAIN = "pltf fuzz, no pipelining"

@@ -36,7 +36,8 @@ from benchmarks.proc_cpu import process_cpu
 from pltf.fuzz.engine import Campaign, Options
 from pltf.fuzz.options import Stats
 from pltf.fuzz.parallel import LocalCampaign
-from pltf.zoo.launch import REPO, free_ports
+from pltf.harness.launch import REPO
+from pltf.harness.ports import free_ports
 
 # a worker reads its target's ports from its "server started at port N" lines, which --log-level ERROR hides: the
 # scaling runs (ours and boofuzz's alike) use the server at its default level

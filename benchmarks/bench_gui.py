@@ -39,9 +39,9 @@ from benchmarks.harness import Config, Row, Target, benchmark, make_row
 from benchmarks.proc_cpu import process_cpu
 from pltf.client import MotionMode, OperationState, PlatformClient
 from pltf.gui.launch import GatewayProcess
+from pltf.harness import launch
 from pltf.spec.codec import REPLIES, REQUESTS, TelegramDecoder, build, encode
 from pltf.spec.telegram import user_fields
-from pltf.zoo import launch
 
 ROOT = Path(__file__).resolve().parents[1]
 CHROMIUM = "/usr/bin/chromium"

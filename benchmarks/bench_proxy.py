@@ -34,7 +34,7 @@ from pathlib import Path
 from typing import Any
 
 from benchmarks.harness import Config, Row, Target, benchmark, make_row
-from pltf.fuzz.pcapng import TcpFlow, enhanced_packet, file_header
+from pltf.harness.pcapng import TcpFlow, enhanced_packet, file_header
 from pltf.proxy.dissector import OUTPUT as DISSECTOR
 from pltf.spec.codec import REPLIES, REQUESTS, decode_frame, encode
 

@@ -1,7 +1,7 @@
 """CPU seconds of a process group, read from /proc: what a benchmark's target spent while a subject drove it.
 
 Rules:
-- A target started by ``pltf.zoo.launch`` runs in a process group of its own (a zoo member and the server behind
+- A target started by ``pltf.harness.launch`` runs in a process group of its own (a zoo member and the server behind
   it are two processes of one group), so the group is what "the target" costs.
 - Only live processes count: read the group before the target is stopped. utime + stime of each, in clock ticks
   (``os.sysconf("SC_CLK_TCK")``), so a figure is good to 10 ms; compare readings seconds apart, not milliseconds.

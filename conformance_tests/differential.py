@@ -30,10 +30,10 @@ from pltf.conformance_tests.chart import St
 from pltf.conformance_tests.context import CaseContext, Config, Target
 from pltf.conformance_tests.outcome import Outcome, Unreachable
 from pltf.conformance_tests.reports.differential import Differential, print_differential
+from pltf.harness import launch
 from pltf.spec.model import enum_classes
 from pltf.spec.telegram import Telegram
 from pltf.spec.volatile import rule, values_differ, volatile
-from pltf.zoo import launch
 
 __all__ = [
     "Diff",

@@ -38,7 +38,6 @@ from pltf.fuzz.corpus import Corpus
 from pltf.fuzz.findings import FindingWriter
 from pltf.fuzz.knowledge import Knowledge
 from pltf.fuzz.lanes import DONE, STOPPED, InFlight, Lanes
-from pltf.fuzz.launch import Launcher
 from pltf.fuzz.options import Options, Stats
 from pltf.fuzz.pace import Pace
 from pltf.fuzz.prefetch import Prefetcher
@@ -47,6 +46,7 @@ from pltf.fuzz.schedule import BIG_CASE, Scheduler
 from pltf.fuzz.trial import Trial
 from pltf.fuzz.unit import Unit, rarest, window_units
 from pltf.fuzz.verdict import HOW, NEEDED, REPLAYS, TIMED_OUT, Verdict, confirm, confirmed, patient
+from pltf.harness.launch import Launcher
 
 WINDOW = 256  # cases drawn at a time
 MEASURE = 6  # status-only clients per port at the start: does it answer, what does a connection cost

@@ -31,12 +31,12 @@ from pathlib import Path
 from typing import Any
 
 from pltf.fuzz.engine import HarnessError
-from pltf.fuzz.launch import START_TIMEOUT
 from pltf.fuzz.options import Options
 from pltf.fuzz.parallel_store import Store
 from pltf.fuzz.parallel_view import CampaignView
 from pltf.fuzz.parallel_worker import run_worker, worker_seed
 from pltf.fuzz.preludes import StatePlan
+from pltf.harness.launch import START_TIMEOUT
 
 STOP_GRACE = 2.0  # s past a worker's own end (its --duration from its target's start) before it is told to stop
 CUT_GRACE = 3.0  # s the workers get to end once --max-findings were kept (a minimisation then is in vain)

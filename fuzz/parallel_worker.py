@@ -27,9 +27,9 @@ from pltf.fuzz.case import Case
 from pltf.fuzz.corpus import MAX_CASE_BYTES, MAX_CASES, Corpus
 from pltf.fuzz.engine import Campaign, HarnessError
 from pltf.fuzz.knowledge import Knowledge
-from pltf.fuzz.launch import LaunchError
 from pltf.fuzz.options import Options, Stats
 from pltf.fuzz.unit import Unit
+from pltf.harness.launch import LaunchError
 
 SEED_MIN = 9  # bytes of each frame of an imported input at least: header, length and id (guide 6.2)
 SYNC_EVERY = 0.5  # s between exchanges with the driver

@@ -12,9 +12,9 @@ import re
 from pathlib import Path
 from typing import Any
 
-from pltf.fuzz.pcapng import Conversation, write_pcapng
 from pltf.fuzz.target import LEAD, Outcome, Session
 from pltf.fuzz.wire import split_frames
+from pltf.harness.pcapng import Conversation, write_pcapng
 from pltf.spec import errors
 from pltf.spec.codec import REQUESTS
 

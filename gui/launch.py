@@ -2,7 +2,7 @@
 (tests/gui/conftest.py) and the benchmarks (benchmarks/bench_gui.py).
 
 Rules:
-- The process is a ``pltf.zoo.launch.Launched``: its own session, ended with whatever it started, SIGTERM when
+- The process is a ``pltf.harness.launch.Launched``: its own session, ended with whatever it started, SIGTERM when
   its harness dies, and its stdout and stderr in a log FILE. Never a pipe: the gateway logs a line per connection
   event, and a pipe nobody reads fills at 64 KB; the next log call then blocks the gateway's one thread and every
   viewer with it (the stall of the whole tests/gui run, session gui19b; tests/gui/test_gateway.py).
@@ -20,7 +20,7 @@ import time
 from pathlib import Path
 from urllib.parse import parse_qs, urlsplit
 
-from pltf.zoo.launch import REPO, Launched, LaunchError, python
+from pltf.harness.launch import REPO, Launched, LaunchError, python
 
 SERVING = re.compile(r"gui serving at (http://[^/\s]+)/(\S*)")
 

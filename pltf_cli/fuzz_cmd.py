@@ -156,7 +156,7 @@ def run_fuzz(args: argparse.Namespace) -> int:
 
     from pltf.fuzz.engine import Campaign, HarnessError, Options
     from pltf.fuzz.view import LiveView
-    from pltf.zoo.launch import LaunchError
+    from pltf.harness.launch import LaunchError
 
     opts = Options(
         host=host,
@@ -207,7 +207,7 @@ def _parallel(args: argparse.Namespace, opts: Any) -> int:
     from pltf.fuzz.engine import HarnessError
     from pltf.fuzz.parallel import LocalCampaign
     from pltf.fuzz.view import LiveView
-    from pltf.zoo.launch import LaunchError
+    from pltf.harness.launch import LaunchError
 
     title = f"pltf fuzz --jobs {args.jobs}" + (f" --ray {args.ray}" if args.ray else "")
     try:

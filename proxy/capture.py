@@ -1,5 +1,5 @@
 """The proxy's pcapng recording: each proxied connection as one TCP conversation between the client and the
-target, written packet by packet as the bytes pass (fuzz/pcapng.py builds the packets).
+target, written packet by packet as the bytes pass (harness/pcapng.py builds the packets).
 
 Rules: a segment is what one read returned, so the file shows how the bytes were really cut (telegrams split
 across segments, several in one); each conversation gets its handshake when it opens and a FIN per direction
@@ -15,7 +15,7 @@ import itertools
 from pathlib import Path
 from typing import IO
 
-from pltf.fuzz.pcapng import CLIENT_IP, TcpFlow, enhanced_packet, file_header
+from pltf.harness.pcapng import CLIENT_IP, TcpFlow, enhanced_packet, file_header
 
 
 def ipv4(host: str, default: bytes = CLIENT_IP) -> bytes:

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from pltf.zoo.launch import emulator_binary, why_no_emulator
+from pltf.harness.launch import emulator_binary, why_no_emulator
 
 REQUIRE = "PLTF_REQUIRE_EMULATOR"
 

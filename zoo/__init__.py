@@ -1,2 +1,2 @@
-"""A zoo of foreign PlatformCtrl targets for the suite, the fuzzer and the benchmarks (issue 17), and the one
-launcher that starts any target on ephemeral ports (launch.py). See zoo/README.md."""
+"""A zoo of foreign PlatformCtrl targets for the suite, the fuzzer and the benchmarks (issue 17). Members are
+started with the toolkit's one launcher, pltf.harness.launch. See zoo/README.md."""

@@ -20,7 +20,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import NoReturn
 
-from pltf.zoo import launch
+from pltf.harness import launch
 from pltf.zoo.bugs import BUGS, Leak
 from pltf.zoo.members import GET_STATUS_ID, MEMBERS, Member, member
 from pltf.zoo.relay import Relay

@@ -6,7 +6,7 @@ Rules:
   client per port. The GUI holds the first port, the patrol the second; the reconnecting client connects to the
   second port too, so the server turns it away (FIN) every few seconds while the patrol drives: a connection's
   whole life (accept, forward, record, turn away, close) in every process, every few seconds.
-- Each part is a ``pltf.zoo.launch.Launched``: its own session, a log FILE (never a pipe), SIGTERM when the
+- Each part is a ``pltf.harness.launch.Launched``: its own session, a log FILE (never a pipe), SIGTERM when the
   harness dies. The browser is the harness's own child (Playwright); ``Parts.processes`` names every pid.
 """
 
@@ -26,7 +26,7 @@ from typing import Any
 
 from benchmarks.soak.procs import cmdline, comm, descendants
 from pltf.gui.launch import GatewayProcess
-from pltf.zoo.launch import REPO, Launched, LaunchError, python, reference
+from pltf.harness.launch import REPO, Launched, LaunchError, python, reference
 
 CHROMIUM = "/usr/bin/chromium"
 CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run", "--disable-background-networking"]

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from benchmarks.soak.procs import peak_rss_mb
-from pltf.zoo.launch import LaunchError, python, reference
+from pltf.harness.launch import LaunchError, python, reference
 
 POLL = 0.2  # s between looks at the replay process
 COUNT = re.compile(r"^(\d+) differences? in \d+ telegram")

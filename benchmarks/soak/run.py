@@ -22,7 +22,7 @@ from typing import Any
 
 from benchmarks.soak import integrity, parts, report, sampling
 from benchmarks.soak.replay import Replayed, replay
-from pltf.zoo.launch import LaunchError
+from pltf.harness.launch import LaunchError
 
 REPLAY_TIMEOUT_PAD = 600.0  # s beyond twice the recorded duration over the replay's time scale
 

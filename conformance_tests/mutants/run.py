@@ -19,7 +19,7 @@ from pltf.conformance_tests.context import Config
 from pltf.conformance_tests.mutants.catalogue import MUTANTS, Mutant
 from pltf.conformance_tests.mutants.proxy import FrameProxy
 from pltf.conformance_tests.runner import CaseResult, Runner
-from pltf.zoo import launch
+from pltf.harness import launch
 
 KILLED = (Verdict.FAIL, Verdict.NON_STRICT)
 

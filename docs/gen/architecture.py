@@ -36,10 +36,11 @@ PARTS: dict[str, tuple[str, str]] = {
     "pltf.fuzz": ("fuzz/", "the protocol fuzzer: cases, verdicts, minimised reproducers"),
     "pltf.proxy": ("proxy/", "the recording proxy, replay, and the Wireshark dissector generated from spec/"),
     "pltf.gui": ("gui/", "the browser GUI's Python side: the gateway holding the one platform connection"),
-    "pltf.zoo": ("zoo/", "foreign targets (members with planted bugs) and the launcher every tool starts targets with"),
+    "pltf.zoo": ("zoo/", "foreign targets: members with planted bugs in front of the reference server or the emulator"),
     "pltf.stubgen": ("clients/stubgen/", "the client generator for C++, Java, TypeScript, Go, Rust, Python"),
     "pltf.client": ("clients/pltf_client/", "the Python client library (blocking and asyncio)"),
     "pltf.fake_hardware": ("fake_hardware/", "virtual CAN boards (python-can) and the serial laser scanner"),
+    "pltf.harness": ("harness/", "what the tools' harnesses share: the target launcher, the pcapng writer, free ports"),
     "pltf.fixtures": ("fixtures/", "maps, roadmaps, programs, invalid documents, byte-exact test vectors"),
     "pltf.spec": ("spec/", "the protocol as data and the sans-IO codec built from it: the single source of truth"),
 }

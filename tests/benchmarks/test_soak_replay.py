@@ -19,7 +19,7 @@ from benchmarks.soak import integrity, report
 from benchmarks.soak.parts import Plain, ProxyProcess
 from benchmarks.soak.replay import Replayed, replay
 from benchmarks.soak.run import Outcome, options
-from pltf.zoo.launch import REPO, python, reference
+from pltf.harness.launch import REPO, python, reference
 
 TIME_SCALE = 10.0
 RECORD_S = 6.0

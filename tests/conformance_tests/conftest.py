@@ -7,7 +7,7 @@ from collections.abc import Iterator
 import pytest
 
 from pltf.conformance_tests.context import Config
-from pltf.zoo import launch
+from pltf.harness import launch
 from tests.conformance_tests.fakes import TinyTarget
 
 TIME_SCALE = 10.0

@@ -19,12 +19,12 @@ from pltf.conformance_tests import reported
 from pltf.conformance_tests.catalogue import Tier, Verdict, load_all, select
 from pltf.conformance_tests.context import Config
 from pltf.conformance_tests.runner import Runner, RunResult
+from pltf.harness import launch
 from pltf.spec.codec import REPLIES
 from pltf.spec.compiler import WIRE, value_range
 from pltf.spec.model import FieldDef
 from pltf.spec.strategies import _INT_BOUNDS
 from pltf.spec.telegram import user_fields
-from pltf.zoo import launch
 from tests.conformance_tests.conftest import TIME_SCALE
 from tests.conformance_tests.relays import ABSURD, Relay, Rewrite, fields_set
 

@@ -16,7 +16,7 @@ from pltf.conformance_tests.catalogue import Case, Level, Tier, Verdict, load_al
 from pltf.conformance_tests.chart import St
 from pltf.conformance_tests.context import CaseContext, Config
 from pltf.conformance_tests.runner import Runner, RunResult
-from pltf.zoo import launch
+from pltf.harness import launch
 from pltf.zoo.members import MEMBERS
 from tests.conformance_tests.fakes import TinyTarget
 

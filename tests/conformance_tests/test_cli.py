@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from pltf.cli.main import main
-from pltf.zoo import launch
+from pltf.harness import launch
 from tests.conformance_tests.fakes import ScriptedServer
 
 

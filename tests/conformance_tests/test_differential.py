@@ -12,7 +12,7 @@ from pltf.conformance_tests.differential import compare, diff_replies, script, v
 from pltf.conformance_tests.mutants.catalogue import BY_ID
 from pltf.conformance_tests.mutants.proxy import FrameProxy
 from pltf.conformance_tests.readings import canonical
-from pltf.zoo import launch
+from pltf.harness import launch
 from tests.emulator_gate import emulator_or_skip
 
 

@@ -17,7 +17,7 @@ import pytest
 import yaml
 
 from pltf.cli.main import main
-from pltf.zoo import launch
+from pltf.harness import launch
 from tests.emulator_gate import emulator_or_skip
 
 TIME_SCALE = 10.0

@@ -9,7 +9,7 @@ from typing import Any
 
 import pytest
 
-from pltf.zoo import launch
+from pltf.harness import launch
 from tests.conformance_tests.test_fleet import FEW, check_fleet_against_single_runs, four  # noqa: F401 (fixture)
 from tests.ray_cluster import ray_cluster  # noqa: F401 (the fixture)
 

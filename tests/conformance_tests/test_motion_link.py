@@ -22,8 +22,8 @@ from pltf.conformance_tests.mutants.catalogue import DropRequest, RewriteRequest
 from pltf.conformance_tests.mutants.proxy import FrameProxy
 from pltf.conformance_tests.outcome import Fail, Inconclusive
 from pltf.conformance_tests.runner import Runner, RunResult
+from pltf.harness import launch
 from pltf.spec.codec import build, decode_frame, encode, frame
-from pltf.zoo import launch
 from tests.conformance_tests.relays import Relay
 
 SCALE = 10.0

@@ -6,7 +6,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from pltf.zoo import launch
+from pltf.harness import launch
 
 
 def _pytest(tmp_path: Path, port: int, *args: str) -> subprocess.CompletedProcess[str]:

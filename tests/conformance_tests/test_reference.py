@@ -17,7 +17,7 @@ from pltf.conformance_tests.mutants.matrix import NOT_ON_REFERENCE
 from pltf.conformance_tests.reports.files import write_json, write_junit
 from pltf.conformance_tests.reports.html import write_html
 from pltf.conformance_tests.runner import Runner, RunResult
-from pltf.zoo import launch
+from pltf.harness import launch
 
 # Time scale 5, not 10: the timing cases judge windows of simulated time that are wall milliseconds at a high time
 # scale (the velocity watchdog 0.5 s, a program's delay of 1.5 s). Under `make test`'s load (pytest -n 2, a browser

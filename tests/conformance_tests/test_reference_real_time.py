@@ -13,8 +13,8 @@ from pltf.conformance_tests.catalogue import Tier, Verdict, load_all, select
 from pltf.conformance_tests.context import Config
 from pltf.conformance_tests.mutants.matrix import NOT_ON_REFERENCE
 from pltf.conformance_tests.runner import Runner, RunResult
-from pltf.zoo import launch
-from pltf.zoo.launch import Launched
+from pltf.harness import launch
+from pltf.harness.launch import Launched
 
 pytestmark = pytest.mark.slow
 

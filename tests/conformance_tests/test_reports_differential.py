@@ -17,7 +17,7 @@ from pltf.conformance_tests.reports.differential import Differential
 from pltf.conformance_tests.reports.files import write_json, write_junit
 from pltf.conformance_tests.reports.html import write_html
 from pltf.conformance_tests.runner import RunResult
-from pltf.zoo import launch
+from pltf.harness import launch
 from tests.emulator_gate import emulator_or_skip
 
 VEC = "CMD_GET_PLTF_PARAM_VEC()"

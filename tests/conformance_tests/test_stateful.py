@@ -11,7 +11,7 @@ import pytest
 
 from pltf.conformance_tests.context import Config
 from pltf.conformance_tests.stateful import run_stateful
-from pltf.zoo import launch
+from pltf.harness import launch
 
 
 def _replay(script: Path, port: int) -> subprocess.CompletedProcess[str]:

@@ -14,8 +14,8 @@ from pathlib import Path
 
 import pytest
 
+from pltf.harness.launch import Launcher
 from pltf.spec.codec import TelegramDecoder, build, encode
-from pltf.zoo.launch import Launcher
 from tests.emulator_gate import missing
 
 REPO = Path(__file__).resolve().parents[2]

@@ -20,7 +20,7 @@ from pathlib import Path
 import pytest
 
 from pltf.fuzz.engine import Campaign, Options
-from pltf.fuzz.launch import Launcher
+from pltf.harness.launch import Launcher
 from pltf.zoo.members import MEMBERS
 from tests.emulator_gate import emulator_or_skip
 

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from pltf.fuzz.engine import Campaign, Options
-from pltf.zoo.launch import Launcher
+from pltf.harness.launch import Launcher
 
 SERVER = Path(__file__).with_name("fragile_server.py")
 LAUNCH = f"{sys.executable} {SERVER} --ports {{ports}} --bug {{bug}}"

@@ -22,7 +22,7 @@ import pytest
 from pltf.fuzz.case import Case
 from pltf.fuzz.parallel_view import CampaignView
 from pltf.fuzz.parallel_worker import SharedKnowledge, source_of
-from pltf.zoo.launch import Launcher
+from pltf.harness.launch import Launcher
 from tests.emulator_gate import emulator_or_skip
 
 PLTF = str(Path(sys.executable).with_name("pltf"))

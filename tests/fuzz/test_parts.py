@@ -19,10 +19,10 @@ from pltf.fuzz.corpus import Corpus
 from pltf.fuzz.inprocess import InProcessCampaign
 from pltf.fuzz.knowledge import Knowledge
 from pltf.fuzz.minimize import ddmin
-from pltf.fuzz.pcapng import Conversation, write_pcapng
 from pltf.fuzz.preludes import REPORTED, StatePlan, path
 from pltf.fuzz.schedule import BIG_CASE, Scheduler
 from pltf.fuzz.wire import CLOSE, KEEP, PARTIAL, Group, Str, classify, forbidden_ids, frame, frame_lie, pack_fields
+from pltf.harness.pcapng import Conversation, write_pcapng
 from pltf.spec.codec import REQUESTS, decode_frame, encode
 from pltf.spec.documents import validate_document
 
@@ -176,7 +176,7 @@ def test_pcapng_is_well_formed(tmp_path: Path) -> None:
         pos += length
     assert kinds[:2] == [0x0A0D0D0A, 1]
     assert len(packets) == 3 + 1 + 2 + 2  # handshake, request, 70 kB reply in two segments, two FINs
-    from pltf.fuzz.pcapng import _checksum
+    from pltf.harness.pcapng import _checksum
 
     for pkt in packets:
         ip = pkt[14:34]

@@ -16,8 +16,8 @@ from pltf.fuzz.case import Delivery
 from pltf.fuzz.flight import Flight, fly
 from pltf.fuzz.sent import segments
 from pltf.fuzz.target import GET_STATUS, LEAD, Session, play_admitted
+from pltf.harness.launch import Launcher
 from pltf.spec.codec import REQUESTS, encode
-from pltf.zoo.launch import Launcher
 from tests.emulator_gate import emulator_or_skip
 
 CRASH = f"{sys.executable} -m pltf.zoo crash-after-start --serve emulator --ports {{ports}}"

@@ -21,7 +21,7 @@ import pytest
 
 from pltf.client import PlatformClient
 from pltf.gui.launch import GatewayProcess as Gateway
-from pltf.zoo import launch
+from pltf.harness import launch
 
 REPO = Path(__file__).resolve().parents[2]
 CHROMIUM = "/usr/bin/chromium"

@@ -16,7 +16,7 @@ import pytest
 
 from pltf.client import OperationState
 from pltf.gui.launch import GatewayProcess
-from pltf.zoo import launch
+from pltf.harness import launch
 from tests.gui.conftest import VIEWPORT, Platform, expect_text, wait_for
 from tests.gui.fakes import free_port, request, upgrade
 

@@ -22,8 +22,8 @@ import pytest
 from pltf.conformance_tests.catalogue import Case, Tier, Verdict, load_all, select
 from pltf.conformance_tests.context import Config
 from pltf.conformance_tests.runner import Runner
+from pltf.harness import launch
 from pltf.proxy.session import read_session
-from pltf.zoo import launch
 
 TIME_SCALE = 10.0
 LISTENING = re.compile(r"proxy listening at [\d.]+:(\d+)")

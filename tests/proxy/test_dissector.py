@@ -20,7 +20,7 @@ from typing import Any
 import pytest
 
 from pltf.cli.main import main as pltf
-from pltf.fuzz.pcapng import TcpFlow, enhanced_packet, file_header
+from pltf.harness.pcapng import TcpFlow, enhanced_packet, file_header
 from pltf.proxy.dissector import OUTPUT, abbrs, check, field_abbr, render
 from pltf.spec.model import telegram_def
 from tests.proxy.tshark import Shown, expected, run_tshark, shown_value, telegrams
@@ -201,7 +201,7 @@ def test_a_fuzz_finding_opens_with_the_dissector(tmp_path: Path) -> None:
     """The fuzzer writes its findings' exchange.pcapng with fuzz/pcapng.write_pcapng (fuzz/report.py): client
     ports 40000+k against the target's port, whatever that is (Decode As). Its telegrams decode, its garbage is
     marked."""
-    from pltf.fuzz.pcapng import Conversation, write_pcapng
+    from pltf.harness.pcapng import Conversation, write_pcapng
 
     status = bytes.fromhex(next(v["hex"] for v in REPLIES if v["telegram"] == "CMD_GET_STATUS"))
     set_mode = bytes.fromhex("ff01fe02000000050f00000003")

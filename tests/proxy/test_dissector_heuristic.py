@@ -15,9 +15,9 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from pltf.harness import launch
 from pltf.proxy.dissector import OUTPUT, PORTS, field_abbr
 from pltf.spec.codec import REQUESTS, TelegramDecoder, encode
-from pltf.zoo import launch
 from tests.proxy.test_dissector import write_capture
 from tests.proxy.tshark import Shown, run_tshark, shown_value, telegrams
 from tests.proxy.vectors import REPLIES

@@ -27,6 +27,7 @@ from mcap.reader import NonSeekingReader, SeekingReader
 from pltf.cli.main import main as pltf
 from pltf.client import PlatformClient
 from pltf.conformance_tests.readings import canonical
+from pltf.harness import launch
 from pltf.proxy.mcap_export import (
     CHANNELS,
     McapSink,
@@ -42,7 +43,6 @@ from pltf.proxy.session import Session, read_session
 from pltf.proxy.tap import CLOSE, FRAME, OPEN, RAW, Record, Tap
 from pltf.proxy.view import format_record
 from pltf.spec.codec import REPLIES, REQUESTS, encode
-from pltf.zoo import launch
 
 ROOT = Path(__file__).resolve().parents[2]
 READER = ROOT / "tests" / "proxy" / "mcap_reader"

@@ -17,13 +17,13 @@ import pytest
 
 from pltf.cli.main import main as pltf
 from pltf.conformance_tests.readings import canonical
+from pltf.harness import launch
 from pltf.proxy.capture import PcapngWriter
 from pltf.proxy.recorder import Recorder
 from pltf.proxy.replay import Outcome, Script, judge, plan
 from pltf.proxy.session import Route, Session, SessionWriter, read_session
 from pltf.proxy.tap import CLOSE, OPEN, Record, Tap
 from pltf.spec.codec import build, encode
-from pltf.zoo import launch
 from tests.proxy.helpers import ProxyThread
 from tests.proxy.scenarios import all_scenarios
 from tests.proxy.tshark import run_tshark, telegrams

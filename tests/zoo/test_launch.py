@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from pltf.zoo import launch
+from pltf.harness import launch
 from tests.emulator_gate import emulator_or_skip
 
 # a target that starts in milliseconds: two listening ports, the reference server's log line, serves nothing
@@ -98,7 +98,7 @@ def test_a_target_dies_with_the_harness_that_started_it(tmp_path: Path) -> None:
         [
             sys.executable,
             "-c",
-            "import sys,time\nfrom pltf.zoo import launch\n"
+            "import sys,time\nfrom pltf.harness import launch\n"
             "t = launch.Launcher(sys.argv[1], '127.0.0.1', 0, 0); t.start()\n"
             "print(t.pid, t.tmpdir, t._log.name, flush=True); time.sleep(60)",
             tiny(tmp_path),

@@ -17,7 +17,7 @@ from pltf.conformance_tests import pace
 from pltf.conformance_tests.catalogue import Tier, Verdict, load_all, select
 from pltf.conformance_tests.context import Config
 from pltf.conformance_tests.runner import Runner, RunResult
-from pltf.zoo import launch
+from pltf.harness import launch
 from pltf.zoo.members import MEMBERS
 from tests.emulator_gate import emulator_or_skip
 

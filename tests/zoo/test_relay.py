@@ -19,9 +19,9 @@ from pathlib import Path
 
 import pytest
 
+from pltf.harness import launch
 from pltf.spec.codec import TelegramDecoder, build, encode
 from pltf.spec.telegram import Telegram
-from pltf.zoo import launch
 from tests.emulator_gate import emulator_or_skip
 
 STATUS = encode(build("request", "CMD_GET_STATUS"))
