@@ -35,7 +35,7 @@ from typing import Any
 from pltf.fuzz import preludes, profile, safety
 from pltf.fuzz.case import Case
 from pltf.fuzz.corpus import Corpus
-from pltf.fuzz.findings import FindingWriter
+from pltf.fuzz.findings import AtFailure, FindingContext, FindingWriter
 from pltf.fuzz.knowledge import Knowledge
 from pltf.fuzz.lanes import DONE, STOPPED, InFlight, Lanes
 from pltf.fuzz.options import Options, Stats
@@ -93,7 +93,7 @@ class Campaign:
         self.single_telegrams: collections.Counter[str] = collections.Counter()  # singles queued on a dear target
         self.stop = False
         self.coverage: set[tuple[Any, ...]] = set()
-        self.writer = FindingWriter(self, self.corpus.known_findings())
+        self.writer = FindingWriter(FindingContext.of(opts, self.launcher), self.corpus.known_findings())
         self.prefetch: Prefetcher | None = None
         self.trial = Trial()  # fresh connections or the dear way, measured (kept across restarts)
         self.profile: profile.Profile | None = None  # learnt at the first start (``pltf.fuzz.profile``)
@@ -418,9 +418,23 @@ class Campaign:
         )
         self.failure(kind, why, last, True, {"units_sent_last": [u.describe() for u in last[-8:]]})
 
+    def at_failure(self) -> AtFailure:
+        """Where the campaign stands, for the finding writer."""
+        kb, learnt = self.kb, self.stats.profile
+        return AtFailure(
+            index=self.index,
+            state=self.plan.current,
+            operation_state=kb.operation_state,
+            motion_mode=kb.motion_mode,
+            elapsed=self.stats.elapsed,
+            port=self.ports[0],
+            profile=self.profile,
+            learnt=learnt,
+        )
+
     def failure(self, kind: str, reason: str, units: list[Unit], ok: bool, evidence: dict[str, Any]) -> None:
         assert self.lanes is not None
-        finding = self.writer.handle(kind, reason, units, self.lanes.sent(), ok, evidence)
+        finding = self.writer.handle(kind, reason, units, self.lanes.sent(), ok, evidence, self.at_failure())
         if finding is None:
             self.stats.duplicates += 1
         elif finding["confirmed"]:

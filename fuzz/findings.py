@@ -12,6 +12,9 @@ Rules:
   instance dies (``REPEAT_MAX`` rounds, ``REPEAT_SECONDS``): all of them, then the biggest and the busiest alone. ddmin
   (``pltf.fuzz.minimize``) then removes frames across sessions, the lead of each kept: it tells a
   newcomer turned away from one served (``pltf.fuzz.verdict``); every replay waits for the port as the lanes do.
+- The writer reads no campaign: a ``FindingContext`` (frozen) holds what stays for the campaign's life (the options
+  it reads, the launcher of fresh instances), and ``handle`` gets an ``AtFailure`` with where the campaign stands
+  at the failure (case index, state, elapsed time, the target's port and profile), which moves on between calls.
 - The signature (kind and the ids of the minimal frames) deduplicates findings within a run and, through the
   corpus, across resumed runs; a failure whose culprit was seen before is not reproduced again.
 """
@@ -19,7 +22,8 @@ Rules:
 from __future__ import annotations
 
 import time
-from dataclasses import replace
+from dataclasses import dataclass, replace
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from pltf.fuzz import preludes
@@ -32,7 +36,9 @@ from pltf.fuzz.verdict import BAD_REPLY, DROPPED, OK, TIMED_OUT, judge, patient
 from pltf.spec.codec import REQUESTS
 
 if TYPE_CHECKING:
-    from pltf.fuzz.engine import Campaign
+    from pltf.fuzz.options import Options
+    from pltf.fuzz.profile import Profile
+    from pltf.harness.launch import Launcher
 
 REPEAT_MAX = 2000  # rounds of a repeated candidate at most
 REPEAT_SECONDS = 30.0  # s a repeated candidate may take
@@ -54,9 +60,41 @@ def prelude_session(target: preludes.Target) -> Session:
     return Session([LEAD, *preludes.full(target)], sync=True, half_close=True, led=True)
 
 
+@dataclass(frozen=True)
+class FindingContext:
+    """What a FindingWriter reads of its campaign for the campaign's whole life."""
+
+    host: str
+    deadline: float  # s: the campaign's reply deadline (``--deadline``); replays wait ``patient(deadline)``
+    out: Path = Path("findings")
+    minimize_seconds: float = 60.0
+    command: str = "pltf fuzz"  # the command line the description records
+    seed: int = 0
+    launcher: Launcher | None = None  # fresh instances (``--launch``); None: no reproduction, no minimisation
+
+    @classmethod
+    def of(cls, o: Options, launcher: Launcher | None) -> FindingContext:
+        return cls(o.host, o.deadline, o.out, o.minimize_seconds, o.command, o.seed, launcher)
+
+
+@dataclass(frozen=True)
+class AtFailure:
+    """Where the campaign stands when a failure is handled (it moves on between failures)."""
+
+    index: int  # the case index before the failure
+    state: preludes.Target  # the state plan's current target: the prelude of units that name none
+    operation_state: int | None  # as the campaign last knew them (``pltf.fuzz.knowledge``)
+    motion_mode: int | None
+    elapsed: float  # s since the campaign started
+    port: int  # the target's first port now (a restart of a --launch target changes it)
+    profile: Profile | None = None  # what the opening phase learnt: replays adapt their sessions to it
+    learnt: dict[str, Any] | None = None  # the same as the statistics record it, for the description
+
+
 class FindingWriter:
-    def __init__(self, campaign: Campaign, known: set[str]) -> None:
-        self.c = campaign
+    def __init__(self, context: FindingContext, known: set[str]) -> None:
+        self.ctx = context
+        self.profile: Profile | None = None  # the target's, as ``handle`` last got it (``AtFailure.profile``)
         self.signatures: set[str] = set(known)
         self.culprits: set[str] = set()
         self.count = 0
@@ -65,8 +103,7 @@ class FindingWriter:
 
     def adapt(self, session: Session) -> Session:
         """A session as the campaign's target needs it (``pltf.fuzz.profile``)."""
-        profile = getattr(self.c, "profile", None)
-        return profile.adapt(session) if profile is not None else session
+        return self.profile.adapt(session) if self.profile is not None else session
 
     # ------------------------------------------------------------------ replay against a fresh target
     def reproduce(
@@ -89,7 +126,7 @@ class FindingWriter:
         """One fresh instance. Every wait is the campaign's: the patient deadline of its stall replays
         (``pltf.fuzz.verdict.patient``) and, for the probe port, the patience of its liveness: a fresh instance on a
         loaded machine that answers late is slow, not stalled or hung."""
-        launcher, o = self.c.launcher, self.c.o
+        launcher, o = self.ctx.launcher, self.ctx
         assert launcher is not None
         port, second = launcher.start()
         deadline, patience = patient(o.deadline), max(1.0, 2 * o.deadline)
@@ -119,7 +156,7 @@ class FindingWriter:
 
     def _gone(self, second: int, patience: float) -> str | None:
         """None when the probe port still serves us; else dead, hang or deaf."""
-        launcher, o = self.c.launcher, self.c.o
+        launcher, o = self.ctx.launcher, self.ctx
         assert launcher is not None
         if not launcher.alive():
             return "dead"
@@ -144,7 +181,7 @@ class FindingWriter:
                 for k, fr in sorted(keep.items())
             ]
 
-        end = time.monotonic() + self.c.o.minimize_seconds
+        end = time.monotonic() + self.ctx.minimize_seconds
 
         def test(items: list[tuple[int, int]]) -> bool:
             nonlocal tests
@@ -166,17 +203,16 @@ class FindingWriter:
             result = simpler
         return result, tests
 
-    def _fresh(self, kind: str, units: list[Unit], history: list[Session]) -> dict[str, Any]:
-        """Reproduce on fresh instances and minimise; what was found out."""
-        c = self.c
-        sessions_of = [(prelude_session(u.target or c.plan.current), u.session()) for u in units]
+    def _fresh(self, kind: str, units: list[Unit], history: list[Session], state: preludes.Target) -> dict[str, Any]:
+        """Reproduce on fresh instances and minimise; what was found out (``state``: the plan's current target)."""
+        sessions_of = [(prelude_session(u.target or state), u.session()) for u in units]
         candidates = [list(pair) for pair in reversed(sessions_of[-4:])]
         if len(units) > 1:
             candidates.append([sessions_of[-1][0], *(s for _, s in sessions_of)])
         # what both lanes sent lately, in the order it was written (``pltf.fuzz.sent``): a state fed by every
         # connection (a platform has one) may have been reached by the lanes together, in no unit alone
         sent = [history[-RECENT_SENT:], history] if len(history) > RECENT_SENT else [history]
-        candidates += [[prelude_session(c.plan.current), *map(led, h)] for h in sent if h]
+        candidates += [[prelude_session(state), *map(led, h)] for h in sent if h]
         got: dict[str, Any] = {"sessions": None, "repeat": 1, "minimized": False, "tests": 0}
         for candidate in candidates:
             if self.reproduce(candidate)[0] == kind:
@@ -210,29 +246,31 @@ class FindingWriter:
         history: list[Session],
         believed: bool,
         evidence: dict[str, Any],
+        at: AtFailure,
     ) -> dict[str, Any] | None:
         """Write the failure; None for a duplicate. ``believed``: a finding (replays confirmed it, or no port
-        serves us any more); else it goes under ``unconfirmed/``."""
-        c = self.c
+        serves us any more); else it goes under ``unconfirmed/``. ``at``: where the campaign stands."""
+        c, launcher = self.ctx, self.ctx.launcher
         self.used_launcher = False
-        found_after = round(c.stats.elapsed, 1)
+        self.profile = at.profile
+        found_after = round(at.elapsed, 1)
         culprit = units[-1].cases[-1] if units and units[-1].cases else None
         key = f"{kind}:{culprit.telegram if culprit else '-'}:{culprit.origin if culprit else '-'}"
         if believed and key in self.culprits:
             return None
-        target = units[-1].target if units and units[-1].target else c.plan.current
+        target = units[-1].target if units and units[-1].target else at.state
         sessions = [prelude_session(target), *(u.session() for u in units)]
         fresh: dict[str, Any] = {}
-        if c.launcher is not None and believed:
+        if launcher is not None and believed:
             self.used_launcher = True
-            c.launcher.spares = True  # each test of the minimisation on a fresh instance, the next one warming up
+            launcher.spares = True  # each test of the minimisation on a fresh instance, the next one warming up
             try:
-                fresh = self._fresh(kind, units, history)
+                fresh = self._fresh(kind, units, history, at.state)
             finally:
-                c.launcher.no_spares()
+                launcher.no_spares()
             if fresh.get("sessions") is not None:
                 sessions = fresh["sessions"]
-            c.launcher.stop()
+            launcher.stop()
         ids = [f[8] for s in sessions for f in s.frames[int(s.led) :] if len(f) > 8]
         signature = f"{kind}:{','.join(map(str, ids[-8:]))}"
         if believed and signature in self.signatures:
@@ -244,13 +282,13 @@ class FindingWriter:
         last = next((f for s in reversed(sessions) for f in reversed(s.frames[int(s.led) :])), b"")
         called = _telegram(last) if fresh.get("sessions") else culprit.telegram if culprit else "batch"
         name = f"finding-{self.count:03d}-{kind}-{slug(called)}"
-        tail = list(c.launcher.output)[-30:] if c.launcher is not None else []
+        tail = list(launcher.output)[-30:] if launcher is not None else []
         description = {
             "signature": signature,
-            "command": c.o.command,
-            "seed": c.o.seed,
-            "case_index_before": c.index,
-            "state": {"target": list(target), "operation_state": c.kb.operation_state, "motion_mode": c.kb.motion_mode},
+            "command": c.command,
+            "seed": c.seed,
+            "case_index_before": at.index,
+            "state": {"target": list(target), "operation_state": at.operation_state, "motion_mode": at.motion_mode},
             "culprit": culprit.to_json() | {"frames": len(culprit.frames)} if culprit else None,
             "confirmed": believed,
             "found_after_s": found_after,
@@ -260,9 +298,9 @@ class FindingWriter:
             "minimized": fresh.get("minimized", False),
             "minimize_tests": fresh.get("tests", 0),
             "target_output_tail": tail,
-            "target_profile": getattr(c.stats, "profile", None) or None,  # what the opening phase learnt
+            "target_profile": at.learnt or None,  # what the opening phase learnt
         }
-        where = c.o.out if believed else c.o.out / "unconfirmed"
+        where = c.out if believed else c.out / "unconfirmed"
         directory = write_finding(
             where / name,
             kind,
@@ -270,8 +308,8 @@ class FindingWriter:
             [self.adapt(s) for s in sessions],
             description,
             fresh.get("outcomes", []),
-            c.ports[0],
-            c.o.deadline,
+            at.port,
+            c.deadline,
             repeat=fresh.get("repeat", 1),
         )
         return {
@@ -291,4 +329,4 @@ def _telegram(frame: bytes) -> str:
     return t.NAME if t is not None else f"id {frame[8]}" if len(frame) > 8 else "raw"
 
 
-__all__ = ["OK", "FindingWriter", "led", "prelude_session"]
+__all__ = ["OK", "AtFailure", "FindingContext", "FindingWriter", "led", "prelude_session"]

@@ -7,13 +7,14 @@ within the patient deadline of a stall replay (``pltf.fuzz.verdict.patient``). I
 
 from __future__ import annotations
 
-from types import SimpleNamespace
+import json
+from pathlib import Path
 from typing import Any
 
 import pytest
 
 from pltf.fuzz import findings
-from pltf.fuzz.findings import FRESH_TRIES, FindingWriter, prelude_session
+from pltf.fuzz.findings import FRESH_TRIES, AtFailure, FindingContext, FindingWriter, prelude_session
 from pltf.fuzz.target import LEAD, Outcome, Session, session_reply_ids
 from pltf.fuzz.verdict import patient
 
@@ -37,8 +38,8 @@ class FakeLauncher:
 
 
 def writer(launcher: FakeLauncher) -> FindingWriter:
-    campaign: Any = SimpleNamespace(launcher=launcher, o=SimpleNamespace(host="127.0.0.1", deadline=DEADLINE))
-    return FindingWriter(campaign, set())
+    fresh: Any = launcher  # the launcher's start and alive, without processes
+    return FindingWriter(FindingContext("127.0.0.1", DEADLINE, launcher=fresh), set())
 
 
 class SlowTarget:
@@ -100,3 +101,22 @@ def test_an_instance_that_never_serves_the_probe_port_reproduces_nothing(monkeyp
     target = slow(monkeypatch, unserved_starts=FRESH_TRIES)
     assert writer(target.launcher).reproduce(stall_sessions())[0] is None
     assert target.launcher.starts == FRESH_TRIES
+
+
+def test_a_writer_without_a_campaign_writes_what_the_failure_says(tmp_path: Path) -> None:
+    """No campaign and no launcher: a frozen context and where the campaign stood are all it reads. A failure not
+    believed goes under unconfirmed/ with the index, state and time given; the same failure believed is a finding,
+    and again a duplicate (None)."""
+    writer = FindingWriter(FindingContext("127.0.0.1", DEADLINE, out=tmp_path, seed=7, command="pltf fuzz -x"), set())
+    at = AtFailure(index=41, state=("ready", 0), operation_state=2, motion_mode=1, elapsed=12.34, port=PORT)
+    doubt = writer.handle("dead", "it died", [], [], False, {"why": "test"}, at)
+    assert doubt is not None and not doubt["confirmed"] and doubt["found_after_s"] == 12.3
+    assert Path(doubt["dir"]).parent == tmp_path / "unconfirmed"
+    described = json.loads((Path(doubt["dir"]) / "finding.json").read_text())
+    assert (described["case_index_before"], described["seed"], described["command"]) == (41, 7, "pltf fuzz -x")
+    assert described["state"] == {"target": ["ready", 0], "operation_state": 2, "motion_mode": 1}
+    assert described["target_profile"] is None and described["target_output_tail"] == []
+    found = writer.handle("dead", "it died", [], [], True, {}, at)
+    assert found is not None and found["confirmed"] and Path(found["dir"]).parent == tmp_path
+    assert writer.handle("dead", "it died", [], [], True, {}, at) is None  # the same signature: a duplicate
+    assert not writer.used_launcher
