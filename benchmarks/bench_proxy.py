@@ -14,7 +14,7 @@ compiler its rows are left out and the reason printed) and in Python (``forward.
 of the server's second port, as ``pltf proxy`` (recording) is: latency p50 and one-at-a-time rate, no target.
 
 ``proxy.tshark``: a capture of one million telegrams (500,000 GET_POSITION requests and their replies, one TCP
-segment each, written with fuzz/pcapng.py) read by ``tshark`` with the generated dissector (proxy/pltf.lua) and,
+segment each, written with harness/pcapng.py) read by ``tshark`` with the generated dissector (proxy/pltf.lua) and,
 as the baseline, by ``tshark`` without it (TCP only), output to /dev/null. No target: the issue asks how long.
 """
 

@@ -198,7 +198,7 @@ def test_a_malformed_frame_is_marked_not_misdecoded(tmp_path: Path) -> None:
 
 
 def test_a_fuzz_finding_opens_with_the_dissector(tmp_path: Path) -> None:
-    """The fuzzer writes its findings' exchange.pcapng with fuzz/pcapng.write_pcapng (fuzz/report.py): client
+    """The fuzzer writes its findings' exchange.pcapng with harness/pcapng.write_pcapng (fuzz/report.py): client
     ports 40000+k against the target's port, whatever that is (Decode As). Its telegrams decode, its garbage is
     marked."""
     from pltf.harness.pcapng import Conversation, write_pcapng

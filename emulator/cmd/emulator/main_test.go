@@ -30,7 +30,7 @@ func (s *syncBuffer) Write(p []byte) (int, error) {
 }
 func (s *syncBuffer) String() string { s.mu.Lock(); defer s.mu.Unlock(); return s.b.String() }
 
-// the launchers' pattern (conformance_tests/launch.py, fuzz/launch.py)
+// the launcher's pattern (harness/launch.py)
 var started = regexp.MustCompile(`server started at port (\d+)`)
 
 func launch(t *testing.T, args ...string) (ports []string, out *syncBuffer, stop chan os.Signal, code chan int) {
