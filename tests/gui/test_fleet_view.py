@@ -21,7 +21,7 @@ import yaml
 
 from pltf.client import OperationState, PlatformClient
 from pltf.gui.launch import GatewayProcess
-from tests.gui.conftest import aim, expect_text, wait_for
+from tests.gui.conftest import PATIENCE, aim, expect_text, wait_for
 from tests.gui.fakes import Recorder, Tab, run
 from tests.gui.test_app import button, readout
 from tests.reference_server.test_fleet_conformance import FleetProcess
@@ -155,6 +155,8 @@ def test_a_fleet_file_without_its_ports_is_one_line_and_exit_2(tmp_path: Path) -
 
 
 def playwright_expect(locator: Any) -> Any:
+    """Playwright's expect with the browser tests' patience (its own default, 5 s, is short on a loaded machine)."""
     from playwright import sync_api
 
+    sync_api.expect.set_options(timeout=PATIENCE * 1000)
     return sync_api.expect(locator)
