@@ -448,7 +448,7 @@ class CaseContext:
         """Whether polling one request at a time would sample the target less often than every ``gap`` simulated
         s (its measured reply time is longer) while it takes pipelined requests (E-WIRE-008): then a case samples
         at the platform's pace instead (``timeline``; a slow link, issue 17). A fast target is polled as before: a
-        stream of unpaced requests can starve a loaded simulator (motion.hold)."""
+        stream of unpaced requests can starve a loaded simulator (poses.hold)."""
         reply = self.config.reply_time or 0.0
         return self.config.pipeline and reply * self.config.time_scale > gap
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterable
 from typing import Any
 
@@ -96,16 +95,6 @@ def no_unsolicited(ctx: CaseContext, what: str) -> None:
 
 def near(value: float, target: float, tol: float) -> bool:
     return abs(value - target) <= tol
-
-
-def angle_diff(a: float, b: float) -> float:
-    """a - b in (-pi, pi] (radians)."""
-    d = math.fmod(a - b, 2 * math.pi)
-    if d <= -math.pi:
-        d += 2 * math.pi
-    elif d > math.pi:
-        d -= 2 * math.pi
-    return d
 
 
 def param_table(ctx: CaseContext) -> dict[str, Any]:

@@ -8,24 +8,11 @@ from functools import partial
 from typing import Any
 
 from pltf.conformance_tests.cases._common import MotionMode
-from pltf.conformance_tests.cases.motion import (
-    _GATE,
-    AUTO,
-    JOYHARD,
-    NO,
-    VEL,
-    Pose,
-    _local_roadmap,
-    _milli,
-    _pose_of,
-    judge_still,
-    pose,
-    rest,
-    still,
-)
+from pltf.conformance_tests.cases.motion import _GATE, _local_roadmap
 from pltf.conformance_tests.catalogue import Level, add
 from pltf.conformance_tests.chart import St
 from pltf.conformance_tests.context import CaseContext
+from pltf.conformance_tests.poses import AUTO, JOYHARD, NO, VEL, Pose, _milli, _pose_of, judge_still, pose, rest, still
 from pltf.conformance_tests.wire import Pause
 from pltf.spec.codec import build
 from pltf.spec.telegram import Telegram

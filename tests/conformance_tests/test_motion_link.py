@@ -3,7 +3,7 @@ accept loop of a GUI application runs every 100 ms, a simulated second at time s
 watchdog): they feed the watchdog from the one connection they hold and judge the target, not the link - and a
 target that does not move, moves at the wrong speed or keeps moving still FAILs behind that link.
 
-The judgement's rule is tested on its own too (``motion.Held``): a late resend of the suite excuses a dip below
+The judgement's rule is tested on its own too (``poses.Held``): a late resend of the suite excuses a dip below
 the commanded velocity, never a target that does not move or never reaches it."""
 
 from __future__ import annotations
@@ -13,14 +13,13 @@ from contextlib import contextmanager
 
 import pytest
 
-from pltf.conformance_tests import pace
-from pltf.conformance_tests.cases import motion
-from pltf.conformance_tests.cases.motion import Pose
+from pltf.conformance_tests import pace, poses
 from pltf.conformance_tests.catalogue import Case, Level, Tier, Verdict, load_all
 from pltf.conformance_tests.context import CaseContext, Config, Target
 from pltf.conformance_tests.mutants.catalogue import DropRequest, RewriteRequest, WireMutant
 from pltf.conformance_tests.mutants.proxy import FrameProxy
 from pltf.conformance_tests.outcome import Fail, Inconclusive
+from pltf.conformance_tests.poses import Pose
 from pltf.conformance_tests.runner import Runner, RunResult
 from pltf.harness import launch
 from pltf.spec.codec import build, decode_frame, encode, frame
@@ -51,7 +50,7 @@ def _line(vs: list[float]) -> list[Pose]:
 
 def test_a_late_resend_turns_a_dip_below_the_commanded_velocity_into_an_inconclusive_naming_the_link() -> None:
     ctx = _ctx()
-    held = motion._held(
+    held = poses._held(
         ctx, "CMD_MOVE_VEL", _line([200.0] * 6 + [0.0] * 6), None, worst_gap=0.6, spread=(0.1, 0.2), limit=0.5
     )
     assert held.void and not held.stale
@@ -73,7 +72,7 @@ def test_a_late_resend_turns_a_dip_below_the_commanded_velocity_into_an_inconclu
 def test_a_late_resend_excuses_no_target_that_never_moves_or_never_reaches_the_velocity(
     what: str, vs: list[float], value: float
 ) -> None:
-    held = motion._held(_ctx(), "CMD_MOVE_VEL", _line(vs), None, worst_gap=0.6, spread=(0.1, 0.2), limit=0.5)
+    held = poses._held(_ctx(), "CMD_MOVE_VEL", _line(vs), None, worst_gap=0.6, spread=(0.1, 0.2), limit=0.5)
     with pytest.raises(Fail) as exc:
         held.fail(f"{what}: velocity {value:.0f} mm/s", dipped=held.dipped(value, 200, "v"))
     assert not isinstance(exc.value, Inconclusive)
@@ -81,9 +80,9 @@ def test_a_late_resend_excuses_no_target_that_never_moves_or_never_reaches_the_v
 
 def test_a_target_that_answered_in_bursts_of_one_stale_pose_is_inconclusive_only_if_it_moved() -> None:
     stale = [Pose(0.0, 0.0, 0.0, 200.0)] * 8 + [Pose(150.0, 0.0, 0.0, 0.0)] * 4
-    held = motion._held(_ctx(), "CMD_MOVE_VEL", stale, None, worst_gap=0.1, spread=(0.1, 0.2), limit=0.5)
+    held = poses._held(_ctx(), "CMD_MOVE_VEL", stale, None, worst_gap=0.1, spread=(0.1, 0.2), limit=0.5)
     assert held.stale and "12 poses read, only 2 distinct" in held.void and "time scale 10" in held.void
-    standing = motion._held(
+    standing = poses._held(
         _ctx(), "CMD_MOVE_VEL", [Pose(0.0, 0.0, 0.0)] * 12, None, worst_gap=0.6, spread=(0.1, 0.2), limit=0.5
     )
     assert standing.void == ""
@@ -91,9 +90,9 @@ def test_a_target_that_answered_in_bursts_of_one_stale_pose_is_inconclusive_only
 
 def test_a_target_that_stood_still_answering_nothing_for_the_whole_hold_is_not_judged_one_that_answers_is() -> None:
     standing = [Pose(0.0, 0.0, 0.0)] * 12
-    stalled = motion._held(_ctx(), "CMD_MOVE_VEL", standing, None, 0.1, spread=(0.3, 2.0), limit=0.5, held_for=1.5)
+    stalled = poses._held(_ctx(), "CMD_MOVE_VEL", standing, None, 0.1, spread=(0.3, 2.0), limit=0.5, held_for=1.5)
     assert stalled.stale and "answered a pose 2.00 simulated s after it was asked, 1.60 s more than" in stalled.void
-    prompt = motion._held(_ctx(), "CMD_MOVE_VEL", standing, None, 0.1, spread=(0.3, 0.6), limit=0.5, held_for=1.5)
+    prompt = poses._held(_ctx(), "CMD_MOVE_VEL", standing, None, 0.1, spread=(0.3, 0.6), limit=0.5, held_for=1.5)
     assert prompt.void == ""
 
 
