@@ -13,29 +13,29 @@ import {
 } from "../src/editor/shell";
 import type { Verdict } from "../src/editor/validate";
 
-/** A list of words with snapshot undo. */
+/** A list of words with snapshot undo: the smallest EditHistory. */
 class Words implements EditHistory {
-  private done: Array<{ before: string[]; label: string }> = [];
-  private undone: Array<{ after: string[]; label: string }> = [];
-  private saved = 0;
-  private savedMark: unknown = null;
+  private done: Array<{ before: string[]; after: string[]; label: string }> = [];
+  private undone: Array<{ before: string[]; after: string[]; label: string }> = [];
+  private saved: object | null = null;
   constructor(public words: string[]) {}
   add(word: string): void {
-    this.done.push({ before: this.words, label: `add ${word}` });
+    const after = [...this.words, word];
+    this.done.push({ before: this.words, after, label: `add ${word}` });
     this.undone = [];
-    this.words = [...this.words, word];
+    this.words = after;
   }
   undo(): string | null {
     const s = this.done.pop();
     if (s === undefined) return null;
-    this.undone.push({ after: this.words, label: s.label });
+    this.undone.push(s);
     this.words = s.before;
     return s.label;
   }
   redo(): string | null {
     const s = this.undone.pop();
     if (s === undefined) return null;
-    this.done.push({ before: this.words, label: s.label });
+    this.done.push(s);
     this.words = s.after;
     return s.label;
   }
@@ -49,11 +49,10 @@ class Words implements EditHistory {
     return this.done.at(-1)?.label ?? null;
   }
   markSaved(): void {
-    this.saved = this.done.length;
-    this.savedMark = this.words;
+    this.saved = this.done.at(-1) ?? null;
   }
   get dirty(): boolean {
-    return this.done.length !== this.saved || (this.savedMark !== null && this.savedMark !== this.words);
+    return (this.done.at(-1) ?? null) !== this.saved;
   }
 }
 
