@@ -15,8 +15,8 @@ from collections.abc import Callable
 
 from benchmarks.harness import Config, Row, Target, benchmark, make_row
 from pltf.conformance_tests.catalogue import Tier, load_all, select
-from pltf.conformance_tests.context import Config as SuiteConfig
 from pltf.conformance_tests.runner import Runner
+from pltf.conformance_tests.target import Config as SuiteConfig
 from pltf.harness import launch
 
 TIME_SCALE = 10.0

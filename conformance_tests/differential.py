@@ -26,10 +26,11 @@ from rich.console import Console
 from pltf.conformance_tests import docdata
 from pltf.conformance_tests.catalogue import Case, Level, Tier
 from pltf.conformance_tests.chart import St
-from pltf.conformance_tests.context import CaseContext, Config, Target
+from pltf.conformance_tests.context import CaseContext
 from pltf.conformance_tests.outcome import Outcome, Unreachable
 from pltf.conformance_tests.poses import rest
 from pltf.conformance_tests.reports.differential import Differential, print_differential
+from pltf.conformance_tests.target import Config, Target
 from pltf.harness import launch
 from pltf.spec.model import enum_classes
 from pltf.spec.telegram import Telegram

@@ -28,8 +28,8 @@ import yaml
 from pltf.cli.options import parse_host_port
 from pltf.conformance_tests.baseline import Baseline, BaselineError
 from pltf.conformance_tests.catalogue import Tier, Verdict, load_all, select
-from pltf.conformance_tests.context import Config
 from pltf.conformance_tests.pace import run_budget
+from pltf.conformance_tests.target import Config
 
 NAME = re.compile(r"^[A-Za-z0-9][A-Za-z0-9_.-]{0,63}$")  # a report file is named after it
 

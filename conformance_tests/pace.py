@@ -40,8 +40,8 @@ import statistics
 import time
 from dataclasses import dataclass, field
 
-from pltf.conformance_tests.context import Config, Target, greet
 from pltf.conformance_tests.outcome import ConnectionClosed, TargetFailure, Unreachable
+from pltf.conformance_tests.target import Config, Target, greet
 from pltf.conformance_tests.wire import NullObserver, Session, WireLog
 from pltf.spec.codec import build
 

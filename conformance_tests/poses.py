@@ -21,8 +21,9 @@ from typing import Any, NoReturn
 
 from pltf.conformance_tests import pace, reported
 from pltf.conformance_tests.chart import St
-from pltf.conformance_tests.context import CaseContext, MotionMode
+from pltf.conformance_tests.context import CaseContext
 from pltf.conformance_tests.outcome import Fail, Inconclusive
+from pltf.conformance_tests.target import MotionMode
 from pltf.conformance_tests.wire import Session
 from pltf.spec.codec import build
 from pltf.spec.telegram import Telegram

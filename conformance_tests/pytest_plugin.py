@@ -19,9 +19,9 @@ from typing import Any
 import pytest
 
 from pltf.conformance_tests.catalogue import Case, Level, Tier, Verdict, load_all, select
-from pltf.conformance_tests.context import Config
 from pltf.conformance_tests.outcome import Unreachable
 from pltf.conformance_tests.runner import CaseResult, Runner
+from pltf.conformance_tests.target import Config
 from pltf.conformance_tests.wire import NullObserver, WireLog
 
 _RUNNER = pytest.StashKey[Runner]()

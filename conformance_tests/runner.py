@@ -41,7 +41,7 @@ from typing import Protocol
 from pltf.conformance_tests import pace
 from pltf.conformance_tests.baseline import Baseline
 from pltf.conformance_tests.catalogue import Case, Level, Verdict
-from pltf.conformance_tests.context import CaseContext, Config, Status, Target
+from pltf.conformance_tests.context import CaseContext
 from pltf.conformance_tests.outcome import (
     Absurd,
     BudgetSpent,
@@ -57,6 +57,7 @@ from pltf.conformance_tests.outcome import (
     verdict_for_level,
     worst,
 )
+from pltf.conformance_tests.target import Config, Status, Target
 from pltf.conformance_tests.wire import NullObserver, Session, WireEntry, WireLog
 
 

@@ -29,7 +29,7 @@ from rich.console import Console
 
 from pltf.conformance_tests import chart, docdata
 from pltf.conformance_tests.chart import St
-from pltf.conformance_tests.context import Config
+from pltf.conformance_tests.target import Config
 from pltf.conformance_tests.wire import Session
 from pltf.spec.codec import REPLIES, build, encode
 from pltf.spec.compiler import fixed_size

@@ -19,9 +19,9 @@ from rich.console import Console
 from pltf.cli.options import USAGE, CommandError, count, exit_status, port, positive, target
 from pltf.conformance_tests.baseline import Baseline, BaselineError
 from pltf.conformance_tests.catalogue import Case, Tier, Verdict, load_all, select
-from pltf.conformance_tests.context import Config
 from pltf.conformance_tests.outcome import Outcome, Unreachable
 from pltf.conformance_tests.pace import run_budget
+from pltf.conformance_tests.target import Config
 
 if TYPE_CHECKING:
     from pltf.conformance_tests.reports.differential import Differential

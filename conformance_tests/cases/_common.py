@@ -7,8 +7,9 @@ from typing import Any
 
 from pltf.conformance_tests import chart
 from pltf.conformance_tests.chart import St
-from pltf.conformance_tests.context import CaseContext, Status
+from pltf.conformance_tests.context import CaseContext
 from pltf.conformance_tests.outcome import Fail, NotApplicable
+from pltf.conformance_tests.target import Status
 from pltf.spec.model import enum_classes
 
 # The spec's enums are built at import; mypy sees them as plain IntEnum classes without members.

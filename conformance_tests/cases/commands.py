@@ -15,8 +15,9 @@ from typing import Any
 from pltf.conformance_tests.cases._common import STATES, no_unsolicited
 from pltf.conformance_tests.catalogue import Level, add
 from pltf.conformance_tests.chart import St
-from pltf.conformance_tests.context import CaseContext, Status, Then
+from pltf.conformance_tests.context import CaseContext, Then
 from pltf.conformance_tests.outcome import ConnectionClosed, Fail
+from pltf.conformance_tests.target import Status
 from pltf.spec.codec import build
 from pltf.spec.model import enum_classes
 

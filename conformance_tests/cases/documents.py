@@ -11,8 +11,9 @@ from functools import partial
 from pltf.conformance_tests import docdata
 from pltf.conformance_tests.cases._common import STATES, no_unsolicited
 from pltf.conformance_tests.catalogue import Level, Tier, add, case
-from pltf.conformance_tests.context import CaseContext, Status
+from pltf.conformance_tests.context import CaseContext
 from pltf.conformance_tests.outcome import Fail
+from pltf.conformance_tests.target import Status
 from pltf.spec.codec import build
 from pltf.spec.telegram import Telegram
 

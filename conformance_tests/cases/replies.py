@@ -8,8 +8,9 @@ from functools import partial
 from pltf.conformance_tests.cases._common import STATES, no_unsolicited
 from pltf.conformance_tests.catalogue import Level, Tier, add, case
 from pltf.conformance_tests.chart import St
-from pltf.conformance_tests.context import CaseContext, Status
+from pltf.conformance_tests.context import CaseContext
 from pltf.conformance_tests.outcome import Fail, Inconclusive, ReplyTimeout
+from pltf.conformance_tests.target import Status
 from pltf.spec.codec import REPLIES, build
 from pltf.spec.errata import errata_for
 from pltf.spec.telegram import Telegram

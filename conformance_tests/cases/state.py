@@ -18,8 +18,9 @@ from pltf.conformance_tests.cases._common import (
 )
 from pltf.conformance_tests.catalogue import Level, Tier, add, case
 from pltf.conformance_tests.chart import St
-from pltf.conformance_tests.context import CaseContext, Status
+from pltf.conformance_tests.context import CaseContext
 from pltf.conformance_tests.outcome import Fail, NotApplicable
+from pltf.conformance_tests.target import Status
 from pltf.conformance_tests.wire import Pause
 from pltf.spec.codec import build
 

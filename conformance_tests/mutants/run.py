@@ -15,10 +15,10 @@ from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 
 from pltf.conformance_tests.catalogue import Case, Tier, Verdict, load_all, select
-from pltf.conformance_tests.context import Config
 from pltf.conformance_tests.mutants.catalogue import MUTANTS, Mutant
 from pltf.conformance_tests.mutants.proxy import FrameProxy
 from pltf.conformance_tests.runner import CaseResult, Runner
+from pltf.conformance_tests.target import Config
 from pltf.harness import launch
 
 KILLED = (Verdict.FAIL, Verdict.NON_STRICT)

@@ -10,9 +10,9 @@ from rich.progress import BarColumn, MofNCompleteColumn, Progress, TaskID, TextC
 from rich.table import Table
 
 from pltf.conformance_tests.catalogue import Case, Verdict
-from pltf.conformance_tests.context import Config
 from pltf.conformance_tests.reports import ORDER, first_line, summary_rows
 from pltf.conformance_tests.runner import CaseResult, RunResult
+from pltf.conformance_tests.target import Config
 
 STYLE = {
     Verdict.PASS: "green",

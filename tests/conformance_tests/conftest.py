@@ -6,7 +6,7 @@ from collections.abc import Iterator
 
 import pytest
 
-from pltf.conformance_tests.context import Config
+from pltf.conformance_tests.target import Config
 from pltf.harness import launch
 from tests.conformance_tests.fakes import TinyTarget
 

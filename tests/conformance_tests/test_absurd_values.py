@@ -17,8 +17,8 @@ from hypothesis import strategies as st
 
 from pltf.conformance_tests import reported
 from pltf.conformance_tests.catalogue import Tier, Verdict, load_all, select
-from pltf.conformance_tests.context import Config
 from pltf.conformance_tests.runner import Runner, RunResult
+from pltf.conformance_tests.target import Config
 from pltf.harness import launch
 from pltf.spec.codec import REPLIES
 from pltf.spec.compiler import WIRE, value_range

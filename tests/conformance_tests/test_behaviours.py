@@ -11,11 +11,13 @@ from collections.abc import Callable
 
 import pytest
 
-from pltf.conformance_tests import context, pace
+from pltf.conformance_tests import pace
+from pltf.conformance_tests import target as target_side
 from pltf.conformance_tests.catalogue import Case, Level, Tier, Verdict, load_all, select
 from pltf.conformance_tests.chart import St
-from pltf.conformance_tests.context import CaseContext, Config
+from pltf.conformance_tests.context import CaseContext
 from pltf.conformance_tests.runner import Runner, RunResult
+from pltf.conformance_tests.target import Config
 from pltf.harness import launch
 from pltf.zoo.members import MEMBERS
 from tests.conformance_tests.fakes import TinyTarget
@@ -207,7 +209,7 @@ def _cut(target: Restarting, down: float, times: int = 1) -> tuple[Callable[[Cas
         if len(attempts) <= times:
             target.restart(down)
         s = ctx.status()
-        assert s.op == context.OperationState.ST_OP_READY, s.describe()
+        assert s.op == target_side.OperationState.ST_OP_READY, s.describe()
 
     return case, attempts
 
@@ -261,7 +263,7 @@ def test_a_closed_connection_that_is_no_restart_still_fails(how: str) -> None:
 
 
 def test_a_port_that_does_not_come_back_is_named_with_how_long_it_refused(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(context, "RESTART_WINDOW", 1.5)
+    monkeypatch.setattr(target_side, "RESTART_WINDOW", 1.5)
     with Restarting() as target:
         func, _ = _cut(target, 60.0)
         run = _tiny_run(target, func)

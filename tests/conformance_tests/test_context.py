@@ -12,8 +12,9 @@ import pytest
 from pltf.conformance_tests import chart
 from pltf.conformance_tests.catalogue import Case, Level, Tier, Verdict
 from pltf.conformance_tests.chart import St
-from pltf.conformance_tests.context import CaseContext, Config, Status
+from pltf.conformance_tests.context import CaseContext
 from pltf.conformance_tests.runner import Runner, RunResult
+from pltf.conformance_tests.target import Config, Status
 from pltf.conformance_tests.wire import Pause
 from pltf.spec.codec import build
 from tests.conformance_tests.fakes import LinkTarget

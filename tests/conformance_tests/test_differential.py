@@ -7,11 +7,11 @@ from pathlib import Path
 
 import yaml
 
-from pltf.conformance_tests.context import Config
 from pltf.conformance_tests.differential import compare, diff_replies, script, volatile
 from pltf.conformance_tests.mutants.catalogue import BY_ID
 from pltf.conformance_tests.mutants.proxy import FrameProxy
 from pltf.conformance_tests.readings import canonical
+from pltf.conformance_tests.target import Config
 from pltf.harness import launch
 from tests.emulator_gate import emulator_or_skip
 

@@ -9,8 +9,8 @@ from collections.abc import Iterator
 import pytest
 
 from pltf.conformance_tests.catalogue import Level, Verdict, load_all
-from pltf.conformance_tests.context import Config
 from pltf.conformance_tests.runner import CaseResult, Runner
+from pltf.conformance_tests.target import Config
 from tests.conformance_tests.fakes import HardwareTarget
 
 FAULTS = {

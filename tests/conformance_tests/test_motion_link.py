@@ -15,12 +15,13 @@ import pytest
 
 from pltf.conformance_tests import pace, poses
 from pltf.conformance_tests.catalogue import Case, Level, Tier, Verdict, load_all
-from pltf.conformance_tests.context import CaseContext, Config, Target
+from pltf.conformance_tests.context import CaseContext
 from pltf.conformance_tests.mutants.catalogue import DropRequest, RewriteRequest, WireMutant
 from pltf.conformance_tests.mutants.proxy import FrameProxy
 from pltf.conformance_tests.outcome import Fail, Inconclusive
 from pltf.conformance_tests.poses import Pose
 from pltf.conformance_tests.runner import Runner, RunResult
+from pltf.conformance_tests.target import Config, Target
 from pltf.harness import launch
 from pltf.spec.codec import build, decode_frame, encode, frame
 from tests.conformance_tests.relays import Relay

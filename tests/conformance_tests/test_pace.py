@@ -12,8 +12,9 @@ import pytest
 
 from pltf.conformance_tests import pace
 from pltf.conformance_tests.catalogue import Case, Level, Tier, Verdict
-from pltf.conformance_tests.context import CaseContext, Config, Target
+from pltf.conformance_tests.context import CaseContext
 from pltf.conformance_tests.runner import Runner, RunResult
+from pltf.conformance_tests.target import Config, Target
 from tests.conformance_tests.fakes import TinyTarget
 from tests.conformance_tests.relays import Relay
 

@@ -12,11 +12,11 @@ from pathlib import Path
 import pytest
 
 from pltf.conformance_tests.catalogue import Tier, Verdict, load_all, select
-from pltf.conformance_tests.context import Config
 from pltf.conformance_tests.mutants.matrix import NOT_ON_REFERENCE
 from pltf.conformance_tests.reports.files import write_json, write_junit
 from pltf.conformance_tests.reports.html import write_html
 from pltf.conformance_tests.runner import Runner, RunResult
+from pltf.conformance_tests.target import Config
 from pltf.harness import launch
 
 # Time scale 5, not 10: the timing cases judge windows of simulated time that are wall milliseconds at a high time

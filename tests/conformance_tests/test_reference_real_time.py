@@ -10,9 +10,9 @@ from __future__ import annotations
 import pytest
 
 from pltf.conformance_tests.catalogue import Tier, Verdict, load_all, select
-from pltf.conformance_tests.context import Config
 from pltf.conformance_tests.mutants.matrix import NOT_ON_REFERENCE
 from pltf.conformance_tests.runner import Runner, RunResult
+from pltf.conformance_tests.target import Config
 from pltf.harness import launch
 from pltf.harness.launch import Launched
 

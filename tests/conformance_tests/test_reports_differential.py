@@ -11,12 +11,12 @@ from pathlib import Path
 import pytest
 
 from pltf.cli.main import main
-from pltf.conformance_tests.context import Config, Target
 from pltf.conformance_tests.differential import Diff
 from pltf.conformance_tests.reports.differential import Differential
 from pltf.conformance_tests.reports.files import write_json, write_junit
 from pltf.conformance_tests.reports.html import write_html
 from pltf.conformance_tests.runner import RunResult
+from pltf.conformance_tests.target import Config, Target
 from pltf.harness import launch
 from tests.emulator_gate import emulator_or_skip
 

@@ -7,9 +7,9 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from pltf.conformance_tests.catalogue import REGISTRY, Level, Verdict, load_all
-from pltf.conformance_tests.context import Config, Target
 from pltf.conformance_tests.reports.files import write_junit
 from pltf.conformance_tests.runner import CaseResult, RunResult
+from pltf.conformance_tests.target import Config, Target
 
 load_all()
 

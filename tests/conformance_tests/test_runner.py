@@ -8,9 +8,10 @@ from typing import Any
 from pltf.conformance_tests.baseline import Baseline
 from pltf.conformance_tests.catalogue import Case, Level, Tier, Verdict, load_all, select
 from pltf.conformance_tests.chart import St
-from pltf.conformance_tests.context import CaseContext, Config
+from pltf.conformance_tests.context import CaseContext
 from pltf.conformance_tests.outcome import Fail, Inconclusive, NotApplicable
 from pltf.conformance_tests.runner import Runner
+from pltf.conformance_tests.target import Config
 from tests.conformance_tests.fakes import TinyTarget
 
 

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from pltf.conformance_tests.context import Config
 from pltf.conformance_tests.stateful import run_stateful
+from pltf.conformance_tests.target import Config
 from pltf.harness import launch
 
 

@@ -20,8 +20,8 @@ from pathlib import Path
 import pytest
 
 from pltf.conformance_tests.catalogue import Case, Tier, Verdict, load_all, select
-from pltf.conformance_tests.context import Config
 from pltf.conformance_tests.runner import Runner
+from pltf.conformance_tests.target import Config
 from pltf.harness import launch
 from pltf.proxy.session import read_session
 

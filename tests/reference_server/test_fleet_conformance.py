@@ -20,9 +20,9 @@ import pytest
 import yaml
 
 from pltf.conformance_tests.catalogue import Tier, Verdict, load_all, select
-from pltf.conformance_tests.context import Config
 from pltf.conformance_tests.mutants.matrix import NOT_ON_REFERENCE
 from pltf.conformance_tests.runner import Runner
+from pltf.conformance_tests.target import Config
 from tests.reference_server.helpers import REPO, wait_for
 
 # tests/conformance_tests/test_reference.py runs one platform at 5; ten at 5 are 50 platform-seconds a wall second,

@@ -15,8 +15,8 @@ import pytest
 
 from pltf.conformance_tests import pace
 from pltf.conformance_tests.catalogue import Tier, Verdict, load_all, select
-from pltf.conformance_tests.context import Config
 from pltf.conformance_tests.runner import Runner, RunResult
+from pltf.conformance_tests.target import Config
 from pltf.harness import launch
 from pltf.zoo.members import MEMBERS
 from tests.emulator_gate import emulator_or_skip
