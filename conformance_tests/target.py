@@ -169,6 +169,7 @@ class Target:
                 self._served(label, refused)
                 return s
             except Unreachable as exc:
+                s.close()
                 if "refused" in str(exc).lower() and not self.reached:
                     raise  # nothing listens: a busy port accepts and closes, it does not refuse
                 if refused is None and "refused" in str(exc).lower():  # gone since: a restart, or a crash
@@ -176,10 +177,12 @@ class Target:
                 if refused is not None and waits_restart:
                     deadline = max(deadline, began + RESTART_WINDOW)
                 last = str(exc)
-                s.close()
             except TargetFailure as exc:
                 last = str(exc).removeprefix(f"port {label} ({cfg.host}:{self.port_of(label)}): ")
                 s.close()
+            except BaseException:  # anything else ends the run's connect: the socket is not left to the collector
+                s.close()
+                raise
             if time.monotonic() + delay > deadline:
                 raise Unreachable(self._gone(label, window, refused if waits_restart else None, last))
             self.budget.check()
