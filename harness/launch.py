@@ -333,19 +333,7 @@ def reference(
     not log the ports it took, so a quiet one gets two free ports chosen here."""
     if log_level not in ("DEBUG", "INFO") and 0 in ports:
         ports = free_ports()
-    args = [
-        "--ports",
-        f"{ports[0]},{ports[1]}",
-        "--data-dir",
-        "{data}",
-        "--time-scale",
-        f"{time_scale:g}",
-        "--seed",
-        str(seed),
-        "--log-level",
-        log_level,
-        *extra,
-    ]
+    args = [*_server_args(ports, time_scale, seed), "--log-level", log_level, *extra]
     argv = (
         python("pltf.conformance_tests.mutants.serve", mutant, *args)
         if mutant
@@ -354,6 +342,20 @@ def reference(
     target = _DataDirTarget(argv, data_dir, ports=ports, name=f"mutant {mutant}" if mutant else "reference server")
     target.start_timeout = start_timeout
     return target
+
+
+def _server_args(ports: tuple[int, int], time_scale: float, seed: int) -> list[str]:
+    """The options the reference server and the emulator share: ports, data directory ({data}), time scale, seed."""
+    return [
+        "--ports",
+        f"{ports[0]},{ports[1]}",
+        "--data-dir",
+        "{data}",
+        "--time-scale",
+        f"{time_scale:g}",
+        "--seed",
+        str(seed),
+    ]
 
 
 def emulator_binary() -> Path | None:
@@ -405,18 +407,7 @@ def emulator(
     binary = emulator_binary()
     if binary is None:
         raise LaunchError(f"the emulator is not available: {why_no_emulator()}")
-    argv = [
-        str(binary),
-        "--ports",
-        f"{ports[0]},{ports[1]}",
-        "--data-dir",
-        "{data}",
-        "--time-scale",
-        f"{time_scale:g}",
-        "--seed",
-        str(seed),
-        *extra,
-    ]
+    argv = [str(binary), *_server_args(ports, time_scale, seed), *extra]
     return _Emulator(argv, data_dir, ports=ports, name="emulator")
 
 

@@ -42,6 +42,15 @@ def event(t: float, conn: int, kind: str, detail: str = "", port: int = 10000) -
     return Record(t, conn, port, kind, detail=detail)
 
 
+def ipo_trans_vel(t: float = 2.0, conn: int = 1) -> tuple[Record, Record]:
+    """CMD_GET_PLTF_PARAM IpoTransVel at ``t`` and its recorded reply 0.1 s later."""
+    reply = {"value": "800", "category": 2, "data_type": 1, "minimum": 50, "maximum": 1500}
+    return (
+        rec(t, conn, "request", "CMD_GET_PLTF_PARAM", key="IpoTransVel"),
+        rec(t + 0.1, conn, "reply", "CMD_GET_PLTF_PARAM", key="IpoTransVel", **reply),
+    )
+
+
 def session(*records: Record) -> Session:
     return Session(0.0, (Route("l:1", "h:10000"), Route("l:2", "h:10002")), records)
 
@@ -144,19 +153,7 @@ def test_the_judgement_names_each_difference() -> None:
         rec(0.5, 1, "request", "CMD_STOP"),  # it drives: its replies are compared field by field
         rec(1.0, 1, "request", "CMD_GET_STATUS"),
         rec(1.1, 1, "reply", "STATUS"),
-        rec(2.0, 1, "request", "CMD_GET_PLTF_PARAM", key="IpoTransVel"),
-        rec(
-            2.1,
-            1,
-            "reply",
-            "CMD_GET_PLTF_PARAM",
-            key="IpoTransVel",
-            value="800",
-            category=2,
-            data_type=1,
-            minimum=50,
-            maximum=1500,
-        ),
+        *ipo_trans_vel(),
         rec(3.0, 1, "request", "CMD_GET_CAMERA"),
         event(4.0, 1, CLOSE, "by target (FIN)"),
     )
@@ -305,19 +302,7 @@ def _watcher(*extra: Record) -> Script:
             rec(1.3, 1, "reply", "STATUS"),
             rec(1.4, 1, "request", "CMD_GET_POSITION"),
             rec(1.5, 1, "reply", "CMD_GET_POSITION", **position),
-            rec(2.0, 1, "request", "CMD_GET_PLTF_PARAM", key="IpoTransVel"),
-            rec(
-                2.1,
-                1,
-                "reply",
-                "CMD_GET_PLTF_PARAM",
-                key="IpoTransVel",
-                value="800",
-                category=2,
-                data_type=1,
-                minimum=50,
-                maximum=1500,
-            ),
+            *ipo_trans_vel(),
             *extra,
             event(4.0, 1, CLOSE, "by client (FIN)"),
         )
