@@ -11,7 +11,9 @@
  * - Colours are a fixed table, taken in the order of the address (the same platform, the same colour, on every
  *   reload); past its end they repeat.
  * - Only the selected platform is commanded: the one session the panels hold is switched to it
- *   (`PlatformSession.open(target)`), the others are only watched (GET_STATUS).
+ *   (`PlatformSession.open(target)`), the others are only watched (GET_STATUS). Guide 5.2: "To connect the GUI to
+ *   the platform select the desired server in the server combo box." - one platform commanded at a time, as the
+ *   guide's GUI switches server (erratum E-GUI-008).
  */
 import type { GetStatusReply } from "../pltf";
 
