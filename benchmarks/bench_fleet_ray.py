@@ -22,16 +22,15 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import os
 import statistics
-import sys
 import tempfile
 import time
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 from benchmarks.harness import Config, Row, benchmark, make_row
+from benchmarks.ray_local import local_cluster
+from benchmarks.ray_local import say as _say
 
 PLATFORMS = 6
 SHARDS = (1, 2, 3)
@@ -41,37 +40,9 @@ FLAT_OUT = 1000.0
 LONG_LAG = 5
 
 
-@contextlib.contextmanager
-def ray_cluster(nodes: int) -> Iterator[Any]:
+def ray_cluster(nodes: int) -> contextlib.AbstractContextManager[Any]:
     """``nodes`` nodes on 127.0.0.1 (None without the ray extra or when the cluster does not come up)."""
-    os.environ["RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER"] = "0"  # before ray is imported: loopback only
-    try:
-        import ray
-        from ray.cluster_utils import Cluster
-    except ImportError:
-        _say("no fleet_ray rows: the ray extra is not installed (pip install 'pltf-toolkit[ray]')")
-        yield None
-        return
-    node: dict[str, Any] = {"num_cpus": 2, "node_ip_address": "127.0.0.1", "object_store_memory": 80 * 1024 * 1024}
-    try:
-        cluster = Cluster(initialize_head=True, head_node_args={**node, "include_dashboard": False})
-        for _ in range(nodes - 1):
-            cluster.add_node(**node)
-        cluster.wait_for_nodes()
-    except Exception as exc:  # Ray's own: a node that does not come up within its start-up time (a loaded machine)
-        _say(f"no fleet_ray rows: the local cluster did not start ({str(exc).splitlines()[0][:120]})")
-        yield None
-        return
-    ray.init(address=cluster.address, log_to_driver=False, logging_level="ERROR")
-    try:
-        yield cluster
-    finally:
-        ray.shutdown()
-        cluster.shutdown()
-
-
-def _say(text: str) -> None:
-    print(f"  {text}, load {os.getloadavg()[0]:.1f}", file=sys.stderr)
+    return local_cluster(nodes, "fleet_ray", logging_level="ERROR")
 
 
 def free_poses(count: int, root: Path) -> list[tuple[float, float, float]]:

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import contextlib
 import multiprocessing
-import os
 import resource
 import statistics
 import sys
@@ -33,6 +32,8 @@ from typing import Any
 from benchmarks.bench_fuzz import REFERENCE, ZOO, _boofuzz, _served, started
 from benchmarks.harness import Config, Row, Target, benchmark, make_row
 from benchmarks.proc_cpu import process_cpu
+from benchmarks.ray_local import local_cluster
+from benchmarks.ray_local import say as _say
 from pltf.fuzz.engine import Campaign, Options
 from pltf.fuzz.options import Stats
 from pltf.fuzz.parallel import LocalCampaign
@@ -168,34 +169,9 @@ def boofuzz_cpu(launch: str, seconds: float) -> tuple[float, float]:
 
 @contextlib.contextmanager
 def ray_cluster() -> Iterator[str | None]:
-    """A head and one more node on 127.0.0.1 (None without the ray extra). Ray reads
-    RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER=0 (loopback addresses only) when it is imported: it is set before."""
-    os.environ["RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER"] = "0"
-    try:
-        import ray
-        from ray.cluster_utils import Cluster
-    except ImportError:
-        yield None
-        return
-    node: dict[str, Any] = {"num_cpus": 2, "node_ip_address": "127.0.0.1", "object_store_memory": 80 * 1024 * 1024}
-    try:
-        cluster = Cluster(initialize_head=True, head_node_args={**node, "include_dashboard": False})
-        cluster.add_node(**node)
-        cluster.wait_for_nodes()
-    except Exception as exc:  # Ray's own: a node that does not come up within its start-up time (a loaded machine)
-        _say(f"no Ray rows: the local cluster did not start ({str(exc).splitlines()[0][:120]})")
-        yield None
-        return
-    ray.init(address=cluster.address, log_to_driver=False)
-    try:
-        yield cluster.address
-    finally:
-        ray.shutdown()
-        cluster.shutdown()
-
-
-def _say(text: str) -> None:
-    print(f"  {text}, load {os.getloadavg()[0]:.1f}", file=sys.stderr)
+    """A head and one more node on 127.0.0.1, its address (None without the ray extra)."""
+    with local_cluster(2, "Ray") as cluster:
+        yield None if cluster is None else cluster.address
 
 
 # ---------------------------------------------------------------------------------------------- the benchmarks
