@@ -1,6 +1,8 @@
 /** German labels (the original GUI's second language, guide 5.7). */
 import type { Key } from "./en";
 import { deEditors } from "./de_editors";
+import { deHelp } from "./de_help";
+import { deTimeline } from "./de_timeline";
 
 export const de: Record<Key, string> = {
   "app.title": "PlatformCtrlGUI",
@@ -315,4 +317,6 @@ export const de: Record<Key, string> = {
   "edit.converted": "{n} Linien aus dem Scan übernommen",
   "edit.save": "Speichern",
   ...deEditors,
+  ...deHelp,
+  ...deTimeline,
 };

@@ -1,5 +1,7 @@
 /** English labels: the guide's own words wherever it names a control (chapters 4 and 5). */
 import { enEditors } from "./en_editors";
+import { enHelp } from "./en_help";
+import { enTimeline } from "./en_timeline";
 
 export const en = {
   "app.title": "PlatformCtrlGUI",
@@ -317,6 +319,8 @@ export const en = {
   "edit.converted": "{n} lines converted from the scan",
   "edit.save": "Save",
   ...enEditors,
+  ...enHelp,
+  ...enTimeline,
 } as const;
 
 export type Key = keyof typeof en;
