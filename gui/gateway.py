@@ -21,6 +21,7 @@ from __future__ import annotations
 import asyncio
 import json
 import logging
+import os
 from pathlib import Path
 from typing import Any
 
@@ -34,7 +35,8 @@ from pltf.gui.truth import TruthReader
 from pltf.gui.validate import add_routes as add_validate_routes
 
 log = logging.getLogger("pltf.gui")
-STATIC = Path(__file__).resolve().parent / "static"
+# PLTF_GUI_STATIC: another build of the front end (e.g. `vite build --outDir DIR` while developing one part of it)
+STATIC = Path(os.environ.get("PLTF_GUI_STATIC") or Path(__file__).resolve().parent / "static")
 LINKS = web.AppKey("links", dict)
 CONFIG = web.AppKey("config", dict)
 TARGETS = web.AppKey("targets", TargetList)

@@ -47,8 +47,9 @@ playwright_sync = pytest.importorskip("playwright.sync_api")
 def _need_browser() -> None:
     if not Path(CHROMIUM).exists():
         pytest.fail(f"{CHROMIUM} is missing: `make chromium` installs Debian's chromium")
-    if not (REPO / "gui" / "static" / "index.html").is_file():
-        pytest.fail("the GUI is not built: `make gui`")
+    static = Path(os.environ.get("PLTF_GUI_STATIC") or REPO / "gui" / "static")
+    if not (static / "index.html").is_file():
+        pytest.fail(f"the GUI is not built in {static}: `make gui`")
 
 
 def wait_for(pred: Callable[[], Any], timeout: float = PATIENCE, what: str = "condition", every: float = 0.05) -> Any:
