@@ -30,6 +30,8 @@ from aiohttp import WSMsgType, web
 from pltf.gui.doors import Doors
 from pltf.gui.link import PlatformLink, parse_target
 from pltf.gui.network_ini import NetworkIni
+from pltf.gui.recorded import Recording
+from pltf.gui.recorded import add_routes as add_recording_routes
 from pltf.gui.targets import TargetList
 from pltf.gui.truth import TruthReader
 from pltf.gui.validate import add_routes as add_validate_routes
@@ -191,9 +193,11 @@ def make_app(
     allowed: TargetList | None = None,
     read_only: bool = False,
     fleet: tuple[tuple[str, str], ...] = (),
+    recording: Recording | None = None,
 ) -> web.Application:
     """``doors`` and ``allowed`` (the targets) default to a loopback gateway that connects only to ``target`` and
-    the addresses of Network.ini."""
+    the addresses of Network.ini. With ``recording`` (``pltf gui --session``, recorded.py) there is no /ws: the
+    page shows the recording and nothing reaches a platform."""
     app = web.Application(middlewares=[(doors or Doors()).middleware()])
     app[TARGETS] = allowed or TargetList(target, ini)
     link_options: dict[str, Any] = {"read_only": read_only}
@@ -204,7 +208,10 @@ def make_app(
     app[LINKS] = {}
     app[CONFIG] = {"target": target, "ini": ini, "link": link_options, "tabs": 0, "fleet": fleet}
     app.router.add_get("/", index)
-    app.router.add_get("/ws", websocket)
+    if recording is None:
+        app.router.add_get("/ws", websocket)
+    else:
+        add_recording_routes(app, recording)
     app.router.add_route("*", "/api/targets", targets)
     add_validate_routes(app)  # the editors' check before sending (issue 20)
     if (STATIC / "assets").is_dir():

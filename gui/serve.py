@@ -1,8 +1,10 @@
-"""Run the gateway: ``pltf gui --target HOST:PORT [--listen 127.0.0.1:8080] [--open]`` and the doors' flags.
+"""Run the gateway: ``pltf gui --target HOST:PORT [--listen 127.0.0.1:8080] [--open]`` and the doors' flags, or
+``pltf gui --session FILE``: a recording, without a platform (recorded.py).
 
 Rules: one line on stdout says where the GUI is (``gui serving at http://HOST:PORT/?target=...``, with
-``&token=...`` when a token is needed: tests and ``make demo`` read it); under a wildcard listen (0.0.0.0, ::)
-that line names 127.0.0.1 and the next says how other machines reach it. A listen beyond loopback without a
+``&token=...`` when a token is needed: tests and ``make demo`` read it; a recording's page is
+``/?recording=FILE``); under a wildcard listen (0.0.0.0, ::) that line names 127.0.0.1 and the next says how
+other machines reach it. A listen beyond loopback without a
 token is warned about on stderr (``--no-token``). User errors are one line on stderr and exit 2; SIGINT/SIGTERM
 stop it cleanly.
 """
@@ -24,6 +26,7 @@ from aiohttp import web
 from pltf.gui.doors import Doors, is_loopback, new_token
 from pltf.gui.gateway import STATIC, make_app
 from pltf.gui.network_ini import NetworkIni, default_path
+from pltf.gui.recorded import Recording
 from pltf.gui.targets import TargetList
 
 log = logging.getLogger("pltf.gui")
@@ -57,8 +60,10 @@ async def serve(
     reply_timeout: float | None = None,
     options: Options | None = None,
     fleet: tuple[tuple[str, str], ...] = (),
+    recording: Recording | None = None,
 ) -> int:
-    """``fleet``: (name, HOST:PORT) of every platform when there are several (issue 30), ``target`` the first."""
+    """``fleet``: (name, HOST:PORT) of every platform when there are several (issue 30), ``target`` the first;
+    ``recording``: the page shows it (``target`` is then not connected to)."""
     options = options or Options()
     host, port = parse_listen(listen)
     ini = NetworkIni(ini_path or default_path())
@@ -66,7 +71,14 @@ async def serve(
     allowed = frozenset(options.allow_targets) | {t for _, t in fleet}  # every platform of the fleet: on the list
     targets = TargetList(target, ini, allowed, options.allow_any_target)
     app = make_app(
-        target, ini, reply_timeout=reply_timeout, doors=doors, allowed=targets, read_only=options.read_only, fleet=fleet
+        target,
+        ini,
+        reply_timeout=reply_timeout,
+        doors=doors,
+        allowed=targets,
+        read_only=options.read_only,
+        fleet=fleet,
+        recording=recording,
     )
     runner = web.AppRunner(app, access_log=None, handle_signals=False)
     await runner.setup()
@@ -79,7 +91,7 @@ async def serve(
         return 2
     sockets = getattr(site._server, "sockets", None) or []
     bound = sockets[0].getsockname()[1] if sockets else port
-    url = _url(host, bound, [t for _, t in fleet] or [target], doors.token)
+    url = _url(host, bound, [t for _, t in fleet] or [target], doors.token, recording)
     if not (STATIC / "index.html").is_file():
         log.warning("the web application is not built (%s missing): run `make gui`", STATIC / "index.html")
     _warn(host, bound, options, doors)
@@ -96,11 +108,13 @@ async def serve(
     return 0
 
 
-def _url(host: str, port: int, targets: list[str], token: str | None) -> str:
-    """The page's address: ``?target=A`` (a fleet: ``?target=A&target=B...``, the page opens one session each)."""
+def _url(host: str, port: int, targets: list[str], token: str | None, recording: Recording | None = None) -> str:
+    """The page's address: ``?target=A`` (a fleet: ``?target=A&target=B...``, the page opens one session each;
+    a recording: ``?recording=FILE``, its name only)."""
     shown = "127.0.0.1" if Doors(host).wildcard else host
     shown = f"[{shown}]" if ":" in shown else shown
-    query = [("target", t) for t in targets] + ([("token", token)] if token is not None else [])
+    pages = [("recording", recording.path.name)] if recording is not None else [("target", t) for t in targets]
+    query = pages + ([("token", token)] if token is not None else [])
     return f"http://{shown}:{port}/?{urlencode(query, safe=':[]')}"
 
 

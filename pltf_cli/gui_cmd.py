@@ -9,6 +9,7 @@ import sys
 from pathlib import Path
 
 from pltf.cli.options import exit_status, format_host_port, positive, target, target_or_zero
+from pltf.gui.recorded import Recording, RecordingError, open_recording
 from pltf.gui.serve import Options, serve
 
 
@@ -26,6 +27,13 @@ def add_gui_arguments(p: argparse.ArgumentParser) -> None:
         type=Path,
         metavar="FILE",
         help="the fleet file of `pltf serve --fleet FILE`: each platform's first port on --fleet-host, by its name",
+    )
+    platforms.add_argument(
+        "--session",
+        type=Path,
+        metavar="FILE",
+        help="show a recording instead of a platform: a `pltf proxy --record` session file or an MCAP file "
+        "(`pltf export --mcap`, `pltf proxy --mcap`), with a timeline; nothing is sent (issue 35)",
     )
     p.add_argument(
         "--fleet-host",
@@ -58,7 +66,7 @@ def add_gui_arguments(p: argparse.ArgumentParser) -> None:
     add_door_arguments(p)
     p.epilog = exit_status(
         ok="stopped (Ctrl-C or a signal); a target that does not answer is shown, not an error",
-        usage="usage error: bad options, --listen's port in use",
+        usage="usage error: bad options, --listen's port in use, a --session file that is not a recording",
     )
 
 
@@ -134,10 +142,17 @@ def _platforms(args: argparse.Namespace) -> tuple[tuple[str, str], ...]:
     return tuple((t, t) for t in dict.fromkeys(targets))
 
 
+def _recording(path: Path | None) -> Recording | None:
+    """The recording of --session, indexed once (an hour's session file: a few seconds)."""
+    return None if path is None else open_recording(path)
+
+
 def run_gui(args: argparse.Namespace) -> int:
     try:
-        platforms = _platforms(args)
-    except ValueError as exc:
+        recording = _recording(args.session)
+        # a recording: no platform (the gateway has no /ws); the target only fills the gateway's list
+        platforms = _platforms(args) if recording is None else (("recording", "127.0.0.1:1"),)
+    except (ValueError, RecordingError) as exc:
         print(f"pltf gui: error: {exc}", file=sys.stderr)
         return 2
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)-7s %(message)s")
@@ -157,5 +172,6 @@ def run_gui(args: argparse.Namespace) -> int:
                 read_only=args.read_only,
             ),
             fleet=platforms if len(platforms) > 1 else (),
+            recording=recording,
         )
     )
