@@ -1,4 +1,5 @@
 import { describe, expect, it } from "vitest";
+import { act } from "../src/editor/history";
 import office from "../../../fixtures/maps/office.map?raw";
 import {
   addObject,
@@ -35,7 +36,7 @@ describe("history", () => {
       h.run(moveObjects(h.doc, [5], 0.1, 0.3));
     }
     expect(pointsOf(h, 5)).toEqual([50, 11350, 4450, 11350]);
-    const ext = lineOp(h.doc, "extend", extend, 5, 15);
+    const ext = lineOp(h.doc, act("act.extend"), extend, 5, 15);
     if (!ext.ok) throw new Error(ext.reason);
     h.run(ext.value);
     expect(pointsOf(h, 5)).toEqual([50, 11350, 7000, 11350]);
@@ -75,7 +76,7 @@ describe("history", () => {
           { kind: "linemapped", layer: 1, points: [0, 0, 1000, 0], attrs: {} },
           { kind: "auxlinemapped", layer: 1, points: [0, 0, 0, 300], attrs: {} },
         ],
-        "convert lines from scan",
+        act("act.fromScan", { n: 2 }),
       ),
     );
     expect(h.doc.scene.objects.map((o) => o.id).slice(-3)).toEqual([48, 49, 50]);
@@ -99,10 +100,13 @@ describe("geometric commands", () => {
   it("trim against a parallel line says why and changes nothing", () => {
     const h = fresh();
     const start = snapshot(h);
-    const r = lineOp(h.doc, "trim", trim, 5, 10); // corridor walls y = 11200 and y = 8800
+    const r = lineOp(h.doc, act("act.trim"), trim, 5, 10); // corridor walls y = 11200 and y = 8800
     expect(r).toEqual({ ok: false, reason: "the lines are parallel: they never cross" });
-    expect(lineOp(h.doc, "trim", trim, 5, 5)).toEqual({ ok: false, reason: "the reference line is the line itself" });
-    expect(lineOp(h.doc, "trim", trim, 0, 5)).toEqual({ ok: false, reason: "a <workarea> is not a line" });
+    expect(lineOp(h.doc, act("act.trim"), trim, 5, 5)).toEqual({
+      ok: false,
+      reason: "the reference line is the line itself",
+    });
+    expect(lineOp(h.doc, act("act.trim"), trim, 0, 5)).toEqual({ ok: false, reason: "a <workarea> is not a line" });
     expect(snapshot(h)).toBe(start);
   });
   it("invert swaps a line's ends and undo swaps them back", () => {
@@ -141,7 +145,7 @@ describe("object commands", () => {
         h.doc,
         { kind: "workarea", layer: 0, points: [0, 0, 10, 0, 10, 10], attrs: {} },
         [0],
-        "workarea replaced",
+        act("act.replaceWorkarea"),
       ),
     );
     const areas = h.doc.scene.objects.filter((o) => o.kind === "workarea");

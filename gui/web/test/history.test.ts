@@ -5,7 +5,11 @@ import { describe, expect, it } from "vitest";
 import mapSrc from "../../../fixtures/maps/office.map?raw";
 import rmSrc from "../../../fixtures/roadmaps/office.rm?raw";
 import { History, moveObjects } from "../src/editor/commands";
-import type { EditHistory } from "../src/editor/history";
+import type { Action, EditHistory } from "../src/editor/history";
+import type { Key } from "../src/i18n/i18n";
+
+/** A step named `s` (a stand-in for a catalog key). */
+const L = (s: string): Action => ({ key: s as Key });
 import { parseMapDoc, writeMapDoc } from "../src/editor/mapdoc";
 import { addStation, parseRoadmapDoc, RoadmapHistory, writeRoadmapDoc } from "../src/editor/roadmapdoc";
 
@@ -22,7 +26,7 @@ const SUBJECTS: Record<string, () => Subject> = {
     let k = 0;
     return {
       history: h,
-      edit: (label) => h.run({ label, changes: moveObjects(h.doc, [1], 10 * ++k, 0).changes }),
+      edit: (label) => h.run({ label: L(label), changes: moveObjects(h.doc, [1], 10 * ++k, 0).changes }),
       text: () => writeMapDoc(h.doc),
     };
   },
@@ -33,7 +37,7 @@ const SUBJECTS: Record<string, () => Subject> = {
       history: h,
       edit: (label) => {
         k++;
-        expect(h.run(addStation(`S${k}`, 100 * k, 0, 0), label)).toBeNull();
+        expect(h.run(addStation(`S${k}`, 100 * k, 0, 0), L(label))).toBeNull();
       },
       text: () => writeRoadmapDoc(h.doc),
     };
@@ -60,15 +64,15 @@ describe.each(Object.entries(SUBJECTS))("the history of the %s editor", (_name, 
     const afterFirst = s.text();
     s.edit("second");
     const afterSecond = s.text();
-    expect(s.history.label).toBe("second");
-    expect(s.history.undo()).toBe("second");
+    expect(s.history.label).toEqual(L("second"));
+    expect(s.history.undo()).toEqual(L("second"));
     expect(s.text()).toBe(afterFirst);
-    expect([s.history.label, s.history.canUndo, s.history.canRedo]).toEqual(["first", true, true]);
-    expect(s.history.undo()).toBe("first");
+    expect([s.history.label, s.history.canUndo, s.history.canRedo]).toEqual([L("first"), true, true]);
+    expect(s.history.undo()).toEqual(L("first"));
     expect(s.text()).toBe(before);
     expect([s.history.label, s.history.canUndo]).toEqual([null, false]);
-    expect(s.history.redo()).toBe("first");
-    expect(s.history.redo()).toBe("second");
+    expect(s.history.redo()).toEqual(L("first"));
+    expect(s.history.redo()).toEqual(L("second"));
     expect(s.text()).toBe(afterSecond);
     expect(s.history.canRedo).toBe(false);
   });
@@ -78,7 +82,7 @@ describe.each(Object.entries(SUBJECTS))("the history of the %s editor", (_name, 
     s.edit("a");
     s.history.undo();
     s.edit("b");
-    expect([s.history.canRedo, s.history.redo(), s.history.label]).toEqual([false, null, "b"]);
+    expect([s.history.canRedo, s.history.redo(), s.history.label]).toEqual([false, null, L("b")]);
   });
 
   it("is dirty until saved, again after an undo, clean when redone to the saved document", () => {

@@ -1,4 +1,5 @@
 import { describe, expect, it } from "vitest";
+import { act } from "../src/editor/history";
 import office from "../../../fixtures/maps/office.map?raw";
 import { addObject, addObjects, deleteObjects, History } from "../src/editor/commands";
 import { type ToolContext, ShapeTools } from "../src/editor/drawtools";
@@ -144,7 +145,7 @@ describe("new objects in the document", () => {
       value(segmentObject("line", { x: 0, y: 0 }, { x: 500, y: 0 }, 3)),
       value(segmentObject("line", { x: 0, y: 100 }, { x: 500, y: 100 }, 3)),
     ];
-    h.run(addObjects(h.doc, objs, "convert lines from scan"));
+    h.run(addObjects(h.doc, objs, act("act.fromScan", { n: 4 })));
     const out = writeMapDoc(h.doc);
     expect(layersOf(out).map(([i]) => i)).toEqual(["0", "1", "2", "3"]);
     expect(layersOf(out)[3]).toEqual(["3", ["line@0,0", "line@0,100"]]);

@@ -72,8 +72,8 @@ describe("Edit objects", () => {
     gesture(ed, env, "select", [4000, 11200], [4000, 11203], [4034, 11247]);
     expect(ed.selected).toBe(5);
     expect(pointsOf(history, 5)).toEqual([30, 11250, 4430, 11250]);
-    expect(said.at(-1)).toBe("move");
-    expect(history.label).toBe("move");
+    expect(said.at(-1)).toBe('edit.actionDone {"action":"act.move"}');
+    expect(history.label).toEqual({ key: "act.move" });
   });
 
   it("goes through objects on top of each other at still clicks (a wall on the workarea's edge)", () => {
@@ -117,7 +117,11 @@ describe("the two-click line operations", () => {
     gesture(ed, env, "extend", [4000, 11200]);
     expect(ed.first?.id).toBe(5);
     gesture(ed, env, "extend", [7000, 15000]);
-    expect([pointsOf(history, 5), ed.first, history.label]).toEqual([[0, 11200, 7000, 11200], null, "extend"]);
+    expect([pointsOf(history, 5), ed.first, history.label]).toEqual([
+      [0, 11200, 7000, 11200],
+      null,
+      { key: "act.extend" },
+    ]);
   });
 
   it("says why a trim against a parallel line cannot be done and changes nothing", () => {
@@ -170,11 +174,11 @@ describe("the toolbar's actions", () => {
     const shown = fieldsOf(history.byId(5) as MapObject);
     typeCoordinates(ed, env, { ...shown, x1: "100" }, shown);
     expect(pointsOf(history, 5)?.[0]).toBe(100);
-    expect(history.label).toBe("typed coordinates");
+    expect(history.label).toEqual({ key: "act.typed" });
     ed.many = new Set([1, 2]);
     typeCoordinates(ed, env, { ...shown, x1: "5" }, shown);
-    expect(history.label).toBe("typed coordinates");
-    expect(history.undo()).toBe("typed coordinates");
+    expect(history.label).toEqual({ key: "act.typed" });
+    expect(history.undo()).toEqual({ key: "act.typed" });
     expect(history.canUndo).toBe(false);
   });
 });

@@ -60,7 +60,7 @@ describe("the roadmap's tools", () => {
     ]);
     expect(ed.selected).toBe("c_west");
     expect([station(history, "c_west")?.x, station(history, "c_west")?.y]).toEqual([3000, 5000]);
-    expect([said.at(-1), history.label]).toEqual(["rm.moved", "rm.moved"]);
+    expect([said.at(-1), history.label]).toEqual(["rm.moved", { key: "act.moveStation" }]);
   });
 
   it("a click that does not move changes nothing", () => {
@@ -144,7 +144,7 @@ describe("the roadmap's actions", () => {
     expect(stationAt(history.doc, 5000, 10000, 10)).toBeNull();
     expect(history.doc.edges.length).toBeLessThan(edges);
     expect([ed.selected, ed.edgeSel]).toEqual([null, null]);
-    expect(history.undo()).toBe("rm.deleted");
+    expect(history.undo()).toEqual({ key: "act.deleteStation" });
     expect(history.doc.edges.length).toBe(edges);
   });
 

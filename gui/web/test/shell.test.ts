@@ -2,7 +2,8 @@
 // stores what is sent (or refuses to take it), and dialogs that answer as scripted. What a user observes: the
 // messages, the file downloaded, what the platform holds, whether the editor closed.
 import { describe, expect, it } from "vitest";
-import type { EditHistory } from "../src/editor/history";
+import type { Action, EditHistory } from "../src/editor/history";
+import type { Key } from "../src/i18n/i18n";
 import {
   type Closing,
   type DocumentKind,
@@ -15,24 +16,24 @@ import type { Verdict } from "../src/editor/validate";
 
 /** A list of words with snapshot undo: the smallest EditHistory. */
 class Words implements EditHistory {
-  private done: Array<{ before: string[]; after: string[]; label: string }> = [];
-  private undone: Array<{ before: string[]; after: string[]; label: string }> = [];
+  private done: Array<{ before: string[]; after: string[]; label: Action }> = [];
+  private undone: Array<{ before: string[]; after: string[]; label: Action }> = [];
   private saved: object | null = null;
   constructor(public words: string[]) {}
   add(word: string): void {
     const after = [...this.words, word];
-    this.done.push({ before: this.words, after, label: `add ${word}` });
+    this.done.push({ before: this.words, after, label: { key: "act.addObject" as Key, words: { kind: word } } });
     this.undone = [];
     this.words = after;
   }
-  undo(): string | null {
+  undo(): Action | null {
     const s = this.done.pop();
     if (s === undefined) return null;
     this.undone.push(s);
     this.words = s.before;
     return s.label;
   }
-  redo(): string | null {
+  redo(): Action | null {
     const s = this.undone.pop();
     if (s === undefined) return null;
     this.done.push(s);
@@ -45,7 +46,7 @@ class Words implements EditHistory {
   get canRedo(): boolean {
     return this.undone.length > 0;
   }
-  get label(): string | null {
+  get label(): Action | null {
     return this.done.at(-1)?.label ?? null;
   }
   markSaved(): void {
@@ -79,6 +80,7 @@ const WORDS: DocumentKind<Words> = {
   same: (a, b) => a === b,
   counts: (h) => ({ n: h.words.length }),
   text: (event: ShellEvent, words) => `${event}${words === undefined ? "" : ` ${JSON.stringify(words)}`}`,
+  action: (said, action) => `${said}${action === null ? "" : ` ${action.words?.kind}`}`,
 };
 
 /** The shell over an in-memory platform and scripted dialogs, and what each side saw. */

@@ -6,9 +6,10 @@
  * read the document and return a command (or, for a geometric operation with no solution, the reason, the
  * document untouched); `History.run` applies it.
  */
-import { KINDS, type MapObject } from "../scene/map";
+import type { Key } from "../i18n/i18n";
+import { KINDS, type Kind, type MapObject } from "../scene/map";
 import * as g from "./geometry";
-import type { EditHistory } from "./history";
+import { type Action, act, type EditHistory } from "./history";
 import type { MapDoc } from "./mapdoc";
 import { inDocumentOrder, ObjectIndex } from "./objindex";
 
@@ -19,7 +20,7 @@ export interface Change {
 }
 
 export interface Command {
-  label: string;
+  label: Action;
   changes: Change[];
 }
 
@@ -123,8 +124,8 @@ export class History implements EditHistory {
     this.undone = [];
   }
 
-  /** The label of the command undone, or null when there is nothing to undo. */
-  undo(): string | null {
+  /** The action of the command undone, or null when there is nothing to undo. */
+  undo(): Action | null {
     const cmd = this.done.pop();
     if (cmd === undefined) {
       return null;
@@ -134,7 +135,7 @@ export class History implements EditHistory {
     return cmd.label;
   }
 
-  redo(): string | null {
+  redo(): Action | null {
     const cmd = this.undone.pop();
     if (cmd === undefined) {
       return null;
@@ -152,7 +153,7 @@ export class History implements EditHistory {
     return this.undone.length > 0;
   }
 
-  get label(): string | null {
+  get label(): Action | null {
     return this.done[this.done.length - 1]?.label ?? null;
   }
 
@@ -174,14 +175,33 @@ function indexOf(doc: MapDoc, id: number): number {
   return k;
 }
 
+/** The action of adding an object of `kind` (issue 35: the history's labels are catalog keys). */
+const ADD_KEY: Record<Kind, Key> = {
+  line: "act.addLine",
+  auxline: "act.addAuxline",
+  linemapped: "act.addLine",
+  auxlinemapped: "act.addAuxline",
+  reflmark: "act.addReflector",
+  circle: "act.addCircle",
+  workarea: "act.addWorkarea",
+  prohibit: "act.addProhibit",
+  hiddenpolygon: "act.addHiddenpolygon",
+  hiddenlabel: "act.addLabel",
+};
+
+export function addAction(kind: string): Action {
+  const key = ADD_KEY[kind as Kind];
+  return key === undefined ? act("act.addObject", { kind }) : act(key);
+}
+
 /** Add an object (its id is the document's next) at the end of the document. */
-export function addObject(doc: MapDoc, obj: Omit<MapObject, "id">, label = `add ${obj.kind}`): Command {
+export function addObject(doc: MapDoc, obj: Omit<MapObject, "id">, label = addAction(obj.kind)): Command {
   const after: MapObject = { ...obj, id: doc.nextId, points: [...obj.points], attrs: { ...obj.attrs } };
   return { label, changes: [{ index: doc.scene.objects.length, before: null, after }] };
 }
 
 /** Delete objects (highest position first, so the positions stay right). */
-export function deleteObjects(doc: MapDoc, ids: Iterable<number>, label = "delete"): Command {
+export function deleteObjects(doc: MapDoc, ids: Iterable<number>, label = act("act.delete")): Command {
   const at = [...new Set(ids)].map((id) => indexOf(doc, id)).sort((a, b) => b - a);
   return { label, changes: at.map((index) => ({ index, before: doc.scene.objects[index], after: null })) };
 }
@@ -195,11 +215,11 @@ export function clearMap(doc: MapDoc): Command {
   return deleteObjects(
     doc,
     doc.scene.objects.filter((o) => known.has(o.kind)).map((o) => o.id),
-    "clear",
+    act("act.clear"),
   );
 }
 
-function replace(doc: MapDoc, id: number, points: number[], label: string): Command {
+function replace(doc: MapDoc, id: number, points: number[], label: Action): Command {
   const index = indexOf(doc, id);
   const before = doc.scene.objects[index];
   return { label, changes: [{ index, before, after: { ...before, points } }] };
@@ -214,7 +234,7 @@ export function moveObjects(doc: MapDoc, ids: Iterable<number>, dx: number, dy: 
     const points = before.points.map((v, k) => g.clean(v + (k % 2 === 0 ? dx : dy)));
     changes.push({ index, before, after: { ...before, points } });
   }
-  return { label: "move", changes };
+  return { label: act("act.move"), changes };
 }
 
 /** Move one vertex of a polygon or line (guide 5.4 "Edit vertices of a polygon"). */
@@ -226,7 +246,7 @@ export function moveVertex(doc: MapDoc, id: number, vertex: number, p: g.Pt): Co
   const points = [...before.points];
   points[2 * vertex] = p.x;
   points[2 * vertex + 1] = p.y;
-  return replace(doc, id, points, "edit vertex");
+  return replace(doc, id, points, act("act.moveVertex"));
 }
 
 export function segOf(o: MapObject): g.Result<g.Seg> {
@@ -240,7 +260,7 @@ export function segOf(o: MapObject): g.Result<g.Seg> {
 type LineOp = (s: g.Seg, r: g.Seg) => g.Result<g.Seg>;
 
 /** A geometric operation of line `id` against reference line `refId`: a command, or why not (nothing changed). */
-export function lineOp(doc: MapDoc, label: string, op: LineOp, id: number, refId: number): g.Result<Command> {
+export function lineOp(doc: MapDoc, label: Action, op: LineOp, id: number, refId: number): g.Result<Command> {
   if (id === refId) {
     return { ok: false, reason: "the reference line is the line itself" };
   }
@@ -268,11 +288,11 @@ export function invertLine(doc: MapDoc, id: number): g.Result<Command> {
     return out;
   }
   const { a, b } = out.value;
-  return { ok: true, value: replace(doc, id, [a.x, a.y, b.x, b.y], "invert") };
+  return { ok: true, value: replace(doc, id, [a.x, a.y, b.x, b.y], act("act.invert")) };
 }
 
 /** Add several objects as one step of the history (e.g. every line converted from one scan). */
-export function addObjects(doc: MapDoc, objs: ReadonlyArray<Omit<MapObject, "id">>, label: string): Command {
+export function addObjects(doc: MapDoc, objs: ReadonlyArray<Omit<MapObject, "id">>, label: Action): Command {
   const n = doc.scene.objects.length;
   const changes = objs.map((o, k) => ({
     index: n + k,
@@ -294,11 +314,11 @@ export function setGeometry(doc: MapDoc, id: number, g: { points: number[]; r?: 
     after.text = g.text;
     after.attrs = { ...before.attrs, text: g.text };
   }
-  return { label: "typed coordinates", changes: [{ index, before, after }] };
+  return { label: act("act.typed"), changes: [{ index, before, after }] };
 }
 
 /** Add `obj` and remove the objects `ids` in one step (a new workarea replaces the old one). */
-export function addReplacing(doc: MapDoc, obj: Omit<MapObject, "id">, ids: readonly number[], label: string): Command {
+export function addReplacing(doc: MapDoc, obj: Omit<MapObject, "id">, ids: readonly number[], label: Action): Command {
   const removed = deleteObjects(doc, ids).changes;
   const after: MapObject = { ...obj, id: doc.nextId, points: [...obj.points], attrs: { ...obj.attrs } };
   return { label, changes: [...removed, { index: doc.scene.objects.length - removed.length, before: null, after }] };
@@ -316,7 +336,7 @@ export function insertVertex(doc: MapDoc, id: number, after: number, p: g.Pt): g
   }
   const points = [...before.points];
   points.splice(2 * (after + 1), 0, g.clean(p.x), g.clean(p.y));
-  return { ok: true, value: replace(doc, id, points, "add vertex") };
+  return { ok: true, value: replace(doc, id, points, act("act.addVertex")) };
 }
 
 /** Delete vertex `vertex` of a polygon; a polygon keeps at least 3. */
@@ -330,5 +350,5 @@ export function deleteVertex(doc: MapDoc, id: number, vertex: number): g.Result<
   }
   const points = [...before.points];
   points.splice(2 * vertex, 2);
-  return { ok: true, value: replace(doc, id, points, "delete vertex") };
+  return { ok: true, value: replace(doc, id, points, act("act.deleteVertex")) };
 }

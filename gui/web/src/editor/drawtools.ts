@@ -8,6 +8,7 @@
 import { type Camera, toScreen } from "../view/camera";
 import { addObject, addReplacing, type Command, deleteVertex, insertVertex, moveVertex } from "./commands";
 import type { Pt, Result } from "./geometry";
+import { act } from "./history";
 import type { MapDoc } from "./mapdoc";
 import type { MapObject } from "../scene/map";
 import {
@@ -138,7 +139,7 @@ export class ShapeTools {
     const old = kind === "workarea" ? doc.scene.objects.filter((o) => o.kind === "workarea").map((o) => o.id) : [];
     this.c.run({
       ok: true,
-      value: old.length > 0 ? addReplacing(doc, r.value, old, "workarea replaced") : addObject(doc, r.value),
+      value: old.length > 0 ? addReplacing(doc, r.value, old, act("act.replaceWorkarea")) : addObject(doc, r.value),
     });
   }
 

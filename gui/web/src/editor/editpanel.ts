@@ -5,7 +5,7 @@
  * editor's document (the session's `edited` topic) and its hold on the pointer in the view's "edit" tool. The
  * tool's use is shown at the bottom of the toolbar, as the guide says.
  */
-import { h } from "../dom";
+import { field, h } from "../dom";
 import { bind, type Key, t } from "../i18n/i18n";
 import type { MapView } from "../panels/mapview";
 import { guard } from "../panels/control";
@@ -13,6 +13,7 @@ import { type GetMapReply, GetMapRequest, SetMapRequest } from "../pltf";
 import type { EditHooks } from "../session/edited";
 import type { PlatformSession } from "../session/session";
 import { History } from "./commands";
+import { actionMessage } from "./history";
 import { ShapeTools } from "./drawtools";
 import type { ScanStatus } from "./fromscan";
 import { layerPanel } from "./layerpanel";
@@ -91,6 +92,7 @@ export const MAP_KIND: DocumentKind<History> = {
   same: sameObjects,
   counts: (history) => ({ n: history.doc.scene.objects.length }),
   text: wording(MAP_KEYS),
+  action: (said, action) => actionMessage(said, action, t),
   named: (history, name) => {
     history.doc.scene.name = name;
   },
@@ -256,7 +258,7 @@ export function mapEditor(
   // the tooltips at the bottom of the toolbar (guide 5.4): the pointed-at button's use, else the chosen tool's
   const hoverTips: Array<[HTMLElement, Key]> = [
     [files.load, "edit.tipLoad"],
-    [files.open, "edit.tipOpen"],
+    [files.openButton, "edit.tipOpen"],
     [files.save, "edit.tipSave"],
     [files.saveAs, "edit.tipSaveAs"],
     [files.new, "edit.tipNew"],
@@ -272,19 +274,7 @@ export function mapEditor(
     [closeB, "edit.tipClose"],
     ...[...bar.tools].map(([k, b]): [HTMLElement, Key] => [b, TIP_FOR[k]]),
   ];
-  for (const [b, key] of hoverTips) {
-    bind(b, key, { text: false, name: false, title: key });
-    const show = (): void => {
-      tip.textContent = t(key);
-    };
-    const back = (): void => {
-      tip.textContent = t(TIP_FOR[ed.tool]);
-    };
-    b.addEventListener("pointerenter", show);
-    b.addEventListener("focus", show);
-    b.addEventListener("pointerleave", back);
-    b.addEventListener("blur", back);
-  }
+  bar.tips(hoverTips, tip, () => TIP_FOR[ed.tool]);
   document.addEventListener("keydown", (e) => {
     if (
       !open ||
@@ -327,7 +317,7 @@ export function mapEditor(
       session.refreshDocuments(); // the view shows the platform's map again
     }
   };
-  const labelField = h("label", { class: "edit-label" }, h("span", {}), labelIn);
-  bind(labelField.firstElementChild as HTMLElement, "edit.labelText", { name: false });
+  const labelField = field("edit.labelText", labelIn);
+  labelField.classList.add("edit-label");
   return { root: h("div", { class: "map-editor" }, bar.root, labelField, layers.root, typed.root, state, tip), onShow };
 }

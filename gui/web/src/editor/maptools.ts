@@ -25,6 +25,7 @@ import { SHAPE_TOOLS, type ShapeTool, type ShapeTools } from "./drawtools";
 import { LINE_LEN_DEFAULTS, linesFromScan, type ScanStatus } from "./fromscan";
 import { clean, extend, orthogonal, parallel, type Pt, type Result, type Seg, snap, trim } from "./geometry";
 import { objectsAt } from "./shapes";
+import { act, actionMessage } from "./history";
 import { applyFields, type Fields } from "./typed";
 
 export type RefTool = "trim" | "extend" | "parallel" | "orthogonal";
@@ -84,11 +85,11 @@ export function deselect(ed: MapEditing): void {
   ed.many = new Set();
 }
 
-/** Do a command (its label said), or say why it cannot be done; then show the document. */
+/** Do a command (its action said: "Done: add a line"), or say why it cannot be done; then show the document. */
 export function run(ed: MapEditing, env: MapToolEnv, r: Result<Command>): void {
   if (r.ok) {
     ed.history().run(r.value);
-    env.say(r.value.label);
+    env.say(actionMessage("done", r.value.label, env.text));
   } else {
     env.say(r.reason);
   }
@@ -223,7 +224,7 @@ export function pressLineOp(ed: MapEditing, env: MapToolEnv, x: number, y: numbe
   run(
     ed,
     env,
-    lineOp(h.doc, tool, (s, r) => op(s, r, f.at), f.id, id),
+    lineOp(h.doc, act(`act.${tool}`), (s, r) => op(s, r, f.at), f.id, id),
   );
 }
 
@@ -361,7 +362,7 @@ export function convertScan(
     env.say(env.text("edit.noLines"));
     return;
   }
-  run(ed, env, { ok: true, value: addObjects(ed.history().doc, objs, env.text("edit.converted", { n: objs.length })) });
+  run(ed, env, { ok: true, value: addObjects(ed.history().doc, objs, act("act.fromScan", { n: objs.length })) });
 }
 
 /** Typed coordinates (typed.ts) of the one selected object: mm and degrees, one undoable step. */

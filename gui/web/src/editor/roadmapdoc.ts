@@ -6,7 +6,7 @@
  * The history keeps whole snapshots: a roadmap is small (tens of stations), so an edit, its undo and its redo
  * are exact copies, unbounded while the editor is open.
  */
-import type { EditHistory } from "./history";
+import { type Action, act, type EditHistory } from "./history";
 import { elementsOf, parseXml, writeDocument, type XmlElement } from "./xml";
 
 export interface RmStation {
@@ -189,7 +189,7 @@ export type Edit = (doc: RoadmapDoc) => string | null;
 interface Step {
   readonly before: RoadmapDoc;
   readonly after: RoadmapDoc;
-  readonly label: string;
+  readonly label: Action;
 }
 
 /**
@@ -206,7 +206,7 @@ export class RoadmapHistory implements EditHistory {
   constructor(public doc: RoadmapDoc) {}
 
   /** Apply `edit` to a copy; it returns null when done or the reason it cannot be done (nothing changes). */
-  run(edit: Edit, label = "edit"): string | null {
+  run(edit: Edit, label: Action = act("act.edit")): string | null {
     const next = copy(this.doc);
     const why = edit(next);
     if (why !== null) {
@@ -218,7 +218,7 @@ export class RoadmapHistory implements EditHistory {
     return null;
   }
 
-  undo(): string | null {
+  undo(): Action | null {
     const step = this.done.pop();
     if (step === undefined) {
       return null;
@@ -228,7 +228,7 @@ export class RoadmapHistory implements EditHistory {
     return step.label;
   }
 
-  redo(): string | null {
+  redo(): Action | null {
     const step = this.undone.pop();
     if (step === undefined) {
       return null;
@@ -246,7 +246,7 @@ export class RoadmapHistory implements EditHistory {
     return this.undone.length > 0;
   }
 
-  get label(): string | null {
+  get label(): Action | null {
     return this.done[this.done.length - 1]?.label ?? null;
   }
 

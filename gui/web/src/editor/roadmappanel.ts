@@ -6,7 +6,7 @@
  * toolbar and the fields (station name, x, y, angle, Apply) and gives the map view the editor's roadmap (the
  * session's `edited` topic) and its hold on the pointer while the editor is open.
  */
-import { h } from "../dom";
+import { button, field, h } from "../dom";
 import { bind, type Key, t } from "../i18n/i18n";
 import type { MapView } from "../panels/mapview";
 import { guard } from "../panels/control";
@@ -36,6 +36,7 @@ import {
 } from "./roadmaptools";
 import { type DocumentKind, DocumentShell, type PlatformLink } from "./shell";
 import { closeButton, fileButtons, historyButtons, pageEffects, type ShellKeys, sendButton, wording } from "./shellbar";
+import { act, actionMessage } from "./history";
 import { Toolbar } from "./toolbar";
 import { validateDocument } from "./validate";
 
@@ -76,6 +77,7 @@ export const ROADMAP_KIND: DocumentKind<RoadmapHistory> = {
   same: sameRoadmap,
   counts: (history) => ({ n: history.doc.stations.length, e: history.doc.edges.length }),
   text: wording(ROADMAP_KEYS),
+  action: (said, action) => actionMessage(said, action, t),
 };
 
 /** CMD_GET_ROADMAP and CMD_SET_ROADMAP. */
@@ -89,10 +91,8 @@ export function roadmapLink(session: PlatformSession): PlatformLink {
   };
 }
 
-function numberField(key: Key, step: string): HTMLInputElement {
-  const i = h("input", { type: "number", step });
-  bind(i, key, { text: false });
-  return i;
+function numberField(step: string): HTMLInputElement {
+  return h("input", { type: "number", step });
 }
 
 export function roadmapEditor(
@@ -106,10 +106,9 @@ export function roadmapEditor(
   bind(tip, "edit.tip", { text: false });
   const state = h("output", { class: "rm-state" });
   const nameIn = h("input", { type: "text" });
-  bind(nameIn, "rm.stationName", { text: false });
-  const xIn = numberField("rm.x", "10");
-  const yIn = numberField("rm.y", "10");
-  const angleIn = numberField("rm.angle", "1");
+  const xIn = numberField("10");
+  const yIn = numberField("10");
+  const angleIn = numberField("1");
   const bar = new Toolbar<RmTool>("rm.tools");
 
   const shell: DocumentShell<RoadmapHistory> = new DocumentShell(
@@ -141,8 +140,8 @@ export function roadmapEditor(
     draw: (ctx, cam) => drawEditing(ed, ctx, cam),
   };
 
-  fileButtons(shell, bar, ROADMAP_KEYS, say);
-  bar.action("rm.clear", () => run(ed, env, clearRoadmap, t("rm.cleared")));
+  const files = fileButtons(shell, bar, ROADMAP_KEYS, say);
+  const clearB = bar.action("rm.clear", () => run(ed, env, clearRoadmap, act("act.clearRoadmap"), t("rm.cleared")));
   const undoRedo = historyButtons(shell, bar);
   const refresh = (): void => {
     const doc = shell.history.doc;
@@ -176,14 +175,40 @@ export function roadmapEditor(
   bar.tool("addStation", "rm.addStation", setTool);
   bar.tool("addEdge", "rm.addEdge", setTool);
   bar.tool("pathPoints", "rm.pathPoints", setTool);
-  bar.action("edit.delete", () => deleteSelected(ed, env));
-  const apply = bar.action("rm.apply", () =>
+  const deleteB = bar.action("edit.delete", () => deleteSelected(ed, env));
+  const apply = button("rm.apply", () =>
     applyTyped(ed, env, { name: nameIn.value, x: xIn.value, y: yIn.value, angle: angleIn.value }),
   );
   const sendB = sendButton(shell, bar);
   guard(session, sendB); // CMD_SET_ROADMAP: only while this tab may command (issue 33)
-  closeButton(shell, bar); // guide 5.5 "looks similar to the toolbar of the map editor": asks for saving if necessary
-  const fields = h("div", { class: "rm-fields" }, nameIn, xIn, yIn, angleIn, apply);
+  const closeB = closeButton(shell, bar); // guide 5.5 "looks similar to the toolbar of the map editor"
+  // guide 5.5 names the buttons of the shell only (its words say "map": read as "roadmap", erratum E-GUI-009)
+  const hoverTips: Array<[HTMLElement, Key]> = [
+    [files.load, "rm.tipLoad"],
+    [files.openButton, "rm.tipOpen"],
+    [files.save, "rm.tipSave"],
+    [files.saveAs, "rm.tipSaveAs"],
+    [files.new, "rm.tipNew"],
+    [clearB, "rm.tipClear"],
+    [undoRedo.undo, "edit.tipUndo"],
+    [undoRedo.redo, "edit.tipRedo"],
+    [deleteB, "rm.tipDelete"],
+    [apply, "rm.tipApply"],
+    [sendB, "rm.tipSend"],
+    [closeB, "rm.tipClose"],
+    ...[...bar.tools].map(([k, b]): [HTMLElement, Key] => [b, TIP_FOR[k]]),
+  ];
+  bar.tips(hoverTips, tip, () => TIP_FOR[ed.tool]);
+  // every field with its caption (issue 35: they were four bare boxes)
+  const fields = h(
+    "div",
+    { class: "rm-fields" },
+    field("rm.stationName", nameIn),
+    field("rm.x", xIn),
+    field("rm.y", yIn),
+    field("rm.angle", angleIn),
+    apply,
+  );
   setTool("select");
   refresh();
   const onShow = (shown: boolean): void => {

@@ -17,6 +17,7 @@ import {
   type RoadmapDoc,
   type RoadmapHistory,
 } from "./roadmapdoc";
+import { type Action, act, actionMessage } from "./history";
 import { deletePathPoint, edgeAt, edgePath, insertPathPoint, movePathPoint, pathPointAt } from "./roadmappath";
 
 export type RmTool = "select" | "addStation" | "addEdge" | "pathPoints";
@@ -79,10 +80,14 @@ export function stationAt(doc: RoadmapDoc, x: number, y: number, tol: number): s
 
 export const grid = (v: number): number => Math.round(v / GRID_MM) * GRID_MM;
 
-/** Do an edit (its label said), or say why it cannot be done; then show the document. The reason, or null. */
-export function run(ed: RoadmapEditing, env: RoadmapToolEnv, edit: Edit, label: string): string | null {
-  const why = ed.history().run(edit, label);
-  env.say(why ?? label);
+/**
+ * Do an edit named `action` (the history's label: "Undone: add station A"), or say why it cannot be done; then
+ * show the document. What is said when done is `done` (e.g. "Station A added"), else "Done: {action}". The
+ * reason, or null.
+ */
+export function run(ed: RoadmapEditing, env: RoadmapToolEnv, edit: Edit, action: Action, done?: string): string | null {
+  const why = ed.history().run(edit, action);
+  env.say(why ?? done ?? actionMessage("done", action, env.text));
   env.refresh();
   return why;
 }
@@ -95,7 +100,7 @@ function edgeWords(doc: RoadmapDoc, k: number): { from: string; to: string; n: n
 
 /** A path point edit, said as the edge's new path ("Path of A -> B: 2 points"). */
 function runPath(ed: RoadmapEditing, env: RoadmapToolEnv, edit: Edit, edge: number): void {
-  if (run(ed, env, edit, "") === null) {
+  if (run(ed, env, edit, act("act.pathPoints", edgeWords(ed.history().doc, edge))) === null) {
     env.say(env.text("rm.pathChanged", edgeWords(ed.history().doc, edge)));
   }
 }
@@ -139,7 +144,13 @@ export function pressAddStation(ed: RoadmapEditing, env: RoadmapToolEnv, x: numb
   const f = env.fields();
   const n = f.name.trim() || `Station_${ed.history().doc.stations.length + 1}`;
   const angle = Number(f.angle || "0");
-  run(ed, env, addStation(n, grid(x), grid(y), Number.isFinite(angle) ? angle : 0), env.text("rm.added", { name: n }));
+  run(
+    ed,
+    env,
+    addStation(n, grid(x), grid(y), Number.isFinite(angle) ? angle : 0),
+    act("act.addStation", { name: n }),
+    env.text("rm.added", { name: n }),
+  );
   ed.selected = ed.history().doc.stations.find((s) => s.name === n)?.id ?? ed.selected;
   env.refresh();
 }
@@ -159,7 +170,7 @@ export function pressAddEdge(ed: RoadmapEditing, env: RoadmapToolEnv, x: number,
   const from = ed.edgeFrom;
   ed.edgeFrom = null;
   ed.selected = id;
-  run(ed, env, addEdge(from, id), env.text("rm.edgeAdded"));
+  run(ed, env, addEdge(from, id), act("act.addEdge"), env.text("rm.edgeAdded"));
 }
 
 /** "Select": the station under the pointer, dragged until the release. */
@@ -201,7 +212,7 @@ export function release(ed: RoadmapEditing, env: RoadmapToolEnv, x: number, y: n
   const d = ed.drag;
   ed.drag = null;
   if (d?.moved) {
-    run(ed, env, moveStation(d.id, grid(x), grid(y)), env.text("rm.moved"));
+    run(ed, env, moveStation(d.id, grid(x), grid(y)), act("act.moveStation"), env.text("rm.moved"));
   }
 }
 
@@ -240,7 +251,7 @@ export function deleteSelected(ed: RoadmapEditing, env: RoadmapToolEnv): void {
     env.say(env.text("edit.noneSelected"));
     return;
   }
-  run(ed, env, deleteStation(ed.selected), env.text("rm.deleted"));
+  run(ed, env, deleteStation(ed.selected), act("act.deleteStation"), env.text("rm.deleted"));
   ed.selected = null;
   ed.edgeSel = null;
   env.refresh();
@@ -274,6 +285,7 @@ export function applyTyped(
       Object.assign(s, { x, y, angle: a, name: newName || s.name });
       return null;
     },
+    act("act.changeStation"),
     env.text("rm.moved"),
   );
 }

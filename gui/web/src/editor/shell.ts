@@ -6,7 +6,7 @@
  * the dialogs and the download are `ShellEffects`. No DOM and no session here: shellbar.ts builds the buttons and
  * the real effects, the panels the adapters, and test/shell.test.ts drives it with an in-memory document.
  */
-import type { EditHistory } from "./history";
+import type { Action, EditHistory, Said } from "./history";
 import type { Verdict } from "./validate";
 
 /** What a close with unsaved changes came to (closeask.ts asks). */
@@ -48,6 +48,8 @@ export interface DocumentKind<H extends EditHistory> {
   counts(history: H): Words;
   /** The message of an event in the user's language. */
   text(event: ShellEvent, words?: Words): string;
+  /** The message of an action done, undone or redone ("Undone: add a line"), in the user's language. */
+  action(said: Said, action: Action | null): string;
   /** The document took a new name (Save As); a kind that keeps its name inside the document stores it. */
   named?(history: H, name: string): void;
 }
@@ -178,13 +180,17 @@ export class DocumentShell<H extends EditHistory> {
     this.save(fileName);
   }
 
+  /** guide 5.4 "Undo": the action taken back is said ("Undone: add a line"), or that there was none. */
   undo(): void {
-    this.current.undo();
+    const action = this.current.undo();
+    this.panel.say(this.kind.action(action === null ? "nothingToUndo" : "undone", action));
     this.panel.changed();
   }
 
+  /** guide 5.4 "Redo": the action done again is said ("Redone: add a line"), or that there was none. */
   redo(): void {
-    this.current.redo();
+    const action = this.current.redo();
+    this.panel.say(this.kind.action(action === null ? "nothingToRedo" : "redone", action));
     this.panel.changed();
   }
 

@@ -52,6 +52,8 @@ export function pageEffects(keys: ShellKeys): ShellEffects {
 export interface FileButtons {
   load: HTMLButtonElement;
   open: HTMLInputElement;
+  /** the file input's icon button (its label) */
+  openButton: HTMLLabelElement;
   save: HTMLButtonElement;
   saveAs: HTMLButtonElement;
   new: HTMLButtonElement;
@@ -66,11 +68,11 @@ export function fileButtons<H extends EditHistory, T extends string>(
 ): FileButtons {
   const load = bar.action("edit.load", () => void shell.load());
   const open = fileInput(keys.accept, keys.open, say, (fileName, text) => shell.open(fileName, text));
-  bar.root.append(open);
+  const openButton = bar.fileAction(keys.open, open);
   const save = bar.action("edit.save", () => shell.save());
   const saveAs = bar.action("edit.saveAs", () => void shell.saveAs());
   const fresh = bar.action(keys.new, () => shell.newDocument());
-  return { load, open, save, saveAs, new: fresh };
+  return { load, open, openButton, save, saveAs, new: fresh };
 }
 
 /** Undo and Redo, enabled while there is something to undo (redo); `update` after each change. */
