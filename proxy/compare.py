@@ -16,12 +16,13 @@ Every other reply of a watcher (a parameter, the map) is compared as any other.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
 from pltf.spec.jsonio import telegram_to_json
 from pltf.spec.telegram import Telegram
-from pltf.spec.volatile import rule, values_differ
+from pltf.spec.volatile import Rule, rule, values_differ
 
 CUT = 60
 
@@ -68,9 +69,15 @@ def diff_watched(recorded: Telegram, replayed: Telegram) -> list[FieldDiff]:
     return diff_telegrams(recorded, replayed, only)
 
 
-def diff_telegrams(recorded: Telegram, replayed: Telegram, only: tuple[str, ...] | None = None) -> list[FieldDiff]:
+def diff_telegrams(
+    recorded: Telegram,
+    replayed: Telegram,
+    only: tuple[str, ...] | None = None,
+    widen: Mapping[str, float] | None = None,
+) -> list[FieldDiff]:
     """The fields of two replies that differ beyond the volatile-field table (an empty list: the same reply);
-    ``only``: just these fields (the telegram's kind always)."""
+    ``only``: just these fields (the telegram's kind always); ``widen``: wider tolerances for some fields (a
+    replay wait's rates, erratum E-REP-023)."""
     if recorded.NAME != replayed.NAME:
         return [FieldDiff("(telegram)", recorded.NAME, replayed.NAME)]
     a, b = telegram_to_json(recorded), telegram_to_json(replayed)
@@ -83,6 +90,8 @@ def diff_telegrams(recorded: Telegram, replayed: Telegram, only: tuple[str, ...]
         r = rule(recorded.NAME, field)
         if r.ignored or (only is not None and field not in only):
             continue
+        if widen and field in widen:
+            r = Rule(tolerance=max(r.tolerance or 0.0, widen[field]))
         if field in groups:
             out += _diff_group(field, va, vb, r.tolerance, names)
         elif isinstance(va, list):

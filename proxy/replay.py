@@ -16,9 +16,10 @@ Rules:
 - Replies answer requests by identifier, oldest first (guide 6.1: "returns data only on request").
 - A wait is a run of the same request, sent again and again on one connection (a client polling until
   something changes). How many polls see each state depends on timing, so a wait is judged by where it ended:
-  its final reply is compared, the polls before it are counted. The replay polls at the recorded pace until a
-  reply matches the recorded final one (possibly before the recorded number of polls) or, past the recorded
-  number, until twice the wait's recorded duration plus ``WAIT_GRACE`` has passed. A run longer than
+  its final reply is compared, the polls before it are counted; its rates (velocities) within how far they moved
+  between the recorded wait's last two polls (``phase_slack``, erratum E-REP-023). The replay polls at the
+  recorded pace until a reply matches the recorded final one (possibly before the recorded number of polls) or,
+  past the recorded number, until twice the wait's recorded duration plus ``WAIT_GRACE`` has passed. A run longer than
   ``WAIT_SPAN`` recorded seconds or ``WAIT_POLLS`` polls is cut into waits of that size (each judged by its own
   final reply): the replay needs a wait's final reply before it sends its first poll, and a reader that looks
   that far ahead is what bounds the replay's memory.
@@ -37,6 +38,7 @@ Rules:
 from __future__ import annotations
 
 import itertools
+import math
 import statistics
 from collections import deque
 from collections.abc import Iterable
@@ -48,6 +50,7 @@ from pltf.proxy.tap import CLOSE, FRAME, OPEN, RAW, Record
 from pltf.proxy.view import format_fields
 from pltf.spec.codec import FRAME_OVERHEAD
 from pltf.spec.jsonio import telegram_to_json
+from pltf.spec.volatile import rates
 
 WAIT_GRACE = 2.0  # s (wall, unscaled) a wait may poll beyond twice its recorded duration
 MIN_WAIT_POLLS = 2  # a run of this many identical requests is a wait
@@ -66,6 +69,7 @@ class Step:
     after_replies: int  # replies this connection had received when it was sent
     answered: bool  # a reply is due (guide 6.1: only requests with a reply table are answered)
     reply: Record | None = None  # the recorded reply (dropped for a poll that is not its wait's final one)
+    before: Record | None = None  # a poll's: the recorded reply of the poll before it (kept for the final one)
     wait: int | None = None  # the wait it is a poll of
     ident: int = -1  # the telegram identifier (-1: no frame)
     at: float = 0.0  # recorded seconds since the session began
@@ -307,8 +311,9 @@ class Builder:
         if self.keep:
             self.s.steps.append(step)
         if self._joins_run(step):
-            self.run[-1].superseded = True
-            self.run[-1].reply = None
+            prev = self.run[-1]
+            prev.superseded = True
+            step.before, prev.reply, prev.before = prev.reply, None, None
             self.run.append(step)
             return
         self._close_run()
@@ -401,12 +406,29 @@ def plan(session: Session) -> list[Script]:
     return scripts
 
 
+def phase_slack(step: Step) -> dict[str, float]:
+    """A wait's final poll: how far each rate field (spec/volatile.yaml ``rates``: velocities) moved between the
+    recorded wait's last two polls. A replayed poll falls elsewhere in the platform's control period than the
+    recorded one did, so at the wait's end a velocity may be off by that much (erratum E-REP-023: a platform that
+    reports its target reached while it still turns at 49 mrad/s, one 50 ms poll later at rest)."""
+    a, b = step.before, step.reply
+    if a is None or b is None or a.telegram is None or b.telegram is None or a.telegram.NAME != b.telegram.NAME:
+        return {}
+    fa, fb = telegram_to_json(a.telegram)["fields"], telegram_to_json(b.telegram)["fields"]
+    return {f: abs(float(fb[f]) - float(fa[f])) for f in rates(b.telegram.NAME) if _numbers(fa.get(f), fb.get(f))}
+
+
+def _numbers(*xs: object) -> bool:
+    return all(isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) for x in xs)
+
+
 def final_matches(step: Step, reply: Record) -> bool:
-    """Does a replayed poll's reply match the reply the recorded wait ended on (within the volatile table)?"""
+    """Does a replayed poll's reply match the reply the recorded wait ended on (within the volatile table, the
+    rates within their ``phase_slack``)?"""
     rec = step.reply
     if rec is None or rec.telegram is None or reply.telegram is None:
         return False
-    return not diff_telegrams(rec.telegram, reply.telegram)
+    return not diff_telegrams(rec.telegram, reply.telegram, widen=phase_slack(step))
 
 
 # ---------------------------------------------------------------------------------------------- judgement
@@ -420,7 +442,14 @@ def _describe(rec: Record | None) -> str:
     return rec.telegram.NAME
 
 
-def _compare(script: Script, step: Step, got: Record | None, note: str = "", watched: bool = False) -> list[Difference]:
+def _compare(
+    script: Script,
+    step: Step,
+    got: Record | None,
+    note: str = "",
+    watched: bool = False,
+    widen: dict[str, float] | None = None,
+) -> list[Difference]:
     rec = step.reply
     name = (
         rec.telegram.NAME
@@ -438,8 +467,11 @@ def _compare(script: Script, step: Step, got: Record | None, note: str = "", wat
             same = (rec.error or "").split(":")[0] == (got.error or "").split(":")[0]
             return [] if same else [d("(reply)", _describe(rec), _describe(got))]
         return [d("(reply)", _describe(rec), _describe(got))]
-    diff = diff_watched if script.reads_only or watched else diff_telegrams
-    return [d(f.path, f.recorded, f.replayed) for f in diff(rec.telegram, got.telegram)]
+    if script.reads_only or watched:
+        found = diff_watched(rec.telegram, got.telegram)
+    else:
+        found = diff_telegrams(rec.telegram, got.telegram, widen=widen)
+    return [d(f.path, f.recorded, f.replayed) for f in found]
 
 
 def judge_step(script: Script, step: Step, got: Record | None) -> list[Difference]:
@@ -459,7 +491,7 @@ def judge_wait(script: Script, wait: Wait, final: Record | None, polls: int) -> 
     cut = cut_by_end(script, wait)
     what = "the connection's end cut it with the platform moving" if cut else "its final reply"
     note = f" (a wait: {len(wait.steps)} polls recorded, {polls} replayed; {what})"
-    return _compare(script, wait.last, final, note, watched=cut)
+    return _compare(script, wait.last, final, note, watched=cut, widen=phase_slack(wait.last))
 
 
 MOTION = ("vel_trans", "vel_rot")  # fields of a reply that say the platform is moving

@@ -3,6 +3,8 @@
 Rules: loaded once; ``rule(telegram, field)`` says whether a reply field is ignored (a glob of the table's
 ``ignore`` list matches it; a group's name covers its items) or compared within a numeric tolerance; every
 other field is compared exactly. The conformance suite's differential mode and ``pltf replay`` both judge by it.
+``rates(telegram)`` names the fields that are rates of change (velocities), whose value at the end of a replay's
+wait depends on where in a poll's period the poll fell (erratum E-REP-023).
 ``check_table`` names entries that match no reply telegram or no field (the table must not rot).
 """
 
@@ -45,6 +47,11 @@ def rule(telegram: str, field: str) -> Rule:
     return EXACT if tol is None else Rule(tolerance=float(tol))
 
 
+def rates(telegram: str) -> tuple[str, ...]:
+    """The reply's fields that are rates of change (the table's ``rates`` list)."""
+    return tuple(volatile().get(telegram, {}).get("rates", ()))
+
+
 def values_differ(a: Any, b: Any, tolerance: float | None) -> bool:
     """Exact comparison, or within ``tolerance`` for two numbers (never for a NaN or an infinity)."""
     if tolerance is not None and _number(a) and _number(b):
@@ -74,4 +81,5 @@ def check_table() -> list[str]:
                 problems.append(f"{name}: tolerance for unknown field {field!r}")
             elif not (_number(amount) and amount >= 0):
                 problems.append(f"{name}.{field}: tolerance {amount!r} is not a number >= 0")
+        problems += [f"{name}: rate of unknown field {f!r}" for f in entry.get("rates", ()) if f not in fields]
     return problems

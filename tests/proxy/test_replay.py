@@ -20,7 +20,7 @@ from pltf.conformance_tests.readings import canonical
 from pltf.harness import launch
 from pltf.proxy.capture import PcapngWriter
 from pltf.proxy.recorder import Recorder
-from pltf.proxy.replay import Outcome, Script, judge, plan
+from pltf.proxy.replay import Outcome, Script, final_matches, judge, plan
 from pltf.proxy.session import Route, Session, SessionWriter, read_session
 from pltf.proxy.tap import CLOSE, OPEN, Record, Tap
 from pltf.spec.codec import build, encode
@@ -382,8 +382,9 @@ def test_what_the_recording_s_end_cut_is_not_held_against_the_target_and_the_res
     rested = _with(turning, STATUS)
     ok = Outcome(1, replies={3: answered}, wait_final={0: rested}, sent=4)
     turned_again = Outcome(2, sent=0, closed_by_target_after=0)  # closed before its request went out
-    # the last wait is not the connection's last request here: it is judged field by field
-    assert [d.path for d in judge([driver, newcomer], {1: ok, 2: turned_again})] == ["est_angle", "vel_rot"]
+    # the last wait is not the connection's last request here: it is judged field by field (its vel_rot went from
+    # 0 to 50 between the recorded last two polls, so 0 is within one poll's phase: E-REP-023)
+    assert [d.path for d in judge([driver, newcomer], {1: ok, 2: turned_again})] == ["est_angle"]
     served = Outcome(2, replies={0: answered}, sent=1)  # the newcomer answered and kept: real differences
     assert {d.path for d in judge([newcomer], {2: served})} == {"(reply)", "end"}
     wrong = Outcome(1, replies={3: rec(0.8, 1, "reply", "STATUS", port=10002)}, wait_final={0: turning}, sent=4)
@@ -410,3 +411,43 @@ def test_a_connection_s_last_wait_cut_while_the_platform_moved_is_judged_by_kind
     fault = _with(final.reply, STATUS.replace(est_x=9000, app_error=3))
     assert [d.path for d in judge([driver], {1: Outcome(1, wait_final={0: fault}, sent=3)})] == ["app_error"]
     assert [d.path for d in judge([driver], {1: Outcome(1, sent=3)})] == ["(reply)"]  # no reply at all
+
+
+def _wait_ending_on(before_vel_rot: int) -> Script:
+    """A driver's wait of two CMD_GET_STATUS polls: the last but one turning at ``before_vel_rot`` mrad/s, the
+    last with the target reached while still turning at 49 mrad/s (the soak's patrol), then a CMD_STOP."""
+    s = session(
+        event(0.0, 1, OPEN),
+        rec(0.1, 1, "request", "CMD_SET_MODE", mode=4),
+        rec(0.2, 1, "request", "CMD_GET_STATUS"),
+        rec(0.3, 1, "reply", "STATUS"),
+        rec(0.4, 1, "request", "CMD_GET_STATUS"),
+        rec(0.5, 1, "reply", "STATUS"),
+        rec(0.6, 1, "request", "CMD_STOP"),
+        event(0.7, 1, CLOSE, "by client (FIN)"),
+    )
+    (driver,) = plan(s)
+    (wait,) = driver.waits.values()
+    final = driver.steps[wait.final]
+    assert final.reply is not None and final.before is not None
+    final.before = _with(final.before, STATUS.replace(vel_rot=before_vel_rot))
+    final.reply = _with(final.reply, STATUS.replace(vel_rot=49, target_reached=1))
+    return driver
+
+
+def test_a_wait_s_final_velocity_may_differ_by_what_one_recorded_poll_period_changed_it() -> None:
+    # E-REP-023: recorded 519 -> 49 mrad/s between the last two polls; the replay's poll fell later, at rest
+    at_rest = STATUS.replace(vel_rot=0, target_reached=1)
+    driver = _wait_ending_on(before_vel_rot=519)
+    final = driver.steps[next(iter(driver.waits.values())).final]
+    assert final_matches(final, _with(final.reply, at_rest))
+    assert judge([driver], {1: Outcome(1, wait_final={0: _with(final.reply, at_rest)}, sent=4)}) == []
+    # the slack is the velocities', not the reply's: a pose elsewhere is still a difference
+    moving = _with(final.reply, STATUS.replace(vel_rot=0, target_reached=1, est_angle=30000))
+    assert not final_matches(final, moving)
+    # a velocity that stood still between the last two polls has only the table's 20 mrad/s
+    steady = _wait_ending_on(before_vel_rot=49)
+    final = steady.steps[next(iter(steady.waits.values())).final]
+    assert not final_matches(final, _with(final.reply, at_rest))
+    found = judge([steady], {1: Outcome(1, wait_final={0: _with(final.reply, at_rest)}, sent=4)})
+    assert [(d.path, d.recorded, d.replayed) for d in found] == [("vel_rot", "49", "0")]
