@@ -21,6 +21,7 @@ import type { EditedDocument } from "../session/edited";
 import { bodyAt, type FleetBody } from "../session/fleet";
 import type { PlatformSession } from "../session/session";
 import { type Camera, toWorld } from "../view/camera";
+import type { PlacedLabel } from "../view/labels";
 import { liveKey } from "../view/livekey";
 import { MapController, type Tool } from "./map/controller";
 import { LayerCache } from "./map/layercache";
@@ -59,6 +60,8 @@ export interface MapDebug {
   setSyncLayers(on: boolean): void;
   /** the ms the last static layers took to draw (worker or page), since the last call */
   takeLayerTimes(): number[];
+  /** the texts (station names, map labels) the static layer drew, their boxes in the canvas's CSS px (issue 35) */
+  labels(): PlacedLabel[];
 }
 
 export class MapView {
@@ -105,7 +108,7 @@ export class MapView {
       shown: this.shown,
       cam: () => this.controller.cam,
       layers: () => layersOf(options),
-      drawn: (counts) => this.renderer.countVisible(counts),
+      drawn: (counts, labels) => this.renderer.countVisible(counts, labels),
       invalidate,
     });
     this.renderer = new MapRenderer(this.canvas, summary, truthText, this.shown, options, this.controller, this.cache);
@@ -280,6 +283,7 @@ export class MapView {
       showScene: (scene: MapScene | null) => this.showScene(scene),
       setSyncLayers: (on: boolean) => cache.setSync(on),
       takeLayerTimes: () => cache.takeTimes(),
+      labels: () => renderer.labels(),
     });
   }
 }

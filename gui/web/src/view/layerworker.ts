@@ -6,10 +6,12 @@
  * Messages in: {type: "scene", scene, roadmap} (the scene packed by maprender.ts `pack`, its arrays transferred;
  * the worker builds its own index: the base), {type: "patch", patch, roadmap} (an edit of the base: only the
  * changed objects, drawn over the base's index, which is not rebuilt; issue 20) and
- * {type: "render", id, cam, layers, dpr}. Out: {type: "layer", id, cam, bitmap, drawn, ms}.
+ * {type: "render", id, cam, layers, dpr}. Out: {type: "layer", id, cam, bitmap, drawn, labels, ms} (`labels`: the
+ * boxes of the texts drawn, layer px; view/labels.ts).
  */
 import type { Roadmap } from "../scene/roadmap";
 import type { Camera } from "./camera";
+import type { PlacedLabel } from "./labels";
 import {
   applyPatch,
   buildGrids,
@@ -65,10 +67,13 @@ scope.onmessage = (e: MessageEvent) => {
   const t0 = performance.now();
   const ctx = surface(Math.max(1, Math.round(m.cam.width * m.dpr)), Math.max(1, Math.round(m.cam.height * m.dpr)));
   ctx.setTransform(m.dpr, 0, 0, m.dpr, 0, 0);
-  const drawn = drawStatic(ctx, m.cam, prepared, roadmap, m.layers);
+  const labels: PlacedLabel[] = [];
+  const drawn = drawStatic(ctx, m.cam, prepared, roadmap, m.layers, labels);
   // a copy of the kept canvas (one render is in flight at a time, so the canvas is not drawn again before this)
   void createImageBitmap(ctx.canvas).then((bitmap) => {
-    scope.postMessage({ type: "layer", id: m.id, cam: m.cam, bitmap, drawn, ms: performance.now() - t0 }, [bitmap]);
+    scope.postMessage({ type: "layer", id: m.id, cam: m.cam, bitmap, drawn, labels, ms: performance.now() - t0 }, [
+      bitmap,
+    ]);
     // the base's grids are built after its first layer is sent (a view of the whole map needs none; issue 20)
     setTimeout(() => base !== null && buildGrids(base), 0);
   });

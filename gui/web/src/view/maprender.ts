@@ -11,11 +11,14 @@
  *   once a metre is at least 25 px.
  * - `drawn` counts what the last call drew, per kind: the map view exposes it for tests and assistive tools.
  * - Lines are 1 px wide: the rasterizer's hairline path, about ten times faster than a 1.5 px stroke on 50,000 lines.
+ * - Texts (station names, the map's labels) are drawn last, placed without overlap by view/labels.ts (issue 35):
+ *   stations first, a label with no free place hidden at that zoom; `labelsOut` gets the boxes drawn.
  * - The same code runs in the layer worker (OffscreenCanvas) and, without workers, on the page.
  */
 import { AREA_KINDS, type Bounds, KINDS, LINE_KINDS, type MapScene, sceneBounds } from "../scene/map";
 import type { Roadmap } from "../scene/roadmap";
 import { type Camera, toScreen, viewBounds } from "./camera";
+import { type Box, type LabelIn, type PlacedLabel, placeLabels, SYMBOL_HALF } from "./labels";
 import { SegmentGrid } from "./spatial";
 
 export type Ctx2D = CanvasRenderingContext2D | OffscreenCanvasRenderingContext2D;
@@ -378,15 +381,99 @@ function drawGrid(ctx: Ctx2D, cam: Camera): void {
   ctx.stroke();
 }
 
-/** Draw everything static for camera `cam`; returns the number of objects drawn per kind. */
+/** the fonts of the labels: a station's name, a map label (hiddenlabel) */
+const STATION_FONT = 11;
+const LABEL_FONT = 12;
+/** px beyond the canvas within which a label's anchor is still placed (its box may reach in) */
+const LABEL_REACH = 200;
+/** text widths measured, per font and text (cleared when it grows past WIDTHS_MAX) */
+const widths = new Map<string, number>();
+const WIDTHS_MAX = 20_000;
+
+function textWidth(ctx: Ctx2D, size: number, text: string): number {
+  const key = `${size}\u0000${text}`;
+  let w = widths.get(key);
+  if (w === undefined) {
+    if (widths.size >= WIDTHS_MAX) {
+      widths.clear();
+    }
+    ctx.font = `${size}px sans-serif`;
+    w = ctx.measureText(text).width;
+    widths.set(key, w);
+  }
+  return w;
+}
+
+/** The labels of a layer, gathered while it is drawn, and the station symbols they must leave free. */
+class LabelSet {
+  readonly labels: LabelIn[] = [];
+  readonly obstacles: Box[] = [];
+
+  constructor(
+    private readonly ctx: Ctx2D,
+    readonly cam: Camera,
+  ) {}
+
+  private near(x: number, y: number): boolean {
+    return (
+      x > -LABEL_REACH && y > -LABEL_REACH && x < this.cam.width + LABEL_REACH && y < this.cam.height + LABEL_REACH
+    );
+  }
+
+  add(kind: LabelIn["kind"], text: string, ax: number, ay: number): void {
+    if (text !== "" && this.near(ax, ay)) {
+      const size = kind === "station" ? STATION_FONT : LABEL_FONT;
+      this.labels.push({ kind, text, ax, ay, size, w: textWidth(this.ctx, size, text) });
+    }
+  }
+
+  symbol(x: number, y: number): void {
+    if (this.near(x, y)) {
+      this.obstacles.push({ x: x - SYMBOL_HALF, y: y - SYMBOL_HALF, w: 2 * SYMBOL_HALF, h: 2 * SYMBOL_HALF });
+    }
+  }
+}
+
+const LABEL_COLOUR: Record<LabelIn["kind"], string> = {
+  station: STYLES.station.stroke,
+  hiddenlabel: STYLES.hiddenlabel.stroke,
+};
+
+/** Place the gathered labels and draw those placed; counts what was drawn and hidden. */
+function drawLabels(ctx: Ctx2D, set: LabelSet, drawn: Record<string, number>, out?: PlacedLabel[]): void {
+  const { placed, hidden } = placeLabels(set.labels, set.obstacles, set.cam.width, set.cam.height);
+  // a white halo under each text keeps it readable over lines (as the fleet's names: panels/map/renderer.ts)
+  ctx.setLineDash([]);
+  ctx.lineWidth = 3;
+  ctx.strokeStyle = "#ffffff";
+  for (const l of placed) {
+    ctx.font = `${l.kind === "station" ? STATION_FONT : LABEL_FONT}px sans-serif`;
+    ctx.strokeText(l.text, l.tx, l.ty);
+    ctx.fillStyle = LABEL_COLOUR[l.kind];
+    ctx.fillText(l.text, l.tx, l.ty);
+  }
+  if (set.labels.some((l) => l.kind === "hiddenlabel")) {
+    drawn.hiddenlabel = placed.filter((l) => l.kind === "hiddenlabel").length;
+  }
+  drawn.labels = placed.length;
+  drawn.labelsHidden = hidden;
+  out?.push(...placed);
+}
+
+/**
+ * Draw everything static for camera `cam`; returns the number of objects drawn per kind (and `labels`,
+ * `labelsHidden`: the texts drawn and those hidden for want of room). `labelsOut` gets the boxes of the texts drawn.
+ */
 export function drawStatic(
   ctx: Ctx2D,
   cam: Camera,
   prep: Prepared | null,
   roadmap: Roadmap | null,
   layers: Layers,
+  labelsOut?: PlacedLabel[],
 ): Record<string, number> {
   const drawn: Record<string, number> = {};
+  const labels = new LabelSet(ctx, cam);
   ctx.fillStyle = "#ffffff";
   ctx.fillRect(0, 0, cam.width, cam.height);
   if (layers.grid) {
@@ -464,20 +551,24 @@ export function drawStatic(
         ctx.stroke();
         drawn.circle = (drawn.circle ?? 0) + 1;
       } else if (o.kind === "hiddenlabel" && layers.labels) {
-        ctx.fillStyle = STYLES.hiddenlabel.stroke;
-        ctx.font = "12px sans-serif";
-        ctx.fillText(o.text ?? "", ox + o.points[0] * k, oy - o.points[1] * k);
-        drawn.hiddenlabel = (drawn.hiddenlabel ?? 0) + 1;
+        labels.add("hiddenlabel", o.text ?? "", ox + o.points[0] * k, oy - o.points[1] * k);
       }
     }
   }
   if (roadmap !== null && layers.roadmap) {
-    drawRoadmap(ctx, ox, oy, k, roadmap, drawn);
+    drawRoadmap(ctx, { ox, oy, k }, roadmap, drawn, labels);
   }
+  drawLabels(ctx, labels, drawn, labelsOut);
   return drawn;
 }
 
-function drawRoadmap(ctx: Ctx2D, ox: number, oy: number, k: number, rm: Roadmap, drawn: Record<string, number>): void {
+function drawRoadmap(
+  ctx: Ctx2D,
+  { ox, oy, k }: { ox: number; oy: number; k: number },
+  rm: Roadmap,
+  drawn: Record<string, number>,
+  labels: LabelSet,
+): void {
   const byId = new Map(rm.stations.map((s) => [s.id, s]));
   applyStyle(ctx, STYLES.edge);
   ctx.beginPath();
@@ -503,7 +594,6 @@ function drawRoadmap(ctx: Ctx2D, ox: number, oy: number, k: number, rm: Roadmap,
     }
   }
   applyStyle(ctx, STYLES.station);
-  ctx.font = "11px sans-serif";
   for (const s of rm.stations) {
     const x = ox + s.x * k;
     const y = oy - s.y * k;
@@ -517,8 +607,8 @@ function drawRoadmap(ctx: Ctx2D, ox: number, oy: number, k: number, rm: Roadmap,
     ctx.moveTo(x, y);
     ctx.lineTo(x + Math.cos(a) * 12, y - Math.sin(a) * 12);
     ctx.stroke();
-    ctx.fillStyle = STYLES.station.stroke;
-    ctx.fillText(s.name, x + 7, y - 7);
+    labels.symbol(x, y);
+    labels.add("station", s.name, x, y);
   }
   drawn.station = rm.stations.length;
   drawn.edge = rm.edges.length;

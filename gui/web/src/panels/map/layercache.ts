@@ -11,6 +11,7 @@
  */
 import type { Bounds, MapScene } from "../../scene/map";
 import type { Camera } from "../../view/camera";
+import type { PlacedLabel } from "../../view/labels";
 import {
   applyPatch,
   buildGrids,
@@ -86,8 +87,8 @@ export interface LayerHost {
   readonly shown: Shown;
   cam(): Camera;
   layers(): Layers;
-  /** what a new layer drew per kind (margin included) */
-  drawn(counts: Record<string, number>): void;
+  /** what a new layer drew per kind (margin included), and the boxes of its texts (layer px) */
+  drawn(counts: Record<string, number>, labels: readonly PlacedLabel[]): void;
   invalidate(): void;
 }
 
@@ -362,9 +363,7 @@ export class LayerCache {
       return;
     }
     this.worker.onmessage = (e: MessageEvent) => {
-      this.received(
-        e.data as { id: number; cam: Camera; bitmap: ImageBitmap; drawn: Record<string, number>; ms: number },
-      );
+      this.received(e.data as Parameters<LayerCache["received"]>[0]);
     };
     this.worker.onerror = () => {
       this.worker = null; // drawn on the page from now on
@@ -378,6 +377,7 @@ export class LayerCache {
     cam: Camera;
     bitmap: ImageBitmap;
     drawn: Record<string, number>;
+    labels: PlacedLabel[];
     ms: number;
   }): void {
     const asked = this.inFlight;
@@ -393,7 +393,7 @@ export class LayerCache {
     this.layer = { image: m.bitmap, cam: m.cam, version: asked.version };
     this.countsStale = this.countsStale && asked.version !== this.docVersion;
     keep(this.times, m.ms);
-    this.host.drawn(m.drawn);
+    this.host.drawn(m.drawn, m.labels);
     this.buildPageBase();
     this.host.invalidate();
   }
@@ -422,10 +422,11 @@ export class LayerCache {
     const ctx = canvas.getContext("2d")!;
     ctx.setTransform(dpr, 0, 0, dpr, 0, 0);
     const t0 = performance.now();
-    const drawn = drawStatic(ctx, big, this.prepared, roadmap, this.host.layers());
+    const labels: PlacedLabel[] = [];
+    const drawn = drawStatic(ctx, big, this.prepared, roadmap, this.host.layers(), labels);
     this.times.push(performance.now() - t0);
     this.layer = { image: canvas, cam: big, version: this.docVersion };
-    this.host.drawn(drawn);
+    this.host.drawn(drawn, labels);
   }
 
   /** The last layer, moved and scaled to the current camera, on a white ground. */

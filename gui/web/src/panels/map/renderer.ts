@@ -5,13 +5,15 @@
  *
  * Rules: drawing reads the camera, the documents and the options and changes none of them. The canvas says what
  * it drew (data-drawn-*, data-camera, data-layer, data-flag, data-truth, an accessible summary), so tests and
- * assistive tools can read the view without reaching into it.
+ * assistive tools can read the view without reaching into it. The texts the static layer drew (placed without
+ * overlap, view/labels.ts) are kept with their boxes: `labels()` gives them in the canvas's px.
  */
 import { type Key, t } from "../../i18n/i18n";
 import { GetStatusReply, type GetPltfParamVecReply } from "../../pltf";
 import { KINDS } from "../../scene/map";
 import { type FleetBody, fleetData } from "../../session/fleet";
 import { type Camera, toScreen, viewBounds } from "../../view/camera";
+import type { PlacedLabel } from "../../view/labels";
 import type { Layers } from "../../view/maprender";
 import {
   drawFlag,
@@ -24,7 +26,7 @@ import {
 } from "../../view/overlay";
 import type { ViewOptions } from "../viewoptions";
 import type { Area, MapController } from "./controller";
-import type { LayerCache } from "./layercache";
+import { type LayerCache, placement } from "./layercache";
 import { platformGeometry } from "./platform";
 import type { Shown } from "./shown";
 
@@ -69,6 +71,8 @@ export class MapRenderer {
   private usSensors: UsSensor[] = [];
   /** what the last static layer drew per kind */
   private drawn: Record<string, number> = {};
+  /** the texts the last static layer drew (layer px) */
+  private drawnLabels: readonly PlacedLabel[] = [];
 
   constructor(
     private readonly canvas: HTMLCanvasElement,
@@ -103,7 +107,10 @@ export class MapRenderer {
   }
 
   /** What lies in the view itself (the static layer also draws the margin). */
-  countVisible(drawnAll: Record<string, number>): void {
+  countVisible(drawnAll: Record<string, number>, labels: readonly PlacedLabel[] = []): void {
+    this.drawnLabels = labels;
+    this.canvas.dataset.drawnLabels = String(drawnAll.labels ?? 0);
+    this.canvas.dataset.hiddenLabels = String(drawnAll.labelsHidden ?? 0);
     const whole = this.shown.bounds;
     const v = viewBounds(this.controller.cam);
     const inView =
@@ -146,6 +153,27 @@ export class MapRenderer {
       return `${b.name} ${at}${b.selected ? ` (${t("fleet.selected")})` : ""}`;
     });
     return `. ${t("fleet.onMap", { list: each.join(", ") })}`;
+  }
+
+  /**
+   * The texts of the last static layer as the canvas shows them now: each box moved and scaled from the layer's
+   * camera to the current one (the same until the view leaves the layer or its scale changes).
+   */
+  labels(): PlacedLabel[] {
+    const l = this.cache.drawnFor;
+    if (l === null) {
+      return [];
+    }
+    const { dx, dy, r } = placement(l.cam, this.controller.cam);
+    return this.drawnLabels.map((b) => ({
+      ...b,
+      x: dx + b.x * r,
+      y: dy + b.y * r,
+      w: b.w * r,
+      h: b.h * r,
+      tx: dx + b.tx * r,
+      ty: dy + b.ty * r,
+    }));
   }
 
   /** The radius (mm) within which a click hits a platform's body. */
