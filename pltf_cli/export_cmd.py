@@ -10,7 +10,7 @@ import argparse
 from pathlib import Path
 
 from pltf.cli.options import CommandError, exit_status
-from pltf.proxy.mcap_export import export, read_records
+from pltf.proxy.mcap_export import export_session
 from pltf.proxy.session import SessionError
 
 
@@ -28,7 +28,7 @@ def add_export_arguments(p: argparse.ArgumentParser) -> None:
 
 def run_export(args: argparse.Namespace) -> int:
     try:
-        counts = export(read_records(args.session), args.mcap)
+        counts = export_session(args.session, args.mcap)
     except SessionError as exc:
         raise CommandError(str(exc)) from None
     except OSError as exc:

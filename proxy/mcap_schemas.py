@@ -1,4 +1,5 @@
-"""The well-known schemas of the MCAP export (proxy/mcap_export.py): JSON schemas, JSON-encoded messages.
+"""The well-known schemas of the MCAP export (proxy/mcap_export.py): JSON schemas for JSON-encoded messages, and
+foxglove.LaserScan's as protobuf (a FileDescriptorSet, mcap_proto.py: a status's 541 ranges as packed doubles).
 
 Foxglove's schemas (foxglove.PoseInFrame, FrameTransform, LaserScan, SceneUpdate, Log) are written out here from
 their published JSON-schema definitions (github foxglove/schemas, schemas/jsonschema/*.json), the parts a viewer
@@ -13,7 +14,10 @@ from __future__ import annotations
 import json
 from typing import Any
 
-ENCODING = "jsonschema"  # the schemas' encoding; the messages' is "json"
+from pltf.proxy import mcap_proto
+
+ENCODING = "jsonschema"  # the JSON schemas' encoding; their messages' is "json"
+PROTOBUF_SCHEMAS = {"foxglove.LaserScan": mcap_proto.file_descriptor_set}  # name: its FileDescriptorSet
 
 _NUMBER: dict[str, Any] = {"type": "number"}
 TIME: dict[str, Any] = {
@@ -73,19 +77,6 @@ FRAME_TRANSFORM = _schema(
         "child_frame_id": {"type": "string"},
         "translation": VECTOR3,
         "rotation": QUATERNION,
-    },
-)
-LASER_SCAN = _schema(
-    "foxglove.LaserScan",
-    "A single scan from a planar laser range-finder",
-    {
-        "timestamp": TIME,
-        "frame_id": {"type": "string"},
-        "pose": POSE,
-        "start_angle": _NUMBER,
-        "end_angle": _NUMBER,
-        "ranges": _array(_NUMBER),
-        "intensities": _array(_NUMBER),
     },
 )
 LINE_PRIMITIVE: dict[str, Any] = {
@@ -179,8 +170,15 @@ TELEGRAM = _schema(
         "error": {"type": ["string", "null"], "description": "<codec error class>: reason, when malformed"},
     },
 )
-SCHEMAS = {s["title"]: s for s in (POSE_IN_FRAME, FRAME_TRANSFORM, LASER_SCAN, SCENE_UPDATE, LOG, TELEGRAM)}
+SCHEMAS = {s["title"]: s for s in (POSE_IN_FRAME, FRAME_TRANSFORM, SCENE_UPDATE, LOG, TELEGRAM)}
+
+
+def schema_encoding(name: str) -> str:
+    """The encoding of the schema ``name`` as the export writes it: protobuf or jsonschema."""
+    return mcap_proto.ENCODING if name in PROTOBUF_SCHEMAS else ENCODING
 
 
 def schema_bytes(name: str) -> bytes:
+    if name in PROTOBUF_SCHEMAS:
+        return PROTOBUF_SCHEMAS[name]()
     return json.dumps(SCHEMAS[name], separators=(",", ":")).encode()

@@ -3,7 +3,8 @@
 An application (examples/patrol.py, and a client on the second port asking for the map, the roadmap, the
 status) runs against the reference server through ``pltf proxy --record --mcap``; the session is exported with
 ``pltf export``. Both files are read back by two independent readers: the Python ``mcap`` library and
-``@mcap/core`` (npm, tests/proxy/mcap_reader, as Foxglove reads). The sans-IO parts (the scan's bins, the
+``@mcap/core`` (npm, tests/proxy/mcap_reader, as Foxglove reads); the protobuf scan is decoded with the protobuf
+library from the descriptor set the file carries, as Foxglove decodes it. The sans-IO parts (the scan's bins, the
 documents, the order of times) are checked with exact numbers below.
 """
 
@@ -21,7 +22,10 @@ from collections import Counter
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
+from google.protobuf import descriptor_pb2, descriptor_pool, message_factory, timestamp_pb2
+from google.protobuf.json_format import MessageToDict
 from mcap.reader import NonSeekingReader, SeekingReader
 
 from pltf.cli.main import main as pltf
@@ -30,6 +34,7 @@ from pltf.conformance_tests.readings import canonical
 from pltf.harness import launch
 from pltf.proxy.mcap_export import (
     CHANNELS,
+    PROTOBUF,
     McapSink,
     in_time_order,
     quaternion,
@@ -38,7 +43,8 @@ from pltf.proxy.mcap_export import (
     stamp,
     wire_line,
 )
-from pltf.proxy.mcap_schemas import SCHEMAS
+from pltf.proxy.mcap_read import read_entries
+from pltf.proxy.mcap_schemas import PROTOBUF_SCHEMAS, SCHEMAS, schema_encoding
 from pltf.proxy.session import Session, read_session
 from pltf.proxy.tap import CLOSE, FRAME, OPEN, RAW, Record, Tap
 from pltf.proxy.view import format_record
@@ -97,6 +103,23 @@ def _telegrams(session: Session) -> list[Record]:
     return [r for r in session.records if r.kind in (FRAME, RAW)]
 
 
+def _protobuf_class(schema: Any) -> Any:
+    """The message class of a protobuf schema, built from the FileDescriptorSet the MCAP file carries."""
+    files = descriptor_pb2.FileDescriptorSet.FromString(schema.data)
+    pool = descriptor_pool.DescriptorPool()
+    for f in files.file:
+        pool.Add(f)
+    return message_factory.GetMessageClass(pool.FindMessageTypeByName(schema.name))
+
+
+def _decode(schema: Any, channel: Any, data: bytes) -> dict[str, Any]:
+    if channel.message_encoding == "json":
+        return json.loads(data)  # type: ignore[no-any-return]
+    assert channel.message_encoding == "protobuf" and schema.encoding == "protobuf"
+    message = _protobuf_class(schema).FromString(data)
+    return MessageToDict(message, preserving_proto_field_name=True, always_print_fields_with_no_presence=True)
+
+
 def _python_read(path: Path) -> dict[str, Any]:
     """What the Python mcap library reads: streamed record by record, and through the summary's indexes."""
     counts: Counter[str] = Counter()
@@ -111,7 +134,7 @@ def _python_read(path: Path) -> dict[str, Any]:
             counts[channel.topic] += 1
             monotonic &= message.log_time >= last.get(channel.topic, 0)
             last[channel.topic] = message.log_time
-            messages.setdefault(channel.topic, []).append(json.loads(message.data))
+            messages.setdefault(channel.topic, []).append(_decode(schema, channel, message.data))
     with path.open("rb") as fh:
         reader = SeekingReader(fh, validate_crcs=True)
         summary = reader.get_summary()
@@ -141,8 +164,10 @@ def test_the_python_mcap_library_reads_every_telegram_with_known_schemas_and_con
     got = _python_read(recorded / which)
     assert got["declared"] == CHANNELS  # every channel, its schema declared in the summary
     for topic, (name, encoding, message_encoding) in got["schemas"].items():
-        assert (name, encoding, message_encoding) == (CHANNELS[topic], "jsonschema", "json"), topic
-        assert name in SCHEMAS
+        want = "protobuf" if topic in PROTOBUF else "json"
+        assert (name, encoding, message_encoding) == (CHANNELS[topic], schema_encoding(name), want), topic
+        assert name in SCHEMAS or name in PROTOBUF_SCHEMAS
+    assert got["schemas"]["/scan"] == ("foxglove.LaserScan", "protobuf", "protobuf")
     telegrams = _telegrams(session)
     assert got["counts"]["/pltf/telegrams"] == len(telegrams) > 50
     assert got["counts"]["/pltf/wire"] == len(session.records)  # a line per telegram and per connection event
@@ -208,7 +233,9 @@ def test_mcap_core_from_npm_reads_the_same(recorded: Path, which: str) -> None:
     stream, indexed = got["stream"], got["indexed"]
     assert stream["done"] and stream["monotonic"]
     assert {c["topic"]: c["schemaName"] for c in stream["channels"]} == CHANNELS
-    assert all(c["schemaEncoding"] == "jsonschema" and c["messageEncoding"] == "json" for c in stream["channels"])
+    for c in stream["channels"]:
+        want = ("protobuf", "protobuf") if c["topic"] in PROTOBUF else ("jsonschema", "json")
+        assert (c["schemaEncoding"], c["messageEncoding"]) == want, c
     assert stream["counts"] == dict(ours["counts"])
     assert stream["counts"]["/pltf/telegrams"] == len(_telegrams(read_session(recorded / "session.jsonl")))
     stats = indexed["statistics"]
@@ -259,8 +286,8 @@ def test_pltf_proxy_refuses_an_unwritable_mcap_in_one_line(tmp_path: Path, capsy
 def _read(buf: io.BytesIO) -> dict[str, list[tuple[int, int, dict[str, Any]]]]:
     buf.seek(0)
     out: dict[str, list[tuple[int, int, dict[str, Any]]]] = {}
-    for _, channel, m in NonSeekingReader(buf).iter_messages():
-        out.setdefault(channel.topic, []).append((m.log_time, m.publish_time, json.loads(m.data)))
+    for schema, channel, m in NonSeekingReader(buf).iter_messages():
+        out.setdefault(channel.topic, []).append((m.log_time, m.publish_time, _decode(schema, channel, m.data)))
     return out
 
 
@@ -303,16 +330,58 @@ def test_malformed_bytes_are_on_the_raw_channel_with_their_error_and_a_warning_l
     assert log["level"] == 3 and "MALFORMED BadHeader" in log["message"]
 
 
+def _scan(points: list[tuple[int, int]]) -> tuple[float, float, list[float]]:
+    xy = np.array(points, dtype=np.int16)
+    start, end, ranges = scan_ranges(xy[:, 0], xy[:, 1])
+    return start, end, ranges.tolist()
+
+
 def test_scan_points_go_into_half_degree_bins_by_bearing_with_exact_ranges() -> None:
     # 1 m ahead, 2 m at +1 degree (bin 2), nothing at +0.5 degree (bin 1), 3 m to the left (+90: bin 180)
     ahead, one_degree = (
         (1000, 0),
         (round(2000 * math.cos(math.radians(1))), round(2000 * math.sin(math.radians(1)))),
     )
-    start, end, ranges = scan_ranges([ahead, one_degree, (0, 3000)])
+    start, end, ranges = _scan([ahead, one_degree, (0, 3000)])
     assert (start, end) == (0.0, 180 * math.radians(0.5)) and len(ranges) == 181
     assert ranges[0] == 1.0 and ranges[1] == 0.0 and ranges[2] == pytest.approx(2.0, abs=1e-3) and ranges[180] == 3.0
-    assert scan_ranges([(1000, 0), (500, 0)])[2] == [0.5]  # the nearest point wins a bin
+    assert _scan([(1000, 0), (500, 0)])[2] == [0.5]  # the nearest point wins a bin
+    assert _scan([(500, 0), (1000, 0), (0, -700)])[2][::180] == [0.7, 0.5]  # in any order
+
+
+def _expected_bins(points: tuple[Any, ...]) -> dict[int, float]:
+    """The oracle: each point's 0.5 degree bin by its bearing, the nearest point's range (m, to the mm), in plain
+    Python floats from the codec's decoded points."""
+    bins: dict[int, float] = {}
+    for p in points:
+        b, r = round(math.atan2(p.y, p.x) / math.radians(0.5)), math.hypot(p.x, p.y) / 1000
+        bins[b] = min(bins.get(b, r), r)
+    return {b: round(r, 3) for b, r in bins.items()}
+
+
+def test_each_laser_scan_decoded_by_protobuf_holds_its_status_replys_scan_as_the_codec_decodes_it(
+    recorded: Path,
+) -> None:
+    session = read_session(recorded / "session.jsonl")
+    replies = sorted(
+        (r for r in session.records if r.direction == "reply" and r.telegram and r.telegram.NAME == "CMD_GET_STATUS"),
+        key=lambda r: r.time,
+    )
+    scans = _python_read(recorded / "export.mcap")["messages"]["/scan"]
+    with_points = [r for r in replies if r.telegram.scan]  # type: ignore[union-attr]
+    assert len(scans) == len(with_points) >= 3
+    assert max(len(r.telegram.scan) for r in with_points) > 100  # type: ignore[union-attr]  # a real scan
+    for scan, rec in zip(scans, with_points, strict=True):
+        want = _expected_bins(rec.telegram.scan)  # type: ignore[union-attr]
+        lo, hi = min(want), max(want)
+        when = timestamp_pb2.Timestamp()
+        when.FromJsonString(scan["timestamp"])
+        assert {"sec": when.seconds, "nsec": when.nanos} == stamp(rec.time)
+        assert scan["frame_id"] == "base_link" and scan["pose"]["orientation"] == {"x": 0, "y": 0, "z": 0, "w": 1.0}
+        assert scan["start_angle"] == pytest.approx(lo * math.radians(0.5), abs=1e-12)
+        assert scan["end_angle"] == pytest.approx(hi * math.radians(0.5), abs=1e-12)
+        assert scan["ranges"] == [want.get(b, 0.0) for b in range(lo, hi + 1)]
+        assert scan["intensities"] == []
 
 
 def test_the_map_and_the_roadmap_become_scene_entities() -> None:
@@ -372,3 +441,18 @@ def test_records_are_put_in_time_order_within_the_window_and_a_session_reads_as_
         20.0,
     ]
     assert tuple(read_records(recorded / "session.jsonl")) == read_session(recorded / "session.jsonl").records
+    fields = ("time", "conn", "port", "kind", "direction", "raw", "error", "detail")
+    entries = list(read_entries(recorded / "session.jsonl"))
+    records = read_session(recorded / "session.jsonl").records
+    assert [tuple(getattr(e, f) for f in fields) for e in entries] == [
+        tuple(getattr(r, f) for f in fields) for r in records
+    ]
+    for e, r in zip(entries, records, strict=True):  # whole, or the first items of each column
+        if e.columns:
+            assert r.telegram is not None and e.telegram is not None
+            cut = {c.name: c for c in e.columns}
+            assert e.telegram == r.telegram.replace(**{n: getattr(r.telegram, n)[:3] for n in cut})
+            for name, c in cut.items():
+                assert [tuple(item) for item in c.items.tolist()] == list(getattr(r.telegram, name))
+        else:
+            assert e.telegram == r.telegram
