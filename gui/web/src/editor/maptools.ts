@@ -85,11 +85,14 @@ export function deselect(ed: MapEditing): void {
   ed.many = new Set();
 }
 
-/** Do a command (its action said: "Done: add a line"), or say why it cannot be done; then show the document. */
-export function run(ed: MapEditing, env: MapToolEnv, r: Result<Command>): void {
+/**
+ * Do a command and say it (`done`, else its action: "Done: add a line"), or say why it cannot be done; then show
+ * the document.
+ */
+export function run(ed: MapEditing, env: MapToolEnv, r: Result<Command>, done?: string): void {
   if (r.ok) {
     ed.history().run(r.value);
-    env.say(actionMessage("done", r.value.label, env.text));
+    env.say(done ?? actionMessage("done", r.value.label, env.text));
   } else {
     env.say(r.reason);
   }
@@ -362,7 +365,8 @@ export function convertScan(
     env.say(env.text("edit.noLines"));
     return;
   }
-  run(ed, env, { ok: true, value: addObjects(ed.history().doc, objs, act("act.fromScan", { n: objs.length })) });
+  const value = addObjects(ed.history().doc, objs, act("act.fromScan", { n: objs.length }));
+  run(ed, env, { ok: true, value }, env.text("edit.converted", { n: objs.length }));
 }
 
 /** Typed coordinates (typed.ts) of the one selected object: mm and degrees, one undoable step. */

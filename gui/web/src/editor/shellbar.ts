@@ -4,8 +4,8 @@
  * guide's toolbars have them (5.4; 5.5 "looks similar"): Load, Open, Save, Save as, New first; Undo and Redo
  * after the editor's Clear; Send and Close where the editor puts them.
  */
-import { h } from "../dom";
-import { bind, type Key, t } from "../i18n/i18n";
+import { field, h } from "../dom";
+import { type Key, t } from "../i18n/i18n";
 import { dialog } from "../ui/dialog";
 import { askToClose } from "./closeask";
 import { download, fileInput } from "./files";
@@ -32,12 +32,13 @@ export function wording(keys: ShellKeys): (event: ShellEvent, words?: Words) => 
 /** The Save As dialog: the file name to save under, Enter or the first button saves; null when cancelled. */
 function askFileName(title: Key, suggested: string): Promise<string | null> {
   const nameIn = h("input", { type: "text", value: suggested });
-  bind(nameIn, "edit.fileName", { text: false });
   nameIn.addEventListener(
     "keydown",
     (e) => e.key === "Enter" && (nameIn.closest(".dialog")?.querySelector("button") as HTMLElement | null)?.click(),
   );
-  return dialog(title, nameIn, ["edit.saveAs", "dialog.cancel"]).then((k) => (k === 0 ? nameIn.value : null));
+  return dialog(title, field("edit.fileName", nameIn), ["edit.saveAs", "dialog.cancel"]).then((k) =>
+    k === 0 ? nameIn.value : null,
+  );
 }
 
 /** The page's effects: a download, the dialogs of `keys`. */

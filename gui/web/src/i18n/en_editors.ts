@@ -129,4 +129,20 @@ export const enEditors = {
   "rm.tipDelete": "Delete the selected station with its edges.",
   "rm.tipApply": "Apply the typed name and pose to the selected station.",
   "rm.tipClose": "Closes the toolbar and asks for saving if necessary.",
+  // issue 35: tooltips of the operation toolbar (guide 4.2, 6.3) and of the map tools (guide 5.3)
+  "op.tipInit": "Initialise the platform: CMD_CONNECT_TO_PLTF, then CMD_INIT_PLTF (in state Not initialized).",
+  "op.tipStart": "Start the platform: CMD_START (in state Ready).",
+  "op.tipBreak": "Pause the platform: CMD_BREAK (in state Running).",
+  "op.tipContinue": "Continue after a break: CMD_CONTINUE (in state Breaked).",
+  "op.tipStop": "Stop the platform: CMD_STOP; it returns to state Ready.",
+  "op.tipShutdownCan": "Shut down the CAN communication: CMD_SHUTDOWN_PLTF.",
+  "map.tipRefresh": "Refresh map.",
+  "map.tipZoomAll": "Zoom all visible objects.",
+  "map.tipZoomIn": "Zoom in.",
+  "map.tipZoomOut": "Zoom out.",
+  "map.tipZoomArea": "Select the area and zoom.",
+  "map.tipPan": "Scroll the map.",
+  "map.tipShift": "The platform can be shifted by drag and drop. The frame is rotated with a right-click.",
+  "map.tipFlag":
+    "Selecting a target frame. Used in motion mode Automatic, the platform will move to a specified location: drag the red flag; rotate the target direction with a right-click.",
 } as const;

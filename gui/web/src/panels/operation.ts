@@ -80,6 +80,16 @@ export const COMMANDS: Command[] = [
   },
 ];
 
+/** The commands' tooltips (issue 35): what each sends and from which state (guide 4.2, 6.3). */
+const OP_TIPS: Partial<Record<Key, Key>> = {
+  "op.init": "op.tipInit",
+  "op.start": "op.tipStart",
+  "op.break": "op.tipBreak",
+  "op.continue": "op.tipContinue",
+  "op.stop": "op.tipStop",
+  "op.shutdownCan": "op.tipShutdownCan",
+};
+
 export function allowed(c: Command, s: GetStatusReply | null): boolean {
   if (s === null) {
     return false;
@@ -112,7 +122,7 @@ export function operationPanel(session: PlatformSession, say: (text: string) => 
   };
   const buttons = COMMANDS.map((c) => {
     const b = h("button", { type: "button", "aria-keyshortcuts": c.shortcut || false });
-    bind(b, c.key);
+    bind(b, c.key, { title: OP_TIPS[c.key] });
     b.addEventListener("click", () => sendAll(c.send()));
     return b;
   });

@@ -160,6 +160,7 @@ export function parametersWindow(session: PlatformSession): { root: HTMLElement;
       value.setAttribute("aria-label", `${t("param.value")} ${selected}`);
     } else {
       value.setAttribute("aria-label", t("param.value"));
+      valueCaption.textContent = `${t("param.value")}:`; // issue 35: a caption before a parameter is picked
     }
   });
   const root = h(

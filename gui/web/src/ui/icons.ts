@@ -1,5 +1,5 @@
 /**
- * The editors' toolbar icons (issue 35): lucide's icons (a kept icon set, ISC licence), only the ones used here so
+ * The toolbars' icons (issue 35: the editors' and the map view's): lucide's icons (a kept icon set, ISC licence), only the ones used here so
  * the bundle stays small. A toolbar button shows its icon; its accessible name stays the catalog's words (the
  * guide's names of the tools, 5.4 and 5.5) and its tooltip the guide's description. `ICONS` maps a button's
  * catalog key to its icon; a key without one keeps its text. `SHORTCUTS` lists the editors' keyboard shortcuts
@@ -8,6 +8,14 @@
 import {
   ArrowLeftRight,
   ArrowRightToLine,
+  Flag,
+  Hand,
+  Maximize,
+  Move,
+  RefreshCw,
+  ScanSearch,
+  ZoomIn,
+  ZoomOut,
   Ban,
   Check,
   Circle,
@@ -82,6 +90,15 @@ export const ICONS: Partial<Record<Key, IconNode>> = {
   "rm.addStation": MapPinPlus,
   "rm.addEdge": Route,
   "rm.pathPoints": Spline,
+  // the map view's tools (guide 5.3 Map tools)
+  "map.refresh": RefreshCw,
+  "map.zoomAll": Maximize,
+  "map.zoomIn": ZoomIn,
+  "map.zoomOut": ZoomOut,
+  "map.zoomArea": ScanSearch,
+  "map.pan": Hand,
+  "map.shift": Move,
+  "map.flag": Flag,
 };
 
 /** The icon of `key` as an <svg> hidden from assistive technology (the button carries the name), or null. */

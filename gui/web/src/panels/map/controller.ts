@@ -15,6 +15,7 @@ import { type Camera, fit, panBy, toWorld, zoomAt } from "../../view/camera";
 import type { Pose } from "../../view/overlay";
 import { guard } from "../control";
 import { draggedPose } from "./platform";
+import { icon } from "../../ui/icons";
 import type { Shown } from "./shown";
 
 export type Tool = "pan" | "zoomArea" | "shift" | "flag" | "edit";
@@ -36,6 +37,18 @@ interface Drag {
 }
 
 /** px the h/j/k/l keys pan by, and their directions */
+/** guide 5.3 Map tools: each tool's use, its tooltip (issue 35). */
+const MAP_TIPS: Partial<Record<Key, Key>> = {
+  "map.refresh": "map.tipRefresh",
+  "map.zoomAll": "map.tipZoomAll",
+  "map.zoomIn": "map.tipZoomIn",
+  "map.zoomOut": "map.tipZoomOut",
+  "map.zoomArea": "map.tipZoomArea",
+  "map.pan": "map.tipPan",
+  "map.shift": "map.tipShift",
+  "map.flag": "map.tipFlag",
+};
+
 const KEY_STEP = 60;
 const KEY_MOVES: Record<string, [number, number]> = {
   h: [KEY_STEP, 0],
@@ -101,8 +114,17 @@ export class MapController {
     const toolbar = h("div", { role: "toolbar", class: "map-tools" });
     bind(toolbar, "map.tools", { text: false });
     const act = (key: Key, fn: () => void, shortcut = "") => {
-      const b = h("button", { type: "button", "aria-keyshortcuts": shortcut || false });
-      bind(b, key);
+      const svg = icon(key);
+      const b = h("button", {
+        type: "button",
+        class: svg === null ? "" : "icon-button",
+        "aria-keyshortcuts": shortcut || false,
+      });
+      // issue 35: an icon with the tool's name as its accessible name and the guide's words (5.3) as its tooltip
+      bind(b, key, { text: svg === null, title: MAP_TIPS[key] });
+      if (svg !== null) {
+        b.append(svg);
+      }
       b.addEventListener("click", fn);
       toolbar.append(b);
       return b;
