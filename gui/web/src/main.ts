@@ -26,6 +26,7 @@ import { PlatformSession } from "./session/session";
 import { connText } from "./session/connwords";
 import { firstSelected, fleetTargets } from "./session/fleet";
 import { type Fleet, fleetPanel } from "./panels/fleet";
+import { mountHelp } from "./ui/help";
 
 const params = new URLSearchParams(window.location.search);
 // issue 33: the token of the printed URL has become a cookie (gui/doors.py): keep it out of the address bar,
@@ -118,6 +119,7 @@ const menus: Array<[Key, MenuItem[]]> = [
 ];
 
 const header = h("header", { class: "top" }, menubar(menus), controlPanel(session), h("h1", { class: "title" }));
+mountHelp(header); // issue 35: the keyboard shortcuts on ? and the Help button
 const title = () => {
   header.querySelector("h1")!.textContent = `${t("app.title")} ${session.target}`;
   document.title = t("app.title");
