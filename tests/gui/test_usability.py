@@ -9,7 +9,8 @@ from typing import Any
 
 import pytest
 
-from tests.gui.conftest import Gateway, expect_text, open_gui
+from tests.gui.conftest import Gateway, Platform, expect_text, open_gui
+from tests.gui.test_app import button, readout
 
 # The panels of the dock, by the menu and item that open them (English labels).
 PANELS = [
@@ -85,7 +86,8 @@ def test_every_input_has_a_name_and_a_visible_caption_and_every_toolbar_button_a
         inputs, buttons = inputs + seen[0], buttons + seen[1]
     # every tab of the hardware monitor (guide 5.8)
     _open(page, "View", "Hardware Monitor")
-    tabs = page.get_by_role("tablist").last.get_by_role("tab")
+    tabs = page.get_by_role("tablist", name="Hardware Monitor").get_by_role("tab")
+    assert tabs.count() >= 8  # Motor, IOBoard, RelayBoard, USBoard, Radar, CAN, the TCP tabs
     for k in range(tabs.count()):
         tabs.nth(k).click()
         inputs += _walk(page, f"Hardware Monitor tab {k}", found)[0]
@@ -101,6 +103,21 @@ def test_every_input_has_a_name_and_a_visible_caption_and_every_toolbar_button_a
     inputs += _walk(page, "Save as", found)[0]
     page.get_by_role("dialog").get_by_role("button", name="Cancel", exact=True).click()
     assert inputs >= 10 and buttons >= 30, (inputs, buttons)  # the walk saw the GUI, not an empty page
+    assert found == {"missing": [], "untitled": []}
+
+
+def test_the_motion_modes_controls_have_names_and_captions(page: Any, gateway: Gateway, platform: Platform) -> None:
+    """The motion panel shows each mode's controls only in that mode (guide 5.6): walked in each, connected."""
+    open_gui(page, gateway, platform.target)
+    button(page, "Init").click()
+    expect_text(readout(page, "System state"), "Ready")
+    found: dict[str, list[str]] = {"missing": [], "untitled": []}
+    inputs = 0
+    for mode in ["Velocity", "Automatic", "Post-process replay"]:
+        page.get_by_role("combobox", name="Motion mode").select_option(label=mode)
+        expect_text(readout(page, "Motion mode"), mode)
+        inputs += _walk(page, mode, found)[0]
+    assert inputs >= 3 * 1 + 2 + 7, inputs  # the mode select each time; 2 velocities; station and 6 coordinates
     assert found == {"missing": [], "untitled": []}
 
 
