@@ -101,8 +101,8 @@ class SessionIndex:
         rows.sort(key=lambda r: r[0])  # a close is written late; frames are in time order already
         for t, at, direction, name in rows:
             index.add(t, at, direction, name)
-        if rows:
-            index.start, index.end = min(index.start or rows[0][0], rows[0][0]), rows[-1][0]
+        if rows:  # the recording's times are its frames' (the header's start is when the proxy started listening)
+            index.start, index.end = rows[0][0], rows[-1][0]
         else:
             index.end = index.start
         return index
