@@ -23,6 +23,9 @@ import { controlPanel } from "./panels/control";
 import { ViewOptions, viewOptionsPanel } from "./panels/viewoptions";
 import { planObstacleSwitch } from "./panels/planobst";
 import { PlatformSession } from "./session/session";
+import { RecordedSession } from "./session/recorded";
+import { recordedSession } from "./session/recorded_open";
+import { mountTimeline } from "./panels/timeline";
 import { connText } from "./session/connwords";
 import { firstSelected, fleetTargets } from "./session/fleet";
 import { type Fleet, fleetPanel } from "./panels/fleet";
@@ -44,7 +47,8 @@ const target =
     : (params.get("target") ?? localStorage.getItem("pltf.lastTarget") ?? "");
 const wsUrl = new URL("ws", window.location.href);
 wsUrl.protocol = wsUrl.protocol === "https:" ? "wss:" : "ws:";
-const session = new PlatformSession(wsUrl.href.split("?")[0], target);
+// issue 35: ?recording=FILE (pltf gui --session) feeds the same panels from a recording instead of a platform
+const session = params.has("recording") ? recordedSession() : new PlatformSession(wsUrl.href.split("?")[0], target);
 const options = new ViewOptions();
 
 const notice = h("p", { class: "notice", role: "status", "aria-live": "polite" });
@@ -145,7 +149,11 @@ document.addEventListener("keydown", (e) => {
 });
 
 // Exposed for the browser tests and the benchmark (read-only use; the map view's surface: MapDebug in mapview.ts).
-(window as unknown as { pltf: unknown }).pltf = { session, map: map.debug, options, dock, fleet };
+const pltf = { session, map: map.debug, options, dock, fleet, timeline: null as unknown };
+(window as unknown as { pltf: unknown }).pltf = pltf;
+if (session instanceof RecordedSession) {
+  void mountTimeline(session, app.querySelector("main")!, say).then((tl) => (pltf.timeline = tl));
+}
 
 // The optional ground-truth layer: ?control=HOST:PORT names a reference server's control channel (loopback).
 const control = params.get("control");
