@@ -1,0 +1,173 @@
+"""Time travel (issue 35): a patrol recorded through ``pltf proxy --record`` and opened with ``pltf gui --session``,
+as a session file and as its MCAP export (``pltf export --mcap``, read in the page with @mcap/core).
+
+The recording is made once per module with real processes: the reference server, ``pltf proxy --record`` in front
+of its first port, and examples/patrol.py driving two stations through the proxy. The patrol asks GET_STATUS (never
+GET_POSITION: checked), so the pose the GUI shows at a time is the estimated pose of the recording's last
+GET_STATUS reply at or before it, read here from the session file with the proxy's own reader; the GUI shows it in
+the status bar (its data-value: x, y mm, angle degrees), from the same topic the map view draws from.
+"""
+
+from __future__ import annotations
+
+import re
+import signal
+import subprocess
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from pltf.harness import launch
+from pltf.proxy.session import read_session
+from pltf.proxy.tap import FRAME
+from tests.gui.conftest import PATIENCE, Gateway, wait_for
+
+REPO = Path(__file__).resolve().parents[2]
+STATIONS = "Corridor_01,Corridor_02"
+FRACTIONS = (0.3, 0.55, 0.8)  # where the test scrubs to, of the recording's length
+
+
+def _pltf(*args: str, timeout: float = 120) -> subprocess.CompletedProcess[str]:
+    cmd = [sys.executable, "-m", "pltf.cli.main", *args]
+    return subprocess.run(cmd, cwd=REPO, capture_output=True, text=True, timeout=timeout, check=False)
+
+
+def record_patrol(session: Path) -> None:
+    """examples/patrol.py through ``pltf proxy --record SESSION`` against the reference server (real time: the
+    5 m between the stations take ~9 s, ~20 GET_STATUS replies a second)."""
+    with launch.reference(time_scale=1.0, start_timeout=60.0) as server:
+        cmd = [sys.executable, "-m", "pltf.cli.main", "proxy", "--listen", "127.0.0.1:0", "--quiet"]
+        cmd += ["--target", f"127.0.0.1:{server.ports[0]}", "--record", str(session)]
+        with subprocess.Popen(cmd, cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) as proxy:
+            try:
+                assert proxy.stdout is not None
+                port = re.search(r"listening at [\d.]+:(\d+)", proxy.stdout.readline())
+                assert port is not None, proxy.stderr.read() if proxy.stderr else ""
+                patrol = [sys.executable, str(REPO / "examples" / "patrol.py"), "--stations", STATIONS]
+                run = subprocess.run(
+                    [*patrol, "--target", f"127.0.0.1:{port.group(1)}"],
+                    cwd=REPO,
+                    capture_output=True,
+                    text=True,
+                    timeout=180,
+                    check=False,
+                )
+                assert run.returncode == 0, (run.stdout, run.stderr)
+                proxy.send_signal(signal.SIGINT)
+                _, err = proxy.communicate(timeout=30)
+                assert proxy.returncode == 0, err
+            finally:
+                proxy.kill()
+
+
+class Recording:
+    """The recording as the test reads it: its GET_STATUS replies' poses and its commands."""
+
+    def __init__(self, path: Path) -> None:
+        frames = [r for r in read_session(path).records if r.kind == FRAME and r.telegram is not None]
+        names = {r.telegram.NAME for r in frames}
+        assert "CMD_GET_POSITION" not in names, "the patrol asks GET_POSITION now: compare with it instead"
+        self.status = [
+            (r.time, (r.telegram.est_x, r.telegram.est_y, r.telegram.est_angle / 1000))
+            for r in frames
+            if r.direction == "reply" and r.telegram.NAME == "CMD_GET_STATUS"
+        ]
+        self.commands = [
+            r.telegram.NAME for r in frames if r.direction == "request" and not r.telegram.NAME.startswith("CMD_GET_")
+        ]
+        self.start, self.end = frames[0].time, frames[-1].time
+
+    def pose_at(self, t: float) -> tuple[float, ...]:
+        before = [pose for at, pose in self.status if at <= t]
+        assert before, f"no GET_STATUS reply at or before {t}"
+        return before[-1]
+
+
+@pytest.fixture(scope="module")
+def recorded(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, Recording]:
+    root = tmp_path_factory.mktemp("recorded")
+    session, mcap = root / "patrol.jsonl", root / "patrol.mcap"
+    record_patrol(session)
+    exported = _pltf("export", str(session), "--mcap", str(mcap))
+    assert exported.returncode == 0, exported.stderr
+    return session, mcap, Recording(session)
+
+
+@pytest.fixture(scope="module", params=["session", "mcap"])
+def shown(
+    request: pytest.FixtureRequest, recorded: tuple[Path, Path, Recording]
+) -> Iterator[tuple[Gateway, Recording]]:
+    session, mcap, rec = recorded
+    ini = session.parent / "Network.ini"
+    ini.write_text("[Network]\n", encoding="utf-8")
+    path = session if request.param == "session" else mcap
+    with Gateway(ini, target=None, args=("--session", str(path))) as gw:
+        yield gw, rec
+
+
+def open_recording(page: Any, gw: Gateway) -> Any:
+    page.goto(f"{gw.base}/?recording=1", timeout=30_000)
+    timeline = page.get_by_role("region", name="Timeline")
+    timeline.wait_for()
+    return timeline
+
+
+def shown_pose(page: Any) -> tuple[float, ...]:
+    value = page.get_by_role("status", name="Estimated pose").get_attribute("data-value") or ""
+    x, y, angle = value.split(",")
+    return float(x), float(y), float(angle)
+
+
+def scrub(page: Any, timeline: Any, start: float, rel: float) -> float:
+    """Drag the scrubber to ``rel`` s into the recording (its input event, as a drag ends); the time shown."""
+    scrubber = timeline.get_by_role("slider", name="Time in the recording")
+    scrubber.evaluate("(el, v) => { el.value = v; el.dispatchEvent(new Event('input', { bubbles: true })); }", str(rel))
+    return float(wait_for(lambda: _time_near(timeline, start + rel, 0.006), what=f"the timeline at {rel} s"))
+
+
+def _time_near(timeline: Any, t: float, tol: float) -> str | None:
+    shown = timeline.get_attribute("data-time")
+    return shown if shown is not None and abs(float(shown) - t) <= tol else None
+
+
+def test_scrubbing_shows_the_recorded_pose_and_play_ends_at_the_last_state(
+    page: Any, shown: tuple[Gateway, Recording]
+) -> None:
+    gw, rec = shown
+    timeline = open_recording(page, gw)
+    start, end = float(timeline.get_attribute("data-start")), float(timeline.get_attribute("data-end"))
+    assert abs(start - rec.start) < 1e-3 and abs(end - rec.end) < 1e-3, (start, end, rec.start, rec.end)
+    seen = []
+    for f in FRACTIONS:
+        at = scrub(page, timeline, start, round(f * (end - start), 2))
+        want = rec.pose_at(at)
+        wait_for(lambda want=want: shown_pose(page) == want, what=f"pose {want} at {at}")
+        seen.append(want)
+    assert len(set(seen)) == len(FRACTIONS), seen  # the platform moved: each time shows its own pose
+    # nothing can be sent: the operation buttons are disabled and the control line says why
+    assert page.get_by_role("button", name="Start", exact=True).is_disabled()
+    # play at 4x from the start: it ends at the recording's end, with its last state shown
+    scrub(page, timeline, start, 0.0)
+    timeline.get_by_role("combobox", name="Speed").select_option("4")
+    timeline.get_by_role("button", name="Play").click()
+    wait_for(lambda: timeline.get_attribute("data-playing") == "true", what="playing")
+    wait_for(
+        lambda: timeline.get_attribute("data-playing") == "false",
+        timeout=PATIENCE + (end - start) / 4,
+        what="the end of the recording",
+    )
+    assert abs(float(timeline.get_attribute("data-time") or 0) - end) < 1e-6
+    wait_for(lambda: shown_pose(page) == rec.status[-1][1], what="the last state")
+
+
+def test_the_commands_are_marks_on_the_timeline(page: Any, shown: tuple[Gateway, Recording]) -> None:
+    gw, rec = shown
+    timeline = open_recording(page, gw)
+    marks = timeline.get_by_role("listitem")
+    wait_for(lambda: marks.count() > 0, what="the marks")
+    names = [m.get_attribute("data-name") for m in marks.all()]
+    assert names == rec.commands, (names, rec.commands)
+    assert set(names) >= {"CMD_MOVE_ABS"}, names  # the patrol's goals
