@@ -134,6 +134,10 @@ ROWS = [
     ("gui/port-out-of-range", "gui --target 127.0.0.1:99999", USAGE, "PORT 1..65535, got '127.0.0.1:99999'"),
     ("gui/bad-listen", "gui --target 127.0.0.1:{dead} --listen nowhere", USAGE, "got 'nowhere'"),
     ("gui/bad-reply-timeout", "gui --target 127.0.0.1:{dead} --reply-timeout -1", USAGE, "number > 0"),
+    ("gui/session-missing", "gui --session {tmp}/missing.jsonl", USAGE, "missing.jsonl: No such file"),
+    ("gui/session-not-a-recording", "gui --session {tmp}/bad.xml", USAGE, "neither a pltf-session file"),
+    ("gui/session-cut-short", "gui --session {tmp}/bad.jsonl", USAGE, "bad.jsonl:1"),
+    ("gui/session-and-target", "gui --session {tmp}/session.jsonl --target 127.0.0.1:{dead}", USAGE, "not allowed"),
     (
         "proxy/port-out-of-range",
         "proxy --listen 127.0.0.1:0 --target 127.0.0.1:99999",
