@@ -128,6 +128,22 @@ function setup(platform = { text: "words\nalpha\nbeta", name: "plant" }) {
   return { shell, seen, script, platform };
 }
 
+describe("the document shell: Undo and Redo (issue 35)", () => {
+  it("say the action they took back or did again, or that there was none", async () => {
+    const { shell, seen } = setup();
+    await shell.load();
+    shell.undo();
+    expect(seen.said.at(-1)).toBe("nothingToUndo");
+    shell.history.add("gamma");
+    shell.undo();
+    expect([seen.said.at(-1), shell.history.words]).toEqual(["undone gamma", ["alpha", "beta"]]);
+    shell.redo();
+    expect([seen.said.at(-1), shell.history.words]).toEqual(["redone gamma", ["alpha", "beta", "gamma"]]);
+    shell.redo();
+    expect(seen.said.at(-1)).toBe("nothingToRedo");
+  });
+});
+
 describe("the document shell: file actions", () => {
   it("loads the platform's document under its name, or says why not and keeps its own", async () => {
     const { shell, seen, script } = setup();
