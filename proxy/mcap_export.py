@@ -50,11 +50,11 @@ from mcap.writer import Writer
 from pltf.proxy import mcap_proto
 from pltf.proxy.mcap_read import Entry, entry_of, read_entries
 from pltf.proxy.mcap_schemas import schema_bytes, schema_encoding
+from pltf.proxy.mcap_wire import fields_text
 from pltf.proxy.session import FORMAT, VERSION, SessionError, _lines, _record
 from pltf.proxy.tap import CLOSE, MEMO_BYTES, MEMO_FRAMES, OPEN, Record
-from pltf.proxy.view import ARROW, ITEMS_SHOWN, format_fields, format_record
+from pltf.proxy.view import ARROW, format_record
 from pltf.spec.documents import DocumentError, DocumentKind, validate_document
-from pltf.spec.jsonio import telegram_to_json
 
 NS = 1_000_000_000
 MM = 1000  # mm per metre, Foxglove's unit (division: the nearest float to the exact value)
@@ -246,42 +246,18 @@ def _log(e: Entry, level: int, message: str) -> bytes:
     return _tail({"level": level, "message": message, "name": f"port {e.port}", "file": "", "line": 0})
 
 
-class _Counted(list[Any]):
-    """The first items of a group that says how many it has (the view prints ``[541: {..}, {..}, {..}, ...]``)."""
-
-    def __init__(self, items: list[Any], total: int) -> None:
-        super().__init__(items)
-        self.total = total
-
-    def __len__(self) -> int:
-        return self.total
-
-
-def _is_group(value: Any) -> bool:
-    return isinstance(value, tuple) and len(value) > ITEMS_SHOWN and hasattr(value[0], "_fields")
-
-
 def _as_record(e: Entry) -> Record:
     return Record(e.time, e.conn, e.port, e.kind, e.direction, e.raw, e.telegram, e.error, e.detail)
 
 
 def wire_line(rec: Record | Entry) -> str:
-    """The line ``pltf proxy`` shows for the record, without its clock. A long group (a status's 541 scan points)
-    is cut to the items the view shows before the telegram is turned into JSON: the same line, at a fraction of
-    the cost; an entry's columns (mcap_read.py) are cut already, their counts are the columns'."""
+    """The line ``pltf proxy`` shows for the record, without its clock, its words written by mcap_wire.py's
+    compiled formatter (a long group cut to the items the view shows; an entry's columns are cut already)."""
     e = entry_of(rec) if isinstance(rec, Record) else rec
-    t = e.telegram
-    counts = {c.name: len(c.items) for c in e.columns}
-    if t is None or (not counts and (len(e.raw) <= MEMO_BYTES or not any(_is_group(v) for v in t))):
+    if e.telegram is None:
         return format_record(_as_record(e), t0=e.time)[1].lstrip().split(" ", 1)[1]
-    short = t._make(v[:ITEMS_SHOWN] if _is_group(v) else v for v in t)  # type: ignore[attr-defined]
-    shape = telegram_to_json(short)
-    for name, value in zip(t._fields, t, strict=True):
-        total = counts.get(name, len(value) if _is_group(value) else 0)
-        if total > ITEMS_SHOWN:
-            shape["fields"][name] = _Counted(shape["fields"][name], total)
-    arrow = ARROW[e.direction or "request"]
-    return f"#{e.conn:<3} :{e.port:<5} {arrow} {t.NAME} {format_fields(shape)}".rstrip()
+    words = fields_text(e.telegram, {c.name: len(c.items) for c in e.columns})
+    return f"#{e.conn:<3} :{e.port:<5} {ARROW[e.direction or 'request']} {e.telegram.NAME} {words}".rstrip()
 
 
 def telegram_message(e: Entry) -> bytes:

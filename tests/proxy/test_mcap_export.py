@@ -26,6 +26,8 @@ import numpy as np
 import pytest
 from google.protobuf import descriptor_pb2, descriptor_pool, message_factory, timestamp_pb2
 from google.protobuf.json_format import MessageToDict
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from mcap.reader import NonSeekingReader, SeekingReader
 
 from pltf.cli.main import main as pltf
@@ -45,10 +47,13 @@ from pltf.proxy.mcap_export import (
 )
 from pltf.proxy.mcap_read import read_entries
 from pltf.proxy.mcap_schemas import PROTOBUF_SCHEMAS, SCHEMAS, schema_encoding
+from pltf.proxy.mcap_wire import fields_text
 from pltf.proxy.session import Session, read_session
 from pltf.proxy.tap import CLOSE, FRAME, OPEN, RAW, Record, Tap
-from pltf.proxy.view import format_record
-from pltf.spec.codec import REPLIES, REQUESTS, encode
+from pltf.proxy.view import format_fields, format_record
+from pltf.spec.codec import FRAME_OVERHEAD, REPLIES, REQUESTS, encode, telegram_set
+from pltf.spec.jsonio import telegram_to_json
+from pltf.spec.strategies import telegram_strategy
 
 ROOT = Path(__file__).resolve().parents[2]
 READER = ROOT / "tests" / "proxy" / "mcap_reader"
@@ -425,6 +430,16 @@ def test_the_wire_line_of_a_status_with_its_scan_is_the_views_line() -> None:
     (rec,) = Tap("reply", 2, 10002).feed(encode(status), 7.25)
     assert wire_line(rec) == format_record(rec, t0=7.25)[1].lstrip().split(" ", 1)[1]
     assert " scan=[541: {x=0 y=0}, {x=1 y=-1}, {x=2 y=-2}, ...] " in wire_line(rec)
+
+
+EVERY_CLASS = [cls for direction in ("request", "reply") for cls in telegram_set(direction)]
+
+
+@settings(max_examples=400, deadline=None)
+@given(st.sampled_from(EVERY_CLASS).flatmap(lambda cls: telegram_strategy(cls, max_items=6)))
+def test_the_compiled_wire_words_are_the_views_for_every_telegram(t: Any) -> None:
+    decoded = telegram_set(t.DIRECTION).decode_data(encode(t)[FRAME_OVERHEAD:])  # group items as the codec makes them
+    assert fields_text(decoded) == format_fields(telegram_to_json(decoded))
 
 
 def test_records_are_put_in_time_order_within_the_window_and_a_session_reads_as_read_session_reads_it(
