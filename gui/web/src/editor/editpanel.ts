@@ -226,6 +226,7 @@ export function mapEditor(
       view.setTool("edit"); // redraw without the draft
     }
   };
+  bar.separator(); // issue 35: the groups of the toolbar (documents, tools, actions, platform)
   bar.tool("select", "edit.select", setTool);
   bar.tool("vertex", "edit.vertex", setTool);
   bar.tool("addLine", "edit.addLine", setTool);
@@ -237,6 +238,7 @@ export function mapEditor(
     bar.tool(k, `edit.${k}`, setTool);
   }
   bar.tool("measure", "edit.measure", setTool);
+  bar.separator();
   const allB = bar.action("edit.selectAll", () => {
     selectAll(ed);
     setTool("select");
@@ -252,6 +254,7 @@ export function mapEditor(
   );
   const deleteB = bar.action("edit.delete", () => deleteSelection(ed, env));
   const invertB = bar.action("edit.invert", () => invertSelected(ed, env));
+  bar.separator();
   const sendB = sendButton(shell, bar);
   guard(session, sendB); // CMD_SET_MAP: only while this tab may command (issue 33)
   const closeB = closeButton(shell, bar);

@@ -171,6 +171,7 @@ export function roadmapEditor(
     bar.press(next);
     bind(tip, TIP_FOR[next], { name: false });
   };
+  bar.separator(); // issue 35: the groups of the toolbar (documents, tools, actions, platform)
   bar.tool("select", "rm.select", setTool);
   bar.tool("addStation", "rm.addStation", setTool);
   bar.tool("addEdge", "rm.addEdge", setTool);
@@ -179,6 +180,7 @@ export function roadmapEditor(
   const apply = button("rm.apply", () =>
     applyTyped(ed, env, { name: nameIn.value, x: xIn.value, y: yIn.value, angle: angleIn.value }),
   );
+  bar.separator();
   const sendB = sendButton(shell, bar);
   guard(session, sendB); // CMD_SET_ROADMAP: only while this tab may command (issue 33)
   const closeB = closeButton(shell, bar); // guide 5.5 "looks similar to the toolbar of the map editor"
