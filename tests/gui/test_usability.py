@@ -110,6 +110,7 @@ def test_the_motion_modes_controls_have_names_and_captions(page: Any, gateway: G
     """The motion panel shows each mode's controls only in that mode (guide 5.6): walked in each, connected."""
     open_gui(page, gateway, platform.target)
     button(page, "Init").click()
+    expect_text(_messages(page), "Init: CMD_CONNECT_TO_PLTF, CMD_INIT_PLTF sent")  # what the button sent
     expect_text(readout(page, "System state"), "Ready")
     found: dict[str, list[str]] = {"missing": [], "untitled": []}
     inputs = 0

@@ -243,6 +243,7 @@ export function mapEditor(
     selectAll(ed);
     setTool("select");
     refresh();
+    say(t("edit.selectedN", { n: selection(ed).size })); // issue 35: a message for every action
   });
   const scanB = bar.action("edit.fromScan", () =>
     convertScan(

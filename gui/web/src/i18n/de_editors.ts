@@ -147,4 +147,5 @@ export const deEditors: Record<keyof typeof enEditors, string> = {
   "map.tipShift": "Die Plattform per Drag and Drop verschieben; mit Rechtsklick wird der Rahmen gedreht.",
   "map.tipFlag":
     "Zielrahmen wählen. Im Bewegungsmodus Automatik fährt die Plattform an den gewählten Ort: die rote Fahne ziehen; mit Rechtsklick die Zielrichtung drehen.",
+  "op.sent": "{what}: {telegrams} gesendet",
 };

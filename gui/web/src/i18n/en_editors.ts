@@ -145,4 +145,5 @@ export const enEditors = {
   "map.tipShift": "The platform can be shifted by drag and drop. The frame is rotated with a right-click.",
   "map.tipFlag":
     "Selecting a target frame. Used in motion mode Automatic, the platform will move to a specified location: drag the red flag; rotate the target direction with a right-click.",
+  "op.sent": "{what}: {telegrams} sent",
 } as const;

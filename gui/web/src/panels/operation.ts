@@ -113,17 +113,25 @@ export function operationPanel(session: PlatformSession, say: (text: string) => 
   const bar = h("div", { role: "toolbar", class: "operation" });
   bind(bar, "op.toolbar", { text: false });
   let status: GetStatusReply | null = null;
-  const sendAll = (telegrams: Telegram[]) => {
+  const sendAll = (telegrams: Telegram[]): boolean => {
     try {
       telegrams.forEach((tg) => session.send(tg));
+      return true;
     } catch (e) {
       say((e as Error).message);
+      return false;
     }
   };
   const buttons = COMMANDS.map((c) => {
     const b = h("button", { type: "button", "aria-keyshortcuts": c.shortcut || false });
     bind(b, c.key, { title: OP_TIPS[c.key] });
-    b.addEventListener("click", () => sendAll(c.send()));
+    // issue 35: a message for every action: what was sent, by the telegrams' names (guide 6.3)
+    b.addEventListener("click", () => {
+      const telegrams = c.send();
+      if (sendAll(telegrams)) {
+        say(t("op.sent", { what: t(c.key), telegrams: telegrams.map((tg) => tg.telegramName).join(", ") }));
+      }
+    });
     return b;
   });
   // guide 5.6: "For starting a motion mode the platform has to be in the state 'Ready'. Select in to motion mode combo box"
