@@ -6,10 +6,12 @@ Rules:
   time, direction, telegram name and byte offset, ~40 bytes a frame kept) and answers two questions from that
   index, reading only the lines the answer needs:
   ``GET /api/recording/state?t=T``: the last reply of each telegram name at or before T (status, position, map,
-  roadmap, debug data, CAN messages, parameters, ...): what the panels of a live GUI would show at T;
-  ``GET /api/recording/records?from=A&to=B&limit=N``: the last N frames (both directions) in (A, B], for the
-  wire inspector. Per name, a sorted array of times and a bisection stand in for keyframes: the same answer as
-  per-second keyframes (the last offset of each name), without a second's rounding.
+  roadmap, debug data, CAN messages, parameters, ...): what the panels of a live GUI would show at T; with
+  ``&since=S&limit=N`` also the last N frames (both directions) in (S, T] for the wire inspector, in the same
+  answer (one round trip a seek: ``{"state": [...], "wire": [...]}``);
+  ``GET /api/recording/records?from=A&to=B&limit=N``: the last N frames in (A, B] alone.
+  Per name, a sorted array of times and a bisection stand in for keyframes: the same answer as per-second
+  keyframes (the last offset of each name), without a second's rounding.
 - An MCAP file (``pltf export --mcap``, ``pltf proxy --mcap``) is served as it is, with HTTP range requests
   (``GET /recording.mcap``): the browser reads it with @mcap/core's McapIndexedReader, as Foxglove does. The
   gateway only checks that it is an MCAP file with the raw telegrams' channel (``/pltf/telegrams``).
@@ -42,6 +44,9 @@ _FRAME = re.compile(
     rb'\{"time": ([-0-9.e+]+), "conn": \d+, "port": \d+, "kind": "(frame|raw|open|close)"'
     rb'(?:, "direction": "(request|reply)", "hex": "([0-9a-f]{0,%d}))?' % (2 * FRAME_OVERHEAD + 2)
 )
+
+
+_HEX = re.compile(rb'"hex": "([0-9a-f]*)"')
 
 
 class RecordingError(Exception):
@@ -143,10 +148,16 @@ class SessionIndex:
         return [self._frame(at) for at in self.offsets[max(lo, hi - limit) : hi]]
 
     def _frame(self, offset: int) -> dict[str, Any]:
+        """The frame of the line at ``offset``: its fields found in SessionWriter's layout (a line is ~10 KB of
+        decoded telegram beside the hex: not parsed), else in the JSON."""
         if self._fh is None:
             self._fh = self.path.open("rb")
         self._fh.seek(offset)
-        obj = json.loads(self._fh.readline())
+        line = self._fh.readline()
+        m, h = _FRAME.match(line), _HEX.search(line)
+        if m is not None and m[3] is not None and h is not None:
+            return {"t": float(m[1]), "dir": m[3].decode(), "hex": h[1].decode()}
+        obj = json.loads(line)
         return {"t": float(obj["time"]), "dir": obj["direction"], "hex": obj["hex"]}
 
     def close(self) -> None:
@@ -249,7 +260,12 @@ async def info(request: web.Request) -> web.Response:
 
 
 async def state(request: web.Request) -> web.Response:
-    return web.json_response({"frames": _session(request).state_at(_number(request, "t"))})
+    rec, t = _session(request), _number(request, "t")
+    answer: dict[str, Any] = {"state": rec.state_at(t)}
+    if "since" in request.query:
+        limit = int(min(RECORDS_LIMIT, max(1, _number(request, "limit", RECORDS_LIMIT))))
+        answer["wire"] = rec.records_in(_number(request, "since"), t, limit)
+    return web.json_response(answer)
 
 
 async def records(request: web.Request) -> web.Response:

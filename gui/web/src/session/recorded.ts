@@ -50,17 +50,21 @@ export interface RecordingInfo {
   events: RecordedEvent[];
 }
 
+/** What a seek shows: the last reply of each telegram name at or before t, and the wire's frames before it. */
+export interface RecordedState {
+  state: RecordedFrame[];
+  /** the last `limit` frames with since < time <= t, in time order */
+  wire: RecordedFrame[];
+}
+
 export interface RecordingSource {
   info(): Promise<RecordingInfo>;
-  /** the last reply of each telegram name at or before t */
-  stateAt(t: number): Promise<RecordedFrame[]>;
-  /** the last `limit` frames with from < time <= to, in time order */
-  recordsIn(from: number, to: number, limit: number): Promise<RecordedFrame[]>;
+  at(t: number, since: number, limit: number): Promise<RecordedState>;
 }
 
 /** A jump longer than this shows the wire's last WIRE_BACK seconds before the new time rather than the gap. */
-const WIRE_BACK = 2;
-const WIRE_LIMIT = 200;
+const WIRE_BACK = 1;
+const WIRE_LIMIT = 100;
 
 async function json<T>(url: string): Promise<T> {
   const r = await fetch(url);
@@ -78,13 +82,8 @@ export class GatewaySource implements RecordingSource {
     return json<RecordingInfo>(this.base);
   }
 
-  async stateAt(t: number): Promise<RecordedFrame[]> {
-    return (await json<{ frames: RecordedFrame[] }>(`${this.base}/state?t=${t}`)).frames;
-  }
-
-  async recordsIn(from: number, to: number, limit: number): Promise<RecordedFrame[]> {
-    const q = `from=${from}&to=${to}&limit=${limit}`;
-    return (await json<{ frames: RecordedFrame[] }>(`${this.base}/records?${q}`)).frames;
+  at(t: number, since: number, limit: number): Promise<RecordedState> {
+    return json<RecordedState>(`${this.base}/state?t=${t}&since=${since}&limit=${limit}`);
   }
 }
 
@@ -151,7 +150,7 @@ export class RecordedSession extends PlatformSession {
       this.wanted = null;
       const back =
         this.wireAt !== null && this.wireAt < t && t - this.wireAt <= WIRE_BACK ? this.wireAt : t - WIRE_BACK;
-      const [state, wire] = await Promise.all([this.source.stateAt(t), this.source.recordsIn(back, t, WIRE_LIMIT)]);
+      const { state, wire } = await this.source.at(t, back, WIRE_LIMIT);
       this.wireAt = t;
       this.publishState(state);
       this.publishWire(wire);

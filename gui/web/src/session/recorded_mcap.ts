@@ -14,7 +14,7 @@
 import { McapIndexedReader } from "@mcap/core";
 import type { IReadable } from "@mcap/core";
 import { decompress } from "fzstd";
-import type { RecordedEvent, RecordedFrame, RecordingInfo, RecordingSource } from "./recorded";
+import type { RecordedEvent, RecordedFrame, RecordedState, RecordingInfo, RecordingSource } from "./recorded";
 
 export const TELEGRAMS = "/pltf/telegrams";
 
@@ -140,6 +140,10 @@ export class McapSource implements RecordingSource {
       }
     }
     return out.sort((a, b) => a.t - b.t);
+  }
+
+  async at(t: number, since: number, limit: number): Promise<RecordedState> {
+    return { state: await this.stateAt(t), wire: await this.recordsIn(since, t, limit) };
   }
 
   async recordsIn(from: number, to: number, limit: number): Promise<RecordedFrame[]> {

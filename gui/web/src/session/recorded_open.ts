@@ -19,12 +19,8 @@ export class GatewayOrMcap implements RecordingSource {
     return this.inner.info();
   }
 
-  stateAt(t: number) {
-    return this.inner?.stateAt(t) ?? Promise.resolve([]);
-  }
-
-  recordsIn(from: number, to: number, limit: number) {
-    return this.inner?.recordsIn(from, to, limit) ?? Promise.resolve([]);
+  at(t: number, since: number, limit: number) {
+    return this.inner?.at(t, since, limit) ?? Promise.resolve({ state: [], wire: [] });
   }
 }
 
