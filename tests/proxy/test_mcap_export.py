@@ -48,7 +48,7 @@ from pltf.proxy.mcap_export import (
 from pltf.proxy.mcap_read import read_entries
 from pltf.proxy.mcap_schemas import PROTOBUF_SCHEMAS, SCHEMAS, schema_encoding
 from pltf.proxy.mcap_wire import fields_text
-from pltf.proxy.session import Session, read_session
+from pltf.proxy.session import Session, SessionError, SessionWriter, read_session
 from pltf.proxy.tap import CLOSE, FRAME, OPEN, RAW, Record, Tap
 from pltf.proxy.view import format_fields, format_record
 from pltf.spec.codec import FRAME_OVERHEAD, REPLIES, REQUESTS, encode, telegram_set
@@ -432,6 +432,59 @@ def test_the_wire_line_of_a_status_with_its_scan_is_the_views_line() -> None:
     assert " scan=[541: {x=0 y=0}, {x=1 y=-1}, {x=2 y=-2}, ...] " in wire_line(rec)
 
 
+ENTRY_FIELDS = ("time", "conn", "port", "kind", "direction", "raw", "error", "detail")
+
+
+def _session_file(path: Path, lines: list[str], newline: str = "\n") -> Path:
+    header = '{"format": "pltf-session", "version": 1, "started": 0, "routes": []}'
+    path.write_text(newline.join([header, *lines]) + newline, encoding="ascii", newline="")
+    return path
+
+
+def test_read_entries_reads_what_read_records_reads_line_by_line(tmp_path: Path) -> None:
+    """Every kind of line, the fast way (SessionWriter's frame lines) and the slow (the rest), with CRLF too."""
+    status = canonical("CMD_GET_STATUS", {}).replace(scan=[(i, -i) for i in range(50)])
+    recs = Tap("reply", 1, 10002).feed(encode(status), 2.0) + Tap("request", 1, 10002).feed(b"\xff\x01\xfe\x03xyz", 3.0)
+    recs += Tap("reply", 2, 10000).feed(
+        encode(REPLIES.CMD_GET_POSITION(x=1, y=2, angle=0.5, vel_trans=0, vel_rot=0)), 4
+    )
+    buf = io.StringIO()
+    writer = SessionWriter(tmp_path / "unused.jsonl")
+    writer.close()
+    writer._fh = buf  # the lines into memory
+    writer.write(Record(1.0, 1, 10002, OPEN, detail="client 127.0.0.1:5"))
+    for r in recs:
+        writer.write(r)
+    writer.write(Record(5.0, 1, 10002, CLOSE, detail="by client (FIN)"))
+    lines = buf.getvalue().splitlines()
+    marked = '{"time": 6, "conn": 3, "port": 10000, "kind": "frame", "direction": "reply", "hex": "ff01fe02", '
+    lines += ["", marked + '"telegram": null, "error": "Truncated: short"}']
+    for newline in ("\n", "\r\n"):
+        path = _session_file(tmp_path / "s.jsonl", lines, newline)
+        got = [tuple(getattr(e, f) for f in ENTRY_FIELDS) for e in read_entries(path)]
+        assert got == [tuple(getattr(r, f) for f in ENTRY_FIELDS) for r in read_records(path)]
+        assert len(got) == 6 and got[-1][6] == "Truncated: short"
+
+
+@pytest.mark.parametrize(
+    "line",
+    [
+        '{"time": 1, "conn": 1, "port": 1, "kind": "frame", "direction": "reply", "hex": "ff01fe020000000112", '
+        '"telegram": {}}',  # a CMD_GET_STATUS reply without its fields does not decode
+        '{"time": 1, "conn": 1, "port": 1, "kind": "frame", "direction": "sideways", "hex": "", "telegram": {}}',
+        '{"time": 1, "conn": 1, "port": 1, "kind": "frame", "direction": "reply", "hex": "zz", "telegram": {}}',
+        '{"time": 1, "conn": 1, "port": 1, "kind": "frame", "direction": "reply", "hex": "ff01',  # cut short
+    ],
+)
+def test_read_entries_refuses_a_bad_line_with_read_records_message(tmp_path: Path, line: str) -> None:
+    path = _session_file(tmp_path / "s.jsonl", ["", line])
+    with pytest.raises(SessionError) as want:
+        list(read_records(path))
+    with pytest.raises(SessionError) as got:
+        list(read_entries(path))
+    assert str(got.value) == str(want.value) and ":3: " in str(got.value)
+
+
 EVERY_CLASS = [cls for direction in ("request", "reply") for cls in telegram_set(direction)]
 
 
@@ -456,7 +509,7 @@ def test_records_are_put_in_time_order_within_the_window_and_a_session_reads_as_
         20.0,
     ]
     assert tuple(read_records(recorded / "session.jsonl")) == read_session(recorded / "session.jsonl").records
-    fields = ("time", "conn", "port", "kind", "direction", "raw", "error", "detail")
+    fields = ENTRY_FIELDS
     entries = list(read_entries(recorded / "session.jsonl"))
     records = read_session(recorded / "session.jsonl").records
     assert [tuple(getattr(e, f) for f in fields) for e in entries] == [
