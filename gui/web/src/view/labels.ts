@@ -3,6 +3,9 @@
  * without overlap, as map renderers place them: a greedy pass in priority order over a few candidate positions
  * around each anchor, the first free one taken, a label with none free hidden at that zoom.
  *
+ * Where they meet the guide says nothing (5.4: "Insert a label to indicate special areas for better understanding
+ * the map."): erratum E-GUI-010 records the decision below and the other readings.
+ *
  * Rules:
  * - Priority: stations above map labels (a station's name is what a user commands the platform to), each kind in
  *   document order. What is placed first is never moved by what comes later.
