@@ -136,7 +136,9 @@ def timestamp(ns: int) -> bytes:
     return (integer(1, sec) if sec else b"") + (integer(2, nsec) if nsec else b"")
 
 
-IDENTITY_POSE = length_delimited(2, double(4, 1.0))  # foxglove.Pose: position 0, orientation w = 1
+# foxglove.Pose: position (0, 0, 0) written as an empty Vector3 (a reader's defaults give a missing one as null),
+# orientation w = 1
+IDENTITY_POSE = length_delimited(1, b"") + length_delimited(2, double(4, 1.0))
 
 
 def laser_scan_tail(frame_id: str, start: float, end: float, ranges: bytes) -> bytes:

@@ -242,6 +242,17 @@ def test_mcap_core_from_npm_reads_the_same(recorded: Path, which: str) -> None:
         want = ("protobuf", "protobuf") if c["topic"] in PROTOBUF else ("jsonschema", "json")
         assert (c["schemaEncoding"], c["messageEncoding"]) == want, c
     assert stream["counts"] == dict(ours["counts"])
+    # protobufjs (Foxglove's decoder) from the file's own FileDescriptorSet reads the scans the protobuf library reads
+    theirs = stream["decoded"]["/scan"]
+    assert len(theirs) == len(ours["messages"]["/scan"]) >= 3
+    for js, py in zip(theirs, ours["messages"]["/scan"], strict=True):
+        assert (js["ranges"], js["start_angle"], js["end_angle"], js["frame_id"]) == (
+            py["ranges"],
+            py["start_angle"],
+            py["end_angle"],
+            py["frame_id"],
+        )
+        assert js["pose"] == {"position": {"x": 0, "y": 0, "z": 0}, "orientation": {"x": 0, "y": 0, "z": 0, "w": 1}}
     assert stream["counts"]["/pltf/telegrams"] == len(_telegrams(read_session(recorded / "session.jsonl")))
     stats = indexed["statistics"]
     assert int(stats["messageCount"]) == sum(stream["counts"].values())

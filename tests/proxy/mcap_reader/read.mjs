@@ -5,12 +5,21 @@
 // - "indexed": through the summary section (McapIndexedReader): the statistics record, the chunk indexes
 //   (time range and messages per chunk, from each chunk's message indexes), and the messages per topic that
 //   readMessages() finds through those indexes.
+// A protobuf channel's messages are decoded as Foxglove decodes them: protobufjs, its types built from the
+// FileDescriptorSet the schema record carries ("decoded": per topic, each message as plain JSON).
 import { McapIndexedReader, McapStreamReader } from "@mcap/core";
 import { decompress } from "fzstd";
 import { open, readFile } from "node:fs/promises";
+import protobuf from "protobufjs";
+import descriptor from "protobufjs/ext/descriptor/index.js";
 
 const decompressHandlers = { zstd: (data, size) => decompress(data, new Uint8Array(Number(size))) };
 const path = process.argv[2];
+
+function protobufType(schema) {
+  const root = protobuf.Root.fromDescriptor(descriptor.FileDescriptorSet.decode(schema.data));
+  return root.lookupType(schema.name);
+}
 
 function streamRead(bytes) {
   const reader = new McapStreamReader({ decompressHandlers, validateCrcs: true });
@@ -22,13 +31,22 @@ function streamRead(bytes) {
   let monotonic = true;
   let start = null;
   let end = null;
+  const types = new Map();
+  const decoded = {};
   let rec;
   while ((rec = reader.nextRecord()) !== undefined) {
     if (rec.type === "Schema") schemas.set(rec.id, rec);
     if (rec.type === "Channel") channels.set(rec.id, rec);
     if (rec.type !== "Message") continue;
-    const topic = channels.get(rec.channelId).topic;
+    const channel = channels.get(rec.channelId);
+    const topic = channel.topic;
     counts[topic] = (counts[topic] ?? 0) + 1;
+    if (channel.messageEncoding === "protobuf") {
+      if (!types.has(channel.id)) types.set(channel.id, protobufType(schemas.get(channel.schemaId)));
+      const type = types.get(channel.id);
+      const message = type.toObject(type.decode(rec.data), { longs: Number, defaults: true, arrays: true });
+      (decoded[topic] ??= []).push(message);
+    }
     if (last.has(rec.channelId) && rec.logTime < last.get(rec.channelId)) monotonic = false;
     last.set(rec.channelId, rec.logTime);
     if (start === null || rec.logTime < start) start = rec.logTime;
@@ -44,7 +62,15 @@ function streamRead(bytes) {
       schemaBytes: s ? s.data.length : 0,
     };
   });
-  return { done: reader.done(), channels: described, counts, monotonic, start: String(start), end: String(end) };
+  return {
+    done: reader.done(),
+    channels: described,
+    counts,
+    monotonic,
+    start: String(start),
+    end: String(end),
+    decoded,
+  };
 }
 
 async function indexedRead() {
