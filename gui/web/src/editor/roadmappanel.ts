@@ -211,6 +211,19 @@ export function roadmapEditor(
     field("rm.angle", angleIn),
     apply,
   );
+  // Ctrl+Z / Ctrl+Y (Ctrl+Shift+Z) as in the map editor (ui/icons.ts SHORTCUTS); a text field keeps its own undo
+  document.addEventListener("keydown", (e) => {
+    const k = e.key.toLowerCase();
+    if (!open || !(e.ctrlKey || e.metaKey) || (k !== "z" && k !== "y") || view.tool !== "edit") {
+      return;
+    }
+    if ((e.target as HTMLElement).closest?.("input, select, textarea, .dialog")) {
+      return;
+    }
+    e.preventDefault();
+    if (k === "z" && !e.shiftKey) shell.undo();
+    else shell.redo();
+  });
   setTool("select");
   refresh();
   const onShow = (shown: boolean): void => {

@@ -117,4 +117,7 @@ export const SHORTCUTS: ReadonlyArray<{ keys: string; what: Key; where: Key }> =
   { keys: "Ctrl+Shift+Z", what: "edit.redo", where: "edit.tools" },
   { keys: "Enter", what: "edit.finish", where: "edit.tools" },
   { keys: "Escape", what: "edit.cancelDraft", where: "edit.tools" },
+  { keys: "Ctrl+Z", what: "edit.undo", where: "rm.tools" },
+  { keys: "Ctrl+Y", what: "edit.redo", where: "rm.tools" },
+  { keys: "Ctrl+Shift+Z", what: "edit.redo", where: "rm.tools" },
 ];
