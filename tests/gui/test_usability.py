@@ -5,11 +5,12 @@ or did again, in English and in German. No platform is needed: the panels and ed
 
 from __future__ import annotations
 
+import json
 from typing import Any
 
 import pytest
 
-from tests.gui.conftest import Gateway, Platform, expect_text, open_gui
+from tests.gui.conftest import Gateway, Platform, expect_text, open_gui, wait_for
 from tests.gui.test_app import button, readout
 
 # The panels of the dock, by the menu and item that open them (English labels).
@@ -217,3 +218,21 @@ def test_undo_and_redo_say_which_action_they_took_back_or_did_again(page: Any, g
         expect_text(messages, undone)
         page.keyboard.press("Control+y")
         expect_text(messages, redone)
+
+
+def test_the_map_tools_keys_zoom_the_focused_map(page: Any, gateway: Gateway) -> None:
+    """+ and - on the focused map zoom it, as the Zoom in and Zoom out buttons do (their aria-keyshortcuts)."""
+    open_gui(page, gateway, "127.0.0.1:1", connected=False)
+    canvas = page.get_by_role("img", name="Map", exact=True)
+    for name, key in [("Zoom in", "+"), ("Zoom out", "-")]:
+        assert page.get_by_role("button", name=name, exact=True).get_attribute("aria-keyshortcuts") == key
+
+    def scale() -> float:
+        return float(json.loads(canvas.get_attribute("data-camera"))["scale"])
+
+    canvas.focus()
+    before = scale()
+    page.keyboard.press("+")
+    wait_for(lambda: scale() > before * 1.4, what="zoomed in by +")
+    page.keyboard.press("-")
+    wait_for(lambda: abs(scale() - before) < before * 0.01, what="zoomed back out by -")

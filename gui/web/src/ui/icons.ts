@@ -110,13 +110,17 @@ export function icon(key: Key): SVGElement | null {
   return createElement(node, { "aria-hidden": "true", focusable: "false", class: "icon", width: 18, height: 18 });
 }
 
-/** The editors' keyboard shortcuts (editpanel.ts, roadmappanel.ts), for the help overlay: keys and catalog key. */
+/** The editors' and the map tools' keyboard shortcuts (editpanel.ts, roadmappanel.ts, map/controller.ts), for the
+ * help overlay: keys, what they do and where (catalog keys). */
 export const SHORTCUTS: ReadonlyArray<{ keys: string; what: Key; where: Key }> = [
   { keys: "Ctrl+Z", what: "edit.undo", where: "edit.tools" },
   { keys: "Ctrl+Y", what: "edit.redo", where: "edit.tools" },
   { keys: "Ctrl+Shift+Z", what: "edit.redo", where: "edit.tools" },
   { keys: "Enter", what: "edit.finish", where: "edit.tools" },
   { keys: "Escape", what: "edit.cancelDraft", where: "edit.tools" },
+  { keys: "R", what: "map.refresh", where: "map.tools" },
+  { keys: "+", what: "map.zoomIn", where: "map.tools" },
+  { keys: "-", what: "map.zoomOut", where: "map.tools" },
   { keys: "Ctrl+Z", what: "edit.undo", where: "rm.tools" },
   { keys: "Ctrl+Y", what: "edit.redo", where: "rm.tools" },
   { keys: "Ctrl+Shift+Z", what: "edit.redo", where: "rm.tools" },

@@ -130,7 +130,7 @@ export class MapController {
       return b;
     };
     act("map.refresh", () => this.session.refreshDocuments(), "R");
-    act("map.zoomAll", () => this.zoomAll(), "A");
+    act("map.zoomAll", () => this.zoomAll());
     act("map.zoomIn", () => this.zoom(1.5), "+");
     act("map.zoomOut", () => this.zoom(1 / 1.5), "-");
     const tools: Array<[Tool, Key]> = [
@@ -165,10 +165,20 @@ export class MapController {
     c.addEventListener("pointermove", (e) => this.move(e));
     c.addEventListener("pointerup", (e) => this.up(e));
     c.addEventListener("contextmenu", (e) => e.preventDefault());
+    // issue 35: the map tools' keys on the focused map (their aria-keyshortcuts; ui/icons.ts SHORTCUTS). Zoom all
+    // has none: A drives left in motion mode Velocity (panels/motion.ts)
+    const keyActions: Record<string, () => void> = {
+      r: () => this.session.refreshDocuments(),
+      "+": () => this.zoom(1.5),
+      "-": () => this.zoom(1 / 1.5),
+    };
     c.addEventListener("keydown", (e) => {
       const m = KEY_MOVES[e.key];
       if (m !== undefined) {
         this.setCamera(panBy(this.camera, m[0], m[1]));
+      }
+      if (!e.ctrlKey && !e.metaKey && !e.altKey) {
+        keyActions[e.key.toLowerCase()]?.();
       }
     });
   }
