@@ -73,6 +73,7 @@ def write_recording(path: Path, seconds: float) -> int:
     req_tap, rep_tap = Tap("request", 1, 10002), Tap("reply", 1, 10002)
     lap = io.StringIO()
     writer = SessionWriter(path)
+    writer._fh.close()  # the file it opened is written below, whole
     writer._fh = lap  # the lap's lines into memory
     writer.start([Route("127.0.0.1:10000", "127.0.0.1:10000"), Route("127.0.0.1:10002", "127.0.0.1:10002")], T0)
     writer.write(Record(T0, 1, 10002, OPEN, detail="client 127.0.0.1:40000"))
