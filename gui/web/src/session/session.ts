@@ -61,6 +61,14 @@ export interface ControlEvent {
   message: string;
 }
 
+/** A recording's seek (session/recorded.ts; a live session never publishes it): the time shown (Unix s) and the
+ * plotted replies (GET_STATUS, GET_POSITION) up to it; `reset`: what was drawn before is not the past of `t`. */
+export interface Seeked {
+  t: number;
+  reset: boolean;
+  history: Array<{ t: number; telegram: Telegram }>;
+}
+
 export interface WireRecord {
   dir: "out" | "in";
   t: number;
@@ -129,6 +137,7 @@ export class PlatformSession {
   readonly can = new Topic<GetCanMessagesReply>();
   readonly replies = new Topic<Telegram>();
   readonly wire = new Topic<WireRecord>();
+  readonly seeked = new Topic<Seeked>();
   readonly gatewayStats = new Topic<Record<string, unknown>>();
   /** The optional ground truth from the reference server's control channel (gui/truth.py): never needed. */
   readonly truth = new Topic<TruthEvent>();
