@@ -5,7 +5,7 @@
  */
 import { h } from "../dom";
 import { bind, type Key, onLanguage, t } from "../i18n/i18n";
-import { GetPositionReply, GetPositionRequest } from "../pltf";
+import { GetPositionReply, GetPositionRequest, GetStatusReply, type Telegram } from "../pltf";
 import type { PlatformSession } from "../session/session";
 
 export const WINDOW_S = 60;
@@ -40,8 +40,13 @@ class Plot {
     }
   }
 
+  clear(): void {
+    this.series.forEach((s) => (s.points.length = 0));
+  }
+
   draw(now: number): void {
     const c = this.canvas;
+    c.dataset.points = String(this.series[0].points.length);
     const w = (c.width = c.clientWidth || 300);
     const hgt = (c.height = c.clientHeight || 120);
     const ctx = c.getContext("2d")!;
@@ -92,20 +97,31 @@ export function plotsPanel(session: PlatformSession): { root: HTMLElement; onSho
   ]);
   const plots = [vel, battery, loc];
   let shown = false;
-  session.status.subscribe((s) => {
-    const now = performance.now();
-    vel.add(0, now, s.velTrans);
-    battery.add(0, now, s.ioBatteryVoltage / 1000);
-    loc.add(0, now, s.covMajor);
-    loc.add(1, now, s.covMinor);
-  });
-  session.replies.subscribe((r) => {
-    if (r instanceof GetPositionReply) {
-      vel.add(1, performance.now(), r.velTrans);
+  // a recording (session.seeked) plots its own times, up to the time shown, and only the history it is given
+  let recorded = false;
+  let clock = () => performance.now();
+  const take = (now: number, r: Telegram) => {
+    if (r instanceof GetStatusReply) {
+      vel.add(0, now, r.velTrans);
+      battery.add(0, now, r.ioBatteryVoltage / 1000);
+      loc.add(0, now, r.covMajor);
+      loc.add(1, now, r.covMinor);
+    } else if (r instanceof GetPositionReply) {
+      vel.add(1, now, r.velTrans);
     }
+  };
+  session.status.subscribe((s) => recorded || take(clock(), s));
+  session.replies.subscribe((r) => recorded || (r instanceof GetPositionReply && take(clock(), r)));
+  session.seeked.subscribe((s) => {
+    recorded = true;
+    clock = () => s.t * 1000;
+    if (s.reset) {
+      plots.forEach((p) => p.clear());
+    }
+    s.history.forEach((h) => take(h.t * 1000, h.telegram));
   });
   session.poll("position", () => new GetPositionRequest(), 5);
-  window.setInterval(() => shown && plots.forEach((p) => p.draw(performance.now())), 250);
+  window.setInterval(() => shown && plots.forEach((p) => p.draw(clock())), 250);
   const note = h("p", { class: "hint" });
   onLanguage(() => (note.textContent = t("plot.window", { s: WINDOW_S })));
   return {
