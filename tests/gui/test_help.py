@@ -21,6 +21,7 @@ EXPECTED = {
     "Alt+X": "stop the motion of the platform",
     "Arrow keys": "CMD_MOVE_VEL",
     "H J K L": "scroll the map",
+    "+": "Zoom in",
     "Ctrl+Z": "Undo",
     "Ctrl+Y": "Redo",
 }

@@ -6,9 +6,8 @@
  * Rules:
  * - The list is a table (`GUI_SHORTCUTS`) of the shortcuts the panels really handle: the menu's Ctrl+O (main.ts),
  *   the operation's Alt keys (panels/operation.ts), driving in Velocity and Joystick (Software) (panels/motion.ts),
- *   the map's h/j/k/l and wheel (panels/map/controller.ts); the editors' come from their own table (`SHORTCUTS` in
- *   ui/icons.ts). The map toolbar's buttons name R, A, + and - in aria-keyshortcuts, but no handler reads those
- *   keys, so they are not listed here.
+ *   the map's h/j/k/l and wheel (panels/map/controller.ts); the map toolbar's keys (R, +, -) and the editors' come
+ *   from the toolbars' own table (`SHORTCUTS` in ui/icons.ts), listed after these.
  * - While it is open it is modal: no key reaches the panels behind it (Alt+S does not start the platform, the arrow
  *   keys do not drive it).
  * - Texts come from the catalog (i18n/en_help.ts, de_help.ts) and follow the language at once.
