@@ -8,6 +8,7 @@ A page fixture fails the test on any browser console error or uncaught page erro
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import re
@@ -237,10 +238,12 @@ def artifacts(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return path
 
 
-@pytest.fixture
-def page(browser: Any) -> Iterator[Any]:
-    context = browser.new_context(viewport=VIEWPORT)
-    pg = context.new_page()
+@contextlib.contextmanager
+def checked_page(browser: Any, **context: Any) -> Iterator[Any]:
+    """A page in a new browser context (``context``: Playwright's new_context options, the viewport by default);
+    any console error or page error it reported fails the test at the end."""
+    ctx = browser.new_context(**{"viewport": VIEWPORT, **context})
+    pg = ctx.new_page()
     problems: list[str] = []
     pg.on("console", lambda m: problems.append(f"console {m.type}: {m.text}") if m.type == "error" else None)
     pg.on("pageerror", lambda e: problems.append(f"page error: {e}"))
@@ -248,8 +251,14 @@ def page(browser: Any) -> Iterator[Any]:
     try:
         yield pg
     finally:
-        context.close()
+        ctx.close()
     assert not problems, "the browser reported errors:\n" + "\n".join(problems)
+
+
+@pytest.fixture
+def page(browser: Any) -> Iterator[Any]:
+    with checked_page(browser) as pg:
+        yield pg
 
 
 def open_gui(page: Any, gateway: Gateway, target: str, *, connected: bool = True) -> None:

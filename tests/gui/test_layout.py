@@ -10,7 +10,7 @@ from typing import Any
 
 import pytest
 
-from tests.gui.conftest import PATIENCE, Gateway, Platform, open_gui, settled_view
+from tests.gui.conftest import Gateway, Platform, checked_page, open_gui, settled_view
 
 # name -> viewport, touch, the least share of the window the map must keep
 SCREENS = {
@@ -44,17 +44,8 @@ SMALL_TARGETS_JS = """() => [...document.querySelectorAll('button, select')]
 @pytest.fixture(params=list(SCREENS))
 def screen(request: pytest.FixtureRequest, browser: Any) -> Any:
     viewport, touch, share = SCREENS[request.param]
-    context = browser.new_context(viewport=viewport, has_touch=touch, is_mobile=False)
-    pg = context.new_page()
-    problems: list[str] = []
-    pg.on("console", lambda m: problems.append(f"console {m.type}: {m.text}") if m.type == "error" else None)
-    pg.on("pageerror", lambda e: problems.append(f"page error: {e}"))
-    pg.set_default_timeout(PATIENCE * 1000)
-    try:
+    with checked_page(browser, viewport=viewport, has_touch=touch, is_mobile=False) as pg:
         yield request.param, pg, viewport, touch, share
-    finally:
-        context.close()
-    assert not problems, "the browser reported errors:\n" + "\n".join(problems)
 
 
 def inside(box: dict[str, float] | None, viewport: dict[str, int]) -> bool:

@@ -391,17 +391,20 @@ def test_what_the_recording_s_end_cut_is_not_held_against_the_target_and_the_res
     assert [(d.path, d.replayed) for d in judge([driver], {1: wrong})] == [("(reply)", "CMD_GET_STATUS")]
 
 
-def test_a_connection_s_last_wait_cut_while_the_platform_moved_is_judged_by_kind() -> None:
-    s = session(
+def _two_polls() -> list[Record]:
+    """A driver (it set the mode) whose wait is two CMD_GET_STATUS polls."""
+    return [
         event(0.0, 1, OPEN),
         rec(0.1, 1, "request", "CMD_SET_MODE", mode=4),
         rec(0.2, 1, "request", "CMD_GET_STATUS"),
         rec(0.3, 1, "reply", "STATUS"),
         rec(0.4, 1, "request", "CMD_GET_STATUS"),
         rec(0.5, 1, "reply", "STATUS"),
-        event(0.6, 1, CLOSE, "by client (FIN)"),
-    )
-    (driver,) = plan(s)
+    ]
+
+
+def test_a_connection_s_last_wait_cut_while_the_platform_moved_is_judged_by_kind() -> None:
+    (driver,) = plan(session(*_two_polls(), event(0.6, 1, CLOSE, "by client (FIN)")))
     (wait,) = driver.waits.values()
     final = driver.steps[wait.final]
     assert final.reply is not None
@@ -416,17 +419,8 @@ def test_a_connection_s_last_wait_cut_while_the_platform_moved_is_judged_by_kind
 def _wait_ending_on(before_vel_rot: int) -> Script:
     """A driver's wait of two CMD_GET_STATUS polls: the last but one turning at ``before_vel_rot`` mrad/s, the
     last with the target reached while still turning at 49 mrad/s (the soak's patrol), then a CMD_STOP."""
-    s = session(
-        event(0.0, 1, OPEN),
-        rec(0.1, 1, "request", "CMD_SET_MODE", mode=4),
-        rec(0.2, 1, "request", "CMD_GET_STATUS"),
-        rec(0.3, 1, "reply", "STATUS"),
-        rec(0.4, 1, "request", "CMD_GET_STATUS"),
-        rec(0.5, 1, "reply", "STATUS"),
-        rec(0.6, 1, "request", "CMD_STOP"),
-        event(0.7, 1, CLOSE, "by client (FIN)"),
-    )
-    (driver,) = plan(s)
+    stop = rec(0.6, 1, "request", "CMD_STOP")
+    (driver,) = plan(session(*_two_polls(), stop, event(0.7, 1, CLOSE, "by client (FIN)")))
     (wait,) = driver.waits.values()
     final = driver.steps[wait.final]
     assert final.reply is not None and final.before is not None
