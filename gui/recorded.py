@@ -9,7 +9,9 @@ Rules:
   roadmap, debug data, CAN messages, parameters, ...): what the panels of a live GUI would show at T; with
   ``&since=S&limit=N`` also the last N frames (both directions) in (S, T] for the wire inspector, in the same
   answer (one round trip a seek: ``{"state": [...], "wire": [...]}``);
-  ``GET /api/recording/records?from=A&to=B&limit=N``: the last N frames in (A, B] alone.
+  ``GET /api/recording/records?from=A&to=B&limit=N``: the last N frames in (A, B] alone;
+  ``GET /api/recording/history?t=T&span=S&points=N``: the plotted replies (PLOTTED: GET_STATUS, GET_POSITION) in
+  (T - S, T], at most N of each name spread evenly over them: the plots' window up to a scrubbed time.
   Per name, a sorted array of times and a bisection stand in for keyframes: the same answer as per-second
   keyframes (the last offset of each name), without a second's rounding.
 - An MCAP file (``pltf export --mcap``, ``pltf proxy --mcap``) is served as it is, with HTTP range requests
@@ -39,6 +41,7 @@ from pltf.spec.codec import FRAME_OVERHEAD, telegram_set
 MCAP_MAGIC = b"\x89MCAP0\r\n"
 TELEGRAMS = "/pltf/telegrams"  # proxy/mcap_export.py: the raw telegrams' channel
 RECORDS_LIMIT = 500  # frames one records answer holds at most
+PLOTTED = ("CMD_GET_STATUS", "CMD_GET_POSITION")  # the replies panels/plots.ts draws over time
 # the start of a line as proxy/session.py's SessionWriter writes a frame: time, kind, direction, the id's byte
 _FRAME = re.compile(
     rb'\{"time": ([-0-9.e+]+), "conn": \d+, "port": \d+, "kind": "(frame|raw|open|close)"'
@@ -147,6 +150,17 @@ class SessionIndex:
         lo, hi = bisect.bisect_right(self.times, a), bisect.bisect_right(self.times, b)
         return [self._frame(at) for at in self.offsets[max(lo, hi - limit) : hi]]
 
+    def history(self, t: float, span: float, points: int) -> list[dict[str, Any]]:
+        """The PLOTTED replies with t - span < time <= t, at most ``points`` of each name (evenly spread, the last
+        one always), in time order."""
+        found = []
+        for name in PLOTTED:
+            series = self.replies.get(name)
+            if series is not None:
+                lo, hi = bisect.bisect_right(series.times, t - span), bisect.bisect_right(series.times, t)
+                found += [series.offsets[i] for i in spread(lo, hi, points)]
+        return sorted((self._frame(at) for at in found), key=lambda f: f["t"])
+
     def _frame(self, offset: int) -> dict[str, Any]:
         """The frame of the line at ``offset``: its fields found in SessionWriter's layout (a line is ~10 KB of
         decoded telegram beside the hex: not parsed), else in the JSON."""
@@ -164,6 +178,14 @@ class SessionIndex:
         if self._fh is not None:
             self._fh.close()
             self._fh = None
+
+
+def spread(lo: int, hi: int, n: int) -> list[int]:
+    """At most ``n`` indices of [lo, hi), evenly spread, ``hi - 1`` among them."""
+    count = hi - lo
+    if count <= n:
+        return list(range(lo, hi))
+    return sorted({hi - 1 - (k * (count - 1)) // max(1, n - 1) for k in range(n)})
 
 
 def _row(path: Path, n: int, raw: bytes) -> tuple[float, str, str] | None:
@@ -274,6 +296,12 @@ async def records(request: web.Request) -> web.Response:
     return web.json_response({"frames": frames})
 
 
+async def history(request: web.Request) -> web.Response:
+    points = int(min(RECORDS_LIMIT, max(1, _number(request, "points", RECORDS_LIMIT))))
+    frames = _session(request).history(_number(request, "t"), max(0.0, _number(request, "span")), points)
+    return web.json_response({"frames": frames})
+
+
 async def mcap(request: web.Request) -> web.StreamResponse:
     rec = request.app[RECORDING]
     if not isinstance(rec, McapFile):
@@ -292,5 +320,6 @@ def add_routes(app: web.Application, recording: Recording) -> None:
     app.router.add_get("/api/recording", info)
     app.router.add_get("/api/recording/state", state)
     app.router.add_get("/api/recording/records", records)
+    app.router.add_get("/api/recording/history", history)
     app.router.add_get("/recording.mcap", mcap)
     app.on_cleanup.append(_close)

@@ -4,8 +4,6 @@ polling, the platform on a circle), 20 s of it, written with the proxy's Session
 
 from __future__ import annotations
 
-import gc
-import warnings
 from collections.abc import Iterator
 from typing import Any
 
@@ -22,10 +20,7 @@ SECONDS = 20.0
 def circle(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[Gateway, list[tuple[float, tuple[float, ...]]]]]:
     root = tmp_path_factory.mktemp("timeline")
     session = root / "circle.jsonl"
-    with warnings.catch_warnings():  # write_recording leaves its SessionWriter's first file to the collector
-        warnings.simplefilter("ignore", ResourceWarning)
-        write_recording(session, SECONDS)
-        gc.collect()
+    write_recording(session, SECONDS)
     poses = [
         (r.time, (r.telegram.est_x, r.telegram.est_y, r.telegram.est_angle / 1000))
         for r in read_session(session).records
@@ -80,3 +75,49 @@ def test_space_plays_and_pauses_and_the_arrows_step(page: Any, circle: tuple[Gat
         "() => window.pltf.session.request({ telegramName: 'CMD_STOP' }).then(() => 'sent', (e) => e.message)"
     )
     assert refused == "CMD_STOP not sent: a recording is shown", refused
+
+
+def _status_count(poses: list[Any], t: float, span: float = 60.0) -> int:
+    return sum(1 for when, _ in poses if t - span < when <= t)
+
+
+def test_a_jump_before_the_first_reply_shows_no_status_and_the_plots_end_at_the_time(
+    page: Any, circle: tuple[Gateway, list[Any]]
+) -> None:
+    gw, poses = circle
+    page.goto(f"{gw.base}/?recording=circle.jsonl", timeout=30_000)
+    timeline = page.get_by_role("region", name="Timeline")
+    timeline.wait_for()
+    start = float(timeline.get_attribute("data-start"))
+    pose = page.get_by_role("status", name="Estimated pose")
+    page.get_by_role("tab", name="Plots").click()
+    velocity = page.get_by_role("img", name="Velocity")
+    for t in (start + 15.0, start + 5.0, start + 12.5):  # forward, back, forward again: each a jump
+        page.evaluate("(t) => window.pltf.timeline.seek(t)", t)
+        want = [p for when, p in poses if when <= t][-1]
+        wait_for(lambda want=want: _pose(page) == want, what=f"the pose at {t}")
+        # the plots hold the recording's statuses up to t (the window's 60 s), none after it
+        n = _status_count(poses, t)
+        wait_for(lambda n=n: velocity.get_attribute("data-points") == str(n), what=f"{n} points at {t}")
+    # the recording starts with a request: at its start no status has been answered yet
+    page.keyboard.press("Home")
+    wait_for(lambda: pose.get_attribute("data-value") is None, what="no pose before the first reply")
+    assert pose.inner_text().strip().endswith("-"), pose.inner_text()
+    wait_for(lambda: velocity.get_attribute("data-points") == "0", what="an empty plot")
+    page.keyboard.press("ArrowRight")  # 0.5 s in: the status is back
+    wait_for(lambda: _pose(page) == [p for when, p in poses if when <= start + 0.5][-1], what="the pose again")
+
+
+def test_the_timeline_in_german(page: Any, circle: tuple[Gateway, list[Any]]) -> None:
+    gw, _ = circle
+    page.add_init_script("localStorage.setItem('pltf.lang', 'de')")
+    page.goto(f"{gw.base}/?recording=circle.jsonl", timeout=30_000)
+    timeline = page.get_by_role("region", name="Zeitleiste")
+    timeline.wait_for()
+    assert timeline.get_by_role("slider", name="Zeit in der Aufzeichnung").is_visible()
+    assert timeline.get_by_role("combobox", name="Geschwindigkeit").is_visible()
+    timeline.get_by_role("button", name="Abspielen").click()
+    timeline.get_by_role("button", name="Anhalten").click()
+    wait_for(lambda: timeline.get_attribute("data-playing") == "false", what="paused")
+    note = "Eine Aufzeichnung wird gezeigt: nichts wird an eine Plattform gesendet."
+    assert note in timeline.inner_text(), timeline.inner_text()

@@ -12,5 +12,6 @@ export const deTimeline: Record<keyof typeof enTimeline, string> = {
   "timeline.readOnly": "Eine Aufzeichnung wird gezeigt: nichts wird an eine Plattform gesendet.",
   "timeline.notSent": "nicht gesendet: eine Aufzeichnung wird gezeigt",
   "timeline.conn": "Aufzeichnung {file}",
+  "timeline.noStatus": "Aufzeichnung {file}: zu dieser Zeit noch keine Statusantwort",
   "timeline.failed": "Die Aufzeichnung kann nicht gelesen werden: {detail}",
 } as const;

@@ -10,5 +10,6 @@ export const enTimeline = {
   "timeline.readOnly": "A recording is shown: nothing is sent to any platform.",
   "timeline.notSent": "not sent: a recording is shown",
   "timeline.conn": "recording {file}",
+  "timeline.noStatus": "recording {file}: no status reply yet at this time",
   "timeline.failed": "The recording cannot be read: {detail}",
 } as const;

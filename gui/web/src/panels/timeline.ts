@@ -77,22 +77,31 @@ export function timelinePanel(session: RecordedSession, info: RecordingInfo): Ti
   const marks = h("div", { class: "marks", role: "list" });
   bind(marks, "timeline.events", { text: false });
   const span = Math.max(end - start, 1e-9);
-  for (const e of thinMarks(info.events, start, end)) {
-    const mark = h("button", {
-      type: "button",
-      class: "mark",
-      role: "listitem",
-      style: `left: ${(100 * (e.t - start)) / span}%`,
-      "data-name": e.name,
-      "data-t": e.t,
-    });
-    onLanguage(() => {
-      mark.title = t("timeline.mark", { name: e.name, at: clock(e.t - start) });
+  const titleMarks = () => {
+    for (const mark of marks.children as HTMLCollectionOf<HTMLElement>) {
+      mark.title = t("timeline.mark", { name: mark.dataset.name ?? "", at: clock(Number(mark.dataset.t) - start) });
       mark.setAttribute("aria-label", mark.title);
-    });
-    mark.addEventListener("click", () => void go(e.t));
-    marks.append(mark);
-  }
+    }
+  };
+  // the marks so far (an MCAP file's arrive while it is shown: data-marks "reading", then "all")
+  const drawMarks = ({ events, complete }: { events: RecordedEvent[]; complete: boolean }) => {
+    marks.replaceChildren(
+      ...thinMarks(events, start, end).map((e) => {
+        const mark = h("button", {
+          type: "button",
+          class: "mark",
+          role: "listitem",
+          style: `left: ${(100 * (e.t - start)) / span}%`,
+          "data-name": e.name,
+          "data-t": e.t,
+        });
+        mark.addEventListener("click", () => void go(e.t));
+        return mark;
+      }),
+    );
+    titleMarks();
+    root.dataset.marks = complete ? "all" : "reading";
+  };
   const playButton = h("button", { type: "button", class: "play" });
   playButton.addEventListener("click", () => toggle());
   const note = bind(h("p", { class: "timeline-note" }), "timeline.readOnly");
@@ -158,6 +167,8 @@ export function timelinePanel(session: RecordedSession, info: RecordingInfo): Ti
   speedBox.addEventListener("change", () => setSpeed(Number(speedBox.value)));
   scrubber.addEventListener("input", () => void go(start + Number(scrubber.value)));
   session.time.subscribe(show);
+  session.events.subscribe(drawMarks);
+  onLanguage(titleMarks);
   onLanguage(showPlaying);
 
   const typing = (el: EventTarget | null) =>

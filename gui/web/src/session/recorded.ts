@@ -12,6 +12,12 @@
  * - Where the frames come from is a `RecordingSource`: the gateway's index of a session file (`GatewaySource`,
  *   gui/recorded.py) or an MCAP file read in the page (`McapSource`, recorded_mcap.ts). Frames are bytes (`hex`,
  *   the truth of a recording: proxy/session.py) decoded here with the protocol's codec.
+ * - A name with no reply at or before t (a jump before the first status reply) shows nothing, as live before its
+ *   first reply: the topic's last value is dropped, and without a status the session says it has none yet (not
+ *   `connected`, a conn event: the status bar, the operation and motion panels show no status).
+ * - Every seek publishes `seeked` (session.ts): the plotted replies up to t. A step forward of at most WIRE_BACK
+ *   carries those among the wire's frames; a jump resets the plots and, once read (one more request, after the
+ *   state is shown, the latest jump only), carries the plots' window (PLOT_SPAN_S) before t.
  * - Nothing is sent: `send` and `request` refuse with the reason, `mayCommand` is false (every command group is
  *   disabled: panels/control.ts), and the control line says "read-only".
  */
@@ -60,11 +66,19 @@ export interface RecordedState {
 export interface RecordingSource {
   info(): Promise<RecordingInfo>;
   at(t: number, since: number, limit: number): Promise<RecordedState>;
+  /** the plotted replies (GET_STATUS, GET_POSITION) with t - span < time <= t, at most `points` of each name */
+  history(t: number, span: number, points: number): Promise<RecordedFrame[]>;
+  /** the marks found after `info` (an MCAP file's commands are read in the background): all so far each time */
+  onEvents?: (events: RecordedEvent[], complete: boolean) => void;
 }
 
 /** A jump longer than this shows the wire's last WIRE_BACK seconds before the new time rather than the gap. */
 const WIRE_BACK = 1;
 const WIRE_LIMIT = 100;
+/** the plots' window (panels/plots.ts WINDOW_S) and how many points of each reply a jump's history holds */
+const PLOT_SPAN_S = 60;
+const PLOT_POINTS = 300;
+const PLOTTED = new Set(["CMD_GET_STATUS", "CMD_GET_POSITION"]);
 
 async function json<T>(url: string): Promise<T> {
   const r = await fetch(url);
@@ -85,6 +99,11 @@ export class GatewaySource implements RecordingSource {
   at(t: number, since: number, limit: number): Promise<RecordedState> {
     return json<RecordedState>(`${this.base}/state?t=${t}&since=${since}&limit=${limit}`);
   }
+
+  async history(t: number, span: number, points: number): Promise<RecordedFrame[]> {
+    return (await json<{ frames: RecordedFrame[] }>(`${this.base}/history?t=${t}&span=${span}&points=${points}`))
+      .frames;
+  }
 }
 
 export function fromHex(hex: string): Uint8Array {
@@ -95,28 +114,44 @@ export function fromHex(hex: string): Uint8Array {
   return out;
 }
 
-/** Publish a reply on its topic: the live session's dispatch (session.ts), kept beside it as a table. */
-const TOPICS: Array<(t: Telegram, s: RecordedSession) => void> = [
-  (t, s) => t instanceof GetStatusReply && s.status.publish(t),
-  (t, s) => t instanceof GetMapReply && s.map.publish(t),
-  (t, s) => t instanceof GetRoadmapReply && s.roadmap.publish(t),
-  (t, s) => t instanceof GetDebugDataReply && s.debug.publish(t),
-  (t, s) => t instanceof GetPltfParamVecReply && s.params.publish(t),
-  (t, s) => t instanceof GetCanMessagesReply && s.can.publish(t),
-];
+/** A reply's topic (the live session's dispatch, session.ts, kept beside it as a table): publish, and forget. */
+interface Dispatch {
+  publish(t: Telegram, s: RecordedSession): void;
+  forget(s: RecordedSession): void;
+}
+function topic<T extends Telegram>(cls: new (...a: never[]) => T, of: (s: RecordedSession) => Topic<T>): Dispatch {
+  return {
+    publish: (t, s) => t instanceof cls && of(s).publish(t),
+    forget: (s) => {
+      of(s).last = undefined;
+    },
+  };
+}
+const TOPICS: Record<string, Dispatch> = {
+  CMD_GET_STATUS: topic(GetStatusReply, (s) => s.status),
+  CMD_GET_MAP: topic(GetMapReply, (s) => s.map),
+  CMD_GET_ROADMAP: topic(GetRoadmapReply, (s) => s.roadmap),
+  CMD_GET_DEBUG_DATA: topic(GetDebugDataReply, (s) => s.debug),
+  CMD_GET_PLTF_PARAM_VEC: topic(GetPltfParamVecReply, (s) => s.params),
+  CMD_GET_CAN_MESSAGES: topic(GetCanMessagesReply, (s) => s.can),
+};
 
 export class RecordedSession extends PlatformSession {
   /** the time shown (Unix s), published after the state at that time */
   readonly time = new Topic<number>();
+  /** the timeline's marks, all so far (an MCAP file's arrive while it is shown), and whether that is all */
+  readonly events = new Topic<{ events: RecordedEvent[]; complete: boolean }>();
   info: RecordingInfo | null = null;
   private shownAt = new Map<string, number>();
   private wanted: number | null = null;
   private reading: Promise<void> | null = null;
   private wireAt: number | null = null;
+  private jumps = 0;
 
   constructor(readonly source: RecordingSource) {
     super("", "");
     this.fetchDocuments = false;
+    source.onEvents = (events, complete) => this.events.publish({ events, complete });
   }
 
   /** Read the recording's times and events and show its first state. */
@@ -124,10 +159,11 @@ export class RecordedSession extends PlatformSession {
     const info = await this.source.info();
     this.info = info;
     this.target = info.file;
-    this.connected = true;
     this.drive = { event: "control", holder: null, you: false, read_only: true, message: tr("timeline.readOnly") };
     this.driving.publish(this.drive);
-    this.conn.publish({ event: "recording", target: info.file, message: tr("timeline.conn", { file: info.file }) });
+    if (this.events.last === undefined) {
+      this.events.publish({ events: info.events, complete: info.kind === "session" });
+    }
     await this.seek(info.start);
     return info;
   }
@@ -148,28 +184,76 @@ export class RecordedSession extends PlatformSession {
     while (this.wanted !== null) {
       const t = this.wanted;
       this.wanted = null;
-      const back =
-        this.wireAt !== null && this.wireAt < t && t - this.wireAt <= WIRE_BACK ? this.wireAt : t - WIRE_BACK;
-      const { state, wire } = await this.source.at(t, back, WIRE_LIMIT);
+      const step = this.wireAt !== null && this.wireAt < t && t - this.wireAt <= WIRE_BACK;
+      const { state, wire } = await this.source.at(
+        t,
+        step && this.wireAt !== null ? this.wireAt : t - WIRE_BACK,
+        WIRE_LIMIT,
+      );
       this.wireAt = t;
       this.publishState(state);
       this.publishWire(wire);
+      this.seeked.publish({ t, reset: !step, history: this.plotted(wire) });
       this.time.publish(t);
+      if (!step) {
+        void this.readHistory(t, ++this.jumps);
+      }
     }
   }
 
-  private publishState(frames: RecordedFrame[]): void {
+  /** A jump's plots: the window before t, read after the state is shown; dropped when another jump came since. */
+  private async readHistory(t: number, jump: number): Promise<void> {
+    const frames = await this.source.history(t, PLOT_SPAN_S, PLOT_POINTS).catch(() => []);
+    if (jump === this.jumps) {
+      this.seeked.publish({ t, reset: true, history: this.plotted(frames) });
+    }
+  }
+
+  private plotted(frames: RecordedFrame[]): Array<{ t: number; telegram: Telegram }> {
+    const out = [];
     for (const f of frames) {
-      const telegram = this.decode(f);
+      const telegram = f.dir === "reply" ? this.decode(f) : null;
+      if (telegram !== null && PLOTTED.has(telegram.telegramName)) {
+        out.push({ t: f.t, telegram });
+      }
+    }
+    return out;
+  }
+
+  private publishState(frames: RecordedFrame[]): void {
+    const decoded = frames.map((f) => [f, this.decode(f)] as const);
+    const names = new Set(decoded.map(([, t]) => t?.telegramName));
+    this.forgetAbsent(names);
+    this.setShowing(names.has("CMD_GET_STATUS"));
+    for (const [f, telegram] of decoded) {
       if (telegram === null || this.shownAt.get(telegram.telegramName) === f.t) {
         continue;
       }
       this.shownAt.set(telegram.telegramName, f.t);
-      for (const publish of TOPICS) {
-        publish(telegram, this);
-      }
+      TOPICS[telegram.telegramName]?.publish(telegram, this);
       this.replies.publish(telegram);
     }
+  }
+
+  /** The names shown before that have no reply at the new time: their topics keep no value (live before it). */
+  private forgetAbsent(names: Set<string | undefined>): void {
+    for (const name of [...this.shownAt.keys()]) {
+      if (!names.has(name)) {
+        this.shownAt.delete(name);
+        TOPICS[name]?.forget(this);
+      }
+    }
+  }
+
+  /** With a status at the time shown the recording is "connected"; before its first one it has no status yet. */
+  private setShowing(withStatus: boolean): void {
+    if (withStatus === this.connected && this.conn.last !== undefined) {
+      return;
+    }
+    this.connected = withStatus;
+    const file = this.info?.file ?? "";
+    const message = tr(withStatus ? "timeline.conn" : "timeline.noStatus", { file });
+    this.conn.publish({ event: "recording", target: file, message });
   }
 
   private publishWire(frames: RecordedFrame[]): void {

@@ -5,11 +5,19 @@
  * /pltf/telegrams, one JSON message per frame with its direction, name and hex); the other channels are for
  * Foxglove.
  *
- * Rules:
- * - On opening, the channel is read once and only each frame's log time, direction and name are kept (the
- *   index); `stateAt(t)` then bisects each reply name's times and reads just those messages back by their time.
- *   Chunks are read on demand; nothing holds the whole file.
- * - Times are the messages' log times (ns); the recording's start and end are the first and last of the channel.
+ * Rules (an hour's export is ~300 MB in ~600 chunks: opening and seeking read a few of them, never the whole file):
+ * - Opening reads the summary (chunk indexes, statistics) and the first and the last message of the telegrams'
+ *   channel (its first and last chunk): the recording's start and end.
+ * - A seek to t reads the telegrams of the LOOKBACK_S before t backwards (a chunk or two) and keeps the last reply
+ *   of each name. A name not among them is looked for on the channel of its own (OWN: the status on /scan, the
+ *   position on /pose, the map and the roadmap on /map), backwards in widening windows, so only chunks holding
+ *   that channel are read; its telegram is then read at that time. Other names (parameters, CAN messages,
+ *   debug data, commands' replies) older than the lookback come from the background read below, once it has
+ *   passed t (before that they are not shown: E-GUI-011).
+ * - The marks (the commands) and those other names' times come from a background read of the telegrams' channel,
+ *   SCAN_SLICE_S of recording at a time, in time order, paused while a seek reads (seeks come first); the marks are
+ *   handed on (`onEvents`) after each slice.
+ * - Times are the messages' log times (ns).
  */
 import { McapIndexedReader } from "@mcap/core";
 import type { IReadable } from "@mcap/core";
@@ -54,10 +62,6 @@ interface TelegramMessage {
   hex: string;
 }
 
-interface Series {
-  times: bigint[];
-}
-
 /** The index of the last element <= x in a sorted array, -1 when none. */
 export function lastAtOrBefore(sorted: bigint[], x: bigint): number {
   let lo = 0;
@@ -77,10 +81,35 @@ const toNs = (t: number): bigint => BigInt(Math.round(t * 1e6)) * 1000n; // µs:
 const toS = (ns: bigint): number => Number(ns / 1000n) / 1e6;
 const decoder = new TextDecoder();
 
+const LOOKBACK_S = 5;
+const SCAN_SLICE_S = 20;
+const S_NS = 1_000_000_000n;
+/** The replies with a channel of their own (proxy/mcap_export.py), and how to know one of that name there. */
+const OWN: Record<string, { topic: string; entity?: string }> = {
+  CMD_GET_STATUS: { topic: "/scan" },
+  CMD_GET_POSITION: { topic: "/pose" },
+  CMD_GET_MAP: { topic: "/map", entity: "map" },
+  CMD_GET_ROADMAP: { topic: "/map", entity: "roadmap" },
+};
+const ENTITY = /"id":"([^"]*)"/;
+
+interface Found {
+  name: string;
+  frame: RecordedFrame;
+}
+
 export class McapSource implements RecordingSource {
   private reader: McapIndexedReader | null = null;
-  private replies = new Map<string, Series>();
   private summary: RecordingInfo | null = null;
+  private startNs = 0n;
+  private endNs = 0n;
+  /** the background read: the other names' reply times, the marks, how far it has come (ns) */
+  private replies = new Map<string, bigint[]>();
+  private events: RecordedEvent[] = [];
+  private scannedTo = -1n;
+  private seeking = 0;
+  private resume: Array<() => void> = [];
+  onEvents?: (events: RecordedEvent[], complete: boolean) => void;
 
   constructor(
     readonly url: string,
@@ -96,54 +125,92 @@ export class McapSource implements RecordingSource {
       decompressHandlers: { zstd: (buf, size) => decompress(buf, new Uint8Array(Number(size))) },
     });
     this.reader = reader;
-    const events: RecordedEvent[] = [];
-    let first: bigint | null = null;
-    let last = 0n;
-    for await (const m of reader.readMessages({ topics: [TELEGRAMS] })) {
-      const body = JSON.parse(decoder.decode(m.data)) as TelegramMessage;
-      first ??= m.logTime;
-      last = m.logTime > last ? m.logTime : last;
-      if (body.kind !== "frame") {
-        continue;
-      }
-      if (body.direction === "reply") {
-        let s = this.replies.get(body.name);
-        if (s === undefined) {
-          s = { times: [] };
-          this.replies.set(body.name, s);
-        }
-        s.times.push(m.logTime);
-      } else if (!body.name.startsWith("CMD_GET_")) {
-        events.push({ t: toS(m.logTime), name: body.name });
+    const ids = new Set([...reader.channelsById.values()].filter((c) => c.topic === TELEGRAMS).map((c) => c.id));
+    const chunks = reader.chunkIndexes.filter((c) => [...c.messageIndexOffsets.keys()].some((id) => ids.has(id)));
+    if (chunks.length > 0) {
+      const first = chunks.reduce((a, b) => (b.messageStartTime < a.messageStartTime ? b : a));
+      const last = chunks.reduce((a, b) => (b.messageEndTime > a.messageEndTime ? b : a));
+      this.startNs = (await this.first(TELEGRAMS, first.messageStartTime, first.messageEndTime, false)) ?? 0n;
+      this.endNs = (await this.first(TELEGRAMS, last.messageStartTime, last.messageEndTime, true)) ?? this.startNs;
+    }
+    this.summary = { kind: "mcap", file: this.file, start: toS(this.startNs), end: toS(this.endNs), events: [] };
+    void this.scan();
+    return this.summary;
+  }
+
+  /** The log time of the first message of `topic` in [a, b] (the last one: `reverse`), null when none. */
+  private async first(topic: string, a: bigint, b: bigint, reverse: boolean): Promise<bigint | null> {
+    for await (const m of this.reader!.readMessages({ topics: [topic], startTime: a, endTime: b, reverse })) {
+      return m.logTime;
+    }
+    return null;
+  }
+
+  async at(t: number, since: number, limit: number): Promise<RecordedState> {
+    this.seeking++;
+    try {
+      return { state: await this.stateAt(t), wire: await this.recordsIn(since, t, limit) };
+    } finally {
+      if (--this.seeking === 0) {
+        this.resume.splice(0).forEach((go) => go());
       }
     }
-    const start = first === null ? 0 : toS(first);
-    this.summary = { kind: "mcap", file: this.file, start, end: first === null ? 0 : toS(last), events };
-    return this.summary;
   }
 
   async stateAt(t: number): Promise<RecordedFrame[]> {
     const at = toNs(t) + 999n; // a session's times are rounded to the µs; the export's ns may lie just after
-    const wanted = new Map<string, bigint>();
-    for (const [name, s] of this.replies) {
-      const i = lastAtOrBefore(s.times, at);
-      if (i >= 0) {
-        wanted.set(name, s.times[i]);
+    const back = at - BigInt(LOOKBACK_S) * S_NS;
+    const found = new Map<string, RecordedFrame>();
+    for (const f of await this.read(back, at, true)) {
+      if (f.frame.dir === "reply" && !found.has(f.name)) {
+        found.set(f.name, f.frame);
       }
     }
-    const out: RecordedFrame[] = [];
-    for (const [name, time] of wanted) {
-      for (const f of await this.read(time, time)) {
-        if (f.name === name && f.frame.dir === "reply") {
-          out.push(f.frame);
+    for (const [name, own] of Object.entries(OWN)) {
+      if (!found.has(name)) {
+        const when = await this.lastOn(own.topic, back, own.entity);
+        const frame = when === null ? undefined : await this.replyAt(name, when);
+        if (frame !== undefined) {
+          found.set(name, frame);
         }
       }
     }
-    return out.sort((a, b) => a.t - b.t);
+    if (this.scannedTo >= at) {
+      for (const [name, times] of this.replies) {
+        const i = lastAtOrBefore(times, at);
+        const frame = i < 0 || found.has(name) ? undefined : await this.replyAt(name, times[i]);
+        if (frame !== undefined) {
+          found.set(name, frame);
+        }
+      }
+    }
+    return [...found.values()].sort((a, b) => a.t - b.t);
   }
 
-  async at(t: number, since: number, limit: number): Promise<RecordedState> {
-    return { state: await this.stateAt(t), wire: await this.recordsIn(since, t, limit) };
+  /** The log time of the last message of `topic` (of that entity) before `before`, in windows that widen
+   * backwards: only the chunks of the window that hold the channel are read. */
+  private async lastOn(topic: string, before: bigint, entity?: string): Promise<bigint | null> {
+    let width = BigInt(LOOKBACK_S) * S_NS;
+    for (let end = before; end >= this.startNs; width *= 4n) {
+      const start = end - width;
+      for await (const m of this.reader!.readMessages({
+        topics: [topic],
+        startTime: start,
+        endTime: end,
+        reverse: true,
+      })) {
+        if (entity === undefined || ENTITY.exec(decoder.decode(m.data.subarray(0, 400)))?.[1] === entity) {
+          return m.logTime;
+        }
+      }
+      end = start - 1n;
+    }
+    return null;
+  }
+
+  private async replyAt(name: string, time: bigint): Promise<RecordedFrame | undefined> {
+    const frames = await this.read(time - 1_000_000n, time, true);
+    return frames.find((f) => f.name === name && f.frame.dir === "reply")?.frame;
   }
 
   async recordsIn(from: number, to: number, limit: number): Promise<RecordedFrame[]> {
@@ -151,12 +218,49 @@ export class McapSource implements RecordingSource {
     return frames.slice(-limit);
   }
 
-  private async read(start: bigint, end: bigint): Promise<Array<{ name: string; frame: RecordedFrame }>> {
-    const out: Array<{ name: string; frame: RecordedFrame }> = [];
+  async history(t: number, span: number, points: number): Promise<RecordedFrame[]> {
+    const frames = await this.read(toNs(t - span) + 1000n, toNs(t) + 999n);
+    const out: RecordedFrame[] = [];
+    for (const name of Object.keys(OWN).slice(0, 2)) {
+      const mine = frames.filter((f) => f.name === name && f.frame.dir === "reply").map((f) => f.frame);
+      out.push(...spread(mine, points));
+    }
+    return out.sort((a, b) => a.t - b.t);
+  }
+
+  /** The background read: marks and the other names' reply times, a slice at a time, seeks first. */
+  private async scan(): Promise<void> {
+    const slice = BigInt(SCAN_SLICE_S) * S_NS;
+    for (let a = this.startNs; a <= this.endNs; a += slice) {
+      if (this.seeking > 0) {
+        await new Promise<void>((go) => this.resume.push(go));
+      }
+      const b = a + slice - 1n;
+      for (const f of await this.read(a, b)) {
+        if (f.frame.dir === "request" && !f.name.startsWith("CMD_GET_")) {
+          this.events.push({ t: f.frame.t, name: f.name });
+        } else if (f.frame.dir === "reply" && !(f.name in OWN)) {
+          let times = this.replies.get(f.name);
+          if (times === undefined) {
+            times = [];
+            this.replies.set(f.name, times);
+          }
+          times.push(toNs(f.frame.t));
+        }
+      }
+      this.scannedTo = b;
+      this.onEvents?.(this.events, b >= this.endNs);
+      await new Promise((go) => setTimeout(go, 0));
+    }
+  }
+
+  private async read(start: bigint, end: bigint, reverse = false): Promise<Found[]> {
+    const out: Found[] = [];
     if (this.reader === null || end < start) {
       return out;
     }
-    for await (const m of this.reader.readMessages({ topics: [TELEGRAMS], startTime: start, endTime: end })) {
+    const args = { topics: [TELEGRAMS], startTime: start, endTime: end, reverse };
+    for await (const m of this.reader.readMessages(args)) {
       const body = JSON.parse(decoder.decode(m.data)) as TelegramMessage;
       if (body.kind === "frame") {
         out.push({ name: body.name, frame: { t: toS(m.logTime), dir: body.direction, hex: body.hex } });
@@ -164,4 +268,16 @@ export class McapSource implements RecordingSource {
     }
     return out;
   }
+}
+
+/** At most `n` of `xs`, evenly spread, the last always among them (gui/recorded.py `spread`). */
+export function spread<T>(xs: T[], n: number): T[] {
+  if (xs.length <= n) {
+    return xs;
+  }
+  const picked = new Set<number>();
+  for (let k = 0; k < n; k++) {
+    picked.add(xs.length - 1 - Math.floor((k * (xs.length - 1)) / Math.max(1, n - 1)));
+  }
+  return [...picked].sort((a, b) => a - b).map((i) => xs[i]);
 }
