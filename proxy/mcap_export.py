@@ -1,7 +1,8 @@
 """A pltf proxy recording as MCAP (issue 35): for Foxglove, Lichtblick and the ROS 2 tools.
 
-Sans-IO apart from the files it is given: records in (proxy/tap.py), MCAP out through the ``mcap`` library's
-writer (chunked, zstd, with a summary section and its indexes: the library's defaults). Used by ``pltf export
+Sans-IO apart from the files it is given: records in (proxy/tap.py), MCAP out through mcap_writer.py (the
+layout the ``mcap`` library's writer makes: chunked, with a summary section and its indexes; each chunk compressed
+with zstd at level 1 by default, or lz4, or not at all: ``--compression``). Used by ``pltf export
 SESSION --mcap OUT`` (a session file read line by line, put in time order) and, live, by ``pltf proxy --mcap
 OUT`` (a sink of the recorder).
 
@@ -45,12 +46,12 @@ from pathlib import Path
 from typing import IO, Any, TypeVar
 
 import numpy as np
-from mcap.writer import Writer
 
 from pltf.proxy import mcap_proto
 from pltf.proxy.mcap_read import Entry, entry_of, read_entries
 from pltf.proxy.mcap_schemas import schema_bytes, schema_encoding
 from pltf.proxy.mcap_wire import fields_text
+from pltf.proxy.mcap_writer import COMPRESSIONS, McapWriter
 from pltf.proxy.session import FORMAT, VERSION, SessionError, _lines, _record
 from pltf.proxy.tap import CLOSE, MEMO_BYTES, MEMO_FRAMES, OPEN, Record
 from pltf.proxy.view import ARROW, format_record
@@ -73,6 +74,8 @@ CHANNELS = {  # topic: schema
 PROTOBUF = ("/scan",)  # channels whose messages are protobuf (mcap_proto.py); the others JSON
 UNSTAMPED = ("/map",)  # foxglove.SceneUpdate has no timestamp of its own (its entities have)
 CHUNK_BYTES = 4 * 1024 * 1024  # the writer's chunk size (the mcap library's default is 1 MiB)
+DEFAULT_COMPRESSION = "zstd"  # at mcap_writer.ZSTD_LEVEL: the smallest file within the hour's 10 s (mcap.md)
+COMPRESSION_NAMES = tuple(COMPRESSIONS)
 Message = tuple[str, bytes]  # (topic, the message after its timestamp: see ``encode``)
 Ordered = TypeVar("Ordered", Record, Entry, Record | Entry)
 
@@ -292,26 +295,39 @@ def messages(e: Entry) -> list[Message]:
 # --------------------------------------------------------------------------------------------- the writer
 
 
+class _Channel:
+    """A channel's state in McapSink: its id, its last log time, its last sequence number (= its messages)."""
+
+    __slots__ = ("ident", "json", "last", "sequence")
+
+    def __init__(self, ident: int, topic: str) -> None:
+        self.ident, self.json, self.last, self.sequence = ident, topic not in PROTOBUF + UNSTAMPED, 0, 0
+
+
 class McapSink:
     """Writes records as MCAP to ``stream`` (binary, seekable or not); ``write`` is a recorder sink, ``write_entry``
     takes the entries of ``read_entries``; ``finish`` writes the summary section and the footer (the stream stays
-    open). A short frame's messages are made once (the last MEMO_FRAMES kept) and only stamped again."""
+    open). A short frame's messages are made once (the last MEMO_FRAMES kept) and only stamped again.
+    ``compression``: zstd, lz4 or none (mcap_writer.COMPRESSIONS)."""
 
-    def __init__(self, stream: IO[bytes], library: str = "pltf") -> None:
-        self._writer = Writer(stream, chunk_size=CHUNK_BYTES)
+    def __init__(self, stream: IO[bytes], library: str = "pltf", compression: str = DEFAULT_COMPRESSION) -> None:
+        self._writer = McapWriter(stream, compression, CHUNK_BYTES)
         self._writer.start(profile="", library=library)
         schema_ids: dict[str, int] = {}
-        self._channels: dict[str, int] = {}
+        self._channels: dict[str, _Channel] = {}
         for topic, schema in CHANNELS.items():
             encoding = schema_encoding(schema)
             if schema not in schema_ids:
                 schema_ids[schema] = self._writer.register_schema(schema, encoding, schema_bytes(schema))
             message_encoding = "protobuf" if topic in PROTOBUF else "json"
-            self._channels[topic] = self._writer.register_channel(topic, message_encoding, schema_ids[schema])
-        self._last: dict[str, int] = dict.fromkeys(CHANNELS, 0)
-        self._sequence: dict[str, int] = dict.fromkeys(CHANNELS, 0)
-        self.counts: dict[str, int] = dict.fromkeys(CHANNELS, 0)
+            ident = self._writer.register_channel(topic, message_encoding, schema_ids[schema])
+            self._channels[topic] = _Channel(ident, topic)
         self._memo: dict[tuple[Any, ...], list[Message]] = {}
+
+    @property
+    def counts(self) -> dict[str, int]:
+        """Messages written per topic."""
+        return {topic: ch.sequence for topic, ch in self._channels.items()}
 
     def write(self, rec: Record) -> None:
         self.write_entry(entry_of(rec))
@@ -332,27 +348,28 @@ class McapSink:
 
     def write_entry(self, e: Entry) -> None:
         publish = max(0, round(e.time * NS))
+        head = b'{"timestamp":{"sec":%d,"nsec":%d},' % divmod(publish, NS)  # encode's JSON stamp, made once
+        add = self._writer.add
         for topic, tail in self._messages(e):
-            log_time = max(publish, self._last[topic])  # never back within a channel
-            self._last[topic] = log_time
-            self._sequence[topic] += 1
-            self.counts[topic] += 1
-            data = encode(topic, publish, tail)
-            self._writer.add_message(self._channels[topic], log_time, data, publish, self._sequence[topic])
+            ch = self._channels[topic]
+            log_time = publish if publish > ch.last else ch.last  # never back within a channel
+            ch.last = log_time
+            ch.sequence += 1
+            add(ch.ident, log_time, head + tail if ch.json else encode(topic, publish, tail), publish, ch.sequence)
 
     def finish(self) -> None:
-        self._writer.finish()  # type: ignore[no-untyped-call]  # mcap 1.6: finish() is not annotated
+        self._writer.finish()
 
 
 class McapFile:
     """An MCAP file written atomically: into a temporary file beside ``path``, renamed over it by ``close``
     (a reader never sees half a file; ``abort`` removes the temporary file). OSError when it cannot be made."""
 
-    def __init__(self, path: Path, library: str = "pltf") -> None:
+    def __init__(self, path: Path, library: str = "pltf", compression: str = DEFAULT_COMPRESSION) -> None:
         self.path = path
         fd, self._tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-        self._fh = os.fdopen(fd, "wb")
-        self.sink = McapSink(self._fh, library)
+        self._fh = os.fdopen(fd, "wb", buffering=1 << 20)
+        self.sink = McapSink(self._fh, library, compression)
 
     def write(self, rec: Record) -> None:
         self.sink.write(rec)
@@ -414,11 +431,13 @@ def in_time_order(records: Iterable[Ordered], window: float = REORDER_S) -> Iter
         yield heapq.heappop(held)[2]
 
 
-def export(records: Iterable[Record | Entry], path: Path, library: str = "pltf") -> dict[str, int]:
+def export(
+    records: Iterable[Record | Entry], path: Path, library: str = "pltf", compression: str = DEFAULT_COMPRESSION
+) -> dict[str, int]:
     """Write ``records`` (``read_records``' or, faster, ``read_entries``') to ``path`` as MCAP in time order
     (``in_time_order``); the message count of each channel. On any error (SessionError of a record read lazily,
     OSError) nothing is left at ``path``."""
-    out = McapFile(path, library)
+    out = McapFile(path, library, compression)
     try:
         for rec in in_time_order(records):
             out.write_entry(entry_of(rec) if isinstance(rec, Record) else rec)
@@ -429,6 +448,8 @@ def export(records: Iterable[Record | Entry], path: Path, library: str = "pltf")
     return out.sink.counts
 
 
-def export_session(session: Path, path: Path, library: str = "pltf") -> dict[str, int]:
+def export_session(
+    session: Path, path: Path, library: str = "pltf", compression: str = DEFAULT_COMPRESSION
+) -> dict[str, int]:
     """``pltf export SESSION --mcap PATH``: the session file read by ``read_entries``, written by ``export``."""
-    return export(read_entries(session), path, library)
+    return export(read_entries(session), path, library, compression)
