@@ -35,6 +35,7 @@ time; its publish time keeps the recorded one.
 
 from __future__ import annotations
 
+import binascii
 import contextlib
 import heapq
 import json
@@ -58,6 +59,7 @@ from pltf.proxy.view import ARROW, format_record
 from pltf.spec.documents import DocumentError, DocumentKind, validate_document
 
 NS = 1_000_000_000
+_json_string: Callable[[str], str] = json.encoder.encode_basestring_ascii  # json.dumps' own string escaping
 MM = 1000  # mm per metre, Foxglove's unit (division: the nearest float to the exact value)
 SCAN_STEP = math.radians(0.5)
 REORDER_S = 10.0  # how late a record may come and still be put in its place (in_time_order)
@@ -246,7 +248,9 @@ REPLY_MESSAGES: dict[str, Callable[[Entry, Any], list[Message]]] = {  # telegram
 
 
 def _log(e: Entry, level: int, message: str) -> bytes:
-    return _tail({"level": level, "message": message, "name": f"port {e.port}", "file": "", "line": 0})
+    """foxglove.Log after its timestamp: the message is the one string that needs JSON's escaping."""
+    text = _json_string(message).encode()
+    return b'"level":%d,"message":%s,"name":"port %d","file":"","line":0}' % (level, text, e.port)
 
 
 def _as_record(e: Entry) -> Record:
@@ -266,9 +270,17 @@ def wire_line(rec: Record | Entry) -> str:
 def telegram_message(e: Entry) -> bytes:
     """pltf.Telegram: conn, port, direction, kind, name, hex, error (the hex written in as it is: it needs no
     escaping, and json.dumps of 5 KB of it cost more than the rest of the message)."""
-    head = _tail({"conn": e.conn, "port": e.port, "direction": e.direction, "kind": e.kind, "name": _name(e)})
-    error = json.dumps(e.error)
-    return b'%s,"hex":"%s","error":%s}' % (head[:-1], e.raw.hex().encode(), error.encode())
+    strings = (_json_string(v) if v is not None else "null" for v in (e.direction, e.kind, _name(e), e.error))
+    direction, kind, name, error = (v.encode() for v in strings)
+    return b'"conn":%d,"port":%d,"direction":%s,"kind":%s,"name":%s,"hex":"%s","error":%s}' % (
+        e.conn,
+        e.port,
+        direction,
+        kind,
+        name,
+        binascii.hexlify(e.raw),
+        error,
+    )
 
 
 def _name(e: Entry) -> str:

@@ -12,6 +12,7 @@ library from that descriptor set, as Foxglove does.
 
 from __future__ import annotations
 
+import functools
 import struct
 from typing import Any
 
@@ -73,8 +74,13 @@ FILES: tuple[tuple[str, str, tuple[str, ...], str, tuple[tuple[str, int, int, in
 )
 
 
+_SMALL = tuple(bytes((n,)) for n in range(0x80))  # the one-byte varints
+
+
 def varint(n: int) -> bytes:
     """An unsigned varint (a negative int64 is its two's complement, ten bytes)."""
+    if 0 <= n < 0x80:
+        return _SMALL[n]
     n &= (1 << 64) - 1
     out = bytearray()
     while n > 0x7F:
@@ -84,6 +90,7 @@ def varint(n: int) -> bytes:
     return bytes(out)
 
 
+@functools.cache
 def key(number: int, wire: int) -> bytes:
     return varint(number << 3 | wire)
 
@@ -141,13 +148,22 @@ def timestamp(ns: int) -> bytes:
 IDENTITY_POSE = length_delimited(1, b"") + length_delimited(2, double(4, 1.0))
 
 
+_ANGLES = struct.Struct("<BdBd")  # start_angle (4) and end_angle (5): each a key byte and a little-endian double
+
+
+@functools.cache
+def _scan_head(frame_id: str) -> bytes:
+    return text(2, frame_id) + length_delimited(3, IDENTITY_POSE)
+
+
 def laser_scan_tail(frame_id: str, start: float, end: float, ranges: bytes) -> bytes:
     """foxglove.LaserScan after its timestamp (field 1, written first by ``stamped``): ``ranges`` are the packed
     little-endian doubles (``ndarray.astype("<f8").tobytes()``); no intensities."""
-    out = text(2, frame_id) + length_delimited(3, IDENTITY_POSE) + double(4, start) + double(5, end)
-    return out + length_delimited(6, ranges) if ranges else out
+    out = _scan_head(frame_id) + _ANGLES.pack(4 << 3 | _FIXED64, start, 5 << 3 | _FIXED64, end)
+    return out + key(6, _LEN) + varint(len(ranges)) + ranges if ranges else out
 
 
 def stamped(ns: int, tail: bytes) -> bytes:
     """A message whose field 1 is its google.protobuf.Timestamp, then ``tail``."""
-    return length_delimited(1, timestamp(ns)) + tail
+    stamp = timestamp(ns)
+    return b"%c%c%s%s" % (1 << 3 | _LEN, len(stamp), stamp, tail)  # a Timestamp is < 128 bytes: one length byte

@@ -16,7 +16,7 @@ from collections.abc import Callable, Mapping
 from typing import Any
 
 from pltf.proxy.view import ITEMS_SHOWN, format_fields
-from pltf.spec.model import load_enums
+from pltf.spec.model import FieldDef, load_enums
 from pltf.spec.telegram import Telegram, user_fields
 
 Formatter = Callable[[Telegram, Mapping[str, int]], str]
@@ -53,13 +53,32 @@ def _other(name: str, value: Any, counts: Mapping[str, int]) -> str:
     return format_fields({"fields": {name: _plain(value)}})
 
 
+def _item_formatter(group: FieldDef) -> Callable[[Any], str] | None:
+    """The view's ``{x=1 y=2}`` of one item of a group whose fields are all single numbers without enums (the
+    view prints them as ``repr``), compiled; None for any other group."""
+    if not all(f.type in NUMBERS and not f.repeat and f.enum is None and not f.is_group for f in group.fields):
+        return None
+    words = " ".join(f"{f.name}={{v[{i}]!r}}" for i, f in enumerate(group.fields))
+    source = f"def item(v):\n    return f{'{{' + words + '}}'!r}\n"
+    ns: dict[str, Any] = {}
+    exec(compile(source, f"<mcap_wire:{group.name}>", "exec"), ns)
+    return ns["item"]  # type: ignore[no-any-return]
+
+
+def _group(name: str, value: tuple[Any, ...], counts: Mapping[str, int], item: Callable[[Any], str]) -> str:
+    """The view's ``name=[541: {..}, {..}, {..}, ...]`` of a group of numbers (``_item_formatter``)."""
+    total = counts.get(name, len(value))
+    head = ", ".join(map(item, value[:ITEMS_SHOWN]))
+    return f"{name}=[{total}: {head}{', ...' if total > ITEMS_SHOWN else ''}]"
+
+
 @functools.cache
 def formatter(cls: type[Telegram]) -> Formatter:
     """The function writing the view's words of a telegram of class ``cls`` (``counts``: the total of a group whose
     items the telegram holds only the first of)."""
     layout = cls.DEF.layout(cls.DIRECTION) if cls.DEF.layout_known else None
     fields = {f.name: f for f in user_fields(layout or ())}
-    ns: dict[str, Any] = {"_other": _other}
+    ns: dict[str, Any] = {"_other": _other, "_group": _group}
     words, names = [], []
     for i, name in enumerate(cls._fields):
         f, var = fields.get(name), f"v{i}"
@@ -71,6 +90,9 @@ def formatter(cls: type[Telegram]) -> Formatter:
             words.append(f"{name}={{{var}!r}}")
         elif f is not None and f.type in NUMBERS:  # an array: the view's [1,2,3]
             words.append(f"{name}=[{{','.join(map(repr, {var}))}}]")
+        elif f is not None and f.is_group and (item := _item_formatter(f)) is not None:
+            ns[f"_G{i}"] = item
+            words.append(f"{{_group({name!r}, {var}, counts, _G{i}) if {var} else {name + '=[]'!r}}}")
         elif f is not None and f.is_group:
             words.append(f"{{_other({name!r}, {var}, counts) if {var} else {name + '=[]'!r}}}")
         else:
