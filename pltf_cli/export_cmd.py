@@ -10,7 +10,7 @@ import argparse
 from pathlib import Path
 
 from pltf.cli.options import CommandError, exit_status
-from pltf.proxy.mcap_export import export_session
+from pltf.proxy.mcap_export import COMPRESSION_NAMES, DEFAULT_COMPRESSION, export_session
 from pltf.proxy.session import SessionError
 
 
@@ -23,12 +23,19 @@ def add_export_arguments(p: argparse.ArgumentParser) -> None:
         metavar="OUT",
         help="write the session as MCAP to OUT (written to a temporary file beside it, then renamed)",
     )
+    p.add_argument(
+        "--compression",
+        choices=COMPRESSION_NAMES,
+        default=DEFAULT_COMPRESSION,
+        help="how each chunk of the MCAP file is compressed (default: %(default)s; lz4 is larger and a little "
+        "faster; Foxglove reads all three)",
+    )
     p.epilog = exit_status(ok="written", usage="usage error: an unreadable session file, the output not writable")
 
 
 def run_export(args: argparse.Namespace) -> int:
     try:
-        counts = export_session(args.session, args.mcap)
+        counts = export_session(args.session, args.mcap, compression=args.compression)
     except SessionError as exc:
         raise CommandError(str(exc)) from None
     except OSError as exc:

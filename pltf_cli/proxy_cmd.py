@@ -71,6 +71,12 @@ def add_proxy_arguments(p: argparse.ArgumentParser) -> None:
         help="also write the traffic as MCAP, as `pltf export --mcap` does (OUT appears when the proxy stops)",
     )
     p.add_argument(
+        "--compression",
+        choices=("zstd", "lz4", "none"),  # proxy/mcap_writer.py COMPRESSIONS (not imported: the mcap library is lazy)
+        default="zstd",
+        help="how --mcap's chunks are compressed, as `pltf export --compression` (default: %(default)s)",
+    )
+    p.add_argument(
         "--filter",
         action="append",
         default=[],
@@ -169,7 +175,7 @@ def run_proxy(args: argparse.Namespace) -> int:
         if args.mcap is not None:
             from pltf.proxy.mcap_export import McapFile  # the mcap library only when asked for
 
-            mcap = McapFile(args.mcap)
+            mcap = McapFile(args.mcap, compression=args.compression)
             sinks.append(mcap.write)
             closes.append(mcap.close)
         return Recorder(sinks, pcapng, session, max_length=args.max_length, flushes=flushes, closes=closes)

@@ -101,7 +101,13 @@ def recorded(tmp_path_factory: pytest.TempPathFactory) -> Path:
             proc.kill()
     assert proc.returncode == 0 and "Traceback" not in err, err
     assert pltf(["export", str(out / "session.jsonl"), "--mcap", str(out / "export.mcap")]) == 0
+    for compression in ("lz4", "none"):
+        args = ["export", str(out / "session.jsonl"), "--mcap", str(out / f"export-{compression}.mcap")]
+        assert pltf([*args, "--compression", compression]) == 0
     return out
+
+
+EXPORTS = {"export.mcap": "zstd", "export-lz4.mcap": "lz4", "export-none.mcap": "", "live.mcap": "zstd"}  # chunks
 
 
 def _telegrams(session: Session) -> list[Record]:
@@ -161,7 +167,7 @@ def _python_read(path: Path) -> dict[str, Any]:
     }
 
 
-@pytest.mark.parametrize("which", ["export.mcap", "live.mcap"])
+@pytest.mark.parametrize("which", list(EXPORTS))
 def test_the_python_mcap_library_reads_every_telegram_with_known_schemas_and_consistent_indexes(
     recorded: Path, which: str
 ) -> None:
@@ -183,6 +189,7 @@ def test_the_python_mcap_library_reads_every_telegram_with_known_schemas_and_con
     assert got["channel_counts"] == dict(got["counts"])
     assert got["indexed"] == got["counts"]  # the chunk and message indexes lead to every message
     assert stats.chunk_count == len(got["chunks"]) >= 1
+    assert {c.compression for c in got["chunks"]} == {EXPORTS[which]}
     assert stats.message_start_time == min(c.message_start_time for c in got["chunks"])
     assert stats.message_end_time == max(c.message_end_time for c in got["chunks"])
     first, last = telegrams[0].time, telegrams[-1].time
@@ -220,8 +227,16 @@ def test_the_pose_messages_are_the_get_position_replies(recorded: Path) -> None:
         )
 
 
+def test_each_compression_carries_the_same_messages(recorded: Path) -> None:
+    zstd = _python_read(recorded / "export.mcap")["messages"]
+    for which in ("export-lz4.mcap", "export-none.mcap"):
+        assert _python_read(recorded / which)["messages"] == zstd, which
+    sizes = [(recorded / w).stat().st_size for w in ("export.mcap", "export-lz4.mcap", "export-none.mcap")]
+    assert sizes == sorted(sizes), sizes  # zstd smallest, lz4, none largest
+
+
 @pytest.mark.skipif(shutil.which("node") is None, reason="node is not installed")
-@pytest.mark.parametrize("which", ["export.mcap", "live.mcap"])
+@pytest.mark.parametrize("which", list(EXPORTS))
 def test_mcap_core_from_npm_reads_the_same(recorded: Path, which: str) -> None:
     if not (READER / "node_modules" / "@mcap" / "core").is_dir():
         pytest.fail(f"@mcap/core is not installed: make {READER.relative_to(ROOT)}/node_modules/.installed")
@@ -258,6 +273,7 @@ def test_mcap_core_from_npm_reads_the_same(recorded: Path, which: str) -> None:
     assert int(stats["messageCount"]) == sum(stream["counts"].values())
     assert {k: int(v) for k, v in stats["channelMessageCounts"].items()} == stream["counts"]
     assert stats["channelCount"] == len(CHANNELS) and stats["chunkCount"] == len(indexed["chunks"])
+    assert {c["compression"] for c in indexed["chunks"]} == {EXPORTS[which]}
     assert indexed["counts"] == stream["counts"]  # readMessages() goes through the chunk and message indexes
     assert stats["messageStartTime"] == stream["start"] and stats["messageEndTime"] == stream["end"]
 

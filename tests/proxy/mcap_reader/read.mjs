@@ -1,5 +1,5 @@
 // A second, independent MCAP reader for tests/proxy/test_mcap_export.py: @mcap/core, the library Foxglove reads
-// MCAP with. Usage: node read.mjs FILE. Prints one JSON object: what the file says about itself, read twice:
+// MCAP with (chunks compressed with zstd, lz4 or not at all). Usage: node read.mjs FILE. Prints one JSON object: what the file says about itself, read twice:
 // - "stream": every record from start to end (McapStreamReader, CRCs checked): channels with their schemas,
 //   messages per topic, whether log times ever go back within a channel, the time range;
 // - "indexed": through the summary section (McapIndexedReader): the statistics record, the chunk indexes
@@ -9,11 +9,16 @@
 // FileDescriptorSet the schema record carries ("decoded": per topic, each message as plain JSON).
 import { McapIndexedReader, McapStreamReader } from "@mcap/core";
 import { decompress } from "fzstd";
+import lz4 from "lz4js";
 import { open, readFile } from "node:fs/promises";
 import protobuf from "protobufjs";
 import descriptor from "protobufjs/ext/descriptor/index.js";
 
-const decompressHandlers = { zstd: (data, size) => decompress(data, new Uint8Array(Number(size))) };
+// A chunk's compression as Foxglove reads it: zstd (fzstd) or lz4 (lz4js: the LZ4 frame format); none needs none.
+const decompressHandlers = {
+  zstd: (data, size) => decompress(data, new Uint8Array(Number(size))),
+  lz4: (data, size) => lz4.decompress(data, Number(size)),
+};
 const path = process.argv[2];
 
 function protobufType(schema) {
