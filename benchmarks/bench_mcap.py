@@ -5,11 +5,15 @@ for an hour (72,000 requests and 72,000 replies), the platform driving a circle 
 with its 541-point scan (guide 6.4, as the reference server's scanner gives), written with the proxy's own
 SessionWriter. ``--quick``: one minute.
 
-Rows: ``pltf export`` (a subprocess, as a user runs it), wall and CPU seconds, beside reading the session alone
-(``read_records``: every line parsed and decoded again from its hex, what the export read it with before issue
-35's speed-up); reading it as the export reads it now (``read_entries``: the telegram JSON skipped, a status's scan
-as numpy columns); and a floor no reader of this format goes below: the file's lines read and each ``hex`` found
-and un-hexed, nothing decoded. The MCAP file's size beside the session file's. One run of each, interleaved.
+Rows: ``pltf export --compression zstd|lz4|none`` (a subprocess each, as a user runs it), wall and CPU seconds,
+beside the baseline: the same conversion written through the ``mcap`` library's ``Writer`` (zstd at its fixed
+level 3), what the export wrote with before issue 35's last step (``library_export`` in a subprocess). Then
+reading the session alone (``read_records``: every line parsed and decoded again from its hex, what the export
+read it with before issue 35's speed-up); reading it as the export reads it now (``read_entries``: the telegram
+JSON skipped, a status's scan as numpy columns); and a floor no reader of this format goes below: the file's
+lines read and each ``hex`` found and un-hexed, nothing decoded. Each MCAP file's size beside the session file's.
+One run of each. On a machine shared with others the CPU seconds are the figure that compares (the wall time is
+the CPU time stretched by the load).
 """
 
 from __future__ import annotations
@@ -17,17 +21,20 @@ from __future__ import annotations
 import io
 import math
 import resource
-import statistics
 import subprocess
 import sys
 import tempfile
 import time
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
+from typing import IO
+
+from mcap.writer import CompressionType, Writer
 
 from benchmarks.harness import Config, Row, Target, benchmark, make_row
 from pltf.conformance_tests.readings import canonical
-from pltf.proxy.mcap_export import read_records
+from pltf.proxy import mcap_export
+from pltf.proxy.mcap_export import CHUNK_BYTES, read_records
 from pltf.proxy.mcap_read import read_entries
 from pltf.proxy.session import Route, SessionWriter
 from pltf.proxy.tap import OPEN, Record, Tap
@@ -36,12 +43,16 @@ from pltf.spec.codec import REQUESTS, encode
 HZ = 20
 HOUR_S = 3600.0
 TARGET_S = 10.0
+ROOT = Path(__file__).resolve().parents[1]
+LIBRARY_EXPORT = "import sys; from benchmarks.bench_mcap import library_export; library_export(sys.argv[1:])"
 ROOM = (20000.0, 12000.0)  # mm
 SCAN = [math.radians(-135 + 0.5 * i) for i in range(541)]  # the scanner's bearings (fake_hardware)
 T0 = 1_795_000_000.0
 LAP = 60 * HZ  # a lap of the circle a minute
 REPLY_AFTER = 0.002  # s
-EXPORT, READ = "pltf export --mcap", "reading the session alone (read_records)"
+COMPRESSIONS = ("zstd", "lz4", "none")  # pltf export --compression; the first is the default
+LIBRARY = "the same export through the mcap library's Writer (zstd level 3), as before"
+READ = "reading the session alone (read_records)"
 ENTRIES, FLOOR = "reading it as the export does (read_entries)", "the lines read and un-hexed only"
 
 
@@ -98,11 +109,42 @@ def write_recording(path: Path, seconds: float) -> int:
     return 2 * ticks
 
 
-def _export(session: Path, out: Path) -> tuple[float, float]:
-    """Wall and CPU seconds of ``pltf export`` as a user runs it."""
+def export_subject(compression: str) -> str:
+    return f"pltf export --mcap --compression {compression}"
+
+
+class LibraryWriter:
+    """proxy/mcap_writer.McapWriter's interface over the ``mcap`` library's ``Writer`` (chunks of the export's
+    size, zstd at the library's level 3): the writer the export used before, for the baseline."""
+
+    def __init__(self, stream: IO[bytes], compression: str = "zstd", chunk_size: int = CHUNK_BYTES) -> None:
+        self._writer = Writer(stream, chunk_size=chunk_size, compression=CompressionType.ZSTD)
+
+    def start(self, profile: str = "", library: str = "pltf") -> None:
+        self._writer.start(profile=profile, library=library)
+
+    def register_schema(self, name: str, encoding: str, data: bytes) -> int:
+        return self._writer.register_schema(name, encoding, data)  # type: ignore[no-any-return,no-untyped-call]
+
+    def register_channel(self, topic: str, message_encoding: str, schema_id: int) -> int:
+        return self._writer.register_channel(topic, message_encoding, schema_id)
+
+    def add(self, channel: int, log_time: int, data: bytes, publish_time: int, sequence: int) -> None:
+        self._writer.add_message(channel, log_time, data, publish_time, sequence)
+
+    def finish(self) -> None:
+        self._writer.finish()  # type: ignore[no-untyped-call]
+
+
+def _export(session: Path, out: Path, compression: str | None) -> tuple[float, float]:
+    """Wall and CPU seconds of ``pltf export`` as a user runs it (``compression`` None: the baseline)."""
     before, t = resource.getrusage(resource.RUSAGE_CHILDREN), time.perf_counter()
-    cmd = [sys.executable, "-m", "pltf.cli.main", "export", str(session), "--mcap", str(out)]
-    subprocess.run(cmd, check=True, capture_output=True)
+    if compression is None:
+        cmd = [sys.executable, "-c", LIBRARY_EXPORT, str(session), str(out)]
+    else:
+        cmd = [sys.executable, "-m", "pltf.cli.main", "export", str(session), "--mcap", str(out)]
+        cmd += ["--compression", compression]
+    subprocess.run(cmd, check=True, capture_output=True, cwd=ROOT)
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     return time.perf_counter() - t, after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime
 
@@ -126,59 +168,63 @@ def unhexed(session: Path) -> Iterator[bytes]:
 
 @benchmark()
 def export_hour(config: Config) -> list[Row]:
-    """pltf export --mcap of an hour of 20 Hz GET_STATUS with scans (<= 10 s), beside reading the session."""
+    """pltf export --mcap of an hour of 20 Hz GET_STATUS with scans (<= 10 s), each compression beside the mcap
+    library's writer and beside reading the session."""
     seconds = 60.0 if config.quick else HOUR_S
-    repeats = 1  # an hour's export is minutes on a loaded machine: one run of each, interleaved
+    exports: dict[str, str | None] = {export_subject(c): c for c in COMPRESSIONS} | {LIBRARY: None}
     with tempfile.TemporaryDirectory() as tmp:
-        session, out = Path(tmp) / "hour.jsonl", Path(tmp) / "hour.mcap"
+        session = Path(tmp) / "hour.jsonl"
         telegrams = write_recording(session, seconds)
-        times: dict[str, list[tuple[float, float]]] = {EXPORT: [], READ: [], ENTRIES: [], FLOOR: []}
-        for _ in range(repeats):  # interleaved
-            times[EXPORT].append(_export(session, out))
-            times[READ].append(_read(session))
-            times[ENTRIES].append(_read(session, read_entries))
-            times[FLOOR].append(_read(session, unhexed))
-        size, session_size = out.stat().st_size, session.stat().st_size
+        times: dict[str, tuple[float, float]] = {}
+        sizes: dict[str, int] = {}
+        for subject, compression in exports.items():  # one run of each: an hour's export is many seconds here
+            out = Path(tmp) / f"hour-{compression}.mcap"
+            times[subject] = _export(session, out, compression)
+            sizes[subject] = out.stat().st_size
+            out.unlink()
+        times[READ] = _read(session)
+        times[ENTRIES] = _read(session, read_entries)
+        times[FLOOR] = _read(session, unhexed)
+        session_size = session.stat().st_size
     name = f"mcap.export_hour ({seconds / 60:g} min, {telegrams} telegrams)"
-    wall = {k: statistics.median(w for w, _ in v) for k, v in times.items()}
-    cpu = {k: statistics.median(c for _, c in v) for k, v in times.items()}
     target = None if config.quick else Target("value", "<=", TARGET_S)
-    rows = [
-        make_row(
-            name,
-            EXPORT,
-            "wall_seconds",
-            wall[EXPORT],
-            "s",
-            higher_is_better=False,
-            baseline_subject=READ,
-            baseline_value=wall[READ],
-            target=target,
-        ),
-        make_row(
-            name,
-            EXPORT,
-            "cpu_seconds",
-            cpu[EXPORT],
-            "s",
-            higher_is_better=False,
-            baseline_subject=READ,
-            baseline_value=cpu[READ],
-        ),
-    ]
+    rows = []
+    for subject in exports:
+        for metric, value, base in zip(("wall_seconds", "cpu_seconds"), times[subject], times[LIBRARY], strict=True):
+            rows.append(
+                make_row(
+                    name,
+                    subject,
+                    metric,
+                    value,
+                    "s",
+                    higher_is_better=False,
+                    baseline_subject=None if subject == LIBRARY else LIBRARY,
+                    baseline_value=None if subject == LIBRARY else base,
+                    target=target if subject == export_subject(COMPRESSIONS[0]) else None,
+                )
+            )
     for subject in (READ, ENTRIES, FLOOR):
-        rows.append(make_row(name, subject, "wall_seconds", wall[subject], "s", higher_is_better=False))
-        rows.append(make_row(name, subject, "cpu_seconds", cpu[subject], "s", higher_is_better=False))
-    rows.append(
-        make_row(
-            name,
-            "the MCAP file",
-            "size",
-            size / 1e6,
-            "MB",
-            higher_is_better=False,
-            baseline_subject="the session file",
-            baseline_value=session_size / 1e6,
+        rows.append(make_row(name, subject, "wall_seconds", times[subject][0], "s", higher_is_better=False))
+        rows.append(make_row(name, subject, "cpu_seconds", times[subject][1], "s", higher_is_better=False))
+    for subject in exports:
+        rows.append(
+            make_row(
+                name,
+                f"the MCAP file of {subject}",
+                "size",
+                sizes[subject] / 1e6,
+                "MB",
+                higher_is_better=False,
+                baseline_subject="the session file",
+                baseline_value=session_size / 1e6,
+            )
         )
-    )
     return rows
+
+
+def library_export(argv: list[str]) -> None:
+    """``python -c LIBRARY_EXPORT SESSION OUT``: the export through the mcap library's writer (LibraryWriter
+    in place of proxy/mcap_writer.McapWriter), the baseline's subprocess."""
+    mcap_export.McapWriter = LibraryWriter  # type: ignore[misc,assignment]
+    mcap_export.export_session(Path(argv[0]), Path(argv[1]))
