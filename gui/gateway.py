@@ -165,8 +165,8 @@ async def targets(request: web.Request) -> web.Response:
             ini.add(str(body["target"]))
         except (ValueError, KeyError, TypeError) as exc:
             raise web.HTTPBadRequest(text=f'expected {{"target": "HOST:PORT"}}: {exc}') from None
-    default = request.app[CONFIG]["target"]
-    known = [default, *(t for t in ini.targets() if t != default)]
+    default = request.app[CONFIG]["target"]  # None: a recording is shown (pltf gui --session), no target
+    known = [*([default] if default else []), *(t for t in ini.targets() if t != default)]
     fleet = [{"name": name, "target": t} for name, t in request.app[CONFIG]["fleet"]]
     return web.json_response({"default": default, "targets": known, "any": any_target, "fleet": fleet})
 
@@ -184,7 +184,7 @@ async def _shutdown(app: web.Application) -> None:
 
 
 def make_app(
-    target: str,
+    target: str | None,
     ini: NetworkIni,
     *,
     reply_timeout: float | None = None,
@@ -199,7 +199,7 @@ def make_app(
     the addresses of Network.ini. With ``recording`` (``pltf gui --session``, recorded.py) there is no /ws: the
     page shows the recording and nothing reaches a platform."""
     app = web.Application(middlewares=[(doors or Doors()).middleware()])
-    app[TARGETS] = allowed or TargetList(target, ini)
+    app[TARGETS] = allowed or TargetList(target or "", ini)
     link_options: dict[str, Any] = {"read_only": read_only}
     if reply_timeout is not None:
         link_options["reply_timeout"] = reply_timeout

@@ -53,7 +53,7 @@ class Options:
 
 
 async def serve(
-    target: str,
+    target: str | None,
     listen: str,
     ini_path: Path | None = None,
     open_browser: bool = False,
@@ -63,13 +63,13 @@ async def serve(
     recording: Recording | None = None,
 ) -> int:
     """``fleet``: (name, HOST:PORT) of every platform when there are several (issue 30), ``target`` the first;
-    ``recording``: the page shows it (``target`` is then not connected to)."""
+    ``recording``: the page shows it; ``target`` is then None (no platform: no /ws, nothing connected to)."""
     options = options or Options()
     host, port = parse_listen(listen)
     ini = NetworkIni(ini_path or default_path())
     doors = Doors(host, frozenset(options.allow_hosts), options.token_for(host))
     allowed = frozenset(options.allow_targets) | {t for _, t in fleet}  # every platform of the fleet: on the list
-    targets = TargetList(target, ini, allowed, options.allow_any_target)
+    targets = TargetList(target or "", ini, allowed, options.allow_any_target)  # "": no /ws asks it
     app = make_app(
         target,
         ini,
@@ -91,7 +91,7 @@ async def serve(
         return 2
     sockets = getattr(site._server, "sockets", None) or []
     bound = sockets[0].getsockname()[1] if sockets else port
-    url = _url(host, bound, [t for _, t in fleet] or [target], doors.token, recording)
+    url = _url(host, bound, [t for _, t in fleet] or [target or ""], doors.token, recording)
     if not (STATIC / "index.html").is_file():
         log.warning("the web application is not built (%s missing): run `make gui`", STATIC / "index.html")
     _warn(host, bound, options, doors)

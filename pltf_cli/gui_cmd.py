@@ -150,15 +150,15 @@ def _recording(path: Path | None) -> Recording | None:
 def run_gui(args: argparse.Namespace) -> int:
     try:
         recording = _recording(args.session)
-        # a recording: no platform (the gateway has no /ws); the target only fills the gateway's list
-        platforms = _platforms(args) if recording is None else (("recording", "127.0.0.1:1"),)
+        # a recording: no platform and no target (the gateway has no /ws)
+        platforms = _platforms(args) if recording is None else ()
     except (ValueError, RecordingError) as exc:
         print(f"pltf gui: error: {exc}", file=sys.stderr)
         return 2
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)-7s %(message)s")
     return asyncio.run(
         serve(
-            platforms[0][1],
+            platforms[0][1] if platforms else None,
             format_host_port(*args.listen),
             args.network_ini,
             args.open,

@@ -10,11 +10,15 @@ the status bar (its data-value: x, y mm, angle degrees), from the same topic the
 
 from __future__ import annotations
 
+import json
 import re
 import signal
 import subprocess
 import sys
+import urllib.error
+import urllib.request
 from collections.abc import Iterator
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
@@ -171,3 +175,49 @@ def test_the_commands_are_marks_on_the_timeline(page: Any, shown: tuple[Gateway,
     names = [m.get_attribute("data-name") for m in marks.all()]
     assert names == rec.commands, (names, rec.commands)
     assert set(names) >= {"CMD_MOVE_ABS"}, names  # the patrol's goals
+
+
+def _wire_line(r: Any) -> str:
+    """The wire inspector's line head of a frame: its UTC clock (ms, cut as JavaScript's Date cuts), arrow, name."""
+    ms = int(r.time * 1000)
+    clock = datetime.fromtimestamp(ms // 1000, UTC).strftime("%H:%M:%S") + f".{ms % 1000:03d}"
+    return f"{clock} {'->' if r.direction == 'request' else '<-'} {r.telegram.NAME}"
+
+
+def test_a_click_on_a_mark_goes_there_and_the_wire_shows_the_telegrams_before_it(
+    page: Any, shown: tuple[Gateway, Recording], recorded: tuple[Path, Path, Recording]
+) -> None:
+    gw, rec = shown
+    timeline = open_recording(page, gw)
+    wait_for(lambda: timeline.get_attribute("data-marks") == "all", what="every mark read")
+    scrub(page, timeline, float(timeline.get_attribute("data-start")), 0.0)
+    mark = timeline.get_by_role("listitem").last  # drawn on top of any it lies on
+    at = float(mark.get_attribute("data-t") or 0)
+    mark.click()
+    wait_for(lambda: _time_near(timeline, at, 1e-6), what=f"the time of the mark, {at}")
+    wait_for(lambda: shown_pose(page) == rec.pose_at(at), what=f"the pose at {at}")
+    # the wire inspector: the recording's telegrams of the last second before the mark, as they passed
+    page.get_by_role("tab", name="Wire Inspector").click()
+    page.get_by_role("checkbox", name=re.compile("Hide polling")).uncheck()
+    frames = [r for r in read_session(recorded[0]).records if r.kind == FRAME and r.telegram is not None]
+    want = [_wire_line(r) for r in frames if at - 1 < r.time <= at][-100:]
+    assert want and want[-1].endswith(mark.get_attribute("data-name") or "?"), want[-3:]
+    log = page.get_by_role("log", name="Wire Inspector")
+
+    def tail() -> list[str] | None:
+        lines = [" ".join(line.split(" ")[:3]) for line in log.inner_text().splitlines()]
+        return lines[-len(want) :] if lines[-len(want) :] == want else None
+
+    wait_for(tail, what=f"the wire's last {len(want)} lines: {want[-3:]}")
+
+
+def test_a_recording_has_no_target(shown: tuple[Gateway, Recording]) -> None:
+    gw, _ = shown
+    with urllib.request.urlopen(f"{gw.base}/api/targets", timeout=10) as r:
+        targets = json.load(r)
+    assert targets["default"] is None and targets["fleet"] == [], targets
+    assert all(not t.endswith(":1") for t in targets["targets"]), targets
+    with pytest.raises(urllib.error.HTTPError) as ws:
+        urllib.request.urlopen(f"{gw.base}/ws", timeout=10)
+    ws.value.close()
+    assert ws.value.code == 404
