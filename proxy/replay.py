@@ -16,8 +16,8 @@ Rules:
 - Replies answer requests by identifier, oldest first (guide 6.1: "returns data only on request").
 - A wait is a run of the same request, sent again and again on one connection (a client polling until
   something changes). How many polls see each state depends on timing, so a wait is judged by where it ended:
-  its final reply is compared, the polls before it are counted; its rates (velocities) within how far they moved
-  between the recorded wait's last two polls (``phase_slack``, erratum E-REP-023). The replay polls at the
+  its final reply is compared, the polls before it are counted; its rates (velocities) within the most they
+  moved between two of the recorded wait's polls (``phase_slack``, erratum E-REP-023). The replay polls at the
   recorded pace until a reply matches the recorded final one (possibly before the recorded number of polls) or,
   past the recorded number, until twice the wait's recorded duration plus ``WAIT_GRACE`` has passed. A run longer than
   ``WAIT_SPAN`` recorded seconds or ``WAIT_POLLS`` polls is cut into waits of that size (each judged by its own
@@ -70,6 +70,7 @@ class Step:
     answered: bool  # a reply is due (guide 6.1: only requests with a reply table are answered)
     reply: Record | None = None  # the recorded reply (dropped for a poll that is not its wait's final one)
     before: Record | None = None  # a poll's: the recorded reply of the poll before it (kept for the final one)
+    slack: dict[str, float] = field(default_factory=dict)  # a poll's: the rates' largest change so far (E-REP-023)
     wait: int | None = None  # the wait it is a poll of
     ident: int = -1  # the telegram identifier (-1: no frame)
     at: float = 0.0  # recorded seconds since the session began
@@ -313,7 +314,8 @@ class Builder:
         if self._joins_run(step):
             prev = self.run[-1]
             prev.superseded = True
-            step.before, prev.reply, prev.before = prev.reply, None, None
+            step.slack = _widest(prev.slack, _moved(prev.before, prev.reply))
+            step.before, prev.reply, prev.before, prev.slack = prev.reply, None, None, {}
             self.run.append(step)
             return
         self._close_run()
@@ -407,15 +409,24 @@ def plan(session: Session) -> list[Script]:
 
 
 def phase_slack(step: Step) -> dict[str, float]:
-    """A wait's final poll: how far each rate field (spec/volatile.yaml ``rates``: velocities) moved between the
-    recorded wait's last two polls. A replayed poll falls elsewhere in the platform's control period than the
-    recorded one did, so at the wait's end a velocity may be off by that much (erratum E-REP-023: a platform that
-    reports its target reached while it still turns at 49 mrad/s, one 50 ms poll later at rest)."""
-    a, b = step.before, step.reply
+    """A wait's final poll: the largest change of each rate field (spec/volatile.yaml ``rates``: velocities)
+    between two consecutive polls of the recorded wait. A replayed poll falls elsewhere in the platform's motion
+    than the recorded one did (up to a poll's period earlier or later), so at the wait's end a velocity may be
+    off by what one period can change it (erratum E-REP-023: the soak's patrol reports its target reached while
+    still turning at 48-49 mrad/s, one 50 ms poll later at rest; a poll before, at 15 or 519)."""
+    return _widest(step.slack, _moved(step.before, step.reply))
+
+
+def _moved(a: Record | None, b: Record | None) -> dict[str, float]:
+    """How far each rate field moved from reply ``a`` to reply ``b`` (empty: not two replies of one kind)."""
     if a is None or b is None or a.telegram is None or b.telegram is None or a.telegram.NAME != b.telegram.NAME:
         return {}
     fa, fb = telegram_to_json(a.telegram)["fields"], telegram_to_json(b.telegram)["fields"]
     return {f: abs(float(fb[f]) - float(fa[f])) for f in rates(b.telegram.NAME) if _numbers(fa.get(f), fb.get(f))}
+
+
+def _widest(x: dict[str, float], y: dict[str, float]) -> dict[str, float]:
+    return {k: max(x.get(k, 0.0), y.get(k, 0.0)) for k in x.keys() | y.keys()}
 
 
 def _numbers(*xs: object) -> bool:
@@ -486,8 +497,12 @@ def judge_step(script: Script, step: Step, got: Record | None) -> list[Differenc
 
 
 def judge_wait(script: Script, wait: Wait, final: Record | None, polls: int) -> list[Difference]:
-    """A wait by the reply it ended on in the replay; a wait the client's end cut (``cut_by_end``) by kind."""
+    """A wait by the reply it ended on in the replay; a wait the client's end cut (``cut_by_end``), and one whose
+    final poll was still owed its reply when the recording (or its client) ended, by kind."""
     assert wait.last is not None
+    last = wait.last
+    if last.cut and last.reply is None and (final is None or final.name == last.request.name):
+        return []  # the recording ended (or its client closed) before the final poll's reply: as judge_step
     cut = cut_by_end(script, wait)
     what = "the connection's end cut it with the platform moving" if cut else "its final reply"
     note = f" (a wait: {len(wait.steps)} polls recorded, {polls} replayed; {what})"

@@ -445,3 +445,36 @@ def test_a_wait_s_final_velocity_may_differ_by_what_one_recorded_poll_period_cha
     assert not final_matches(final, _with(final.reply, at_rest))
     found = judge([steady], {1: Outcome(1, wait_final={0: _with(final.reply, at_rest)}, sent=4)})
     assert [(d.path, d.recorded, d.replayed) for d in found] == [("vel_rot", "49", "0")]
+
+
+def _status(t: float, **changes: Any) -> Record:
+    (r,) = Tap("reply", 1, 10000).feed(encode(STATUS.replace(**changes)), t)
+    return r
+
+
+def test_a_wait_s_final_velocity_slack_is_the_most_one_poll_period_changed_it_in_the_wait() -> None:
+    # the 10-minute soak's wait at 414.6 s: 519 mrad/s, then 15, then 48 with the target reached; replayed at rest
+    polls = [(0.2, 519), (0.4, 15), (0.6, 48)]
+    records = [event(0.0, 1, OPEN), rec(0.1, 1, "request", "CMD_SET_MODE", mode=4)]
+    for t, vel in polls:
+        records += [rec(t, 1, "request", "CMD_GET_STATUS"), _status(t + 0.05, vel_rot=vel, target_reached=1)]
+    (driver,) = plan(session(*records, rec(0.7, 1, "request", "CMD_STOP"), event(0.8, 1, CLOSE, "by client (FIN)")))
+    (wait,) = driver.waits.values()
+    final = driver.steps[wait.final]
+    assert final.reply is not None
+    at_rest = _with(final.reply, STATUS.replace(vel_rot=0, target_reached=1))
+    assert final_matches(final, at_rest)
+    assert judge([driver], {1: Outcome(1, wait_final={0: at_rest}, sent=5)}) == []
+    spinning = _with(final.reply, STATUS.replace(vel_rot=600, target_reached=1))  # beyond 504, the widest change
+    assert [d.path for d in judge([driver], {1: Outcome(1, wait_final={0: spinning}, sent=5)})] == ["vel_rot"]
+
+
+def test_a_wait_whose_final_reply_the_recording_did_not_keep_is_judged_by_kind() -> None:
+    # the recording stopped (or the client closed) while its last poll was owed its reply
+    (driver,) = plan(session(*_two_polls(), rec(0.6, 1, "request", "CMD_GET_STATUS")))
+    (wait,) = driver.waits.values()
+    assert driver.steps[wait.final].reply is None
+    answered = rec(0.7, 1, "reply", "STATUS")
+    assert judge([driver], {1: Outcome(1, wait_final={0: answered}, sent=4)}) == []
+    wrong = rec(0.7, 1, "reply", "CMD_GET_POSITION", x=1, y=2, angle=0.0, vel_trans=0.0, vel_rot=0.0)
+    assert [d.path for d in judge([driver], {1: Outcome(1, wait_final={0: wrong}, sent=4)})] == ["(reply)"]
