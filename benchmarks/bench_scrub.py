@@ -10,7 +10,9 @@ A seek is timed in the page, as a user's drag of the scrubber ends: from the tim
 topics) until the next animation frame has been drawn (the map view draws on requestAnimationFrame; a task after
 it runs once that frame is done). Times are uniform at random over the recording (seeded), SEEKS of them.
 Rows: seek p50 and p95 of the hour beside the minute's; the gateway's start-up (indexing the file, from start to
-"serving"), and the session file's size.
+"serving"), and the session file's size. The same hour exported with ``pltf export --mcap`` (read in the page with
+@mcap/core, recorded_mcap.ts), in the same run: its seek p50/p95 beside the session file's, and its opening (page
+load until the timeline is there: the summary and the first and last chunk) beside the session file's.
 """
 
 from __future__ import annotations
@@ -18,6 +20,8 @@ from __future__ import annotations
 import contextlib
 import math
 import random
+import subprocess
+import sys
 import tempfile
 import time
 from collections.abc import Iterator
@@ -68,9 +72,10 @@ def _shown(session: Path) -> Iterator[tuple[Any, float]]:
             browser = pw.chromium.launch(executable_path=CHROMIUM, args=ARGS)
             try:
                 pg = browser.new_page(viewport=VIEWPORT)
+                t1 = time.perf_counter()
                 pg.goto(f"{gw.base}/?recording=1")
                 pg.wait_for_function("() => window.pltf.timeline !== null", timeout=60_000)
-                yield pg, started
+                yield pg, started if session.suffix != ".mcap" else time.perf_counter() - t1
             finally:
                 browser.close()
 
@@ -94,6 +99,11 @@ def seek_and_draw(config: Config) -> list[Row]:
         size = long_file.stat().st_size
         short_ms, short_start = _seeks(short_file, short_s, 1)
         long_ms, long_start = _seeks(long_file, long_s, 1)
+        mcap = Path(tmp) / "long.mcap"
+        export = [sys.executable, "-m", "pltf.cli.main", "export", str(long_file), "--mcap", str(mcap)]
+        subprocess.run(export, check=True, capture_output=True)
+        mcap_size = mcap.stat().st_size
+        mcap_ms, mcap_open = _seeks(mcap, long_s, 1)
     name = f"scrub.seek_and_draw ({long_s / 60:g} min at 20 Hz, {size / 1e6:.0f} MB)"
     ours, base = f"{long_s:g} s recording", f"{short_s:g} s recording"
     rows = [
@@ -121,6 +131,32 @@ def seek_and_draw(config: Config) -> list[Row]:
             higher_is_better=False,
             baseline_subject=f"the same, {base}",
             baseline_value=short_start,
+        )
+    )
+    mcap_name = f"scrub.seek_and_draw_mcap ({long_s / 60:g} min at 20 Hz, MCAP {mcap_size / 1e6:.0f} MB)"
+    for metric, q in (("p50", 0.5), ("p95", 0.95)):
+        rows.append(
+            make_row(
+                mcap_name,
+                f"{long_s:g} s recording, its MCAP export",
+                f"seek_{metric}",
+                _percentile(mcap_ms, q),
+                "ms",
+                higher_is_better=False,
+                baseline_subject=f"{ours}, the session file",
+                baseline_value=_percentile(long_ms, q),
+                target=Target("value", "<=", TARGET_MS) if metric == "p95" and not config.quick else None,
+            )
+        )
+    rows.append(make_row(mcap_name, "its MCAP export", "seek_max", max(mcap_ms), "ms", higher_is_better=False))
+    rows.append(
+        make_row(
+            mcap_name,
+            "opening the MCAP in the page (until the timeline shows)",
+            "seconds",
+            mcap_open,
+            "s",
+            higher_is_better=False,
         )
     )
     return rows

@@ -17,7 +17,7 @@
  *   `connected`, a conn event: the status bar, the operation and motion panels show no status).
  * - Every seek publishes `seeked` (session.ts): the plotted replies up to t. A step forward of at most WIRE_BACK
  *   carries those among the wire's frames; a jump resets the plots and, once read (one more request, after the
- *   state is shown, the latest jump only), carries the plots' window (PLOT_SPAN_S) before t.
+ *   state is shown and HISTORY_AFTER_MS without another jump), carries the plots' window (PLOT_SPAN_S) before t.
  * - Nothing is sent: `send` and `request` refuse with the reason, `mayCommand` is false (every command group is
  *   disabled: panels/control.ts), and the control line says "read-only".
  */
@@ -78,6 +78,8 @@ const WIRE_LIMIT = 100;
 /** the plots' window (panels/plots.ts WINDOW_S) and how many points of each reply a jump's history holds */
 const PLOT_SPAN_S = 60;
 const PLOT_POINTS = 300;
+/** a jump's history is asked for when no other jump came for this long */
+const HISTORY_AFTER_MS = 250;
 const PLOTTED = new Set(["CMD_GET_STATUS", "CMD_GET_POSITION"]);
 
 async function json<T>(url: string): Promise<T> {
@@ -203,6 +205,10 @@ export class RecordedSession extends PlatformSession {
 
   /** A jump's plots: the window before t, read after the state is shown; dropped when another jump came since. */
   private async readHistory(t: number, jump: number): Promise<void> {
+    await new Promise((go) => setTimeout(go, HISTORY_AFTER_MS)); // a drag's jumps: only where it stops
+    if (jump !== this.jumps) {
+      return;
+    }
     const frames = await this.source.history(t, PLOT_SPAN_S, PLOT_POINTS).catch(() => []);
     if (jump === this.jumps) {
       this.seeked.publish({ t, reset: true, history: this.plotted(frames) });

@@ -15,7 +15,7 @@
  *   debug data, commands' replies) older than the lookback come from the background read below, once it has
  *   passed t (before that they are not shown: E-GUI-011).
  * - The marks (the commands) and those other names' times come from a background read of the telegrams' channel,
- *   SCAN_SLICE_S of recording at a time, in time order, paused while a seek reads (seeks come first); the marks are
+ *   SCAN_SLICE_S of recording at a time, in time order, when no seek came for SCAN_IDLE_MS (seeks first); the marks are
  *   handed on (`onEvents`) after each slice.
  * - Times are the messages' log times (ns).
  */
@@ -82,7 +82,9 @@ const toS = (ns: bigint): number => Number(ns / 1000n) / 1e6;
 const decoder = new TextDecoder();
 
 const LOOKBACK_S = 5;
-const SCAN_SLICE_S = 20;
+const SCAN_SLICE_S = 10;
+/** the background read waits until no seek came for this long (a drag of the scrubber goes first) */
+const SCAN_IDLE_MS = 400;
 const S_NS = 1_000_000_000n;
 /** The replies with a channel of their own (proxy/mcap_export.py), and how to know one of that name there. */
 const OWN: Record<string, { topic: string; entity?: string }> = {
@@ -108,6 +110,7 @@ export class McapSource implements RecordingSource {
   private events: RecordedEvent[] = [];
   private scannedTo = -1n;
   private seeking = 0;
+  private lastSeek = 0;
   private resume: Array<() => void> = [];
   onEvents?: (events: RecordedEvent[], complete: boolean) => void;
 
@@ -146,22 +149,37 @@ export class McapSource implements RecordingSource {
     return null;
   }
 
+  /** One read backwards from t serves the state's lookback and the wire's frames since `since`. */
   async at(t: number, since: number, limit: number): Promise<RecordedState> {
     this.seeking++;
+    this.lastSeek = performance.now();
     try {
-      return { state: await this.stateAt(t), wire: await this.recordsIn(since, t, limit) };
+      const at = toNs(t) + 999n; // a session's times are rounded to the µs; the export's ns may lie just after
+      const back = at - BigInt(LOOKBACK_S) * S_NS;
+      const from = toNs(since) + 1000n;
+      const recent = await this.read(from < back ? from : back, at, true);
+      const wire = recent
+        .filter((f) => toNs(f.frame.t) >= from)
+        .slice(0, limit)
+        .reverse();
+      const state = await this.stateAt(
+        at,
+        recent.filter((f) => toNs(f.frame.t) >= back),
+      );
+      return { state, wire: wire.map((f) => f.frame) };
     } finally {
+      this.lastSeek = performance.now();
       if (--this.seeking === 0) {
         this.resume.splice(0).forEach((go) => go());
       }
     }
   }
 
-  async stateAt(t: number): Promise<RecordedFrame[]> {
-    const at = toNs(t) + 999n; // a session's times are rounded to the µs; the export's ns may lie just after
+  /** The state at `at` (ns) from `recent`, the telegrams of the lookback newest first, and the channels. */
+  private async stateAt(at: bigint, recent: Found[]): Promise<RecordedFrame[]> {
     const back = at - BigInt(LOOKBACK_S) * S_NS;
     const found = new Map<string, RecordedFrame>();
-    for (const f of await this.read(back, at, true)) {
+    for (const f of recent) {
       if (f.frame.dir === "reply" && !found.has(f.name)) {
         found.set(f.name, f.frame);
       }
@@ -232,8 +250,12 @@ export class McapSource implements RecordingSource {
   private async scan(): Promise<void> {
     const slice = BigInt(SCAN_SLICE_S) * S_NS;
     for (let a = this.startNs; a <= this.endNs; a += slice) {
-      if (this.seeking > 0) {
-        await new Promise<void>((go) => this.resume.push(go));
+      while (this.seeking > 0 || performance.now() - this.lastSeek < SCAN_IDLE_MS) {
+        if (this.seeking > 0) {
+          await new Promise<void>((go) => this.resume.push(go));
+        } else {
+          await new Promise((go) => setTimeout(go, SCAN_IDLE_MS));
+        }
       }
       const b = a + slice - 1n;
       for (const f of await this.read(a, b)) {
