@@ -13,7 +13,7 @@
  *   position on /pose, the map and the roadmap on /map), backwards in widening windows, so only chunks holding
  *   that channel are read; its telegram is then read at that time. Other names (parameters, CAN messages,
  *   debug data, commands' replies) older than the lookback come from the background read below, once it has
- *   passed t (before that they are not shown: E-GUI-011).
+ * passed t (before that they are not shown; the session file has no such gap).
  * - The marks (the commands) and those other names' times come from a background read of the telegrams' channel,
  *   SCAN_SLICE_S of recording at a time, in time order, when no seek came for SCAN_IDLE_MS (seeks first); the marks are
  *   handed on (`onEvents`) after each slice.
