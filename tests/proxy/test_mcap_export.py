@@ -278,6 +278,25 @@ def test_mcap_core_from_npm_reads_the_same(recorded: Path, which: str) -> None:
     assert stats["messageStartTime"] == stream["start"] and stats["messageEndTime"] == stream["end"]
 
 
+@pytest.mark.skipif(shutil.which("node") is None, reason="node is not installed")
+@pytest.mark.parametrize("compression", ["zstd", "lz4", "none"])
+def test_a_session_without_traffic_is_an_mcap_file_of_no_messages_both_readers_read(
+    tmp_path: Path, compression: str
+) -> None:
+    (tmp_path / "session.jsonl").write_text('{"format": "pltf-session", "version": 1, "started": 0, "routes": []}\n')
+    out = tmp_path / "empty.mcap"
+    assert pltf(["export", str(tmp_path / "session.jsonl"), "--mcap", str(out), "--compression", compression]) == 0
+    ours = _python_read(out)
+    assert ours["counts"] == {} and ours["statistics"].message_count == 0 and ours["chunks"] == []
+    assert ours["declared"] == CHANNELS
+    cmd = ["node", str(READER / "read.mjs"), str(out)]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=60, check=False)
+    assert proc.returncode == 0, proc.stderr
+    got = json.loads(proc.stdout)
+    assert got["stream"]["done"] and got["stream"]["counts"] == {} and got["indexed"]["chunks"] == []
+    assert int(got["indexed"]["statistics"]["messageCount"]) == 0
+
+
 def test_pltf_proxy_mcap_live_has_the_counts_of_the_export_of_its_own_recording(recorded: Path) -> None:
     live, export = _python_read(recorded / "live.mcap"), _python_read(recorded / "export.mcap")
     assert live["counts"] == export["counts"]
