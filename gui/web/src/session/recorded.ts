@@ -108,10 +108,17 @@ export class GatewaySource implements RecordingSource {
   }
 }
 
+/** A hex digit's value by its character code (lower and upper case); 0 for any other character. */
+const NIBBLE = new Uint8Array(128);
+for (let d = 0; d < 16; d++) {
+  NIBBLE["0123456789abcdef".charCodeAt(d)] = d;
+  NIBBLE["0123456789ABCDEF".charCodeAt(d)] = d;
+}
+
 export function fromHex(hex: string): Uint8Array {
   const out = new Uint8Array(hex.length >> 1);
   for (let i = 0; i < out.length; i++) {
-    out[i] = Number.parseInt(hex.substr(2 * i, 2), 16);
+    out[i] = (NIBBLE[hex.charCodeAt(2 * i) & 127] << 4) | NIBBLE[hex.charCodeAt(2 * i + 1) & 127];
   }
   return out;
 }

@@ -1,27 +1,36 @@
 /**
  * An MCAP recording read in the page (pltf gui --session FILE.mcap, issue 35), as Foxglove reads one: @mcap/core's
- * McapIndexedReader over HTTP range requests (the gateway serves the file: GET /recording.mcap), zstd chunks
- * decompressed with fzstd. The frames are the raw telegrams' channel of `pltf export --mcap` (proxy/mcap_export.py:
- * /pltf/telegrams, one JSON message per frame with its direction, name and hex); the other channels are for
- * Foxglove.
+ * McapIndexedReader over HTTP range requests (the gateway serves the file: GET /recording.mcap), its chunks
+ * decompressed by mcap_decompress.ts's handlers (zstd, lz4, or none: every `pltf export --compression`) and kept
+ * between seeks (mcap_cache.ts: an LRU by offset). The frames are the raw telegrams' channel of `pltf export
+ * --mcap` (proxy/mcap_export.py: /pltf/telegrams, one JSON message per frame with its direction, name and hex); the
+ * other channels are for Foxglove.
  *
- * Rules (an hour's export is ~300 MB in ~600 chunks: opening and seeking read a few of them, never the whole file):
+ * Rules (an hour's export is ~300 MB in ~600 chunks of ~18 s each: opening and seeking read a few of them, never
+ * the whole file; decompressing a 4 MiB chunk with zstd is most of a seek's cost):
  * - Opening reads the summary (chunk indexes, statistics) and the first and the last message of the telegrams'
  *   channel (its first and last chunk): the recording's start and end.
- * - A seek to t reads the telegrams of the LOOKBACK_S before t backwards (a chunk or two) and keeps the last reply
- *   of each name. A name not among them is looked for on the channel of its own (OWN: the status on /scan, the
- *   position on /pose, the map and the roadmap on /map), backwards in widening windows, so only chunks holding
- *   that channel are read; its telegram is then read at that time. Other names (parameters, CAN messages,
- *   debug data, commands' replies) older than the lookback come from the background read below, once it has
- * passed t (before that they are not shown; the session file has no such gap).
+ * - A seek to t reads the telegrams before t backwards, LOOKBACK_S at most and no further back than the start of
+ *   the chunk holding t (but always the wire's window, `since`), and keeps the last reply of each name: one chunk
+ *   for most seeks (erratum E-GUI-011). A status, position, map or roadmap not among them is looked for on the
+ *   channel of its own (OWN: the status on /scan, the position on /pose, the map and the roadmap on /map; a channel
+ *   without messages in the file's statistics is skipped), backwards in widening windows, so only chunks holding
+ *   that channel are read; its telegram is then read at that time. Other names (parameters, CAN messages, debug
+ *   data, commands' replies) older than that come from the background read below, once it has passed t (before
+ *   that they are not shown: E-GUI-011; the session file has no such gap).
  * - The marks (the commands) and those other names' times come from a background read of the telegrams' channel,
- *   SCAN_SLICE_S of recording at a time, in time order, when no seek came for SCAN_IDLE_MS (seeks first); the marks are
- *   handed on (`onEvents`) after each slice.
+ *   SCAN_SLICE_S of recording at a time, in time order, when no seek came for SCAN_IDLE_MS (seeks first); the marks
+ *   are handed on (`onEvents`) after each slice.
+ * - A message's JSON is not parsed: its direction, kind and name are read from its head (the export writes them
+ *   before the hex, in that order) and its hex only when a frame is shown; a message of another layout is parsed.
+ *   Chunks' CRCs are not checked (their size is: mcap_decompress.ts); a damaged frame fails to decode and is
+ *   dropped, as a malformed one.
  * - Times are the messages' log times (ns).
  */
 import { McapIndexedReader } from "@mcap/core";
 import type { IReadable } from "@mcap/core";
-import { decompress } from "fzstd";
+import { ChunkCache } from "./mcap_cache";
+import { decompressHandlers } from "./mcap_decompress";
 import type { RecordedEvent, RecordedFrame, RecordedState, RecordingInfo, RecordingSource } from "./recorded";
 
 export const TELEGRAMS = "/pltf/telegrams";
@@ -62,6 +71,34 @@ interface TelegramMessage {
   hex: string;
 }
 
+/** The head of a pltf.Telegram message as the export writes it, up to the hex's first digit. */
+const HEAD = /"direction":"(request|reply)","kind":"([^"]*)","name":"([^"]*)","hex":"/;
+const HEAD_BYTES = 320;
+const QUOTE = 0x22;
+
+/** A telegram message's frame (null: not a frame), its hex read from `data` only when asked for. */
+export function telegramFrame(t: number, data: Uint8Array): Found | null {
+  const head = HEAD.exec(decoder.decode(data.subarray(0, HEAD_BYTES)));
+  const start = head === null ? -1 : head.index + head[0].length;
+  if (head === null || data[start - 1] !== QUOTE || data[start - 7] !== QUOTE) {
+    const body = JSON.parse(decoder.decode(data)) as TelegramMessage; // another writer's layout (or a non-ASCII head)
+    return body.kind === "frame" ? { name: body.name, frame: { t, dir: body.direction, hex: body.hex } } : null;
+  }
+  if (head[2] !== "frame") {
+    return null;
+  }
+  let hex: string | undefined;
+  const frame = {
+    t,
+    dir: head[1] as "request" | "reply",
+    get hex(): string {
+      hex ??= decoder.decode(data.subarray(start, data.indexOf(QUOTE, start)));
+      return hex;
+    },
+  };
+  return { name: head[3], frame };
+}
+
 /** The index of the last element <= x in a sorted array, -1 when none. */
 export function lastAtOrBefore(sorted: bigint[], x: bigint): number {
   let lo = 0;
@@ -95,7 +132,7 @@ const OWN: Record<string, { topic: string; entity?: string }> = {
 };
 const ENTITY = /"id":"([^"]*)"/;
 
-interface Found {
+export interface Found {
   name: string;
   frame: RecordedFrame;
 }
@@ -105,6 +142,10 @@ export class McapSource implements RecordingSource {
   private summary: RecordingInfo | null = null;
   private startNs = 0n;
   private endNs = 0n;
+  /** the start times of the telegrams' chunks, in order; the channels with messages (the file's statistics) */
+  private chunkStarts: bigint[] = [];
+  private hasMessages: (topic: string) => boolean = () => true;
+  cache: ChunkCache | null = null;
   /** the background read: the other names' reply times, the marks, how far it has come (ns) */
   private replies = new Map<string, bigint[]>();
   private events: RecordedEvent[] = [];
@@ -123,13 +164,23 @@ export class McapSource implements RecordingSource {
     if (this.summary !== null) {
       return this.summary;
     }
+    const cache = new ChunkCache(new HttpReadable(this.url));
+    this.cache = cache;
     const reader = await McapIndexedReader.Initialize({
-      readable: new HttpReadable(this.url),
-      decompressHandlers: { zstd: (buf, size) => decompress(buf, new Uint8Array(Number(size))) },
+      readable: cache,
+      decompressHandlers: cache.decompressing(decompressHandlers),
     });
     this.reader = reader;
     const ids = new Set([...reader.channelsById.values()].filter((c) => c.topic === TELEGRAMS).map((c) => c.id));
     const chunks = reader.chunkIndexes.filter((c) => [...c.messageIndexOffsets.keys()].some((id) => ids.has(id)));
+    this.chunkStarts = chunks.map((c) => c.messageStartTime).sort((a, b) => (a < b ? -1 : a > b ? 1 : 0));
+    const counts = reader.statistics?.channelMessageCounts;
+    if (counts !== undefined) {
+      const topics = new Set(
+        [...reader.channelsById].filter(([id]) => (counts.get(id) ?? 0n) > 0n).map(([, c]) => c.topic),
+      );
+      this.hasMessages = (topic) => topics.has(topic);
+    }
     if (chunks.length > 0) {
       const first = chunks.reduce((a, b) => (b.messageStartTime < a.messageStartTime ? b : a));
       const last = chunks.reduce((a, b) => (b.messageEndTime > a.messageEndTime ? b : a));
@@ -143,7 +194,8 @@ export class McapSource implements RecordingSource {
 
   /** The log time of the first message of `topic` in [a, b] (the last one: `reverse`), null when none. */
   private async first(topic: string, a: bigint, b: bigint, reverse: boolean): Promise<bigint | null> {
-    for await (const m of this.reader!.readMessages({ topics: [topic], startTime: a, endTime: b, reverse })) {
+    const args = { topics: [topic], startTime: a, endTime: b, reverse, validateCrcs: false };
+    for await (const m of this.reader!.readMessages(args)) {
       return m.logTime;
     }
     return null;
@@ -155,17 +207,14 @@ export class McapSource implements RecordingSource {
     this.lastSeek = performance.now();
     try {
       const at = toNs(t) + 999n; // a session's times are rounded to the µs; the export's ns may lie just after
-      const back = at - BigInt(LOOKBACK_S) * S_NS;
       const from = toNs(since) + 1000n;
-      const recent = await this.read(from < back ? from : back, at, true);
+      const back = this.lookback(at, from);
+      const recent = await this.read(back, at, true);
       const wire = recent
         .filter((f) => toNs(f.frame.t) >= from)
         .slice(0, limit)
         .reverse();
-      const state = await this.stateAt(
-        at,
-        recent.filter((f) => toNs(f.frame.t) >= back),
-      );
+      const state = await this.stateAt(at, back, recent);
       return { state, wire: wire.map((f) => f.frame) };
     } finally {
       this.lastSeek = performance.now();
@@ -175,9 +224,18 @@ export class McapSource implements RecordingSource {
     }
   }
 
-  /** The state at `at` (ns) from `recent`, the telegrams of the lookback newest first, and the channels. */
-  private async stateAt(at: bigint, recent: Found[]): Promise<RecordedFrame[]> {
-    const back = at - BigInt(LOOKBACK_S) * S_NS;
+  /** Where a seek's backwards read stops (E-GUI-011): LOOKBACK_S before `at`, but not before the start of the
+   * chunk holding `at`, unless the wire's window (`from`) reaches further. */
+  lookback(at: bigint, from: bigint): bigint {
+    const i = lastAtOrBefore(this.chunkStarts, at);
+    const chunk = i < 0 ? this.startNs : this.chunkStarts[i];
+    const lookback = at - BigInt(LOOKBACK_S) * S_NS;
+    const stop = chunk < from ? chunk : from;
+    return stop > lookback ? stop : lookback;
+  }
+
+  /** The state at `at` (ns) from `recent`, the telegrams since `back` newest first, and the channels. */
+  private async stateAt(at: bigint, back: bigint, recent: Found[]): Promise<RecordedFrame[]> {
     const found = new Map<string, RecordedFrame>();
     for (const f of recent) {
       if (f.frame.dir === "reply" && !found.has(f.name)) {
@@ -185,7 +243,7 @@ export class McapSource implements RecordingSource {
       }
     }
     for (const [name, own] of Object.entries(OWN)) {
-      if (!found.has(name)) {
+      if (!found.has(name) && this.hasMessages(own.topic)) {
         const when = await this.lastOn(own.topic, back, own.entity);
         const frame = when === null ? undefined : await this.replyAt(name, when);
         if (frame !== undefined) {
@@ -216,6 +274,7 @@ export class McapSource implements RecordingSource {
         startTime: start,
         endTime: end,
         reverse: true,
+        validateCrcs: false,
       })) {
         if (entity === undefined || ENTITY.exec(decoder.decode(m.data.subarray(0, 400)))?.[1] === entity) {
           return m.logTime;
@@ -281,11 +340,11 @@ export class McapSource implements RecordingSource {
     if (this.reader === null || end < start) {
       return out;
     }
-    const args = { topics: [TELEGRAMS], startTime: start, endTime: end, reverse };
+    const args = { topics: [TELEGRAMS], startTime: start, endTime: end, reverse, validateCrcs: false };
     for await (const m of this.reader.readMessages(args)) {
-      const body = JSON.parse(decoder.decode(m.data)) as TelegramMessage;
-      if (body.kind === "frame") {
-        out.push({ name: body.name, frame: { t: toS(m.logTime), dir: body.direction, hex: body.hex } });
+      const found = telegramFrame(toS(m.logTime), m.data);
+      if (found !== null) {
+        out.push(found);
       }
     }
     return out;

@@ -1,0 +1,113 @@
+import type { IReadable } from "@mcap/core";
+import { describe, expect, it } from "vitest";
+import { ChunkCache } from "../src/session/mcap_cache";
+import { spread, telegramFrame } from "../src/session/recorded_mcap";
+
+const encode = (s: string) => new TextEncoder().encode(s);
+
+/** A pltf.Telegram message as proxy/mcap_export.py writes it (telegram_message). */
+function message(direction: string, kind: string, name: string, hex: string): Uint8Array {
+  return encode(
+    `{"timestamp":{"sec":1795000000,"nsec":2000128},"conn":1,"port":10002,"direction":"${direction}",` +
+      `"kind":"${kind}","name":"${name}","hex":"${hex}","error":null}`,
+  );
+}
+
+describe("a telegram message's frame", () => {
+  it("reads direction, name and hex from the export's layout as JSON.parse would", () => {
+    const data = message("reply", "frame", "CMD_GET_STATUS", "ff01fe02000009fc12");
+    const found = telegramFrame(1.5, data);
+    const body = JSON.parse(new TextDecoder().decode(data));
+    expect(found?.name).toBe(body.name);
+    expect(found?.frame.dir).toBe(body.direction);
+    expect(found?.frame.t).toBe(1.5);
+    expect(found?.frame.hex).toBe(body.hex);
+  });
+
+  it("is null for what is not a frame (a connection's opening, marked bytes)", () => {
+    expect(telegramFrame(0, message("request", "open", "open", ""))).toBeNull();
+  });
+
+  it("parses a message of another layout whole", () => {
+    const other = encode('{"name":"CMD_STOP","hex":"ff01","kind":"frame","direction":"request"}');
+    expect(telegramFrame(2, other)).toEqual({ name: "CMD_STOP", frame: { t: 2, dir: "request", hex: "ff01" } });
+    expect(telegramFrame(2, encode('{"name":"x","kind":"bytes","direction":"reply","hex":""}'))).toBeNull();
+  });
+});
+
+describe("spread: the plots' points of a jump's history", () => {
+  it("keeps everything up to n", () => {
+    expect(spread([1, 2, 3], 3)).toEqual([1, 2, 3]);
+    expect(spread([], 5)).toEqual([]);
+  });
+
+  it("picks n evenly spread, in order, the first and the last among them", () => {
+    const xs = Array.from({ length: 101 }, (_, i) => i);
+    expect(spread(xs, 5)).toEqual([0, 25, 50, 75, 100]);
+    const many = spread(
+      Array.from({ length: 10_000 }, (_, i) => i),
+      300,
+    );
+    expect(many).toHaveLength(300);
+    expect(many.at(-1)).toBe(9_999);
+    expect(many[0]).toBe(0);
+    expect(many.every((x, i) => i === 0 || x > many[i - 1])).toBe(true);
+  });
+
+  it("keeps the last one when only one is asked for", () => {
+    expect(spread([1, 2, 3], 1)).toEqual([3]);
+  });
+});
+
+/** A readable over bytes that counts its reads. */
+function bytesReadable(bytes: Uint8Array): IReadable & { reads: number } {
+  return {
+    reads: 0,
+    async size() {
+      return BigInt(bytes.length);
+    },
+    async read(offset: bigint, size: bigint) {
+      this.reads++;
+      return bytes.slice(Number(offset), Number(offset + size));
+    },
+  };
+}
+
+describe("the chunk cache", () => {
+  const file = Uint8Array.from({ length: 4096 }, (_, i) => i & 255);
+
+  it("answers a read again from what it kept, and a chunk's decompression once", async () => {
+    const inner = bytesReadable(file);
+    const cache = new ChunkCache(inner, 1 << 20);
+    let decompressed = 0;
+    const handlers = cache.decompressing({
+      zstd: (buf, size) => {
+        decompressed++;
+        return new Uint8Array(Number(size)).fill(buf[0]);
+      },
+    });
+    for (let k = 0; k < 3; k++) {
+      const raw = await cache.read(100n, 200n);
+      expect([...raw.subarray(0, 3)]).toEqual([100, 101, 102]);
+      const out = handlers.zstd(raw.subarray(10, 50), 1000n); // the chunk's records inside the read, as the reader parses them
+      expect(out.length).toBe(1000);
+      expect(out[0]).toBe(110);
+    }
+    expect(inner.reads).toBe(1);
+    expect(decompressed).toBe(1);
+  });
+
+  it("forgets the least recently used reads past its size", async () => {
+    const inner = bytesReadable(file);
+    const cache = new ChunkCache(inner, 1000);
+    await cache.read(0n, 400n);
+    await cache.read(1000n, 400n);
+    await cache.read(0n, 400n); // used again: now the most recent
+    await cache.read(2000n, 400n); // 1,200 bytes: the read at 1000 goes
+    expect(inner.reads).toBe(3);
+    await cache.read(0n, 400n);
+    expect(inner.reads).toBe(3);
+    await cache.read(1000n, 400n);
+    expect(inner.reads).toBe(4);
+  });
+});
