@@ -83,6 +83,7 @@ class Recording:
             r.telegram.NAME for r in frames if r.direction == "request" and not r.telegram.NAME.startswith("CMD_GET_")
         ]
         self.start, self.end = frames[0].time, frames[-1].time
+        self.frames = frames
 
     def pose_at(self, t: float) -> tuple[float, ...]:
         before = [pose for at, pose in self.status if at <= t]
@@ -97,6 +98,10 @@ def recorded(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path, Reco
     record_patrol(session)
     exported = _pltf("export", str(session), "--mcap", str(mcap))
     assert exported.returncode == 0, exported.stderr
+    for compression in ("lz4", "none"):  # pltf export's other compressions, for the page's reader
+        other = mcap.with_name(f"patrol_{compression}.mcap")
+        exported = _pltf("export", str(session), "--mcap", str(other), "--compression", compression)
+        assert exported.returncode == 0, exported.stderr
     return session, mcap, Recording(session)
 
 
@@ -221,3 +226,71 @@ def test_a_recording_has_no_target(shown: tuple[Gateway, Recording]) -> None:
         urllib.request.urlopen(f"{gw.base}/ws", timeout=10)
     ws.value.close()
     assert ws.value.code == 404
+
+
+@pytest.mark.parametrize("compression", ["lz4", "none"])
+def test_an_mcap_export_of_each_compression_opens_and_seeks(
+    page: Any, recorded: tuple[Path, Path, Recording], compression: str
+) -> None:
+    """pltf export --compression lz4 | none (zstd is the default: the tests above): the page reads its chunks."""
+    session, mcap, rec = recorded
+    ini = session.parent / "Network.ini"
+    ini.write_text("[Network]\n", encoding="utf-8")
+    path = mcap.with_name(f"patrol_{compression}.mcap")
+    with Gateway(ini, target=None, args=("--session", str(path))) as gw:
+        timeline = open_recording(page, gw)
+        start = float(timeline.get_attribute("data-start"))
+        assert abs(start - rec.start) < 1e-3, (start, rec.start)
+        for f in FRACTIONS:
+            at = scrub(page, timeline, start, round(f * (rec.end - rec.start), 2))
+            want = rec.pose_at(at)
+            wait_for(lambda want=want: shown_pose(page) == want, what=f"pose {want} at {at} ({compression})")
+
+
+def _wire_lines(page: Any) -> list[str]:
+    log = page.get_by_role("log", name="Wire Inspector")
+    return [" ".join(line.split(" ")[:3]) for line in log.inner_text().splitlines()]
+
+
+def _battery(page: Any) -> str:
+    pane = page.get_by_role("tabpanel", name="IOBoard", exact=True)
+    return pane.get_by_role("row").filter(has_text="Battery").get_by_role("cell").inner_text().strip()
+
+
+def test_a_jump_shows_the_state_at_its_time_only(page: Any, shown: tuple[Gateway, Recording]) -> None:
+    """After a jump every panel shows the state at t alone: before the first status reply no platform on the map
+    and an empty hardware monitor; the wire inspector holds the telegrams of the second before t, none of an
+    earlier seek's."""
+    gw, rec = shown
+    timeline = open_recording(page, gw)
+    start = float(timeline.get_attribute("data-start"))
+    canvas = page.locator("canvas.map-canvas")
+    page.get_by_role("tab", name="Wire Inspector").click()
+    page.get_by_role("checkbox", name=re.compile("Hide polling")).uncheck()
+
+    def wire_at(at: float) -> list[str]:
+        return [_wire_line(r) for r in rec.frames if at - 1 < r.time <= at + 5e-7][-100:]
+
+    first_status = rec.status[0][0]
+    for rel in (0.55 * (rec.end - rec.start), 0.0, 0.3 * (rec.end - rec.start)):
+        at = scrub(page, timeline, start, round(rel, 2))
+        want = wire_at(at)
+        wait_for(lambda want=want: _wire_lines(page) == want, what=f"only the wire's {len(want)} lines before {at}")
+        if at >= first_status:
+            pose = rec.pose_at(at)
+            wait_for(
+                lambda pose=pose: (
+                    tuple(map(float, (canvas.get_attribute("data-platform") or "0,0,0").split(","))) == pose
+                ),
+                what=f"the platform drawn at {pose}",
+            )
+        else:
+            wait_for(lambda: canvas.get_attribute("data-platform") is None, what="no platform before the first status")
+    # the hardware monitor: the battery of the status at 0.3, then nothing before the first status
+    page.get_by_role("tab", name="Hardware Monitor").click()
+    page.get_by_role("tab", name="IOBoard", exact=True).click()
+    wait_for(lambda: _battery(page).endswith(" V"), what="the battery shown")
+    scrub(page, timeline, start, 0.0)
+    assert start < first_status
+    wait_for(lambda: _battery(page) == "", what="no battery before the first status")
+    wait_for(lambda: canvas.get_attribute("data-platform") is None, what="no platform before the first status")

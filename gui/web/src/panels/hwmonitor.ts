@@ -59,6 +59,13 @@ export function statusWords(word: number, board = ""): string {
 
 type Row = [Key | string, (s: GetStatusReply) => string];
 
+/** Show each status; in a recording (session.seeked) `clear` when the time shown has no status yet, as live
+ * before the first reply. */
+function onStatus(session: PlatformSession, show: (s: GetStatusReply) => void, clear: () => void): void {
+  session.status.subscribe(show);
+  session.seeked.subscribe(() => session.status.last === undefined && clear());
+}
+
 function table(rows: Row[], session: PlatformSession): HTMLElement {
   const body = h("tbody");
   const cells = rows.map(([label]) => {
@@ -72,7 +79,11 @@ function table(rows: Row[], session: PlatformSession): HTMLElement {
     body.append(h("tr", {}, th, td));
     return td;
   });
-  session.status.subscribe((s) => rows.forEach(([, get], i) => setText(cells[i], get(s))));
+  onStatus(
+    session,
+    (s) => rows.forEach(([, get], i) => setText(cells[i], get(s))),
+    () => cells.forEach((c) => setText(c, "")),
+  );
   return h("table", {}, body);
 }
 
@@ -108,7 +119,11 @@ function leds(
 ): HTMLElement {
   const { root, boxes } = checkboxes(n, label, () => undefined);
   boxes.forEach((b) => (b.disabled = true));
-  session.status.subscribe((s) => boxes.forEach((b, i) => (b.checked = ((get(s) >> i) & 1) === 1)));
+  onStatus(
+    session,
+    (s) => boxes.forEach((b, i) => (b.checked = ((get(s) >> i) & 1) === 1)),
+    () => boxes.forEach((b) => (b.checked = false)),
+  );
   return root;
 }
 
@@ -167,12 +182,15 @@ function ioTab(session: PlatformSession, say: (s: string) => void): HTMLElement 
         say,
       ),
   );
-  session.status.subscribe((s) =>
-    outs.boxes.forEach((b, i) => {
-      if (document.activeElement !== b) {
-        b.checked = ((s.ioDigitalOut >> i) & 1) === 1;
-      }
-    }),
+  onStatus(
+    session,
+    (s) =>
+      outs.boxes.forEach((b, i) => {
+        if (document.activeElement !== b) {
+          b.checked = ((s.ioDigitalOut >> i) & 1) === 1;
+        }
+      }),
+    () => outs.boxes.forEach((b) => (b.checked = false)),
   );
   return h(
     "div",
@@ -259,16 +277,26 @@ function usTab(session: PlatformSession, say: (s: string) => void): HTMLElement 
   );
   const distances = sensors.boxes.map(() => h("span", { class: "distance" }));
   sensors.boxes.forEach((b, i) => b.parentElement!.append(distances[i]));
-  session.status.subscribe((s) => {
-    const measuring = s.usStatus !== -1 && (s.usStatus & US_MEASURING) !== 0;
-    if (mask === null && measuring) {
-      mask = s.usDistance.reduce((m, d, i) => (d > 0 ? m | (1 << i) : m), 0);
-    }
-    sensors.boxes.forEach((b, i) => {
-      b.checked = mask === null ? false : ((mask >> i) & 1) === 1;
-      setText(distances[i], measuring ? `${s.usDistance[i]} mm` : "-");
-    });
-  });
+  onStatus(
+    session,
+    (s) => {
+      const measuring = s.usStatus !== -1 && (s.usStatus & US_MEASURING) !== 0;
+      if (mask === null && measuring) {
+        mask = s.usDistance.reduce((m, d, i) => (d > 0 ? m | (1 << i) : m), 0);
+      }
+      sensors.boxes.forEach((b, i) => {
+        b.checked = mask === null ? false : ((mask >> i) & 1) === 1;
+        setText(distances[i], measuring ? `${s.usDistance[i]} mm` : "-");
+      });
+    },
+    () => {
+      mask = null;
+      sensors.boxes.forEach((b, i) => {
+        b.checked = false;
+        setText(distances[i], "");
+      });
+    },
+  );
   const startBtn = h("button", { type: "button" });
   bind(startBtn, "hw.startUs");
   startBtn.addEventListener("click", start);
@@ -375,6 +403,13 @@ function canTab(session: PlatformSession, say: (s: string) => void): { root: HTM
     frames.splice(0, Math.max(0, frames.length - 2000));
     render();
   });
+  // a recording's jump: the frames of the last reply at the time shown, none before the first
+  session.seeked.subscribe((s) => {
+    if (s.reset) {
+      frames.splice(0, frames.length, ...(session.can.last?.messages ?? []));
+      render();
+    }
+  });
   const head = h("tr", {}, h("th", {}, "t (s)"), h("th", {}, "id"), h("th", {}, "data"));
   const root = h(
     "div",
@@ -442,6 +477,7 @@ function tcpClientTab(session: PlatformSession): HTMLElement {
 
 function tcpPlatformTab(session: PlatformSession): HTMLElement {
   const body = h("tbody");
+  session.seeked.subscribe(() => session.debug.last === undefined && body.replaceChildren());
   session.debug.subscribe((d) => {
     const rows: Array<[string, string]> = [
       ["received telegrams/s", String(d.tcpReceivedTelegramsPerS)],

@@ -10,6 +10,14 @@ export function logPanel(session: PlatformSession): HTMLElement {
   bind(pre, "menu.log", { text: false });
   let previous: string[] = [];
   const lines: string[] = [];
+  // a recording's jump (session.seeked): the queue of the last GET_DEBUG_DATA reply at the time shown, or nothing
+  session.seeked.subscribe((s) => {
+    if (s.reset) {
+      previous = session.debug.last?.protocolQueue.map((e) => e.entry) ?? [];
+      lines.splice(0, lines.length, ...previous);
+      pre.textContent = lines.join("\n");
+    }
+  });
   session.debug.subscribe((d) => {
     const queue = d.protocolQueue.map((e) => e.entry);
     // the queue is a sliding window of the last entries: append what follows the overlap with the last one

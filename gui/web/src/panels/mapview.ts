@@ -187,6 +187,28 @@ export class MapView {
     // the platform's own geometry (guide 5.9 Geometry, UltraSonic) for the footprint and the ultrasonic sensors
     s.params.subscribe((r) => this.renderer.setGeometry(r));
     s.edited.subscribe((e) => this.edited(e));
+    s.seeked.subscribe(() => this.seeked());
+  }
+
+  /** A recording's seek (session.seeked): what has no reply at the time shown is not drawn (the platform before
+   * the first status, a map before the first GET_MAP reply), as live before the first reply. */
+  private seeked(): void {
+    const s = this.session;
+    if (s.status.last === undefined && this.shown.status !== null) {
+      this.shown.status = null;
+      this.drawnKey = "";
+      this.renderer.invalidate();
+    }
+    if (s.map.last === undefined && this.shown.scene !== null && this.editing?.shows !== "map") {
+      this.shown.scene = null;
+      this.shown.bounds = null;
+      this.cache.sceneReplaced();
+      this.cache.documentsChanged();
+    }
+    if (s.roadmap.last === undefined && this.shown.roadmap !== null && this.editing?.shows !== "roadmap") {
+      this.shown.roadmap = null;
+      this.cache.documentsChanged();
+    }
   }
 
   private platformMap(m: GetMapReply): void {

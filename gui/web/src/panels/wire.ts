@@ -2,7 +2,7 @@
  * The wire inspector (beyond the original): every telegram this tab sent or received, decoded by the generated
  * codec and shown for a person: each field by its spec name, texts as text (the codec's canonical dump writes
  * them in hex), repeated groups by their count and first item. GET_STATUS polling can be hidden; the view can be
- * paused.
+ * paused. In a recording (session.seeked) a jump clears it and shows the telegrams before the time shown.
  */
 import { h } from "../dom";
 import { bind } from "../i18n/i18n";
@@ -75,13 +75,23 @@ export function wirePanel(session: PlatformSession): { root: HTMLElement; onShow
       text: `${new Date(r.t).toISOString().slice(11, 23)} ${r.dir === "out" ? "->" : "<-"} ${name} ${text}`,
     };
   };
+  let sinceSeek = 0; // the records published since the last seek: a recording publishes them before `seeked`
   session.wire.subscribe((r) => {
     records.push(line(r));
+    sinceSeek++;
     if (records.length > 2 * MAX_RECORDS) {
       records.splice(0, records.length - MAX_RECORDS);
     }
     dirty = true;
   }, false);
+  // a recording's jump: only its own frames, the telegrams before the time shown (a step adds to what is there)
+  session.seeked.subscribe((s) => {
+    if (s.reset) {
+      records.splice(0, Math.max(0, records.length - sinceSeek));
+      dirty = true;
+    }
+    sinceSeek = 0;
+  });
   const hidden = new Set(["CMD_GET_STATUS", "CMD_GET_POSITION", "CMD_GET_DEBUG_DATA", "CMD_GET_CAN_MESSAGES"]);
   const render = () => {
     if (!shown || !dirty || pause.checked) {

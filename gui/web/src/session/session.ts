@@ -62,7 +62,9 @@ export interface ControlEvent {
 }
 
 /** A recording's seek (session/recorded.ts; a live session never publishes it): the time shown (Unix s) and the
- * plotted replies (GET_STATUS, GET_POSITION) up to it; `reset`: what was drawn before is not the past of `t`. */
+ * plotted replies (GET_STATUS, GET_POSITION) up to it; `reset`: what was drawn before is not the past of `t`.
+ * It comes after the seek's replies and wire records: a topic without a value then (`last` undefined) has no reply
+ * at `t`, and a panel shows nothing for it; on a reset the wire's records since the previous seek are all of t's. */
 export interface Seeked {
   t: number;
   reset: boolean;

@@ -231,12 +231,16 @@ export class MapRenderer {
     const c = this.controller.cam;
     const overlay = overlayOf(this.options);
     const { status, truth: tr, hooks } = this.shown;
+    const live = status ? drawStatus(ctx, c, status, this.platform, this.usSensors, overlay) : null;
+    this.canvas.dataset.drawnScan = String(live?.scan ?? 0);
+    this.canvas.dataset.drawnUltrasonic = String(live?.ultrasonic ?? 0);
+    this.canvas.dataset.drawnPath = String(live?.path ?? 0);
+    this.canvas.dataset.drawnPlanobst = String(live?.planobst ?? 0);
+    // the platform drawn at its estimated pose (x, y mm, angle degrees); none before a first status
     if (status) {
-      const live = drawStatus(ctx, c, status, this.platform, this.usSensors, overlay);
-      this.canvas.dataset.drawnScan = String(live.scan);
-      this.canvas.dataset.drawnUltrasonic = String(live.ultrasonic);
-      this.canvas.dataset.drawnPath = String(live.path);
-      this.canvas.dataset.drawnPlanobst = String(live.planobst);
+      this.canvas.dataset.platform = `${status.estX},${status.estY},${status.estAngle / 1000}`;
+    } else {
+      delete this.canvas.dataset.platform;
     }
     if (tr?.event === "truth" && tr.true !== undefined && this.options.truth) {
       const [x, y, angle] = tr.true;
