@@ -1,6 +1,8 @@
-import type { IReadable } from "@mcap/core";
+import { type IReadable, McapIndexedReader, McapWriter } from "@mcap/core";
+import { compress as lz4 } from "lz4js";
 import { describe, expect, it } from "vitest";
 import { ChunkCache } from "../src/session/mcap_cache";
+import { decompressHandlers } from "../src/session/mcap_decompress";
 import { spread, telegramFrame } from "../src/session/recorded_mcap";
 
 const encode = (s: string) => new TextEncoder().encode(s);
@@ -89,12 +91,19 @@ describe("the chunk cache", () => {
     for (let k = 0; k < 3; k++) {
       const raw = await cache.read(100n, 200n);
       expect([...raw.subarray(0, 3)]).toEqual([100, 101, 102]);
-      const out = handlers.zstd(raw.subarray(10, 50), 1000n); // the chunk's records inside the read, as the reader parses them
+      // the reader hands the handler a copy of the chunk record's last field, its records
+      const out = handlers.zstd(raw.slice(150), 1000n);
       expect(out.length).toBe(1000);
-      expect(out[0]).toBe(110);
+      expect(out[0]).toBe(250);
     }
     expect(inner.reads).toBe(1);
     expect(decompressed).toBe(1);
+    // other bytes are decompressed, not answered from the kept chunk
+    expect(handlers.zstd(Uint8Array.of(7, 8, 9), 1000n)[0]).toBe(7);
+    const other = (await cache.read(1000n, 200n)).slice(150);
+    other[0] ^= 1; // not the read's tail
+    expect(handlers.zstd(other, 1000n)[0]).toBe(other[0]);
+    expect(decompressed).toBe(3);
   });
 
   it("forgets the least recently used reads past its size", async () => {
@@ -109,5 +118,64 @@ describe("the chunk cache", () => {
     expect(inner.reads).toBe(3);
     await cache.read(1000n, 400n);
     expect(inner.reads).toBe(4);
+  });
+});
+
+/** An MCAP file of `count` JSON messages in lz4 chunks of ~16 KB, as bytes. */
+async function lz4File(count: number): Promise<Uint8Array> {
+  const parts: Uint8Array[] = [];
+  let at = 0n;
+  const writable = {
+    position: () => at,
+    write: async (b: Uint8Array) => {
+      parts.push(b.slice());
+      at += BigInt(b.length);
+    },
+  };
+  const compressChunk = (data: Uint8Array) => ({ compression: "lz4", compressedData: lz4(data) });
+  const writer = new McapWriter({ writable, chunkSize: 16 * 1024, compressChunk });
+  await writer.start({ profile: "", library: "test" });
+  const channelId = await writer.registerChannel({
+    topic: "/t",
+    messageEncoding: "json",
+    schemaId: 0,
+    metadata: new Map(),
+  });
+  for (let i = 0; i < count; i++) {
+    const data = encode(JSON.stringify({ i, text: "pltf ".repeat(i % 50) }));
+    await writer.addMessage({ channelId, sequence: i, logTime: BigInt(i), publishTime: BigInt(i), data });
+  }
+  await writer.end();
+  const out = new Uint8Array(Number(at));
+  let k = 0;
+  for (const p of parts) {
+    out.set(p, k);
+    k += p.length;
+  }
+  return out;
+}
+
+describe("the chunk cache under @mcap/core's reader", () => {
+  it("decompresses each chunk once over two reads of the file, and the messages are the same", async () => {
+    const cache = new ChunkCache(bytesReadable(await lz4File(2000)));
+    const reader = await McapIndexedReader.Initialize({
+      readable: cache,
+      decompressHandlers: cache.decompressing(decompressHandlers),
+    });
+    const chunks = reader.chunkIndexes.length;
+    expect(chunks).toBeGreaterThan(3);
+    const read = async () => {
+      const out: string[] = [];
+      for await (const m of reader.readMessages({ validateCrcs: false })) {
+        out.push(new TextDecoder().decode(m.data));
+      }
+      return out;
+    };
+    const first = await read();
+    expect(cache.counts.decompressMisses).toBe(chunks);
+    expect(await read()).toEqual(first);
+    expect(first).toHaveLength(2000);
+    expect(cache.counts.decompressMisses).toBe(chunks);
+    expect(cache.counts.decompressHits).toBe(chunks);
   });
 });
