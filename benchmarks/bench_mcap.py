@@ -5,11 +5,10 @@ for an hour (72,000 requests and 72,000 replies), the platform driving a circle 
 with its 541-point scan (guide 6.4, as the reference server's scanner gives), written with the proxy's own
 SessionWriter. ``--quick``: one minute.
 
-Rows: ``pltf export --compression zstd|lz4|none`` (a subprocess each, as a user runs it), wall and CPU seconds,
-beside the baseline: the same conversion written through the ``mcap`` library's ``Writer`` (zstd at its fixed
-level 3), what the export wrote with before issue 35's last step (``library_export`` in a subprocess). Then
-reading the session alone (``read_records``: every line parsed and decoded again from its hex, what the export
-read it with before issue 35's speed-up); reading it as the export reads it now (``read_entries``: the telegram
+Rows: ``pltf export --compression zstd|lz4|none`` (a subprocess each, as a user runs it, the ``mcap`` library's
+writer), wall and CPU seconds, beside the baseline: reading the session alone (``read_records``: every line parsed
+and decoded again from its hex, what the export read it with before issue 35's speed-up, and what ``pltf replay``
+reads it with). Then reading it as the export reads it now (``read_entries``: the telegram
 JSON skipped, a status's scan as numpy columns); and a floor no reader of this format goes below: the file's
 lines read and each ``hex`` found and un-hexed, nothing decoded. Each MCAP file's size beside the session file's.
 One run of each. On a machine shared with others the CPU seconds are the figure that compares (the wall time is
@@ -27,14 +26,10 @@ import tempfile
 import time
 from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
-from typing import IO
-
-from mcap.writer import CompressionType, Writer
 
 from benchmarks.harness import Config, Row, Target, benchmark, make_row
 from pltf.conformance_tests.readings import canonical
-from pltf.proxy import mcap_export
-from pltf.proxy.mcap_export import CHUNK_BYTES, read_records
+from pltf.proxy.mcap_export import read_records
 from pltf.proxy.mcap_read import read_entries
 from pltf.proxy.session import Route, SessionWriter
 from pltf.proxy.tap import OPEN, Record, Tap
@@ -44,14 +39,12 @@ HZ = 20
 HOUR_S = 3600.0
 TARGET_S = 10.0
 ROOT = Path(__file__).resolve().parents[1]
-LIBRARY_EXPORT = "import sys; from benchmarks.bench_mcap import library_export; library_export(sys.argv[1:])"
 ROOM = (20000.0, 12000.0)  # mm
 SCAN = [math.radians(-135 + 0.5 * i) for i in range(541)]  # the scanner's bearings (fake_hardware)
 T0 = 1_795_000_000.0
 LAP = 60 * HZ  # a lap of the circle a minute
 REPLY_AFTER = 0.002  # s
-COMPRESSIONS = ("zstd", "lz4", "none")  # pltf export --compression; the first is the default
-LIBRARY = "the same export through the mcap library's Writer (zstd level 3), as before"
+COMPRESSIONS = ("lz4", "zstd", "none")  # pltf export --compression; the first is the default
 READ = "reading the session alone (read_records)"
 ENTRIES, FLOOR = "reading it as the export does (read_entries)", "the lines read and un-hexed only"
 
@@ -113,37 +106,11 @@ def export_subject(compression: str) -> str:
     return f"pltf export --mcap --compression {compression}"
 
 
-class LibraryWriter:
-    """proxy/mcap_writer.McapWriter's interface over the ``mcap`` library's ``Writer`` (chunks of the export's
-    size, zstd at the library's level 3): the writer the export used before, for the baseline."""
-
-    def __init__(self, stream: IO[bytes], compression: str = "zstd", chunk_size: int = CHUNK_BYTES) -> None:
-        self._writer = Writer(stream, chunk_size=chunk_size, compression=CompressionType.ZSTD)
-
-    def start(self, profile: str = "", library: str = "pltf") -> None:
-        self._writer.start(profile=profile, library=library)
-
-    def register_schema(self, name: str, encoding: str, data: bytes) -> int:
-        return self._writer.register_schema(name, encoding, data)  # type: ignore[no-any-return,no-untyped-call]
-
-    def register_channel(self, topic: str, message_encoding: str, schema_id: int) -> int:
-        return self._writer.register_channel(topic, message_encoding, schema_id)
-
-    def add(self, channel: int, log_time: int, data: bytes, publish_time: int, sequence: int) -> None:
-        self._writer.add_message(channel, log_time, data, publish_time, sequence)
-
-    def finish(self) -> None:
-        self._writer.finish()  # type: ignore[no-untyped-call]
-
-
-def _export(session: Path, out: Path, compression: str | None) -> tuple[float, float]:
-    """Wall and CPU seconds of ``pltf export`` as a user runs it (``compression`` None: the baseline)."""
+def _export(session: Path, out: Path, compression: str) -> tuple[float, float]:
+    """Wall and CPU seconds of ``pltf export`` as a user runs it."""
     before, t = resource.getrusage(resource.RUSAGE_CHILDREN), time.perf_counter()
-    if compression is None:
-        cmd = [sys.executable, "-c", LIBRARY_EXPORT, str(session), str(out)]
-    else:
-        cmd = [sys.executable, "-m", "pltf.cli.main", "export", str(session), "--mcap", str(out)]
-        cmd += ["--compression", compression]
+    cmd = [sys.executable, "-m", "pltf.cli.main", "export", str(session), "--mcap", str(out)]
+    cmd += ["--compression", compression]
     subprocess.run(cmd, check=True, capture_output=True, cwd=ROOT)
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     return time.perf_counter() - t, after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime
@@ -168,10 +135,10 @@ def unhexed(session: Path) -> Iterator[bytes]:
 
 @benchmark()
 def export_hour(config: Config) -> list[Row]:
-    """pltf export --mcap of an hour of 20 Hz GET_STATUS with scans (<= 10 s), each compression beside the mcap
-    library's writer and beside reading the session."""
+    """pltf export --mcap of an hour of 20 Hz GET_STATUS with scans (<= 10 s), each compression beside reading
+    the session."""
     seconds = 60.0 if config.quick else HOUR_S
-    exports: dict[str, str | None] = {export_subject(c): c for c in COMPRESSIONS} | {LIBRARY: None}
+    exports = {export_subject(c): c for c in COMPRESSIONS}
     with tempfile.TemporaryDirectory() as tmp:
         session = Path(tmp) / "hour.jsonl"
         telegrams = write_recording(session, seconds)
@@ -190,7 +157,7 @@ def export_hour(config: Config) -> list[Row]:
     target = None if config.quick else Target("value", "<=", TARGET_S)
     rows = []
     for subject in exports:
-        for metric, value, base in zip(("wall_seconds", "cpu_seconds"), times[subject], times[LIBRARY], strict=True):
+        for metric, value, base in zip(("wall_seconds", "cpu_seconds"), times[subject], times[READ], strict=True):
             rows.append(
                 make_row(
                     name,
@@ -199,12 +166,12 @@ def export_hour(config: Config) -> list[Row]:
                     value,
                     "s",
                     higher_is_better=False,
-                    baseline_subject=None if subject == LIBRARY else LIBRARY,
-                    baseline_value=None if subject == LIBRARY else base,
+                    baseline_subject=READ,
+                    baseline_value=base,
                     target=target if subject == export_subject(COMPRESSIONS[0]) else None,
                 )
             )
-    for subject in (READ, ENTRIES, FLOOR):
+    for subject in (ENTRIES, FLOOR):
         rows.append(make_row(name, subject, "wall_seconds", times[subject][0], "s", higher_is_better=False))
         rows.append(make_row(name, subject, "cpu_seconds", times[subject][1], "s", higher_is_better=False))
     for subject in exports:
@@ -221,10 +188,3 @@ def export_hour(config: Config) -> list[Row]:
             )
         )
     return rows
-
-
-def library_export(argv: list[str]) -> None:
-    """``python -c LIBRARY_EXPORT SESSION OUT``: the export through the mcap library's writer (LibraryWriter
-    in place of proxy/mcap_writer.McapWriter), the baseline's subprocess."""
-    mcap_export.McapWriter = LibraryWriter  # type: ignore[misc,assignment]
-    mcap_export.export_session(Path(argv[0]), Path(argv[1]))

@@ -27,8 +27,8 @@ def add_export_arguments(p: argparse.ArgumentParser) -> None:
         "--compression",
         choices=COMPRESSION_NAMES,
         default=DEFAULT_COMPRESSION,
-        help="how each chunk of the MCAP file is compressed (default: %(default)s; lz4 is larger and a little "
-        "faster; Foxglove reads all three)",
+        help="how each chunk of the MCAP file is compressed (default: %(default)s; zstd makes a smaller file more "
+        "slowly; Foxglove reads all three)",
     )
     p.epilog = exit_status(ok="written", usage="usage error: an unreadable session file, the output not writable")
 

@@ -72,8 +72,8 @@ def add_proxy_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument(
         "--compression",
-        choices=("zstd", "lz4", "none"),  # proxy/mcap_writer.py COMPRESSIONS (not imported: the mcap library is lazy)
-        default="zstd",
+        choices=("lz4", "zstd", "none"),  # proxy/mcap_writer.py COMPRESSIONS (not imported: the mcap library is lazy)
+        default="lz4",  # proxy/mcap_export.py DEFAULT_COMPRESSION
         help="how --mcap's chunks are compressed, as `pltf export --compression` (default: %(default)s)",
     )
     p.add_argument(

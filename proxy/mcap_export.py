@@ -1,8 +1,8 @@
 """A pltf proxy recording as MCAP (issue 35): for Foxglove, Lichtblick and the ROS 2 tools.
 
-Sans-IO apart from the files it is given: records in (proxy/tap.py), MCAP out through mcap_writer.py (the
-layout the ``mcap`` library's writer makes: chunked, with a summary section and its indexes; each chunk compressed
-with zstd at level 1 by default, or lz4, or not at all: ``--compression``). Used by ``pltf export
+Sans-IO apart from the files it is given: records in (proxy/tap.py), MCAP out through mcap_writer.py (the ``mcap``
+library's writer: chunked, with a summary section and its indexes; each chunk compressed with lz4 by default, or
+zstd, or not at all: ``--compression``). Used by ``pltf export
 SESSION --mcap OUT`` (a session file read line by line, put in time order) and, live, by ``pltf proxy --mcap
 OUT`` (a sink of the recorder).
 
@@ -52,7 +52,7 @@ from pltf.proxy import mcap_proto
 from pltf.proxy.mcap_read import Entry, entry_of, read_entries
 from pltf.proxy.mcap_schemas import schema_bytes, schema_encoding
 from pltf.proxy.mcap_wire import fields_text
-from pltf.proxy.mcap_writer import COMPRESSIONS, McapWriter
+from pltf.proxy.mcap_writer import CHUNK_BYTES, COMPRESSIONS, McapWriter
 from pltf.proxy.session import FORMAT, VERSION, SessionError, _lines, _record
 from pltf.proxy.tap import CLOSE, MEMO_BYTES, MEMO_FRAMES, OPEN, Record
 from pltf.proxy.view import ARROW, format_record
@@ -75,8 +75,7 @@ CHANNELS = {  # topic: schema
 }
 PROTOBUF = ("/scan",)  # channels whose messages are protobuf (mcap_proto.py); the others JSON
 UNSTAMPED = ("/map",)  # foxglove.SceneUpdate has no timestamp of its own (its entities have)
-CHUNK_BYTES = 4 * 1024 * 1024  # the writer's chunk size (the mcap library's default is 1 MiB)
-DEFAULT_COMPRESSION = "zstd"  # at mcap_writer.ZSTD_LEVEL: the smallest file within the hour's 10 s (mcap.md)
+DEFAULT_COMPRESSION = "lz4"  # within the hour's 10 s with the mcap library's writer; zstd: 0.58x the size (mcap.md)
 COMPRESSION_NAMES = tuple(COMPRESSIONS)
 Message = tuple[str, bytes]  # (topic, the message after its timestamp: see ``encode``)
 Ordered = TypeVar("Ordered", Record, Entry, Record | Entry)

@@ -101,13 +101,13 @@ def recorded(tmp_path_factory: pytest.TempPathFactory) -> Path:
             proc.kill()
     assert proc.returncode == 0 and "Traceback" not in err, err
     assert pltf(["export", str(out / "session.jsonl"), "--mcap", str(out / "export.mcap")]) == 0
-    for compression in ("lz4", "none"):
+    for compression in ("zstd", "none"):  # the default is lz4
         args = ["export", str(out / "session.jsonl"), "--mcap", str(out / f"export-{compression}.mcap")]
         assert pltf([*args, "--compression", compression]) == 0
     return out
 
 
-EXPORTS = {"export.mcap": "zstd", "export-lz4.mcap": "lz4", "export-none.mcap": "", "live.mcap": "zstd"}  # chunks
+EXPORTS = {"export.mcap": "lz4", "export-zstd.mcap": "zstd", "export-none.mcap": "", "live.mcap": "lz4"}  # chunks
 
 
 def _telegrams(session: Session) -> list[Record]:
@@ -228,10 +228,10 @@ def test_the_pose_messages_are_the_get_position_replies(recorded: Path) -> None:
 
 
 def test_each_compression_carries_the_same_messages(recorded: Path) -> None:
-    zstd = _python_read(recorded / "export.mcap")["messages"]
-    for which in ("export-lz4.mcap", "export-none.mcap"):
-        assert _python_read(recorded / which)["messages"] == zstd, which
-    sizes = [(recorded / w).stat().st_size for w in ("export.mcap", "export-lz4.mcap", "export-none.mcap")]
+    lz4 = _python_read(recorded / "export.mcap")["messages"]
+    for which in ("export-zstd.mcap", "export-none.mcap"):
+        assert _python_read(recorded / which)["messages"] == lz4, which
+    sizes = [(recorded / w).stat().st_size for w in ("export-zstd.mcap", "export.mcap", "export-none.mcap")]
     assert sizes == sorted(sizes), sizes  # zstd smallest, lz4, none largest
 
 
