@@ -30,6 +30,7 @@ from pltf.fuzz.parallel import CUT_GRACE, END_MINIMIZE, TICK, campaign_end, stat
 from pltf.fuzz.parallel_store import Store
 from pltf.fuzz.parallel_view import CampaignView
 from pltf.fuzz.parallel_worker import run_worker, worker_seed
+from pltf.harness.ray_actors import kill_actors
 
 STARTS = 3  # starts of one worker at most (the first and two after losing it)
 POLL_WAIT = 0.25  # s an actor holds a poll open for the worker's next events (no busy polling)
@@ -193,11 +194,7 @@ class RayCampaign:
             self.polls[self.actors[k].poll.remote(view.drain(k))] = k
 
     def close(self) -> None:
-        for actor in self.actors.values():
-            try:
-                self.ray.kill(actor)
-            except Exception:  # an actor already gone: nothing more to end
-                continue
+        kill_actors(self.ray, self.actors.values())
         self.actors.clear()
         self.polls.clear()
 

@@ -38,6 +38,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+from pltf.harness.ray_actors import kill_actors
 from pltf.reference_server.control_loop import ControlLoop
 from pltf.reference_server.fleet.bodies import Bodies
 from pltf.reference_server.fleet.config import FleetError, FleetSpec
@@ -304,11 +305,7 @@ class Driver:
         return 0
 
     def close(self) -> None:
-        for actor in self.actors.values():
-            try:
-                self.ray.kill(actor)
-            except Exception:  # an actor already gone: nothing more to end
-                continue
+        kill_actors(self.ray, self.actors.values())
         if self.connected_here:
             self.ray.shutdown()
 
