@@ -10,9 +10,9 @@ A seek is timed in the page, as a user's drag of the scrubber ends: from the tim
 topics) until the next animation frame has been drawn (the map view draws on requestAnimationFrame; a task after
 it runs once that frame is done). Times are uniform at random over the recording (seeded), SEEKS of them.
 Rows: seek p50 and p95 of the hour beside the minute's; the gateway's start-up (indexing the file, from start to
-"serving"), and the session file's size. The same hour exported with ``pltf export --mcap`` (read in the page with
-@mcap/core, recorded_mcap.ts), in the same run: its seek p50/p95 beside the session file's, and its opening (page
-load until the timeline is there: the summary and the first and last chunk) beside the session file's.
+"serving"), and the session file's size. The same hour exported with ``pltf export --mcap --compression C`` for each of
+COMPRESSIONS (read in the page with @mcap/core, recorded_mcap.ts), in the same run: its seek p50/p95 beside the
+session file's, and its opening (page load until the timeline is there: the summary and the first and last chunk).
 """
 
 from __future__ import annotations
@@ -38,6 +38,8 @@ VIEWPORT = {"width": 1400, "height": 900}
 TARGET_MS = 100.0
 SEEKS = 100
 HOUR_S, MINUTE_S = 3600.0, 60.0
+# pltf export --compression: each is seeked in the same run (zstd is smaller, lz4 decompresses ~9x faster in the page)
+COMPRESSIONS = ("zstd", "lz4")
 
 SEEK_JS = """async (times) => {
   const tl = window.pltf.timeline;
@@ -88,6 +90,32 @@ def _seeks(session: Path, seconds: float, seed: int) -> tuple[list[float], float
         return list(pg.evaluate(SEEK_JS, times)), started
 
 
+def _mcap_rows(
+    config: Config, long_s: float, compression: str, size: int, ms: list[float], opening: float, session_ms: list[float]
+) -> list[Row]:
+    """The MCAP export's rows (one compression): seek p50/p95 beside the session file's, the worst, the opening."""
+    name = f"scrub.seek_and_draw_mcap ({long_s / 60:g} min at 20 Hz, MCAP {compression} {size / 1e6:.0f} MB)"
+    ours = f"{long_s:g} s recording, its MCAP export ({compression})"
+    rows = [
+        make_row(
+            name,
+            ours,
+            f"seek_{metric}",
+            _percentile(ms, q),
+            "ms",
+            higher_is_better=False,
+            baseline_subject=f"{long_s:g} s recording, the session file",
+            baseline_value=_percentile(session_ms, q),
+            target=Target("value", "<=", TARGET_MS) if metric == "p95" and not config.quick else None,
+        )
+        for metric, q in (("p50", 0.5), ("p95", 0.95))
+    ]
+    rows.append(make_row(name, ours, "seek_max", max(ms), "ms", higher_is_better=False))
+    opened = f"opening the MCAP ({compression}) in the page (until the timeline shows)"
+    rows.append(make_row(name, opened, "seconds", opening, "s", higher_is_better=False))
+    return rows
+
+
 @benchmark()
 def seek_and_draw(config: Config) -> list[Row]:
     """Seek a one-hour 20 Hz recording to random times and draw (p95 <= 100 ms), beside a one-minute one."""
@@ -99,11 +127,12 @@ def seek_and_draw(config: Config) -> list[Row]:
         size = long_file.stat().st_size
         short_ms, short_start = _seeks(short_file, short_s, 1)
         long_ms, long_start = _seeks(long_file, long_s, 1)
-        mcap = Path(tmp) / "long.mcap"
-        export = [sys.executable, "-m", "pltf.cli.main", "export", str(long_file), "--mcap", str(mcap)]
-        subprocess.run(export, check=True, capture_output=True)
-        mcap_size = mcap.stat().st_size
-        mcap_ms, mcap_open = _seeks(mcap, long_s, 1)
+        mcaps = {}
+        for compression in COMPRESSIONS:
+            mcap = Path(tmp) / f"long_{compression}.mcap"
+            export = [sys.executable, "-m", "pltf.cli.main", "export", str(long_file), "--mcap", str(mcap)]
+            subprocess.run([*export, "--compression", compression], check=True, capture_output=True)
+            mcaps[compression] = (mcap.stat().st_size, *_seeks(mcap, long_s, 1))
     name = f"scrub.seek_and_draw ({long_s / 60:g} min at 20 Hz, {size / 1e6:.0f} MB)"
     ours, base = f"{long_s:g} s recording", f"{short_s:g} s recording"
     rows = [
@@ -133,30 +162,6 @@ def seek_and_draw(config: Config) -> list[Row]:
             baseline_value=short_start,
         )
     )
-    mcap_name = f"scrub.seek_and_draw_mcap ({long_s / 60:g} min at 20 Hz, MCAP {mcap_size / 1e6:.0f} MB)"
-    for metric, q in (("p50", 0.5), ("p95", 0.95)):
-        rows.append(
-            make_row(
-                mcap_name,
-                f"{long_s:g} s recording, its MCAP export",
-                f"seek_{metric}",
-                _percentile(mcap_ms, q),
-                "ms",
-                higher_is_better=False,
-                baseline_subject=f"{ours}, the session file",
-                baseline_value=_percentile(long_ms, q),
-                target=Target("value", "<=", TARGET_MS) if metric == "p95" and not config.quick else None,
-            )
-        )
-    rows.append(make_row(mcap_name, "its MCAP export", "seek_max", max(mcap_ms), "ms", higher_is_better=False))
-    rows.append(
-        make_row(
-            mcap_name,
-            "opening the MCAP in the page (until the timeline shows)",
-            "seconds",
-            mcap_open,
-            "s",
-            higher_is_better=False,
-        )
-    )
+    for compression, (mcap_size, mcap_ms, mcap_open) in mcaps.items():
+        rows += _mcap_rows(config, long_s, compression, mcap_size, mcap_ms, mcap_open, long_ms)
     return rows
