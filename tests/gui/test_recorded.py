@@ -205,7 +205,9 @@ def test_a_click_on_a_mark_goes_there_and_the_wire_shows_the_telegrams_before_it
     page.get_by_role("tab", name="Wire Inspector").click()
     page.get_by_role("checkbox", name=re.compile("Hide polling")).uncheck()
     frames = [r for r in read_session(recorded[0]).records if r.kind == FRAME and r.telegram is not None]
-    want = [_wire_line(r) for r in frames if at - 1 < r.time <= at + 5e-7]  # times are µs[-100:]
+    # the mark's time is its command's to the µs (an MCAP's log times are whole µs; the session's are rounded):
+    # 1 µs of slack after it, so the command itself is among them
+    want = [_wire_line(r) for r in frames if at - 1 < r.time <= at + 1e-6][-100:]
     assert want, at
     log = page.get_by_role("log", name="Wire Inspector")
 
@@ -269,13 +271,16 @@ def test_a_jump_shows_the_state_at_its_time_only(page: Any, shown: tuple[Gateway
     page.get_by_role("checkbox", name=re.compile("Hide polling")).uncheck()
 
     def wire_at(at: float) -> list[str]:
-        return [_wire_line(r) for r in rec.frames if at - 1 < r.time <= at + 5e-7][-100:]
+        # data-time is the recording's time to the µs (an MCAP's log times are whole µs): 1 µs of slack after it
+        return [_wire_line(r) for r in rec.frames if at - 1 < r.time <= at + 1e-6][-100:]
 
     first_status = rec.status[0][0]
     for rel in (0.55 * (rec.end - rec.start), 0.0, 0.3 * (rec.end - rec.start)):
         at = scrub(page, timeline, start, round(rel, 2))
         want = wire_at(at)
         wait_for(lambda want=want: _wire_lines(page) == want, what=f"only the wire's {len(want)} lines before {at}")
+        page.wait_for_timeout(700)  # the plots' history comes 250 ms after a jump: the wire keeps its lines
+        assert _wire_lines(page) == want, at
         if at >= first_status:
             pose = rec.pose_at(at)
             wait_for(

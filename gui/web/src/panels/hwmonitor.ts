@@ -405,7 +405,7 @@ function canTab(session: PlatformSession, say: (s: string) => void): { root: HTM
   });
   // a recording's jump: the frames of the last reply at the time shown, none before the first
   session.seeked.subscribe((s) => {
-    if (s.reset) {
+    if (s.reset && !s.plotsOnly) {
       frames.splice(0, frames.length, ...(session.can.last?.messages ?? []));
       render();
     }

@@ -12,7 +12,7 @@ export function logPanel(session: PlatformSession): HTMLElement {
   const lines: string[] = [];
   // a recording's jump (session.seeked): the queue of the last GET_DEBUG_DATA reply at the time shown, or nothing
   session.seeked.subscribe((s) => {
-    if (s.reset) {
+    if (s.reset && !s.plotsOnly) {
       previous = session.debug.last?.protocolQueue.map((e) => e.entry) ?? [];
       lines.splice(0, lines.length, ...previous);
       pre.textContent = lines.join("\n");

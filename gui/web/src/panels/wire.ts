@@ -86,6 +86,9 @@ export function wirePanel(session: PlatformSession): { root: HTMLElement; onShow
   }, false);
   // a recording's jump: only its own frames, the telegrams before the time shown (a step adds to what is there)
   session.seeked.subscribe((s) => {
+    if (s.plotsOnly) {
+      return;
+    }
     if (s.reset) {
       records.splice(0, Math.max(0, records.length - sinceSeek));
       dirty = true;

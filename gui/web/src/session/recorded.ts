@@ -218,7 +218,7 @@ export class RecordedSession extends PlatformSession {
     }
     const frames = await this.source.history(t, PLOT_SPAN_S, PLOT_POINTS).catch(() => []);
     if (jump === this.jumps) {
-      this.seeked.publish({ t, reset: true, history: this.plotted(frames) });
+      this.seeked.publish({ t, reset: true, history: this.plotted(frames), plotsOnly: true });
     }
   }
 

@@ -69,6 +69,9 @@ export interface Seeked {
   t: number;
   reset: boolean;
   history: Array<{ t: number; telegram: Telegram }>;
+  /** the plots' window of a jump, read after it (session/recorded.ts): nothing else changed, the other panels keep
+   * what they show */
+  plotsOnly?: boolean;
 }
 
 export interface WireRecord {
