@@ -23,7 +23,7 @@ from benchmarks import construct_defs as cs
 from benchmarks import handwritten as hw
 from benchmarks.harness import Config, Row, Target, benchmark, median_rates, rate_rows
 from pltf.spec.codec import REPLIES, REQUESTS, TelegramDecoder, decode_frame, encode
-from pltf.spec.telegram import Telegram
+from pltf.spec.telegram import Telegram, plain
 
 OURS = "pltf.spec.codec"
 HANDWRITTEN = "handwritten"
@@ -173,7 +173,7 @@ class Case:
             if subject == OURS:
                 same = got == ours
             elif subject == HANDWRITTEN:
-                same = got._fields == ours._fields and tuple(got) == tuple(ours) and _plain(got) == expected
+                same = got._fields == ours._fields and tuple(got) == tuple(ours) and plain(got) == expected
             else:
                 same = cs.plain(got) == expected
             if not same:
@@ -181,16 +181,6 @@ class Case:
         for subject, enc in self.encoders().items():
             if enc() != self.frame:
                 raise AssertionError(f"{self.name}: {subject} encodes to other bytes")
-
-
-def _plain(value: Any) -> Any:
-    """A hand-written result in the shape of ``Telegram.as_dict()``."""
-    if isinstance(value, tuple):
-        fields = getattr(value, "_fields", None)
-        if fields is not None:
-            return {k: _plain(v) for k, v in zip(fields, value, strict=True)}
-        return [_plain(v) for v in value]
-    return value
 
 
 def cases() -> dict[str, Case]:

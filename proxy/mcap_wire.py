@@ -17,7 +17,7 @@ from typing import Any
 
 from pltf.proxy.view import ITEMS_SHOWN, format_fields
 from pltf.spec.model import FieldDef, load_enums
-from pltf.spec.telegram import Telegram, user_fields
+from pltf.spec.telegram import Telegram, plain, user_fields
 
 Formatter = Callable[[Telegram, Mapping[str, int]], str]
 NUMBERS = ("BYTE", "BOOL", "INT16", "INT", "DOUBLE")  # spec/compiler.py WIRE: shown as repr(value)
@@ -34,23 +34,13 @@ class Counted(list[Any]):
         return self.total
 
 
-def _plain(value: Any) -> Any:
-    """A value as ``Telegram.as_dict`` gives it (groups as lists of dicts, arrays as lists, bytes as hex)."""
-    if isinstance(value, tuple):
-        fields = getattr(value, "_fields", None)
-        if fields is not None:
-            return {k: _plain(v) for k, v in zip(fields, value, strict=True)}
-        return [_plain(v) for v in value]
-    return value.hex() if isinstance(value, bytes) else value
-
-
 def _other(name: str, value: Any, counts: Mapping[str, int]) -> str:
     """The view's words for a field that is not a plain number: a group (cut to ITEMS_SHOWN items, with its total
     count), an array, a string, a payload."""
     if isinstance(value, tuple) and value and hasattr(value[0], "_fields"):
         total = counts.get(name, len(value))
-        return format_fields({"fields": {name: Counted([_plain(v) for v in value[:ITEMS_SHOWN]], total)}})
-    return format_fields({"fields": {name: _plain(value)}})
+        return format_fields({"fields": {name: Counted([plain(v) for v in value[:ITEMS_SHOWN]], total)}})
+    return format_fields({"fields": {name: plain(value)}})
 
 
 def _item_formatter(group: FieldDef) -> Callable[[Any], str] | None:

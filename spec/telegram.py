@@ -38,18 +38,19 @@ class Telegram(tuple):  # type: ignore[type-arg]
 
     def as_dict(self) -> dict[str, Any]:
         """The fields as a plain dict (groups as lists of dicts, arrays as lists): the JSON shape."""
-        return {name: _plain(value) for name, value in zip(self._fields, self, strict=True)}
+        return {name: plain(value) for name, value in zip(self._fields, self, strict=True)}
 
     def replace(self, **changes: Any) -> Telegram:
         return type(self)._make(changes.pop(n, v) for n, v in zip(self._fields, self, strict=True))  # type: ignore[attr-defined, no-any-return]
 
 
-def _plain(value: Any) -> Any:
+def plain(value: Any) -> Any:
+    """A field's value as ``Telegram.as_dict`` gives it (groups as lists of dicts, arrays as lists, bytes as hex)."""
     if isinstance(value, tuple):
         fields = getattr(value, "_fields", None)
         if fields is not None:
-            return {k: _plain(v) for k, v in zip(fields, value, strict=True)}
-        return [_plain(v) for v in value]
+            return {k: plain(v) for k, v in zip(fields, value, strict=True)}
+        return [plain(v) for v in value]
     if isinstance(value, bytes):
         return value.hex()
     return value

@@ -31,7 +31,7 @@ from benchmarks.harness import ROW_KEYS
 from pltf.spec import errors
 from pltf.spec.codec import REPLIES, REQUESTS, TelegramDecoder, decode_frame, encode
 from pltf.spec.strategies import telegram_strategy
-from pltf.spec.telegram import Telegram
+from pltf.spec.telegram import Telegram, plain
 from tests.benchrun import quick
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -103,21 +103,12 @@ def test_only_rejects_an_unknown_benchmark(tmp_path: Path) -> None:
 # ---------------------------------------------------------------------------------------------- fairness
 
 
-def _plain(value: Any) -> Any:
-    if isinstance(value, tuple):
-        fields = getattr(value, "_fields", None)
-        if fields is not None:
-            return {k: _plain(v) for k, v in zip(fields, value, strict=True)}
-        return [_plain(v) for v in value]
-    return value
-
-
 def _assert_same(frame: bytes, direction: str, case: Case) -> None:
     ours = decode_frame(frame, direction)  # type: ignore[arg-type]
     hand = case.hw_decode(frame)
     assert hand._fields == ours._fields
     assert tuple(hand) == tuple(ours)
-    assert _plain(hand) == ours.as_dict()  # same field names inside the groups too
+    assert plain(hand) == ours.as_dict()  # same field names inside the groups too
     assert cs.plain(case.cs_frame.parse(frame)) == ours.as_dict()
     assert cs.plain(case.cs_compiled.parse(frame)) == ours.as_dict()
     assert case.hw_encode(hand) == frame
