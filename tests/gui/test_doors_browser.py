@@ -30,7 +30,7 @@ VIEWING = {
     "Socket", "View", "Parameter", "Edit", "Open Socket", "Open Socket At", "Close Socket", "Map",
     "Hardware Monitor", "View Options", "Plots", "Log", "Wire Inspector", "Platform parameters", "Edit Map",
     "Edit Roadmap", "Refresh map", "Zoom all", "Zoom in", "Zoom out", "Zoom to area", "Pan", "Read all",
-    "Filter (id, . = any digit)",
+    "Filter (id, . = any digit)", "Keyboard shortcuts (?)",
 }  # fmt: skip
 
 # every control in the page, hidden panes included, that is not disabled (a disabled fieldset disables its own)
@@ -38,7 +38,8 @@ _ENABLED = """() => [...document.querySelectorAll("button, input, select, textar
   .filter((e) => !e.matches(":disabled") && e.getAttribute("aria-disabled") !== "true")
   .map((e) => ({tag: e.tagName.toLowerCase(), type: e.getAttribute("type") || "", role: e.getAttribute("role") || "",
     name: e.getAttribute("aria-label") || e.textContent.trim(),
-    editor: e.closest(".map-editor, .roadmap-editor") !== null, pane: e.closest("[id^=pane-]")?.id || ""}))"""
+    editor: e.closest(".map-editor, .roadmap-editor") !== null, pane: e.closest("[id^=pane-]")?.id || "",
+    help: e.closest("[role=dialog].help") !== null}))"""
 # the docked windows that only show: their switches change the page (the planning obstacles' switch sets a
 # parameter of the platform: a command, so it must be disabled like the rest)
 SHOWING = {"pane-view-options", "pane-wire", "pane-plots", "pane-log"}
@@ -180,8 +181,9 @@ def test_read_only_offers_no_command_and_the_gateway_refuses_one_sent_by_hand(
 
 
 def _viewing(control: dict[str, Any]) -> bool:
-    """A tab of a docked window, a view option, an editor's drafting tool: they change the page, not the platform."""
-    if control["role"] == "tab" or (control["pane"] in SHOWING and control["name"] != PLAN_OBST):
+    """A tab of a docked window, a view option, an editor's drafting tool, the keyboard help: they change the page,
+    not the platform."""
+    if control["role"] == "tab" or control["help"] or (control["pane"] in SHOWING and control["name"] != PLAN_OBST):
         return True
     return bool(control["editor"]) and control["name"] != "Send to platform"
 
