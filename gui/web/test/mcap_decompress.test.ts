@@ -1,7 +1,7 @@
-import { McapStreamReader, McapWriter, type McapTypes } from "@mcap/core";
-import { compress as lz4 } from "lz4js";
+import { McapStreamReader, type McapTypes } from "@mcap/core";
 import { describe, expect, it } from "vitest";
 import { decompressHandlers } from "../src/session/mcap_decompress";
+import { mcapFile } from "./mcap_file";
 
 // what pltf export writes its chunks with: python-lz4's lz4.frame.compress (linked 64 KB blocks) and
 // python-zstandard at level 1, of the text below (fixed bytes, made once)
@@ -18,46 +18,6 @@ function text(items: number): Uint8Array {
   let s = "";
   for (let i = 0; i < items; i++) s += `pltf ${String(i % 100).padStart(5, "0")};`;
   return new TextEncoder().encode(s);
-}
-
-class Sink {
-  parts: Uint8Array[] = [];
-  position(): bigint {
-    return BigInt(this.parts.reduce((n, p) => n + p.length, 0));
-  }
-  async write(buffer: Uint8Array): Promise<void> {
-    this.parts.push(buffer.slice());
-  }
-  bytes(): Uint8Array {
-    const out = new Uint8Array(Number(this.position()));
-    let at = 0;
-    for (const p of this.parts) {
-      out.set(p, at);
-      at += p.length;
-    }
-    return out;
-  }
-}
-
-/** An MCAP file of `count` messages whose chunks are compressed as `compression` says. */
-async function mcapFile(compression: "lz4" | "", count: number): Promise<Uint8Array> {
-  const sink = new Sink();
-  const compressChunk = (data: Uint8Array) =>
-    compression === "lz4" ? { compression, compressedData: lz4(data) } : { compression, compressedData: data };
-  const writer = new McapWriter({ writable: sink, chunkSize: 16 * 1024, compressChunk });
-  await writer.start({ profile: "", library: "test" });
-  const channelId = await writer.registerChannel({
-    topic: "/t",
-    messageEncoding: "json",
-    schemaId: 0,
-    metadata: new Map(),
-  });
-  for (let i = 0; i < count; i++) {
-    const data = new TextEncoder().encode(JSON.stringify({ i, text: "pltf ".repeat(i % 50) }));
-    await writer.addMessage({ channelId, sequence: i, logTime: BigInt(i), publishTime: BigInt(i), data });
-  }
-  await writer.end();
-  return sink.bytes();
 }
 
 function read(file: Uint8Array): { chunks: string[]; messages: number[] } {

@@ -1,9 +1,9 @@
-import { type IReadable, McapIndexedReader, McapWriter } from "@mcap/core";
-import { compress as lz4 } from "lz4js";
+import { type IReadable, McapIndexedReader } from "@mcap/core";
 import { describe, expect, it } from "vitest";
 import { ChunkCache } from "../src/session/mcap_cache";
 import { decompressHandlers } from "../src/session/mcap_decompress";
 import { spread, telegramFrame } from "../src/session/recorded_mcap";
+import { mcapFile } from "./mcap_file";
 
 const encode = (s: string) => new TextEncoder().encode(s);
 
@@ -121,43 +121,9 @@ describe("the chunk cache", () => {
   });
 });
 
-/** An MCAP file of `count` JSON messages in lz4 chunks of ~16 KB, as bytes. */
-async function lz4File(count: number): Promise<Uint8Array> {
-  const parts: Uint8Array[] = [];
-  let at = 0n;
-  const writable = {
-    position: () => at,
-    write: async (b: Uint8Array) => {
-      parts.push(b.slice());
-      at += BigInt(b.length);
-    },
-  };
-  const compressChunk = (data: Uint8Array) => ({ compression: "lz4", compressedData: lz4(data) });
-  const writer = new McapWriter({ writable, chunkSize: 16 * 1024, compressChunk });
-  await writer.start({ profile: "", library: "test" });
-  const channelId = await writer.registerChannel({
-    topic: "/t",
-    messageEncoding: "json",
-    schemaId: 0,
-    metadata: new Map(),
-  });
-  for (let i = 0; i < count; i++) {
-    const data = encode(JSON.stringify({ i, text: "pltf ".repeat(i % 50) }));
-    await writer.addMessage({ channelId, sequence: i, logTime: BigInt(i), publishTime: BigInt(i), data });
-  }
-  await writer.end();
-  const out = new Uint8Array(Number(at));
-  let k = 0;
-  for (const p of parts) {
-    out.set(p, k);
-    k += p.length;
-  }
-  return out;
-}
-
 describe("the chunk cache under @mcap/core's reader", () => {
   it("decompresses each chunk once over two reads of the file, and the messages are the same", async () => {
-    const cache = new ChunkCache(bytesReadable(await lz4File(2000)));
+    const cache = new ChunkCache(bytesReadable(await mcapFile("lz4", 2000)));
     const reader = await McapIndexedReader.Initialize({
       readable: cache,
       decompressHandlers: cache.decompressing(decompressHandlers),
