@@ -273,7 +273,7 @@ def test_against_a_mutant_the_differences_are_named(recorded: Path, tmp_path: Pa
         for c in ET.parse(tmp_path / "replay.xml").getroot().iter("testcase")
         if c.find("failure") is not None
     ]
-    assert failed == ["CMD_GET_STATUS"]
+    assert failed == ["CMD_GET_STATUS"], out
 
 
 def test_replay_errors_are_one_line(tmp_path: Path, recorded: Path, capsys: pytest.CaptureFixture[str]) -> None:
