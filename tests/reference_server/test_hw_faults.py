@@ -4,6 +4,7 @@ platform's reaction (state, motion, log) and what GET_STATUS reports (errata E-H
 from __future__ import annotations
 
 import math
+import time
 from pathlib import Path
 from typing import Any
 
@@ -24,6 +25,23 @@ def _halted_in_ready(r: Rig, what: str) -> Any:
     r.wait(lambda s: s.operation_state == OP_READY, f"{what}: back to Ready", keep=FORWARD)
     r.send("CMD_START")
     return r.wait(lambda s: s.vel_trans == 0 and s.operation_state == OP_READY, f"{what}: standing", keep=FORWARD)
+
+
+def _standing_still(r: Rig, for_s: float = 0.1) -> None:
+    """Zero velocities in GET_STATUS for ``for_s`` simulated seconds: the gyro calibrates at CMD_INIT_PLTF and
+    its self test fails while the platform still turns (erratum E-HW-019), as a drive fault's stop can leave it
+    turning for a while (one wheel stops first)."""
+    since = None
+    deadline = time.monotonic() + 10.0
+    while time.monotonic() < deadline:
+        st, now = r.status(), r.control("pose")["time"]
+        if st.vel_trans != 0 or st.vel_rot != 0:
+            since = None
+        elif since is None:
+            since = now
+        elif now - since >= for_s:
+            return
+    raise AssertionError(f"the platform did not come to a standstill; last status: {st}")
 
 
 def _restart(r: Rig) -> None:
@@ -87,6 +105,7 @@ def test_motor_over_temperature(data_dir: Path) -> None:
         assert r.status().initialized == 0
         r.control("overtemp right off")
         r.wait(lambda s: s.motor_right_temp < 70, "cooled")
+        _standing_still(r)
         r.send("CMD_INIT_PLTF")
         r.wait(lambda s: s.operation_state == OP_READY and s.initialized == 1, "initialized again")
         _restart(r)
