@@ -21,8 +21,10 @@ Rules (errata E-MOT-006, E-MOT-007, E-MOT-009, E-MOT-015):
   the planner is not asked (STANDBY).
 - Settle: with PositionStabilizationEnabled the platform is driven onto the target within
   TargetReachedTolPos; then it turns to the target angle within TargetReachedTolAngle (also without
-  EndTurnEnabled, after the curve, when the angle is still off). Target reached = both within tolerance.
-  ``SETTLE_TIMEOUT`` s without success ends the job, not reached.
+  EndTurnEnabled, after the curve, when the angle is still off). The verdict waits for standstill (the
+  odometry below ``STILL_TRANS`` / ``STILL_ROT``, erratum E-SRV-009): a platform that coasts out of the
+  tolerance is corrected again. Target reached = both within tolerance at standstill. ``SETTLE_TIMEOUT`` s
+  without success ends the job, not reached.
 """
 
 from __future__ import annotations
@@ -55,6 +57,8 @@ CLUSTER_PAD = 50.0  # mm added to a cluster's radius
 CLUSTER_REACH = 600.0  # mm around the points in the corridor that belong to the same obstacle
 SETTLE_TIMEOUT = 15.0  # s
 SETTLE_TURN_GAIN = 2.0  # 1/s
+STILL_TRANS = 1.0  # mm/s: the odometry's translation below this is standstill (the verdict waits for it)
+STILL_ROT = 0.002  # rad/s, likewise the rotation
 
 
 class Navigator(Protocol):
@@ -75,6 +79,11 @@ class Navigator(Protocol):
     def plan(self, start: Pose, goal: Pose, obstacles: F64) -> Plan: ...
 
     def free(self, points: F64, obstacles: F64) -> BOOL: ...
+
+    @property
+    def measured(self) -> tuple[float, float]:
+        """The platform's (v mm/s, w rad/s) from the odometry of the last period."""
+        ...
 
 
 @dataclass(frozen=True)
@@ -153,7 +162,7 @@ class AutoJob:
                 ref = self.ipo.reference(pose)
                 return track(pose, ref, isinstance(self.ipo.leg, Turn), p)
         if self.phase == "settle":
-            return self._settle(now, pose, p)
+            return self._settle(now, pose, p, nav.measured)
         return 0.0, 0.0
 
     def _legs(self, points: list[tuple[float, float]], pose: Pose, p: Params, nav: Navigator) -> list[Leg]:
@@ -341,8 +350,9 @@ class AutoJob:
         self.events.append("obstacle on the path: driving around it")
 
     # ---- the end
-    def _settle(self, now: float, pose: Pose, p: Params) -> tuple[float, float]:
-        """Position stabilisation (to half the tolerance once started), then the turn, then the verdict."""
+    def _settle(self, now: float, pose: Pose, p: Params, measured: tuple[float, float]) -> tuple[float, float]:
+        """Position stabilisation (to half the tolerance once started), then the turn, then the verdict at
+        standstill (``measured``: the odometry's v, w)."""
         tol_pos = float(p("TargetReachedTolPos"))
         tol_ang = math.radians(float(p("TargetReachedTolAngle")))
         dist = math.hypot(self.goal[0] - pose[0], self.goal[1] - pose[1])
@@ -358,6 +368,9 @@ class AutoJob:
             if abs(err) > 0.5 * tol_ang:
                 w_max = float(p("IpoRotVel"))
                 return 0.0, max(-w_max, min(w_max, SETTLE_TURN_GAIN * err + math.copysign(0.01, err)))
+            # guide 4.3 Mode Automatic: "If the target is reached, the platform stops": the verdict once it stands
+            if abs(measured[0]) >= STILL_TRANS or abs(measured[1]) >= STILL_ROT:
+                return 0.0, 0.0
         self.reached = dist <= tol_pos and abs(err) <= tol_ang
         self.phase = "done"
         self.planner_state = PlannerState.STANDBY

@@ -153,6 +153,21 @@ def test_a_new_move_preempts_the_running_one(office: MapGeometry) -> None:
     _reached(sim, KITCHEN)
 
 
+def test_the_target_is_reached_at_standstill_and_the_pose_stays_there(office: MapGeometry) -> None:
+    # E-SRV-009: "reached" waits for the odometry at rest; a goal behind a platform that drives east, to be faced
+    # the other way (tests/clients/test_scenarios' replaced goal: it coasted 2 degrees past the verdict once)
+    sim = make_sim(office, (2500.0, 10000.0, 0.0))
+    sim.world.move_to((9000.0, 10000.0, 0.0))
+    assert sim.run(30.0, lambda w: w.truth[0] > 3500.0)
+    goal = (3000.0, 9800.0, math.pi)
+    sim.world.move_to(goal)
+    assert sim.run(60.0, lambda w: w.target_reached)
+    v, w = sim.world.measured
+    assert abs(v) < 1.0 and abs(w) < 0.002, (v, w)
+    sim.run(2.0)
+    assert within(sim.world, goal, TOL, 2.0, truth=False)
+
+
 def test_move_path_follows_the_frames_and_turns_to_the_end_angle(office: MapGeometry) -> None:
     frames = [(3000.0, 10000.0, 0.0), (8500.0, 10000.0, 0.0), (8500.0, 11200.0, 0.0), (8500.0, 13000.0, math.pi)]
     sim = make_sim(office, (1500.0, 9500.0, 0.0))
