@@ -74,10 +74,12 @@ def diff_telegrams(
     replayed: Telegram,
     only: tuple[str, ...] | None = None,
     widen: Mapping[str, float] | None = None,
+    exact: frozenset[str] = frozenset(),
 ) -> list[FieldDiff]:
     """The fields of two replies that differ beyond the volatile-field table (an empty list: the same reply);
     ``only``: just these fields (the telegram's kind always); ``widen``: wider tolerances for some fields (a
-    replay wait's rates, erratum E-REP-023)."""
+    replay wait's rates, erratum E-REP-023); ``exact``: fields compared exactly although the table ignores them
+    (what a replay wait waited for, E-REP-024)."""
     if recorded.NAME != replayed.NAME:
         return [FieldDiff("(telegram)", recorded.NAME, replayed.NAME)]
     a, b = telegram_to_json(recorded), telegram_to_json(replayed)
@@ -87,7 +89,7 @@ def diff_telegrams(
     out: list[FieldDiff] = []
     for field, va in a["fields"].items():
         vb = b["fields"][field]
-        r = rule(recorded.NAME, field)
+        r = Rule() if field in exact else rule(recorded.NAME, field)
         if r.ignored or (only is not None and field not in only):
             continue
         if widen and field in widen:

@@ -17,12 +17,13 @@ Rules:
 - A wait is a run of the same request, sent again and again on one connection (a client polling until
   something changes). How many polls see each state depends on timing, so a wait is judged by where it ended:
   its final reply is compared, the polls before it are counted; its rates (velocities) within the most they
-  moved between two of the recorded wait's polls (``phase_slack``, erratum E-REP-023). The replay polls at the
-  recorded pace until a reply matches the recorded final one (possibly before the recorded number of polls) or,
-  past the recorded number, until twice the wait's recorded duration plus ``WAIT_GRACE`` has passed. A run longer than
-  ``WAIT_SPAN`` recorded seconds or ``WAIT_POLLS`` polls is cut into waits of that size (each judged by its own
-  final reply): the replay needs a wait's final reply before it sends its first poll, and a reader that looks
-  that far ahead is what bounds the replay's memory.
+  moved between two of the recorded wait's polls (``phase_slack``, erratum E-REP-023), and the table's outcomes
+  that changed at its last poll (``awaited``: what the client waited for, E-REP-024) exactly. The replay polls
+  at the recorded pace until a reply matches the recorded final one (possibly before the recorded number of
+  polls) or, past the recorded number, until twice the wait's recorded duration plus ``WAIT_GRACE`` has passed.
+  A run longer than ``WAIT_SPAN`` recorded seconds or ``WAIT_POLLS`` polls is cut into waits of that size (each
+  judged by its own final reply): the replay needs a wait's final reply before it sends its first poll, and a
+  reader that looks that far ahead is what bounds the replay's memory.
 - A watcher (``Script.reads_only``: every request a well-formed query, the telegrams the guide answers) has no
   waits: each poll is sent and judged on its own, and its replies whose values depend on when it asked are
   compared by kind (compare.py ``WATCHED``, erratum E-REP-022).
@@ -50,7 +51,7 @@ from pltf.proxy.tap import CLOSE, FRAME, OPEN, RAW, Record
 from pltf.proxy.view import format_fields
 from pltf.spec.codec import FRAME_OVERHEAD
 from pltf.spec.jsonio import telegram_to_json
-from pltf.spec.volatile import rates
+from pltf.spec.volatile import outcomes, rates
 
 WAIT_GRACE = 2.0  # s (wall, unscaled) a wait may poll beyond twice its recorded duration
 MIN_WAIT_POLLS = 2  # a run of this many identical requests is a wait
@@ -417,6 +418,17 @@ def phase_slack(step: Step) -> dict[str, float]:
     return _widest(step.slack, _moved(step.before, step.reply))
 
 
+def awaited(step: Step) -> frozenset[str]:
+    """A wait's final poll: the table's ``outcomes`` (ignored fields that say how a command ended) that changed
+    from the recorded poll before it to the final one - what the client waited for (target_reached going to 1,
+    erratum E-REP-024). The replayed wait ends only when they match, and its final reply is judged on them."""
+    a, b = step.before, step.reply
+    if a is None or b is None or a.telegram is None or b.telegram is None or a.telegram.NAME != b.telegram.NAME:
+        return frozenset()
+    fa, fb = telegram_to_json(a.telegram)["fields"], telegram_to_json(b.telegram)["fields"]
+    return frozenset(f for f in outcomes(b.telegram.NAME) if fa.get(f) != fb.get(f))
+
+
 def _moved(a: Record | None, b: Record | None) -> dict[str, float]:
     """How far each rate field moved from reply ``a`` to reply ``b`` (empty: not two replies of one kind)."""
     if a is None or b is None or a.telegram is None or b.telegram is None or a.telegram.NAME != b.telegram.NAME:
@@ -439,7 +451,7 @@ def final_matches(step: Step, reply: Record) -> bool:
     rec = step.reply
     if rec is None or rec.telegram is None or reply.telegram is None:
         return False
-    return not diff_telegrams(rec.telegram, reply.telegram, widen=phase_slack(step))
+    return not diff_telegrams(rec.telegram, reply.telegram, widen=phase_slack(step), exact=awaited(step))
 
 
 # ---------------------------------------------------------------------------------------------- judgement
@@ -460,6 +472,7 @@ def _compare(
     note: str = "",
     watched: bool = False,
     widen: dict[str, float] | None = None,
+    exact: frozenset[str] = frozenset(),
 ) -> list[Difference]:
     rec = step.reply
     name = (
@@ -481,7 +494,7 @@ def _compare(
     if script.reads_only or watched:
         found = diff_watched(rec.telegram, got.telegram)
     else:
-        found = diff_telegrams(rec.telegram, got.telegram, widen=widen)
+        found = diff_telegrams(rec.telegram, got.telegram, widen=widen, exact=exact)
     return [d(f.path, f.recorded, f.replayed) for f in found]
 
 
@@ -506,7 +519,7 @@ def judge_wait(script: Script, wait: Wait, final: Record | None, polls: int) -> 
     cut = cut_by_end(script, wait)
     what = "the connection's end cut it with the platform moving" if cut else "its final reply"
     note = f" (a wait: {len(wait.steps)} polls recorded, {polls} replayed; {what})"
-    return _compare(script, wait.last, final, note, watched=cut, widen=phase_slack(wait.last))
+    return _compare(script, last, final, note, watched=cut, widen=phase_slack(last), exact=awaited(last))
 
 
 MOTION = ("vel_trans", "vel_rot")  # fields of a reply that say the platform is moving

@@ -4,7 +4,9 @@ Rules: loaded once; ``rule(telegram, field)`` says whether a reply field is igno
 ``ignore`` list matches it; a group's name covers its items) or compared within a numeric tolerance; every
 other field is compared exactly. The conformance suite's differential mode and ``pltf replay`` both judge by it.
 ``rates(telegram)`` names the fields that are rates of change (velocities), whose value at the end of a replay's
-wait depends on where in a poll's period the poll fell (erratum E-REP-023).
+wait depends on where in a poll's period the poll fell (erratum E-REP-023). ``outcomes(telegram)`` names the
+ignored fields that say how a command ended (target_reached): a replay's wait that ends on their change compares
+them exactly (erratum E-REP-024).
 ``check_table`` names entries that match no reply telegram or no field (the table must not rot).
 """
 
@@ -52,6 +54,11 @@ def rates(telegram: str) -> tuple[str, ...]:
     return tuple(volatile().get(telegram, {}).get("rates", ()))
 
 
+def outcomes(telegram: str) -> tuple[str, ...]:
+    """The reply's ignored fields that tell how a command ended (the table's ``outcomes`` list)."""
+    return tuple(volatile().get(telegram, {}).get("outcomes", ()))
+
+
 def values_differ(a: Any, b: Any, tolerance: float | None) -> bool:
     """Exact comparison, or within ``tolerance`` for two numbers (never for a NaN or an infinity)."""
     if tolerance is not None and _number(a) and _number(b):
@@ -81,5 +88,6 @@ def check_table() -> list[str]:
                 problems.append(f"{name}: tolerance for unknown field {field!r}")
             elif not (_number(amount) and amount >= 0):
                 problems.append(f"{name}.{field}: tolerance {amount!r} is not a number >= 0")
-        problems += [f"{name}: rate of unknown field {f!r}" for f in entry.get("rates", ()) if f not in fields]
+        for kind in ("rates", "outcomes"):
+            problems += [f"{name}: {kind} names unknown field {f!r}" for f in entry.get(kind, ()) if f not in fields]
     return problems

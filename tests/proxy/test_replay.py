@@ -447,6 +447,21 @@ def test_a_wait_s_final_velocity_may_differ_by_what_one_recorded_poll_period_cha
     assert [(d.path, d.recorded, d.replayed) for d in found] == [("vel_rot", "49", "0")]
 
 
+def test_a_wait_for_the_target_ends_only_when_the_replay_reaches_it_too() -> None:
+    # E-REP-024: the recorded wait ended on target_reached 0 -> 1 (a field the table ignores); a replayed poll 10 mm
+    # short of the pose, driving and not reached, is within the pose tolerance and the velocity slack but no end
+    driver = _wait_ending_on(before_vel_rot=519)
+    final = driver.steps[next(iter(driver.waits.values())).final]
+    short = _with(final.reply, STATUS.replace(vel_rot=49, est_x=10, target_reached=0))
+    assert not final_matches(final, short)
+    found = judge([driver], {1: Outcome(1, wait_final={0: short}, sent=40)})
+    assert [(d.path, d.recorded, d.replayed) for d in found] == [("target_reached", "ON (1)", "OFF (0)")]
+    assert final_matches(final, _with(final.reply, STATUS.replace(vel_rot=49, est_x=10, target_reached=1)))
+    # a wait during which it did not change (a stale "reached" from the move before) compares it as the table says
+    final.before = _with(final.reply, STATUS.replace(vel_rot=519, target_reached=1))
+    assert final_matches(final, short)
+
+
 def _status(t: float, **changes: Any) -> Record:
     (r,) = Tap("reply", 1, 10000).feed(encode(STATUS.replace(**changes)), t)
     return r
