@@ -10,7 +10,9 @@ Rules:
   address, ``{tmpdir}`` is a fresh empty directory per start.
 - Port 0 asks for ephemeral ports: the target logs ``server started at port N`` (the reference server, the
   zoo; the emulator prefixes ``emulator:``) once per port, in port order, and we read them from its merged
-  stdout/stderr. The output goes to a log file (no reader thread, no pipe to fill); ``output`` is its tail.
+  stdout/stderr. A target that listens elsewhere than ``host`` says so: ``server started at port N on ::1``
+  (the zoo's IPv6-only member); the harness then talks to that address. The output goes to a log file (no
+  reader thread, no pipe to fill); ``output`` is its tail.
 - The child runs in a session (process group) of its own, so ``stop`` ends the target and whatever it started
   itself (a zoo member's server) and nothing else: SIGTERM to the group, SIGKILL after a grace period. It also
   gets SIGTERM when the thread that started it ends (PR_SET_PDEATHSIG): no target outlives its harness.
@@ -38,6 +40,7 @@ from typing import IO
 from pltf.harness.ports import free_ports
 
 STARTED = re.compile(r"(?:server|emulator) started at port (\d+)")
+ANNOUNCED_HOST = re.compile(r"(?:server|emulator) started at port \d+ on (\S+)")
 START_TIMEOUT = 30.0  # a loaded machine imports numpy and scipy slowly
 REPO = Path(__file__).resolve().parents[1]
 
@@ -130,6 +133,7 @@ class Launched:
             seen = [int(m) for m in STARTED.findall(self._read_log())]
         if len(seen) < 2:
             seen = [int(m) for m in STARTED.findall(self._read_log())]
+        self._learn_host()
         if len(seen) < 2:
             why = "exited" if not self.alive() else f"did not report two ports within {self.start_timeout:g} s"
             raise LaunchError(
@@ -138,9 +142,15 @@ class Launched:
             )
         return seen[0], seen[1]
 
+    def _learn_host(self) -> None:
+        """The address the target announced with its ports, if it named one."""
+        if found := ANNOUNCED_HOST.findall(self._read_log()):
+            self.host = found[0]
+
     def _await_listening(self) -> tuple[int, int]:
         deadline = time.monotonic() + self.start_timeout
         while time.monotonic() < deadline and self.alive():
+            self._learn_host()
             try:
                 socket.create_connection((self.host, self.want[1]), timeout=0.5).close()
                 return self.want
@@ -434,10 +444,7 @@ def zoo(
         str(seed),
         *extra,
     )
-    from pltf.zoo.members import MEMBERS  # here: the launcher of the other targets needs no codec
-
-    host = MEMBERS[member].host if member in MEMBERS else "127.0.0.1"
-    return Launched(argv, host=host, ports=ports, name=f"zoo {member} ({upstream})")
+    return Launched(argv, ports=ports, name=f"zoo {member} ({upstream})")  # a member on ::1 announces it
 
 
 def target(kind: str, **kw: object) -> Launched:

@@ -3,8 +3,9 @@ member in front of a PlatformCtrl target; ``--list`` shows the members.
 
 With ``--serve`` the member starts the target behind it itself (ephemeral ports, stopped with the member);
 ``--upstream`` puts it in front of a target that runs already. It logs ``zoo MEMBER: server started at port N``
-once per port, in port order (the line every launcher of the toolkit reads). Exit status: 2 for bad arguments or
-a target that cannot be started, 134 when a planted crash fires, 3 after a planted hang.
+once per port, in port order (the line every launcher of the toolkit reads), ending `` on HOST`` when it listens
+elsewhere than 127.0.0.1. Exit status: 2 for bad arguments or a target that cannot be started, 134 when a
+planted crash fires, 3 after a planted hang.
 """
 
 from __future__ import annotations
@@ -288,9 +289,11 @@ class Spare:
 
 
 def _serve(relay: Relay, name: str, listen_host: str) -> None:
+    where = "" if listen_host == "127.0.0.1" else f" on {listen_host}"  # harness.launch talks to that address
+
     def ready(bound: list[int]) -> None:
         for port in bound:
-            print(f"zoo {name}: server started at port {port}", flush=True)
+            print(f"zoo {name}: server started at port {port}{where}", flush=True)
 
     try:
         asyncio.run(relay.serve_forever(ready))

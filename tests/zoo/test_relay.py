@@ -551,6 +551,7 @@ def _listening(pid: int) -> set[tuple[str, int]]:
 
 def test_ipv6_only_listens_on_the_ipv6_loopback_only(upstream: launch.Launched) -> None:
     with member(upstream, "ipv6-only") as z:
+        assert z.host == "::1"  # announced with its ports ("server started at port N on ::1"): the launcher's address
         with socket.create_connection(("::1", z.ports[0]), timeout=5) as s:
             s.sendall(POSITION)
             replies(s)
