@@ -37,6 +37,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import IO
 
+from pltf.fixtures import seed_data_dir
 from pltf.harness.ports import free_ports
 
 STARTED = re.compile(r"(?:server|emulator) started at port (\d+)")
@@ -399,9 +400,7 @@ class _Emulator(_DataDirTarget):
     def command(self) -> list[str]:
         data = self.data()
         if not data.exists():  # the same disk the reference server starts with (fixtures/)
-            from pltf.reference_server.storage import Storage
-
-            Storage(data).seed_from_fixtures()
+            seed_data_dir(data)
         return super().command()
 
 

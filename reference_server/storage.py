@@ -1,9 +1,7 @@
 """The platform's "hard disk": a data directory with the stored documents and the start pose.
 
 Rules:
-- File names are fixed, as in the original's start-up log ("load map: Platform/Map/PltfMap.map", "load
-  roadmap: Platform/Roadmap/PltfRoadmap.rm", "init pose read from StartupPosition.dat"); the program file
-  follows the same pattern (Program/PltfProgram.xml).
+- File names are fixed, as in the original's start-up log (spec/datadir.py, erratum E-CMD-008).
 - ``save`` is atomic: the data go to a temporary file in the same directory, which is flushed and fsync'ed,
   then renamed over the target with ``os.replace``, then the directory is fsync'ed. A crash at any instant
   leaves the old file or the new one, never a torn one. Temporary files a crash left behind are removed
@@ -17,33 +15,20 @@ import contextlib
 import logging
 import math
 import os
-import shutil
 import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
 from pltf.fixtures import DIR as FIXTURES_DIR
+from pltf.fixtures import seed_data_dir
+from pltf.spec.datadir import FILES, START_POSE_FILE
 from pltf.spec.documents import DocumentKind
 
 log = logging.getLogger("pltf.server")
 
 REPO_FIXTURES = FIXTURES_DIR
 
-FILES: dict[DocumentKind, str] = {
-    DocumentKind.MAP: "Map/PltfMap.map",
-    DocumentKind.ROADMAP: "Roadmap/PltfRoadmap.rm",
-    DocumentKind.PROGRAM: "Program/PltfProgram.xml",
-}
-START_POSE_FILE = "StartupPosition.dat"
 _TMP_SUFFIX = ".tmp"
-
-# what seed_from_fixtures copies: data-dir file -> fixtures file
-SEED: dict[str, str] = {
-    FILES[DocumentKind.MAP]: "maps/office.map",
-    FILES[DocumentKind.ROADMAP]: "roadmaps/office.rm",
-    FILES[DocumentKind.PROGRAM]: "programs/patrol.xml",
-    START_POSE_FILE: "start_pose.dat",
-}
 
 
 class StorageError(Exception):
@@ -111,17 +96,7 @@ class Storage:
 
     def seed_from_fixtures(self, fixtures: Path = REPO_FIXTURES) -> list[Path]:
         """Fill an empty data dir from the repository's fixtures (office floor, roadmap, program, pose)."""
-        if not self.is_empty():
-            return []
-        written = []
-        for target, source in SEED.items():
-            src = fixtures / source
-            if src.is_file():
-                dst = self.root / target
-                dst.parent.mkdir(parents=True, exist_ok=True)
-                shutil.copyfile(src, dst)
-                written.append(dst)
-        return written
+        return seed_data_dir(self.root, fixtures)
 
     def _remove_stale_temporaries(self) -> None:
         for rel in FILES.values():
