@@ -9,9 +9,11 @@ import {
   fleetData,
   fleetMembers,
   fleetTargets,
+  reach,
   selectedHref,
   statusLine,
 } from "../src/session/fleet";
+import { footprint } from "../src/view/overlay";
 import { GetStatusReply } from "../src/pltf";
 
 const q = (s: string) => new URLSearchParams(s);
@@ -21,7 +23,9 @@ const body = (name: string, x: number, y: number, selected = false): FleetBody =
   colour: "#000",
   selected,
   pose: { x, y, angle: 90 },
+  footprint: null,
 });
+const DEFAULT = footprint(650, 430, 100); // rear -425, front 225, half width 270
 
 describe("the fleet of the address", () => {
   it("is every target once, in order; one target is no fleet", () => {
@@ -89,7 +93,18 @@ describe("the map's bodies", () => {
     expect(bodyAt(bodies, 500, 0, 500)?.name).toBe("a"); // a tie: the first
   });
 
-  it("are written to data-fleet, the selected one marked", () => {
-    expect(fleetData(bodies)).toBe("*a@0,0,90.0;b@1000,0,90.0;c@-");
+  it("are written to data-fleet with the footprint drawn, the selected one marked", () => {
+    const long = footprint(1600, 900, 100);
+    const withOwn = [bodies[0], { ...bodies[1], footprint: long }, bodies[2]];
+    expect(fleetData(withOwn, DEFAULT)).toBe("*a@0,0,90.0/-425,225,270;b@1000,0,90.0/-900,700,505;c@-");
+  });
+
+  it("a click hits a body within its own footprint's reach (a big platform from farther away)", () => {
+    const long = footprint(1600, 900, 100);
+    const two = [body("small", 0, 0), { ...body("big", 3000, 0), footprint: long }];
+    expect(reach(long)).toBeCloseTo(Math.hypot(900, 505));
+    expect(bodyAt(two, 3000 - 950, 0, reach(DEFAULT))?.name).toBe("big"); // within big's 1032 mm
+    expect(bodyAt(two, 600, 0, reach(DEFAULT))).toBeNull(); // beyond small's default 507 mm
+    expect(bodyAt([{ ...body("small", 0, 0), footprint: DEFAULT }], 600, 0, 5000)).toBeNull(); // its own, not 5 m
   });
 });

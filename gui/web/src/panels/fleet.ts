@@ -2,14 +2,16 @@
  * The fleet's status lines (issue 30): one line per platform (name, operation state, motion mode, position,
  * connected or lost), its colour on the map; a click on a line (or on the platform's body on the map) selects it.
  *
- * Rules (session/fleet.ts): every platform is watched by a session of its own that reads GET_STATUS only (no
- * documents, no command); the selected one is also the target of the page's one commanding session, the one
- * every other panel holds, switched with `PlatformSession.open(target)`: motion, operation, menus and editors
- * act on it alone, the others are watched. The selection is kept in the address (`?selected=`) over a reload.
+ * Rules (session/fleet.ts): every platform is watched by a session of its own (no documents, no command) that
+ * polls GET_STATUS while the platform is not selected and reads its parameters once per connection (its
+ * footprint); the selected one is the target of the page's one commanding session, the one every other panel
+ * holds, switched with `PlatformSession.open(target)`: motion, operation, menus and editors act on it alone, and
+ * its status line and body read that session's GET_STATUS (one stream per platform on the wire). The selection is
+ * kept in the address (`?selected=`) over a reload.
  */
 import { h } from "../dom";
 import { bind, type Key, onLanguage, t } from "../i18n/i18n";
-import type { GetStatusReply } from "../pltf";
+import { type GetPltfParamVecReply, GetPltfParamVecRequest, type GetStatusReply } from "../pltf";
 import {
   type FleetBody,
   type FleetMember,
@@ -19,6 +21,8 @@ import {
   statusLine,
 } from "../session/fleet";
 import { PlatformSession } from "../session/session";
+import type { Footprint } from "../view/overlay";
+import { platformGeometry } from "./map/platform";
 import type { MapView } from "./mapview";
 import { poseText } from "./statusbar";
 
@@ -29,6 +33,8 @@ interface Watched {
   member: FleetMember;
   session: PlatformSession;
   status: GetStatusReply | null;
+  /** its own outline (its GET_PLTF_PARAM_VEC), null until read */
+  footprint: Footprint | null;
   everConnected: boolean;
   line: HTMLButtonElement;
 }
@@ -60,23 +66,54 @@ export function fleetPanel(
       member,
       session: new PlatformSession(wsUrl, member.target),
       status: null,
+      footprint: null,
       everConnected: false,
       line,
     };
     w.session.fetchDocuments = false;
-    w.session.setPolling("status", true, WATCH_HZ);
+    w.session.setPolling("status", member.target !== current, WATCH_HZ);
     w.session.status.subscribe((s) => {
-      w.status = s;
-      show(w);
-      drawn();
+      if (w.member.target !== current) {
+        seen(w, s);
+      }
     });
+    w.session.params.subscribe((r) => ownGeometry(w, r));
     w.session.conn.subscribe((ev) => {
       w.everConnected ||= ev.event === "connected";
+      if (ev.event === "connected") {
+        w.session.request(new GetPltfParamVecRequest()).catch(() => undefined); // its footprint, once a connection
+      }
       show(w);
       drawn();
     });
     line.addEventListener("click", () => select(member.target));
     return w;
+  });
+
+  /** A status of `w`: from its watcher, or from the panels' session while it is selected. */
+  function seen(w: Watched, s: GetStatusReply): void {
+    w.status = s;
+    show(w);
+    drawn();
+  }
+  function ownGeometry(w: Watched, r: Pick<GetPltfParamVecReply, "parameters">): void {
+    w.footprint = platformGeometry(r).footprint;
+    drawn();
+  }
+  const selectedOne = (): Watched | undefined =>
+    session.target === current ? watched.find((w) => w.member.target === current) : undefined;
+  // the selected platform's one GET_STATUS stream is the panels' session's (and its parameters, when it reads them)
+  session.status.subscribe((s) => {
+    const w = selectedOne();
+    if (w !== undefined) {
+      seen(w, s);
+    }
+  });
+  session.params.subscribe((r) => {
+    const w = selectedOne();
+    if (w !== undefined) {
+      ownGeometry(w, r);
+    }
   });
 
   const words = (l: StatusLine, w: Watched): string[] => {
@@ -93,8 +130,13 @@ export function fleetPanel(
     ];
   };
 
+  /** Is `w`'s status current: its watcher's connection, or the panels' session's while it is selected. */
+  const live = (w: Watched): boolean =>
+    w.member.target === current ? session.connected && session.target === current : w.session.connected;
+
   const show = (w: Watched) => {
-    const l = statusLine(w.member.name, w.session.connected, w.session.connected ? w.status : null);
+    const up = live(w);
+    const l = statusLine(w.member.name, up, up ? w.status : null);
     w.line.replaceChildren(...words(l, w).map((text, i) => h("span", { class: i === 0 ? "name" : "part" }, text)));
     w.line.setAttribute("aria-pressed", String(w.member.target === current));
     const d = w.line.dataset;
@@ -107,13 +149,14 @@ export function fleetPanel(
 
   const drawn = () => {
     const bodies: FleetBody[] = watched.map((w) => {
-      const st = w.session.connected ? w.status : null;
+      const st = live(w) ? w.status : null;
       return {
         name: w.member.name,
         target: w.member.target,
         colour: w.member.colour,
         selected: w.member.target === current,
         pose: st === null ? null : { x: st.estX, y: st.estY, angle: st.estAngle / 1000 },
+        footprint: w.footprint,
       };
     });
     map.setFleet(bodies);
@@ -123,8 +166,16 @@ export function fleetPanel(
     if (target === current || !targets.includes(target)) {
       return;
     }
+    const before = watched.find((w) => w.member.target === current);
+    const after = watched.find((w) => w.member.target === target);
     current = target;
     session.open(target); // the panels' session now talks to this platform alone
+    // one GET_STATUS stream per platform: the one no longer selected is watched again, the selected one is not
+    before?.session.setPolling("status", true, WATCH_HZ);
+    after?.session.setPolling("status", false);
+    if (after !== undefined) {
+      after.status = null; // until the panels' session reads it (no stale pose from the watcher's last poll)
+    }
     history.replaceState(null, "", selectedHref(window.location.href, target));
     watched.forEach(show);
     drawn();

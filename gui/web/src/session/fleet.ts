@@ -14,8 +14,15 @@
  *   (`PlatformSession.open(target)`), the others are only watched (GET_STATUS). Guide 5.2: "To connect the GUI to
  *   the platform select the desired server in the server combo box." - one platform commanded at a time, as the
  *   guide's GUI switches server (erratum E-GUI-008).
+ * - One GET_STATUS stream per platform: the selected one's status line and body read the panels' session (20 Hz);
+ *   its watcher stops polling while it is selected and starts again when another is.
+ * - Each body has its own footprint (guide 5.9 Geometry: PltfLength, DistWheels, DistPltfCenterToWheelAxis), from
+ *   its own platform's GET_PLTF_PARAM_VEC; until that is known, the map's default one.
+ * - An open editor's document belongs to the platform it was loaded from (or sent to), and survives a switch
+ *   (erratum E-GUI-012): `DocumentOwner` below.
  */
 import type { GetStatusReply } from "../pltf";
+import type { Footprint } from "../view/overlay";
 
 /** Distinct on the map's white and grey (Okabe-Ito, without yellow): blue, vermilion, green, purple, ... */
 export const FLEET_COLOURS = ["#0072b2", "#d55e00", "#009e73", "#cc79a7", "#e69f00", "#56b4e9", "#000000"];
@@ -33,6 +40,13 @@ export interface FleetBody {
   colour: string;
   selected: boolean;
   pose: { x: number; y: number; angle: number } | null;
+  /** its own outline (its parameters); null until they are read */
+  footprint: Footprint | null;
+}
+
+/** The radius (mm) of the circle around a footprint's centre that holds it (a click within it hits the body). */
+export function reach(f: Footprint): number {
+  return Math.hypot(Math.max(Math.abs(f.rear), Math.abs(f.front)), f.halfWidth);
 }
 
 /** The platforms the address lists, in order, each once; [] when it lists fewer than two (no fleet). */
@@ -80,16 +94,22 @@ export function statusLine(name: string, connected: boolean, s: GetStatusReply |
   };
 }
 
-/** The body under a world point (mm): the nearest whose centre lies within `radius` mm (a tie: the first), or null. */
+/**
+ * The body under a world point (mm): the nearest whose centre lies within its own footprint's reach (`radius` mm
+ * for a body whose footprint is not known yet; a tie: the first), or null.
+ */
 export function bodyAt(bodies: FleetBody[], x: number, y: number, radius: number): FleetBody | null {
   let best: FleetBody | null = null;
-  let bestD = radius;
+  let bestD = Number.POSITIVE_INFINITY;
   for (const b of bodies) {
     if (b.pose === null) {
       continue;
     }
     const d = Math.hypot(b.pose.x - x, b.pose.y - y);
-    if (d < bestD || (best === null && d === bestD)) {
+    if (d > (b.footprint === null ? radius : reach(b.footprint))) {
+      continue;
+    }
+    if (d < bestD) {
       best = b;
       bestD = d;
     }
@@ -97,12 +117,21 @@ export function bodyAt(bodies: FleetBody[], x: number, y: number, radius: number
   return best;
 }
 
-/** The canvas's `data-fleet`: one `name@x,y,angle` (or `name@-`: pose unknown) per body, `*` before the selected. */
-export function fleetData(bodies: FleetBody[]): string {
+/**
+ * The canvas's `data-fleet`: one `name@x,y,angle/rear,front,halfWidth` per body (mm, degrees; the footprint as
+ * drawn: its own, or `fallback` while its own is not known; `name@-`: pose unknown, not drawn), `*` before the
+ * selected.
+ */
+export function fleetData(bodies: FleetBody[], fallback: Footprint): string {
   return bodies
     .map((b) => {
-      const at = b.pose === null ? "-" : `${Math.round(b.pose.x)},${Math.round(b.pose.y)},${b.pose.angle.toFixed(1)}`;
-      return `${b.selected ? "*" : ""}${b.name}@${at}`;
+      if (b.pose === null) {
+        return `${b.selected ? "*" : ""}${b.name}@-`;
+      }
+      const f = b.footprint ?? fallback;
+      const at = `${Math.round(b.pose.x)},${Math.round(b.pose.y)},${b.pose.angle.toFixed(1)}`;
+      const outline = `${Math.round(f.rear)},${Math.round(f.front)},${Math.round(f.halfWidth)}`;
+      return `${b.selected ? "*" : ""}${b.name}@${at}/${outline}`;
     })
     .join(";");
 }

@@ -11,7 +11,7 @@
 import { type Key, t } from "../../i18n/i18n";
 import { GetStatusReply, type GetPltfParamVecReply } from "../../pltf";
 import { KINDS } from "../../scene/map";
-import { type FleetBody, fleetData } from "../../session/fleet";
+import { type FleetBody, fleetData, reach } from "../../session/fleet";
 import { type Camera, toScreen, viewBounds } from "../../view/camera";
 import type { PlacedLabel } from "../../view/labels";
 import type { Layers } from "../../view/maprender";
@@ -176,10 +176,14 @@ export class MapRenderer {
     }));
   }
 
-  /** The radius (mm) within which a click hits a platform's body. */
+  /** The radius (mm) within which a click hits a platform's body whose own footprint is not known yet. */
   get bodyRadius(): number {
-    const f = this.platform;
-    return Math.hypot(Math.max(Math.abs(f.rear), Math.abs(f.front)), f.halfWidth);
+    return reach(this.platform);
+  }
+
+  /** The selected platform's footprint: a fleet's selected body's own (issue 30) once known, else the session's. */
+  private get selectedFootprint(): Footprint {
+    return this.shown.fleet.find((b) => b.selected)?.footprint ?? this.platform;
   }
 
   /** The true pose beside the estimate and the injected faults, in words (guide units: mm, degrees). */
@@ -231,7 +235,8 @@ export class MapRenderer {
     const c = this.controller.cam;
     const overlay = overlayOf(this.options);
     const { status, truth: tr, hooks } = this.shown;
-    const live = status ? drawStatus(ctx, c, status, this.platform, this.usSensors, overlay) : null;
+    const own = this.selectedFootprint;
+    const live = status ? drawStatus(ctx, c, status, own, this.usSensors, overlay) : null;
     this.canvas.dataset.drawnScan = String(live?.scan ?? 0);
     this.canvas.dataset.drawnUltrasonic = String(live?.ultrasonic ?? 0);
     this.canvas.dataset.drawnPath = String(live?.path ?? 0);
@@ -244,7 +249,7 @@ export class MapRenderer {
     }
     if (tr?.event === "truth" && tr.true !== undefined && this.options.truth) {
       const [x, y, angle] = tr.true;
-      drawPlatform(ctx, c, { x, y, angle }, this.platform, "#757575", true);
+      drawPlatform(ctx, c, { x, y, angle }, own, "#757575", true);
       this.canvas.dataset.truth = `${x},${y},${angle}`;
     } else {
       delete this.canvas.dataset.truth;
@@ -253,7 +258,7 @@ export class MapRenderer {
     if (ghost) {
       ctx.globalAlpha = 0.6;
       const st = Object.assign(new GetStatusReply(), { estX: ghost.x, estY: ghost.y, estAngle: ghost.angle * 1000 });
-      drawStatus(ctx, c, st, this.platform, [], { ...overlay, ...GHOST_ONLY });
+      drawStatus(ctx, c, st, own, [], { ...overlay, ...GHOST_ONLY });
       ctx.globalAlpha = 1;
     }
     const flag = this.controller.flag;
@@ -265,7 +270,10 @@ export class MapRenderer {
     this.drawFleet(ctx, c, this.shown.fleet);
   }
 
-  /** The fleet's other platforms in their colours, a name label on each (the selected one is drawn above). */
+  /**
+   * The fleet's other platforms in their colours, each with its own footprint (its own parameters; the default
+   * one until they are read), a name label on each (the selected one is drawn above).
+   */
   private drawFleet(ctx: CanvasRenderingContext2D, c: Camera, bodies: FleetBody[]): void {
     if (bodies.length === 0) {
       delete this.canvas.dataset.fleet;
@@ -277,7 +285,7 @@ export class MapRenderer {
         continue;
       }
       if (!b.selected) {
-        drawPlatform(ctx, c, b.pose, this.platform, b.colour, false);
+        drawPlatform(ctx, c, b.pose, b.footprint ?? this.platform, b.colour, false);
       }
       const [sx, sy] = toScreen(c, b.pose.x, b.pose.y);
       const label = b.selected ? `▶ ${b.name}` : b.name;
@@ -288,7 +296,7 @@ export class MapRenderer {
       ctx.fillText(label, sx + 8, sy - 8);
     }
     ctx.lineWidth = 1;
-    this.canvas.dataset.fleet = fleetData(bodies);
+    this.canvas.dataset.fleet = fleetData(bodies, this.platform);
   }
 }
 
