@@ -28,6 +28,7 @@ the A/B against main: benchmarks/results/gui.md.
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 from benchmarks.bench_gui import MapPlatform, _percentile, big_map, gateway, page
@@ -164,15 +165,14 @@ def load(config: Config) -> list[Row]:
     ]
 
 
-@benchmark()
-def edit(config: Config) -> list[Row]:
-    """Move, trim and undo on 50,000 lines until on screen (target p95 <= 50 ms)."""
-    cycles = 2 if config.quick else 15
+def edit_times(cycles: int, static: Path | None = None) -> tuple[dict[str, list[float]], list[float]]:
+    """ms to screen of each trim, undo and move of ``cycles`` cycles (``_cycle``) in a page of the build ``static``
+    (bench_gui.gateway), and of the baseline redraw after each cycle."""
     fake = MapPlatform(bench_map())
     out: dict[str, list[float]] = {"trim": [], "undo": [], "move": []}
     redraw: list[float] = []
     try:
-        with gateway() as base, page(base, f"127.0.0.1:{fake.port}") as pg:
+        with gateway(static) as base, page(base, f"127.0.0.1:{fake.port}") as pg:
             pg.wait_for_function(f"() => window.pltf.map.scene?.objects.length === {N_LINES}", timeout=60_000)
             _open_and_load(pg)
             pg.evaluate(
@@ -183,6 +183,13 @@ def edit(config: Config) -> list[Row]:
                 redraw.append(float(pg.evaluate(REDRAW_JS)))
     finally:
         fake.close()
+    return out, redraw
+
+
+@benchmark()
+def edit(config: Config) -> list[Row]:
+    """Move, trim and undo on 50,000 lines until on screen (target p95 <= 50 ms)."""
+    out, redraw = edit_times(2 if config.quick else 15)
     rows = []
     every = out["trim"] + out["undo"] + out["move"]
     for subject, xs in (("move", out["move"]), ("trim", out["trim"]), ("undo", out["undo"]), ("all edits", every)):

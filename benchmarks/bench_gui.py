@@ -31,7 +31,9 @@ import socket
 import tempfile
 import threading
 import time
+import urllib.request
 from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -70,12 +72,24 @@ def _percentile(xs: list[float], q: float) -> float:
 
 # ---------------------------------------------------------------------------------------------- the parts
 @contextlib.contextmanager
-def gateway() -> Iterator[str]:
-    with (
-        tempfile.TemporaryDirectory(prefix="pltf-bench-gui-") as tmp,
-        GatewayProcess(Path(tmp) / "Network.ini") as gw,
-    ):
-        yield gw.base
+def gateway(static: Path | None = None) -> Iterator[str]:
+    """``pltf gui`` on a free port; ``static``: the build of gui/web it serves (PLTF_GUI_STATIC), else its own."""
+    with tempfile.TemporaryDirectory(prefix="pltf-bench-gui-") as tmp:
+        gw = GatewayProcess(Path(tmp) / "Network.ini")
+        if static is not None:
+            gw.env = {"PLTF_GUI_STATIC": str(static)}
+        with gw:
+            if static is not None:
+                _check_served(gw.base, static)
+            yield gw.base
+
+
+def _check_served(base: str, static: Path) -> None:
+    """The gateway serves the page of ``static`` (its index.html names that build's hashed bundles)."""
+    with urllib.request.urlopen(f"{base}/", timeout=10) as reply:
+        served = reply.read()
+    if served != (static / "index.html").read_bytes():
+        raise RuntimeError(f"the gateway at {base} does not serve the build in {static}")
 
 
 @contextlib.contextmanager
@@ -143,11 +157,17 @@ class MapPlatform:
         self.listener.close()
 
 
+# Drives every build of gui/web since issue 19 the same way: the camera moves by setCamera (assign and ask for a
+# frame) in all of them; the on-page baseline's switch and the worker's layer times are the MapDebug facade's
+# setSyncLayers/takeLayerTimes since the MapView split (1ddf12c), the view's own syncLayers/layerTimes before it
+# (the same field behind both: outside the timed frames).
 PAN_ZOOM_JS = """async ([frames, cache]) => {
   const m = window.pltf.map;
   const ctx = m.canvas.getContext("2d");
-  m.setSyncLayers(!cache);
-  m.takeLayerTimes();
+  const setSync = (on) => (m.setSyncLayers ? m.setSyncLayers(on) : (m.syncLayers = on));
+  const takeTimes = () => (m.takeLayerTimes ? m.takeLayerTimes() : m.layerTimes.splice(0));
+  setSync(!cache);
+  takeTimes();
   const out = { pan: [], zoom: [] };
   const frame = (kind) => {
     const t0 = performance.now();
@@ -166,25 +186,31 @@ PAN_ZOOM_JS = """async ([frames, cache]) => {
     m.setCamera({ ...c, cx: c.cx + (12 * Math.cos(a)) / c.scale, cy: c.cy + (12 * Math.sin(a)) / c.scale });
     frame("pan"); await tick();
   }
-  m.setSyncLayers(false);
-  out.layer = m.takeLayerTimes();
+  setSync(false);
+  out.layer = takeTimes();
   return out;
 }"""
 
 
-@benchmark()
-def pan_zoom(config: Config) -> list[Row]:
-    """Map view frame time while panning and zooming a map of 50,000 lines (target p95 <= 16 ms)."""
-    frames = 30 if config.quick else 300
+def pan_zoom_frames(frames: int, static: Path | None = None) -> tuple[dict[str, list[float]], dict[str, list[float]]]:
+    """The frame times (ms) of a pan of ``frames`` frames and of the zooms, with the layer worker and with the static
+    layer drawn on the page per frame, in one page of the build ``static`` (``gateway``); "layer": the worker's."""
     fake = MapPlatform(big_map())
     try:
-        with gateway() as base, page(base, f"127.0.0.1:{fake.port}") as pg:
+        with gateway(static) as base, page(base, f"127.0.0.1:{fake.port}") as pg:
             loaded = "() => window.pltf.map.scene?.objects.length === 50000 && window.pltf.map.layer !== null"
             pg.wait_for_function(loaded, timeout=60_000)
             ours = pg.evaluate(PAN_ZOOM_JS, [frames, True])
             plain = pg.evaluate(PAN_ZOOM_JS, [frames, False])
     finally:
         fake.close()
+    return ours, plain
+
+
+@benchmark()
+def pan_zoom(config: Config) -> list[Row]:
+    """Map view frame time while panning and zooming a map of 50,000 lines (target p95 <= 16 ms)."""
+    ours, plain = pan_zoom_frames(30 if config.quick else 300)
     rows = []
     frame_target = Target("value", "<=", FRAME_TARGET_MS)
     for kind in ("pan", "zoom"):
@@ -256,16 +282,26 @@ def _stages(samples: list[tuple[int, float, float]], polls: list[tuple[str, floa
     return out
 
 
-@benchmark()
-def status_latency(config: Config) -> list[Row]:
-    """Status change (CMD_SET_FRM_PLTF on the other port) to the screen at the default polling (p95 <= 100 ms)."""
-    n = 8 if config.quick else 60
+@dataclass
+class StatusToScreen:
+    """What ``status_to_screen`` measured (ms): each change to the screen, the back-to-back client's (the
+    baseline), each change's stages (``STAGES``), the page's main thread while watching (ms/s, ``_busy``)."""
+
+    gui: list[float]
+    tight: list[float]
+    stages: list[list[float]]
+    busy: dict[str, float]
+
+
+def status_to_screen(n: int, busy_seconds: float, *, baseline: bool, static: Path | None = None) -> StatusToScreen:
+    """``n`` status changes to the screen of a page of the build ``static`` (``gateway``); with ``baseline``, ``n``
+    more seen by a client polling back to back (after the page's, so they do not load the page's samples)."""
     gui: list[float] = []
     samples: list[tuple[int, float, float]] = []
     tight: list[float] = []
     with (
         launch.reference(time_scale=1.0) as server,
-        gateway() as base,
+        gateway(static) as base,
         page(base, f"127.0.0.1:{server.ports[0]}") as pg,
     ):
         pg.evaluate(OBSERVE_JS)
@@ -280,7 +316,7 @@ def status_latency(config: Config) -> list[Row]:
                 ).json_value()
                 gui.append(shown[0] - t0 * 1000)
                 samples.append((x, t0 * 1000, shown[0]))
-            for i in range(n):  # the baseline apart: a client polling back to back loads the server
+            for i in range(n if baseline else 0):  # the baseline apart: a client polling back to back loads the server
                 x = 5000 + 10 * i
                 time.sleep(random.uniform(0.1, 0.3))
                 t0 = time.time()
@@ -289,7 +325,16 @@ def status_latency(config: Config) -> list[Row]:
                     pass
                 tight.append((time.time() - t0) * 1000)
         stages = _stages(samples, pg.evaluate("() => window.__polls"))
-        busy = _busy(pg, 2.0 if config.quick else 10.0)
+        busy = _busy(pg, busy_seconds)
+    return StatusToScreen(gui, tight, stages, busy)
+
+
+@benchmark()
+def status_latency(config: Config) -> list[Row]:
+    """Status change (CMD_SET_FRM_PLTF on the other port) to the screen at the default polling (p95 <= 100 ms)."""
+    n = 8 if config.quick else 60
+    m = status_to_screen(n, 2.0 if config.quick else 10.0, baseline=True)
+    gui, tight, stages, busy = m.gui, m.tight, m.stages, m.busy
     return (
         [
             make_row(
