@@ -13,6 +13,7 @@ import signal
 import subprocess
 import sys
 import time
+import xml.etree.ElementTree as ET
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -273,3 +274,61 @@ def test_each_platform_is_drawn_with_its_own_footprint(
     wait_for(lambda: all(n > 0 for n in inked("p00", default)), timeout=10, what="p00's own outline in its colour")
     assert inked("p00", big) == [0, 0, 0]
     wait_for(lambda: _outline_of(page, "p02") == big, what="the selected p02 with its own footprint")
+
+
+# ------------------------------------------------------------------------------------ 3: the editor's document
+
+
+def _objects(client: PlatformClient) -> list[tuple[str, dict[str, str]]]:
+    root = ET.fromstring(client.get_map().xml)
+    return [(o.tag, dict(o.attrib)) for layer in root.findall("layer") for o in layer]
+
+
+def test_an_open_map_editor_keeps_its_document_over_a_switch_and_asks_before_sending_it_elsewhere(
+    page: Any, fleet: Fleet, gui: GatewayProcess
+) -> None:
+    """Erratum E-GUI-012: p00's map loaded and edited (a line added), then p01 selected: the editor stays open
+    with the edit unsaved and says whose map it holds; Send asks first (Cancel: p01's map unchanged over its other
+    port), then sends it to p01, whose map it is from then on; p00's map is never touched."""
+    maps = {n: _objects(fleet.other[n]) for n in ("p00", "p01")}
+    page.goto(_url(gui.base, [fleet.first[n] for n in NAMES]), timeout=30_000)
+    _all_connected(page)
+    page.get_by_role("menuitem", name="Edit", exact=True).click()
+    page.get_by_role("menuitem", name="Edit Map", exact=True).click()
+    page.get_by_role("button", name="Load from platform", exact=True).click()
+    expect_text(messages(page), "Map loaded into the editor")
+    state = page.locator("output.edit-state")
+    wait_for(lambda: state.get_attribute("data-objects") == str(len(maps["p00"])), what="p00's map in the editor")
+    heading = page.locator("#pane-edit-map .edit-owner")
+    expect_text(heading, "Map of p00")
+    page.get_by_role("button", name="Add a line", exact=True).click()
+    _, box = settled_view(page)
+    page.mouse.move(box["x"] + box["width"] * 0.37, box["y"] + box["height"] * 0.41)
+    page.mouse.down()
+    page.mouse.move(box["x"] + box["width"] * 0.63, box["y"] + box["height"] * 0.44, steps=5)
+    page.mouse.up()
+    edited = len(maps["p00"]) + 1
+    wait_for(lambda: state.get_attribute("data-objects") == str(edited), what="the added line")
+
+    _select(page, "p01", fleet.first["p01"])
+    expect_text(heading, "p00's document; p01 is selected")
+    playwright_expect(page.locator("#pane-edit-map")).to_be_visible()
+    assert state.get_attribute("data-objects") == str(edited) and state.get_attribute("data-dirty") == "true"
+    canvas = page.get_by_role("img", name="Map")
+    assert canvas.get_attribute("data-drawn-line") is not None
+
+    send = page.locator("#pane-edit-map").get_by_role("button", name="Send to platform", exact=True)
+    ask = page.get_by_role("dialog", name="Send to another platform?")
+    send.click()
+    expect_text(ask, "This document is p00's (loaded from it or sent to it). Send it to p01")
+    ask.get_by_role("button", name="Cancel", exact=True).click()
+    time.sleep(1.0)  # a CMD_SET_MAP sent anyway would be active by now (guide 6.1: no reply to wait for)
+    assert _objects(fleet.other["p01"]) == maps["p01"]
+    assert state.get_attribute("data-dirty") == "true"
+
+    send.click()
+    ask.get_by_role("button", name="Send to platform", exact=True).click()
+    expect_text(messages(page), "Map sent to the platform and active")
+    wait_for(lambda: len(_objects(fleet.other["p01"])) == edited, what="the edited map on p01")
+    expect_text(heading, "Map of p01")
+    assert _objects(fleet.other["p00"]) == maps["p00"]

@@ -28,7 +28,7 @@ import { recordedSession } from "./session/recorded_open";
 import { mountTimeline } from "./panels/timeline";
 import { connText } from "./session/connwords";
 import { firstSelected, fleetTargets } from "./session/fleet";
-import { type Fleet, fleetPanel } from "./panels/fleet";
+import { editorFleet, type Fleet, fleetPanel } from "./panels/fleet";
 import { mountHelp } from "./ui/help";
 
 const params = new URLSearchParams(window.location.search);
@@ -68,9 +68,13 @@ dock.add("view-options", "menu.viewOptions", viewOptionsPanel(options, planObsta
 dock.add("plots", "menu.plots", plots.root, plots.onShow);
 dock.add("log", "menu.log", logPanel(session));
 dock.add("wire", "menu.wire", wire.root, wire.onShow);
-const editor = mapEditor(session, map, say, () => dock.close("edit-map"));
+// issue 30: a fleet's status lines; the editors' documents say whose they are (erratum E-GUI-012)
+const fleet: Fleet | null =
+  fleetList.length > 0 ? fleetPanel(wsUrl.href.split("?")[0], fleetList, target, session, map, () => title()) : null;
+const editorSide = (kind: "map" | "roadmap") => (fleet === null ? null : editorFleet(fleet, kind));
+const editor = mapEditor(session, map, say, () => dock.close("edit-map"), editorSide("map"));
 dock.add("edit-map", "menu.editMap", editor.root, editor.onShow);
-const rmEditor = roadmapEditor(session, map, say, () => dock.close("edit-roadmap"));
+const rmEditor = roadmapEditor(session, map, say, () => dock.close("edit-roadmap"), editorSide("roadmap"));
 dock.add("edit-roadmap", "menu.editRoadmap", rmEditor.root, rmEditor.onShow);
 
 session.poll("debug", () => new GetDebugDataRequest(), 1);
@@ -129,8 +133,6 @@ const title = () => {
   document.title = t("app.title");
 };
 onLanguage(title);
-const fleet: Fleet | null =
-  fleetList.length > 0 ? fleetPanel(wsUrl.href.split("?")[0], fleetList, target, session, map, title) : null;
 const app = document.getElementById("app")!;
 app.append(
   header,

@@ -3,6 +3,7 @@
 import { describe, expect, it } from "vitest";
 import {
   bodyAt,
+  DocumentOwner,
   FLEET_COLOURS,
   type FleetBody,
   firstSelected,
@@ -106,5 +107,20 @@ describe("the map's bodies", () => {
     expect(bodyAt(two, 3000 - 950, 0, reach(DEFAULT))?.name).toBe("big"); // within big's 1032 mm
     expect(bodyAt(two, 600, 0, reach(DEFAULT))).toBeNull(); // beyond small's default 507 mm
     expect(bodyAt([{ ...body("small", 0, 0), footprint: DEFAULT }], 600, 0, 5000)).toBeNull(); // its own, not 5 m
+  });
+});
+
+describe("whose document an editor holds (E-GUI-012)", () => {
+  it("is the platform selected when it came, kept over a switch until it is taken again", () => {
+    let selected = "a:1";
+    const owner = new DocumentOwner(() => selected);
+    expect(owner.platform).toBe("a:1");
+    expect(owner.elsewhere).toBe(false);
+    selected = "b:2"; // a switch: the document stays a:1's
+    expect(owner.platform).toBe("a:1");
+    expect(owner.elsewhere).toBe(true);
+    owner.take(); // loaded from, or sent to, the selected platform
+    expect(owner.platform).toBe("b:2");
+    expect(owner.elsewhere).toBe(false);
   });
 });

@@ -7,6 +7,7 @@
  */
 import { field, h } from "../dom";
 import { bind, type Key, t } from "../i18n/i18n";
+import type { EditorFleet } from "../panels/fleet";
 import type { MapView } from "../panels/mapview";
 import { guard } from "../panels/control";
 import { type GetMapReply, GetMapRequest, SetMapRequest } from "../pltf";
@@ -114,6 +115,7 @@ export function mapEditor(
   view: MapView,
   say: (s: string) => void,
   close: () => void = () => undefined,
+  fleet: EditorFleet | null = null,
 ): { root: HTMLElement; onShow: (shown: boolean) => void } {
   let open = false;
   const labelIn = h("input", { type: "text", class: "edit-label-text" });
@@ -126,6 +128,7 @@ export function mapEditor(
   const bar = new Toolbar<EditTool>("edit.tools");
 
   const replaced = (how: Replaced): void => {
+    fleet?.take(); // a fleet: the new document is the selected platform's (erratum E-GUI-012)
     layers.reset(shell.history.doc);
     if (how !== "new") {
       const loaded = shell.history;
@@ -256,7 +259,7 @@ export function mapEditor(
   const deleteB = bar.action("edit.delete", () => deleteSelection(ed, env));
   const invertB = bar.action("edit.invert", () => invertSelected(ed, env));
   bar.separator();
-  const sendB = sendButton(shell, bar);
+  const sendB = sendButton(shell, bar, fleet?.confirmSend);
   guard(session, sendB); // CMD_SET_MAP: only while this tab may command (issue 33)
   const closeB = closeButton(shell, bar);
   // the tooltips at the bottom of the toolbar (guide 5.4): the pointed-at button's use, else the chosen tool's
@@ -323,5 +326,6 @@ export function mapEditor(
   };
   const labelField = field("edit.labelText", labelIn);
   labelField.classList.add("edit-label");
-  return { root: h("div", { class: "map-editor" }, bar.root, labelField, layers.root, typed.root, state, tip), onShow };
+  const parts = [bar.root, labelField, layers.root, typed.root, state, tip];
+  return { root: h("div", { class: "map-editor" }, ...(fleet === null ? [] : [fleet.heading]), ...parts), onShow };
 }

@@ -8,6 +8,7 @@
  */
 import { button, field, h } from "../dom";
 import { bind, type Key, t } from "../i18n/i18n";
+import type { EditorFleet } from "../panels/fleet";
 import type { MapView } from "../panels/mapview";
 import { guard } from "../panels/control";
 import { type GetRoadmapReply, GetRoadmapRequest, SetRoadmapRequest } from "../pltf";
@@ -100,6 +101,7 @@ export function roadmapEditor(
   view: MapView,
   say: (s: string) => void,
   close: () => void = () => undefined,
+  fleet: EditorFleet | null = null,
 ): { root: HTMLElement; onShow: (shown: boolean) => void } {
   let open = false;
   const tip = h("p", { class: "edit-tip", role: "note" });
@@ -118,6 +120,7 @@ export function roadmapEditor(
       say,
       changed: () => refresh(),
       replaced: () => {
+        fleet?.take(); // a fleet: the new document is the selected platform's (erratum E-GUI-012)
         ed.selected = null;
         ed.edgeSel = null;
         refresh();
@@ -181,7 +184,7 @@ export function roadmapEditor(
     applyTyped(ed, env, { name: nameIn.value, x: xIn.value, y: yIn.value, angle: angleIn.value }),
   );
   bar.separator();
-  const sendB = sendButton(shell, bar);
+  const sendB = sendButton(shell, bar, fleet?.confirmSend);
   guard(session, sendB); // CMD_SET_ROADMAP: only while this tab may command (issue 33)
   const closeB = closeButton(shell, bar); // guide 5.5 "looks similar to the toolbar of the map editor"
   // guide 5.5 names the buttons of the shell only (its words say "map": read as "roadmap", erratum E-GUI-009)
@@ -238,5 +241,6 @@ export function roadmapEditor(
       session.refreshDocuments(); // the view shows the platform's roadmap again
     }
   };
-  return { root: h("div", { class: "roadmap-editor" }, bar.root, fields, state, tip), onShow };
+  const parts = [bar.root, fields, state, tip];
+  return { root: h("div", { class: "roadmap-editor" }, ...(fleet === null ? [] : [fleet.heading]), ...parts), onShow };
 }

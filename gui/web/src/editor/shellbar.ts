@@ -97,8 +97,14 @@ export function historyButtons<H extends EditHistory, T extends string>(
 export function sendButton<H extends EditHistory, T extends string>(
   shell: DocumentShell<H>,
   bar: Toolbar<T>,
+  before: () => Promise<boolean> = async () => true,
 ): HTMLButtonElement {
-  return bar.action("edit.send", () => void shell.send());
+  // `before`: a fleet's question when the document is another platform's (panels/fleet.ts, erratum E-GUI-012)
+  return bar.action("edit.send", async () => {
+    if (await before()) {
+      await shell.send();
+    }
+  });
 }
 
 /** Close the toolbar (asks for saving if necessary). */

@@ -90,6 +90,12 @@ export const de: Record<Key, string> = {
   "fleet.noPose": "(Pose unbekannt)",
   "fleet.at": "bei x {x} mm, y {y} mm",
   "fleet.onMap": "Plattformen: {list}",
+  "fleet.mapOf": "Karte von {owner}",
+  "fleet.roadmapOf": "Roadmap von {owner}",
+  "fleet.ownerElsewhere": "Dokument von {owner}; ausgewählt ist {selected}",
+  "fleet.sendTitle": "An eine andere Plattform senden?",
+  "fleet.sendAsk":
+    "Dieses Dokument gehört zu {owner} (von dort geladen oder dorthin gesendet). An {selected}, die jetzt ausgewählte Plattform, senden?",
   "map.none": "Keine Karte",
   "map.summary": "Karte {name}, gezeichnet/im Dokument:",
   "map.sentShift": "CMD_SET_FRM_PLTF gesendet: x {x} mm, y {y} mm, {angle}°",

@@ -88,6 +88,12 @@ export const en = {
   "fleet.noPose": "(pose unknown)",
   "fleet.at": "at x {x} mm, y {y} mm",
   "fleet.onMap": "Platforms: {list}",
+  "fleet.mapOf": "Map of {owner}",
+  "fleet.roadmapOf": "Roadmap of {owner}",
+  "fleet.ownerElsewhere": "{owner}'s document; {selected} is selected",
+  "fleet.sendTitle": "Send to another platform?",
+  "fleet.sendAsk":
+    "This document is {owner}'s (loaded from it or sent to it). Send it to {selected}, the platform selected now?",
   "map.none": "No map",
   "map.summary": "Map {name}, drawn/in the document:",
   "map.sentShift": "CMD_SET_FRM_PLTF sent: x {x} mm, y {y} mm, {angle}°",

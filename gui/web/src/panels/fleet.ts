@@ -13,6 +13,7 @@ import { h } from "../dom";
 import { bind, type Key, onLanguage, t } from "../i18n/i18n";
 import { type GetPltfParamVecReply, GetPltfParamVecRequest, type GetStatusReply } from "../pltf";
 import {
+  DocumentOwner,
   type FleetBody,
   type FleetMember,
   fleetMembers,
@@ -24,6 +25,7 @@ import { PlatformSession } from "../session/session";
 import type { Footprint } from "../view/overlay";
 import { platformGeometry } from "./map/platform";
 import type { MapView } from "./mapview";
+import { dialog } from "../ui/dialog";
 import { poseText } from "./statusbar";
 
 /** GET_STATUS of a watched platform, Hz: the map's other bodies need no more (the selected one: 20 Hz) */
@@ -43,6 +45,10 @@ export interface Fleet {
   readonly root: HTMLElement;
   readonly selected: string;
   select(target: string): void;
+  /** The platform's name (the fleet file's, else its address). */
+  nameOf(target: string): string;
+  /** Called after every switch of the selected platform. */
+  onSwitch(f: () => void): void;
 }
 
 export function fleetPanel(
@@ -58,6 +64,7 @@ export function fleetPanel(
   bind(root, "fleet.title", { text: false });
   bind(list, "fleet.title", { text: false });
   let current = selected;
+  const switched: Array<() => void> = [];
   const watched: Watched[] = fleetMembers(targets).map((member) => {
     const line = h("button", { class: "fleet-line", type: "button", "data-target": member.target });
     line.style.borderLeftColor = member.colour;
@@ -180,6 +187,9 @@ export function fleetPanel(
     watched.forEach(show);
     drawn();
     onSelect(target);
+    for (const f of switched) {
+      f();
+    }
   };
 
   map.onPick = select;
@@ -190,6 +200,9 @@ export function fleetPanel(
       show(w);
     }
     drawn();
+    for (const f of switched) {
+      f(); // the names came: the editors' headings say them
+    }
   });
   onLanguage(() => watched.forEach(show));
   for (const w of watched) {
@@ -203,6 +216,56 @@ export function fleetPanel(
       return current;
     },
     select,
+    nameOf: (target) => watched.find((w) => w.member.target === target)?.member.name ?? target,
+    onSwitch: (f) => switched.push(f),
+  };
+}
+
+/** What an editor needs of the fleet (erratum E-GUI-012): whose its document is, said and asked. */
+export interface EditorFleet {
+  /** the editor's heading: "Map of p00" ("p00's document; p01 is selected" after a switch) */
+  readonly heading: HTMLElement;
+  /** A new document came into the editor (loaded, opened, new): it is the selected platform's. */
+  take(): void;
+  /** Before Send: true to send; asks first when the document is another platform's than the selected one. */
+  confirmSend(): Promise<boolean>;
+}
+
+/**
+ * The fleet's side of an editor: a switch of the selected platform leaves the editor's document open, with its
+ * history and unsaved changes; the heading names the platform it belongs to, and a Send to another platform asks.
+ */
+export function editorFleet(fleet: Fleet, kind: "map" | "roadmap"): EditorFleet {
+  const owner = new DocumentOwner(() => fleet.selected);
+  const heading = h("p", { class: "edit-owner", role: "note" });
+  const words = () => ({ owner: fleet.nameOf(owner.platform), selected: fleet.nameOf(fleet.selected) });
+  const said = () => {
+    const w = words();
+    heading.textContent = owner.elsewhere
+      ? t("fleet.ownerElsewhere", w)
+      : t(kind === "map" ? "fleet.mapOf" : "fleet.roadmapOf", w);
+    heading.dataset.owner = w.owner;
+    heading.dataset.selected = w.selected;
+  };
+  fleet.onSwitch(said);
+  onLanguage(said);
+  return {
+    heading,
+    take: () => {
+      owner.take();
+      said();
+    },
+    confirmSend: async () => {
+      if (owner.elsewhere) {
+        const ask = h("p", {}, t("fleet.sendAsk", words()));
+        if ((await dialog("fleet.sendTitle", ask, ["edit.send", "dialog.cancel"])) !== 0) {
+          return false;
+        }
+      }
+      owner.take(); // sent to the selected platform: the document is its now
+      said();
+      return true;
+    },
   };
 }
 

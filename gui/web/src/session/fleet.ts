@@ -142,3 +142,33 @@ export function selectedHref(href: string, target: string): string {
   url.searchParams.set("selected", target);
   return url.href;
 }
+
+/**
+ * Whose document an editor holds (erratum E-GUI-012): the platform selected when it came into the editor (loaded
+ * from it, opened from a file or started new) or was last sent to. A switch of the selected platform leaves the
+ * document, its history and its owner alone; sending it elsewhere asks first (panels/fleet.ts) and makes the
+ * platform it went to its owner.
+ */
+export class DocumentOwner {
+  private owner: string;
+
+  /** `selected`: the platform selected now (its target) */
+  constructor(private readonly selected: () => string) {
+    this.owner = selected();
+  }
+
+  /** The document is now the selected platform's. */
+  take(): void {
+    this.owner = this.selected();
+  }
+
+  /** The target of the platform the document belongs to. */
+  get platform(): string {
+    return this.owner;
+  }
+
+  /** Another platform than the document's is selected: a Send would go there. */
+  get elsewhere(): boolean {
+    return this.owner !== this.selected();
+  }
+}
