@@ -217,7 +217,7 @@ describe("the document shell: send then verify", () => {
   it("sends, marks the document clean, and reads it back: active", async () => {
     const { shell, seen, platform } = setup();
     shell.history.add("gamma");
-    await shell.send();
+    expect(await shell.send()).toBe(true);
     expect(seen.sent).toEqual([["edited", "words\ngamma"]]);
     expect(platform.text).toBe("words\ngamma");
     expect(shell.history.dirty).toBe(false);
@@ -238,7 +238,7 @@ describe("the document shell: send then verify", () => {
     const { shell, seen } = setup();
     shell.history.add("ok");
     shell.history.add("bad");
-    await shell.send();
+    expect(await shell.send()).toBe(false); // a fleet's editor keeps the document's owner (E-GUI-012)
     expect(seen.sent).toEqual([]);
     expect(seen.invalid).toEqual([3]);
     expect(seen.said.at(-1)).toBe(`invalid {"why":"'bad' is not allowed"}`);
@@ -248,12 +248,12 @@ describe("the document shell: send then verify", () => {
   it("says why a document cannot be written or sent, and it stays dirty", async () => {
     const { shell, seen, script } = setup();
     shell.history.add("unwritable");
-    await shell.send();
+    expect(await shell.send()).toBe(false);
     expect(seen.said.at(-1)).toBe("cannot write 'unwritable'");
     shell.history.undo();
     shell.history.add("fine");
     script.reachable = false;
-    await shell.send();
+    expect(await shell.send()).toBe(false);
     expect(seen.said.at(-1)).toBe("not connected");
     expect([seen.sent, shell.history.dirty]).toEqual([[], true]);
   });

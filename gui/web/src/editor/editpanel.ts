@@ -259,7 +259,7 @@ export function mapEditor(
   const deleteB = bar.action("edit.delete", () => deleteSelection(ed, env));
   const invertB = bar.action("edit.invert", () => invertSelected(ed, env));
   bar.separator();
-  const sendB = sendButton(shell, bar, fleet?.confirmSend);
+  const sendB = sendButton(shell, bar, fleet);
   guard(session, sendB); // CMD_SET_MAP: only while this tab may command (issue 33)
   const closeB = closeButton(shell, bar);
   // the tooltips at the bottom of the toolbar (guide 5.4): the pointed-at button's use, else the chosen tool's

@@ -184,7 +184,7 @@ export function roadmapEditor(
     applyTyped(ed, env, { name: nameIn.value, x: xIn.value, y: yIn.value, angle: angleIn.value }),
   );
   bar.separator();
-  const sendB = sendButton(shell, bar, fleet?.confirmSend);
+  const sendB = sendButton(shell, bar, fleet);
   guard(session, sendB); // CMD_SET_ROADMAP: only while this tab may command (issue 33)
   const closeB = closeButton(shell, bar); // guide 5.5 "looks similar to the toolbar of the map editor"
   // guide 5.5 names the buttons of the shell only (its words say "map": read as "roadmap", erratum E-GUI-009)

@@ -200,7 +200,8 @@ export class DocumentShell<H extends EditHistory> {
    * telegram, answered after it (guide 6.1): the platform took it when the document read back holds what was
    * sent. The counts in the messages are those of the document sent.
    */
-  async send(): Promise<void> {
+  /** Send the document; true once the platform got it (then read back), false when it was not sent. */
+  async send(): Promise<boolean> {
     const history = this.current;
     const name = this.docName;
     let text: string;
@@ -208,21 +209,21 @@ export class DocumentShell<H extends EditHistory> {
       text = this.kind.serialise(history);
     } catch (e) {
       this.panel.say(reason(e));
-      return;
+      return false;
     }
     const verdict = await this.kind.validate(text);
     if (!verdict.ok) {
       this.panel.invalid?.(verdict, text, history);
       this.say("invalid", { why: verdict.message });
       this.panel.changed();
-      return;
+      return false;
     }
     const counts = this.kind.counts(history);
     try {
       this.link.send(name || "edited", text);
     } catch (e) {
       this.panel.say(reason(e));
-      return;
+      return false;
     }
     history.markSaved();
     this.say("sent", counts);
@@ -233,6 +234,7 @@ export class DocumentShell<H extends EditHistory> {
     } catch (e) {
       this.panel.say(reason(e));
     }
+    return true;
   }
 
   /**

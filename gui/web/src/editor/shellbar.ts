@@ -97,12 +97,16 @@ export function historyButtons<H extends EditHistory, T extends string>(
 export function sendButton<H extends EditHistory, T extends string>(
   shell: DocumentShell<H>,
   bar: Toolbar<T>,
-  before: () => Promise<boolean> = async () => true,
+  fleet: { confirmSend(): Promise<boolean>; sent(): void } | null = null,
 ): HTMLButtonElement {
-  // `before`: a fleet's question when the document is another platform's (panels/fleet.ts, erratum E-GUI-012)
+  // a fleet asks first when the document is another platform's, and it is that platform's once sent
+  // (panels/fleet.ts, erratum E-GUI-012)
   return bar.action("edit.send", async () => {
-    if (await before()) {
-      await shell.send();
+    if ((await fleet?.confirmSend()) === false) {
+      return;
+    }
+    if (await shell.send()) {
+      fleet?.sent();
     }
   });
 }

@@ -229,6 +229,8 @@ export interface EditorFleet {
   take(): void;
   /** Before Send: true to send; asks first when the document is another platform's than the selected one. */
   confirmSend(): Promise<boolean>;
+  /** The selected platform got the document: it is that platform's now. */
+  sent(): void;
 }
 
 /**
@@ -262,9 +264,11 @@ export function editorFleet(fleet: Fleet, kind: "map" | "roadmap"): EditorFleet 
           return false;
         }
       }
-      owner.take(); // sent to the selected platform: the document is its now
-      said();
       return true;
+    },
+    sent: () => {
+      owner.take(); // sent to the selected platform: the document is its now (not before: a refused send keeps it)
+      said();
     },
   };
 }
