@@ -28,9 +28,9 @@ def case(case_id: str, func: Callable[[CaseContext], None]) -> Case:
     )
 
 
-def run(target: LinkTarget, *cases: Case) -> RunResult:
+def run(target: LinkTarget, *cases: Case, time_scale: float = 10.0) -> RunResult:
     config = Config(
-        "127.0.0.1", target.ports[0], target.ports[1], time_scale=10.0, reply_timeout=1.0, connect_window=1.0
+        "127.0.0.1", target.ports[0], target.ports[1], time_scale=time_scale, reply_timeout=1.0, connect_window=1.0
     )
     config.min_wall = 0.05
     return Runner(config, cases).run()
@@ -141,7 +141,7 @@ def test_a_timeline_samples_at_the_platforms_pace_and_judges_each_reply_at_its_t
         events = [(0.0, build("request", "CMD_CONNECT_TO_PLTF")), (0.5, build("request", "CMD_INIT_PLTF"))]
         seen["samples"] = [(t, r.initialized) for t, r in ctx.timeline(ASK, 1.0, events)]  # type: ignore[attr-defined]
 
-    result = run(link, case("4.2/t/timeline", step))
+    result = run(link, case("4.2/t/timeline", step), time_scale=2.0)  # 0.5 s of wall time: asks 50 ms apart
     assert result.results[0].verdict is Verdict.PASS, result.results[0].message
     samples = seen["samples"]
     assert seen["paced"] and len(samples) >= 8 and [t for t, _ in samples] == sorted(t for t, _ in samples)
