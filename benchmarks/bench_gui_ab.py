@@ -118,6 +118,8 @@ def _pan_zoom(config: Config, static: Path) -> Figures:
         _quantiles(out, f"{kind}: layer worker + culling", "frame_", ours[kind])
         _quantiles(out, f"{kind}: drawn on the page per frame", "frame_", plain[kind])
     _quantiles(out, "layer worker (off the page's thread)", "layer_", ours["layer"])
+    # of the on-page frame, the static layer's drawing alone (drawStatic; the rest: the canvas, copying the layer)
+    _quantiles(out, "static layer drawn on the page (drawStatic alone)", "layer_", plain["layer"])
     return out
 
 
