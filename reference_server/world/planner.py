@@ -9,7 +9,10 @@ Rules (erratum E-MOT-006):
   a convex polygon of 8 vertices; vertices slightly pushed out so they keep more than ``radius``. The graph's
   nodes are the vertices that are free and allowed; its edges the pairs that see each other (segment keeps
   ``radius`` from everything) and are tangent at both ends (the reduced visibility graph: only such edges
-  can be on a shortest path). Built once per map and per radius ("lookup data").
+  can be on a shortest path). Built once per map and per radius ("lookup data"): ``Planner.shared`` hands
+  every caller with an equal map (same walls, lines, circles, areas) and radius the same planner while one is
+  alive, so a fleet whose platforms load one map builds its graph once, not once per platform (a planner is
+  never changed after it is built; ``plan`` only reads it).
 - ``plan`` adds the start, the goal and the octagons of obstacles seen on the way (circles), drops the static
   edges those obstacles block, and runs Dijkstra (scipy). Start and goal whose disc touches something but
   whose real footprint is free connect with their own clearance instead of ``radius``.
@@ -19,7 +22,9 @@ Rules (erratum E-MOT-006):
 from __future__ import annotations
 
 import enum
+import hashlib
 import math
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
@@ -101,7 +106,35 @@ def _inward(v: F64, prev: F64, nxt: F64, w: F64) -> np.ndarray:
     return np.asarray((a > 0) & (b > 0))
 
 
+def _fingerprint(geometry: MapGeometry, radius: float) -> tuple[bytes, float]:
+    """What a planner is built from: the map's physical and area arrays (bytes, with their shapes) and the radius."""
+    h = hashlib.blake2b(digest_size=20)
+    for a in (geometry.walls, geometry.aux, geometry.circles, geometry.reflectors):
+        h.update(repr(a.shape).encode())
+        h.update(np.ascontiguousarray(a, dtype=np.float64).tobytes())
+    for group in (geometry.workareas, geometry.prohibited):
+        h.update(b"|%d" % len(group))
+        for a in group:
+            h.update(repr(a.shape).encode())
+            h.update(np.ascontiguousarray(a, dtype=np.float64).tobytes())
+    return h.digest(), float(radius)
+
+
+_SHARED: weakref.WeakValueDictionary[tuple[bytes, float], Planner] = weakref.WeakValueDictionary()
+
+
 class Planner:
+    @classmethod
+    def shared(cls, geometry: MapGeometry, radius: float) -> Planner:
+        """A planner for ``geometry`` and ``radius``: the one already built for an equal map and radius while
+        anything holds it, else a new one (see the module rules)."""
+        key = _fingerprint(geometry, radius)
+        planner = _SHARED.get(key)
+        if planner is None:
+            planner = cls(geometry, radius)
+            _SHARED[key] = planner
+        return planner
+
     def __init__(self, geometry: MapGeometry, radius: float) -> None:
         self.geometry = geometry
         self.radius = radius

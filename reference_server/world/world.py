@@ -449,7 +449,7 @@ class World:
 
     def planner(self) -> Planner:
         if self._planner is None:
-            self._planner = Planner(self.geometry or MapGeometry(), self.footprint.radius + PLAN_MARGIN)
+            self._planner = Planner.shared(self.geometry or MapGeometry(), self.footprint.radius + PLAN_MARGIN)
         return self._planner
 
     def plan(self, start: Pose, goal: Pose, obstacles: F64) -> Plan:

@@ -112,3 +112,19 @@ def test_many_maze_queries_find_paths_wherever_the_grid_does() -> None:
         grid = grid_astar(free, 50.0, start, goal)
         plan = pl.plan(start, goal)
         assert (grid is None) or plan.state is PlannerState.PATH_FOUND
+
+
+def test_equal_maps_share_one_planner_and_plan_alike() -> None:
+    """A fleet's platforms each parse the same map: they get one planner (one visibility graph), which plans
+    what a planner of their own would; another map, area or radius gets its own."""
+    first, second = geometry_of(SPLIT), geometry_of(SPLIT)
+    assert first is not second
+    shared = Planner.shared(first, R)
+    assert Planner.shared(second, R) is shared
+    start, goal = (2000.0, 2000.0), (8000.0, 2000.0)
+    assert shared.plan(start, goal) == Planner(second, R).plan(start, goal)
+    assert Planner.shared(first, R + 1.0) is not shared
+    assert Planner.shared(geometry_of([*SPLIT, (1000.0, 9000.0, 2000.0, 9000.0)]), R) is not shared
+    area = (np.array([[0.0, 0.0], [10000.0, 0.0], [10000.0, 9000.0], [0.0, 9000.0]]),)
+    fenced = MapGeometry(walls=first.walls, aux=first.aux, workareas=area)
+    assert Planner.shared(fenced, R) is not shared
