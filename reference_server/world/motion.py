@@ -65,6 +65,9 @@ class Motion:
     _coll_key: tuple[float, ...] = ()
     _coll_ahead: bool = False
     _coll_turn: tuple[bool, bool] = (False, False)  # a turn left / right would hit something
+    _echo_key: tuple[Any, ...] = ()  # the echoes, footprint and direction ``_echo_hit`` was computed for
+    _echo_mounts: F64 | None = None
+    _echo_hit: bool = False
 
     # ---- commands
     def command_velocity(self, v: float, w: float, now: float, kind: str, params: Params) -> None:
@@ -195,10 +198,20 @@ class Motion:
         if w != 0.0 and abs(v) < TURN_ON_SPOT:
             sign = 1.0 if w > 0 else -1.0
             # a turn on the spot swings the rear out to the side, where the laser cannot see: the echoes guard it
-            echoes = echo_points(us(), ultrasonic_mounts(params))
-            if self._coll_turn[0 if w > 0 else 1] or _turn_hits(echoes, nav, sign):
+            if self._coll_turn[0 if w > 0 else 1] or self._echoes_hit(us(), params, nav, sign):
                 w, self.collision = 0.0, True
         return v, w
+
+    def _echoes_hit(self, dist: list[float], params: Params, nav: Navigator, sign: float) -> bool:
+        """``_turn_hits`` of the places the echoes may come from (``echo_points``), computed again only when the
+        echoes, the sensors' mounts, the footprint or the direction changed: a turn held back asks every control
+        period, the echoes change once per sensing period."""
+        mounts = ultrasonic_mounts(params)
+        key = (*dist, nav.front, nav.rear, nav.half_width, nav.sweep, sign)
+        if key != self._echo_key or mounts is not self._echo_mounts:
+            self._echo_key, self._echo_mounts = key, mounts
+            self._echo_hit = _turn_hits(echo_points(dist, mounts), nav, sign)
+        return self._echo_hit
 
 
 def _turn_hits(pts: np.ndarray, nav: Navigator, sign: float) -> bool:

@@ -146,6 +146,23 @@ def test_a_turn_on_the_spot_does_not_swing_the_rear_into_what_only_the_ultrasoni
     assert sim.world.truth[2] > 0.5 and sim.contacts == 0
 
 
+def test_a_turn_held_back_by_an_echo_goes_on_once_the_echo_is_gone() -> None:
+    # the turn check remembers its verdict on the echoes while they stay the same: a new echo must end it
+    sim = make_sim(OPEN, (10000.0, 10000.0, 0.0))
+    sim.world.set_obstacle("post", (10000.0 - 250.0, 10000.0 + 270.0 + 150.0, 60.0))
+    sim.world.sense(0.0, force=True)
+    for _ in range(5):
+        sim.world.command_velocity(0.0, -0.5, sim.now)
+        sim.run(0.2)
+    held_at = sim.world.truth[2]
+    assert sim.world.collision and abs(held_at) < math.radians(15.0)
+    sim.world.set_obstacle("post", None)
+    for _ in range(5):
+        sim.world.command_velocity(0.0, -0.5, sim.now)
+        sim.run(0.2)
+    assert sim.world.truth[2] < held_at - 0.3 and not sim.world.collision and sim.contacts == 0
+
+
 def _turn_beside_a_wall(gap: float, w: float) -> tuple[float, bool]:
     """Turn on the spot by 90 degrees (``w`` rad/s) beside a wall parallel to the heading, ``gap`` mm to the right
     of the wheel axis' midpoint (the default footprint: rear corners 504 mm from it): (turned rad, collision)."""
