@@ -11,12 +11,14 @@ Rules:
 
 from __future__ import annotations
 
+import bisect
 import functools
+import itertools
 import math
 import random
 import struct
-from collections.abc import Callable
-from typing import Any
+from collections.abc import Callable, Sequence
+from typing import Any, TypeVar
 
 from pltf.fuzz import xml_attacks
 from pltf.fuzz.case import Case
@@ -101,13 +103,22 @@ HEAVY = frozenset(
 HEAVY_WEIGHT = 0.1
 
 
+T = TypeVar("T")
+
+
+def weighted(rng: random.Random, population: Sequence[T], cum_weights: list[float]) -> T:
+    """``rng.choices(population, weights)[0]`` from the weights' running sums, computed once: the same draw from
+    the same state (``random.choices`` sums the weights on every call)."""
+    return population[bisect.bisect(cum_weights, rng.random() * (cum_weights[-1] + 0.0), 0, len(cum_weights) - 1)]
+
+
 @functools.cache
-def _weights(forbidden: frozenset[int]) -> tuple[float, ...]:
-    return tuple(HEAVY_WEIGHT if t.name in HEAVY else 1.0 for t in request_defs(forbidden))
+def _cum_weights(forbidden: frozenset[int]) -> list[float]:
+    return list(itertools.accumulate(HEAVY_WEIGHT if t.name in HEAVY else 1.0 for t in request_defs(forbidden)))
 
 
 def pick_telegram(rng: random.Random, forbidden: frozenset[int]) -> TelegramDef:
-    return rng.choices(request_defs(forbidden), _weights(forbidden))[0]
+    return weighted(rng, request_defs(forbidden), _cum_weights(forbidden))
 
 
 @functools.cache
@@ -115,10 +126,22 @@ def _free_ids(forbidden: frozenset[int]) -> tuple[int, ...]:
     return tuple(i for i in range(256) if i not in forbidden)
 
 
+_SORTED_ALLOWED: dict[int, tuple[FieldDef, tuple[int, ...] | None]] = {}  # id(field) -> (field, its values sorted)
+
+
+def _sorted_allowed(f: FieldDef) -> tuple[int, ...] | None:
+    """``sorted(allowed_values(f))``, once per field (fields live as long as the process: ``load_telegrams``)."""
+    known = _SORTED_ALLOWED.get(id(f))
+    if known is None or known[0] is not f:
+        allowed = allowed_values(f)
+        known = _SORTED_ALLOWED[id(f)] = (f, None if allowed is None else tuple(sorted(allowed)))
+    return known[1]
+
+
 def _valid_scalar(f: FieldDef, rng: random.Random) -> Any:
-    allowed = allowed_values(f)
+    allowed = _sorted_allowed(f)
     if allowed is not None:
-        return rng.choice(sorted(allowed))
+        return rng.choice(allowed)
     if f.type == "DOUBLE":
         return rng.choice(BOUNDARY["DOUBLE"]) if rng.random() < 0.5 else rng.uniform(-1e6, 1e6)
     rng_ = value_range(f)

@@ -9,8 +9,11 @@ Rules:
   from the drawing loop for every 64 KiB chunk - at 5 ms a switch, a window of a few hundred KiB waited tens of
   milliseconds on the campaign's side, about 15 % of a run.)
 - Knowledge goes the other way as changes only: the fields of ``Knowledge.light`` that differ from what was sent
-  last, and the documents that changed. While its window waits for room in the pipe, the child reads knowledge,
-  so neither side can block the other for good.
+  last, and the documents that changed, one message per window taken (empty when nothing changed). While its
+  window waits for room in the pipe, the child reads knowledge, so neither side can block the other for good.
+- The child draws at most ``AHEAD`` windows the campaign has not taken (each message is a window taken): a pipe
+  of 1 MiB held up to a dozen windows of small cases, drawn and never served when the target is slow or the run
+  ends - against a target serving a few hundred cases a second, more CPU than the cases served.
 - The child is forked before the campaign opens its connections and closes every socket it inherited anyway, so
   that a connection the campaign closes is closed. Where fork is not available the windows are drawn in a thread.
 """
@@ -36,6 +39,7 @@ from pltf.fuzz.schedule import Scheduler
 
 PIPE_SIZE = 1 << 20  # bytes (Linux's default /proc/sys/fs/pipe-max-size): a typical window fits whole
 GET_TIMEOUT = 30.0  # s the campaign waits for a window before it gives up
+AHEAD = 2  # windows drawn and not yet taken, at most (a window takes ~10 ms to draw, a campaign ~0.1-1 s to run)
 _LENGTH = struct.Struct(">Q")
 
 
@@ -45,7 +49,7 @@ def _enlarge(fd: int) -> None:
 
 
 class Prefetcher:
-    def __init__(self, sched: Scheduler, start: int, window: int, ahead: int = 3) -> None:
+    def __init__(self, sched: Scheduler, start: int, window: int, ahead: int = AHEAD) -> None:
         self.sched, self.next_index, self.window = sched, start, window
         self.sent_light: dict[str, Any] = {}
         self.sent_documents: dict[str, bytes] = {}
@@ -61,7 +65,8 @@ class Prefetcher:
                 _enlarge(fd)
             ctx = multiprocessing.get_context("fork")
             ends = (win_w, kb_r, self.win_r, self.kb_w)  # the child keeps the first two, closes the parent's
-            self.proc = ctx.Process(target=_child, args=(sched, start, window, ends), name="fuzz-prefetch", daemon=True)
+            args = (sched, start, window, ends, ahead)
+            self.proc = ctx.Process(target=_child, args=args, name="fuzz-prefetch", daemon=True)
             self.proc.start()
             os.close(win_w)
             os.close(kb_r)
@@ -82,18 +87,18 @@ class Prefetcher:
             i += self.window
 
     def _send_knowledge(self) -> None:
+        """A window was taken: the knowledge that changed since the last message (none: an empty one)."""
         kb = self.sched.kb
-        if self.proc is None or kb.version == self.sent_version:
-            return
-        light = {k: v for k, v in kb.light().items() if k not in self.sent_light or self.sent_light[k] != v}
-        documents = {k: v for k, v in kb.documents.items() if self.sent_documents.get(k) is not v}
-        self.sent_version = kb.version
-        if not light and not documents:
-            return
-        self.sent_light.update({k: v.copy() if isinstance(v, list | dict) else v for k, v in light.items()})
-        self.sent_documents = dict(kb.documents)
+        light: dict[str, Any] = {}
+        documents: dict[str, bytes] = {}
+        if kb.version != self.sent_version:
+            light = {k: v for k, v in kb.light().items() if k not in self.sent_light or self.sent_light[k] != v}
+            documents = {k: v for k, v in kb.documents.items() if self.sent_documents.get(k) is not v}
+            self.sent_version = kb.version
+            self.sent_light.update({k: v.copy() if isinstance(v, list | dict) else v for k, v in light.items()})
+            self.sent_documents = dict(kb.documents)
         with contextlib.suppress(BrokenPipeError):  # the child is gone: the next ``get`` says so
-            _write_all(self.kb_w, _message((light, documents)))
+            _write_all(self.kb_w, _EMPTY if not light and not documents else _message((light, documents)))
 
     def get(self) -> tuple[int, list[Case]]:
         """(index of the first case, the cases) of the next window."""
@@ -104,7 +109,7 @@ class Prefetcher:
                 raise RuntimeError(f"the case generator produced nothing for {GET_TIMEOUT:g} s") from None
         else:
             first, cases, dropped = pickle.loads(_read_message(self.win_r, time.monotonic() + GET_TIMEOUT))
-            self._send_knowledge()  # after the read: the child may be waiting for room to write the next window
+            self._send_knowledge()  # after the read: the child may be waiting for room (or leave) to draw the next
         if isinstance(cases, str):
             raise RuntimeError(f"the case generator failed:\n{cases}")
         self.sched.dropped = dropped
@@ -126,6 +131,9 @@ class Prefetcher:
 def _message(obj: object) -> bytes:
     data = pickle.dumps(obj, protocol=pickle.HIGHEST_PROTOCOL)
     return _LENGTH.pack(len(data)) + data
+
+
+_EMPTY = _message(({}, {}))
 
 
 def _write_all(fd: int, data: bytes) -> None:
@@ -155,9 +163,10 @@ def _read_message(fd: int, deadline: float) -> bytes:
 # ---------------------------------------------------------------------------------------------- the child
 
 
-def _child(sched: Scheduler, i: int, window: int, ends: tuple[int, int, int, int]) -> None:
-    """Windows of cases into ``out`` for ever (the parent terminates it); knowledge from ``kb_in``. The
-    parent's ends of both pipes are closed here, so that each side sees the other one go."""
+def _child(sched: Scheduler, i: int, window: int, ends: tuple[int, int, int, int], ahead: int = AHEAD) -> None:
+    """Windows of cases into ``out`` for ever (the parent terminates it), at most ``ahead`` of them not taken;
+    knowledge from ``kb_in``. The parent's ends of both pipes are closed here, so that each side sees the other
+    one go."""
     out, kb_in, *parents = ends
     for fd in parents:
         os.close(fd)
@@ -165,14 +174,19 @@ def _child(sched: Scheduler, i: int, window: int, ends: tuple[int, int, int, int
     os.set_blocking(out, False)
     os.set_blocking(kb_in, False)
     inbox = _Inbox(kb_in, sched)
+    written = 0
     try:
         while True:
             inbox.drain()
+            while written - inbox.taken >= ahead:  # wait until the campaign takes one
+                select.select([inbox.fd], [], [])
+                inbox.drain()
             try:
                 cases: Any = [sched.case(i + k) for k in range(window)]
             except Exception:
                 cases = traceback.format_exc()
             _put(out, inbox, _message((i, cases, sched.dropped)))
+            written += 1
             if isinstance(cases, str):
                 return
             i += window
@@ -197,6 +211,7 @@ class _Inbox:
 
     def __init__(self, fd: int, sched: Scheduler) -> None:
         self.fd, self.sched, self.buf = fd, sched, bytearray()
+        self.taken = 0  # messages read: windows the campaign took
 
     def drain(self) -> None:
         while True:
@@ -213,7 +228,9 @@ class _Inbox:
                 break
             light, documents = pickle.loads(self.buf[_LENGTH.size : _LENGTH.size + n])
             del self.buf[: _LENGTH.size + n]
-            self.sched.kb.update(light, documents)
+            self.taken += 1
+            if light or documents:
+                self.sched.kb.update(light, documents)
 
 
 def _close_inherited_sockets() -> None:

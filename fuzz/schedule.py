@@ -14,12 +14,14 @@ Rules:
 
 from __future__ import annotations
 
+import itertools
 import random
 from dataclasses import replace
 from typing import Any
 
 from pltf.fuzz import generate, mutate
 from pltf.fuzz.case import Case
+from pltf.fuzz.generate import weighted
 from pltf.fuzz.knowledge import Knowledge
 from pltf.fuzz.wire import CLOSE, KEEP, forbidden_ids, survey
 from pltf.spec.codec import REQUESTS, encode
@@ -48,9 +50,9 @@ class Scheduler:
         self.dropped = 0
         gens = generate.GENERATORS
         self._gen_names = list(gens)
-        self._gen_weights = [gens[n][0] for n in self._gen_names]
+        self._gen_cum = list(itertools.accumulate(gens[n][0] for n in self._gen_names))
         self._mut_names = list(mutate.MUTATORS)
-        self._mut_weights = [mutate.MUTATORS[n][0] for n in self._mut_names]
+        self._mut_cum = list(itertools.accumulate(mutate.MUTATORS[n][0] for n in self._mut_names))
         self._rng = random.Random()  # seeded again for each case: the stream of ``random.Random(f"{seed}:{i}")``
 
     def case(self, i: int) -> Case:
@@ -71,10 +73,10 @@ class Scheduler:
 
     def _draw(self, rng: random.Random) -> Case:
         if rng.random() < GEN_SHARE:
-            name = rng.choices(self._gen_names, self._gen_weights)[0]
+            name = weighted(rng, self._gen_names, self._gen_cum)
             return generate.GENERATORS[name][1](rng, self.kb, self.forbidden)
         seed = self._seed_case(rng)
-        name = rng.choices(self._mut_names, self._mut_weights)[0]
+        name = weighted(rng, self._mut_names, self._mut_cum)
         return mutate.MUTATORS[name][1](seed, rng)
 
     def _seed_case(self, rng: random.Random) -> Case:

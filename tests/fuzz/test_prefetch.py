@@ -3,12 +3,13 @@
 from __future__ import annotations
 
 import time
+from pathlib import Path
 
 import pytest
 
 from pltf.fuzz.case import Case
 from pltf.fuzz.knowledge import Knowledge
-from pltf.fuzz.prefetch import PIPE_SIZE, Prefetcher
+from pltf.fuzz.prefetch import AHEAD, PIPE_SIZE, Prefetcher
 from pltf.fuzz.safety import forbidden
 from pltf.fuzz.schedule import Scheduler
 
@@ -91,3 +92,30 @@ def test_close_ends_the_child() -> None:
     pre.get()
     pre.close()
     assert proc is not None and not proc.is_alive()
+
+
+class Tally(PoseEcho):
+    """A PoseEcho that writes each index it draws to a file (the child's draws, seen from the parent)."""
+
+    def __init__(self, path: Path) -> None:
+        super().__init__()
+        self.path = path
+
+    def case(self, i: int) -> Case:
+        with self.path.open("a") as f:
+            f.write(f"{i}\n")
+        return super().case(i)
+
+
+def test_the_child_draws_no_further_ahead_than_the_windows_the_campaign_has_not_taken(tmp_path: Path) -> None:
+    drawn = tmp_path / "drawn"
+    pre = Prefetcher(Tally(drawn), 0, 4)  # type: ignore[arg-type]
+    try:
+        for taken in (1, 2, 5):
+            while pre.get()[0] < 4 * (taken - 1):
+                pass
+            time.sleep(0.3)  # time to draw many more windows of 4 tiny cases, were it not held back
+            indices = [int(line) for line in drawn.read_text().split()]
+            assert max(indices) < 4 * (taken + AHEAD), f"{taken} windows taken, drew up to case {max(indices)}"
+    finally:
+        pre.close()
