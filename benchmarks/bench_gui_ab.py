@@ -12,9 +12,10 @@ Rules:
   checked: the page served is that build's index.html) and a fresh chromium. The rounds alternate the order, old
   then new, then new then old (ABBA ABBA ...), so a spell of load on the shared machine hits both sides.
 - A row is one figure of the new build (the median over its rounds of each round's figure) with the old build's
-  median as its baseline: ``ratio`` is new/old. Every round's figure, the load average at its start and the two
-  builds' bundles are printed and, with ``PLTF_GUI_AB_RUNS=FILE``, written to FILE as JSON (the spread a reading
-  needs; rows hold medians only).
+  median as its baseline: ``ratio`` is new/old. ``pooled_p50``/``pooled_p95`` rows take the quantile of all rounds'
+  samples of a side together (the p95 of an action's 15 samples in a round is its slowest one). Every round's
+  figure, the load average at its start and the two builds' bundles are printed and, with ``PLTF_GUI_AB_RUNS=FILE``,
+  written to FILE as JSON with the samples (the spread a reading needs; rows hold medians only).
 - ``PLTF_GUI_AB_OLD`` unset: the benchmarks say so and give no rows (``make bench`` runs every group).
   ``PLTF_GUI_AB_NEW`` defaults to gui/static. ``PLTF_GUI_AB_ROUNDS`` (default 4; ``--quick``: 1) is the number of
   old/new pairs.
@@ -51,6 +52,14 @@ Key = tuple[str, str, str]  # subject, metric, unit
 Figures = dict[Key, float]
 
 
+@dataclass
+class Measured:
+    """One side's round: its figures, and the samples (ms) behind each quantile, by subject and metric prefix."""
+
+    figures: Figures = field(default_factory=dict)
+    samples: dict[tuple[str, str], list[float]] = field(default_factory=dict)
+
+
 @dataclass(frozen=True)
 class Builds:
     dirs: dict[str, Path]  # "old"/"new" -> a vite build (index.html, assets/)
@@ -68,7 +77,7 @@ class Run:
     started: str
     loadavg: str
     seconds: float
-    figures: Figures = field(default_factory=dict)
+    measured: Measured = field(default_factory=Measured)
 
 
 def _build_dir(var: str, default: Path | None) -> Path:
@@ -104,16 +113,17 @@ def _loadavg() -> str:
         return "?"
 
 
-def _quantiles(figures: Figures, subject: str, metric: str, xs: list[float], unit: str = "ms") -> None:
+def _quantiles(m: Measured, subject: str, metric: str, xs: list[float]) -> None:
     if xs:
+        m.samples[(subject, metric)] = list(xs)
         for name, q in QUANTILES:
-            figures[(subject, f"{metric}{name}", unit)] = _percentile(xs, q)
+            m.figures[(subject, f"{metric}{name}", "ms")] = _percentile(xs, q)
 
 
 # ---------------------------------------------------------------------------------------------- the sides' figures
-def _pan_zoom(config: Config, static: Path) -> Figures:
+def _pan_zoom(config: Config, static: Path) -> Measured:
     ours, plain = pan_zoom_frames(30 if config.quick else 300, static)
-    out: Figures = {}
+    out = Measured()
     for kind in ("pan", "zoom"):
         _quantiles(out, f"{kind}: layer worker + culling", "frame_", ours[kind])
         _quantiles(out, f"{kind}: drawn on the page per frame", "frame_", plain[kind])
@@ -123,20 +133,20 @@ def _pan_zoom(config: Config, static: Path) -> Figures:
     return out
 
 
-def _status(config: Config, static: Path) -> Figures:
+def _status(config: Config, static: Path) -> Measured:
     m = status_to_screen(8 if config.quick else 60, 2.0 if config.quick else 10.0, baseline=False, static=static)
-    out: Figures = {}
+    out = Measured()
     _quantiles(out, "status change to screen, GET_STATUS at 20 Hz", "", m.gui)
     for name, ms in zip(STAGES, m.stages, strict=True):
         _quantiles(out, f"stage: {name}", "", ms)
     for what, v in m.busy.items():
-        out[(f"page main thread, watching: {what}", "busy", "ms/s")] = v
+        out.figures[(f"page main thread, watching: {what}", "busy", "ms/s")] = v
     return out
 
 
-def _edit(config: Config, static: Path) -> Figures:
+def _edit(config: Config, static: Path) -> Measured:
     acts, redraw = edit_times(2 if config.quick else 15, static)
-    out: Figures = {}
+    out = Measured()
     for subject, xs in (*acts.items(), ("all edits", acts["trim"] + acts["undo"] + acts["move"])):
         _quantiles(out, f"{subject}, 50,000 lines, to screen", "", xs)
     _quantiles(out, "view redraw of the same scene, no edit", "", redraw)
@@ -148,7 +158,7 @@ def _say(line: str) -> None:
     print(f"  gui_ab {line}", flush=True)
 
 
-def _measure(name: str, config: Config, measure: Callable[[Config, Path], Figures]) -> list[Row]:
+def _measure(name: str, config: Config, measure: Callable[[Config, Path], Measured]) -> list[Row]:
     ab = builds(config)
     if ab is None:
         _say(f"{name}: skipped ({OLD_ENV} names no build of gui/web to compare with)")
@@ -159,7 +169,7 @@ def _measure(name: str, config: Config, measure: Callable[[Config, Path], Figure
     for k, side in enumerate(ab.order()):
         run = Run(side, k // 2 + 1, time.strftime("%H:%M:%S", time.gmtime()), _loadavg(), 0.0)
         t0 = time.monotonic()
-        run.figures = measure(config, ab.dirs[side])
+        run.measured = measure(config, ab.dirs[side])
         run.seconds = time.monotonic() - t0
         runs.append(run)
         _say(f"{name} round {run.round} {side}: {run.started} UTC, load {run.loadavg}, {run.seconds:.0f} s")
@@ -168,27 +178,39 @@ def _measure(name: str, config: Config, measure: Callable[[Config, Path], Figure
 
 
 def _rows(name: str, runs: list[Run]) -> list[Row]:
-    keys = list(dict.fromkeys(key for run in runs for key in run.figures))
+    """Per figure: the median of each side's rounds; per sampled subject: the quantiles of all rounds' samples pooled
+    (``pooled_p50``, ``pooled_p95``: a p95 of 15 samples in a round is its slowest one, pooled it is more)."""
     rows = []
-    for key in keys:
+    for key in dict.fromkeys(key for run in runs for key in run.measured.figures):
         subject, metric, unit = key
-        per = {side: [r.figures[key] for r in runs if r.side == side and key in r.figures] for side in SIDES}
-        if not per["old"] or not per["new"]:
-            continue
-        rows.append(
-            make_row(
-                f"gui_ab.{name}",
-                f"{subject} (new build)",
-                metric,
-                statistics.median(per["new"]),
-                unit,
-                higher_is_better=False,
-                baseline_subject=f"{subject} (old build)",
-                baseline_value=statistics.median(per["old"]),
+        per = {s: [r.measured.figures[key] for r in runs if r.side == s and key in r.measured.figures] for s in SIDES}
+        if per["old"] and per["new"]:
+            rows.append(
+                _ab_row(name, subject, metric, unit, statistics.median(per["new"]), statistics.median(per["old"]))
             )
-        )
-        _say(f"{name} {subject} {metric}: old {_runs(per['old'])} / new {_runs(per['new'])} {unit}")
+            _say(f"{name} {subject} {metric}: old {_runs(per['old'])} / new {_runs(per['new'])} {unit}")
+    for subject, prefix in dict.fromkeys(k for run in runs for k in run.measured.samples):
+        pooled = {
+            s: [x for r in runs if r.side == s for x in r.measured.samples.get((subject, prefix), [])] for s in SIDES
+        }
+        if pooled["old"] and pooled["new"]:
+            for q_name, q in QUANTILES:
+                new, old = _percentile(pooled["new"], q), _percentile(pooled["old"], q)
+                rows.append(_ab_row(name, subject, f"{prefix}pooled_{q_name}", "ms", new, old))
     return rows
+
+
+def _ab_row(name: str, subject: str, metric: str, unit: str, new: float, old: float) -> Row:
+    return make_row(
+        f"gui_ab.{name}",
+        f"{subject} (new build)",
+        metric,
+        new,
+        unit,
+        higher_is_better=False,
+        baseline_subject=f"{subject} (old build)",
+        baseline_value=old,
+    )
 
 
 def _runs(xs: list[float]) -> str:
@@ -211,7 +233,13 @@ def _record(name: str, ab: Builds, runs: list[Run]) -> None:
                 "started_utc": r.started,
                 "loadavg": r.loadavg,
                 "seconds": round(r.seconds, 1),
-                "figures": [{"subject": s, "metric": m, "unit": u, "value": v} for (s, m, u), v in r.figures.items()],
+                "figures": [
+                    {"subject": s, "metric": m, "unit": u, "value": v} for (s, m, u), v in r.measured.figures.items()
+                ],
+                "samples_ms": [
+                    {"subject": s, "metric": m, "values": [round(x, 3) for x in xs]}
+                    for (s, m), xs in r.measured.samples.items()
+                ],
             }
             for r in runs
         ],
