@@ -28,6 +28,12 @@ from pltf.spec.codec import REQUESTS
 CHUNK = 1 << 16
 AWAIT = -1.0  # the pause of a piece that waits for the peer's first byte (the rest of a gated session)
 _RESET = (errno.ECONNRESET, errno.EPIPE)
+# One write and our FIN on a fresh connection: Nagle holds back no segment (nothing of ours is unacknowledged
+# before it, and a write of this size is one segment on any link), so TCP_NODELAY - a system call per connection,
+# and about half of all cases are singles on a connection of their own - is set only for sessions written in
+# pieces, kept open, or larger.
+NAGLE_FREE = 1024  # bytes
+_NONBLOCK = getattr(socket, "SOCK_NONBLOCK", 0)  # Linux: the socket is created non-blocking (no fcntl call)
 _WRITES = itertools.count()  # one order over every write of every flight (``Flight.sends``, ``pltf.fuzz.sent``)
 
 
@@ -74,9 +80,12 @@ class Flight:
             self.sock, self.connected = sock, True
             self._send_some()
             return
-        self.sock = socket.socket(socket.AF_INET6 if ":" in host else socket.AF_INET, socket.SOCK_STREAM)
-        self.sock.setblocking(False)
-        self.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        family = socket.AF_INET6 if ":" in host else socket.AF_INET
+        self.sock = socket.socket(family, socket.SOCK_STREAM | _NONBLOCK)
+        if not _NONBLOCK:
+            self.sock.setblocking(False)
+        if len(self.pieces) > 1 or not session.half_close or len(data) > NAGLE_FREE:
+            self.sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         self.connected = False
         code = self.sock.connect_ex((host, port))
         if code not in (0, errno.EINPROGRESS):
