@@ -38,5 +38,5 @@ def test_without_its_exceptions_the_layers_are_broken_where_they_say(tmp_path: P
     proc = _lint("--config", str(bare))
     assert proc.returncode == 1, proc.stdout[-3000:]
     report = " ".join(proc.stdout.split())
-    for rule in ("pltf.harness.launch -> pltf.reference_server.storage", "pltf.harness.launch -> pltf.zoo.members"):
+    for rule in ("pltf.gui.recorded -> pltf.proxy.session", "pltf.conformance_tests.fleet -> pltf.cli.options"):
         assert f"- {rule}" in report, rule
