@@ -35,6 +35,7 @@ from pltf.reference_server.platform import Platform
 from pltf.reference_server.program_api import ProgramFactory
 from pltf.reference_server.storage import Storage
 from pltf.spec.codec import REQUESTS, TelegramDecoder, encode
+from pltf.spec.parameters import ParameterStore
 from pltf.spec.telegram import Telegram
 from tests.reference_server.helpers import REPO, wait_for
 
@@ -57,11 +58,13 @@ class ServerThread:
         motion: MotionFactory | None = None,
         program: ProgramFactory | None = None,
         control: bool = False,
+        params: dict[str, str] | None = None,
         **options: Any,
     ) -> None:
         storage = Storage(data_dir)
         storage.seed_from_fixtures()
-        self.platform = Platform(storage, seed=1, motion=motion, program=program, hardware=hardware)
+        store = ParameterStore(startup=params)  # ``params``: the parameter file's values (read-only ones too)
+        self.platform = Platform(storage, seed=1, motion=motion, program=program, hardware=hardware, parameters=store)
         self.time_scale = time_scale
         self.options = options
         self.control = control
@@ -449,8 +452,16 @@ class Rig:
 
 
 @contextmanager
-def rig(data_dir: Path, motion: MotionFactory | None = None, up: bool = True, **hw: Any) -> Iterator[Rig]:
-    srv = ServerThread(data_dir, hardware=hardware_link.factory(**hw), motion=motion, control=True).start()
+def rig(
+    data_dir: Path,
+    motion: MotionFactory | None = None,
+    up: bool = True,
+    params: dict[str, str] | None = None,
+    **hw: Any,
+) -> Iterator[Rig]:
+    srv = ServerThread(
+        data_dir, hardware=hardware_link.factory(**hw), motion=motion, control=True, params=params
+    ).start()
     r = Rig(srv)
     try:
         if up:

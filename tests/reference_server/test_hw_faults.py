@@ -13,6 +13,10 @@ from pltf.reference_server.world.model import factory as world_factory
 from tests.reference_server.conftest import EM_ACTIVE, EM_NOT_ACTIVE, EM_RESET, MODE_VEL, OP_READY, OP_RUNNING, Rig, rig
 
 FORWARD = ("CMD_MOVE_VEL", {"vel_trans": 300, "vel_rot": 0})
+# at the rig's time scale 20 the default velocity watchdog (500 ms) is 25 ms of wall time between two FORWARDs,
+# which a loaded machine misses: the platform would stop by its watchdog, not by the fault under test (E-PAR-018;
+# read-only, so the parameter file's)
+PARAMS = {"VelWatchdogTime": "5000"}
 
 
 def _driving(r: Rig) -> None:
@@ -52,7 +56,7 @@ def _restart(r: Rig) -> None:
 
 
 def test_unplugging_a_motor_is_a_drive_fault_until_it_is_replugged(data_dir: Path) -> None:
-    with rig(data_dir) as r:
+    with rig(data_dir, params=PARAMS) as r:
         _driving(r)
         assert r.control("unplug left")["injected"] == {"kind": "unplug", "target": "MOTOR_LEFT"}
         r.wait_log("drive fault: MOTOR_LEFT not answering")
@@ -66,7 +70,7 @@ def test_unplugging_a_motor_is_a_drive_fault_until_it_is_replugged(data_dir: Pat
 
 
 def test_unplugging_a_sensor_board_is_reported_and_the_platform_keeps_running(data_dir: Path) -> None:
-    with rig(data_dir) as r:
+    with rig(data_dir, params=PARAMS) as r:
         _driving(r)
         r.control("unplug us for 2")
         st = r.wait(lambda s: s.us_status & St.NODE_TIMEOUT, "US board timeout", keep=FORWARD)
@@ -76,7 +80,7 @@ def test_unplugging_a_sensor_board_is_reported_and_the_platform_keeps_running(da
 
 
 def test_emergency_stop_pressed_and_released(data_dir: Path) -> None:
-    with rig(data_dir) as r:
+    with rig(data_dir, params=PARAMS) as r:
         _driving(r)
         r.control("estop press")
         r.wait(lambda s: s.emergency_state == EM_ACTIVE, "emergency active", keep=FORWARD)
@@ -91,7 +95,7 @@ def test_emergency_stop_pressed_and_released(data_dir: Path) -> None:
 
 
 def test_motor_over_temperature(data_dir: Path) -> None:
-    with rig(data_dir) as r:
+    with rig(data_dir, params=PARAMS) as r:
         _driving(r)
         r.control("overtemp right 95")
         r.wait(lambda s: s.motor_right_temp == 95, "95 degC reported", keep=FORWARD)
@@ -112,7 +116,7 @@ def test_motor_over_temperature(data_dir: Path) -> None:
 
 
 def test_encoder_slip_makes_the_estimate_drift_from_the_truth(data_dir: Path) -> None:
-    with rig(data_dir) as r:
+    with rig(data_dir, params=PARAMS) as r:
         _driving(r)
         pose = r.control("pose")
         assert abs(pose["estimate"][2] - pose["true"][2]) < 0.01
@@ -130,7 +134,7 @@ def test_encoder_slip_makes_the_estimate_drift_from_the_truth(data_dir: Path) ->
 
 
 def test_can_frame_loss_is_reported_and_odometry_survives_it(data_dir: Path) -> None:
-    with rig(data_dir) as r:
+    with rig(data_dir, params=PARAMS) as r:
         _driving(r)
         r.control("can-loss 0.5 right")
         st = r.wait(lambda s: s.motor_right_status & St.FRAMES_LOST, "frames lost on the right motor", keep=FORWARD)
@@ -143,7 +147,7 @@ def test_can_frame_loss_is_reported_and_odometry_survives_it(data_dir: Path) -> 
 
 
 def test_can_frame_delay_beyond_the_node_timeout_is_a_drive_fault(data_dir: Path) -> None:
-    with rig(data_dir) as r:
+    with rig(data_dir, params=PARAMS) as r:
         _driving(r)
         r.control("can-delay 0.05 left")  # within the timeouts: nothing happens
         st = r.wait(lambda s: s.vel_trans > 250, "still driving", keep=FORWARD)
@@ -159,7 +163,7 @@ def test_can_frame_delay_beyond_the_node_timeout_is_a_drive_fault(data_dir: Path
 
 
 def test_bus_off_of_the_controller_flags_every_board_and_stops_the_drives(data_dir: Path) -> None:
-    with rig(data_dir) as r:
+    with rig(data_dir, params=PARAMS) as r:
         _driving(r)
         r.control("bus-off")
         r.wait_log("drive fault: CAN bus-off")
@@ -172,7 +176,7 @@ def test_bus_off_of_the_controller_flags_every_board_and_stops_the_drives(data_d
 
 
 def test_serial_corruption_and_silence_of_the_laser_scanner(data_dir: Path) -> None:
-    with rig(data_dir, motion=world_factory(1)) as r:
+    with rig(data_dir, motion=world_factory(1), params=PARAMS) as r:
         st = r.wait(lambda s: len(s.scan) > 100, "a scan from the serial scanner")
         assert all(abs(x) < 32768 and abs(y) < 32768 for x, y in st.scan)
         r.control("serial-corrupt 0.3")
@@ -192,7 +196,7 @@ def test_serial_corruption_and_silence_of_the_laser_scanner(data_dir: Path) -> N
 
 
 def test_battery_drop(data_dir: Path) -> None:
-    with rig(data_dir) as r:
+    with rig(data_dir, params=PARAMS) as r:
         _driving(r)
         r.control("battery 22000 1")
         st = r.wait(lambda s: s.io_status & St.LOW_BATTERY, "low battery", keep=FORWARD)
@@ -205,7 +209,7 @@ def test_battery_drop(data_dir: Path) -> None:
 
 
 def test_faults_can_be_scheduled_in_simulated_time(data_dir: Path) -> None:
-    with rig(data_dir) as r:
+    with rig(data_dir, params=PARAMS) as r:
         t = r.status().timestamp / 1000.0
         reply = r.control("after 1 estop press for 1")
         assert reply["scheduled"]["at"] >= t
