@@ -20,6 +20,7 @@ from pltf.reference_server.world.geometry import F64
 from pltf.reference_server.world.physics import Footprint
 
 _NO_SEGMENTS = np.zeros((0, 4))
+_NEXT = np.array([1, 2, 3, 0])  # each corner's successor: a body's four edges
 
 
 class Bodies:
@@ -89,17 +90,19 @@ class Bodies:
 
     def near(self, i: int, x: float, y: float, radius: float) -> F64:
         """(K, 4) outline segments of the live bodies other than i that come within ``radius`` of (x, y)."""
-        dist = np.hypot(self.poses[:, 0] - x, self.poses[:, 1] - y) - self.reach
+        poses = self.poses
+        dist = np.hypot(poses[:, 0] - x, poses[:, 1] - y) - self.reach
         pick = self.live & (dist <= radius)
         pick[i] = False
         idx = np.flatnonzero(pick)
         if len(idx) == 0:
             return _NO_SEGMENTS
-        px, py, pa = self.poses[idx, 0, None], self.poses[idx, 1, None], self.poses[idx, 2, None]
+        p, corners = poses[idx], self.corners[idx]  # one gather each
+        px, py, pa = p[:, 0, None], p[:, 1, None], p[:, 2, None]
         c, s = np.cos(pa), np.sin(pa)
-        cx, cy = self.corners[idx, :, 0], self.corners[idx, :, 1]
+        cx, cy = corners[:, :, 0], corners[:, :, 1]
         wx, wy = px + c * cx - s * cy, py + s * cx + c * cy  # (K, 4) corners in the world
-        return np.stack([wx, wy, np.roll(wx, -1, axis=1), np.roll(wy, -1, axis=1)], axis=2).reshape(-1, 4)
+        return np.stack([wx, wy, wx[:, _NEXT], wy[:, _NEXT]], axis=2).reshape(-1, 4)
 
     def overlapping(self) -> list[tuple[int, int]]:
         """Pairs of live bodies whose footprints overlap now (none, unless something is wrong)."""
