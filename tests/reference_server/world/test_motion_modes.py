@@ -8,7 +8,7 @@ import math
 import pytest
 
 from pltf.reference_server.world import MapGeometry
-from tests.reference_server.world.conftest import CORRIDOR_WEST, DT, geometry_of, make_sim, room
+from tests.reference_server.world.conftest import CORRIDOR_WEST, DT, Sim, geometry_of, make_sim, room
 
 OPEN = geometry_of(room(20000, 20000))
 
@@ -130,36 +130,38 @@ def test_the_same_seed_and_commands_give_the_same_trajectory(office: MapGeometry
     assert run(6) != first
 
 
-def test_a_turn_on_the_spot_does_not_swing_the_rear_into_what_only_the_ultrasonic_sees() -> None:
-    # a post beside the rear, behind the laser's field of view: turning right swings the rear into it
+def _beside_a_post() -> Sim:
+    """A post beside the rear, behind the laser's field of view: turning right swings the rear into it."""
     sim = make_sim(OPEN, (10000.0, 10000.0, 0.0))
     sim.world.set_obstacle("post", (10000.0 - 250.0, 10000.0 + 270.0 + 150.0, 60.0))
     sim.world.sense(0.0, force=True)
-    for _ in range(10):
-        sim.world.command_velocity(0.0, -0.5, sim.now)
+    return sim
+
+
+def _turn(sim: Sim, w: float, seconds: float) -> None:
+    """MODE_MOTION_VEL on the spot at ``w`` rad/s, the command renewed every 0.2 s (the watchdog)."""
+    for _ in range(round(seconds / 0.2)):
+        sim.world.command_velocity(0.0, w, sim.now)
         sim.run(0.2)
+
+
+def test_a_turn_on_the_spot_does_not_swing_the_rear_into_what_only_the_ultrasonic_sees() -> None:
+    sim = _beside_a_post()
+    _turn(sim, -0.5, 2.0)
     # the rear corner (sweep 504 mm) would reach the post after some 20 degrees: held back within the look-ahead
     assert sim.contacts == 0 and sim.world.collision and abs(sim.world.truth[2]) < math.radians(15.0)
-    for _ in range(10):  # the other way round is free
-        sim.world.command_velocity(0.0, 0.5, sim.now)
-        sim.run(0.2)
+    _turn(sim, 0.5, 2.0)  # the other way round is free
     assert sim.world.truth[2] > 0.5 and sim.contacts == 0
 
 
 def test_a_turn_held_back_by_an_echo_goes_on_once_the_echo_is_gone() -> None:
     # the turn check remembers its verdict on the echoes while they stay the same: a new echo must end it
-    sim = make_sim(OPEN, (10000.0, 10000.0, 0.0))
-    sim.world.set_obstacle("post", (10000.0 - 250.0, 10000.0 + 270.0 + 150.0, 60.0))
-    sim.world.sense(0.0, force=True)
-    for _ in range(5):
-        sim.world.command_velocity(0.0, -0.5, sim.now)
-        sim.run(0.2)
+    sim = _beside_a_post()
+    _turn(sim, -0.5, 1.0)
     held_at = sim.world.truth[2]
     assert sim.world.collision and abs(held_at) < math.radians(15.0)
     sim.world.set_obstacle("post", None)
-    for _ in range(5):
-        sim.world.command_velocity(0.0, -0.5, sim.now)
-        sim.run(0.2)
+    _turn(sim, -0.5, 1.0)
     assert sim.world.truth[2] < held_at - 0.3 and not sim.world.collision and sim.contacts == 0
 
 
