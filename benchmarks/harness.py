@@ -123,10 +123,12 @@ def make_row(
     baseline_value: float | None = None,
     target: Target | None = None,
 ) -> Row:
-    """One result; ``ratio`` is the time ratio subject/baseline (see the module docstring)."""
+    """One result; ``ratio`` is the time ratio subject/baseline (see the module docstring); None where a divisor
+    is 0 (a figure that rounds to nothing in one build or subject has no ratio, not a crash of the run)."""
     ratio = None
     if baseline_value is not None:
-        ratio = baseline_value / value if higher_is_better else value / baseline_value
+        num, den = (baseline_value, value) if higher_is_better else (value, baseline_value)
+        ratio = num / den if den else None
     row: Row = {
         "benchmark": benchmark,
         "subject": subject,
