@@ -374,3 +374,18 @@ def track(ctx: CaseContext, until: Callable[[Pose], bool], within: float, period
 
 def _set_moving(start: Pose) -> Callable[[Pose], bool]:
     return lambda q: abs(q.v) > 50 or q.dist(start) > MOVED
+
+
+def set_moving(ctx: CaseContext, start: Pose, within: float = 2.0) -> tuple[bool, Pose]:
+    """Whether a pose showed the platform moving since ``start`` (faster than 50 mm/s, or ``MOVED`` away) within
+    ``within`` simulated s of a command, and that pose (else the last one read). A platform that shows nothing in
+    that window gets a second one counted from the window's last reply: one reply that came late (a loaded
+    machine stalled the target or the link for longer than the window) ends a window with one pose, the one asked
+    right after the command, before the platform could move (issue 32: "did not set the platform moving" with one
+    pose at the start, through a 100 ms accept loop at time scale 10 beside a CPU hog). A target that does not
+    move shows nothing in either window."""
+    moving = _set_moving(start)
+    p = track(ctx, moving, within=within)
+    if not moving(p):
+        p = track(ctx, moving, within=within)
+    return moving(p), p

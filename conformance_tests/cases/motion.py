@@ -20,7 +20,6 @@ from pltf.conformance_tests.outcome import Fail, Inconclusive
 from pltf.conformance_tests.poses import (
     AUTO,
     JOYSOFT,
-    MOVED,
     POS_TOL,
     STOP_WITHIN,
     VEL,
@@ -28,7 +27,6 @@ from pltf.conformance_tests.poses import (
     _dist_wheels,
     _milli,
     _rot_near,
-    _set_moving,
     _vel_near,
     angle_diff,
     at_pose,
@@ -36,6 +34,7 @@ from pltf.conformance_tests.poses import (
     hold,
     pose,
     rest,
+    set_moving,
     settled,
     still,
     track,
@@ -137,10 +136,12 @@ def _watchdog(
         # set moving: a pose read shows the velocity, or the way covered - on a loaded machine a target stalled for
         # the half second one command moves it answers the polls of that half second late, with one stale pose, and
         # the pose after it shows the platform elsewhere (before: INCONCLUSIVE "no pose read showed it moving")
-        moving = track(ctx, _set_moving(p), within=2.0)
-        if abs(moving.v) <= 50 and moving.dist(p) <= MOVED:
+        moved, seen = set_moving(ctx, p)
+        if not moved:
             raise Fail(
-                f"precondition: one {name} did not set the platform moving ({moving.describe()})", precondition=True
+                f"precondition: one {name} did not set the platform moving within 2 s, nor 2 s after the last reply "
+                f"({seen.describe()})",
+                precondition=True,
             )
         p = track(ctx, lambda q: abs(q.v) < 3.0, within=within)
         if abs(p.v) >= 3.0:
