@@ -134,12 +134,20 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "in the file picks its node, else round-robin); needs the ray extra",
     )
     p.add_argument(
+        "--processes",
+        type=int,
+        default=None,
+        metavar="K",
+        help="with --fleet: split the fleet over K processes of this machine (one shard each; a platform's 'node' "
+        "in the file picks its process, else round-robin): a fleet too big for one core uses the others",
+    )
+    p.add_argument(
         "--ray-lag",
         type=int,
         default=1,
         metavar="N",
-        help="with --ray: at each tick a shard sees the other shards' platforms where they were N periods before "
-        "(default 1: lockstep one period behind)",
+        help="with --ray or --processes: at each tick a shard sees the other shards' platforms where they were N "
+        "periods before (default 1: lockstep one period behind)",
     )
     p.add_argument(
         "--shared-map",
@@ -176,7 +184,7 @@ def run(args: argparse.Namespace, prog: str = "pltf serve") -> int:
         from pltf.reference_server.fleet.cli import run as run_fleet
 
         return run_fleet(args, prog)
-    for option in ("shared_map", "ray"):
+    for option in ("shared_map", "ray", "processes"):
         if getattr(args, option, None):
             print(f"{prog}: error: --{option.replace('_', '-')} needs --fleet", file=sys.stderr)
             return 2

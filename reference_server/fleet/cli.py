@@ -3,7 +3,8 @@
 Rules: the options are those of ``pltf serve`` (reference_server/cli.py); ``--fleet`` is a fleet file
 (reference_server/fleet/config.py) or a count. Each platform's data dir is the file's ``data_dir`` or
 ``--data-dir``/NAME, seeded from the repository's fixtures when empty; its seed the file's or ``--seed`` plus its
-index. ``--ray ADDRESS``: the fleet as shards on a Ray cluster (reference_server/fleet/ray_shards.py). What a
+index. ``--ray ADDRESS``: the fleet as shards on a Ray cluster (reference_server/fleet/ray_shards.py);
+``--processes K``: as shards in K local processes (reference_server/fleet/local_shards.py). What a
 single platform has and a fleet cannot share (one CAN channel, one fault-control port, the ideal
 wheels that have no body) is refused with one line. User errors exit 2, as ``pltf serve``'s.
 """
@@ -33,13 +34,26 @@ _REFUSED: tuple[tuple[Callable[[argparse.Namespace], bool], str], ...] = (
     (lambda a: a.motion != "world", "--fleet needs --motion world: the platforms are bodies in one world"),
     (lambda a: a.control_port is not None, "--control-port serves one platform; it is not available with --fleet"),
     (lambda a: a.can_channel is not None, "--can-channel would put every platform's boards on one bus"),
-    (lambda a: _ray(a) and a.shared_map, "--shared-map hands a map on within one process; not with --ray"),
-    (lambda a: _ray(a) and getattr(a, "ray_lag", 1) < 1, "--ray-lag must be at least 1 (period)"),
+    (lambda a: _ray(a) and _processes(a) > 0, "--ray and --processes: choose one (Ray places the shards itself)"),
+    (lambda a: _processes(a) < 0, "--processes must be at least 1"),
+    (lambda a: _split(a) and a.shared_map, "--shared-map hands a map on in one process: not with --ray, --processes"),
+    (lambda a: _split(a) and getattr(a, "ray_lag", 1) < 1, "--ray-lag must be at least 1 (period)"),
 )
 
 
 def _ray(args: argparse.Namespace) -> bool:
     return getattr(args, "ray", None) is not None
+
+
+def _processes(args: argparse.Namespace) -> int:
+    """``--processes K`` as given: 0 when not given; -1 when below 1 (refused)."""
+    k = getattr(args, "processes", None)
+    return 0 if k is None else (k if k >= 1 else -1)
+
+
+def _split(args: argparse.Namespace) -> bool:
+    """The fleet is served by shards of their own (on Ray, or in local processes): more than one process."""
+    return _ray(args) or _processes(args) > 1
 
 
 def spec_of(args: argparse.Namespace) -> FleetSpec:
@@ -78,6 +92,10 @@ def run(args: argparse.Namespace, prog: str) -> int:
         from pltf.reference_server.fleet import ray_shards  # Ray only under --ray
 
         return ray_shards.run(spec, args, prog)
+    if _processes(args) > 1:
+        from pltf.reference_server.fleet import local_shards
+
+        return local_shards.run(spec, args, prog)
     platforms: list[Platform] = []
     try:
         platforms = build_platforms(spec, args)

@@ -6,9 +6,9 @@ Rules:
   (``{x: mm, y: mm, angle: degrees}``: where the body starts, truth and estimate; without it the platform
   starts at its data dir's StartupPosition.dat), ``seed`` (default: the fleet's seed plus the platform's
   index), ``data_dir`` (default: the fleet's data dir / name) and ``node`` (with ``--ray``: the index of the
-  Ray node whose shard serves it, 0 the head; without it Ray's nodes take the platforms round-robin; without
-  ``--ray`` it is ignored: one process serves them all). Unknown keys are refused: a misspelt key would
-  otherwise be silently ignored.
+  Ray node whose shard serves it, 0 the head; with ``--processes K``: the index of its process, 0 to K-1; without
+  it the nodes or processes take the platforms round-robin; in one process it is ignored). Unknown keys are
+  refused: a misspelt key would otherwise be silently ignored.
 - ``--fleet N``: N platforms named ``p01``..; ports ``A+4k, B+4k`` from ``--ports A,B`` (0 stays 0; E-FLEET-003); the
   poses are chosen at free places of the map at start (reference_server/fleet/places.py).
 - Every error is a ``FleetError`` with a one-line message naming the file and the platform.
@@ -44,7 +44,7 @@ class PlatformSpec:
     pose: Pose | None = None  # None: the data dir's start pose (a file) or a free place (--fleet N)
     seed: int | None = None
     data_dir: str | None = None
-    node: int | None = None  # --ray: the node (index, 0 the head) whose shard serves it; None: round-robin
+    node: int | None = None  # --ray: the node (0 the head), --processes: the process of its shard; None: round-robin
 
 
 @dataclass(frozen=True)

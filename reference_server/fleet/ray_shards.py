@@ -26,7 +26,6 @@ Rules (the shards' rules, the lag and the snapshots: reference_server/fleet/shar
 from __future__ import annotations
 
 import argparse
-import asyncio
 import logging
 import os
 import signal
@@ -34,26 +33,18 @@ import socket
 import sys
 import threading
 import time
-from dataclasses import replace
-from pathlib import Path
 from typing import Any
 
 from pltf.harness.ray_actors import kill_actors
-from pltf.reference_server.control_loop import ControlLoop
-from pltf.reference_server.fleet.bodies import Bodies
 from pltf.reference_server.fleet.config import FleetError, FleetSpec
-from pltf.reference_server.fleet.fleet import Fleet
-from pltf.reference_server.fleet.network import FleetServer
-from pltf.reference_server.fleet.shards import LAG, STALL, Exchange, ShardPlan, ShardWorld, Snapshot, plan
-from pltf.reference_server.network import serve_until_stopped
-from pltf.reference_server.platform import Platform
+from pltf.reference_server.fleet.shard import START_TIMEOUT, Shard, first_line, options, placed, settled
+from pltf.reference_server.fleet.shards import LAG, ShardPlan, plan
 
 log = logging.getLogger("pltf.server")
 
 INSTALL = "pip install 'pltf-toolkit[ray]'"
 CPUS = 1.0  # a shard is a busy simulation loop: a whole CPU of its node
 THREADS = 8  # the actor's threads: wait, receive (one per peer at a time), stats, stop
-START_TIMEOUT = 120.0  # s for every shard to build, boot and open its ports
 STOP_GRACE = 10.0  # s the shards have to stop at SIGINT/SIGTERM before they are killed
 WATCH = 0.5  # s between two looks at the shards
 ANSWER_TIMEOUT = 5.0  # s a shard whose wait failed has to answer before it is called lost
@@ -74,113 +65,18 @@ def import_ray() -> Any:
 
 
 # ------------------------------------------------------------------------------------------ a shard (the actor)
-class ShardServer(FleetServer):
-    """The fleet's asyncio shell for a shard: its clock starts at the fleet's epoch, its fleet is already booted."""
-
-    def __init__(self, fleet: Fleet, world: ShardWorld, host: str, time_scale: float, epoch: float) -> None:
-        super().__init__(fleet, host, time_scale, ticked=world)
-        self.epoch = epoch
-
-    def control_loop(self, wall: float, burst: int) -> ControlLoop:
-        # simulated time 0 at the epoch: loop.time() and time.time() differ by a constant in this process
-        return ControlLoop(self.ticked, self.time_scale, wall - (time.time() - self.epoch), burst=burst)
-
-    def boot(self, control: ControlLoop, wall: float) -> None:
-        """Booted at simulated time 0 already (``ShardActor.prepare``): the ticks from 0 on are due."""
-
-
-class ShardActor:
+class ShardActor(Shard):
     """One shard on its node (``ray.remote`` is applied in ``Driver``, so that this module imports without Ray)."""
 
-    def __init__(self) -> None:
-        self.plan: ShardPlan | None = None
-        self.fleet: Fleet | None = None
-        self.world: ShardWorld | None = None
-        self.exchange: Exchange | None = None
-        self.peers: dict[int, Any] = {}
-        self.server: FleetServer | None = None
-        self.loop: asyncio.AbstractEventLoop | None = None
-        self.thread: threading.Thread | None = None
-        self.exit_code: int | None = None
-        self.error: str | None = None
-        self._ready = threading.Event()
-
-    def prepare(self, shard: ShardPlan, options: dict[str, Any], lag: int) -> tuple[str, int]:
+    def prepare(self, shard: ShardPlan, options: dict[str, Any], lag: int) -> tuple[str, int]:  # type: ignore[override]
         """Build and boot this shard's platforms (simulated time 0); this node's id and this process's."""
-        from pltf.reference_server.fleet.cli import build_platforms
-
-        logging.basicConfig(level=options.get("log_level", "INFO"), stream=sys.stderr, force=True)
         import ray
 
-        self.plan = shard
-        args = argparse.Namespace(**options)
-        platforms: list[Platform] = build_platforms(FleetSpec(shard.platforms), args)
-        self.fleet = Fleet(FleetSpec(shard.platforms), platforms, bodies=Bodies(shard.total), indices=shard.indices)
-        self.fleet.boot(0.0)
-        self.exchange = Exchange(shard.peers, time.time, lag, options.get("stall", STALL))
-        self.world = ShardWorld(self.fleet, shard.shard, self.exchange, shard.owners, self._send, time.time)
-        return ray.get_runtime_context().get_node_id(), os.getpid()
+        return ray.get_runtime_context().get_node_id(), super().prepare(shard, options, lag)
 
     def connect(self, peers: dict[int, Any]) -> None:
-        self.peers = {k: h for k, h in peers.items() if self.plan is not None and k != self.plan.shard}
-
-    def _send(self, snaps: list[Snapshot]) -> None:
-        for handle in self.peers.values():
-            handle.receive.remote(snaps)  # fire and forget: a dead peer's call fails on its own
-
-    def receive(self, snaps: list[Snapshot]) -> None:
-        if self.exchange is not None:
-            self.exchange.put_all(snaps)
-
-    def drop(self, shard: int) -> None:
-        if self.exchange is not None:
-            self.exchange.drop(shard)
-
-    def go(self, epoch: float, host: str, time_scale: float) -> dict[str, list[int]]:
-        """Serve the platforms' ports with simulated time 0 at ``epoch``; each platform's ports."""
-        assert self.fleet is not None and self.world is not None, "prepare first"
-        self.world.publish(0)
-        server = ShardServer(self.fleet, self.world, host, time_scale, epoch)
-        self.thread = threading.Thread(target=self._serve, args=(server,), name="shard", daemon=True)
-        self.thread.start()
-        if not self._ready.wait(START_TIMEOUT) or self.error is not None:
-            raise RuntimeError(self.error or "the shard's ports did not open")
-        return {name: srv.ports for name, srv in server.servers.items()}
-
-    def _serve(self, server: ShardServer) -> None:
-        def ready(srv: FleetServer) -> None:
-            self.server, self.loop = srv, asyncio.get_running_loop()
-            self._ready.set()
-
-        try:
-            self.exit_code = asyncio.run(serve_until_stopped(server, ready, False, "shard"))
-        except OSError as exc:
-            self.error = f"cannot listen: {exc.strerror or exc}"
-            self.exit_code = 2
-        finally:
-            self._ready.set()
-            if self.world is not None:
-                self.world.publish(1 << 40, done=True)  # the others stop waiting for us
-            if self.fleet is not None:
-                self.fleet.close()
-
-    def wait(self) -> int:
-        """Block until the shard has ended (its platforms all exited, or ``stop``); its exit status."""
-        if self.thread is not None:
-            self.thread.join()
-        return self.exit_code if self.exit_code is not None else 2
-
-    def stop(self) -> None:
-        if self.loop is not None and self.server is not None:
-            self.loop.call_soon_threadsafe(self.server.stop)
-
-    def stats(self) -> dict[str, Any]:
-        """The exchange's figures and the simulated time reached (benchmarks/bench_fleet_ray.py)."""
-        out: dict[str, Any] = self.exchange.stats.as_dict() if self.exchange is not None else {}
-        control = self.server.control if self.server is not None else None
-        out["ticks"] = control.ticks if control is not None else 0
-        out["held"] = control.held if control is not None else 0.0
-        return out
+        """The other shards' actor handles: a batch goes to each with ``receive.remote`` (fire and forget)."""
+        super().connect({k: handle.receive.remote for k, handle in peers.items()})
 
 
 # ------------------------------------------------------------------------------------------ the driver
@@ -217,7 +113,7 @@ class Driver:
         try:
             ray.init(address=self.args.ray, log_to_driver=False, logging_level="ERROR")
         except Exception as exc:  # ConnectionError, or Ray's own: no cluster at that address
-            raise RayMissing(f"cannot connect to the Ray cluster at {self.args.ray}: {_first_line(exc)}") from None
+            raise RayMissing(f"cannot connect to the Ray cluster at {self.args.ray}: {first_line(exc)}") from None
         self.connected_here = True
 
     def start(self) -> None:
@@ -226,7 +122,7 @@ class Driver:
 
         nodes = _nodes(ray)
         plans = plan(self.spec, len(nodes), self.args.seed)
-        options = _options(self.args)
+        options_ = options(self.args)
         actor_class = ray.remote(num_cpus=CPUS, max_concurrency=THREADS, max_restarts=0)(ShardActor)
         for p in plans:
             node_id = nodes[p.node]["NodeID"]
@@ -234,7 +130,7 @@ class Driver:
             self.actors[p.shard] = actor_class.options(scheduling_strategy=strategy).remote()
             self.plans[p.shard] = p
             self.node_ids[p.shard] = node_id
-        refs = [self.actors[p.shard].prepare.remote(p, options, self.args.ray_lag) for p in plans]
+        refs = [self.actors[p.shard].prepare.remote(p, options_, self.args.ray_lag) for p in plans]
         for p, (node_id, _pid) in zip(plans, ray.get(refs, timeout=START_TIMEOUT), strict=True):
             assert node_id == self.node_ids[p.shard], "Ray placed a shard on another node than asked"
         handles = dict(self.actors)
@@ -321,43 +217,6 @@ def _probe(address: str) -> None:
         raise RayMissing(f"cannot connect to the Ray cluster at {address}: {exc.strerror or exc}") from None
 
 
-def _options(args: argparse.Namespace) -> dict[str, Any]:
-    """What a shard needs of the command line (plain data): the data dir resolved here, as the user meant it."""
-    return {
-        "data_dir": str(Path(args.data_dir).resolve()),
-        "seed": args.seed,
-        "no_hardware": args.no_hardware,
-        "can_interface": args.can_interface,
-        "log_level": args.log_level,
-    }
-
-
-def settled(spec: FleetSpec, args: argparse.Namespace) -> FleetSpec:
-    """The fleet file's data dirs resolved against this directory (a shard's worker runs elsewhere)."""
-    platforms = tuple(
-        replace(p, data_dir=None if p.data_dir is None else str(Path(p.data_dir).resolve())) for p in spec.platforms
-    )
-    return replace(spec, platforms=platforms)
-
-
-def placed(spec: FleetSpec, args: argparse.Namespace) -> FleetSpec:
-    """``--fleet N``: the poses chosen here, at free places of the first platform's map (as one process chooses
-    them after its boot), so that every shard knows them before it starts."""
-    if spec.placed:
-        return spec
-    from pltf.reference_server.fleet.cli import build_platforms
-
-    first = FleetSpec(spec.platforms[:1])
-    probe = argparse.Namespace(**{**vars(args), "no_hardware": True})
-    fleet = Fleet(first, build_platforms(first, probe))
-    try:
-        fleet.boot(0.0)
-        poses = fleet._free_places(len(spec.platforms))
-    finally:
-        fleet.close()
-    return FleetSpec(tuple(replace(p, pose=pose) for p, pose in zip(spec.platforms, poses, strict=True)))
-
-
 def run(spec: FleetSpec, args: argparse.Namespace, prog: str) -> int:
     """``pltf serve --fleet FILE|N --ray ADDRESS``: user errors are one line and status 2, as ``pltf serve``'s."""
     try:
@@ -366,7 +225,7 @@ def run(spec: FleetSpec, args: argparse.Namespace, prog: str) -> int:
         print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2
     try:
-        driver = Driver(settled(spec, args), args)
+        driver = Driver(settled(spec), args)
         driver.connect()
     except RayMissing as exc:
         print(f"{prog}: error: {exc}", file=sys.stderr)
@@ -379,18 +238,12 @@ def run(spec: FleetSpec, args: argparse.Namespace, prog: str) -> int:
         print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2
     except Exception as exc:  # a shard that could not start (a port taken, a data dir refused): Ray's error
-        print(f"{prog}: error: a shard did not start: {_first_line(exc)}", file=sys.stderr)
+        print(f"{prog}: error: a shard did not start: {first_line(exc)}", file=sys.stderr)
         return 2
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler)
         driver.close()
-
-
-def _first_line(exc: BaseException) -> str:
-    lines = [line.strip() for line in str(exc).splitlines() if line.strip()]
-    mine = [line for line in lines if "cannot listen" in line or "Error:" in line]
-    return (mine or lines or [type(exc).__name__])[-1][:300]
 
 
 __all__ = ["LAG", "Driver", "RayMissing", "ShardActor", "run"]

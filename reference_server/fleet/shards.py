@@ -62,8 +62,9 @@ class ShardPlan:
         return sorted(self.owners)
 
 
-def plan(spec: FleetSpec, nodes: int, seed: int) -> list[ShardPlan]:
-    """The shards of ``spec`` on a cluster of ``nodes`` nodes; each platform's seed settled (``seed`` + index)."""
+def plan(spec: FleetSpec, nodes: int, seed: int, across: str = "the Ray cluster has") -> list[ShardPlan]:
+    """The shards of ``spec`` on a cluster of ``nodes`` nodes (or ``nodes`` local processes: ``across`` names them
+    in the error); each platform's seed settled (``seed`` + index)."""
     where: list[int] = []
     turn = 0
     for p in spec.platforms:
@@ -71,7 +72,7 @@ def plan(spec: FleetSpec, nodes: int, seed: int) -> list[ShardPlan]:
             where.append(turn % nodes)
             turn += 1
         elif p.node >= nodes:
-            raise FleetError(f"platform {p.name!r}: node {p.node}, but the Ray cluster has {nodes} (0..{nodes - 1})")
+            raise FleetError(f"platform {p.name!r}: node {p.node}, but {across} {nodes} (0..{nodes - 1})")
         else:
             where.append(p.node)
     settled = [replace(p, seed=seed + k if p.seed is None else p.seed) for k, p in enumerate(spec.platforms)]

@@ -213,7 +213,7 @@ def test_two_shards_block_each_other_and_run_the_same_every_time(tmp_path: Path,
         (["--ray", "auto"], "--ray needs --fleet"),
         (
             ["--fleet", "FILE", "--ray", "auto", "--shared-map"],
-            "--shared-map hands a map on within one process; not with --ray",
+            "--shared-map hands a map on in one process: not with --ray, --processes",
         ),
         (["--fleet", "FILE", "--ray", "auto", "--ray-lag", "0"], "--ray-lag must be at least 1 (period)"),
     ],
