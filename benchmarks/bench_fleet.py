@@ -92,12 +92,14 @@ def _fleet(count: int, root: Path) -> Any:
     return Fleet(spec, build_platforms(spec, args))
 
 
-def _bring_up(fleet: Any) -> int:
-    """Every platform Running in Automatic with the laser at 10 Hz and the ultrasonic on; the tick reached."""
+def _bring_up(fleet: Any, boot: bool = True) -> int:
+    """Every platform Running in Automatic with the laser at 10 Hz and the ultrasonic on; the tick reached.
+    ``boot``: boot the fleet first (a shard's fleet is booted when it is prepared)."""
     from pltf.reference_server.enums import MotionMode
     from pltf.spec.codec import REQUESTS as R
 
-    fleet.boot(0.0)
+    if boot:
+        fleet.boot(0.0)
     for m in fleet.members:
         for t in (R.CMD_CONNECT_TO_PLTF(), R.CMD_INIT_PLTF(), R.CMD_START_ULTRASONIC(active_channels=0xFFFF)):
             assert m.platform.handle(t, 0.0).refused is None, t
@@ -115,19 +117,25 @@ def _bring_up(fleet: Any) -> int:
 
 def _drive(fleet: Any, first: int, seconds: float) -> None:
     """Each platform shuttles between its own place and that of the platform half the fleet away."""
+    drive(fleet.members, [m.platform.motion.truth for m in fleet.members], fleet.tick, first, seconds)
+
+
+def drive(members: Any, homes: list[Any], tick: Any, first: int, seconds: float) -> None:
+    """``members`` (each with its global ``index`` into ``homes``, every platform's place) shuttle between their
+    own place and that of the platform half the fleet away; ``tick(now)`` steps them."""
     from pltf.spec.codec import REQUESTS as R
 
-    homes = [m.platform.motion.truth for m in fleet.members]
     n = len(homes)
-    legs = [0] * n
+    legs = {m.index: 0 for m in members}
     for k in range(first + 1, first + round(seconds / DT) + 1):
         now = k * DT
-        for i, m in enumerate(fleet.members):
+        for m in members:
             if not m.platform.motion.active:
+                i = m.index
                 x, y, a = homes[(i + n // 2) % n] if legs[i] % 2 == 0 else homes[i]
                 legs[i] += 1
                 m.platform.handle(R.CMD_MOVE_ABS(x=round(x), y=round(y), angle=round(math.degrees(a) * 1000)), now)
-        fleet.tick(now)
+        tick(now)
 
 
 def child(count: int, seconds: float) -> dict[str, float]:

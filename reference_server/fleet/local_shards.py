@@ -44,6 +44,7 @@ log = logging.getLogger("pltf.server")
 
 STOP_GRACE = 10.0  # s the shards have to stop at SIGINT/SIGTERM before they are terminated
 WATCH = 0.5  # s between two looks at the shards
+Boxes = dict[int, dict[int, Connection]]  # shard -> peer -> its end of the pipe between them
 
 
 class ShardFailed(RuntimeError):
@@ -68,9 +69,7 @@ def child(
     except Exception as exc:  # a data dir refused, a map that does not parse: the user's one line
         ctrl.send(("error", f"{type(exc).__name__}: {exc}"))
         sys.exit(2)
-    shard.connect({k: _sender(conn) for k, conn in outbox.items()})
-    for peer, conn in inbox.items():
-        threading.Thread(target=_receive, args=(shard, peer, conn), name=f"from-{peer}", daemon=True).start()
+    wire(shard, inbox, outbox)
     ctrl.send(("prepared", pid))
     try:
         epoch = ctrl.recv()
@@ -87,6 +86,24 @@ def child(
     for conn in outbox.values():
         conn.close()
     sys.exit(code)
+
+
+def pipes(plans: list[ShardPlan], ctx: Any) -> tuple[Boxes, Boxes]:
+    """One pipe per ordered pair of shards: ``inbox[b][a]`` reads what ``outbox[a][b]`` sends."""
+    outbox: Boxes = {p.shard: {} for p in plans}
+    inbox: Boxes = {p.shard: {} for p in plans}
+    for a in plans:
+        for b in plans:
+            if a.shard != b.shard:
+                inbox[b.shard][a.shard], outbox[a.shard][b.shard] = ctx.Pipe(duplex=False)
+    return inbox, outbox
+
+
+def wire(shard: Shard, inbox: dict[int, Connection], outbox: dict[int, Connection]) -> None:
+    """The shard's batches go down ``outbox``'s pipes; a thread per peer reads ``inbox``'s into its exchange."""
+    shard.connect({k: _sender(conn) for k, conn in outbox.items()})
+    for peer, conn in inbox.items():
+        threading.Thread(target=_receive, args=(shard, peer, conn), name=f"from-{peer}", daemon=True).start()
 
 
 def _sender(conn: Connection) -> Any:
@@ -156,12 +173,7 @@ class Driver:
         n = self.args.processes
         plans = plan(self.spec, n, self.args.seed, across="--processes gives")
         ctx = mp.get_context("spawn")
-        outbox: dict[int, dict[int, Connection]] = {p.shard: {} for p in plans}
-        inbox: dict[int, dict[int, Connection]] = {p.shard: {} for p in plans}
-        for a in plans:
-            for b in plans:
-                if a.shard != b.shard:
-                    inbox[b.shard][a.shard], outbox[a.shard][b.shard] = ctx.Pipe(duplex=False)
+        inbox, outbox = pipes(plans, ctx)
         opts, serve = options(self.args), (self.args.host, self.args.time_scale)
         for p in plans:
             ours, theirs = ctx.Pipe()
@@ -259,4 +271,4 @@ def run(spec: FleetSpec, args: argparse.Namespace, prog: str) -> int:
         driver.close()
 
 
-__all__ = ["Driver", "ShardFailed", "child", "run"]
+__all__ = ["Driver", "ShardFailed", "child", "pipes", "run", "wire"]
