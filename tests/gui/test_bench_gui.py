@@ -30,7 +30,10 @@ def test_the_status_latency_benchmark_runs_and_writes_its_rows(tmp_path: Path) -
     assert all(r["value"] > 0 and r["baseline_value"] > 0 for r in main)
     # where the time went: the three stages add up to the whole (each sample's, so the medians roughly)
     busy = {r["subject"]: r["value"] for r in rows if r["subject"].startswith("page main thread")}
-    assert len(busy) == 3 and all(0 < v <= 1000 for v in busy.values()), busy
+    # ms of each second: the page ran tasks while it watched; a quick run's 2 s may hold no layout at all (hog run
+    # 15: layout 0.0 under load), so only the whole is asserted above 0
+    assert len(busy) == 3 and all(0 <= v <= 1000 for v in busy.values()), busy
+    assert busy["page main thread, watching: all tasks"] > 0, busy
     assert {r["subject"] for r in rows} - {r["subject"] for r in main} - set(busy) == {
         "stage: waiting for the poll",
         "stage: GET_STATUS round trip (page, gateway, server)",
