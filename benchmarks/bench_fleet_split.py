@@ -97,7 +97,10 @@ def split_run(count: int, seconds: float, processes: int, lag: int) -> dict[str,
 def _get(conn: Any) -> Any:
     if not conn.poll(START_TIMEOUT):
         raise RuntimeError(f"a shard said nothing in {START_TIMEOUT:g} s")
-    return conn.recv()
+    try:
+        return conn.recv()
+    except EOFError:
+        raise RuntimeError("a shard's process ended before it reported (its error is above)") from None
 
 
 @benchmark()
