@@ -274,9 +274,27 @@ def gen_xml(rng: random.Random, kb: Knowledge, forbidden: frozenset[int]) -> Cas
     tdef = next(t for t in request_defs() if t.name == name)
     if tdef.id in forbidden:
         return gen_unknown_id(rng, kb, forbidden)
-    values: list[Any] = [Str(doc)] if name == "CMD_SET_PROGRAM" else [Str(b"fuzz"), Str(doc)]
-    data = pack_fields(tdef.id, tdef.request or (), values)
-    return Case((frame(data),), f"xml.{attack}", name, f"{kind} document of {len(doc)} bytes")
+    return Case((_xml_frame(tdef, doc),), f"xml.{attack}", name, f"{kind} document of {len(doc)} bytes")
+
+
+_XML_FRAMES: dict[tuple[int, int], tuple[bytes, bytes]] = {}  # (telegram id, id(doc)) -> (doc, its frame)
+XML_FRAMES_KEPT = 64  # frames of documents kept (the big documents are a handful, built once: xml_attacks)
+
+
+def _xml_frame(tdef: TelegramDef, doc: bytes) -> bytes:
+    """The frame of ``tdef`` carrying ``doc``; one frame object per document object and telegram, so that the
+    scheduler's look at a big case (``pltf.fuzz.schedule``) is done once per document, not once per draw (a 6 MiB
+    document took ~4 ms a draw to copy twice and scan twice)."""
+    key = (tdef.id, id(doc))
+    known = _XML_FRAMES.get(key)
+    if known is not None and known[0] is doc:
+        return known[1]
+    values: list[Any] = [Str(doc)] if tdef.name == "CMD_SET_PROGRAM" else [Str(b"fuzz"), Str(doc)]
+    data = frame(pack_fields(tdef.id, tdef.request or (), values))
+    if len(_XML_FRAMES) >= XML_FRAMES_KEPT:
+        _XML_FRAMES.clear()
+    _XML_FRAMES[key] = (doc, data)
+    return data
 
 
 GENERATORS: dict[str, tuple[float, Generator]] = {
