@@ -46,27 +46,15 @@ class Flight:
         self.out = Outcome()
         data = session.data
         self.expected = session_reply_ids(session)
-        gate = session.gate_bytes
-        pieces = [(data[:gate], 0.0)] if gate else []
-        pieces += session.delivery.chunks(data[gate:])  # (bytes, pause before them): one piece unless slow/bytewise
-        if gate and len(pieces) > 1:
-            pieces[1] = (pieces[1][0], AWAIT)
         if session.sync:
             data += GET_STATUS
-            pieces.append((GET_STATUS, 0.0))
             self.expected.append(REQUESTS.CMD_GET_STATUS.ID)
-        self.data, self.pos = data, 0
         self.sends: list[tuple[int, int]] = []  # (place in the order of all flights' writes, end offset) per write
-        self.pieces: collections.deque[tuple[int, float]] = collections.deque()  # (end offset, pause before it)
-        end = 0
-        for piece, pause in pieces:
-            if piece:
-                end += len(piece)
-                self.pieces.append((end, pause))
+        self.pieces, pauses = _pieces(session, data)
+        self.data, self.pos = data, 0
         self.next_at = 0.0  # monotonic time before which the next piece waits (a slow delivery's pause)
         self.awaiting = False  # the next piece waits for a byte back (a gated session's lead)
         self.want = len(self.expected) if session.sync and not session.half_close else None
-        pauses = sum(pause for _, pause in pieces if pause > 0)
         self.budget = pauses + session_deadline(deadline_s, len(session.frames), len(data))  # s from its turn
         self.started = time.monotonic()
         self.deadline = self.started + self.budget
@@ -219,6 +207,30 @@ class Flight:
             self._finish()
         else:
             self._fin()
+
+
+def _pieces(session: Session, data: bytes) -> tuple[collections.deque[tuple[int, float]], float]:
+    """(end offset, pause before it) of each piece ``data`` is written in (a sync's GET_STATUS at its end), and the
+    pauses' sum."""
+    pieces: collections.deque[tuple[int, float]] = collections.deque()
+    gate = session.gate_bytes
+    if not gate and session.delivery.mode == "whole":  # most units: one write
+        if data:
+            pieces.append((len(data), 0.0))
+        return pieces, 0.0
+    body = data[: len(data) - len(GET_STATUS)] if session.sync else data
+    chunks = [(body[:gate], 0.0)] if gate else []
+    chunks += session.delivery.chunks(body[gate:])  # (bytes, pause before them)
+    if gate and len(chunks) > 1:
+        chunks[1] = (chunks[1][0], AWAIT)
+    if session.sync:
+        chunks.append((GET_STATUS, 0.0))
+    end = 0
+    for piece, pause in chunks:
+        if piece:
+            end += len(piece)
+            pieces.append((end, pause))
+    return pieces, sum(pause for _, pause in chunks if pause > 0)
 
 
 def fly(flights: list[Flight]) -> None:

@@ -63,11 +63,12 @@ class Unit:
     def batch(self) -> bool:
         return len(self.cases) > 1 or (bool(self.cases) and batchable(self.cases[0]))
 
-    @property
+    @functools.cached_property
     def size(self) -> int:
+        """Asked for a few times per unit, computed once (a unit's prelude is set before: ``window_units``)."""
         return sum(c.size for c in self.cases) + sum(len(f) for f in self.prelude)
 
-    @property
+    @functools.cached_property
     def whole(self) -> bool:
         """Small and written in one piece: it may wait behind another unit (pipelining)."""
         return self.size <= PIPELINE_BYTES and all(c.delivery.mode == "whole" for c in self.cases)

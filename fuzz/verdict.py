@@ -63,19 +63,23 @@ def judge(out: Outcome, owed: int, led: bool, keep: bool) -> Verdict:
     """The verdict of a finished unit. ``owed``: the replies the target must send (E-WIRE-006); ``led``: the
     session opened with the lead; ``keep``: every case of the unit is accepted by the strict codec."""
     if out.refused:
-        return Verdict(NOT_ADMITTED, HOW["refused"], "refused")
+        return _TURNED_AWAY["refused"]
     if led and not admitted(out):
-        how = "timed-out" if out.timed_out else "closed"
-        return Verdict(NOT_ADMITTED, HOW[how], how)
+        return _TURNED_AWAY["timed-out" if out.timed_out else "closed"]
     if out.bad_reply is not None:
         if not keep and out.bad_reply.startswith(CUT):
-            return Verdict(OK, cut=True)
+            return _CUT
         return Verdict(BAD_REPLY, out.bad_reply)
     if out.timed_out:
         return Verdict(TIMED_OUT, TIMED_OUT_REASON)
     if len(out.replies) < owed:
         return Verdict(DROPPED, DROPPED_REASON)
-    return Verdict(OK)
+    return _OK  # the verdict of most units: one object (verdicts are frozen)
+
+
+_OK = Verdict(OK)
+_CUT = Verdict(OK, cut=True)
+_TURNED_AWAY = {how: Verdict(NOT_ADMITTED, HOW[how], how) for how in HOW}
 
 
 def patient(deadline: float) -> float:
