@@ -216,7 +216,7 @@ class Driver:
                         c.process.exitcode,
                         c.names,
                     )
-        log.info("fleet stopped")
+        log.info("fleet stopped: %d shard(s) ended, %d lost", len(self.children) - lost, lost)
         return 1 if lost else 0
 
     @staticmethod
@@ -239,7 +239,7 @@ class Driver:
         deadline = time.monotonic() + STOP_GRACE
         for c in live.values():
             c.process.join(max(0.0, deadline - time.monotonic()))
-        log.info("fleet stopped")
+        log.info("fleet stopped: %d shard(s) stopped", len(live))
         return 0
 
     def close(self) -> None:
