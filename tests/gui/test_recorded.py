@@ -278,7 +278,14 @@ def test_a_jump_shows_the_state_at_its_time_only(page: Any, shown: tuple[Gateway
     for rel in (0.55 * (rec.end - rec.start), 0.0, 0.3 * (rec.end - rec.start)):
         at = scrub(page, timeline, start, round(rel, 2))
         want = wire_at(at)
-        wait_for(lambda want=want: _wire_lines(page) == want, what=f"only the wire's {len(want)} lines before {at}")
+        try:
+            wait_for(lambda want=want: _wire_lines(page) == want, what=f"only the wire's {len(want)} lines before {at}")
+        except AssertionError as exc:  # what was shown instead (hog run 20 saw this fail once, without it)
+            shown, now = _wire_lines(page), timeline.get_attribute("data-time")
+            extra, missing = [x for x in shown if x not in want], [x for x in want if x not in shown]
+            raise AssertionError(
+                f"{exc}; timeline at {now}; shown but not wanted {extra}; wanted, not shown {missing}"
+            ) from None
         page.wait_for_timeout(700)  # the plots' history comes 250 ms after a jump: the wire keeps its lines
         assert _wire_lines(page) == want, at
         if at >= first_status:
