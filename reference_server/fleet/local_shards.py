@@ -37,7 +37,15 @@ from multiprocessing.process import BaseProcess
 from typing import Any
 
 from pltf.reference_server.fleet.config import FleetError, FleetSpec
-from pltf.reference_server.fleet.shard import START_TIMEOUT, Shard, first_line, options, placed, settled
+from pltf.reference_server.fleet.shard import (
+    START_TIMEOUT,
+    Shard,
+    first_line,
+    options,
+    placed,
+    settled,
+    stopped_by_signals,
+)
 from pltf.reference_server.fleet.shards import ShardPlan, Snapshot, plan
 
 log = logging.getLogger("pltf.server")
@@ -258,16 +266,14 @@ def run(spec: FleetSpec, args: argparse.Namespace, prog: str) -> int:
         print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2
     driver = Driver(spec, args)
-    previous = {sig: signal.signal(sig, lambda *_: driver.stop()) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
-        driver.start()
-        return driver.watch()
+        with stopped_by_signals(driver.stop):
+            driver.start()
+            return driver.watch()
     except (FleetError, ShardFailed) as exc:
         print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2
     finally:
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
         driver.close()
 
 

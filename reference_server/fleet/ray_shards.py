@@ -28,7 +28,6 @@ from __future__ import annotations
 import argparse
 import logging
 import os
-import signal
 import socket
 import sys
 import threading
@@ -37,7 +36,15 @@ from typing import Any
 
 from pltf.harness.ray_actors import kill_actors
 from pltf.reference_server.fleet.config import FleetError, FleetSpec
-from pltf.reference_server.fleet.shard import START_TIMEOUT, Shard, first_line, options, placed, settled
+from pltf.reference_server.fleet.shard import (
+    START_TIMEOUT,
+    Shard,
+    first_line,
+    options,
+    placed,
+    settled,
+    stopped_by_signals,
+)
 from pltf.reference_server.fleet.shards import LAG, ShardPlan, plan
 
 log = logging.getLogger("pltf.server")
@@ -230,10 +237,10 @@ def run(spec: FleetSpec, args: argparse.Namespace, prog: str) -> int:
     except RayMissing as exc:
         print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2
-    previous = {sig: signal.signal(sig, lambda *_: driver.stop()) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
-        driver.start()
-        return driver.watch()
+        with stopped_by_signals(driver.stop):
+            driver.start()
+            return driver.watch()
     except FleetError as exc:
         print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2
@@ -241,8 +248,6 @@ def run(spec: FleetSpec, args: argparse.Namespace, prog: str) -> int:
         print(f"{prog}: error: a shard did not start: {first_line(exc)}", file=sys.stderr)
         return 2
     finally:
-        for sig, handler in previous.items():
-            signal.signal(sig, handler)
         driver.close()
 
 

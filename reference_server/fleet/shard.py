@@ -19,12 +19,14 @@ from __future__ import annotations
 
 import argparse
 import asyncio
+import contextlib
 import logging
 import os
+import signal
 import sys
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -191,6 +193,17 @@ def placed(spec: FleetSpec, args: argparse.Namespace) -> FleetSpec:
     return FleetSpec(tuple(replace(p, pose=pose) for p, pose in zip(spec.platforms, poses, strict=True)))
 
 
+@contextlib.contextmanager
+def stopped_by_signals(stop: Callable[[], None]) -> Iterator[None]:
+    """SIGINT and SIGTERM call ``stop`` (a driver ends its shards itself) while inside; the handlers before after."""
+    previous = {sig: signal.signal(sig, lambda *_: stop()) for sig in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
+
+
 def first_line(exc: BaseException) -> str:
     """The line of a shard's error that says what went wrong (a traceback from another process is long)."""
     lines = [line.strip() for line in str(exc).splitlines() if line.strip()]
@@ -198,4 +211,4 @@ def first_line(exc: BaseException) -> str:
     return (mine or lines or [type(exc).__name__])[-1][:300]
 
 
-__all__ = ["START_TIMEOUT", "Shard", "ShardServer", "first_line", "options", "placed", "settled"]
+__all__ = ["START_TIMEOUT", "Shard", "ShardServer", "first_line", "options", "placed", "settled", "stopped_by_signals"]

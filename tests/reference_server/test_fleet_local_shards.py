@@ -10,27 +10,21 @@ import re
 import signal
 import subprocess
 import sys
-from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
-from pltf.spec.codec import REQUESTS as R
 from tests.reference_server.conftest import Client
 from tests.reference_server.test_fleet import OP_NOT_INIT
-from tests.reference_server.test_fleet_ray import HEAD_ON, Served, head_on
+from tests.reference_server.test_fleet_ray import (  # served: the fixture
+    HEAD_ON,
+    Served,
+    _answers,
+    head_on,
+    served,  # noqa: F401
+)
 
 SHARD = r"shard (\d+) \(pid (\d+)\) serves platforms ([\w, ]+)$"
-
-
-@pytest.fixture
-def served() -> Iterator[list[Served]]:
-    runs: list[Served] = []
-    try:
-        yield runs
-    finally:
-        for r in runs:
-            r.stop()
 
 
 def _shards(run: Served, count: int) -> dict[str, tuple[int, int]]:
@@ -43,7 +37,7 @@ def _shards(run: Served, count: int) -> dict[str, tuple[int, int]]:
     return out
 
 
-def test_head_on_across_two_processes_as_in_one(tmp_path: Path, served: list[Served]) -> None:
+def test_head_on_across_two_processes_as_in_one(tmp_path: Path, served: list[Served]) -> None:  # noqa: F811
     (tmp_path / "split").mkdir()
     split = Served(tmp_path / "split", HEAD_ON, None, "--processes", "2")
     served.append(split)
@@ -65,15 +59,7 @@ def test_head_on_across_two_processes_as_in_one(tmp_path: Path, served: list[Ser
     assert abs(across["gap"] - alone["gap"]) < 120, (across["gap"], alone["gap"])
 
 
-def _answers(port: int) -> bool:
-    try:
-        with Client(port) as c:
-            return c.request(R.CMD_GET_POSITION()) is not None
-    except OSError:
-        return False
-
-
-def test_a_killed_process_takes_only_its_platforms(tmp_path: Path, served: list[Served]) -> None:
+def test_a_killed_process_takes_only_its_platforms(tmp_path: Path, served: list[Served]) -> None:  # noqa: F811
     run = Served(tmp_path, "3", None, "--processes", "2")
     served.append(run)
     ports = run.platforms(["p01", "p02", "p03"])
