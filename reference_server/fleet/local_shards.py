@@ -36,16 +36,9 @@ from multiprocessing.connection import Connection, wait
 from multiprocessing.process import BaseProcess
 from typing import Any
 
+from pltf.reference_server.fleet import shard as common
 from pltf.reference_server.fleet.config import FleetError, FleetSpec
-from pltf.reference_server.fleet.shard import (
-    START_TIMEOUT,
-    Shard,
-    first_line,
-    options,
-    placed,
-    settled,
-    stopped_by_signals,
-)
+from pltf.reference_server.fleet.shard import START_TIMEOUT, Shard, first_line
 from pltf.reference_server.fleet.shards import ShardPlan, Snapshot, plan
 
 log = logging.getLogger("pltf.server")
@@ -182,7 +175,7 @@ class Driver:
         plans = plan(self.spec, n, self.args.seed, across="--processes gives")
         ctx = mp.get_context("spawn")
         inbox, outbox = pipes(plans, ctx)
-        opts, serve = options(self.args), (self.args.host, self.args.time_scale)
+        opts, serve = common.options(self.args), (self.args.host, self.args.time_scale)
         for p in plans:
             ours, theirs = ctx.Pipe()
             args = (p, opts, self.args.ray_lag, serve, inbox[p.shard], outbox[p.shard], theirs)
@@ -261,13 +254,13 @@ class Driver:
 def run(spec: FleetSpec, args: argparse.Namespace, prog: str) -> int:
     """``pltf serve --fleet FILE|N --processes K``: user errors are one line and status 2, as ``pltf serve``'s."""
     try:
-        spec = settled(placed(spec, args))
+        spec = common.settled(common.placed(spec, args))
     except FleetError as exc:
         print(f"{prog}: error: {exc}", file=sys.stderr)
         return 2
     driver = Driver(spec, args)
     try:
-        with stopped_by_signals(driver.stop):
+        with common.stopped_by_signals(driver.stop):
             driver.start()
             return driver.watch()
     except (FleetError, ShardFailed) as exc:

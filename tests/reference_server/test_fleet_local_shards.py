@@ -20,6 +20,7 @@ from tests.reference_server.test_fleet_ray import (  # served: the fixture
     HEAD_ON,
     Served,
     _answers,
+    as_in_one_process,
     head_on,
     served,  # noqa: F401
 )
@@ -49,12 +50,7 @@ def test_head_on_across_two_processes_as_in_one(tmp_path: Path, served: list[Ser
     across = head_on(ports)
     assert split.stop() == 0
 
-    (tmp_path / "one").mkdir()
-    one = Served(tmp_path / "one", HEAD_ON, None)
-    served.append(one)
-    alone = head_on(one.platforms(["alpha", "bravo"]))
-    for key in ("alpha params", "bravo params", "alpha other ahead", "bravo other ahead", "alpha held", "bravo held"):
-        assert across[key] == alone[key], (key, across[key], alone[key])
+    alone = as_in_one_process(tmp_path, served, across)
     assert 150 < across["gap"] < 900, across
     assert abs(across["gap"] - alone["gap"]) < 120, (across["gap"], alone["gap"])
 

@@ -147,6 +147,20 @@ def head_on(ports: dict[str, tuple[int, int, int, str]]) -> dict[str, Any]:
         return seen
 
 
+def as_in_one_process(tmp_path: Path, served: list[Served], across: dict[str, Any]) -> dict[str, Any]:
+    """The head-on scenario in one process: the same replies as ``across`` (split) where they are deterministic -
+    the parameters, each sees the other 3.55 m ahead at the start, each is held back Running with the other in its
+    scan just ahead and in its ultrasonic echo (not compared: the echo's mm and the exact gap depend on the tick at
+    which each client's telegrams land, i.e. on wall-clock timing in both runs). What one process saw."""
+    (tmp_path / "one").mkdir()
+    one = Served(tmp_path / "one", HEAD_ON, None)
+    served.append(one)
+    alone = head_on(one.platforms(["alpha", "bravo"]))
+    for key in ("alpha params", "bravo params", "alpha other ahead", "bravo other ahead", "alpha held", "bravo held"):
+        assert across[key] == alone[key], (key, across[key], alone[key])
+    return alone
+
+
 def test_head_on_across_two_nodes_as_in_one_process(cluster: Any, tmp_path: Path, served: list[Served]) -> None:
     (tmp_path / "ray").mkdir()
     ray = Served(tmp_path / "ray", HEAD_ON, cluster.address)
@@ -158,16 +172,7 @@ def test_head_on_across_two_nodes_as_in_one_process(cluster: Any, tmp_path: Path
     across = head_on(ports)
     ray.stop()
 
-    (tmp_path / "one").mkdir()
-    one = Served(tmp_path / "one", HEAD_ON, None)
-    served.append(one)
-    alone = head_on(one.platforms(["alpha", "bravo"]))
-
-    # the same replies: the parameters, each sees the other 3.55 m ahead at the start, each is held back Running
-    # with the other in its scan just ahead and in its ultrasonic echo (not compared: the echo's mm and the exact
-    # gap depend on the tick at which each client's telegrams land, i.e. on wall-clock timing in both runs)
-    for key in ("alpha params", "bravo params", "alpha other ahead", "bravo other ahead", "alpha held", "bravo held"):
-        assert across[key] == alone[key], (key, across[key], alone[key])
+    alone = as_in_one_process(tmp_path, served, across)
     assert across["alpha held"] == (OP_RUNNING, 1, True)
     for seen in (across, alone):
         assert 150 < seen["gap"] < 900, seen
