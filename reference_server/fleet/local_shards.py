@@ -167,7 +167,6 @@ class Driver:
     def __init__(self, spec: FleetSpec, args: argparse.Namespace) -> None:
         self.spec, self.args = spec, args
         self.children: dict[int, Child] = {}
-        self.ports: dict[str, list[int]] = {}
         self._stopping = threading.Event()
 
     def start(self) -> None:
@@ -192,7 +191,7 @@ class Driver:
         for c in self.children.values():
             c.ctrl.send(epoch)
         for shard, c in self.children.items():  # each child logged its ports as pltf serve --fleet does
-            self.ports.update(c.expect("serving", START_TIMEOUT))
+            c.expect("serving", START_TIMEOUT)
             log.info("shard %d (pid %d) serves platforms %s", shard, c.pid, c.names)
 
     def watch(self) -> int:
