@@ -104,9 +104,10 @@ def test_two_workers_find_the_planted_bug_once_and_share_their_corpus(tmp_path: 
     workers = summary["workers"]
     assert [w["seed"] for w in workers] == [1, 2]
     assert all(w["cases"] > 0 for w in workers), workers
-    # each worker received the other's inputs; whether one was drawn before the crash stopped the campaign is timing
-    # (a clean clone's make test saw imports of 143 and 534 and none used yet): the slow tier's prelude test holds use
-    assert all(w["imported"] for w in workers), [(w["imported"], w["used"]) for w in workers]
+    # the corpus is shared: a worker received the other's inputs. Whether BOTH had found new ones before the crash
+    # stopped the campaign is timing (a quiet clean-clone run: worker 1 imported 523 of worker 0's, worker 0 none),
+    # and so is whether one was drawn yet (imports of 143 and 534, none used): the slow tier's prelude test holds use
+    assert any(w["imported"] for w in workers), [(w["imported"], w["used"]) for w in workers]
     # the crash needs Running (zoo/bugs.py CrashAfterStart), which the target's view tracks across both lanes: a
     # death reached through the two lanes' interleaving (the culprit's state 'ready') replays in send order
     # (fuzz/sent.py), so every finding is reproduced and its reproducer kills a fresh instance
