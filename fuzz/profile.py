@@ -9,7 +9,7 @@ Rules:
 - Nothing here is a finding: each behaviour is a reading the guide allows (spec/errata/behaviour.yaml). The
   campaign then relies on none the target lacks: where our FIN ends the session, a session waits for the replies
   it is owed before it half-closes (``Session.fin_waits``); where nothing is answered before CMD_CONNECT_TO_PLTF,
-  every lead carries it (``Profile.adapt``, applied by the lanes and the replays); a fresh connection that costs
+  every session opens with it (``Profile.adapt``, applied by the lanes and the replays); a fresh connection that costs
   far more than a reply makes the ports dear from the start, a listen backlog no deeper than the pipelining turns
   pipelining off (``pltf.fuzz.engine``).
 - ``describe`` is the line the console and summary.json show: "ends the session at our FIN; turns newcomers away
@@ -107,8 +107,9 @@ class Profile:
 
     def adapt(self, session: Session) -> Session:
         """``session`` as this target needs it: our FIN only after the replies owed (where it ends the session);
-        where nothing is answered before CMD_CONNECT_TO_PLTF, it in front of the lead and behind every
-        CMD_SHUTDOWN_PLTF (a platform not connected answers nothing: a state it cannot be fuzzed in)."""
+        where nothing is answered before CMD_CONNECT_TO_PLTF, it in front of the session's first frame (the lead,
+        or on a session without one its prelude or case) and behind every CMD_SHUTDOWN_PLTF (a platform not
+        connected answers nothing: a state it cannot be fuzzed in)."""
         if self.silent_before_connect:
             session = _connected(session)
         return replace(session, fin_waits=True) if self.fin_ends and not session.fin_waits else session
@@ -118,11 +119,13 @@ class Profile:
 
 
 def _connected(session: Session) -> Session:
-    """The session with CMD_CONNECT_TO_PLTF in the lead's frame and in each CMD_SHUTDOWN_PLTF's (frame indices and
-    the replies asked for stay: CMD_CONNECT_TO_PLTF has no reply)."""
+    """The session with CMD_CONNECT_TO_PLTF in its first frame and in each CMD_SHUTDOWN_PLTF's (frame indices and
+    the replies asked for stay: CMD_CONNECT_TO_PLTF has no reply). Not only in the lead's: a session without a lead
+    (past the first units, ``pltf.fuzz.lanes``) whose prelude does not connect would have its prelude's replies
+    swallowed, and the target judged for replies it never owed."""
     frames = [f + CONNECT_TO_PLTF if f == SHUTDOWN_PLTF else f for f in session.frames]
-    if session.led and frames[0] == LEAD:
-        frames[0] = CONNECT_TO_PLTF + LEAD
+    if frames and not frames[0].startswith(CONNECT_TO_PLTF):
+        frames[0] = CONNECT_TO_PLTF + frames[0]
     return replace(session, frames=frames) if frames != session.frames else session
 
 

@@ -18,9 +18,11 @@ from pltf.fuzz.lanes import InFlight
 from pltf.fuzz.profile import CONNECT_TO_PLTF, SHUTDOWN_PLTF, Profile, learn
 from pltf.fuzz.target import LEAD, Session, play
 from pltf.fuzz.unit import Unit
-from pltf.spec.codec import REPLIES, TelegramDecoder, encode
+from pltf.spec.codec import REPLIES, REQUESTS, TelegramDecoder, encode
 
 POSITION_REPLY = encode(REPLIES.CMD_GET_POSITION(x=1, y=2, angle=0.0, vel_trans=0.0, vel_rot=0.0))
+SET_MODE_6 = encode(REQUESTS.CMD_SET_MODE(mode=6))
+GET_STATUS = encode(REQUESTS.CMD_GET_STATUS())
 LATE = 0.05  # s each reply takes: our FIN, sent with the requests, always comes first
 
 
@@ -167,6 +169,8 @@ def test_a_silent_target_gets_connect_to_pltf_in_its_lead_and_after_every_shutdo
     s = prof.adapt(Session([LEAD, SHUTDOWN_PLTF, LEAD], half_close=True, led=True))
     assert s.frames == [CONNECT_TO_PLTF + LEAD, SHUTDOWN_PLTF + CONNECT_TO_PLTF, LEAD]
     assert not s.fin_waits  # its FIN does not end the session
+    unled = prof.adapt(Session([SET_MODE_6, GET_STATUS], half_close=True))  # a session past the first units
+    assert unled.frames == [CONNECT_TO_PLTF + SET_MODE_6, GET_STATUS]  # its prelude's reply is owed: connect first
     plain = Session([LEAD], half_close=True, led=True)
     assert Profile().adapt(plain) is plain  # a target with no such manners: the session as it was
 
