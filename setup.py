@@ -4,9 +4,10 @@ Everything else about the distribution is in pyproject.toml. The folders stay at
 (the layout is part of the product); each is installed as one subpackage of the namespace ``pltf`` (PEP 420:
 there is no ``pltf/__init__.py``, so the client and spec distributions add theirs beside it).
 
-The C extensions (inner loops of the ray caster and the planner's segment tests, the proxy's forwarding loop)
-are optional: without a compiler, or when ``PLTF_NO_EXTENSIONS=1``, the build goes on and the numpy fallbacks of
-reference_server/world/raycast.py and geometry.py run, and the proxy forwards with Python threads.
+The C extensions (inner loops of the ray caster and the planner's segment tests, the proxy's forwarding loop, the
+fuzzer's drawing core) are optional: without a compiler, or when ``PLTF_NO_EXTENSIONS=1``, the build goes on and
+the numpy fallbacks of reference_server/world/raycast.py and geometry.py run, the proxy forwards with Python
+threads and the fuzzer draws its cases in Python.
 -ffp-contract=off: no fused multiply-add, so the C loops round every product as numpy does (the tests hold them
 to numpy bit for bit).
 """
@@ -73,6 +74,8 @@ EXTENSIONS = [
 ] + [
     # pltf proxy's forwarding loop (proxy/_forward.c); without it the proxy forwards with Python threads
     Extension("pltf.proxy._forward", ["proxy/_forward.c"], extra_compile_args=["-O2"], optional=True),
+    # the fuzzer's drawing core (fuzz/_draw.c); without it the cases are drawn in Python (another stream)
+    Extension("pltf.fuzz._draw", ["fuzz/_draw.c"], extra_compile_args=["-O2"], optional=True),
 ]
 
 PACKAGES, PACKAGE_DIR = _packages()

@@ -122,6 +122,11 @@ def pick_telegram(rng: random.Random, forbidden: frozenset[int]) -> TelegramDef:
 
 
 @functools.cache
+def request_def(ident: int) -> TelegramDef:
+    return next(t for t in request_defs() if t.id == ident)
+
+
+@functools.cache
 def _free_ids(forbidden: frozenset[int]) -> tuple[int, ...]:
     return tuple(i for i in range(256) if i not in forbidden)
 
@@ -249,7 +254,10 @@ def gen_unknown_id(rng: random.Random, kb: Knowledge, forbidden: frozenset[int])
 
 def gen_length_field(rng: random.Random, kb: Knowledge, forbidden: frozenset[int]) -> Case:
     """A frame whose own length field lies (0, one short, one long, huge, over 2^31)."""
-    tdef = pick_telegram(rng, forbidden)
+    return length_field_case(pick_telegram(rng, forbidden), rng, kb)
+
+
+def length_field_case(tdef: TelegramDef, rng: random.Random, kb: Knowledge) -> Case:
     values, _ = field_values(tdef, rng, kb, 0.0)
     data = pack_fields(tdef.id, tdef.request or (), values)
     declared = rng.choice((0, len(data) - 1, len(data) + 1, 0x00FFFFFF, 0x7FFFFFFF, 0x80000000, 0xFFFFFFFF))

@@ -22,7 +22,7 @@ import random
 from dataclasses import replace
 from typing import Any
 
-from pltf.fuzz import generate, mutate
+from pltf.fuzz import draw, generate, mutate
 from pltf.fuzz.case import Case
 from pltf.fuzz.generate import weighted
 from pltf.fuzz.knowledge import Knowledge
@@ -42,6 +42,14 @@ def _enc(telegram: str, **fields: Any) -> bytes:
     return encode(REQUESTS[telegram](**fields))
 
 
+GEN_NAMES = ("gen.boundary", "gen.hostile")
+
+
+def _survey(data: bytes) -> tuple[str, tuple[int, ...] | list[int]]:
+    """``survey`` in C when the core is built (the tests hold the two equal)."""
+    return draw.survey(data) or survey(data)
+
+
 class Scheduler:
     def __init__(
         self,
@@ -50,6 +58,7 @@ class Scheduler:
         kb: Knowledge,
         pool: list[Case] | None = None,
         big_share: float = BIG_SHARE,
+        compiled: bool = True,
     ) -> None:
         self.seed, self.forbidden, self.kb, self.big_share = seed, forbidden, kb, big_share
         self.pool: list[Case] = list(pool or [])
@@ -62,8 +71,50 @@ class Scheduler:
         self._rng = random.Random()  # seeded again for each block of ``BLOCK`` cases
         self._at: int | None = None  # the case the generator's state is at (None: not seeded yet)
         self._looked: dict[int, tuple[bytes, bool, str, tuple[int, ...]]] = {}  # id(data) -> (data, ``_look``)
+        self._drawer = draw.Drawer(seed, forbidden, big_share) if compiled and draw.AVAILABLE else None
+        self._block: tuple[int, list[Case]] = (-1, [])  # the block drawn last and its cases
+        self._counted = -1  # the last block whose unsafe cases were counted in ``dropped``
+
+    def _compiled(self, i: int) -> Case:
+        """Case ``i`` from its block, drawn whole by the compiled core (``pltf.fuzz.draw``) when first asked for;
+        the cases it leaves to Python drawn here, each from a ``random.Random`` seeded by the core."""
+        number, cases = self._block
+        if number != i // BLOCK:
+            assert self._drawer is not None
+            number = i // BLOCK
+            items, dropped = self._drawer.block(number, BLOCK, self.kb, bool(self.pool))
+            cases = [c if isinstance(c, Case) else self._intent(*c) for c in items]
+            if number > self._counted:  # a block drawn again (asked for out of turn) was counted the first time
+                self.dropped += dropped
+                self._counted = number
+            self._block = (number, cases)
+        return cases[i % BLOCK]
+
+    def _intent(self, intent: int, ident: int, seed: int) -> Case:
+        """A case the compiled core leaves to Python (``pltf.fuzz.draw``): an XML document, a corpus input."""
+        rng = random.Random(seed)
+        for _ in range(MAX_DRAWS if intent != draw.FALLBACK else 0):
+            case = self._draw_intent(intent, ident, rng)
+            checked = self._checked(case, rng)
+            if checked is not None:
+                return checked
+        return Case((_enc("CMD_GET_STATUS"),), "gen.fallback", "CMD_GET_STATUS", expect=KEEP)
+
+    def _draw_intent(self, intent: int, ident: int, rng: random.Random) -> Case:
+        if intent == draw.POOL:
+            name = weighted(rng, self._mut_names, self._mut_cum)
+            return mutate.MUTATORS[name][1](rng.choice(self.pool), rng)
+        if intent == draw.XML:
+            return generate.GENERATORS["gen.xml"][1](rng, self.kb, self.forbidden)
+        tdef = generate.request_def(ident & 0xFF)
+        if intent == draw.LENGTH:
+            return generate.length_field_case(tdef, rng, self.kb)
+        hostile = bool(ident >> 8)
+        return generate.gen_telegram(tdef, rng, self.kb, 0.35 if hostile else 0.0, GEN_NAMES[hostile])
 
     def case(self, i: int) -> Case:
+        if self._drawer is not None:
+            return self._compiled(i)
         if self._at != i:  # out of turn: the block's cases before it, drawn again
             start = i - i % BLOCK
             self._rng.seed(f"{self.seed}:b{start // BLOCK}")
@@ -83,28 +134,33 @@ class Scheduler:
 
     def _draw_checked(self, rng: random.Random) -> Case:
         for _ in range(MAX_DRAWS):
-            case = self._draw(rng)
-            if not case.frames or not case.data:
-                continue
-            if case.size > BIG_CASE and rng.random() >= self.big_share:
-                continue
-            forbidden, kind, answered = self._look(case.data)
-            if forbidden:
-                self.dropped += 1
-                continue
-            return case.judged(CLOSE if case.half_close else kind, answered)
+            checked = self._checked(self._draw(rng), rng)
+            if checked is not None:
+                return checked
         return Case((_enc("CMD_GET_STATUS"),), "gen.fallback", "CMD_GET_STATUS", expect=KEEP)
+
+    def _checked(self, case: Case, rng: random.Random) -> Case | None:
+        """The case with what a strict server does with it, or None: empty, a big one not kept, or unsafe."""
+        if not case.frames or not case.data:
+            return None
+        if case.size > BIG_CASE and rng.random() >= self.big_share:
+            return None
+        forbidden, kind, answered = self._look(case.data)
+        if forbidden:
+            self.dropped += 1
+            return None
+        return case.judged(CLOSE if case.half_close else kind, answered)
 
     def _look(self, data: bytes) -> tuple[bool, str, tuple[int, ...]]:
         """(a forbidden id in it, ``survey``'s kind and answered ids) of ``data``; remembered for big data, whose
         object comes again (a document's frame, ``pltf.fuzz.generate``): scanning megabytes twice per draw was
         most of the cost of drawing a big document."""
         if len(data) < LOOK_KEPT_FROM:
-            kind, answered = survey(data)
+            kind, answered = _survey(data)
             return bool(forbidden_ids(data, self.forbidden)), kind, tuple(answered)
         known = self._looked.get(id(data))
         if known is None or known[0] is not data:
-            kind, answered = survey(data)
+            kind, answered = _survey(data)
             if len(self._looked) >= LOOKS_KEPT:
                 self._looked.clear()
             known = self._looked[id(data)] = (data, bool(forbidden_ids(data, self.forbidden)), kind, tuple(answered))
