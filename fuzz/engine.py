@@ -10,10 +10,10 @@ Rules:
   does one single in ``STATEFUL_EVERY`` about an operation or motion command. On a target whose connections are dear
   (``pltf.fuzz.gate``) the units of accepted cases run on a kept connection, and the cases a window brings that
   need a fresh connection (the target should close on them) beyond ``SINGLES_QUEUE`` waiting are skipped
-  (counted): fresh connections are what such a target has least of. Those kept are the ones whose telegram ran
-  least so far (``pltf.fuzz.unit.rarest``): every id comes round. Where the target turns nobody away the dear way
-  is paced (its batches take turns with the singles, ``pltf.fuzz.pace``), tried against fresh connections and
-  kept only when it is faster and gives up few singles (``pltf.fuzz.trial``).
+  (counted, before units are built for them): fresh connections are what such a target has least of. Those kept
+  are the ones whose telegram ran least so far (``pltf.fuzz.unit.rarest_cases``): every id comes round. Where the
+  target turns nobody away the dear way is paced (its batches take turns with the singles, ``pltf.fuzz.pace``),
+  tried against fresh connections and kept only when it is faster and gives up few singles (``pltf.fuzz.trial``).
 - A suspicion (``pltf.fuzz.verdict``) stops the lanes; once the ports are free its unit is replayed alone: a
   finding when it fails again the same way, else reported apart as unconfirmed (``stats.unconfirmed``), which
   never sets the exit status. A unit that timed out is a stall when another port still serves us, else a hang;
@@ -44,8 +44,9 @@ from pltf.fuzz.prefetch import Prefetcher
 from pltf.fuzz.preludes import STATEFUL, StatePlan
 from pltf.fuzz.schedule import BIG_CASE, Scheduler
 from pltf.fuzz.trial import Trial
-from pltf.fuzz.unit import Unit, rarest, window_units
+from pltf.fuzz.unit import Unit, rarest_cases, window_units
 from pltf.fuzz.verdict import HOW, NEEDED, REPLAYS, TIMED_OUT, Verdict, confirm, confirmed, patient
+from pltf.fuzz.wire import KEEP
 from pltf.harness.launch import Launcher
 
 WINDOW = 256  # cases drawn at a time
@@ -115,6 +116,7 @@ class Campaign:
                 raise HarnessError(f"{exc}{self._target_said()}") from None
             self.stats.profile = self.profile.to_json()
         lanes.adapt = self.profile.adapt
+        lanes.fin_waits, lanes.frames_as_is = self.profile.fin_ends, not self.profile.silent_before_connect
         if self.profile.small_backlog:  # SYNs past the backlog are dropped: a pipelined connect would wait seconds
             for gate in lanes.gates:
                 gate.pipelining = False
@@ -227,14 +229,7 @@ class Campaign:
         if self.o.max_cases is not None:
             cases = cases[: max(1, self.o.max_cases - self.stats.cases)]
         self.index = first + len(cases)
-        units = self.units(cases)
-        if self.lanes.dear:
-            room = max(0, self._singles_queue(units) - self.lanes.fresh_waiting())
-            fresh = [u for u in units if not u.keep]
-            skip = set(fresh) - set(rarest(fresh, room, self.single_telegrams))
-            self.stats.skipped += len(skip)
-            units = [u for u in units if u not in skip]
-        self.lanes.add(units)
+        self.lanes.add(self.units(cases, self._choose_singles if self.lanes.dear else None))
         t0, served, singles, dear = time.monotonic(), self.stats.cases, self.stats.singles, self.lanes.dear
         self._lanes_run(batches_only=dear and self.trial.next_way())  # a trial's ways are not mixed
         if not self.stop:
@@ -247,13 +242,29 @@ class Campaign:
             self._way(self.trial.way())
         self._gate_stats()
 
-    def _singles_queue(self, units: list[Unit]) -> int:
-        """Singles that may wait on the dear way: ``SINGLES_QUEUE``, or, paced, as many as the window's batches
-        owe the other port (``pltf.fuzz.pace``) when that is more."""
+    def _choose_singles(self, singles: list[Case], batches: list[list[Case]]) -> list[Case]:
+        """On the dear way: the singles' cases that run, before units are built for them - those that need a fresh
+        connection beyond the room left (``_singles_queue``) are skipped (counted), the rarest telegrams kept."""
+        assert self.lanes is not None
+        kept = [len(b) for b in batches] + [1 for c in singles if c.expect == KEEP]  # the kept connection's units
+        room = max(0, self._singles_queue(kept) - self.lanes.fresh_waiting())
+        fresh = [c for c in singles if c.expect != KEEP]
+        chosen = rarest_cases(fresh, room, self.single_telegrams)
+        if len(chosen) == len(fresh):
+            return singles
+        run = {id(c) for c in chosen}
+        out = [c for c in singles if c.expect == KEEP or id(c) in run]
+        self.stats.skipped += len(singles) - len(out)
+        return out
+
+    def _singles_queue(self, batches: list[int]) -> int:
+        """Singles that may wait on the dear way: ``SINGLES_QUEUE``, or, paced, as many as the window's units of
+        accepted cases (``batches``: their numbers of cases) owe the other port (``pltf.fuzz.pace``) when that is
+        more."""
         pace = self.lanes.pace if self.lanes is not None else None
         if pace is None:
             return SINGLES_QUEUE
-        return max(SINGLES_QUEUE, sum(pace.singles(len(u.cases)) for u in units if u.keep))
+        return max(SINGLES_QUEUE, sum(pace.singles(n) for n in batches))
 
     def _way(self, dear: bool) -> None:
         """Run the next window the dear way or with fresh connections (``pltf.fuzz.trial``)."""
@@ -277,9 +288,11 @@ class Campaign:
             if result == DONE:
                 return
 
-    def units(self, cases: list[Case]) -> list[Unit]:
+    def units(
+        self, cases: list[Case], choose: Callable[[list[Case], list[list[Case]]], list[Case]] | None = None
+    ) -> list[Unit]:
         """The window's units (``pltf.fuzz.unit.window_units``): the first batch behind the state prelude, and
-        one single in ``STATEFUL_EVERY`` about an operation or motion command."""
+        one single in ``STATEFUL_EVERY`` about an operation or motion command of those that run (``choose``)."""
         state, mode = self.kb.operation_state, self.kb.motion_mode
         target = self.plan.current
 
@@ -291,21 +304,23 @@ class Campaign:
                 return []
             return preludes.path(state, mode, target, self.forbidden)
 
-        return window_units(cases, lambda: self.plan.prelude(state, mode, self.forbidden), target, single_prelude)
+        return window_units(
+            cases, lambda: self.plan.prelude(state, mode, self.forbidden), target, single_prelude, choose
+        )
 
     # ------------------------------------------------------------------ the oracle of an admitted unit
     def judge_unit(self, e: InFlight, v: Verdict) -> bool:
         """Count and learn from a unit the target served; False (stop the lanes) on a suspicion."""
-        st, out, unit = self.stats, e.flight.out, e.unit
+        st, f, unit = self.stats, e.flight, e.unit
         st.units += 1
         st.probes += e.led  # its lead was answered: a liveness probe
         st.batches += unit.batch
         st.singles += not unit.batch
         st.cut_replies += v.cut
-        self._learn(out.replies)
+        self._learn(f.replies)
         at = None if unit.check_at is None else unit.check_at - (not e.led)
-        if at is not None and unit.target is not None and len(out.replies) > at:
-            check: Any = out.replies[at]  # a CMD_GET_STATUS reply (its fields are built from the spec at import)
+        if at is not None and unit.target is not None and len(f.replies) > at:
+            check: Any = f.replies[at]  # a CMD_GET_STATUS reply (its fields are built from the spec at import)
             if check.NAME == "CMD_GET_STATUS" and self.plan.check(
                 unit.target, check.operation_state, check.motion_mode
             ):
@@ -313,7 +328,7 @@ class Campaign:
         if v.suspicious:
             self.suspicions.append(Suspicion(unit, e.port, v, exchange(e)))
             return False
-        self._count(unit.cases, ("kept" if unit.batch else "closed") if out.closed or unit.batch else "open")
+        self._count(unit.cases, ("kept" if unit.batch else "closed") if f.closed or unit.batch else "open")
         return True
 
     def _learn(self, replies: list[Any]) -> None:

@@ -39,7 +39,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from pltf.fuzz.flight import Flight, fly, step_flights
+from pltf.fuzz.flight import Flight, Poller, Single, fly, plain, step_flights
 from pltf.fuzz.gate import DEPTH, Gate
 from pltf.fuzz.pace import Pace
 from pltf.fuzz.sent import segments
@@ -57,7 +57,7 @@ DONE, STOPPED = "done", "stopped"
 
 @dataclass(eq=False)
 class InFlight:
-    flight: Flight
+    flight: Flight | Single
     unit: Unit
     port: int  # index into the ports
     behind: bool  # connected while another unit of ours was on the port (pipelined)
@@ -101,7 +101,7 @@ class Lanes:
         self.flights: list[collections.deque[InFlight]] = [collections.deque() for _ in ports]
         self.todo: collections.deque[Unit] = collections.deque()
         self.recent: collections.deque[InFlight] = collections.deque(maxlen=RECENT)
-        self.log: collections.deque[Flight] = collections.deque(maxlen=LOG)  # every flight, as it started
+        self.log: collections.deque[Flight | Single] = collections.deque(maxlen=LOG)  # every flight, as it started
         self.kept: socket.socket | None = None
         self.dear = False  # set by the campaign from the gates' release
         self.pace: Pace | None = None  # the dear way's batches take turns with the singles (``pltf.fuzz.pace``)
@@ -110,6 +110,11 @@ class Lanes:
         self.stuck: int | None = None  # the port of a stall
         self.suspect: int | None = None  # a port that has not served us for ``patience``: are the others alive?
         self.adapt: Callable[[Session], Session] = _as_is  # a session as the target needs it (``pltf.fuzz.profile``)
+        # what ``adapt`` does, for the plain singles that skip it (``pltf.fuzz.flight.Single``): our FIN waits for the
+        # replies asked for; frames_as_is False (it rewrites frames: CONNECT_TO_PLTF first): no plain singles
+        self.fin_waits = False
+        self.frames_as_is = True
+        self.poller = Poller()
 
     # ------------------------------------------------------------------ queue
     def add(self, units: list[Unit]) -> None:
@@ -145,7 +150,7 @@ class Lanes:
                 time.sleep(max(0.0, min(wait, 0.05)))
                 continue
             if live and not any(q and q[0].flight.done for q in self.flights):
-                step_flights(live, until=self._next_retry())
+                step_flights(live, until=self._next_retry(), poller=self.poller)
             for q in self.flights:
                 while q and q[0].flight.done:
                     e = q.popleft()
@@ -167,20 +172,28 @@ class Lanes:
     def _fill(self) -> None:
         """Start units on every port that takes one now."""
         now = time.monotonic()
+        todo = self.todo
         for k in range(self.active):
-            while self.todo and self.gates[k].may_connect(now):
+            gate, q = self.gates[k], self.flights[k]
+            while todo and now >= gate.retry_at:  # ``Gate.may_connect``
                 unit = self._pick(k)
                 if unit is None or not self._may_start(k, unit):
                     break
-                self.todo.remove(unit)
-                self.flights[k].append(self._start(k, unit))
+                if unit is todo[0]:
+                    todo.popleft()
+                else:
+                    todo.remove(unit)
+                q.append(self._start(k, unit))
 
     def _pick(self, k: int) -> Unit | None:
         """The unit port ``k`` takes next: the queue's first, except on a dear target (batches on the kept
         connection of port 0, singles first on the others)."""
-        mine = (u for u in self.todo if u.pin is None or u.pin == k)
         if not self.dear or self.active < 2:
-            return next(mine, None)
+            head = self.todo[0]  # the common case: the queue's first is not pinned elsewhere
+            if head.pin is None or head.pin == k:
+                return head
+            return next((u for u in self.todo if u.pin is None or u.pin == k), None)
+        mine = (u for u in self.todo if u.pin is None or u.pin == k)
         first = None
         for u in mine:
             if u.keep == (k == 0):
@@ -201,7 +214,7 @@ class Lanes:
         return (
             f.connected
             and not f.sending
-            and f.session.half_close
+            and f.half_close
             and len(f.data) <= PIPELINE_BYTES
             and all(i in LEAD_IDS for i in f.expected)
         )
@@ -231,8 +244,13 @@ class Lanes:
         if kept and self.pace is not None:
             self.pace.batch_started(len(unit.cases))
         led = self._led(k, unit, sock is None)
-        session = self.adapt(unit.session(lead=led, kept=kept))
-        flight = self.connect(self.host, self.ports[k], session, self.deadline, sock=sock)
+        flight: Flight | Single
+        if self.frames_as_is and self.connect is Flight and plain(unit, led, kept, self.fin_waits):
+            flight = Single(self.host, self.ports[k], unit, led, self.deadline, self.fin_waits)
+        else:
+            flight = self.connect(
+                self.host, self.ports[k], self.adapt(unit.session(lead=led, kept=kept)), self.deadline, sock=sock
+            )
         self.log.append(flight)
         q = self.flights[k]
         behind = bool(q)
@@ -245,7 +263,7 @@ class Lanes:
             self.recent.append(e)
         return e
 
-    def _share_allowances(self, k: int, flight: Flight) -> None:
+    def _share_allowances(self, k: int, flight: Flight | Single) -> None:
         """A target may serve its ports one at a time: a unit's allowance for its size (a big document takes
         seconds to parse) is added to the deadlines of the units in flight on the other ports (up to
         ``SHARED_UNITS`` allowances each), and theirs to its deadline."""
@@ -265,7 +283,10 @@ class Lanes:
         now = time.monotonic()
         f, unit, gate = e.flight, e.unit, self.gates[e.port]
         # on the kept connection, too, nothing back means the unit was not served (the connection is gone)
-        v = judge(f.out, unit.owed(f.session, len(f.expected)), e.led or e.kept, unit.keep)
+        if type(f) is Single:
+            v = f.verdict()
+        else:
+            v = judge(f.out, unit.owed(f.session, len(f.expected)), e.led or e.kept, unit.keep)
         e.verdict = v
         if e.kept and f.kept is not None:
             self.kept = f.kept

@@ -12,7 +12,7 @@ Rules:
   single queued for another port or in flight there). So the singles keep at least ``TURN`` per batched case
   whatever the machine's load, and a batch never waits for singles that are not there.
 - A window queues as many singles as its batches will owe, at least ``pltf.fuzz.engine.SINGLES_QUEUE``; the rest
-  of its singles are skipped (counted), the rarest telegrams kept (``pltf.fuzz.unit.rarest``).
+  of its singles are skipped (counted), the rarest telegrams kept (``pltf.fuzz.unit.rarest_cases``).
 - Only the trial's dear way is paced (``pltf.fuzz.trial``: the target turns nobody away). A target that turns
   newcomers away (the zoo's ``slow-release``) is dear by necessity and not paced: there a fresh connection costs
   the target's release time, idle, which the batches do not lengthen; pacing would only slow the batches to

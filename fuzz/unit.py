@@ -23,9 +23,9 @@ Rules:
 from __future__ import annotations
 
 import collections
-import functools
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import Any, Generic, TypeVar, overload
 
 from pltf.fuzz.case import WHOLE, Case
 from pltf.fuzz.preludes import Target, chart_last
@@ -38,6 +38,25 @@ LEAD_ID = LEAD[8]
 PIPELINE_BYTES = 1 << 14  # units up to this size may be pipelined on a port (read whole by one recv)
 BATCH_CASES = 128
 BATCH_BYTES = 1 << 18
+T = TypeVar("T")
+
+
+class once(Generic[T]):
+    """``functools.cached_property`` without its lock: Python 3.11 takes an RLock at each first access, and a unit's
+    five are each asked for once or more per unit, about half of all units being singles (issue 34)."""
+
+    def __init__(self, fn: Callable[[Any], T]) -> None:
+        self.fn, self.name, self.__doc__ = fn, fn.__name__, fn.__doc__
+
+    @overload
+    def __get__(self, obj: None, owner: type | None = None) -> once[T]: ...
+    @overload
+    def __get__(self, obj: object, owner: type | None = None) -> T: ...
+    def __get__(self, obj: object | None, owner: type | None = None) -> T | once[T]:
+        if obj is None:
+            return self
+        value = obj.__dict__[self.name] = self.fn(obj)  # the instance's attribute from now on
+        return value
 
 
 def batchable(c: Case) -> bool:
@@ -53,22 +72,22 @@ class Unit:
     tries: int = 0  # connections that were not admitted so far
     pin: int | None = None  # the port it must run again on (it was left unanswered there)
 
-    @functools.cached_property
+    @once
     def keep(self) -> bool:
         """Every case accepted by the strict codec (a unit without cases - a lead alone - is not: it owes only
         the lead's reply). Its cases never change: asked for many times per unit, computed once."""
         return bool(self.cases) and all(c.expect == KEEP for c in self.cases)
 
-    @functools.cached_property
+    @once
     def batch(self) -> bool:
         return len(self.cases) > 1 or (bool(self.cases) and batchable(self.cases[0]))
 
-    @functools.cached_property
+    @once
     def size(self) -> int:
         """Asked for a few times per unit, computed once (a unit's prelude is set before: ``window_units``)."""
         return sum(c.size for c in self.cases) + sum(len(f) for f in self.prelude)
 
-    @functools.cached_property
+    @once
     def whole(self) -> bool:
         """Small and written in one piece: it may wait behind another unit (pipelining)."""
         return self.size <= PIPELINE_BYTES and all(c.delivery.mode == "whole" for c in self.cases)
@@ -78,7 +97,7 @@ class Unit:
         """The prelude and its check (nothing without a prelude)."""
         return [*self.prelude, GET_STATUS] if self.prelude else []
 
-    @functools.cached_property
+    @once
     def prelude_ids(self) -> list[int]:
         """The ids of the answered requests of the prelude and its check."""
         return [*answered_ids(b"".join(self.prelude)), GET_STATUS_ID] if self.prelude else []
@@ -112,27 +131,38 @@ class Unit:
 
 
 def window_units(
-    cases: list[Case], head: Callable[[], list[bytes]], target: Target, single_prelude: Callable[[Case], list[bytes]]
+    cases: list[Case],
+    head: Callable[[], list[bytes]],
+    target: Target,
+    single_prelude: Callable[[Case], list[bytes]],
+    choose: Callable[[list[Case], list[list[Case]]], list[Case]] | None = None,
 ) -> list[Unit]:
     """A window of cases as units: batches of the ``batchable`` ones (at most ``BATCH_CASES`` cases and
     ``BATCH_BYTES``; chart commands last, ``pltf.fuzz.preludes.chart_last``), the first one behind ``head()``, the
     state prelude to ``target`` (asked for only when there is a batch); a single per other case, behind
     ``single_prelude(case)``; the batches spread evenly among the singles (while the target works through a batch
-    on one port, the other carries singles)."""
+    on one port, the other carries singles). ``choose(singles, batches)``: the singles' cases that run (a dear
+    target: ``rarest_cases``), chosen before any unit is built for them."""
     batches: list[list[Case]] = [[]]
     size = 0
-    singles: list[Unit] = []
+    alone: list[Case] = []
     for c in cases:
         if not batchable(c):
-            prelude = single_prelude(c)
-            singles.append(Unit([c], prelude, target if prelude else None))
+            alone.append(c)
             continue
         if len(batches[-1]) >= BATCH_CASES or size + c.size > BATCH_BYTES:
             batches.append([])
             size = 0
         batches[-1].append(c)
         size += c.size
-    units = [Unit(chart_last(b)) for b in batches if b]
+    groups = [b for b in batches if b]
+    if choose is not None:
+        alone = choose(alone, groups)
+    singles: list[Unit] = []
+    for c in alone:
+        prelude = single_prelude(c)
+        singles.append(Unit([c], prelude, target if prelude else None))
+    units = [Unit(chart_last(b)) for b in groups]
     if units:
         units[0].prelude = head()
         units[0].target = target if units[0].prelude else None
@@ -149,13 +179,22 @@ def window_units(
 def rarest(singles: list[Unit], room: int, seen: collections.Counter[str]) -> list[Unit]:
     """The ``room`` singles (in their order) whose telegrams ran least so far by ``seen``, which counts them:
     the k-th single of a telegram in ``singles`` ranks as if the k - 1 before it had run (a round robin)."""
-    if len(singles) > room:
+    return _rarest(singles, room, seen, lambda u: u.cases[0].telegram if u.cases else None)
+
+
+def rarest_cases(singles: list[Case], room: int, seen: collections.Counter[str]) -> list[Case]:
+    """``rarest`` of the singles' cases, before units are built for them (``window_units``' ``choose``)."""
+    return _rarest(singles, room, seen, lambda c: c.telegram)
+
+
+def _rarest(items: list[T], room: int, seen: collections.Counter[str], name: Callable[[T], str | None]) -> list[T]:
+    if len(items) > room:
         ahead: collections.Counter[str] = collections.Counter()
         rank = []
-        for i, u in enumerate(singles):
-            t = u.cases[0].telegram if u.cases else ""
+        for i, item in enumerate(items):
+            t = name(item) or ""
             rank.append((seen[t] + ahead[t], i))
             ahead[t] += 1
-        singles = [singles[i] for i in sorted(i for _, i in sorted(rank)[:room])]
-    seen.update(u.cases[0].telegram for u in singles if u.cases)
-    return singles
+        items = [items[i] for i in sorted(i for _, i in sorted(rank)[:room])]
+    seen.update(t for t in map(name, items) if t is not None)
+    return items

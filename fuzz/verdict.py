@@ -62,17 +62,25 @@ def admitted(out: Outcome) -> bool:
 def judge(out: Outcome, owed: int, led: bool, keep: bool) -> Verdict:
     """The verdict of a finished unit. ``owed``: the replies the target must send (E-WIRE-006); ``led``: the
     session opened with the lead; ``keep``: every case of the unit is accepted by the strict codec."""
-    if out.refused:
+    return judge_counts(out.refused, out.got, out.timed_out, out.bad_reply, len(out.replies), owed, led, keep)
+
+
+def judge_counts(
+    refused: bool, got: int, timed_out: bool, bad_reply: str | None, replies: int, owed: int, led: bool, keep: bool
+) -> Verdict:
+    """``judge`` from what a connection counted (``got``: bytes back, ``replies``: replies decoded), without an
+    ``Outcome`` (``pltf.fuzz.flight.Single``)."""
+    if refused:
         return _TURNED_AWAY["refused"]
-    if led and not admitted(out):
-        return _TURNED_AWAY["timed-out" if out.timed_out else "closed"]
-    if out.bad_reply is not None:
-        if not keep and out.bad_reply.startswith(CUT):
+    if led and not (got > 0 or replies):
+        return _TURNED_AWAY["timed-out" if timed_out else "closed"]
+    if bad_reply is not None:
+        if not keep and bad_reply.startswith(CUT):
             return _CUT
-        return Verdict(BAD_REPLY, out.bad_reply)
-    if out.timed_out:
+        return Verdict(BAD_REPLY, bad_reply)
+    if timed_out:
         return Verdict(TIMED_OUT, TIMED_OUT_REASON)
-    if len(out.replies) < owed:
+    if replies < owed:
         return Verdict(DROPPED, DROPPED_REASON)
     return _OK  # the verdict of most units: one object (verdicts are frozen)
 

@@ -9,9 +9,13 @@ from collections.abc import Iterator
 
 import pytest
 
-from pltf.fuzz.case import Delivery
-from pltf.fuzz.flight import Flight, fly
+from pltf.fuzz.case import Case, Delivery
+from pltf.fuzz.flight import Flight, Single, fly, plain
 from pltf.fuzz.target import Session
+from pltf.fuzz.unit import Unit
+from pltf.fuzz.verdict import judge
+from pltf.fuzz.wire import CLOSE, frame
+from pltf.spec.codec import HEADER, REPLIES, encode
 
 
 class Listener:
@@ -93,3 +97,62 @@ def test_an_empty_session_is_sent_at_once() -> None:
             assert not flight.sending and conn.recv(10) == b""  # no bytes, our end-of-stream
         fly([flight])
         assert flight.done and flight.out.closed
+
+
+class Answering:
+    """A loopback server that answers every connection the same way: reads until our end-of-stream, writes
+    ``reply`` and closes (``reply`` None: closes at once, unread)."""
+
+    def __init__(self, reply: bytes | None) -> None:
+        self.sock = socket.create_server(("127.0.0.1", 0))
+        self.port = self.sock.getsockname()[1]
+        self.reply = reply
+        self.thread = threading.Thread(target=self._serve, daemon=True)
+        self.thread.start()
+
+    def _serve(self) -> None:
+        for _ in range(2):
+            conn, _ = self.sock.accept()
+            with conn:
+                if self.reply is None:
+                    continue
+                while conn.recv(65536):
+                    pass
+                conn.sendall(self.reply)
+
+    def close(self) -> None:
+        self.thread.join(5.0)
+        self.sock.close()
+
+
+LEAD_REPLY = encode(REPLIES.CMD_GET_POSITION(x=1, y=2, angle=3, vel_trans=0, vel_rot=0))
+ANSWERS = {
+    "the lead's reply": LEAD_REPLY,
+    "nothing": b"",
+    "a reply that does not decode": HEADER + b"\x00\x00\x00\x02\xfe\x00",
+    "a reply cut off by the close": LEAD_REPLY[:-3],
+    "the lead's reply twice": LEAD_REPLY * 2,
+    "closed unread": None,
+}
+
+
+@pytest.mark.parametrize("answer", list(ANSWERS))
+@pytest.mark.parametrize("lead", [True, False])
+def test_a_plain_single_is_judged_as_a_flight_of_its_session_is(answer: str, lead: bool) -> None:
+    """The plain single's one object and its counters give the verdict, replies and close the general flight
+    gives for the same session, whatever the target answered."""
+    unit = Unit([Case((frame(b"\xfe\x01"),), "gen.boundary", "id 254", expect=CLOSE, answered=())])
+    assert plain(unit, lead, kept=False, fin_waits=False)
+    server = Answering(ANSWERS[answer])
+    try:
+        single = Single("127.0.0.1", server.port, unit, lead, 2.0, False)
+        fly([single])
+        flight = Flight("127.0.0.1", server.port, unit.session(lead=lead), 2.0)
+        fly([flight])
+    finally:
+        server.close()
+    assert single.data == flight.data and single.expected == flight.expected
+    assert single.verdict() == judge(flight.out, unit.owed(flight.session, len(flight.expected)), lead, False)
+    assert [r.ID for r in single.replies] == [r.ID for r in flight.out.replies]
+    assert (single.out.closed, single.out.refused, single.out.timed_out) == (True, False, False)
+    assert single.session.frames == flight.session.frames

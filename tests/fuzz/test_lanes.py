@@ -51,6 +51,7 @@ class FakeFlight:
         self.budget, self.deadline = deadline, self.started + deadline
         self.done, self.connected, self.sending, self.kept = False, True, False, None
         self.data = session.data
+        self.half_close = session.half_close
         self.behind = any(not f.done for f in target.flights if f.port == port)  # another of ours holds the port
         self.order = len(target.flights)
 
@@ -90,7 +91,7 @@ class Target:
 def oldest_first(monkeypatch: pytest.MonkeyPatch) -> Iterator[None]:
     """The select loop, played: the oldest flight not done finishes (``fly`` runs them all out)."""
 
-    def step(flights: list[FakeFlight], until: float | None = None) -> list[FakeFlight]:
+    def step(flights: list[FakeFlight], until: float | None = None, poller: Any = None) -> list[FakeFlight]:
         live = [f for f in flights if not f.done]
         if live:
             min(live, key=lambda f: f.order).finish()
