@@ -75,6 +75,24 @@ class Scheduler:
         self._block: tuple[int, list[Case]] = (-1, [])  # the block drawn last and its cases
         self._counted = -1  # the last block whose unsafe cases were counted in ``dropped``
 
+    @property
+    def compiled(self) -> bool:
+        """The compiled core draws (``pltf.fuzz.draw``): a window costs ~3 us a case, drawn where it is taken."""
+        return self._drawer is not None
+
+    def window(self, first: int, n: int) -> list[Case]:
+        """Cases ``first`` to ``first + n - 1``, a block's slice at a time."""
+        if self._drawer is None:
+            return [self.case(i) for i in range(first, first + n)]
+        out: list[Case] = []
+        i, end = first, first + n
+        while i < end:
+            self._compiled(i)
+            stop = min(end, i - i % BLOCK + BLOCK)
+            out += self._block[1][i % BLOCK : i % BLOCK + stop - i]
+            i = stop
+        return out
+
     def _compiled(self, i: int) -> Case:
         """Case ``i`` from its block, drawn whole by the compiled core (``pltf.fuzz.draw``) when first asked for;
         the cases it leaves to Python drawn here, each from a ``random.Random`` seeded by the core."""

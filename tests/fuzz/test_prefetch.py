@@ -27,10 +27,14 @@ class PoseEcho:
         return Case(frames=(head.ljust(self.size, b"."),), origin="test", telegram="-")
 
 
-def test_the_windows_are_the_schedulers_stream_in_order() -> None:
-    sched = Scheduler(7, forbidden(allow_motion=False), Knowledge())
-    expected = [Scheduler(7, forbidden(allow_motion=False), Knowledge()).case(i).data for i in range(100, 164)]
-    pre = Prefetcher(sched, 100, 16)
+@pytest.mark.parametrize("compiled", [False, True])
+def test_the_windows_are_the_schedulers_stream_in_order(compiled: bool) -> None:
+    """Drawn by the forked child (the Python stream), or where they are taken (the compiled core, pltf.fuzz.draw),
+    across a block's end (schedule.BLOCK)."""
+    sched = Scheduler(7, forbidden(allow_motion=False), Knowledge(), compiled=compiled)
+    stream = Scheduler(7, forbidden(allow_motion=False), Knowledge(), compiled=compiled)
+    expected = [stream.case(i).data for i in range(200, 328)]
+    pre = Prefetcher(sched, 200, 32)
     try:
         got: list[bytes] = []
         firsts = []
@@ -38,9 +42,9 @@ def test_the_windows_are_the_schedulers_stream_in_order() -> None:
             first, cases = pre.get()
             firsts.append(first)
             got += [c.data for c in cases]
-        assert firsts == [100, 116, 132, 148]
+        assert firsts == [200, 232, 264, 296]
         assert got == expected
-        assert pre.proc is not None  # the forked child drew them, not a thread
+        assert (pre.proc is None) == sched.compiled  # the forked child drew them, not a thread
     finally:
         pre.close()
 
