@@ -36,15 +36,15 @@
 
 #define READ_SIZE 65536
 #define HAND_OVER_NS 20000000LL   /* 20 ms: the oldest copy kept waits at most about this long for on_data */
-#define HAND_OVER_BYTES (1 << 20)  /* or until so many bytes are kept */
+#define HAND_OVER_BYTES (1 << 20) /* or until so many bytes are kept */
 
-struct way {          /* one direction: bytes read from src, sent to dst */
+struct way { /* one direction: bytes read from src, sent to dst */
     int src, dst;
-    int side;         /* 1: client -> target (network.py's side True), 0: target -> client */
-    int reading;      /* src has not sent its FIN yet */
-    int ended;        /* FIN passed on */
+    int side;    /* 1: client -> target (network.py's side True), 0: target -> client */
+    int reading; /* src has not sent its FIN yet */
+    int ended;   /* FIN passed on */
     char *buf;
-    size_t off, len;  /* the chunk held back: buf[off:len] not sent yet */
+    size_t off, len; /* the chunk held back: buf[off:len] not sent yet */
 };
 
 static long long now_ns(void) {
@@ -57,7 +57,7 @@ static long long now_ns(void) {
 struct kept {
     char *buf;
     size_t len, cap, count;
-    long long first;  /* now_ns() of the oldest record kept */
+    long long first; /* now_ns() of the oldest record kept */
 };
 
 static int keep(struct kept *k, int side, const char *data, size_t n) {
@@ -92,8 +92,8 @@ static PyObject *kept_list(struct kept *k) {
         size_t n;
         memcpy(&when, p + 1, sizeof when);
         memcpy(&n, p + 1 + sizeof when, sizeof n);
-        PyObject *item = Py_BuildValue("(Ody#)", *p ? Py_True : Py_False, when,
-                                       p + 1 + sizeof when + sizeof n, (Py_ssize_t)n);
+        PyObject *item =
+            Py_BuildValue("(Ody#)", *p ? Py_True : Py_False, when, p + 1 + sizeof when + sizeof n, (Py_ssize_t)n);
         if (item == NULL) {
             Py_DECREF(list);
             return NULL;
@@ -115,7 +115,7 @@ static int call(PyThreadState **ts, struct kept *k, PyObject *on_data, PyObject 
         if (res == NULL) PyErr_WriteUnraisable(on_data);
         Py_XDECREF(res);
         Py_XDECREF(list);
-        k->len = k->count = 0;  /* what could not be handed over is dropped (reported): forwarding goes on */
+        k->len = k->count = 0; /* what could not be handed over is dropped (reported): forwarding goes on */
         PyErr_Clear();
     }
     PyObject *res = fn ? PyObject_CallFunction(fn, "O", side ? Py_True : Py_False) : NULL;
@@ -161,8 +161,10 @@ static void interest(struct pollfd fds[3], int wake, int client, int target, con
     for (int i = 0; i < 2; i++) {
         const struct way *w = &ways[i];
         struct pollfd *src = &fds[w->src == client ? 1 : 2], *dst = &fds[w->dst == client ? 1 : 2];
-        if (w->len) dst->events |= POLLOUT;
-        else if (w->reading) src->events |= POLLIN;
+        if (w->len)
+            dst->events |= POLLOUT;
+        else if (w->reading)
+            src->events |= POLLIN;
     }
     for (int i = 1; i < 3; i++)
         if (fds[i].events == 0) fds[i].fd = -1;
@@ -195,7 +197,7 @@ static PyObject *run(PyObject *self, PyObject *args) {
         int moved = 0;
         for (int i = 0; i < 2 && failed_side < 0; i++) {
             struct way *w = &ways[i];
-            if (w->len) {  /* a chunk held back: its receiver first */
+            if (w->len) { /* a chunk held back: its receiver first */
                 int r = push(w);
                 if (r < 0) failed_side = !w->side, failed_errno = errno;
                 moved |= r > 0;
@@ -203,9 +205,9 @@ static PyObject *run(PyObject *self, PyObject *args) {
             if (w->len == 0 && w->reading && failed_side < 0) {
                 ssize_t n = recv(w->src, w->buf, READ_SIZE, MSG_DONTWAIT);
                 if (n > 0) {
-                    if (keep(&kept, w->side, w->buf, (size_t)n) < 0) {  /* no memory: hand over, keep again */
+                    if (keep(&kept, w->side, w->buf, (size_t)n) < 0) { /* no memory: hand over, keep again */
                         call(&ts, &kept, on_data, NULL, 0);
-                        (void)keep(&kept, w->side, w->buf, (size_t)n);  /* failing again: not recorded */
+                        (void)keep(&kept, w->side, w->buf, (size_t)n); /* failing again: not recorded */
                     }
                     w->off = 0, w->len = (size_t)n, moved = 1;
                     if (push(w) < 0) failed_side = !w->side, failed_errno = errno;
@@ -241,8 +243,8 @@ static PyObject *run(PyObject *self, PyObject *args) {
             if (ready > 0 && fds[0].revents) break;
             if (ready != 0) continue;
         }
-        call(&ts, &kept, on_data, NULL, 0);  /* idle: the recorder's turn */
-        interest(fds, wake, client, target, ways);  /* sleep until a socket is ready for what its ways wait for */
+        call(&ts, &kept, on_data, NULL, 0);        /* idle: the recorder's turn */
+        interest(fds, wake, client, target, ways); /* sleep until a socket is ready for what its ways wait for */
         if (poll(fds, 3, -1) < 0 && errno != EINTR) {
             failed_side = 1, failed_errno = errno;
             break;
@@ -271,4 +273,6 @@ static struct PyModuleDef module = {
     PyModuleDef_HEAD_INIT, .m_name = "_forward", .m_doc = NULL, .m_size = -1, .m_methods = methods,
 };
 
-PyMODINIT_FUNC PyInit__forward(void) { return PyModule_Create(&module); }
+PyMODINIT_FUNC PyInit__forward(void) {
+    return PyModule_Create(&module);
+}

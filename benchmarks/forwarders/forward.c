@@ -14,46 +14,54 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
-struct pair { int from, to; };
+struct pair {
+    int from, to;
+};
 
 static void *pump(void *arg) {
-  struct pair *p = arg;
-  char buf[65536];
-  ssize_t n;
-  while ((n = recv(p->from, buf, sizeof buf, 0)) > 0)
-    for (ssize_t sent = 0, k; sent < n; sent += k)
-      if ((k = send(p->to, buf + sent, (size_t)(n - sent), MSG_NOSIGNAL)) <= 0) goto done;
+    struct pair *p = arg;
+    char buf[65536];
+    ssize_t n;
+    while ((n = recv(p->from, buf, sizeof buf, 0)) > 0)
+        for (ssize_t sent = 0, k; sent < n; sent += k)
+            if ((k = send(p->to, buf + sent, (size_t)(n - sent), MSG_NOSIGNAL)) <= 0) goto done;
 done:
-  shutdown(p->to, SHUT_WR);
-  return 0;
+    shutdown(p->to, SHUT_WR);
+    return 0;
 }
 
 int main(int argc, char **argv) {
-  if (argc != 2) { fprintf(stderr, "usage: forward TARGET_PORT\n"); return 2; }
-  signal(SIGPIPE, SIG_IGN);
-  int one = 1, listener = socket(AF_INET, SOCK_STREAM, 0);
-  struct sockaddr_in addr = {.sin_family = AF_INET, .sin_addr.s_addr = htonl(INADDR_LOOPBACK)};
-  socklen_t len = sizeof addr;
-  if (bind(listener, (struct sockaddr *)&addr, sizeof addr) || listen(listener, 16) ||
-      getsockname(listener, (struct sockaddr *)&addr, &len)) { perror("forward"); return 1; }
-  printf("proxy listening at 127.0.0.1:%d\n", ntohs(addr.sin_port));
-  fflush(stdout);
-  struct sockaddr_in target = addr;
-  target.sin_port = htons((unsigned short)atoi(argv[1]));
-  for (;;) {
-    int client = accept(listener, 0, 0), server = socket(AF_INET, SOCK_STREAM, 0);
-    if (client < 0) continue;
-    if (connect(server, (struct sockaddr *)&target, sizeof target) == 0) {
-      setsockopt(client, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
-      setsockopt(server, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
-      struct pair up = {client, server}, down = {server, client};
-      pthread_t a, b;
-      pthread_create(&a, 0, pump, &up);
-      pthread_create(&b, 0, pump, &down);
-      pthread_join(a, 0);
-      pthread_join(b, 0);
+    if (argc != 2) {
+        fprintf(stderr, "usage: forward TARGET_PORT\n");
+        return 2;
     }
-    close(client);
-    close(server);
-  }
+    signal(SIGPIPE, SIG_IGN);
+    int one = 1, listener = socket(AF_INET, SOCK_STREAM, 0);
+    struct sockaddr_in addr = {.sin_family = AF_INET, .sin_addr.s_addr = htonl(INADDR_LOOPBACK)};
+    socklen_t len = sizeof addr;
+    if (bind(listener, (struct sockaddr *)&addr, sizeof addr) || listen(listener, 16) ||
+        getsockname(listener, (struct sockaddr *)&addr, &len)) {
+        perror("forward");
+        return 1;
+    }
+    printf("proxy listening at 127.0.0.1:%d\n", ntohs(addr.sin_port));
+    fflush(stdout);
+    struct sockaddr_in target = addr;
+    target.sin_port = htons((unsigned short)atoi(argv[1]));
+    for (;;) {
+        int client = accept(listener, 0, 0), server = socket(AF_INET, SOCK_STREAM, 0);
+        if (client < 0) continue;
+        if (connect(server, (struct sockaddr *)&target, sizeof target) == 0) {
+            setsockopt(client, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+            setsockopt(server, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
+            struct pair up = {client, server}, down = {server, client};
+            pthread_t a, b;
+            pthread_create(&a, 0, pump, &up);
+            pthread_create(&b, 0, pump, &down);
+            pthread_join(a, 0);
+            pthread_join(b, 0);
+        }
+        close(client);
+        close(server);
+    }
 }

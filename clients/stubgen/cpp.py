@@ -103,6 +103,9 @@ CPP_TYPE = {
     "XML": "std::string",
 }
 HEAD = banner("// ")
+# The per-telegram declarations and tables stay one field a line as generated, not as clang-format packs them (as
+# the Rust client's per-telegram modules are #[rustfmt::skip]); runtime.cpp and the programs are clang-format clean.
+UNFORMATTED = "// clang-format off\n"
 DECLARATION = (
     "  /// {m.name} (id {m.id}): {summary}\n  void {name}({params});",
     "  /// {m.name} (id {m.id}): {summary}\n  {reply} {name}({params});",
@@ -215,7 +218,7 @@ def _header() -> str:
         items.append(f"Value to_value(const {name}& item);\nvoid from_value(const Value& v, {name}& item);")
     items.append("}  // namespace detail")
     telegrams = [_header_telegram(m) for d in ("request", "reply") for m in model.messages(d)]
-    return HEAD + fill(
+    return HEAD + UNFORMATTED + fill(
         template("cpp", "platformctrl.hpp.tmpl"),
         ERRORS=_errors(),
         ENUMS="\n".join(enum_text).rstrip("\n"),
@@ -251,7 +254,7 @@ def _method(m: Message) -> dict[str, str]:
 
 def _protocol() -> str:
     out = [
-        HEAD,
+        HEAD + UNFORMATTED,
         "// Field tables, value conversions, the telegram registry and the client's command methods.\n",
         '#include "platformctrl.hpp"\n',
         "namespace platformctrl {\n",

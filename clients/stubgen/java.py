@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import textwrap
+
 from pltf.stubgen import banner, fill, model, readme, template
 from pltf.stubgen.model import ERRORS, Field, Message, camel, doc_line, field_doc
 from pltf.stubgen.renderer import BUILDER, Spelling, arguments, convert, methods, protocol, scripts, static
@@ -75,7 +77,16 @@ JAVA_TYPE = {
     "STRING": "String",
     "XML": "String",
 }
-HEAD = banner("// ")
+
+
+def _banner() -> str:
+    """The banner as google-java-format leaves it: within 100 columns, "do not edit" on the second line."""
+    text = banner("").strip()
+    cut = text.index("do not edit")
+    return f"// {text[:cut].rstrip()}\n// {text[cut:]}\n"
+
+
+HEAD = _banner()
 SRC = "src/main/java/platformctrl/"
 SPELLING = Spelling(
     scalars=JAVA_TYPE,
@@ -91,11 +102,22 @@ SPELLING = Spelling(
     trailing=False,
 )
 METHOD = (
-    "    /** {m.name} (id {m.id}): {summary} */\n    public void {name}({params}) throws IOException {{\n"
-    "        send({req});\n    }}\n",
-    "    /** {m.name} (id {m.id}): {summary} */\n    public {reply} {name}({params}) throws IOException {{\n"
+    "{doc}\n    public void {name}({params}) throws IOException {{\n        send({req});\n    }}\n",
+    "{doc}\n    public {reply} {name}({params}) throws IOException {{\n"
     "        return request({req}, {reply}.class);\n    }}\n",
 )
+FORMAT_WIDTH = 100  # google-java-format's line width
+
+
+def javadoc(text: str, indent: str = "    ") -> str:
+    """``/** text */`` as google-java-format lays it out: on one line where it fits, else one sentence wrapped."""
+    one = f"{indent}/** {text} */"
+    if len(one) <= FORMAT_WIDTH:
+        return one
+    lines = textwrap.wrap(text, FORMAT_WIDTH - len(indent) - 3, break_long_words=False, break_on_hyphens=False)
+    return "\n".join([f"{indent}/**", *(f"{indent} * {line}" for line in lines), f"{indent} */"])
+
+
 # Values cross the runtime as Object: Long, Double, String, byte[], List<Object> (arrays, group items).
 TO_VALUE = {
     "group": "Wire.group({n}, {item}::toValues)",
@@ -275,7 +297,7 @@ def _method(m: Message) -> dict[str, str]:
         "name": method_name(m),
         "params": ", ".join(params),
         "req": f"new {m.type_name}({', '.join(args)})",
-        "summary": doc_line(m.summary),
+        "doc": javadoc(f"{m.name} (id {m.id}): {doc_line(m.summary)}"),
     }
 
 

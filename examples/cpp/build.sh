@@ -6,9 +6,9 @@ set -e
 cd "$(dirname "$0")"
 GEN="${PLATFORMCTRL:-../../clients/generated/cpp}"
 CXX="${CXX:-g++}"
-FLAGS="-std=c++17 -O1 -Wall -Wextra -I$GEN/include"
+set -- -std=c++17 -O1 -Wall -Wextra -I"$GEN/include"  # the compiler flags
 mkdir -p build
-$CXX $FLAGS -c "$GEN/src/protocol.cpp" -o build/protocol.o &
-$CXX $FLAGS -c "$GEN/src/runtime.cpp" -o build/runtime.o
+"$CXX" "$@" -c "$GEN/src/protocol.cpp" -o build/protocol.o &
+"$CXX" "$@" -c "$GEN/src/runtime.cpp" -o build/runtime.o
 wait $!
-$CXX $FLAGS patrol.cpp build/runtime.o build/protocol.o -o build/patrol
+"$CXX" "$@" patrol.cpp build/runtime.o build/protocol.o -o build/patrol

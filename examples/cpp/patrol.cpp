@@ -27,8 +27,8 @@ namespace {
 
 struct Station {
   std::string name;
-  int32_t x = 0;  // mm
-  int32_t y = 0;  // mm
+  int32_t x = 0;         // mm
+  int32_t y = 0;         // mm
   double angle_deg = 0;  // roadmap angles are degrees (toolkit erratum E-XML-007)
 };
 

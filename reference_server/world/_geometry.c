@@ -22,20 +22,25 @@ static double nmin(double a, double b) {
 static double d2(double px, double py, double x0, double y0, double ex, double ey, double ll) {
     double wx = px - x0, wy = py - y0;
     double t = ll > 0 ? (wx * ex + wy * ey) / ll : 0.0;
-    if (t < 0.0) t = 0.0;
-    else if (t > 1.0) t = 1.0;
+    if (t < 0.0)
+        t = 0.0;
+    else if (t > 1.0)
+        t = 1.0;
     double dx = wx - t * ex, dy = wy - t * ey;
     return dx * dx + dy * dy;
 }
 
-static PyObject *segments_clear(PyObject *self, PyObject *args) {
+static PyObject *segments_clear(PyObject *Py_UNUSED(self), PyObject *args) {
     Py_buffer q, segs, circ, rad, ok;
     if (!PyArg_ParseTuple(args, "y*y*y*y*w*", &q, &segs, &circ, &rad, &ok)) return NULL;
     Py_ssize_t nq = q.len / (Py_ssize_t)(4 * sizeof(double));
     Py_ssize_t ns = segs.len / (Py_ssize_t)(4 * sizeof(double));
     Py_ssize_t nc = circ.len / (Py_ssize_t)(3 * sizeof(double));
     if (rad.len < nq * (Py_ssize_t)sizeof(double) || ok.len < nq) {
-        PyBuffer_Release(&q); PyBuffer_Release(&segs); PyBuffer_Release(&circ); PyBuffer_Release(&rad);
+        PyBuffer_Release(&q);
+        PyBuffer_Release(&segs);
+        PyBuffer_Release(&circ);
+        PyBuffer_Release(&rad);
         PyBuffer_Release(&ok);
         PyErr_SetString(PyExc_ValueError, "segments_clear: rad and ok need one item per query");
         return NULL;
@@ -66,7 +71,10 @@ static PyObject *segments_clear(PyObject *self, PyObject *args) {
         }
         if (!clear) out[i] = 0;
     }
-    PyBuffer_Release(&q); PyBuffer_Release(&segs); PyBuffer_Release(&circ); PyBuffer_Release(&rad);
+    PyBuffer_Release(&q);
+    PyBuffer_Release(&segs);
+    PyBuffer_Release(&circ);
+    PyBuffer_Release(&rad);
     PyBuffer_Release(&ok);
     Py_RETURN_NONE;
 }
@@ -76,7 +84,10 @@ static PyMethodDef methods[] = {
     {NULL, NULL, 0, NULL},
 };
 
-static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_geometry",
-                                    "geometry.segments_clear's inner loops (see geometry.py).", -1, methods};
+static const char doc[] = "geometry.segments_clear's inner loops (see geometry.py).";
+static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, .m_name = "_geometry", .m_doc = doc, .m_size = -1,
+                                    .m_methods = methods};
 
-PyMODINIT_FUNC PyInit__geometry(void) { return PyModule_Create(&module); }
+PyMODINIT_FUNC PyInit__geometry(void) {
+    return PyModule_Create(&module);
+}

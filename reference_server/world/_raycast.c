@@ -78,41 +78,56 @@ static void test_beam(const Fan *f, Py_ssize_t owner, Py_ssize_t b) {
     }
 }
 
-static PyObject *fan(PyObject *self, PyObject *args) {
+static PyObject *fan(PyObject *Py_UNUSED(self), PyObject *args) {
     double x, y, a0, heading, step, max_range;
     Py_ssize_t count;
     Py_buffer segs, circs, cb, sb, ranges, hits;
-    if (!PyArg_ParseTuple(args, "ddddddny*y*y*y*w*w*", &x, &y, &a0, &heading, &step, &max_range, &count, &segs,
-                          &circs, &cb, &sb, &ranges, &hits))
+    if (!PyArg_ParseTuple(args, "ddddddny*y*y*y*w*w*", &x, &y, &a0, &heading, &step, &max_range, &count, &segs, &circs,
+                          &cb, &sb, &ranges, &hits))
         return NULL;
     Py_ssize_t ns = segs.len / (Py_ssize_t)(4 * sizeof(double));
     Py_ssize_t nc = circs.len / (Py_ssize_t)(3 * sizeof(double));
     Py_ssize_t n = ns + nc;
     if (!(sized(&cb, count, sizeof(double), "cos_b") && sized(&sb, count, sizeof(double), "sin_b") &&
           sized(&ranges, count, sizeof(double), "ranges") && sized(&hits, count, sizeof(int64_t), "hits"))) {
-        PyBuffer_Release(&segs); PyBuffer_Release(&circs); PyBuffer_Release(&cb); PyBuffer_Release(&sb);
-        PyBuffer_Release(&ranges); PyBuffer_Release(&hits);
+        PyBuffer_Release(&segs);
+        PyBuffer_Release(&circs);
+        PyBuffer_Release(&cb);
+        PyBuffer_Release(&sb);
+        PyBuffer_Release(&ranges);
+        PyBuffer_Release(&hits);
         return NULL;
     }
-    Fan f = {x, y, cos(heading), sin(heading), max_range, cb.buf, sb.buf, segs.buf, circs.buf, ns, ranges.buf,
-             hits.buf};
+    Fan f = {x,      y,        cos(heading), sin(heading), max_range,  cb.buf,
+             sb.buf, segs.buf, circs.buf,    ns,           ranges.buf, hits.buf};
     double inv = 1.0 / step, wrap_at = TWO_PI / step, top = (double)(count - 1);
     /* each owner's interval [lo, lo + span] above the first beam, as raycast._intervals */
     double *lo = PyMem_Malloc(sizeof(double) * (size_t)(n > 0 ? 2 * n : 1));
     if (lo == NULL) {
-        PyBuffer_Release(&segs); PyBuffer_Release(&circs); PyBuffer_Release(&cb); PyBuffer_Release(&sb);
-        PyBuffer_Release(&ranges); PyBuffer_Release(&hits);
+        PyBuffer_Release(&segs);
+        PyBuffer_Release(&circs);
+        PyBuffer_Release(&cb);
+        PyBuffer_Release(&sb);
+        PyBuffer_Release(&ranges);
+        PyBuffer_Release(&hits);
         return PyErr_NoMemory();
     }
     double *span = lo + n;
     for (Py_ssize_t i = 0; i < ns; i++) {
         const double *s = f.segs + 4 * i;
         double p = atan2(s[1] - y, s[0] - x), q = atan2(s[3] - y, s[2] - x);
-        p -= a0; q -= a0;
-        p = pymod(p, TWO_PI); q = pymod(q, TWO_PI);
+        p -= a0;
+        q -= a0;
+        p = pymod(p, TWO_PI);
+        q = pymod(q, TWO_PI);
         double d = pymod(q - p, TWO_PI);
-        if (d <= 3.14159265358979323846) { lo[i] = p; span[i] = d; }
-        else { lo[i] = q; span[i] = TWO_PI - d; }
+        if (d <= 3.14159265358979323846) {
+            lo[i] = p;
+            span[i] = d;
+        } else {
+            lo[i] = q;
+            span[i] = TWO_PI - d;
+        }
     }
     for (Py_ssize_t k = 0; k < nc; k++) {
         const double *c = f.circs + 3 * k;
@@ -141,16 +156,19 @@ static PyObject *fan(PyObject *self, PyObject *args) {
         }
     }
     PyMem_Free(lo);
-    PyBuffer_Release(&segs); PyBuffer_Release(&circs); PyBuffer_Release(&cb); PyBuffer_Release(&sb);
-    PyBuffer_Release(&ranges); PyBuffer_Release(&hits);
+    PyBuffer_Release(&segs);
+    PyBuffer_Release(&circs);
+    PyBuffer_Release(&cb);
+    PyBuffer_Release(&sb);
+    PyBuffer_Release(&ranges);
+    PyBuffer_Release(&hits);
     Py_RETURN_NONE;
 }
 
-static PyObject *rays(PyObject *self, PyObject *args) {
+static PyObject *rays(PyObject *Py_UNUSED(self), PyObject *args) {
     double max_range;
     Py_buffer ox, oy, dx, dy, segs, circs, ranges, hits;
-    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*dw*w*", &ox, &oy, &dx, &dy, &segs, &circs, &max_range, &ranges,
-                          &hits))
+    if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*dw*w*", &ox, &oy, &dx, &dy, &segs, &circs, &max_range, &ranges, &hits))
         return NULL;
     Py_ssize_t n = ox.len / (Py_ssize_t)sizeof(double);
     Py_ssize_t ns = segs.len / (Py_ssize_t)(4 * sizeof(double));
@@ -158,8 +176,14 @@ static PyObject *rays(PyObject *self, PyObject *args) {
     if (!(sized(&oy, n, sizeof(double), "oy") && sized(&dx, n, sizeof(double), "dx") &&
           sized(&dy, n, sizeof(double), "dy") && sized(&ranges, n, sizeof(double), "ranges") &&
           sized(&hits, n, sizeof(int64_t), "hits"))) {
-        PyBuffer_Release(&ox); PyBuffer_Release(&oy); PyBuffer_Release(&dx); PyBuffer_Release(&dy);
-        PyBuffer_Release(&segs); PyBuffer_Release(&circs); PyBuffer_Release(&ranges); PyBuffer_Release(&hits);
+        PyBuffer_Release(&ox);
+        PyBuffer_Release(&oy);
+        PyBuffer_Release(&dx);
+        PyBuffer_Release(&dy);
+        PyBuffer_Release(&segs);
+        PyBuffer_Release(&circs);
+        PyBuffer_Release(&ranges);
+        PyBuffer_Release(&hits);
         return NULL;
     }
     const double *px = ox.buf, *py = oy.buf, *vx = dx.buf, *vy = dy.buf, *s = segs.buf, *c = circs.buf;
@@ -175,28 +199,49 @@ static PyObject *rays(PyObject *self, PyObject *args) {
             double den = vx[i] * ey - vy[i] * ex;
             double t = (wx * ey - wy * ex) / den;
             double u = (wx * vy[i] - wy * vx[i]) / den;
-            if (t > 0.0 && u >= 0.0 && u <= 1.0 && t < best) { best = t; arg = j; }
+            if (t > 0.0 && u >= 0.0 && u <= 1.0 && t < best) {
+                best = t;
+                arg = j;
+            }
         }
         for (Py_ssize_t k = 0; k < nc; k++) {
             const double *g = c + 3 * k;
             double t = circle_t(g[0] - px[i], g[1] - py[i], g[2], vx[i], vy[i]);
-            if (t > 0.0 && t < best) { best = t; arg = ns + k; }
+            if (t > 0.0 && t < best) {
+                best = t;
+                arg = ns + k;
+            }
         }
-        if (best <= max_range) { out[i] = best; ids[i] = arg; }
-        else { out[i] = INFINITY; ids[i] = -1; }
+        if (best <= max_range) {
+            out[i] = best;
+            ids[i] = arg;
+        } else {
+            out[i] = INFINITY;
+            ids[i] = -1;
+        }
     }
-    PyBuffer_Release(&ox); PyBuffer_Release(&oy); PyBuffer_Release(&dx); PyBuffer_Release(&dy);
-    PyBuffer_Release(&segs); PyBuffer_Release(&circs); PyBuffer_Release(&ranges); PyBuffer_Release(&hits);
+    PyBuffer_Release(&ox);
+    PyBuffer_Release(&oy);
+    PyBuffer_Release(&dx);
+    PyBuffer_Release(&dy);
+    PyBuffer_Release(&segs);
+    PyBuffer_Release(&circs);
+    PyBuffer_Release(&ranges);
+    PyBuffer_Release(&hits);
     Py_RETURN_NONE;
 }
 
 static PyMethodDef methods[] = {
-    {"fan", fan, METH_VARARGS, "fan(x, y, a0, heading, step, max_range, count, segs, circs, cos_b, sin_b, ranges, hits)"},
+    {"fan", fan, METH_VARARGS,
+     "fan(x, y, a0, heading, step, max_range, count, segs, circs, cos_b, sin_b, ranges, hits)"},
     {"rays", rays, METH_VARARGS, "rays(ox, oy, dx, dy, segs, circs, max_range, ranges, hits)"},
     {NULL, NULL, 0, NULL},
 };
 
-static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, "_raycast", "The ray caster's inner loops (see raycast.py).",
-                                    -1, methods};
+static const char doc[] = "The ray caster's inner loops (see raycast.py).";
+static struct PyModuleDef module = {PyModuleDef_HEAD_INIT, .m_name = "_raycast", .m_doc = doc, .m_size = -1,
+                                    .m_methods = methods};
 
-PyMODINIT_FUNC PyInit__raycast(void) { return PyModule_Create(&module); }
+PyMODINIT_FUNC PyInit__raycast(void) {
+    return PyModule_Create(&module);
+}

@@ -4,13 +4,13 @@
 set -e
 cd "$(dirname "$0")"
 CXX="${CXX:-g++}"
-FLAGS="-std=c++17 -O1 -Wall -Wextra -Iinclude"
+set -- -std=c++17 -O1 -Wall -Wextra -Iinclude  # the compiler flags
 mkdir -p build
 if [ ! -f build/.stamp ] || [ -n "$(find include src examples -newer build/.stamp)" ]; then
-  $CXX $FLAGS -c src/runtime.cpp -o build/runtime.o &
-  $CXX $FLAGS -c src/protocol.cpp -o build/protocol.o
+  "$CXX" "$@" -c src/runtime.cpp -o build/runtime.o &
+  "$CXX" "$@" -c src/protocol.cpp -o build/protocol.o
   wait $!
-  $CXX $FLAGS examples/smoke.cpp build/runtime.o build/protocol.o -o build/smoke
-  $CXX $FLAGS examples/vectors.cpp build/runtime.o build/protocol.o -o build/vectors
+  "$CXX" "$@" examples/smoke.cpp build/runtime.o build/protocol.o -o build/smoke
+  "$CXX" "$@" examples/vectors.cpp build/runtime.o build/protocol.o -o build/vectors
   touch build/.stamp
 fi

@@ -6,6 +6,6 @@ cd "$(dirname "$0")"
 if [ ! -f build/classes/.stamp ] || [ -n "$(find src -newer build/classes/.stamp -name '*.java')" ]; then
   rm -rf build/classes
   mkdir -p build/classes
-  javac --release 17 -encoding UTF-8 -d build/classes $(find src/main/java -name '*.java')
+  find src/main/java -name '*.java' -exec javac --release 17 -encoding UTF-8 -d build/classes {} +
   touch build/classes/.stamp
 fi

@@ -63,7 +63,8 @@ int main(int argc, char** argv) {
       ++passed;
     } else {
       ++failed;
-      std::cout << "FAIL " << line.substr(0, line.find(' ', line.find(' ', line.find(' ') + 1) + 1)) << ": " << problem << "\n";
+      std::cout << "FAIL " << line.substr(0, line.find(' ', line.find(' ', line.find(' ') + 1) + 1)) << ": " << problem
+                << "\n";
     }
   }
   std::cout << passed << " passed, " << failed << " failed" << std::endl;

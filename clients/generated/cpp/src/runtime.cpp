@@ -95,7 +95,8 @@ Values decode_fields(const std::vector<Field>& fields, const std::string& buf, s
       }
       Values items;
       items.reserve(static_cast<size_t>(n));
-      for (int64_t k = 0; k < n; ++k) items.push_back(Value::of_list(decode_fields(f.fields, buf, pos, where + "." + f.name + "[]")));
+      for (int64_t k = 0; k < n; ++k)
+        items.push_back(Value::of_list(decode_fields(f.fields, buf, pos, where + "." + f.name + "[]")));
       out.push_back(Value::of_list(std::move(items)));
     } else if (f.type == FieldType::String || f.type == FieldType::Xml) {
       int64_t n = read_length(buf, pos, where);
@@ -134,7 +135,8 @@ void put_scalar(std::string& out, const Field& f, const Value& v, const std::str
   if (f.type == FieldType::Bool) hi = 1;
   if (f.type == FieldType::Int16) lo = INT16_MIN, hi = INT16_MAX;
   if (f.type == FieldType::Int) lo = INT32_MIN, hi = INT32_MAX;
-  if (v.i < lo || v.i > hi) throw FieldValueError(where + "." + f.name + ": " + std::to_string(v.i) + " does not fit its wire type");
+  if (v.i < lo || v.i > hi)
+    throw FieldValueError(where + "." + f.name + ": " + std::to_string(v.i) + " does not fit its wire type");
   check<FieldValueError>(f, v.i, where);
   put_be(out, static_cast<uint64_t>(v.i), scalar_size(f.type));
 }
@@ -241,7 +243,8 @@ std::unique_ptr<Telegram> decode_data(const std::string& data, Direction directi
   size_t pos = 1;
   std::string where = "telegram " + std::to_string(id);
   Values values = decode_fields(layout->fields, data, pos, where);
-  if (pos != data.size()) throw TrailingBytes(where + ": " + std::to_string(data.size() - pos) + " bytes after the last field");
+  if (pos != data.size())
+    throw TrailingBytes(where + ": " + std::to_string(data.size() - pos) + " bytes after the last field");
   return make_telegram(id, direction, values);
 }
 
@@ -259,7 +262,8 @@ std::unique_ptr<Telegram> TelegramDecoder::next_frame() {
   size_t n = std::min<size_t>(buf_.size(), 4);
   if (buf_.compare(0, n, kHeader, n) != 0) throw BadHeader("bad header " + hex(buf_.substr(0, n)));
   if (buf_.size() < 8) {
-    if (eof_ && !buf_.empty()) throw Truncated("stream ended inside a frame header (" + std::to_string(buf_.size()) + " bytes)");
+    if (eof_ && !buf_.empty())
+      throw Truncated("stream ended inside a frame header (" + std::to_string(buf_.size()) + " bytes)");
     return nullptr;
   }
   uint64_t length = read_be(buf_, 4, 4);
@@ -268,7 +272,9 @@ std::unique_ptr<Telegram> TelegramDecoder::next_frame() {
   }
   size_t end = 8 + static_cast<size_t>(length);
   if (buf_.size() < end) {
-    if (eof_) throw Truncated("stream ended inside a frame: " + std::to_string(buf_.size()) + " of " + std::to_string(end) + " bytes");
+    if (eof_)
+      throw Truncated("stream ended inside a frame: " + std::to_string(buf_.size()) + " of " + std::to_string(end) +
+                      " bytes");
     return nullptr;
   }
   std::string data = buf_.substr(8, end - 8);
@@ -355,12 +361,10 @@ std::unique_ptr<Telegram> Client::receive() {
   }
 }
 
-
 // ------------------------------------------------------------------ waits (erratum E-CLI-001)
 
 bool is_target_command(const std::string& name) {
-  return name == "CMD_MOVE_ABS" || name == "CMD_MOVE_REL" || name == "CMD_MOVE_PATH" ||
-         name == "CMD_MOVE_TO_STATION";
+  return name == "CMD_MOVE_ABS" || name == "CMD_MOVE_REL" || name == "CMD_MOVE_PATH" || name == "CMD_MOVE_TO_STATION";
 }
 
 int64_t stamp_after(int64_t later, int64_t earlier) {
@@ -402,7 +406,9 @@ bool TargetWait::check(const GetStatusReply& status, int64_t now_ms) {
   const char* failed = nullptr;
   switch (status.planner_state) {
     case PlannerState::PLANNER_NO_PATH: failed = "the planner found no path to the target"; break;
-    case PlannerState::PLANNER_COLLISION_START: failed = "the start of the planned path collides with an obstacle"; break;
+    case PlannerState::PLANNER_COLLISION_START:
+      failed = "the start of the planned path collides with an obstacle";
+      break;
     case PlannerState::PLANNER_COLLISION_TARGET: failed = "the target collides with an obstacle"; break;
     default: break;
   }
