@@ -170,9 +170,13 @@ def test_turn_aways_that_start_late_stop_pipelining_without_a_false_finding(tmp_
 
 def test_one_lane_runs_every_unit_on_the_target_port_one_at_a_time(tmp_path: Path) -> None:
     """--lanes 1: every unit on --target's port, one at a time (the other port is only asked when one seems stuck)."""
-    c = campaign(tmp_path, "none", duration=2.0, max_findings=None, lanes=1)
+    c = campaign(tmp_path, "none", duration=2.0, max_findings=None, lanes=1, deadline=3.0)
     assert c.run() == 0
-    assert not c.stats.findings and not c.stats.unconfirmed
+    assert not c.stats.findings
+    # a unit the loaded machine kept past the deadline once, and that replayed clean, is not the target's doing
+    # (a clean-clone run beside a CPU hog, load 10: CMD_MAPPING_START at the 0.5 s deadline)
+    load = [u for u in c.stats.unconfirmed if u["kind"] == "stall" and set(u["evidence"]["replays"]) == {"ok"}]
+    assert load == c.stats.unconfirmed, c.stats.unconfirmed
     assert c.stats.batches and c.stats.singles and c.stats.probes and c.stats.pipelined == 0
     assert c.stats.cases > 300
 

@@ -75,9 +75,15 @@ def test_can_messages_listen_filter_and_send_a_frame(
     ids.nth(1).fill("0x010")
     pane.get_by_role("textbox", name="Data (8 bytes, hex)").fill("02 01")
     pane.get_by_role("button", name="Send frame", exact=True).click()
-    wait_for(
-        lambda: platform.other.get_status().io_digital_out == 1 << 2, what="the IO board's outputs set by the frame"
-    )
+    try:
+        wait_for(
+            lambda: platform.other.get_status().io_digital_out == 1 << 2, what="the IO board's outputs set by the frame"
+        )
+    except AssertionError as exc:  # what the page showed (a clean-clone run at load 10 saw this fail once, without it)
+        said = page.get_by_role("status", name="Messages", exact=True).inner_text()
+        typed = (ids.nth(1).input_value(), pane.get_by_role("textbox", name="Data (8 bytes, hex)").input_value())
+        outputs = platform.other.get_status().io_digital_out
+        raise AssertionError(f"{exc}; outputs {outputs:#x}; id and data typed {typed}; messages {said!r}") from None
     # a bad id is refused before sending, with the reason
     ids.nth(1).fill("0x900")
     pane.get_by_role("button", name="Send frame", exact=True).click()
