@@ -34,7 +34,9 @@ static void rng_seed(Rng *r, uint64_t seed, uint64_t block) {
     for (int i = 0; i < 4; i++) r->s[i] = splitmix(&x);
 }
 
-static uint64_t rotl(uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
+static uint64_t rotl(uint64_t x, int k) {
+    return (x << k) | (x >> (64 - k));
+}
 
 static uint64_t next64(Rng *r) {
     uint64_t *s = r->s, out = rotl(s[1] * 5, 7) * 9, t = s[1] << 17;
@@ -42,7 +44,9 @@ static uint64_t next64(Rng *r) {
     return out;
 }
 
-static double unit(Rng *r) { return (double)(next64(r) >> 11) * 0x1.0p-53; }
+static double unit(Rng *r) {
+    return (double)(next64(r) >> 11) * 0x1.0p-53;
+}
 
 static uint64_t below(Rng *r, uint64_t n) { /* 0 .. n-1 (n > 0) */
     return (uint64_t)(((unsigned __int128)next64(r) * n) >> 64);
@@ -132,7 +136,9 @@ static PyObject *STRINGS, *ORIGINS, *CASE, *DELIVERIES, *EXPECTS, *EMPTY, *GET_S
 static PyObject *BIG[2];
 static int ready;
 
-static int64_t as_i64(PyObject *o) { return (int64_t)PyLong_AsLongLong(o); }
+static int64_t as_i64(PyObject *o) {
+    return (int64_t)PyLong_AsLongLong(o);
+}
 
 /* (kind, repeat, const|None, allowed|None, (lo, hi)|None, subfields, role, name) */
 static int read_field(PyObject *t, Field *f) {
@@ -162,7 +168,7 @@ static int read_field(PyObject *t, Field *f) {
     return PyErr_Occurred() ? -1 : 0;
 }
 
-static PyObject *setup(PyObject *self, PyObject *args) {
+static PyObject *setup(PyObject *Py_UNUSED(self), PyObject *args) {
     PyObject *teles, *big;
     if (!PyArg_ParseTuple(args, "O!iO!O!OO!O!SO!", &PyList_Type, &teles, &CLOSE_SOCKET, &PyTuple_Type, &STRINGS,
                           &PyTuple_Type, &ORIGINS, &CASE, &PyTuple_Type, &DELIVERIES, &PyTuple_Type, &EXPECTS,
@@ -203,8 +209,10 @@ static int allowed_has(const Field *f, int64_t v) {
     while (lo <= hi) {
         int mid = (lo + hi) / 2;
         if (f->allowed[mid] == v) return 1;
-        if (f->allowed[mid] < v) lo = mid + 1;
-        else hi = mid - 1;
+        if (f->allowed[mid] < v)
+            lo = mid + 1;
+        else
+            hi = mid - 1;
     }
     return 0;
 }
@@ -255,7 +263,8 @@ static int survey_bytes(const unsigned char *b, Py_ssize_t len, uint8_t *ids, Py
     while (pos < len) {
         Py_ssize_t avail = len - pos;
         if (avail < OVERHEAD) /* a header's prefix waits for more; anything else is a bad header */
-            return memcmp(b + pos, HEADER, (size_t)(avail < 4 ? avail : 4)) ? CLOSE : (expect == CLOSE ? CLOSE : PARTIAL);
+            return memcmp(b + pos, HEADER, (size_t)(avail < 4 ? avail : 4)) ? CLOSE
+                                                                            : (expect == CLOSE ? CLOSE : PARTIAL);
         if (memcmp(b + pos, HEADER, 4)) return CLOSE;
         uint64_t length = get_be(b + pos + 4, 4);
         if (length > MAX_LENGTH) return CLOSE;
@@ -300,7 +309,7 @@ static PyObject *ids_tuple(const uint8_t *ids, Py_ssize_t n) {
     return t;
 }
 
-static PyObject *survey(PyObject *self, PyObject *args) {
+static PyObject *survey(PyObject *Py_UNUSED(self), PyObject *args) {
     Py_buffer data;
     if (!PyArg_ParseTuple(args, "y*", &data)) return NULL;
     Py_ssize_t n;
@@ -311,7 +320,7 @@ static PyObject *survey(PyObject *self, PyObject *args) {
     return t ? Py_BuildValue("(ON)", PyTuple_GET_ITEM(EXPECTS, kind), t) : NULL;
 }
 
-static PyObject *forbidden(PyObject *self, PyObject *args) {
+static PyObject *forbidden(PyObject *Py_UNUSED(self), PyObject *args) {
     Py_buffer data, mask;
     if (!PyArg_ParseTuple(args, "y*y*", &data, &mask)) return NULL;
     int found = mask.len >= 256 && has_forbidden(data.buf, data.len, mask.buf);
@@ -323,22 +332,52 @@ static PyObject *forbidden(PyObject *self, PyObject *args) {
 
 #define MAX_FRAMES 8
 enum { G_BOUNDARY, G_HOSTILE, G_ANY_ID, G_LENGTH, G_XML, N_GEN };
-enum { M_BIT_FLIP, M_BYTE_SET, M_HEADER, M_LENGTH_LIE, M_TRUNCATE, M_INSERT_DELETE, M_INT_FIELD, M_SPLICE,
-       M_BYTEWISE, M_SLOW, M_HALF_CLOSE, M_FLOOD, N_MUT };
+enum {
+    M_BIT_FLIP,
+    M_BYTE_SET,
+    M_HEADER,
+    M_LENGTH_LIE,
+    M_TRUNCATE,
+    M_INSERT_DELETE,
+    M_INT_FIELD,
+    M_SPLICE,
+    M_BYTEWISE,
+    M_SLOW,
+    M_HALF_CLOSE,
+    M_FLOOD,
+    N_MUT
+};
 /* ORIGINS, in this order (fuzz/draw.py passes them) */
-enum { O_BOUNDARY, O_HOSTILE, O_ANY_ID, O_LENGTH, O_BIT_FLIP, O_BYTE_SET, O_HEADER, O_LENGTH_LIE, O_TRUNCATE,
-       O_DELETE, O_INSERT, O_INT_FIELD, O_SPLICE, O_BYTEWISE, O_SLOW, O_HALF_CLOSE, O_FLOOD };
+enum {
+    O_BOUNDARY,
+    O_HOSTILE,
+    O_ANY_ID,
+    O_LENGTH,
+    O_BIT_FLIP,
+    O_BYTE_SET,
+    O_HEADER,
+    O_LENGTH_LIE,
+    O_TRUNCATE,
+    O_DELETE,
+    O_INSERT,
+    O_INT_FIELD,
+    O_SPLICE,
+    O_BYTEWISE,
+    O_SLOW,
+    O_HALF_CLOSE,
+    O_FLOOD
+};
 enum { D_WHOLE, D_BYTEWISE, D_SLOW2, D_SLOW3, D_SLOW4 }; /* DELIVERIES */
 /* intents handed back to Python (fuzz/draw.py INTENTS) */
 enum { I_TELEGRAM, I_LENGTH, I_XML, I_POOL, I_FALLBACK };
 
 static const int64_t I32_MIN = -2147483648LL, I32_MAX = 2147483647LL;
-static const int64_t INT_EDGES[] = {0, 1, -1, 2, 255, 256, 32767, 32768, 65535, 65536,
-                                    2147483647LL, -2147483648LL, 2147483646LL, -2147483647LL};
+static const int64_t INT_EDGES[] = {
+    0, 1, -1, 2, 255, 256, 32767, 32768, 65535, 65536, 2147483647LL, -2147483648LL, 2147483646LL, -2147483647LL};
 static const int64_t BOUNDARY[][6] = {{0, 1, 0x7F, 0x80, 0xFE, 0xFF}, {0, 1, 0, 1, 0, 1}, {0, 1, -1, 32767, -32768, 0}};
 static const int NBOUNDARY[] = {6, 2, 5};
-static const char *HOSTILE_DOUBLES[] = {"7ff8000000000000", "7ff0000000000000", "fff0000000000000",
-                                        "7ff0000000000001", "fff8000000000000"};
+static const char *HOSTILE_DOUBLES[] = {"7ff8000000000000", "7ff0000000000000", "fff0000000000000", "7ff0000000000001",
+                                        "fff8000000000000"};
 static const unsigned char INTERESTING[] = {0x00, 0x01, 0x7F, 0x80, 0xFE, 0xFF};
 
 typedef struct { /* what the campaign learnt (pltf.fuzz.knowledge) and what may be sent */
@@ -447,8 +486,7 @@ static int put_group(Rng *r, Buf *b, const Field *f, int hostile, Draft *d, cons
     for (int64_t k = 0; k < n; k++) {
         if (near) {
             int64_t x = c->pose[0] + between(r, -2000, 2000), y = c->pose[1] + between(r, -2000, 2000);
-            if (put_be(b, (uint64_t)x, 4) || put_be(b, (uint64_t)y, 4) || put_be(b, (uint64_t)c->pose[2], 4))
-                return -1;
+            if (put_be(b, (uint64_t)x, 4) || put_be(b, (uint64_t)y, 4) || put_be(b, (uint64_t)c->pose[2], 4)) return -1;
             continue;
         }
         for (int i = 0; i < f->nsub; i++)
@@ -501,13 +539,15 @@ static int put_telegram(Rng *r, Buf *b, const Tele *t, int id, double hostility,
         const Field *f = &t->f[i];
         int hostile = !f->has_const && unit(r) < hostility;
         int rc = f->kind == K_GROUP && !f->has_const ? put_group(r, b, f, hostile, d, CTX, t->move_path)
-                                                      : put_value(r, b, f, hostile, d);
+                                                     : put_value(r, b, f, hostile, d);
         if (rc < 0) return -1;
     }
     return 0;
 }
 
-static int pick(Rng *r, const Ctx *c) { return c->picks[weighted(r, c->pick_cum, c->npicks)]; }
+static int pick(Rng *r, const Ctx *c) {
+    return c->picks[weighted(r, c->pick_cum, c->npicks)];
+}
 
 static int random_bytes(Rng *r, Buf *b, Py_ssize_t n) {
     for (Py_ssize_t i = 0; i < n; i++) {
@@ -597,136 +637,144 @@ static int mutate(Rng *r, Draft *d, int m) {
     Buf *f = &d->f[i];
     Py_ssize_t n = f->n;
     switch (m) {
-    case M_BIT_FLIP: {
-        static const int FLIPS[] = {1, 1, 2, 4};
-        int k = CHOICE(r, FLIPS);
-        note(d, "frame %d bits ", i);
-        for (int j = 0; j < k; j++) {
-            Py_ssize_t pos = (Py_ssize_t)below(r, (uint64_t)n);
-            int bit = (int)below(r, 8);
-            f->p[pos] ^= (unsigned char)(1 << bit);
-            note(d, j ? ",%zd:%d" : "%zd:%d", pos, bit);
-        }
-        d->origin = O_BIT_FLIP;
-        return 0;
-    }
-    case M_BYTE_SET: {
-        Py_ssize_t pos = n > OVERHEAD ? (Py_ssize_t)between(r, OVERHEAD, n - 1) : (Py_ssize_t)below(r, (uint64_t)n);
-        f->p[pos] = unit(r) < 0.7 ? CHOICE(r, INTERESTING) : (unsigned char)below(r, 256);
-        note(d, "frame %d byte %zd=0x%02x", i, pos, f->p[pos]);
-        d->origin = O_BYTE_SET;
-        return 0;
-    }
-    case M_HEADER: {
-        static const unsigned char REVERSED[4] = {0x02, 0xFE, 0x01, 0xFF};
-        int how = (int)below(r, 4);
-        Buf b = {0};
-        int rc = 0;
-        d->origin = O_HEADER;
-        if (how == 0) {
-            int pos = (int)below(r, 4);
-            f->p[pos] ^= (unsigned char)between(r, 1, 255);
-            note(d, "frame %d: header byte %d changed", i, pos);
+        case M_BIT_FLIP: {
+            static const int FLIPS[] = {1, 1, 2, 4};
+            int k = CHOICE(r, FLIPS);
+            note(d, "frame %d bits ", i);
+            for (int j = 0; j < k; j++) {
+                Py_ssize_t pos = (Py_ssize_t)below(r, (uint64_t)n);
+                int bit = (int)below(r, 8);
+                f->p[pos] ^= (unsigned char)(1 << bit);
+                note(d, j ? ",%zd:%d" : "%zd:%d", pos, bit);
+            }
+            d->origin = O_BIT_FLIP;
             return 0;
         }
-        if (how == 1) rc = put(&b, f->p + 4, n - 4);
-        else if (how == 2) rc = put(&b, HEADER, 4) || put(&b, f->p, n);
-        else rc = put(&b, REVERSED, 4) || put(&b, f->p + 4, n - 4);
-        note(d, "frame %d: header %s", i, how == 1 ? "missing" : how == 2 ? "doubled" : "reversed");
-        PyMem_Free(f->p);
-        *f = b;
-        return rc;
-    }
-    case M_LENGTH_LIE: {
-        int kind = (int)below(r, 6);
-        int64_t len = n - OVERHEAD;
-        int64_t lies[] = {0, len - 1, len + 1, 0x00FFFFFF + (int64_t)below(r, 1 << 24),
-                          0x80000000LL + (int64_t)below(r, 1 << 16), 0xFFFFFFFFLL};
-        uint64_t declared = (uint64_t)lies[kind] & 0xFFFFFFFFu;
-        for (int k = 0; k < 4; k++) f->p[4 + k] = (unsigned char)(declared >> (24 - 8 * k));
-        note(d, "frame %d length %s", i, LIES[kind]);
-        d->origin = O_LENGTH_LIE;
-        return 0;
-    }
-    case M_TRUNCATE: {
-        Buf all = {0};
-        if (joined(d, &all) < 0) return -1;
-        Py_ssize_t cut = all.n > 1 ? (Py_ssize_t)between(r, 1, all.n - 1) : 0;
-        note(d, "cut at byte %zd of %zd", cut, all.n);
-        int rc = split_into(d, all.p, cut);
-        PyMem_Free(all.p);
-        d->origin = O_TRUNCATE, d->half_close = 1;
-        return rc;
-    }
-    case M_INSERT_DELETE: {
-        Py_ssize_t pos = (Py_ssize_t)below(r, (uint64_t)n + 1);
-        Buf b = {0};
-        int rc = put(&b, f->p, pos);
-        if (unit(r) < 0.5 && n > 1) {
-            Py_ssize_t k = pos < n ? (Py_ssize_t)between(r, 1, n - pos < 8 ? n - pos : 8) : 1;
-            rc = rc || put(&b, f->p + pos + (pos < n ? k : 0), n - pos - (pos < n ? k : 0));
-            note(d, "frame %d: %zd bytes deleted at %zd", i, k, pos);
-            d->origin = O_DELETE;
-        } else {
-            static const int BLOB[] = {1, 2, 4, 8};
-            Py_ssize_t start = b.n;
-            rc = rc || random_bytes(r, &b, CHOICE(r, BLOB));
-            note(d, "frame %d: ", i), hex_note(d, b.p + start, b.n - start), note(d, " inserted at %zd", pos);
-            rc = rc || put(&b, f->p + pos, n - pos);
-            d->origin = O_INSERT;
+        case M_BYTE_SET: {
+            Py_ssize_t pos = n > OVERHEAD ? (Py_ssize_t)between(r, OVERHEAD, n - 1) : (Py_ssize_t)below(r, (uint64_t)n);
+            f->p[pos] = unit(r) < 0.7 ? CHOICE(r, INTERESTING) : (unsigned char)below(r, 256);
+            note(d, "frame %d byte %zd=0x%02x", i, pos, f->p[pos]);
+            d->origin = O_BYTE_SET;
+            return 0;
         }
-        PyMem_Free(f->p);
-        *f = b;
-        return rc;
-    }
-    case M_INT_FIELD: {
-        static const uint32_t WORDS[] = {0, 0xFFFFFFFF, 0x7FFFFFFF, 0x80000000, 0x00010000, 0xFFFF0000};
-        if (n < OVERHEAD + 5) return mutate(r, d, M_LENGTH_LIE);
-        Py_ssize_t pos = (Py_ssize_t)between(r, OVERHEAD + 1, n - 4);
-        uint32_t v = CHOICE(r, WORDS);
-        for (int k = 0; k < 4; k++) f->p[pos + k] = (unsigned char)(v >> (24 - 8 * k));
-        note(d, "frame %d: word at %zd = 0x%08x", i, pos, v);
-        d->origin = O_INT_FIELD;
-        return 0;
-    }
-    case M_SPLICE: {
-        Buf all = {0};
-        if (joined(d, &all) < 0) return -1;
-        Py_ssize_t len = all.n, a = (Py_ssize_t)between(r, 1, len), b = (Py_ssize_t)between(r, a, 2 * len);
-        int rc = grow(&all, len); /* the data twice */
-        if (!rc) memcpy(all.p + len, all.p, (size_t)len), all.n = 2 * len;
-        for (int k = 0; k < d->nf; k++) d->f[k].n = 0;
-        rc = rc || put(&d->f[0], all.p, a) || put(&d->f[1], all.p + b, 2 * len - b);
-        PyMem_Free(all.p);
-        note(d, "bytes [%zd:%zd] removed", a, b);
-        d->nf = 2, d->origin = O_SPLICE;
-        return rc;
-    }
-    case M_BYTEWISE:
-    case M_SLOW:
-    case M_HALF_CLOSE: {
-        Py_ssize_t size = 0;
-        for (int k = 0; k < d->nf; k++) size += d->f[k].n;
-        if (m == M_BYTEWISE && size > 512) m = M_SLOW; /* mutate.BYTEWISE_MAX */
-        if (put(&d->f[d->nf++], PyBytes_AS_STRING(GET_STATUS), PyBytes_GET_SIZE(GET_STATUS)) < 0) return -1;
-        if (m == M_BYTEWISE) d->origin = O_BYTEWISE, d->delivery = D_BYTEWISE, note(d, "one write per byte");
-        if (m == M_HALF_CLOSE) d->origin = O_HALF_CLOSE, d->half_close = 1, note(d, "write side shut after the frames");
-        if (m == M_SLOW) {
-            int pieces = 2 + (int)below(r, 3);
-            d->origin = O_SLOW, d->delivery = D_SLOW2 + pieces - 2, note(d, "%d writes 1 ms apart", pieces);
+        case M_HEADER: {
+            static const unsigned char REVERSED[4] = {0x02, 0xFE, 0x01, 0xFF};
+            int how = (int)below(r, 4);
+            Buf b = {0};
+            int rc = 0;
+            d->origin = O_HEADER;
+            if (how == 0) {
+                int pos = (int)below(r, 4);
+                f->p[pos] ^= (unsigned char)between(r, 1, 255);
+                note(d, "frame %d: header byte %d changed", i, pos);
+                return 0;
+            }
+            if (how == 1)
+                rc = put(&b, f->p + 4, n - 4);
+            else if (how == 2)
+                rc = put(&b, HEADER, 4) || put(&b, f->p, n);
+            else
+                rc = put(&b, REVERSED, 4) || put(&b, f->p + 4, n - 4);
+            note(d, "frame %d: header %s", i, how == 1 ? "missing" : how == 2 ? "doubled" : "reversed");
+            PyMem_Free(f->p);
+            *f = b;
+            return rc;
         }
-        return 0;
-    }
-    default: { /* M_FLOOD */
-        static const int COPIES[] = {100, 300, 1000};
-        Py_ssize_t size = 0;
-        for (int k = 0; k < d->nf; k++) size += d->f[k].n;
-        int64_t copies = CHOICE(r, COPIES), fit = (1 << 18) / (size ? size : 1);
-        d->repeat = (int)(copies < fit ? copies : fit > 1 ? fit : 1);
-        note(d, "%d copies", d->repeat);
-        d->origin = O_FLOOD;
-        return 0;
-    }
+        case M_LENGTH_LIE: {
+            int kind = (int)below(r, 6);
+            int64_t len = n - OVERHEAD;
+            int64_t lies[] = {0,
+                              len - 1,
+                              len + 1,
+                              0x00FFFFFF + (int64_t)below(r, 1 << 24),
+                              0x80000000LL + (int64_t)below(r, 1 << 16),
+                              0xFFFFFFFFLL};
+            uint64_t declared = (uint64_t)lies[kind] & 0xFFFFFFFFu;
+            for (int k = 0; k < 4; k++) f->p[4 + k] = (unsigned char)(declared >> (24 - 8 * k));
+            note(d, "frame %d length %s", i, LIES[kind]);
+            d->origin = O_LENGTH_LIE;
+            return 0;
+        }
+        case M_TRUNCATE: {
+            Buf all = {0};
+            if (joined(d, &all) < 0) return -1;
+            Py_ssize_t cut = all.n > 1 ? (Py_ssize_t)between(r, 1, all.n - 1) : 0;
+            note(d, "cut at byte %zd of %zd", cut, all.n);
+            int rc = split_into(d, all.p, cut);
+            PyMem_Free(all.p);
+            d->origin = O_TRUNCATE, d->half_close = 1;
+            return rc;
+        }
+        case M_INSERT_DELETE: {
+            Py_ssize_t pos = (Py_ssize_t)below(r, (uint64_t)n + 1);
+            Buf b = {0};
+            int rc = put(&b, f->p, pos);
+            if (unit(r) < 0.5 && n > 1) {
+                Py_ssize_t k = pos < n ? (Py_ssize_t)between(r, 1, n - pos < 8 ? n - pos : 8) : 1;
+                rc = rc || put(&b, f->p + pos + (pos < n ? k : 0), n - pos - (pos < n ? k : 0));
+                note(d, "frame %d: %zd bytes deleted at %zd", i, k, pos);
+                d->origin = O_DELETE;
+            } else {
+                static const int BLOB[] = {1, 2, 4, 8};
+                Py_ssize_t start = b.n;
+                rc = rc || random_bytes(r, &b, CHOICE(r, BLOB));
+                note(d, "frame %d: ", i), hex_note(d, b.p + start, b.n - start), note(d, " inserted at %zd", pos);
+                rc = rc || put(&b, f->p + pos, n - pos);
+                d->origin = O_INSERT;
+            }
+            PyMem_Free(f->p);
+            *f = b;
+            return rc;
+        }
+        case M_INT_FIELD: {
+            static const uint32_t WORDS[] = {0, 0xFFFFFFFF, 0x7FFFFFFF, 0x80000000, 0x00010000, 0xFFFF0000};
+            if (n < OVERHEAD + 5) return mutate(r, d, M_LENGTH_LIE);
+            Py_ssize_t pos = (Py_ssize_t)between(r, OVERHEAD + 1, n - 4);
+            uint32_t v = CHOICE(r, WORDS);
+            for (int k = 0; k < 4; k++) f->p[pos + k] = (unsigned char)(v >> (24 - 8 * k));
+            note(d, "frame %d: word at %zd = 0x%08x", i, pos, v);
+            d->origin = O_INT_FIELD;
+            return 0;
+        }
+        case M_SPLICE: {
+            Buf all = {0};
+            if (joined(d, &all) < 0) return -1;
+            Py_ssize_t len = all.n, a = (Py_ssize_t)between(r, 1, len), b = (Py_ssize_t)between(r, a, 2 * len);
+            int rc = grow(&all, len); /* the data twice */
+            if (!rc) memcpy(all.p + len, all.p, (size_t)len), all.n = 2 * len;
+            for (int k = 0; k < d->nf; k++) d->f[k].n = 0;
+            rc = rc || put(&d->f[0], all.p, a) || put(&d->f[1], all.p + b, 2 * len - b);
+            PyMem_Free(all.p);
+            note(d, "bytes [%zd:%zd] removed", a, b);
+            d->nf = 2, d->origin = O_SPLICE;
+            return rc;
+        }
+        case M_BYTEWISE:
+        case M_SLOW:
+        case M_HALF_CLOSE: {
+            Py_ssize_t size = 0;
+            for (int k = 0; k < d->nf; k++) size += d->f[k].n;
+            if (m == M_BYTEWISE && size > 512) m = M_SLOW; /* mutate.BYTEWISE_MAX */
+            if (put(&d->f[d->nf++], PyBytes_AS_STRING(GET_STATUS), PyBytes_GET_SIZE(GET_STATUS)) < 0) return -1;
+            if (m == M_BYTEWISE) d->origin = O_BYTEWISE, d->delivery = D_BYTEWISE, note(d, "one write per byte");
+            if (m == M_HALF_CLOSE)
+                d->origin = O_HALF_CLOSE, d->half_close = 1, note(d, "write side shut after the frames");
+            if (m == M_SLOW) {
+                int pieces = 2 + (int)below(r, 3);
+                d->origin = O_SLOW, d->delivery = D_SLOW2 + pieces - 2, note(d, "%d writes 1 ms apart", pieces);
+            }
+            return 0;
+        }
+        default: { /* M_FLOOD */
+            static const int COPIES[] = {100, 300, 1000};
+            Py_ssize_t size = 0;
+            for (int k = 0; k < d->nf; k++) size += d->f[k].n;
+            int64_t copies = CHOICE(r, COPIES), fit = (1 << 18) / (size ? size : 1);
+            d->repeat = (int)(copies < fit ? copies : fit > 1 ? fit : 1);
+            note(d, "%d copies", d->repeat);
+            d->origin = O_FLOOD;
+            return 0;
+        }
     }
 }
 
@@ -810,7 +858,7 @@ static PyObject *make_case(Draft *d, int kind, const uint8_t *ids, Py_ssize_t ni
     return c;
 }
 
-#define MAX_DRAWS 20 /* schedule.MAX_DRAWS */
+#define MAX_DRAWS 20       /* schedule.MAX_DRAWS */
 #define BIG_CASE (1 << 20) /* schedule.BIG_CASE */
 
 /* a case: a Case, (intent, telegram id, seed) for Python to draw, or NULL */
@@ -837,15 +885,15 @@ static PyObject *one(Rng *r, Draft *d, const Ctx *c, Py_ssize_t *dropped) {
     return Py_BuildValue("(iiK)", I_FALLBACK, 0, 0ULL); /* nothing safe was drawn: the fallback case */
 }
 
-static PyObject *block(PyObject *self, PyObject *args) {
+static PyObject *block(PyObject *Py_UNUSED(self), PyObject *args) {
     unsigned long long seed, number;
     Py_ssize_t n;
     Py_buffer mask, picks, pick_cum, free_ids, gen_cum, mut_cum;
     Ctx c = {0};
     if (!ready) return PyErr_Format(PyExc_RuntimeError, "_draw.setup() was not called");
-    if (!PyArg_ParseTuple(args, "KKny*y*y*y*y*y*O!O!(LLL)pd", &seed, &number, &n, &mask, &picks, &pick_cum,
-                          &free_ids, &gen_cum, &mut_cum, &PyList_Type, &c.keys, &PyList_Type, &c.stations,
-                          &c.pose[0], &c.pose[1], &c.pose[2], &c.pool, &c.big_share))
+    if (!PyArg_ParseTuple(args, "KKny*y*y*y*y*y*O!O!(LLL)pd", &seed, &number, &n, &mask, &picks, &pick_cum, &free_ids,
+                          &gen_cum, &mut_cum, &PyList_Type, &c.keys, &PyList_Type, &c.stations, &c.pose[0], &c.pose[1],
+                          &c.pose[2], &c.pool, &c.big_share))
         return NULL;
     c.mask = mask.buf, c.picks = picks.buf, c.npicks = (int)picks.len, c.pick_cum = pick_cum.buf;
     c.free_ids = free_ids.buf, c.nfree = (int)free_ids.len, c.gen_cum = gen_cum.buf, c.mut_cum = mut_cum.buf;
@@ -876,15 +924,21 @@ done:
 }
 
 static PyMethodDef METHODS[] = {
-    {"setup", setup, METH_VARARGS, "setup(telegrams, close_socket, strings, origins, case, deliveries, expects, "
-                                   "get_status, big): the tables, once per process"},
-    {"block", block, METH_VARARGS, "block(seed, number, n, mask, picks, pick_cum, free_ids, gen_cum, mut_cum, "
-                                   "keys, stations, pose, pool, big_share) -> (items, dropped)"},
+    {"setup", setup, METH_VARARGS,
+     "setup(telegrams, close_socket, strings, origins, case, deliveries, expects, "
+     "get_status, big): the tables, once per process"},
+    {"block", block, METH_VARARGS,
+     "block(seed, number, n, mask, picks, pick_cum, free_ids, gen_cum, mut_cum, "
+     "keys, stations, pose, pool, big_share) -> (items, dropped)"},
     {"survey", survey, METH_VARARGS, "survey(data) -> (kind, answered ids) | None (too many ids)"},
     {"forbidden", forbidden, METH_VARARGS, "forbidden(data, mask) -> a forbidden id in data"},
     {NULL, NULL, 0, NULL},
 };
 
-static struct PyModuleDef MODULE = {PyModuleDef_HEAD_INIT, "_draw", NULL, -1, METHODS};
+static struct PyModuleDef MODULE = {
+    PyModuleDef_HEAD_INIT, .m_name = "_draw", .m_doc = NULL, .m_size = -1, .m_methods = METHODS,
+};
 
-PyMODINIT_FUNC PyInit__draw(void) { return PyModule_Create(&MODULE); }
+PyMODINIT_FUNC PyInit__draw(void) {
+    return PyModule_Create(&MODULE);
+}
