@@ -30,18 +30,20 @@ static double d2(double px, double py, double x0, double y0, double ex, double e
     return dx * dx + dy * dy;
 }
 
+/* PyBuffer_Release of each buffer of a NULL-terminated list: what every exit of the function does */
+static void release(Py_buffer *const *bufs) {
+    for (; *bufs; bufs++) PyBuffer_Release(*bufs);
+}
+
 static PyObject *segments_clear(PyObject *Py_UNUSED(self), PyObject *args) {
     Py_buffer q, segs, circ, rad, ok;
     if (!PyArg_ParseTuple(args, "y*y*y*y*w*", &q, &segs, &circ, &rad, &ok)) return NULL;
+    Py_buffer *all[] = {&q, &segs, &circ, &rad, &ok, NULL};
     Py_ssize_t nq = q.len / (Py_ssize_t)(4 * sizeof(double));
     Py_ssize_t ns = segs.len / (Py_ssize_t)(4 * sizeof(double));
     Py_ssize_t nc = circ.len / (Py_ssize_t)(3 * sizeof(double));
     if (rad.len < nq * (Py_ssize_t)sizeof(double) || ok.len < nq) {
-        PyBuffer_Release(&q);
-        PyBuffer_Release(&segs);
-        PyBuffer_Release(&circ);
-        PyBuffer_Release(&rad);
-        PyBuffer_Release(&ok);
+        release(all);
         PyErr_SetString(PyExc_ValueError, "segments_clear: rad and ok need one item per query");
         return NULL;
     }
@@ -71,11 +73,7 @@ static PyObject *segments_clear(PyObject *Py_UNUSED(self), PyObject *args) {
         }
         if (!clear) out[i] = 0;
     }
-    PyBuffer_Release(&q);
-    PyBuffer_Release(&segs);
-    PyBuffer_Release(&circ);
-    PyBuffer_Release(&rad);
-    PyBuffer_Release(&ok);
+    release(all);
     Py_RETURN_NONE;
 }
 

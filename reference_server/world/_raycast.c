@@ -40,6 +40,11 @@ static double circle_t(double wx, double wy, double r, double dx, double dy) {
 }
 
 /* The buffers hold what the call says (the caller's arrays are float64 / int64 of these lengths). */
+/* PyBuffer_Release of each buffer of a NULL-terminated list: what every exit of a function does */
+static void release(Py_buffer *const *bufs) {
+    for (; *bufs; bufs++) PyBuffer_Release(*bufs);
+}
+
 static int sized(const Py_buffer *b, Py_ssize_t items, Py_ssize_t item, const char *name) {
     if (b->len < items * item) {
         PyErr_Format(PyExc_ValueError, "%s: %zd bytes, %zd wanted", name, b->len, items * item);
@@ -85,17 +90,13 @@ static PyObject *fan(PyObject *Py_UNUSED(self), PyObject *args) {
     if (!PyArg_ParseTuple(args, "ddddddny*y*y*y*w*w*", &x, &y, &a0, &heading, &step, &max_range, &count, &segs, &circs,
                           &cb, &sb, &ranges, &hits))
         return NULL;
+    Py_buffer *all[] = {&segs, &circs, &cb, &sb, &ranges, &hits, NULL};
     Py_ssize_t ns = segs.len / (Py_ssize_t)(4 * sizeof(double));
     Py_ssize_t nc = circs.len / (Py_ssize_t)(3 * sizeof(double));
     Py_ssize_t n = ns + nc;
     if (!(sized(&cb, count, sizeof(double), "cos_b") && sized(&sb, count, sizeof(double), "sin_b") &&
           sized(&ranges, count, sizeof(double), "ranges") && sized(&hits, count, sizeof(int64_t), "hits"))) {
-        PyBuffer_Release(&segs);
-        PyBuffer_Release(&circs);
-        PyBuffer_Release(&cb);
-        PyBuffer_Release(&sb);
-        PyBuffer_Release(&ranges);
-        PyBuffer_Release(&hits);
+        release(all);
         return NULL;
     }
     Fan f = {x,      y,        cos(heading), sin(heading), max_range,  cb.buf,
@@ -104,12 +105,7 @@ static PyObject *fan(PyObject *Py_UNUSED(self), PyObject *args) {
     /* each owner's interval [lo, lo + span] above the first beam, as raycast._intervals */
     double *lo = PyMem_Malloc(sizeof(double) * (size_t)(n > 0 ? 2 * n : 1));
     if (lo == NULL) {
-        PyBuffer_Release(&segs);
-        PyBuffer_Release(&circs);
-        PyBuffer_Release(&cb);
-        PyBuffer_Release(&sb);
-        PyBuffer_Release(&ranges);
-        PyBuffer_Release(&hits);
+        release(all);
         return PyErr_NoMemory();
     }
     double *span = lo + n;
@@ -156,12 +152,7 @@ static PyObject *fan(PyObject *Py_UNUSED(self), PyObject *args) {
         }
     }
     PyMem_Free(lo);
-    PyBuffer_Release(&segs);
-    PyBuffer_Release(&circs);
-    PyBuffer_Release(&cb);
-    PyBuffer_Release(&sb);
-    PyBuffer_Release(&ranges);
-    PyBuffer_Release(&hits);
+    release(all);
     Py_RETURN_NONE;
 }
 
@@ -170,20 +161,14 @@ static PyObject *rays(PyObject *Py_UNUSED(self), PyObject *args) {
     Py_buffer ox, oy, dx, dy, segs, circs, ranges, hits;
     if (!PyArg_ParseTuple(args, "y*y*y*y*y*y*dw*w*", &ox, &oy, &dx, &dy, &segs, &circs, &max_range, &ranges, &hits))
         return NULL;
+    Py_buffer *all[] = {&ox, &oy, &dx, &dy, &segs, &circs, &ranges, &hits, NULL};
     Py_ssize_t n = ox.len / (Py_ssize_t)sizeof(double);
     Py_ssize_t ns = segs.len / (Py_ssize_t)(4 * sizeof(double));
     Py_ssize_t nc = circs.len / (Py_ssize_t)(3 * sizeof(double));
     if (!(sized(&oy, n, sizeof(double), "oy") && sized(&dx, n, sizeof(double), "dx") &&
           sized(&dy, n, sizeof(double), "dy") && sized(&ranges, n, sizeof(double), "ranges") &&
           sized(&hits, n, sizeof(int64_t), "hits"))) {
-        PyBuffer_Release(&ox);
-        PyBuffer_Release(&oy);
-        PyBuffer_Release(&dx);
-        PyBuffer_Release(&dy);
-        PyBuffer_Release(&segs);
-        PyBuffer_Release(&circs);
-        PyBuffer_Release(&ranges);
-        PyBuffer_Release(&hits);
+        release(all);
         return NULL;
     }
     const double *px = ox.buf, *py = oy.buf, *vx = dx.buf, *vy = dy.buf, *s = segs.buf, *c = circs.buf;
@@ -220,14 +205,7 @@ static PyObject *rays(PyObject *Py_UNUSED(self), PyObject *args) {
             ids[i] = -1;
         }
     }
-    PyBuffer_Release(&ox);
-    PyBuffer_Release(&oy);
-    PyBuffer_Release(&dx);
-    PyBuffer_Release(&dy);
-    PyBuffer_Release(&segs);
-    PyBuffer_Release(&circs);
-    PyBuffer_Release(&ranges);
-    PyBuffer_Release(&hits);
+    release(all);
     Py_RETURN_NONE;
 }
 
