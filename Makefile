@@ -67,6 +67,7 @@ chromium:
 test: $(STAMP) $(GUI_BUILT) $(MCAP_MODULES) chromium tshark emulator
 	$(BIN)/ruff check .
 	$(BIN)/ruff format --check .
+	$(MAKE) --no-print-directory lint-native
 	$(BIN)/mypy
 	$(BIN)/lint-imports --no-cache
 	$(BIN)/python -m pltf.spec.docgen --check
