@@ -55,25 +55,9 @@ MUTATORS = (
     "mut.half_close",
     "mut.flood",
 )
-ORIGINS = (
-    "gen.boundary",
-    "gen.hostile",
-    "gen.any_id",
-    "gen.length_field",
-    "mut.bit_flip",
-    "mut.byte_set",
-    "mut.header",
-    "mut.length_lie",
-    "mut.truncate",
-    "mut.delete",
-    "mut.insert",
-    "mut.int_field",
-    "mut.splice",
-    "mut.bytewise",
-    "mut.slow",
-    "mut.half_close",
-    "mut.flood",
-)
+# the origins the core names a case by, in its order: a mut.insert_delete case says which of the two it did
+SPLIT = {"mut.insert_delete": ("mut.delete", "mut.insert")}
+ORIGINS = (*GENERATORS[:4], *itertools.chain.from_iterable(SPLIT.get(m, (m,)) for m in MUTATORS))
 I64 = (-(2**63), 2**63 - 1)
 
 
