@@ -67,7 +67,8 @@ def test_move_vel_wheel_sets_both_wheels(stepped_server: SteppedServer, client: 
         command(client, R.CMD_MOVE_VEL_WHEEL(vel_right=300, vel_left=100))  # v 200 mm/s, w 200/430 rad/s
         stepped_server.advance(0.1)
     v, w = mean_velocity(stepped_server, client)
-    assert v == pytest.approx(200, abs=5) and w == pytest.approx(200 / 430, abs=0.01)
+    # the status beside the figures: a clean-clone run at load 9 saw v = 0.0 here once, with no clue why
+    assert v == pytest.approx(200, abs=5) and w == pytest.approx(200 / 430, abs=0.01), (v, w, client.status())
 
 
 def test_velocity_watchdog_stops_the_platform(stepped_server: SteppedServer, client: Client) -> None:
