@@ -218,13 +218,17 @@ def _header() -> str:
         items.append(f"Value to_value(const {name}& item);\nvoid from_value(const Value& v, {name}& item);")
     items.append("}  // namespace detail")
     telegrams = [_header_telegram(m) for d in ("request", "reply") for m in model.messages(d)]
-    return HEAD + UNFORMATTED + fill(
-        template("cpp", "platformctrl.hpp.tmpl"),
-        ERRORS=_errors(),
-        ENUMS="\n".join(enum_text).rstrip("\n"),
-        ITEMS="\n".join(items),
-        TELEGRAMS="\n".join(telegrams).rstrip("\n"),
-        METHODS=methods(_method, DECLARATION),
+    return (
+        HEAD
+        + UNFORMATTED
+        + fill(
+            template("cpp", "platformctrl.hpp.tmpl"),
+            ERRORS=_errors(),
+            ENUMS="\n".join(enum_text).rstrip("\n"),
+            ITEMS="\n".join(items),
+            TELEGRAMS="\n".join(telegrams).rstrip("\n"),
+            METHODS=methods(_method, DECLARATION),
+        )
     )
 
 
