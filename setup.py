@@ -76,6 +76,8 @@ EXTENSIONS = [
     Extension("pltf.proxy._forward", ["proxy/_forward.c"], extra_compile_args=["-O2"], optional=True),
     # the fuzzer's drawing core (fuzz/_draw.c); without it the cases are drawn in Python (another stream)
     Extension("pltf.fuzz._draw", ["fuzz/_draw.c"], extra_compile_args=["-O2"], optional=True),
+    # the fuzzer's plain single (fuzz/_singles.c, Linux: epoll); without it fuzz/flight.py's Single runs
+    Extension("pltf.fuzz._singles", ["fuzz/_singles.c"], extra_compile_args=["-O2"], optional=True),
 ]
 
 PACKAGES, PACKAGE_DIR = _packages()

@@ -16,6 +16,10 @@ Rules:
 - The lanes wait on one ``Poller`` (epoll): each socket is registered once, for reading, and for writing only
   while it has something to send now; a closed socket leaves it by itself. ``fly`` and ``step_flights`` without
   a poller keep ``select`` (replays, checks: one flight at a time).
+- Where the C extension ``_singles`` is built (``NATIVE``), a plain single's connection runs in C (``CSingle``:
+  connect, write, FIN, read to the close, on the ``Poller``'s epoll, which is then ``_singles.Pool``, without a
+  Python call) and Python decodes and judges only what came back; ``Single`` stays the fallback and the oracle
+  (tests/fuzz/test_flight.py holds the two to the same verdicts). ``single`` makes whichever is there.
 """
 
 from __future__ import annotations
@@ -28,6 +32,7 @@ import itertools
 import select
 import socket
 import time
+from collections.abc import Callable
 from dataclasses import replace
 from typing import Any
 
@@ -52,6 +57,13 @@ from pltf.spec import errors
 from pltf.spec.codec import REQUESTS
 from pltf.spec.telegram import Telegram
 
+try:
+    from pltf.fuzz import _singles
+except ImportError:  # built without a compiler, or PLTF_NO_EXTENSIONS=1
+    _singles = None  # type: ignore[assignment]
+
+NATIVE = _singles is not None
+
 CHUNK = 1 << 16
 AWAIT = -1.0  # the pause of a piece that waits for the peer's first byte (the rest of a gated session)
 _RESET = (errno.ECONNRESET, errno.EPIPE)
@@ -61,10 +73,13 @@ _RESET = (errno.ECONNRESET, errno.EPIPE)
 # pieces, kept open, or larger.
 NAGLE_FREE = 1024  # bytes
 _NONBLOCK = getattr(socket, "SOCK_NONBLOCK", 0)  # Linux: the socket is created non-blocking (no fcntl call)
-_WRITES = itertools.count()  # one order over every write of every flight (``Flight.sends``, ``pltf.fuzz.sent``)
+# one order over every write of every flight (``Flight.sends``, ``pltf.fuzz.sent``), the C singles' writes among them
+next_write: Callable[[], int] = _singles.next_write if _singles is not None else itertools.count().__next__
 
 
 class Flight:
+    native = False  # its socket is not driven in C (``CSingle``)
+
     def __init__(
         self, host: str, port: int, session: Session, deadline_s: float, sock: socket.socket | None = None
     ) -> None:
@@ -138,7 +153,7 @@ class Flight:
             return
         self.connected = True
         self.pos += sent
-        self.sends.append((next(_WRITES), self.pos))
+        self.sends.append((next_write(), self.pos))
         if self.pos < end:
             return
         self.pieces.popleft()
@@ -368,6 +383,7 @@ class Single:
     sending = False
     next_at = 0.0
     poll_fd = -1  # its socket's number in the ``Poller`` (-1: not there)
+    native = False
 
     def __init__(self, host: str, port: int, unit: Unit, lead: bool, deadline_s: float, fin_waits: bool) -> None:
         case = unit.cases[0]
@@ -426,7 +442,7 @@ class Single:
             return
         self.connected = True
         self.pos += sent
-        self.sends.append((next(_WRITES), self.pos))
+        self.sends.append((next_write(), self.pos))
         if self.pos < len(self.data):
             return
         self.sending = False
@@ -522,6 +538,144 @@ class Single:
 
 
 LEAD_ID = LEAD[8]
+_NOTHING: tuple[list[Telegram], str | None, int] = ([], None, 0)
+
+
+class CSingle(_singles.Single if _singles is not None else object):  # type: ignore[misc]
+    """``Single`` with its connection in C (``_singles.Single``: the socket, its writes and reads, how it ended);
+    the replies decoded and judged here only when something came back, ``session`` and ``out`` built when asked
+    for. Made by ``single``."""
+
+    __slots__ = ("_decoded", "_out", "_session", "expected", "fin_waits", "led", "owed", "unit")
+    half_close = True
+    kept = None
+    next_at = 0.0
+    poll_fd = -1  # never in the ``Poller``'s own books: the pool drives it
+    native = True
+    unit: Unit
+    led: bool
+    fin_waits: bool
+    expected: list[int]
+    owed: int
+    _decoded: tuple[list[Telegram], str | None, int]
+    _session: Session
+    _out: Outcome
+    # the C type's attributes, for the type checker (its base is Any to it)
+    data: bytes
+    pos: int
+    got: int
+    rx: bytes
+    started: float
+    deadline: float
+    budget: float
+    done: bool
+    refused: bool
+    timed_out: bool
+    closed: bool
+    reset: bool
+    connected: bool
+    sending: bool
+    sends: list[tuple[int, int]]
+    fin_at: float | None
+    end_at: float | None
+
+    @property
+    def due(self) -> bool:
+        return self.sending
+
+    def _finish(self, refused: bool = False, closed: bool = False, timed_out: bool = False) -> None:
+        """Past its deadline (the only end the lanes give a single from outside)."""
+        self.timeout()
+
+    def decoded(self) -> tuple[list[Telegram], str | None, int]:
+        """(replies, why they are bad, bytes left over), as ``Single._end`` finds them; once it is done, once."""
+        try:
+            return self._decoded
+        except AttributeError:
+            pass
+        got = _NOTHING
+        if self.got:
+            replies, bad, pending = decode_replies(self.rx, self.closed)
+            if not self.refused and bad is None and replies:
+                bad = check_order(replies, self.expected, self.data)
+            got = (replies, bad, pending)
+        if self.done:
+            self._decoded = got
+        return got
+
+    @property
+    def replies(self) -> list[Telegram]:
+        return self.decoded()[0]
+
+    @property
+    def bad_reply(self) -> str | None:
+        return self.decoded()[1]
+
+    @property
+    def pending(self) -> int:
+        return self.decoded()[2]
+
+    def verdict(self) -> Verdict:
+        if not self.got:  # most singles: nothing back (unled) or refused, turned away
+            return judge_counts(self.refused, 0, self.timed_out, None, 0, self.owed, self.led, False)
+        replies, bad, _ = self.decoded()
+        return judge_counts(self.refused, self.got, self.timed_out, bad, len(replies), self.owed, self.led, False)
+
+    @property
+    def session(self) -> Session:
+        try:
+            return self._session
+        except AttributeError:
+            self._session = replace(self.unit.session(lead=self.led), fin_waits=self.fin_waits)
+            return self._session
+
+    @property
+    def out(self) -> Outcome:
+        try:
+            return self._out
+        except AttributeError:
+            ms = _ms_from(self.started)
+            replies, bad, _ = self.decoded()
+            self._out = Outcome(
+                refused=self.refused,
+                closed=self.closed,
+                timed_out=self.timed_out,
+                bad_reply=bad,
+                replies=replies,
+                got=self.got,
+                fin_ms=ms(self.fin_at),
+                end_ms=ms(self.end_at),
+                reset=self.reset,
+            )
+            return self._out
+
+
+Flying = Flight | Single | CSingle  # what the lanes drive
+
+
+def single(
+    pool: Any, host: str, port: int, unit: Unit, lead: bool, deadline_s: float, fin_waits: bool
+) -> Single | CSingle:
+    """A plain single (``plain``) on a fresh connection: in C where ``_singles`` is built (its socket on ``pool``,
+    a ``_singles.Pool``, or driven by ``select`` when None), else ``Single``."""
+    if not NATIVE:
+        return Single(host, port, unit, lead, deadline_s, fin_waits)
+    case = unit.cases[0]
+    prelude = unit.prelude
+    if lead or prelude:
+        head = [LEAD] if lead else []
+        if prelude:
+            head += [*prelude, GET_STATUS]
+        frames = len(head) + len(case.frames)
+        data = b"".join(head) + case.data
+        ids = [*([LEAD_ID] if lead else []), *unit.prelude_ids]
+    else:
+        frames, data, ids = len(case.frames), case.data, []
+    budget = deadline_s + PER_FRAME * frames + PER_MIB * len(data) / (1 << 20)
+    s = CSingle(pool, host, port, data, budget)
+    s.unit, s.led, s.fin_waits, s.owed = unit, lead, fin_waits, len(ids)
+    s.expected = [*ids, *case.answered] if case.answered is not None else answered_ids(data)
+    return s
 
 
 def _ms_from(start: float) -> Any:
@@ -538,7 +692,7 @@ class Poller:
     socket closed leaves it by itself; a kept connection is taken out when its flight is done."""
 
     def __init__(self) -> None:
-        self.ep = select.epoll()
+        self.ep: Any = _singles.Pool() if _singles is not None else select.epoll()  # ``CSingle``s enrol themselves
         self.masks: dict[int, int] = {}
         self.by_fd: dict[int, Any] = {}
 
@@ -558,6 +712,8 @@ class Poller:
                 overdue = True
                 continue
             nearest = min(nearest, f.deadline)
+            if f.native:
+                continue
             if f.sending:
                 if f.connected and f.next_at > now:
                     nearest = min(nearest, f.next_at)

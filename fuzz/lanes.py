@@ -39,7 +39,7 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from pltf.fuzz.flight import Flight, Poller, Single, fly, plain, step_flights
+from pltf.fuzz.flight import CSingle, Flight, Flying, Poller, Single, fly, plain, single, step_flights
 from pltf.fuzz.gate import DEPTH, Gate
 from pltf.fuzz.pace import Pace
 from pltf.fuzz.sent import segments
@@ -57,7 +57,7 @@ DONE, STOPPED = "done", "stopped"
 
 @dataclass(eq=False)
 class InFlight:
-    flight: Flight | Single
+    flight: Flying
     unit: Unit
     port: int  # index into the ports
     behind: bool  # connected while another unit of ours was on the port (pipelined)
@@ -101,7 +101,7 @@ class Lanes:
         self.flights: list[collections.deque[InFlight]] = [collections.deque() for _ in ports]
         self.todo: collections.deque[Unit] = collections.deque()
         self.recent: collections.deque[InFlight] = collections.deque(maxlen=RECENT)
-        self.log: collections.deque[Flight | Single] = collections.deque(maxlen=LOG)  # every flight, as it started
+        self.log: collections.deque[Flying] = collections.deque(maxlen=LOG)  # every flight, as it started
         self.kept: socket.socket | None = None
         self.dear = False  # set by the campaign from the gates' release
         self.pace: Pace | None = None  # the dear way's batches take turns with the singles (``pltf.fuzz.pace``)
@@ -244,9 +244,9 @@ class Lanes:
         if kept and self.pace is not None:
             self.pace.batch_started(len(unit.cases))
         led = self._led(k, unit, sock is None)
-        flight: Flight | Single
+        flight: Flying
         if self.frames_as_is and self.connect is Flight and plain(unit, led, kept, self.fin_waits):
-            flight = Single(self.host, self.ports[k], unit, led, self.deadline, self.fin_waits)
+            flight = single(self.poller.ep, self.host, self.ports[k], unit, led, self.deadline, self.fin_waits)
         else:
             flight = self.connect(
                 self.host, self.ports[k], self.adapt(unit.session(lead=led, kept=kept)), self.deadline, sock=sock
@@ -263,7 +263,7 @@ class Lanes:
             self.recent.append(e)
         return e
 
-    def _share_allowances(self, k: int, flight: Flight | Single) -> None:
+    def _share_allowances(self, k: int, flight: Flying) -> None:
         """A target may serve its ports one at a time: a unit's allowance for its size (a big document takes
         seconds to parse) is added to the deadlines of the units in flight on the other ports (up to
         ``SHARED_UNITS`` allowances each), and theirs to its deadline."""
@@ -283,7 +283,7 @@ class Lanes:
         now = time.monotonic()
         f, unit, gate = e.flight, e.unit, self.gates[e.port]
         # on the kept connection, too, nothing back means the unit was not served (the connection is gone)
-        if type(f) is Single:
+        if type(f) is Single or type(f) is CSingle:  # a plain single
             v = f.verdict()
         else:
             v = judge(f.out, unit.owed(f.session, len(f.expected)), e.led or e.kept, unit.keep)
