@@ -39,10 +39,12 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from pltf.fuzz.flight import CSingle, Flight, Flying, Poller, Single, fly, plain, single, step_flights
+from pltf.fuzz.flight import Flight, fly, step_flights
 from pltf.fuzz.gate import DEPTH, Gate
 from pltf.fuzz.pace import Pace
+from pltf.fuzz.poller import Poller
 from pltf.fuzz.sent import segments
+from pltf.fuzz.single import CSingle, Flying, Single, plain, single
 from pltf.fuzz.target import LEAD_IDS, Session, session_deadline
 from pltf.fuzz.unit import PIPELINE_BYTES, Unit
 from pltf.fuzz.verdict import NOT_ADMITTED, Liveness, Verdict, judge
@@ -110,7 +112,7 @@ class Lanes:
         self.stuck: int | None = None  # the port of a stall
         self.suspect: int | None = None  # a port that has not served us for ``patience``: are the others alive?
         self.adapt: Callable[[Session], Session] = _as_is  # a session as the target needs it (``pltf.fuzz.profile``)
-        # what ``adapt`` does, for the plain singles that skip it (``pltf.fuzz.flight.Single``): our FIN waits for the
+        # what ``adapt`` does, for the plain singles that skip it (``pltf.fuzz.single.Single``): our FIN waits for the
         # replies asked for; frames_as_is False (it rewrites frames: CONNECT_TO_PLTF first): no plain singles
         self.fin_waits = False
         self.frames_as_is = True

@@ -69,7 +69,7 @@ def judge_counts(
     refused: bool, got: int, timed_out: bool, bad_reply: str | None, replies: int, owed: int, led: bool, keep: bool
 ) -> Verdict:
     """``judge`` from what a connection counted (``got``: bytes back, ``replies``: replies decoded), without an
-    ``Outcome`` (``pltf.fuzz.flight.Single``)."""
+    ``Outcome`` (``pltf.fuzz.single.Single``)."""
     if refused:
         return _TURNED_AWAY["refused"]
     if led and not (got > 0 or replies):
