@@ -1,4 +1,4 @@
-# Typing of the C extension built from _singles.c (see flight.py, its only caller).
+# Typing of the C extension built from _singles.c (see single.py and poller.py, its callers).
 
 class Pool:
     def __init__(self) -> None: ...

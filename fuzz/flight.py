@@ -42,7 +42,7 @@ from pltf.spec.codec import REQUESTS
 
 if TYPE_CHECKING:
     from pltf.fuzz.poller import Poller
-    from pltf.fuzz.single import Single
+    from pltf.fuzz.single import Flying
 
 try:
     from pltf.fuzz import _singles
@@ -299,7 +299,7 @@ def _pieces(session: Session, data: bytes) -> tuple[collections.deque[tuple[int,
     return pieces, sum(pause for _, pause in chunks if pause > 0)
 
 
-def fly(flights: list[Flight | Single]) -> None:
+def fly(flights: list[Flying]) -> None:
     """Drive ``flights`` until each is done or past its deadline."""
     while live := [f for f in flights if not f.done]:
         _step(live)
@@ -318,7 +318,7 @@ def step_flights(flights: list[Any], until: float | None = None, poller: Poller 
     return done
 
 
-def _step(live: list[Flight | Single], until: float | None = None) -> None:
+def _step(live: list[Flying], until: float | None = None) -> None:
     """One round over flights not done: finish those past their deadline; if none was, wait for the sockets
     of all of them until the nearest deadline (or ``until``) and drive the ones that are ready."""
     now = time.monotonic()

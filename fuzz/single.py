@@ -22,7 +22,7 @@ import errno
 import socket
 import time
 from dataclasses import replace
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from pltf.fuzz.flight import NAGLE_FREE, NATIVE, NONBLOCK, RESET, Connection, Flight, next_write
 from pltf.fuzz.replies import reply_decoder
@@ -242,7 +242,13 @@ LEAD_ID = LEAD[8]
 _NOTHING: tuple[list[Telegram], str | None, int] = ([], None, 0)
 
 
-class CSingle(_singles.Single if _singles is not None else object):  # type: ignore[misc]
+if TYPE_CHECKING:  # the C type's attributes as _singles.pyi declares them
+    _CBase = _singles.Single
+else:
+    _CBase = _singles.Single if _singles is not None else object
+
+
+class CSingle(_CBase):
     """``Single`` with its connection in C (``_singles.Single``: the socket, its writes and reads, how it ended);
     the replies decoded and judged here only when something came back, ``session`` and ``out`` built when asked
     for. Made by ``single``."""
@@ -261,24 +267,6 @@ class CSingle(_singles.Single if _singles is not None else object):  # type: ign
     _decoded: tuple[list[Telegram], str | None, int]
     _session: Session
     _out: Outcome
-    # the C type's attributes, for the type checker (its base is Any to it)
-    data: bytes
-    pos: int
-    got: int
-    rx: bytes
-    started: float
-    deadline: float
-    budget: float
-    done: bool
-    refused: bool
-    timed_out: bool
-    closed: bool
-    reset: bool
-    connected: bool
-    sending: bool
-    sends: list[tuple[int, int]]
-    fin_at: float | None
-    end_at: float | None
 
     @property
     def due(self) -> bool:
