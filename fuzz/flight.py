@@ -72,6 +72,9 @@ class Connection:
     sock: _socket.socket
     connected: bool
     reset: bool
+    sending: bool
+    pos: int  # bytes sent
+    sends: list[tuple[int, int]]  # (the write's place among all writes, bytes sent after it)
 
     @property
     def due(self) -> bool:
@@ -92,6 +95,27 @@ class Connection:
             self.connected = True
         if self.due:
             self._send_due()
+
+    def _write(self, chunk: bytes) -> bool:
+        """One send of ``chunk``, counted in ``pos`` and ``sends``; False when nothing went: still connecting or a
+        full buffer (the poll says when), the connect refused (finished), or the peer gone (``reset``; what it said
+        before it went is read)."""
+        try:
+            sent = self.sock.send(chunk)
+        except (BlockingIOError, InterruptedError):
+            return False
+        except ConnectionRefusedError:
+            self._finish(refused=True)
+            return False
+        except OSError as exc:
+            if exc.errno not in (errno.ENOTCONN, errno.EINPROGRESS, errno.EALREADY):
+                self.connected, self.sending = True, False
+                self.reset = exc.errno in RESET
+            return False
+        self.connected = True
+        self.pos += sent
+        self.sends.append((next_write(), self.pos))
+        return True
 
     def _recv(self) -> bytes | None:
         """What a readable socket brought: bytes, ``b""`` at the peer's close or reset (``reset`` set), or None:
@@ -177,23 +201,7 @@ class Flight(Connection):
             self._sent_all()
             return
         end = self.pieces[0][0]
-        try:
-            sent = self.sock.send(self.data[self.pos : min(end, self.pos + CHUNK)])
-        except (BlockingIOError, InterruptedError):
-            return  # still connecting (or a full buffer): select says when
-        except ConnectionRefusedError:
-            self._finish(refused=True)
-            return
-        except OSError as exc:
-            if exc.errno in (errno.ENOTCONN, errno.EINPROGRESS, errno.EALREADY):
-                return
-            self.connected, self.sending = True, False  # the peer is gone; read what it said before it went
-            self.reset = exc.errno in RESET
-            return
-        self.connected = True
-        self.pos += sent
-        self.sends.append((next_write(), self.pos))
-        if self.pos < end:
+        if not self._write(self.data[self.pos : min(end, self.pos + CHUNK)]) or self.pos < end:
             return
         self.pieces.popleft()
         if self.pieces:

@@ -24,7 +24,7 @@ import time
 from dataclasses import replace
 from typing import TYPE_CHECKING, Any
 
-from pltf.fuzz.flight import NAGLE_FREE, NATIVE, NONBLOCK, RESET, Connection, Flight, next_write
+from pltf.fuzz.flight import NAGLE_FREE, NATIVE, NONBLOCK, Connection, Flight
 from pltf.fuzz.replies import reply_decoder
 from pltf.fuzz.target import (
     CUT,
@@ -149,23 +149,7 @@ class Single(Connection):
         self._send()  # on loopback the handshake is done when connect_ex returns
 
     def _send(self) -> None:
-        try:
-            sent = self.sock.send(self.data[self.pos :] if self.pos else self.data)
-        except (BlockingIOError, InterruptedError):
-            return
-        except ConnectionRefusedError:
-            self._end(refused=True)
-            return
-        except OSError as exc:
-            if exc.errno in (errno.ENOTCONN, errno.EINPROGRESS, errno.EALREADY):
-                return
-            self.connected, self.sending = True, False  # the peer is gone; read what it said before it went
-            self.reset = exc.errno in RESET
-            return
-        self.connected = True
-        self.pos += sent
-        self.sends.append((next_write(), self.pos))
-        if self.pos < len(self.data):
+        if not self._write(self.data[self.pos :] if self.pos else self.data) or self.pos < len(self.data):
             return
         self.sending = False
         self.fin_at = time.monotonic()  # ``plain``: our FIN waits for nothing
