@@ -274,7 +274,8 @@ export class RecordedSession extends PlatformSession {
       const telegram = this.decode(f);
       if (telegram !== null) {
         const dir = f.dir === "request" ? "out" : "in";
-        this.wire.publish({ dir, t: f.t * 1000, telegram, bytes: f.hex.length / 2 });
+        // ms from the whole µs the recording holds: f.t * 1000 can land an ulp below a whole ms (.925 shown .924)
+        this.wire.publish({ dir, t: Math.round(f.t * 1e6) / 1000, telegram, bytes: f.hex.length / 2 });
       }
     }
   }
