@@ -16,6 +16,7 @@ Rules:
 from __future__ import annotations
 
 import _socket
+import abc
 import collections
 import contextlib
 import errno
@@ -64,7 +65,7 @@ NONBLOCK = getattr(socket, "SOCK_NONBLOCK", 0)  # Linux: the socket is created n
 next_write: Callable[[], int] = _singles.next_write if _singles is not None else itertools.count().__next__
 
 
-class Connection:
+class Connection(abc.ABC):
     """What a ``Flight`` and a ``pltf.fuzz.single.Single`` share: the events of a non-blocking connection being made,
     written and read. A subclass has ``sock``, ``connected``, ``reset``, ``due``, ``_send_due`` (write what is due)
     and ``_finish``."""
@@ -77,14 +78,17 @@ class Connection:
     sends: list[tuple[int, int]]  # (the write's place among all writes, bytes sent after it)
 
     @property
+    @abc.abstractmethod
     def due(self) -> bool:
-        raise NotImplementedError
+        """Whether it has bytes to send now."""
 
+    @abc.abstractmethod
     def _send_due(self) -> None:
-        raise NotImplementedError
+        """Write what is due."""
 
+    @abc.abstractmethod
     def _finish(self, refused: bool = False, closed: bool = False, timed_out: bool = False) -> None:
-        raise NotImplementedError
+        """The connection has ended (or is given up): its outcome is settled, its socket closed or kept."""
 
     def writable(self) -> None:
         if not self.connected:
