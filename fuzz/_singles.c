@@ -1,7 +1,7 @@
 /* The fuzzer's plain single in C: one case on a fresh connection, written whole with our FIN, read to the close.
  *
- * Rules (fuzz/singles.py and fuzz/flight.py are the only callers; the Python ``flight.Single`` is the fallback and
- * the oracle, tests/fuzz/test_flight.py holds the two to the same verdicts):
+ * Rules (fuzz/single.py and fuzz/poller.py are the only callers; the Python ``single.Single`` is the fallback and
+ * the oracle, tests/fuzz/test_single.py holds the two to the same verdicts):
  * - Single(pool, host, port, data, budget) opens a non-blocking socket, connects, writes ``data`` whole and shuts
  *   its write side (our FIN) at once where loopback allows it (it nearly always does), else when the socket
  *   becomes writable. It then reads until the target closes (or resets, or refuses); the caller ends it at its
@@ -15,7 +15,7 @@
  * - frames() walks rx by the wire format (guide 6.2, "Message Format": the header m_cHeader = 255, 1, 254, 2,
  *   then "the number of data bytes (N)" in four bytes, MSB first, then the N data bytes, the first of them the
  *   telegram id): the ids of the whole frames and whether the stream is nothing but whole frames. Strict decoding
- *   of the replies stays in Python (pltf.fuzz.flight.decode_replies), remembered by their bytes.
+ *   of the replies stays in Python (pltf.fuzz.single.decode_replies), remembered by their bytes.
  * - Nothing here raises for what the peer does; only a socket that cannot be created raises OSError.
  */
 #define PY_SSIZE_T_CLEAN
@@ -146,7 +146,7 @@ static int note_send(Single *s) {
     return 0;
 }
 
-/* One write of what is left; our FIN once all of it went (as flight.Single._send). */
+/* One write of what is left; our FIN once all of it went (as single.Single._send). */
 static void single_send(Single *s) {
     Py_ssize_t len = PyBytes_GET_SIZE(s->data);
     ssize_t n = send(s->fd, PyBytes_AS_STRING(s->data) + s->pos, (size_t)(len - s->pos), MSG_NOSIGNAL);
@@ -198,7 +198,7 @@ static int take(Single *s, const char *buf, Py_ssize_t n) {
     return 0;
 }
 
-/* Read what is there, to the peer's close (as flight.Single.readable, without a poll round between them). */
+/* Read what is there, to the peer's close (as single.Single.readable, without a poll round between them). */
 static void single_readable(Single *s) {
     static char buf[RECV_CHUNK];
     while (!s->done) {
