@@ -119,8 +119,9 @@ def move_vel(ctx: CaseContext) -> None:
         held.fail(
             f"CMD_GET_STATUS commanded velocities {st.vel_trans} mm/s, {st.vel_rot} mrad/s "  # type: ignore[union-attr]
             "(expected 0 and 400)",
-            # none commanded: the stop of a watchdog that fired while a target behind its clock took the command
-            dipped=st.vel_rot == 0 and st.vel_trans == 0 and held.reached(0.4, "w"),  # type: ignore[union-attr]
+            # short of 400, the poses having reached it: the stop of a watchdog that fired while a target behind its
+            # clock took the command, the status showing none commanded or the ramp from that stop under way
+            dipped=abs(st.vel_trans) <= 30 and held.dipped(st.vel_rot / 1000.0, 0.4, "w"),  # type: ignore[union-attr]
             erratum="E-REP-005",
         )
     ctx.send("CMD_MOVE_VEL", vel_trans=0, vel_rot=0)

