@@ -399,17 +399,25 @@ class Rig:
     def status(self) -> Any:
         return self.client.status()
 
-    def wait(self, pred: Callable[[Any], bool], what: str, timeout: float = 10.0, *, keep: Any = None) -> Any:
-        """Poll GET_STATUS until ``pred``; ``keep``: a (name, fields) command re-sent at every poll (a velocity
-        command lives only VelWatchdogTime)."""
+    def wait(
+        self,
+        pred: Callable[[Any], bool],
+        what: str,
+        timeout: float = 10.0,
+        *,
+        keep: Any = None,
+        ask: str = "CMD_GET_STATUS",
+    ) -> Any:
+        """Poll ``ask`` (GET_STATUS) until ``pred`` holds for its reply; ``keep``: a (name, fields) command re-sent
+        at every poll (a velocity command lives only VelWatchdogTime)."""
         deadline = time.monotonic() + timeout
         while True:
             if keep is not None:
                 self.send(keep[0], **keep[1])
-            st = self.status()
+            st = self.get(ask)
             if pred(st):
                 return st
-            assert time.monotonic() < deadline, f"timed out waiting for {what}; log: {self.log()[-12:]}"
+            assert time.monotonic() < deadline, f"timed out waiting for {what} (last {st}); log: {self.log()[-12:]}"
             time.sleep(0.005)
 
     def wait_messages(self, pred: Callable[[Any], bool], delete: int = 0, timeout: float = 10.0) -> Any:

@@ -11,6 +11,10 @@ from tests.reference_server.conftest import ServerThread
 from tests.reference_server.helpers import REPO
 from tests.reference_server.tasks.conftest import SCALE, Session, program, task
 
+# The waits for a target are bounded at 600 s: a remote program's clock is this computer's (E-TASK-014), which runs
+# on while a loaded server holds its simulated time (a clean-clone run at load 10: 55 s held in all, and a 60 s
+# wait ended with the platform short of the station)
+
 
 def test_remote_run_moves_sets_outputs_and_parameters(session: Session, tmp_path: Path) -> None:
     xml = program(
@@ -18,16 +22,16 @@ def test_remote_run_moves_sets_outputs_and_parameters(session: Session, tmp_path
             "<ioevent><digitalout D1='1' D3='1' D12='1'/></ioevent>"
             "<parameter><set key='IpoTransVel' value='450'/></parameter>"
             "<motion><settarget><coord x='3500' y='10000' angle='90'/></settarget></motion>"
-            "<wait timeout='60000'><target/></wait>"
+            "<wait timeout='600000'><target/></wait>"
             "<ioevent><digitalout D3='0'/></ioevent>"
             "<motion><settarget><station name='Kitchen'/></settarget></motion>"
-            "<wait timeout='60000'><target/></wait>"
+            "<wait timeout='600000'><target/></wait>"
         )
     )
     result = session.run_remote(xml, tmp_path)
     assert result.finished and not result.failed
     st = session.status()
-    assert (abs(st.est_x_mm - 5000) < 60, abs(st.est_y_mm - 12200) < 60) == (True, True)
+    assert abs(st.est_x_mm - 5000) < 60 and abs(st.est_y_mm - 12200) < 60, (st.est_x_mm, st.est_y_mm, result)
     assert st.motion_mode == MotionMode.MODE_MOTION_AUTOMATIC and st.operation_state == OperationState.ST_OP_RUNNING
     assert session.client.get_pltf_param("IpoTransVel").value == "450"
 
@@ -40,7 +44,7 @@ def test_remote_load_sends_the_local_files_and_grab_writes_locally(session: Sess
     xml = program(
         task(
             "<load map='office.map' roadmap='other.rm'/>"
-            "<motion><settarget><station name='Pantry'/></settarget></motion><wait timeout='60000'><target/></wait>"
+            "<motion><settarget><station name='Pantry'/></settarget></motion><wait timeout='600000'><target/></wait>"
             "<surveillance><grab filename='shot' grabscan='true' grabimage='true'/></surveillance>"
         )
     )
