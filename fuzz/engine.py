@@ -116,7 +116,7 @@ class Campaign:
                 raise HarnessError(f"{exc}{self._target_said()}") from None
             self.stats.profile = self.profile.to_json()
         lanes.adapt = self.profile.adapt
-        lanes.fin_waits, lanes.frames_as_is = self.profile.fin_ends, not self.profile.silent_before_connect
+        lanes.fin_waits, lanes.frames_as_is = self.profile.fin_waits, not self.profile.silent_before_connect
         if self.profile.small_backlog:  # SYNs past the backlog are dropped: a pipelined connect would wait seconds
             for gate in lanes.gates:
                 gate.pipelining = False

@@ -5,13 +5,15 @@ Rules:
   ``pltf.fuzz.target``. It measures how long a fresh connection takes to be served (the connection set-up) and a
   reply on a kept one; whether anything is answered before CMD_CONNECT_TO_PLTF; whether the target still answers
   what it owes after our half-close (FIN) or ends the session at it; what a newcomer meets while the port is busy
-  (served, closed with FIN, reset, refused, kept in the listen backlog - and how many such connects complete).
+  (served, closed with FIN, reset, refused, kept in the listen backlog - and how many such connects complete);
+  whether it ends a session with a reset (RST) instead of a FIN.
 - Nothing here is a finding: each behaviour is a reading the guide allows (spec/errata/behaviour.yaml). The
-  campaign then relies on none the target lacks: where our FIN ends the session, a session waits for the replies
-  it is owed before it half-closes (``Session.fin_waits``); where nothing is answered before CMD_CONNECT_TO_PLTF,
-  every session opens with it (``Profile.adapt``, applied by the lanes and the replays); a fresh connection that costs
-  far more than a reply makes the ports dear from the start, a listen backlog no deeper than the pipelining turns
-  pipelining off (``pltf.fuzz.engine``).
+  campaign then relies on none the target lacks: where our FIN ends the session, or the target ends it with a reset
+  (which throws away what it had sent and we had not read yet: a big reply, read late on a loaded machine), a
+  session waits for the replies it is owed before it half-closes (``Session.fin_waits``); where nothing is
+  answered before CMD_CONNECT_TO_PLTF, every session opens with it (``Profile.adapt``, applied by the lanes and
+  the replays); a fresh connection that costs far more than a reply makes the ports dear from the start, a listen
+  backlog no deeper than the pipelining turns pipelining off (``pltf.fuzz.engine``).
 - ``describe`` is the line the console and summary.json show: "ends the session at our FIN; turns newcomers away
   with RST; replies in 2 ms".
 - Every failure to learn says what was seen and where: the port, the flag that named it, and what the target did
@@ -73,6 +75,7 @@ class Profile:
     setup_ms: float = 0.0  # median over fresh connections: connect-to-first-reply less the same one's next reply
     reply_ms: float = 0.0  # median reply time on a kept connection
     fin_ends: bool = False  # our half-close ends the session: replies still owed are lost
+    resets: bool = False  # it ends a session with RST (erratum E-BEH-002): what we had not read yet may be lost
     silent_before_connect: bool = False  # nothing is answered before CMD_CONNECT_TO_PLTF
     newcomer: str = ""  # a key of TURN_AWAY
     backlog: int | None = None  # connects that complete while the port is busy (a backlog target), else None
@@ -90,8 +93,16 @@ class Profile:
         the SYNs beyond it are dropped and a connect waits for the kernel's retry (a second or more)."""
         return self.backlog is not None and self.backlog <= DEPTH
 
+    @property
+    def fin_waits(self) -> bool:
+        """Our FIN waits for the replies owed: the target ends the session at it, or ends it with a reset, whose
+        RST discards the bytes the target sent and we had not read yet (matrix rows 1 and 3)."""
+        return self.fin_ends or self.resets
+
     def describe(self) -> str:
         parts = ["ends the session at our FIN" if self.fin_ends else "answers after our FIN"]
+        if self.resets:
+            parts.append("ends a session with RST: our FIN waits for the replies owed")
         if self.silent_before_connect:
             parts.append("answers nothing before CMD_CONNECT_TO_PLTF")
         if self.newcomer:
@@ -112,7 +123,7 @@ class Profile:
         connected answers nothing: a state it cannot be fuzzed in)."""
         if self.silent_before_connect:
             session = _connected(session)
-        return replace(session, fin_waits=True) if self.fin_ends and not session.fin_waits else session
+        return replace(session, fin_waits=True) if self.fin_waits and not session.fin_waits else session
 
     def to_json(self) -> dict[str, object]:
         return asdict(self) | {"summary": self.describe()}
@@ -140,7 +151,9 @@ def learn(host: str, port: int, flag: str, deadline: float) -> Profile:
         prof.newcomer, prof.backlog = _newcomer(host, port, deadline)
     finally:
         _close(first, deadline)
-    prof.fin_ends = any(_fin_loses(host, port, deadline, prof, setups) for _ in range(FIN_TRIES))
+    ends = [_fin_ends(host, port, deadline, prof, setups) for _ in range(FIN_TRIES)]
+    prof.fin_ends = any(lost for lost, _ in ends)
+    prof.resets = any(reset for _, reset in ends)
     prof.setup_ms = round(statistics.median(setups), 3) if setups else 0.0
     return prof
 
@@ -263,23 +276,38 @@ def _backlog(host: str, port: int) -> int:
             s.close()
 
 
-def _fin_loses(host: str, port: int, deadline: float, prof: Profile, setups: list[float]) -> bool:
-    """Whether the replies owed at our FIN are lost: served (its lead answered), then ``FIN_REPLIES`` leads and
-    our FIN in one write. ``setups`` gets the ms the connection's first reply took over its second's (a port that
-    frees slowly and turns us away first is dear anyway: ``pltf.fuzz.gate``)."""
+def _fin_ends(host: str, port: int, deadline: float, prof: Profile, setups: list[float]) -> tuple[bool, bool]:
+    """(whether the replies owed at our FIN are lost, whether the session then ended with a reset): served (its
+    lead answered), then ``FIN_REPLIES`` leads and our FIN in one write, read to the end. ``setups`` gets the ms
+    the connection's first reply took over its second's (a port that frees slowly and turns us away first is dear
+    anyway: ``pltf.fuzz.gate``)."""
     t0 = time.monotonic()
     s = _served_again(host, port, deadline, prof)
     if s is None:
-        return False  # the port did not serve us again: nothing learnt (the campaign's start will say so)
+        return False, False  # the port did not serve us again: nothing learnt (the campaign's start will say so)
     first_ms = (time.monotonic() - t0) * 1000
     try:
         t1 = time.monotonic()
         if _ask(s, LEAD, 1, deadline)[0] == 1:  # the same connection's second reply: the set-up is the difference
             setups.append(max(0.0, first_ms - (time.monotonic() - t1) * 1000))
-        got, _ = _ask(s, LEAD * FIN_REPLIES, FIN_REPLIES, deadline, fin=True)
+        got, how = _ask(s, LEAD * FIN_REPLIES, FIN_REPLIES, deadline, fin=True)
+        reset = "reset" in how or (got == FIN_REPLIES and _ends_with_reset(s, deadline))
     finally:
         s.close()
-    return got < FIN_REPLIES
+    return got < FIN_REPLIES, reset
+
+
+def _ends_with_reset(s: socket.socket, deadline: float) -> bool:
+    """Read ``s`` to its end: whether the target ended it with a reset (not a FIN, nor the deadline)."""
+    s.settimeout(deadline)
+    try:
+        while s.recv(1 << 16):
+            pass
+    except ConnectionResetError:
+        return True
+    except OSError:
+        return False
+    return False
 
 
 def _tries(deadline: float) -> Iterator[int]:

@@ -24,7 +24,7 @@ import pytest
 
 ROWS = {  # member: what its profile line must say
     "fin-ends-session": "ends the session at our FIN",
-    "close-rst": "turns newcomers away with RST",
+    "close-rst": "ends a session with RST: our FIN waits for the replies owed",
     "slow-accept": "answers after our FIN",
     "silent-until-connect": "answers nothing before CMD_CONNECT_TO_PLTF",
 }

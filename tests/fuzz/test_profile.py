@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import select
 import socket
+import struct
 import threading
 import time
 from collections.abc import Iterator
@@ -144,6 +145,34 @@ def test_a_target_that_answers_at_once_and_ends_the_session_at_our_fin_is_learnt
         assert all(learn("127.0.0.1", s.port, "--target", 2.0).fin_ends for _ in range(5))
     finally:
         s.close()
+
+
+class EndsWithReset(FinEndsSession):
+    """Answers every GET_POSITION at once, and at the client's FIN ends the session with a reset (SO_LINGER 0),
+    as zoo member close-rst does (matrix row 3): what it sent that the client had not read yet is lost."""
+
+    def _serve(self, conn: socket.socket) -> None:
+        dec = TelegramDecoder("request")
+        with conn:
+            while data := conn.recv(65536):
+                dec.receive_data(data)
+                conn.sendall(b"".join(POSITION_REPLY for t in dec if t.NAME == "CMD_GET_POSITION"))
+            conn.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+
+
+def test_a_target_that_ends_its_sessions_with_a_reset_gets_a_fin_that_waits_for_the_replies() -> None:
+    """A reset throws away what the target sent and we had not read yet (slow-tier: a 67 KB GET_STATUS reply cut
+    behind close-rst on a loaded machine, confirmed by two of three replays): the campaign relies on no orderly
+    close, as where our FIN ends the session."""
+    s = EndsWithReset()
+    try:
+        prof = learn("127.0.0.1", s.port, "--target", 2.0)
+    finally:
+        s.close()
+    assert prof.resets and not prof.fin_ends
+    assert "answers after our FIN; ends a session with RST: our FIN waits for the replies owed" in prof.describe()
+    assert prof.adapt(session(False)).fin_waits
+    assert not Profile().fin_waits and Profile(fin_ends=True).fin_waits
 
 
 def test_a_port_that_turns_us_away_for_a_second_is_learnt_within_the_deadline() -> None:
