@@ -1,17 +1,28 @@
 /* The fuzzer's plain single in C: one case on a fresh connection, written whole with our FIN, read to the close.
  *
- * Rules (fuzz/single.py and fuzz/poller.py are the only callers; the Python ``single.Single`` is the fallback and
- * the oracle, tests/fuzz/test_single.py holds the two to the same verdicts):
+ * Rules (fuzz/single.py, fuzz/poller.py and fuzz/lanes.py are the only callers; the Python ``single.Single`` is the
+ * fallback and the oracle, tests/fuzz/test_single.py holds the two to the same verdicts):
  * - Single(pool, host, port, data, budget) opens a non-blocking socket, connects, writes ``data`` whole and shuts
  *   its write side (our FIN) at once where loopback allows it (it nearly always does), else when the socket
- *   becomes writable. It then reads until the target closes (or resets, or refuses); the caller ends it at its
- *   deadline (timeout()). It keeps only what the verdict needs: the bytes received (rx, got), how it ended
- *   (refused, closed, timed_out, reset), when our FIN went and when it ended (monotonic seconds, as Python's
- *   time.monotonic), and the order of its writes among all writes of the campaign (next_write()).
+ *   becomes writable (start=False: made, not connected; a Run starts it). It then reads until the target closes
+ *   (or resets, or refuses); the caller ends it at its deadline (timeout()). It keeps only what the verdict
+ *   needs: the bytes received (rx, got), how it ended (refused, closed, timed_out, reset), when our FIN went and
+ *   when it ended (monotonic seconds, as Python's time.monotonic), and the order of its writes among all writes
+ *   of the campaign (next_write()).
  * - Pool is one epoll for the lanes: a Single given a pool registers its own socket there (its pointer as the
  *   event's data) and is driven inside poll() without a Python call; Python's own flights register their sockets
  *   with register()/modify()/unregister() and poll() hands back their (fd, events) as select.epoll does. A
  *   closed socket leaves the epoll by itself; a Single closes its socket when it ends (or is freed).
+ * - Run(pool, depth) is one port's plain singles in bulk (fuzz/lanes.py): Singles made with start=False are added
+ *   in their order (led, chain: others may wait behind it, allowance: its budget beyond the base deadline) and
+ *   started by the run as the lanes would - a fresh connection each, up to ``depth`` on the port while the last
+ *   one started is connected, sent whole and chains; a waiting one's deadline from its turn (from the one before
+ *   it, restarted when the port's head finishes); the allowances of the other Runs' singles (and of Python's
+ *   units on other ports, set_others) lent to it and its own granted to theirs, SHARED_UNITS of the largest at
+ *   most. poll() times them out and goes on without Python until a Run has REPORT singles finished in port order
+ *   (or fewer, once it stopped or has nothing on the port), is hungry for more, Python's sockets have events or
+ *   the timeout passed. A single not admitted (refused, or led and nothing back) or past its deadline stops the
+ *   run: nothing more starts (unstarted() gives the rest back).
  * - frames() walks rx by the wire format (guide 6.2, "Message Format": the header m_cHeader = 255, 1, 254, 2,
  *   then "the number of data bytes (N)" in four bytes, MSB first, then the N data bytes, the first of them the
  *   telegram id): the ids of the whole frames and whether the stream is nothing but whole frames. Strict decoding
@@ -35,7 +46,10 @@
 #define NAGLE_FREE 1024  /* bytes: larger writes go with TCP_NODELAY (as flight.NAGLE_FREE) */
 #define RECV_CHUNK 65536 /* bytes per recv (as target.RECV) */
 #define MAX_EVENTS 64
-#define TAG_FD 1u /* epoll data of a Python flight's socket: (fd << 1) | 1; a Single's is its (aligned) pointer */
+#define SHARED_UNITS 2 /* allowances of units started on other ports a single gets at most (lanes.SHARED_UNITS) */
+#define REPORT 8       /* singles a Run finishes before poll() hands back to Python */
+#define LOW 4          /* a hungry Run asks Python for more when fewer wait to start */
+#define TAG_FD 1u      /* epoll data of a Python flight's socket: (fd << 1) | 1; a Single's is its (aligned) pointer */
 
 static const unsigned char HEADER[4] = {0xFF, 0x01, 0xFE, 0x02};
 static long long writes = 0; /* one order over every write of every flight (flight.Flight.sends) */
@@ -48,8 +62,14 @@ static double now_s(void) {
 
 /* ------------------------------------------------------------------------------------------------ the pool */
 
+#define MAX_RUNS 16 /* ports with a Run at once */
+
+struct Run;
+
 typedef struct {
     PyObject_HEAD int ep;
+    struct Run *runs[MAX_RUNS]; /* the Runs on this epoll (each holds the pool; it leaves when freed) */
+    int nruns;
 } Pool;
 
 static int pool_init(Pool *self, PyObject *args, PyObject *kwds) {
@@ -115,6 +135,11 @@ typedef struct {
     Py_ssize_t nsends, sends_cap;
     double started, deadline, budget, fin_at, end_at; /* fin_at, end_at: -1 until then */
     char done, refused, timed_out, closed, reset, connected, sending, polled_out;
+    /* in a Run: where to connect once its turn comes, and what the lanes' rules need */
+    struct sockaddr_storage addr;
+    socklen_t addrlen;
+    double allowance, shared, largest; /* s of its budget beyond the base deadline; granted by other ports; */
+    char led, chain, behind;           /* opens with the lead; others may wait behind it; waited behind one */
 } Single;
 
 static void single_end(Single *s, int refused, int closed, int timed_out) {
@@ -230,14 +255,15 @@ static int parse_address(const char *host, int port, struct sockaddr_storage *ad
     return inet_pton(AF_INET, host, &a->sin_addr) == 1 ? 0 : -1;
 }
 
-static int single_open(Single *s, const char *host, int port) {
-    struct sockaddr_storage addr;
-    socklen_t len;
-    if (parse_address(host, port, &addr, &len) < 0) {
-        PyErr_Format(PyExc_ValueError, "not a numeric address: %s", host);
-        return -1;
-    }
-    s->fd = socket(addr.ss_family, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
+static int single_address(Single *s, const char *host, int port) {
+    if (parse_address(host, port, &s->addr, &s->addrlen) == 0) return 0;
+    PyErr_Format(PyExc_ValueError, "not a numeric address: %s", host);
+    return -1;
+}
+
+/* Connect, and write at once where loopback allows it. */
+static int single_open(Single *s) {
+    s->fd = socket(s->addr.ss_family, SOCK_STREAM | SOCK_NONBLOCK | SOCK_CLOEXEC, 0);
     if (s->fd < 0) {
         PyErr_SetFromErrno(PyExc_OSError);
         return -1;
@@ -246,7 +272,7 @@ static int single_open(Single *s, const char *host, int port) {
         int one = 1;
         setsockopt(s->fd, IPPROTO_TCP, TCP_NODELAY, &one, sizeof(one));
     }
-    if (connect(s->fd, (struct sockaddr *)&addr, len) < 0 && errno != EINPROGRESS) {
+    if (connect(s->fd, (struct sockaddr *)&s->addr, s->addrlen) < 0 && errno != EINPROGRESS) {
         single_end(s, errno == ECONNREFUSED, errno != ECONNREFUSED, 0);
         return 0;
     }
@@ -266,12 +292,12 @@ static void single_enrol(Single *s) {
 static PyTypeObject PoolType;
 
 static int single_init(Single *s, PyObject *args, PyObject *kwds) {
-    static char *kw[] = {"pool", "host", "port", "data", "budget", NULL};
+    static char *kw[] = {"pool", "host", "port", "data", "budget", "start", NULL};
     PyObject *pool, *data;
     const char *host;
-    int port;
+    int port, start = 1;
     double budget;
-    if (!PyArg_ParseTupleAndKeywords(args, kwds, "OsiSd", kw, &pool, &host, &port, &data, &budget)) return -1;
+    if (!PyArg_ParseTupleAndKeywords(args, kwds, "OsiSd|p", kw, &pool, &host, &port, &data, &budget, &start)) return -1;
     if (s->data != NULL || s->fd >= 0) {
         PyErr_SetString(PyExc_RuntimeError, "a Single runs once");
         return -1;
@@ -286,7 +312,9 @@ static int single_init(Single *s, PyObject *args, PyObject *kwds) {
     s->budget = budget;
     s->started = now_s();
     s->deadline = s->started + budget;
-    if (single_open(s, host, port) < 0) return -1;
+    if (single_address(s, host, port) < 0) return -1;
+    if (!start) return 0; /* a Run starts it in its turn */
+    if (single_open(s) < 0) return -1;
     single_enrol(s);
     return 0;
 }
@@ -393,6 +421,7 @@ static PyMemberDef single_members[] = {
     {"reset", T_BOOL, offsetof(Single, reset), READONLY, NULL},
     {"connected", T_BOOL, offsetof(Single, connected), READONLY, NULL},
     {"sending", T_BOOL, offsetof(Single, sending), READONLY, NULL},
+    {"behind", T_BOOL, offsetof(Single, behind), READONLY, "connected behind another of its Run (pipelined)"},
     {NULL, 0, 0, 0, NULL},
 };
 
@@ -417,6 +446,297 @@ static PyTypeObject SingleType = {
     .tp_getset = single_getset,
 };
 
+/* ------------------------------------------------------------------------------------------------ a run */
+
+/* The plain singles the lanes hand one port at once, in their order: started as the lanes would start them (a
+ * fresh connection each; while the last one started is connected, has sent all and owes nothing but statuses,
+ * up to ``depth`` on the port; a waiting one's deadline from its turn), finished in port order (``take``). */
+typedef struct Run {
+    PyObject_HEAD Pool *pool;
+    Single **items; /* [taken, popped): finished, for Python; [popped, started): on the port; then waiting */
+    Py_ssize_t n, cap, taken, popped, started, reported_starts;
+    int depth;
+    char halted, hungry;
+    double *others; /* (deadline, allowance) of the units of other ports that Python drives */
+    Py_ssize_t nothers;
+} Run;
+
+static double clamp_lend(double deadline, double allowance, double now) {
+    double left = deadline - now < allowance ? deadline - now : allowance;
+    return left > 0 ? left : 0;
+}
+
+/* What the singles of ``r`` on the port lend a unit started elsewhere now (their allowances, no more than the
+ * time they have left), and the grant of that unit's allowance ``mine`` to each (SHARED_UNITS of the largest). */
+static double run_lend(Run *r, double mine, double now) {
+    double lent = 0;
+    for (Py_ssize_t i = r->popped; i < r->started; i++) {
+        Single *t = r->items[i];
+        if (t->done) continue;
+        lent += clamp_lend(t->deadline, t->allowance, now);
+        if (mine > t->largest) t->largest = mine;
+        double grant = SHARED_UNITS * t->largest - t->shared;
+        grant = grant < mine ? grant : mine;
+        if (grant > 0) t->deadline += grant, t->shared += grant;
+    }
+    return lent;
+}
+
+/* Its turn has come: the deadline from now (behind the last one on the port: from that one's), the allowances of
+ * the other ports' units, then the connect. */
+static void run_start(Run *r, Single *s, double now) {
+    Single *last = r->started > r->popped ? r->items[r->started - 1] : NULL;
+    s->started = now;
+    s->behind = last != NULL;
+    s->deadline = (last != NULL ? last->deadline : now) + s->budget;
+    for (int j = 0; j < r->pool->nruns; j++)
+        if (r->pool->runs[j] != r) s->deadline += run_lend(r->pool->runs[j], s->allowance, now);
+    for (Py_ssize_t i = 0; i < r->nothers; i++) s->deadline += clamp_lend(r->others[2 * i], r->others[2 * i + 1], now);
+    r->started++;
+    if (single_open(s) < 0) {
+        PyErr_Clear(); /* no socket to be had: it ends at once, closed unanswered (not admitted) */
+        single_end(s, 0, 1, 0);
+        return;
+    }
+    single_enrol(s);
+}
+
+static int may_start(Run *r) {
+    if (r->halted || r->started >= r->n) return 0;
+    Py_ssize_t on_port = r->started - r->popped;
+    if (on_port == 0) return 1;
+    Single *last = r->items[r->started - 1];
+    return on_port < r->depth && last->chain && last->connected && !last->sending;
+}
+
+/* A single not admitted (refused, or led and nothing back) or past its deadline stops the run: Python decides. */
+static int stops_run(Single *s) {
+    return s->refused || s->timed_out || (s->led && s->got == 0);
+}
+
+/* Deadlines, the port's finished head(s) (the clocks of the ones behind restart), then what may start. */
+static void run_advance(Run *r, double now) {
+    for (Py_ssize_t i = r->popped; i < r->started; i++)
+        if (!r->items[i]->done && now >= r->items[i]->deadline) single_end(r->items[i], 0, 0, 1);
+    while (1) {
+        int popped = 0;
+        while (r->popped < r->started && r->items[r->popped]->done) {
+            if (stops_run(r->items[r->popped])) r->halted = 1;
+            r->popped++, popped = 1;
+        }
+        if (popped) {
+            double t = now;
+            for (Py_ssize_t i = r->popped; i < r->started; i++) t += r->items[i]->budget, r->items[i]->deadline = t;
+        }
+        if (!may_start(r)) return;
+        run_start(r, r->items[r->started], now);
+    }
+}
+
+static int run_wants_python(Run *r) {
+    Py_ssize_t ready = r->popped - r->taken;
+    if (ready >= REPORT || (ready > 0 && (r->halted || r->popped == r->started))) return 1;
+    return r->hungry && !r->halted && r->n - r->started < LOW;
+}
+
+static double runs_nearest(Pool *p, double until) {
+    for (int j = 0; j < p->nruns; j++) {
+        Run *r = p->runs[j];
+        for (Py_ssize_t i = r->popped; i < r->started; i++)
+            if (!r->items[i]->done && r->items[i]->deadline < until) until = r->items[i]->deadline;
+    }
+    return until;
+}
+
+static int runs_advance(Pool *p, double now) {
+    int wants = 0;
+    for (int j = 0; j < p->nruns; j++) {
+        run_advance(p->runs[j], now);
+        wants |= run_wants_python(p->runs[j]);
+    }
+    return wants;
+}
+
+static int run_init(Run *r, PyObject *args, PyObject *kwds) {
+    static char *kw[] = {"pool", "depth", NULL};
+    PyObject *pool;
+    int depth;
+    if (!PyArg_ParseTupleAndKeywords(args, kwds, "O!i", kw, &PoolType, &pool, &depth)) return -1;
+    Pool *p = (Pool *)pool;
+    if (r->pool != NULL || p->nruns >= MAX_RUNS) {
+        PyErr_SetString(PyExc_RuntimeError, "a Run is made once, at most 16 on a pool");
+        return -1;
+    }
+    r->pool = (Pool *)Py_NewRef(pool);
+    r->depth = depth < 1 ? 1 : depth;
+    p->runs[p->nruns++] = r;
+    return 0;
+}
+
+static PyObject *run_new(PyTypeObject *type, PyObject *args, PyObject *kwds) {
+    (void)args, (void)kwds;
+    return type->tp_alloc(type, 0);
+}
+
+static void run_dealloc(Run *r) {
+    Pool *p = r->pool;
+    for (int j = 0; p != NULL && j < p->nruns; j++)
+        if (p->runs[j] == r) p->runs[j] = p->runs[--p->nruns];
+    for (Py_ssize_t i = r->taken; i < r->n; i++) Py_DECREF(r->items[i]);
+    PyMem_Free(r->items);
+    PyMem_Free(r->others);
+    Py_XDECREF(p);
+    Py_TYPE(r)->tp_free((PyObject *)r);
+}
+
+/* The finished ones go; the rest move to the front. */
+static void run_compact(Run *r) {
+    if (r->taken == 0) return;
+    memmove(r->items, r->items + r->taken, (size_t)(r->n - r->taken) * sizeof(Single *));
+    r->n -= r->taken, r->popped -= r->taken, r->started -= r->taken;
+    r->reported_starts = r->reported_starts > r->taken ? r->reported_starts - r->taken : 0;
+    r->taken = 0;
+}
+
+static PyObject *run_add(Run *r, PyObject *args) {
+    PyObject *single;
+    int led, chain;
+    double allowance;
+    if (!PyArg_ParseTuple(args, "O!ppd", &SingleType, &single, &led, &chain, &allowance)) return NULL;
+    Single *s = (Single *)single;
+    if (s->fd >= 0 || s->done || s->pool != r->pool) {
+        PyErr_SetString(PyExc_ValueError, "a Run takes a Single made on its pool with start=False");
+        return NULL;
+    }
+    run_compact(r);
+    if (r->n == r->cap) {
+        Py_ssize_t cap = r->cap ? 2 * r->cap : 32;
+        Single **more = PyMem_Realloc(r->items, (size_t)cap * sizeof(Single *));
+        if (more == NULL) return PyErr_NoMemory();
+        r->items = more, r->cap = cap;
+    }
+    s->led = (char)led, s->chain = (char)chain, s->allowance = allowance;
+    r->items[r->n++] = (Single *)Py_NewRef(single);
+    Py_RETURN_NONE;
+}
+
+static PyObject *singles_list(Run *r, Py_ssize_t from, Py_ssize_t to) {
+    PyObject *out = PyList_New(to - from);
+    for (Py_ssize_t i = from; out != NULL && i < to; i++) PyList_SET_ITEM(out, i - from, (PyObject *)r->items[i]);
+    return out;
+}
+
+static PyObject *run_take(Run *r, PyObject *Py_UNUSED(ignored)) {
+    PyObject *out = singles_list(r, r->taken, r->popped); /* the list takes the run's references */
+    if (out != NULL) r->taken = r->popped;
+    return out;
+}
+
+static PyObject *run_unstarted(Run *r, PyObject *Py_UNUSED(ignored)) {
+    PyObject *out = singles_list(r, r->started, r->n);
+    if (out != NULL) r->n = r->started;
+    return out;
+}
+
+static PyObject *run_new_starts(Run *r, PyObject *Py_UNUSED(ignored)) {
+    Py_ssize_t from = r->reported_starts > r->taken ? r->reported_starts : r->taken;
+    PyObject *out = PyList_New(0);
+    for (Py_ssize_t i = from; out != NULL && i < r->started; i++) {
+        PyObject *a = PyFloat_FromDouble(r->items[i]->allowance);
+        if (a == NULL || PyList_Append(out, a) < 0) Py_CLEAR(out);
+        Py_XDECREF(a);
+    }
+    r->reported_starts = r->started;
+    return out;
+}
+
+static PyObject *run_lend_py(Run *r, PyObject *args) {
+    double mine;
+    if (!PyArg_ParseTuple(args, "d", &mine)) return NULL;
+    return PyFloat_FromDouble(run_lend(r, mine, now_s()));
+}
+
+static PyObject *run_set_others(Run *r, PyObject *args) {
+    PyObject *seq;
+    if (!PyArg_ParseTuple(args, "O", &seq)) return NULL;
+    PyObject *fast = PySequence_Fast(seq, "others: (deadline, allowance) pairs");
+    if (fast == NULL) return NULL;
+    Py_ssize_t n = PySequence_Fast_GET_SIZE(fast);
+    double *more = PyMem_Realloc(r->others, (size_t)(n ? n : 1) * 2 * sizeof(double));
+    if (more == NULL) {
+        Py_DECREF(fast);
+        return PyErr_NoMemory();
+    }
+    r->others = more, r->nothers = 0;
+    for (Py_ssize_t i = 0; i < n; i++) {
+        PyObject *pair = PySequence_Fast_GET_ITEM(fast, i);
+        if (!PyArg_ParseTuple(pair, "dd", &more[2 * i], &more[2 * i + 1])) break;
+        r->nothers = i + 1;
+    }
+    Py_DECREF(fast);
+    if (PyErr_Occurred()) return NULL;
+    Py_RETURN_NONE;
+}
+
+static PyObject *run_advance_py(Run *r, PyObject *Py_UNUSED(ignored)) {
+    run_advance(r, now_s());
+    Py_RETURN_NONE;
+}
+
+static PyObject *run_halt(Run *r, PyObject *Py_UNUSED(ignored)) {
+    r->halted = 1;
+    Py_RETURN_NONE;
+}
+
+static PyObject *run_count(Run *r, void *which) {
+    Py_ssize_t counts[] = {r->n - r->started, r->started - r->popped, r->popped - r->taken};
+    return PyLong_FromSsize_t(counts[(intptr_t)which]);
+}
+
+static PyObject *run_active(Run *r, void *Py_UNUSED(closure)) {
+    return PyBool_FromLong(r->n > r->taken);
+}
+
+static PyMethodDef run_methods[] = {
+    {"add", (PyCFunction)run_add, METH_VARARGS, "add(single, led, chain, allowance): the next single of the port."},
+    {"take", (PyCFunction)run_take, METH_NOARGS, "The singles finished, in port order (each once)."},
+    {"unstarted", (PyCFunction)run_unstarted, METH_NOARGS, "The singles not started, taken out of the run."},
+    {"new_starts", (PyCFunction)run_new_starts, METH_NOARGS, "The allowances of the singles started since."},
+    {"lend", (PyCFunction)run_lend_py, METH_VARARGS, "lend(mine): a unit started elsewhere: s lent, mine granted."},
+    {"set_others", (PyCFunction)run_set_others, METH_VARARGS, "set_others(pairs): other ports' Python units."},
+    {"advance", (PyCFunction)run_advance_py, METH_NOARGS, "Deadlines, the port's head, what may start: now."},
+    {"halt", (PyCFunction)run_halt, METH_NOARGS, "Start nothing more."},
+    {NULL, NULL, 0, NULL},
+};
+
+static PyMemberDef run_members[] = {
+    {"depth", T_INT, offsetof(Run, depth), 0, "singles on the port at most (1: no pipelining)"},
+    {"hungry", T_BOOL, offsetof(Run, hungry), 0, "Python has more singles for it: poll() asks when few wait"},
+    {"halted", T_BOOL, offsetof(Run, halted), READONLY, "a single not admitted or past its deadline, or halt()"},
+    {NULL, 0, 0, 0, NULL},
+};
+
+static PyGetSetDef run_getset[] = {
+    {"waiting", (getter)run_count, NULL, "singles not started yet", (void *)0},
+    {"flying", (getter)run_count, NULL, "singles on the port (connected, not yet finished in port order)", (void *)1},
+    {"ready", (getter)run_count, NULL, "singles finished, not taken yet", (void *)2},
+    {"active", (getter)run_active, NULL, "anything waiting, on the port or not taken", NULL},
+    {NULL, NULL, NULL, NULL, NULL},
+};
+
+static PyTypeObject RunType = {
+    PyVarObject_HEAD_INIT(NULL, 0).tp_name = "pltf.fuzz._singles.Run",
+    .tp_basicsize = sizeof(Run),
+    .tp_flags = Py_TPFLAGS_DEFAULT,
+    .tp_doc = "The plain singles of one port, started and finished in C.",
+    .tp_new = run_new,
+    .tp_init = (initproc)run_init,
+    .tp_dealloc = (destructor)run_dealloc,
+    .tp_methods = run_methods,
+    .tp_members = run_members,
+    .tp_getset = run_getset,
+};
+
 /* ------------------------------------------------------------------------------------------------ poll */
 
 static void drive(Single *s, uint32_t events) {
@@ -426,33 +746,45 @@ static void drive(Single *s, uint32_t events) {
     Py_DECREF(s);
 }
 
-static PyObject *python_events(struct epoll_event *ev, int n) {
-    PyObject *out = PyList_New(0);
-    for (int i = 0; out != NULL && i < n; i++) {
+/* Drive the Singles that are ready; append the (fd, events) of Python's sockets to ``out``. */
+static int python_events(struct epoll_event *ev, int n, PyObject *out) {
+    for (int i = 0; i < n; i++) {
         if (!(ev[i].data.u64 & TAG_FD)) {
             drive((Single *)ev[i].data.ptr, ev[i].events);
             continue;
         }
         PyObject *pair = Py_BuildValue("(iI)", (int)(ev[i].data.u64 >> 1), ev[i].events);
-        if (pair == NULL || PyList_Append(out, pair) < 0) Py_CLEAR(out);
+        int bad = pair == NULL || PyList_Append(out, pair) < 0;
         Py_XDECREF(pair);
+        if (bad) return -1;
     }
-    return out;
+    return 0;
 }
 
-/* poll(timeout s): wait, drive the Singles that are ready, hand back the (fd, events) of Python's sockets. */
+/* poll(timeout s): wait, drive the Singles that are ready, hand back the (fd, events) of Python's sockets - or,
+ * with Runs on the pool, go on until Python has events, a Run wants Python (finished singles, or it is hungry)
+ * or the timeout has passed. */
 static PyObject *pool_poll(Pool *self, PyObject *args) {
     double timeout;
     if (!PyArg_ParseTuple(args, "d", &timeout)) return NULL;
-    int ms = timeout < 0 ? -1 : (int)(timeout * 1000.0 + 0.999); /* rounded up, as select.epoll.poll */
+    double now = now_s(), end = timeout < 0 ? now + 1e9 : now + timeout;
+    PyObject *out = PyList_New(0);
     struct epoll_event ev[MAX_EVENTS];
-    int n;
-    Py_BEGIN_ALLOW_THREADS n = epoll_wait(self->ep, ev, MAX_EVENTS, ms);
-    Py_END_ALLOW_THREADS if (n < 0) {
-        if (errno == EINTR) return PyList_New(0);
-        return PyErr_SetFromErrno(PyExc_OSError);
+    while (out != NULL && !runs_advance(self, now)) {
+        double wait = runs_nearest(self, end) - now;
+        int ms = wait <= 0 ? 0 : (int)(wait * 1000.0 + 0.999); /* rounded up, as select.epoll.poll */
+        int n;
+        Py_BEGIN_ALLOW_THREADS n = epoll_wait(self->ep, ev, MAX_EVENTS, ms);
+        Py_END_ALLOW_THREADS if (n < 0 && errno != EINTR) {
+            Py_DECREF(out);
+            return PyErr_SetFromErrno(PyExc_OSError);
+        }
+        if (n > 0 && python_events(ev, n, out) < 0) Py_CLEAR(out);
+        now = now_s();
+        if (out == NULL || PyList_GET_SIZE(out) > 0 || now >= end || self->nruns == 0 || n < 0) break;
     }
-    return python_events(ev, n);
+    if (out != NULL && self->nruns > 0) runs_advance(self, now_s());
+    return out;
 }
 
 static PyObject *next_write(PyObject *Py_UNUSED(module), PyObject *Py_UNUSED(ignored)) {
@@ -490,11 +822,12 @@ static struct PyModuleDef module = {
 };
 
 PyMODINIT_FUNC PyInit__singles(void) {
-    if (PyType_Ready(&PoolType) < 0 || PyType_Ready(&SingleType) < 0) return NULL;
+    if (PyType_Ready(&PoolType) < 0 || PyType_Ready(&SingleType) < 0 || PyType_Ready(&RunType) < 0) return NULL;
     PyObject *m = PyModule_Create(&module);
     if (m == NULL) return NULL;
     if (PyModule_AddObjectRef(m, "Pool", (PyObject *)&PoolType) < 0 ||
-        PyModule_AddObjectRef(m, "Single", (PyObject *)&SingleType) < 0) {
+        PyModule_AddObjectRef(m, "Single", (PyObject *)&SingleType) < 0 ||
+        PyModule_AddObjectRef(m, "Run", (PyObject *)&RunType) < 0) {
         Py_DECREF(m);
         return NULL;
     }

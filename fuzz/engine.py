@@ -219,7 +219,7 @@ class Campaign:
         """The units in flight run out and are judged; what is still queued is not run."""
         if self.lanes is None or self.stop:
             return
-        self.lanes.todo.clear()
+        self.lanes.clear_queue()
         self._lanes_run(batches_only=False)
 
     # ------------------------------------------------------------------ one window of cases
@@ -277,7 +277,7 @@ class Campaign:
     def _lanes_run(self, batches_only: bool) -> None:
         assert self.lanes is not None
         while not self.stop:
-            result = self.lanes.run(self.judge_unit, batches_only=batches_only)
+            result = self.lanes.run(self.judge_unit, batches_only=batches_only, judge_clean=self.judge_clean)
             if result not in (DONE, STOPPED):  # no port serves us: what looked suspicious died with it
                 culprit = self.suspicions[-1].unit if self.suspicions else None
                 self.suspicions.clear()
@@ -318,18 +318,43 @@ class Campaign:
         st.singles += not unit.batch
         st.cut_replies += v.cut
         self._learn(f.replies)
-        at = None if unit.check_at is None else unit.check_at - (not e.led)
-        if at is not None and unit.target is not None and len(f.replies) > at:
-            check: Any = f.replies[at]  # a CMD_GET_STATUS reply (its fields are built from the spec at import)
-            if check.NAME == "CMD_GET_STATUS" and self.plan.check(
-                unit.target, check.operation_state, check.motion_mode
-            ):
-                st.states.add(unit.target)
+        if unit.target is not None:
+            self._check(e, f.replies)
         if v.suspicious:
             self.suspicions.append(Suspicion(unit, e.port, v, exchange(e)))
             return False
         self._count(unit.cases, ("kept" if unit.batch else "closed") if f.closed or unit.batch else "open")
         return True
+
+    def judge_clean(self, entries: list[InFlight]) -> None:
+        """``judge_unit`` of plain singles the target served with a clean verdict (``pltf.fuzz.lanes``: they ran in
+        C), in one loop: counted, their replies learnt."""
+        st, learn, count = self.stats, self.kb.learn, self._count
+        st.units += len(entries)
+        st.singles += len(entries)
+        for e in entries:
+            f: Any = e.flight  # a ``pltf.fuzz.single.CSingle``
+            unit = e.unit
+            st.probes += e.led
+            st.cut_replies += e.verdict.cut  # type: ignore[union-attr]
+            if f.got:
+                replies = f.replies
+                for r in replies:
+                    learn(r)
+                if unit.target is not None:
+                    self._check(e, replies)
+            count(unit.cases, "closed" if f.closed else "open")
+
+    def _check(self, e: InFlight, replies: list[Any]) -> None:
+        """The unit's state prelude reached its target when its check's reply says so."""
+        unit = e.unit
+        at = None if unit.check_at is None else unit.check_at - (not e.led)
+        if at is not None and unit.target is not None and len(replies) > at:
+            check: Any = replies[at]  # a CMD_GET_STATUS reply (its fields are built from the spec at import)
+            if check.NAME == "CMD_GET_STATUS" and self.plan.check(
+                unit.target, check.operation_state, check.motion_mode
+            ):
+                self.stats.states.add(unit.target)
 
     def _learn(self, replies: list[Any]) -> None:
         for r in replies:
@@ -420,7 +445,7 @@ class Campaign:
         last = [u for u in dict.fromkeys(e.unit for e in lanes.recent) if u is not culprit and u.cases]
         last += [culprit] if culprit is not None else []
         lanes.drain()
-        lanes.todo.clear()
+        lanes.clear_queue()
         why = (
             reason
             or {

@@ -19,6 +19,8 @@ Rules:
 
 from __future__ import annotations
 
+import collections
+
 BACKOFF_FIRST = 0.001  # s
 BACKOFF_GROWTH = 1.6
 BACKOFF_MAX = 0.016  # s: a turned-away newcomer tries again at least this often
@@ -37,7 +39,8 @@ class Gate:
         self.free_since: float | None = None  # when our last client on the port ended (None: none yet)
         self.admissions = 0  # admitted connections that were alone on the port
         self.late = 0  # of them, those admitted only after a turn-away
-        self.waits: list[float] = []  # recent waits from the port's last client's end to an admitted connect
+        # recent waits from the port's last client's end to an admitted connect
+        self.waits: collections.deque[float] = collections.deque(maxlen=SAMPLES)
         self.turn_aways = 0
         self.pipelined = 0
         self.pipelined_turned_away = 0
@@ -55,7 +58,7 @@ class Gate:
         if not behind and self.free_since is not None:
             self.admissions += 1
             self.late += self.backoff > 0
-            self.waits = [*self.waits[-SAMPLES + 1 :], max(0.0, started - self.free_since)]
+            self.waits.append(max(0.0, started - self.free_since))
         self.backoff = 0.0
 
     def ended(self, now: float, admitted: bool, behind: bool) -> None:

@@ -28,6 +28,16 @@ Rules:
   in flight and units not admitted too (a target that reads every connection may have seen them).
 - Every admitted unit is handed to the campaign's ``judge`` in its port's order; a False answer stops new units,
   the ones in flight run out (and are judged too) and ``run`` returns: the ports are then free for replays.
+- Plain singles in bulk (``bulk``, where ``_singles`` is built): a port with nothing of Python's on it hands the
+  plain singles it would take next (``pltf.fuzz.single.plain``; their leads decided here, in their order) to a
+  ``_singles.Run``, ``FEED`` ahead at most. C starts them as these rules do - a fresh connection each, up to the
+  gate's depth behind one that was sent whole and owes only the lead, a waiting one's deadline from its turn,
+  the allowances of the other ports' units both ways - drives them on the lanes' epoll and finishes them in port
+  order; Python takes the finished ones a few at a time, counts the admitted ones (gate, liveness, served) in
+  one loop and hands the clean ones to the campaign at once (``judge_clean``); only a suspicious one is judged
+  alone. A single not admitted or past its deadline stops the run (C starts nothing more after it), a stop
+  halts every run: the singles a run did not start go back to the front of the queue, in their order, and out
+  of ``log`` and ``recent``. While a run holds a port, Python starts nothing else there.
 """
 
 from __future__ import annotations
@@ -38,8 +48,9 @@ import socket
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
-from pltf.fuzz.flight import Flight, fly, step_flights
+from pltf.fuzz.flight import NATIVE, Flight, fly, step_flights
 from pltf.fuzz.gate import DEPTH, Gate
 from pltf.fuzz.pace import Pace
 from pltf.fuzz.poller import Poller
@@ -47,17 +58,23 @@ from pltf.fuzz.sent import segments
 from pltf.fuzz.single import CSingle, Flying, Single, plain, single
 from pltf.fuzz.target import LEAD_IDS, Session, session_deadline
 from pltf.fuzz.unit import PIPELINE_BYTES, Unit
-from pltf.fuzz.verdict import NOT_ADMITTED, Liveness, Verdict, judge
+from pltf.fuzz.verdict import NOT_ADMITTED, OK, Liveness, Verdict, judge
+
+try:
+    from pltf.fuzz._singles import Run
+except ImportError:  # built without a compiler, or PLTF_NO_EXTENSIONS=1
+    Run = None  # type: ignore[assignment,misc]
 
 RECENT = 16  # units remembered as "sent last"
 LOG = 1024  # flights remembered for ``sent`` (about eight windows of cases)
 WARMUP = 256  # units served, none turned away, before some may go without a lead
 SHARED_UNITS = 2  # allowances of units started on other ports that a unit in flight gets at most
 LEAD_EVERY = 4  # then: one unit in so many on a port keeps it (the liveness probe), and every unit that owes replies
+FEED = 16  # plain singles waiting in a port's ``Run`` at most (it asks for more when fewer than four wait)
 DONE, STOPPED = "done", "stopped"
 
 
-@dataclass(eq=False)
+@dataclass(eq=False, slots=True)
 class InFlight:
     flight: Flying
     unit: Unit
@@ -72,10 +89,13 @@ class InFlight:
 
 
 Judge = Callable[[InFlight, Verdict], bool]
+JudgeClean = Callable[[list[InFlight]], None]  # admitted plain singles with clean verdicts (``e.verdict``), in order
 FlightFactory = Callable[..., Flight]
 
 
 class Lanes:
+    bulk = NATIVE  # plain singles in bulk, in C (``_singles.Run``); False: each through ``_start`` and ``_done``
+
     def __init__(
         self,
         host: str,
@@ -117,6 +137,7 @@ class Lanes:
         self.fin_waits = False
         self.frames_as_is = True
         self.poller = Poller()
+        self.runs: list[Run | None] = [None] * len(ports)  # each port's plain singles in C (``_feed``)
 
     # ------------------------------------------------------------------ queue
     def add(self, units: list[Unit]) -> None:
@@ -124,40 +145,68 @@ class Lanes:
 
     def fresh_waiting(self) -> int:
         """Units queued that need a fresh connection (a case the target should refuse closes it)."""
-        return sum(1 for u in self.todo if not u.keep)
+        return sum(1 for u in self.todo if not u.keep) + sum(r.waiting for r in self.runs if r is not None)
+
+    def clear_queue(self) -> None:
+        """Nothing queued runs any more (the units in flight run out): the queue and the singles waiting in C."""
+        self._halt_runs()
+        self.todo.clear()
 
     # ------------------------------------------------------------------ the loop
-    def run(self, judge_unit: Judge, batches_only: bool = False) -> str:
+    def run(self, judge_unit: Judge, batches_only: bool = False, judge_clean: JudgeClean | None = None) -> str:
         """Run the queue; DONE when it is empty (``batches_only``: when no unit of accepted cases is queued or in
         flight - the others go on in the next call), STOPPED when ``judge_unit`` said stop, else "dead", "hang",
-        "deaf" or "stall" (``gone``)."""
+        "deaf" or "stall" (``gone``). ``judge_clean``: the plain singles that ran in C and were clean, at once."""
         self.stop = False
         while True:
             if not self.stop and self.gone is None:
                 self._fill()
+            else:
+                self._halt_runs()
             live = [e.flight for q in self.flights for e in q if not e.flight.done]
             if batches_only and not self.stop and self.gone is None and not self._batches_pending():
                 return DONE
-            if not live and not any(self.flights):
-                if self.suspect is not None:
-                    self._check_suspect()
-                if self.gone is not None:
-                    gone, self.gone = self.gone, None
-                    return gone
-                if self.stop:
-                    return STOPPED
-                if not self.todo:
-                    return DONE
-                wait = min(g.retry_at for g in self.gates[: self.active]) - time.monotonic()
-                time.sleep(max(0.0, min(wait, 0.05)))
+            runs = [(k, r) for k, r in enumerate(self.runs) if r is not None and r.active]
+            if runs:
+                self._step_runs(runs, live, judge_unit, judge_clean)
+            elif not live and not any(self.flights):
+                ended = self._idle()
+                if ended is not None:
+                    return ended
                 continue
-            if live and not any(q and q[0].flight.done for q in self.flights):
+            elif not any(q and q[0].flight.done for q in self.flights):
                 step_flights(live, until=self._next_retry(), poller=self.poller)
             for q in self.flights:
                 while q and q[0].flight.done:
                     e = q.popleft()
                     _restart_clocks(q)
                     self._done(e, judge_unit)
+
+    def _idle(self) -> str | None:
+        """Nothing in flight: how ``run`` ends (None: it goes on, after the nearest backoff)."""
+        if self.suspect is not None:
+            self._check_suspect()
+        if self.gone is not None:
+            gone, self.gone = self.gone, None
+            return gone
+        if self.stop:
+            return STOPPED
+        if not self.todo:
+            return DONE
+        wait = min(g.retry_at for g in self.gates[: self.active]) - time.monotonic()
+        time.sleep(max(0.0, min(wait, 0.05)))
+        return None
+
+    def _step_runs(
+        self, runs: list[tuple[int, Run]], live: list[Flying], judge_unit: Judge, judge_clean: JudgeClean | None
+    ) -> None:
+        """With runs in C: one wait on the epoll, unless something is ready already (C goes on by itself until a
+        run has singles for Python or wants more), then what the runs finished."""
+        if not any(r.ready for _, r in runs) and not any(q and q[0].flight.done for q in self.flights):
+            self._share_with_runs(runs)
+            self.poller.step(live, until=self._next_retry())
+        for k, r in runs:
+            self._take_run(k, r, judge_unit, judge_clean)
 
     def _batches_pending(self) -> bool:
         """Units of accepted cases queued or in flight (on a dear target: the kept connection's), or singles the
@@ -175,11 +224,23 @@ class Lanes:
         """Start units on every port that takes one now."""
         now = time.monotonic()
         todo = self.todo
+        bulk = self._bulk()
         for k in range(self.active):
             gate, q = self.gates[k], self.flights[k]
+            run = self.runs[k]
+            if run is not None and run.active:  # the port's plain singles run in C: more of them, or nothing
+                if todo and not run.halted and now >= gate.retry_at:
+                    self._feed(k, run)
+                else:
+                    run.hungry = False  # nothing to give it now: it should not ask
+                continue
             while todo and now >= gate.retry_at:  # ``Gate.may_connect``
                 unit = self._pick(k)
                 if unit is None or not self._may_start(k, unit):
+                    break
+                if bulk and not q and _plain(unit):
+                    run = self.runs[k] = Run(self.poller.ep, DEPTH if gate.pipelining else 1)
+                    self._feed(k, run)
                     break
                 if unit is todo[0]:
                     todo.popleft()
@@ -206,7 +267,9 @@ class Lanes:
     def _may_start(self, k: int, unit: Unit) -> bool:
         q = self.flights[k]
         if self.dear and k == 0:  # the kept connection carries one batch at a time; paced, in its turn
-            return not q and (self.pace is None or self.pace.ready(self._singles_waiting()))
+            run = self.runs[0]
+            idle = not q and (run is None or not run.active)
+            return idle and (self.pace is None or self.pace.ready(self._singles_waiting()))
         if not q:
             return True
         gate = self.gates[k]
@@ -223,8 +286,10 @@ class Lanes:
 
     def _singles_waiting(self) -> bool:
         """Singles queued for the other ports (not pinned to port 0) or in flight there."""
-        return any(not u.keep and u.pin != 0 for u in self.todo) or any(
-            not e.unit.keep for q in self.flights[1:] for e in q
+        return (
+            any(not u.keep and u.pin != 0 for u in self.todo)
+            or any(not e.unit.keep for q in self.flights[1:] for e in q)
+            or any(r is not None and r.active for r in self.runs[1:])
         )
 
     def _led(self, k: int, unit: Unit, fresh: bool) -> bool:
@@ -271,6 +336,9 @@ class Lanes:
         ``SHARED_UNITS`` allowances each), and theirs to its deadline."""
         now = time.monotonic()
         mine = max(0.0, flight.budget - self.deadline)
+        for j, run in enumerate(self.runs):
+            if run is not None and j != k and run.flying:
+                flight.deadline += run.lend(mine)
         for j, q in enumerate(self.flights):
             for e in q if j != k else ():
                 if not e.flight.done:
@@ -293,17 +361,7 @@ class Lanes:
         if e.kept and f.kept is not None:
             self.kept = f.kept
         if v.kind == NOT_ADMITTED:
-            pipelining = gate.pipelining
-            gate.ended(now, admitted=False, behind=e.behind)
-            if pipelining and not gate.pipelining:
-                self.turned_away = unit.describe()
-            unit.tries += 1
-            self.unled, self.unled_ever_off = False, True
-            if v.how == "timed-out":
-                unit.pin = e.port
-            self.live.turned_away(e.port, v.how, now)
-            self.todo.appendleft(unit)
-            self._look_at_liveness(now)
+            self._not_admitted(e, v, now)
             return
         gate.admitted(e.started, e.behind)
         gate.ended(now, admitted=True, behind=e.behind)
@@ -314,6 +372,130 @@ class Lanes:
             self.pace.single_served()
         if not judge_unit(e, v):
             self.stop = True
+
+    def _not_admitted(self, e: InFlight, v: Verdict, now: float) -> None:
+        """Not served: back to the front of the queue, gated; the lead comes back for good."""
+        gate, unit = self.gates[e.port], e.unit
+        pipelining = gate.pipelining
+        gate.ended(now, admitted=False, behind=e.behind)
+        if pipelining and not gate.pipelining:
+            self.turned_away = unit.describe()
+        unit.tries += 1
+        self.unled, self.unled_ever_off = False, True
+        if v.how == "timed-out":
+            unit.pin = e.port
+        self.live.turned_away(e.port, v.how, now)
+        self.todo.appendleft(unit)
+        self._look_at_liveness(now)
+
+    # ------------------------------------------------------------------ plain singles in bulk (``_singles.Run``)
+    def _bulk(self) -> bool:
+        """Whether a port's plain singles may run in C: built, real flights, our FIN waits for nothing."""
+        return self.bulk and Run is not None and self.connect is Flight and self.frames_as_is and not self.fin_waits
+
+    def _feed(self, k: int, run: Run) -> None:
+        """Hand port ``k``'s run the plain singles it takes next (``_pick``, up to ``FEED`` waiting), each made
+        here once (its lead, bytes and budget); the run starts them in their turn."""
+        todo, pool, host, port, deadline = self.todo, self.poller.ep, self.host, self.ports[k], self.deadline
+        full = False
+        while todo:
+            if run.waiting >= FEED:
+                full = True
+                break
+            unit = self._pick(k)
+            if unit is None or not _plain(unit):
+                break
+            if unit is todo[0]:
+                todo.popleft()
+            else:
+                todo.remove(unit)
+            led = self._led(k, unit, True)
+            s: Any = single(pool, host, port, unit, led, deadline, False, start=False)
+            chain = len(s.data) <= PIPELINE_BYTES and LEAD_IDS.issuperset(s.expected)
+            run.add(s, led, chain, s.budget - deadline)
+            self.log.append(s)
+            s.entry = e = InFlight(s, unit, k, False, False, led, 0.0)
+            self.recent.append(e)
+        run.hungry = full
+        run.advance()
+
+    def _take_run(self, k: int, run: Run, judge_unit: Judge, judge_clean: JudgeClean | None) -> None:
+        """The singles port ``k``'s run finished, in port order: each judged; the admitted ones counted (gate,
+        liveness, served) in one loop and the clean ones handed to ``judge_clean`` at once; a run that stopped
+        (a single not admitted, or past its deadline) gives back the singles it did not start."""
+        done = run.take()
+        if not done:
+            return
+        if run.halted:
+            self._give_back(run)
+        gate, live, pace = self.gates[k], self.live, self.pace if k else None
+        clean: list[InFlight] = []
+        for f in done:
+            e = f.entry
+            e.started, e.behind = f.started, f.behind
+            gate.pipelined += f.behind  # ``Gate.connected``
+            v = e.verdict = f.verdict()
+            if v.kind == NOT_ADMITTED:
+                self._judge_clean(clean, judge_unit, judge_clean)
+                self._not_admitted(e, v, time.monotonic())
+                continue
+            end = f.end_at
+            gate.admitted(f.started, f.behind)
+            gate.ended(end, admitted=True, behind=f.behind)
+            live.admitted(k, end)
+            self.served += 1
+            if pace is not None:
+                pace.single_served()
+            if v.kind == OK:
+                clean.append(e)
+                continue
+            self._judge_clean(clean, judge_unit, judge_clean)
+            if not judge_unit(e, v):
+                self.stop = True
+        self._judge_clean(clean, judge_unit, judge_clean)
+        self.unled = self.served >= WARMUP and not self.unled_ever_off
+
+    def _judge_clean(self, clean: list[InFlight], judge_unit: Judge, judge_clean: JudgeClean | None) -> None:
+        if not clean:
+            return
+        if judge_clean is not None:
+            judge_clean(clean)
+        else:
+            for e in clean:
+                assert e.verdict is not None
+                judge_unit(e, e.verdict)
+        clean.clear()
+
+    def _share_with_runs(self, runs: list[tuple[int, Run]]) -> None:
+        """The allowances between the runs' singles and the units Python drives on the other ports (as
+        ``_share_allowances``): theirs lent to each single started, each single's granted to them."""
+        for k, run in runs:
+            others = [e for j, q in enumerate(self.flights) if j != k for e in q if not e.flight.done]
+            run.set_others([(e.flight.deadline, max(0.0, e.flight.budget - self.deadline)) for e in others])
+            for mine in run.new_starts():
+                for e in others:
+                    e.largest = max(e.largest, mine)
+                    grant = max(0.0, min(mine, SHARED_UNITS * e.largest - e.shared))
+                    e.flight.deadline += grant
+                    e.shared += grant
+
+    def _halt_runs(self) -> None:
+        """No run starts anything more; the singles they did not start go back to the queue."""
+        for run in self.runs:
+            if run is not None and run.active and not run.halted:
+                run.halt()
+                self._give_back(run)
+
+    def _give_back(self, run: Run) -> None:
+        """The singles ``run`` did not start go back to the front of the queue, in their order, and are no longer
+        among the units sent (they were not)."""
+        back = run.unstarted()
+        if not back:
+            return
+        self.todo.extendleft(reversed([s.unit for s in back]))
+        gone = {id(s) for s in back}
+        self.recent = collections.deque((e for e in self.recent if id(e.flight) not in gone), maxlen=RECENT)
+        self.log = collections.deque((f for f in self.log if id(f) not in gone), maxlen=LOG)
 
     def _look_at_liveness(self, now: float) -> None:
         gone = self.live.verdict(now)
@@ -400,10 +582,25 @@ class Lanes:
         fly([e.flight for q in self.flights for e in q])
         for q in self.flights:
             q.clear()
+        self._halt_runs()
+        runs = [r for r in self.runs if r is not None]
+        while True:
+            for r in runs:
+                r.take()  # taken as they end: poll() waits for the others meanwhile
+            if not any(r.flying for r in runs):
+                break
+            self.poller.step([], until=None)
+        self.runs = [None] * len(self.ports)
 
     def close(self) -> None:
         self.drain()
         self.release()
+
+
+def _plain(unit: Unit) -> bool:
+    """A unit that runs as a plain single whatever its lead (``pltf.fuzz.single.plain``, our FIN waiting for
+    nothing)."""
+    return plain(unit, True, False, False)
 
 
 def _as_is(session: Session) -> Session:

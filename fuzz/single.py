@@ -237,7 +237,7 @@ class CSingle(_CBase):
     the replies decoded and judged here only when something came back, ``session`` and ``out`` built when asked
     for. Made by ``single``."""
 
-    __slots__ = ("_decoded", "_out", "_session", "expected", "fin_waits", "led", "owed", "unit")
+    __slots__ = ("_decoded", "_out", "_session", "entry", "expected", "fin_waits", "led", "owed", "unit")
     half_close = True
     kept = None
     next_at = 0.0
@@ -248,6 +248,7 @@ class CSingle(_CBase):
     fin_waits: bool
     expected: list[int]
     owed: int
+    entry: Any  # its ``pltf.fuzz.lanes.InFlight`` where a ``_singles.Run`` drives it
     _decoded: tuple[list[Telegram], str | None, int]
     _session: Session
     _out: Outcome
@@ -327,10 +328,11 @@ Flying = Flight | Single | CSingle  # what the lanes drive
 
 
 def single(
-    pool: Any, host: str, port: int, unit: Unit, lead: bool, deadline_s: float, fin_waits: bool
+    pool: Any, host: str, port: int, unit: Unit, lead: bool, deadline_s: float, fin_waits: bool, start: bool = True
 ) -> Single | CSingle:
     """A plain single (``plain``) on a fresh connection: in C where ``_singles`` is built (its socket on ``pool``,
-    a ``_singles.Pool``, or driven by ``select`` when None), else ``Single``."""
+    a ``_singles.Pool``, or driven by ``select`` when None), else ``Single``. ``start`` False (C only): made, not
+    connected - a ``_singles.Run`` of the pool starts it in its turn (``pltf.fuzz.lanes``)."""
     if not NATIVE:
         return Single(host, port, unit, lead, deadline_s, fin_waits)
     case = unit.cases[0]
@@ -345,7 +347,7 @@ def single(
     else:
         frames, data, ids = len(case.frames), case.data, []
     budget = deadline_s + PER_FRAME * frames + PER_MIB * len(data) / (1 << 20)
-    s = CSingle(pool, host, port, data, budget)
+    s = CSingle(pool, host, port, data, budget, start)
     s.unit, s.led, s.fin_waits, s.owed = unit, lead, fin_waits, len(ids)
     s.expected = [*ids, *case.answered] if case.answered is not None else answered_ids(data)
     return s

@@ -147,3 +147,51 @@ def test_c_single_frames_walks_the_reply_stream_by_the_wire_format() -> None:
         finally:
             server.close()
         assert isinstance(one, CSingle) and one.frames() == want
+
+
+def run_all(poller: Poller, run: object, flights: int) -> tuple[list[CSingle], list[CSingle]]:
+    """Drive a ``_singles.Run`` on its pool until each of its singles finished or came back unstarted."""
+    done: list[CSingle] = []
+    back: list[CSingle] = []
+    t0 = time.monotonic()
+    while len(done) + len(back) < flights and time.monotonic() - t0 < 10.0:
+        poller.step([], until=time.monotonic() + 0.2)
+        done += run.take()  # type: ignore[attr-defined]
+        if run.halted and not run.flying:  # type: ignore[attr-defined]
+            back += run.unstarted()  # type: ignore[attr-defined]
+    return done, back
+
+
+@pytest.mark.skipif(not NATIVE, reason="the C extension _singles is not built")
+@pytest.mark.parametrize("answer", list(ANSWERS))
+@pytest.mark.parametrize("lead", [True, False])
+def test_plain_singles_in_bulk_are_judged_as_a_flight_of_each_session_is(answer: str, lead: bool) -> None:
+    """Three plain singles handed to one port's run at once (``_singles.Run``, as the lanes hand them): each
+    started in its turn (pipelined behind the one before), judged as the general flight of its session, in port
+    order; a single not admitted stops the run and the ones it did not start come back."""
+    from pltf.fuzz._singles import Run
+
+    unit = REFUSED_UNIT
+    server = Answering(ANSWERS[answer], connections=4)
+    poller = Poller()
+    try:
+        run = Run(poller.ep, 4)
+        mine = [single(poller.ep, "127.0.0.1", server.port, unit, lead, 2.0, False, start=False) for _ in range(3)]
+        for s in mine:
+            run.add(s, lead, True, s.budget - 2.0)
+        run.advance()
+        done, back = run_all(poller, run, len(mine))
+        flight = Flight("127.0.0.1", server.port, unit.session(lead=lead), 2.0)
+        fly([flight])
+    finally:
+        server.close()
+        poller.close()
+    want = judge(flight.out, unit.owed(flight.session, len(flight.expected)), lead, False)
+    assert done[0] is mine[0] and done[0].verdict() == want
+    assert [r.ID for r in done[0].replies] == [r.ID for r in flight.out.replies]
+    if want.kind == "not-admitted":  # the rest stop behind it: back unstarted, or run out and judged the same
+        assert run.halted and back == mine[len(done) :] and all(not s.sends for s in back)
+        return
+    assert done == mine and not back and [s.verdict() for s in done] == [want] * 3
+    assert [s.behind for s in done] == [False, True, True]  # pipelined behind the first (the server is sequential)
+    assert all(s.pos == len(s.data) for s in done)

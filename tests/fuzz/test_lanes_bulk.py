@@ -1,0 +1,88 @@
+"""The lanes' plain singles in bulk (``pltf.fuzz.lanes``, ``_singles.Run``) against the per-unit path: a whole
+small campaign each way serves the same cases with the same verdicts, against the reference server and against a
+zoo member that turns newcomers away."""
+
+from __future__ import annotations
+
+import collections
+import sys
+from pathlib import Path
+
+import pytest
+
+from pltf.fuzz.engine import Campaign
+from pltf.fuzz.lanes import InFlight, Lanes
+from pltf.fuzz.options import Options
+from pltf.fuzz.single import NATIVE
+from pltf.fuzz.verdict import Verdict
+
+REFERENCE = f"{sys.executable} -m pltf.reference_server --ports {{ports}} --data-dir {{tmpdir}} --seed 1"
+SLOW_RELEASE = f"{sys.executable} -m pltf.zoo slow-release --serve reference --ports {{ports}}"
+
+
+class Recording(Campaign):
+    """A campaign that counts the verdict kinds it judged, and how many plain singles came in bulk."""
+
+    def __init__(self, opts: Options) -> None:
+        super().__init__(opts)
+        self.kinds: collections.Counter[str] = collections.Counter()
+        self.in_bulk = 0
+
+    def judge_unit(self, e: InFlight, v: Verdict) -> bool:
+        self.kinds[v.kind] += 1
+        return super().judge_unit(e, v)
+
+    def judge_clean(self, entries: list[InFlight]) -> None:
+        self.kinds.update(e.verdict.kind for e in entries if e.verdict is not None)
+        self.in_bulk += len(entries)
+        super().judge_clean(entries)
+
+
+def campaign(tmp_path: Path, launch: str, bulk: bool, monkeypatch: pytest.MonkeyPatch, cases: int) -> Recording:
+    monkeypatch.setattr(Lanes, "bulk", bulk)
+    opts = Options(
+        host="127.0.0.1",
+        port=0,
+        second_port=0,
+        duration=60.0,
+        max_cases=cases,
+        seed=1,
+        out=tmp_path / ("bulk" if bulk else "per-unit"),
+        allow_motion=True,
+        launch=launch,
+        deadline=5.0,
+    )
+    c = Recording(opts)
+    assert c.run() == 0, c.stats.findings
+    return c
+
+
+@pytest.mark.skipif(not NATIVE, reason="the C extension _singles is not built")
+def test_a_campaign_in_bulk_serves_what_the_per_unit_path_serves(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Two windows against the reference server (no trial yet, nothing skipped): the same cases served, by the
+    same origins, in as many batches and singles, with no finding and nothing unconfirmed either way."""
+    one = campaign(tmp_path, REFERENCE, False, monkeypatch, 500)
+    many = campaign(tmp_path, REFERENCE, True, monkeypatch, 500)
+    assert one.in_bulk == 0 and many.in_bulk > 100
+    for c in (one, many):
+        assert not c.stats.findings and not c.stats.unconfirmed
+        assert set(c.kinds) == {"ok"}
+    assert many.stats.cases == one.stats.cases == 500
+    assert many.stats.origins == one.stats.origins
+    assert (many.stats.singles, many.stats.batches) == (one.stats.singles, one.stats.batches)
+
+
+@pytest.mark.skipif(not NATIVE, reason="the C extension _singles is not built")
+def test_a_campaign_in_bulk_meets_newcomers_turned_away_as_the_per_unit_path_does(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Against a member that turns newcomers away (FIN) each way: no finding, nothing unconfirmed, every unit judged
+    ok (the ones turned away ran again), and the dear way taken. (A fresh connection right after our last one is
+    turned away here: each run of singles stops at its first, which runs again alone, gated.)"""
+    for bulk in (False, True):
+        c = campaign(tmp_path, SLOW_RELEASE, bulk, monkeypatch, 700)
+        assert not c.stats.findings and not c.stats.unconfirmed
+        assert set(c.kinds) == {"ok"} and c.stats.cases >= 300
+        assert c.stats.not_admitted > 0 and c.stats.dear
