@@ -168,14 +168,18 @@ def test_lines_converted_from_a_scan_of_the_office_lie_within_30_mm_of_its_walls
         wall = _nearest(walls, s)
         off = max(_distance(s[0], s[1], wall), _distance(s[2], s[3], wall))
         assert off <= 30, f"converted line {s} lies {off:.0f} mm off the nearest wall {wall}"
-    # an auxiliary line is short (MinLineLenAux to MinLineLenMap): a few beams, whose noise can turn it by 10 degrees
-    # about its middle (a clean clone's make test: 365 mm, ends 31 mm either side of x = 7000); its middle lies on the
-    # wall and it runs along it
+    # an auxiliary line is short (MinLineLenAux to MinLineLenMap): a few beams, whose noise can turn it about its
+    # middle, the shorter the more (clean clones' make test: 365 mm with ends 31 mm either side of x = 7000, 10
+    # degrees; 228 mm with ends 20 and 31 mm off, 13 degrees); its middle lies on the wall and it runs along it:
+    # neither end further off than the noise takes it
     for s in near(aux):
         wall = _nearest(walls, s)
         mid = _distance((s[0] + s[2]) / 2, (s[1] + s[3]) / 2, wall)
         assert mid <= 30, f"auxiliary line {s}: its middle lies {mid:.0f} mm off the nearest wall {wall}"
-        assert _turn(s, wall) <= 12, f"auxiliary line {s} is turned {_turn(s, wall):.0f} degrees from its wall {wall}"
+        off = max(_distance(s[0], s[1], wall), _distance(s[2], s[3], wall))
+        assert off <= 45, (
+            f"auxiliary line {s} is turned {_turn(s, wall):.0f} degrees from its wall {wall}: an end {off:.0f} mm off"
+        )
 
 
 def test_undo_and_redo_of_a_drag_restore_exact_coordinates_on_the_platform(

@@ -43,17 +43,19 @@ def test_random_waits_within_min_max_and_the_same_with_the_same_seed(session: Se
 
 def test_date_waits_for_the_platforms_local_time(session: Session) -> None:
     now = session.status().timestamp_ms / 1000.0  # simulated s since start; local time = 2030-01-01 + now
-    second = int(now) + 4
-    assert second < 60
+    # 30 simulated s ahead (0.6 s of wall time): 4 s ahead (80 ms) had passed before the program ran on a loaded
+    # machine (a clean-clone run at load 9: 'B' at 5.2 s for a wait until 5 s)
+    when = int(now) + 30
+    assert when < 3600
     lines = session.run_local(
         program(
             task(
-                f"<wait><date year='2030' month='1' day='1' hour='0' minute='0' "
-                f"second='{second}'/></wait><log message='B'/>"
+                f"<wait><date year='2030' month='1' day='1' hour='0' minute='{when // 60}' "
+                f"second='{when % 60}'/></wait><log message='B'/>"
             )
         )
     )
-    assert at(lines, "B") == pytest.approx(second, abs=PERIOD + 1e-6)
+    assert at(lines, "B") == pytest.approx(when, abs=PERIOD + 1e-6)
 
 
 def test_target_waits_until_the_platform_stands_at_its_target(session: Session) -> None:

@@ -39,6 +39,8 @@ interface Watched {
   footprint: Footprint | null;
   everConnected: boolean;
   line: HTMLButtonElement;
+  /** the words its line shows now, joined */
+  said: string;
 }
 
 export interface Fleet {
@@ -76,6 +78,7 @@ export function fleetPanel(
       footprint: null,
       everConnected: false,
       line,
+      said: "",
     };
     w.session.fetchDocuments = false;
     w.session.setPolling("status", member.target !== current, WATCH_HZ);
@@ -144,7 +147,12 @@ export function fleetPanel(
   const show = (w: Watched) => {
     const up = live(w);
     const l = statusLine(w.member.name, up, up ? w.status : null);
-    w.line.replaceChildren(...words(l, w).map((text, i) => h("span", { class: i === 0 ? "name" : "part" }, text)));
+    const said = words(l, w);
+    if (said.join("\n") !== w.said) {
+      // only when they change: the statuses (5-20 Hz) that say the same keep the words (and a press on one) as they are
+      w.line.replaceChildren(...said.map((text, i) => h("span", { class: i === 0 ? "name" : "part" }, text)));
+      w.said = said.join("\n");
+    }
     w.line.setAttribute("aria-pressed", String(w.member.target === current));
     const d = w.line.dataset;
     d.name = w.member.name;
