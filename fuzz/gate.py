@@ -61,6 +61,15 @@ class Gate:
             self.waits.append(max(0.0, started - self.free_since))
         self.backoff = 0.0
 
+    def served(self, started: float, behind: bool, end: float) -> None:
+        """``admitted`` and ``ended`` of a client that was served, at once (the lanes' plain singles in bulk)."""
+        if not behind and self.free_since is not None:
+            self.admissions += 1
+            self.late += self.backoff > 0
+            self.waits.append(max(0.0, started - self.free_since))
+        self.backoff = 0.0
+        self.free_since = end
+
     def ended(self, now: float, admitted: bool, behind: bool) -> None:
         """A client of ours is done on the port; not ``admitted``: it was turned away, runs again later."""
         self.free_since = now if admitted or self.free_since is None else self.free_since

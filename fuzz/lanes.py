@@ -59,6 +59,7 @@ from pltf.fuzz.single import CSingle, Flying, Single, plain, single
 from pltf.fuzz.target import LEAD_IDS, Session, session_deadline
 from pltf.fuzz.unit import PIPELINE_BYTES, Unit
 from pltf.fuzz.verdict import NOT_ADMITTED, OK, Liveness, Verdict, judge
+from pltf.fuzz.wire import KEEP
 
 try:
     from pltf.fuzz._singles import Run
@@ -428,8 +429,9 @@ class Lanes:
             return
         if run.halted:
             self._give_back(run)
-        gate, live, pace = self.gates[k], self.live, self.pace if k else None
+        gate, pace = self.gates[k], self.pace if k else None
         clean: list[InFlight] = []
+        end = None
         for f in done:
             e = f.entry
             e.started, e.behind = f.started, f.behind
@@ -440,9 +442,7 @@ class Lanes:
                 self._not_admitted(e, v, time.monotonic())
                 continue
             end = f.end_at
-            gate.admitted(f.started, f.behind)
-            gate.ended(end, admitted=True, behind=f.behind)
-            live.admitted(k, end)
+            gate.served(f.started, f.behind, end)
             self.served += 1
             if pace is not None:
                 pace.single_served()
@@ -453,6 +453,8 @@ class Lanes:
             if not judge_unit(e, v):
                 self.stop = True
         self._judge_clean(clean, judge_unit, judge_clean)
+        if end is not None:
+            self.live.admitted(k, end)
         self.unled = self.served >= WARMUP and not self.unled_ever_off
 
     def _judge_clean(self, clean: list[InFlight], judge_unit: Judge, judge_clean: JudgeClean | None) -> None:
@@ -598,9 +600,12 @@ class Lanes:
 
 
 def _plain(unit: Unit) -> bool:
-    """A unit that runs as a plain single whatever its lead (``pltf.fuzz.single.plain``, our FIN waiting for
-    nothing)."""
-    return plain(unit, True, False, False)
+    """A unit that runs as a plain single whatever its lead (``pltf.fuzz.single.plain`` when our FIN waits for
+    nothing): one case the target should refuse, written whole and small, never turned away."""
+    if unit.tries or len(unit.cases) != 1:
+        return False
+    c = unit.cases[0]
+    return c.expect != KEEP and c.delivery.mode == "whole" and c.size + sum(map(len, unit.prelude)) <= PIPELINE_BYTES
 
 
 def _as_is(session: Session) -> Session:

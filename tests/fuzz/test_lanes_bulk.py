@@ -86,3 +86,30 @@ def test_a_campaign_in_bulk_meets_newcomers_turned_away_as_the_per_unit_path_doe
         assert not c.stats.findings and not c.stats.unconfirmed
         assert set(c.kinds) == {"ok"} and c.stats.cases >= 300
         assert c.stats.not_admitted > 0 and c.stats.dear
+
+
+def test_the_lanes_take_in_bulk_exactly_the_plain_singles() -> None:
+    """``_plain`` (the lanes' check of the units a run takes) is ``plain`` of a fresh connection whose FIN waits for
+    nothing: one case the target should refuse, written whole and small, never turned away."""
+    from pltf.fuzz.case import Case, Delivery
+    from pltf.fuzz.lanes import _plain
+    from pltf.fuzz.single import plain
+    from pltf.fuzz.unit import PIPELINE_BYTES, Unit
+    from pltf.fuzz.wire import CLOSE, KEEP, frame
+
+    def case(body: bytes = b"\xfe\x01", expect: str = CLOSE, delivery: Delivery | None = None) -> Case:
+        made = Case((frame(body),), "gen.boundary", "id 254", expect=expect, answered=())
+        return made if delivery is None else Case(made.frames, made.origin, made.telegram, delivery=delivery)
+
+    units = [
+        Unit([case()]),
+        Unit([case(expect=KEEP)]),
+        Unit([case(b"\xfe" + bytes(PIPELINE_BYTES))]),
+        Unit([case(delivery=Delivery("slow", 4, 0.01))]),
+        Unit([case()], tries=1),
+        Unit([case(), case()]),
+        Unit([case()], prelude=[frame(b"\x10")]),
+        Unit([case()], prelude=[frame(b"\x10" + bytes(PIPELINE_BYTES))]),
+    ]
+    assert [_plain(u) for u in units] == [plain(u, True, False, False) for u in units]
+    assert [_plain(u) for u in units] == [True, False, False, False, False, False, True, False]
