@@ -46,7 +46,7 @@
 #define NAGLE_FREE 1024  /* bytes: larger writes go with TCP_NODELAY (as flight.NAGLE_FREE) */
 #define RECV_CHUNK 65536 /* bytes per recv (as target.RECV) */
 #define MAX_EVENTS 64
-#define SHARED_UNITS 2 /* allowances of units started on other ports a single gets at most (lanes.SHARED_UNITS) */
+#define SHARED_UNITS 2 /* allowances of units started on other ports a single gets at most (inflight.SHARED_UNITS) */
 #define REPORT 8       /* singles a Run finishes before poll() hands back to Python */
 #define LOW 4          /* a hungry Run asks Python for more when fewer wait to start */
 #define TAG_FD 1u      /* epoll data of a Python flight's socket: (fd << 1) | 1; a Single's is its (aligned) pointer */

@@ -19,25 +19,19 @@ Rules:
   the batch before it owes were served, or none waits (``pltf.fuzz.pace``).
 - Deadlines: a unit's budget (``pltf.fuzz.target.session_deadline``) runs from its turn on its port, plus the
   size allowances of the units in flight on the other ports (a target may serve one port at a time). Of the
-  units that start on other ports while it is in flight it gets at most ``SHARED_UNITS`` allowances: a target
-  that serves its ports in turn comes back to it after one of them. Unbounded, the kept connection's batches,
-  one after the other, would push a stalled single's deadline on for as long as they come, and the stall
-  would never show.
+  units that start on other ports while it is in flight it gets at most ``SHARED_UNITS`` allowances
+  (``pltf.fuzz.inflight.grant``): a target that serves its ports in turn comes back to it after one of them.
+  Unbounded, the kept connection's batches, one after the other, would push a stalled single's deadline on for
+  as long as they come, and the stall would never show.
 - Every flight, in the lanes or alone (replays, checks), goes into ``log`` (the last ``LOG``) as it starts:
   ``sent()`` is what the target was sent lately, in the order it was written (``pltf.fuzz.sent``), units still
   in flight and units not admitted too (a target that reads every connection may have seen them).
 - Every admitted unit is handed to the campaign's ``judge`` in its port's order; a False answer stops new units,
   the ones in flight run out (and are judged too) and ``run`` returns: the ports are then free for replays.
 - Plain singles in bulk (``bulk``, where ``_singles`` is built): a port with nothing of Python's on it hands the
-  plain singles it would take next (``pltf.fuzz.single.plain``; their leads decided here, in their order) to a
-  ``_singles.Run``, ``FEED`` ahead at most. C starts them as these rules do - a fresh connection each, up to the
-  gate's depth behind one that was sent whole and owes only the lead, a waiting one's deadline from its turn,
-  the allowances of the other ports' units both ways - drives them on the lanes' epoll and finishes them in port
-  order; Python takes the finished ones a few at a time, counts the admitted ones (gate, liveness, served) in
-  one loop and hands the clean ones to the campaign at once (``judge_clean``); only a suspicious one is judged
-  alone. A single not admitted or past its deadline stops the run (C starts nothing more after it), a stop
-  halts every run: the singles a run did not start go back to the front of the queue, in their order, and out
-  of ``log`` and ``recent``. While a run holds a port, Python starts nothing else there.
+  plain singles it would take next to C, which starts them as these rules do; Python takes them back a few at a
+  time and counts them in one loop (``pltf.fuzz.runs``). While a run holds a port, Python starts nothing else
+  there.
 """
 
 from __future__ import annotations
@@ -47,19 +41,18 @@ import contextlib
 import socket
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
-from typing import Any
 
 from pltf.fuzz.flight import NATIVE, Flight, fly, step_flights
 from pltf.fuzz.gate import DEPTH, Gate
+from pltf.fuzz.inflight import InFlight, Judge, JudgeClean, grant
 from pltf.fuzz.pace import Pace
 from pltf.fuzz.poller import Poller
+from pltf.fuzz.runs import Bulk, plain_unit
 from pltf.fuzz.sent import segments
 from pltf.fuzz.single import CSingle, Flying, Single, plain, single
 from pltf.fuzz.target import LEAD_IDS, Session, session_deadline
 from pltf.fuzz.unit import PIPELINE_BYTES, Unit
-from pltf.fuzz.verdict import NOT_ADMITTED, OK, Liveness, Verdict, judge
-from pltf.fuzz.wire import KEEP
+from pltf.fuzz.verdict import NOT_ADMITTED, Liveness, Verdict, judge
 
 try:
     from pltf.fuzz._singles import Run
@@ -69,28 +62,10 @@ except ImportError:  # built without a compiler, or PLTF_NO_EXTENSIONS=1
 RECENT = 16  # units remembered as "sent last"
 LOG = 1024  # flights remembered for ``sent`` (about eight windows of cases)
 WARMUP = 256  # units served, none turned away, before some may go without a lead
-SHARED_UNITS = 2  # allowances of units started on other ports that a unit in flight gets at most
 LEAD_EVERY = 4  # then: one unit in so many on a port keeps it (the liveness probe), and every unit that owes replies
-FEED = 16  # plain singles waiting in a port's ``Run`` at most (it asks for more when fewer than four wait)
 DONE, STOPPED = "done", "stopped"
 
 
-@dataclass(eq=False, slots=True)
-class InFlight:
-    flight: Flying
-    unit: Unit
-    port: int  # index into the ports
-    behind: bool  # connected while another unit of ours was on the port (pipelined)
-    kept: bool  # on the kept batch connection
-    led: bool  # the session opens with the lead
-    started: float
-    verdict: Verdict | None = None
-    shared: float = 0.0  # s added to its deadline for units started on other ports since it started
-    largest: float = 0.0  # the largest such allowance
-
-
-Judge = Callable[[InFlight, Verdict], bool]
-JudgeClean = Callable[[list[InFlight]], None]  # admitted plain singles with clean verdicts (``e.verdict``), in order
 FlightFactory = Callable[..., Flight]
 
 
@@ -138,7 +113,8 @@ class Lanes:
         self.fin_waits = False
         self.frames_as_is = True
         self.poller = Poller()
-        self.runs: list[Run | None] = [None] * len(ports)  # each port's plain singles in C (``_feed``)
+        self.runs: list[Run | None] = [None] * len(ports)  # each port's plain singles in C (``pltf.fuzz.runs``)
+        self.in_bulk = Bulk(self)
 
     # ------------------------------------------------------------------ queue
     def add(self, units: list[Unit]) -> None:
@@ -150,7 +126,7 @@ class Lanes:
 
     def clear_queue(self) -> None:
         """Nothing queued runs any more (the units in flight run out): the queue and the singles waiting in C."""
-        self._halt_runs()
+        self.in_bulk.halt()
         self.todo.clear()
 
     # ------------------------------------------------------------------ the loop
@@ -163,7 +139,7 @@ class Lanes:
             if not self.stop and self.gone is None:
                 self._fill()
             else:
-                self._halt_runs()
+                self.in_bulk.halt()
             live = [e.flight for q in self.flights for e in q if not e.flight.done]
             if batches_only and not self.stop and self.gone is None and not self._batches_pending():
                 return DONE
@@ -204,10 +180,10 @@ class Lanes:
         """With runs in C: one wait on the epoll, unless something is ready already (C goes on by itself until a
         run has singles for Python or wants more), then what the runs finished."""
         if not any(r.ready for _, r in runs) and not any(q and q[0].flight.done for q in self.flights):
-            self._share_with_runs(runs)
+            self.in_bulk.share(runs)
             self.poller.step(live, until=self._next_retry())
         for k, r in runs:
-            self._take_run(k, r, judge_unit, judge_clean)
+            self.in_bulk.take(k, r, judge_unit, judge_clean)
 
     def _batches_pending(self) -> bool:
         """Units of accepted cases queued or in flight (on a dear target: the kept connection's), or singles the
@@ -231,7 +207,7 @@ class Lanes:
             run = self.runs[k]
             if run is not None and run.active:  # the port's plain singles run in C: more of them, or nothing
                 if todo and not run.halted and now >= gate.retry_at:
-                    self._feed(k, run)
+                    self.in_bulk.feed(k, run)
                 else:
                     run.hungry = False  # nothing to give it now: it should not ask
                 continue
@@ -239,9 +215,9 @@ class Lanes:
                 unit = self._pick(k)
                 if unit is None or not self._may_start(k, unit):
                     break
-                if bulk and not q and _plain(unit):
+                if bulk and not q and plain_unit(unit):
                     run = self.runs[k] = Run(self.poller.ep, DEPTH if gate.pipelining else 1)
-                    self._feed(k, run)
+                    self.in_bulk.feed(k, run)
                     break
                 if unit is todo[0]:
                     todo.popleft()
@@ -344,10 +320,7 @@ class Lanes:
             for e in q if j != k else ():
                 if not e.flight.done:
                     flight.deadline += max(0.0, min(e.flight.deadline - now, e.flight.budget - self.deadline))
-                    e.largest = max(e.largest, mine)
-                    grant = max(0.0, min(mine, SHARED_UNITS * e.largest - e.shared))
-                    e.flight.deadline += grant
-                    e.shared += grant
+                    grant(e, mine)
 
     # ------------------------------------------------------------------ a finished flight
     def _done(self, e: InFlight, judge_unit: Judge) -> None:
@@ -368,11 +341,15 @@ class Lanes:
         gate.ended(now, admitted=True, behind=e.behind)
         self.live.admitted(e.port, now)
         self.served += 1
-        self.unled = self.served >= WARMUP and not self.unled_ever_off
+        self._may_go_unled()
         if self.pace is not None and e.port and not unit.keep:
             self.pace.single_served()
         if not judge_unit(e, v):
             self.stop = True
+
+    def _may_go_unled(self) -> None:
+        """Units that owe nothing may go without the lead once ``WARMUP`` were served and none was turned away."""
+        self.unled = self.served >= WARMUP and not self.unled_ever_off
 
     def _not_admitted(self, e: InFlight, v: Verdict, now: float) -> None:
         """Not served: back to the front of the queue, gated; the lead comes back for good."""
@@ -393,111 +370,6 @@ class Lanes:
     def _bulk(self) -> bool:
         """Whether a port's plain singles may run in C: built, real flights, our FIN waits for nothing."""
         return self.bulk and Run is not None and self.connect is Flight and self.frames_as_is and not self.fin_waits
-
-    def _feed(self, k: int, run: Run) -> None:
-        """Hand port ``k``'s run the plain singles it takes next (``_pick``, up to ``FEED`` waiting), each made
-        here once (its lead, bytes and budget); the run starts them in their turn."""
-        todo, pool, host, port, deadline = self.todo, self.poller.ep, self.host, self.ports[k], self.deadline
-        full = False
-        while todo:
-            if run.waiting >= FEED:
-                full = True
-                break
-            unit = self._pick(k)
-            if unit is None or not _plain(unit):
-                break
-            if unit is todo[0]:
-                todo.popleft()
-            else:
-                todo.remove(unit)
-            led = self._led(k, unit, True)
-            s: Any = single(pool, host, port, unit, led, deadline, False, start=False)
-            chain = len(s.data) <= PIPELINE_BYTES and LEAD_IDS.issuperset(s.expected)
-            run.add(s, led, chain, s.budget - deadline)
-            self.log.append(s)
-            s.entry = e = InFlight(s, unit, k, False, False, led, 0.0)
-            self.recent.append(e)
-        run.hungry = full
-        run.advance()
-
-    def _take_run(self, k: int, run: Run, judge_unit: Judge, judge_clean: JudgeClean | None) -> None:
-        """The singles port ``k``'s run finished, in port order: each judged; the admitted ones counted (gate,
-        liveness, served) in one loop and the clean ones handed to ``judge_clean`` at once; a run that stopped
-        (a single not admitted, or past its deadline) gives back the singles it did not start."""
-        done = run.take()
-        if not done:
-            return
-        if run.halted:
-            self._give_back(run)
-        gate, pace = self.gates[k], self.pace if k else None
-        clean: list[InFlight] = []
-        end = None
-        for f in done:
-            e = f.entry
-            e.started, e.behind = f.started, f.behind
-            gate.pipelined += f.behind  # ``Gate.connected``
-            v = e.verdict = f.verdict()
-            if v.kind == NOT_ADMITTED:
-                self._judge_clean(clean, judge_unit, judge_clean)
-                self._not_admitted(e, v, time.monotonic())
-                continue
-            end = f.end_at
-            gate.served(f.started, f.behind, end)
-            self.served += 1
-            if pace is not None:
-                pace.single_served()
-            if v.kind == OK:
-                clean.append(e)
-                continue
-            self._judge_clean(clean, judge_unit, judge_clean)
-            if not judge_unit(e, v):
-                self.stop = True
-        self._judge_clean(clean, judge_unit, judge_clean)
-        if end is not None:
-            self.live.admitted(k, end)
-        self.unled = self.served >= WARMUP and not self.unled_ever_off
-
-    def _judge_clean(self, clean: list[InFlight], judge_unit: Judge, judge_clean: JudgeClean | None) -> None:
-        if not clean:
-            return
-        if judge_clean is not None:
-            judge_clean(clean)
-        else:
-            for e in clean:
-                assert e.verdict is not None
-                judge_unit(e, e.verdict)
-        clean.clear()
-
-    def _share_with_runs(self, runs: list[tuple[int, Run]]) -> None:
-        """The allowances between the runs' singles and the units Python drives on the other ports (as
-        ``_share_allowances``): theirs lent to each single started, each single's granted to them."""
-        for k, run in runs:
-            others = [e for j, q in enumerate(self.flights) if j != k for e in q if not e.flight.done]
-            run.set_others([(e.flight.deadline, max(0.0, e.flight.budget - self.deadline)) for e in others])
-            for mine in run.new_starts():
-                for e in others:
-                    e.largest = max(e.largest, mine)
-                    grant = max(0.0, min(mine, SHARED_UNITS * e.largest - e.shared))
-                    e.flight.deadline += grant
-                    e.shared += grant
-
-    def _halt_runs(self) -> None:
-        """No run starts anything more; the singles they did not start go back to the queue."""
-        for run in self.runs:
-            if run is not None and run.active and not run.halted:
-                run.halt()
-                self._give_back(run)
-
-    def _give_back(self, run: Run) -> None:
-        """The singles ``run`` did not start go back to the front of the queue, in their order, and are no longer
-        among the units sent (they were not)."""
-        back = run.unstarted()
-        if not back:
-            return
-        self.todo.extendleft(reversed([s.unit for s in back]))
-        gone = {id(s) for s in back}
-        self.recent = collections.deque((e for e in self.recent if id(e.flight) not in gone), maxlen=RECENT)
-        self.log = collections.deque((f for f in self.log if id(f) not in gone), maxlen=LOG)
 
     def _look_at_liveness(self, now: float) -> None:
         gone = self.live.verdict(now)
@@ -584,7 +456,7 @@ class Lanes:
         fly([e.flight for q in self.flights for e in q])
         for q in self.flights:
             q.clear()
-        self._halt_runs()
+        self.in_bulk.halt()
         runs = [r for r in self.runs if r is not None]
         while True:
             for r in runs:
@@ -597,15 +469,6 @@ class Lanes:
     def close(self) -> None:
         self.drain()
         self.release()
-
-
-def _plain(unit: Unit) -> bool:
-    """A unit that runs as a plain single whatever its lead (``pltf.fuzz.single.plain`` when our FIN waits for
-    nothing): one case the target should refuse, written whole and small, never turned away."""
-    if unit.tries or len(unit.cases) != 1:
-        return False
-    c = unit.cases[0]
-    return c.expect != KEEP and c.delivery.mode == "whole" and c.size + sum(map(len, unit.prelude)) <= PIPELINE_BYTES
 
 
 def _as_is(session: Session) -> Session:

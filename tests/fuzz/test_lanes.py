@@ -14,6 +14,7 @@ from typing import Any
 import pytest
 
 import pltf.fuzz.lanes as lanes_module
+from pltf.fuzz import inflight
 from pltf.fuzz.case import Case
 from pltf.fuzz.lanes import DONE, STOPPED, InFlight, Lanes
 from pltf.fuzz.pace import Pace
@@ -260,7 +261,7 @@ def test_units_started_on_the_other_port_extend_a_unit_in_flight_by_shared_units
         batch = SimpleNamespace(done=False, budget=1.5, deadline=time.monotonic() + 1.5)
         lanes._share_allowances(0, batch)  # type: ignore[arg-type]
         batch.done = True
-    assert single.deadline == pytest.approx(now + 1.0 + lanes_module.SHARED_UNITS * 0.5)
+    assert single.deadline == pytest.approx(now + 1.0 + inflight.SHARED_UNITS * 0.5)
 
 
 def test_a_paced_kept_connection_starts_a_batch_only_after_the_singles_the_last_one_owes() -> None:

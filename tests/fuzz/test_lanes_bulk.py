@@ -92,7 +92,7 @@ def test_the_lanes_take_in_bulk_exactly_the_plain_singles() -> None:
     """``_plain`` (the lanes' check of the units a run takes) is ``plain`` of a fresh connection whose FIN waits for
     nothing: one case the target should refuse, written whole and small, never turned away."""
     from pltf.fuzz.case import Case, Delivery
-    from pltf.fuzz.lanes import _plain
+    from pltf.fuzz.runs import plain_unit as _plain
     from pltf.fuzz.single import plain
     from pltf.fuzz.unit import PIPELINE_BYTES, Unit
     from pltf.fuzz.wire import CLOSE, KEEP, frame
