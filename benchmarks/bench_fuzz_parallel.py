@@ -34,7 +34,7 @@ from benchmarks.harness import Config, Row, Target, benchmark, make_row
 from benchmarks.proc_cpu import process_cpu
 from benchmarks.ray_local import local_cluster
 from benchmarks.ray_local import say as _say
-from pltf.fuzz.engine import Campaign, Options
+from pltf.fuzz.engine import Campaign, HarnessError, Options
 from pltf.fuzz.options import Stats
 from pltf.fuzz.parallel import LocalCampaign
 from pltf.harness.launch import REPO
@@ -55,6 +55,7 @@ BUGS = {
 LOCAL, RAY, BOOFUZZ_N = "pltf fuzz --jobs", "pltf fuzz --ray --jobs", "boofuzz processes"
 CPU_GOAL = 1 / 20  # ours per case over boofuzz's per case
 FIND_BUDGET = 60.0  # s of fuzzing to find a planted bug
+STARTS = 3  # starts of a target on ports we chose, at most (``ours_cpu``)
 
 
 def options(launch: str, seconds: float, out: Path, **changes: Any) -> Options:
@@ -133,7 +134,19 @@ def _self_cpu() -> float:
 
 
 def ours_cpu(launch: str, seconds: float) -> tuple[float, float]:
-    """(ms of the fuzzer's own CPU per case served, cases/s): this process and its case generator child."""
+    """(ms of the fuzzer's own CPU per case served, cases/s): this process and its case generator child. The
+    ports are ours to choose (``_ours_cpu``); another process may take one before the target binds it (a CI run
+    beside: "nothing listening on 127.0.0.1:47337 ... connection refused"), so a start that fails runs again on
+    other ports, ``STARTS`` times at most."""
+    for _ in range(STARTS - 1):
+        try:
+            return _ours_cpu(launch, seconds)
+        except HarnessError as exc:
+            _say(f"the target did not start ({exc}): again on other ports")
+    return _ours_cpu(launch, seconds)
+
+
+def _ours_cpu(launch: str, seconds: float) -> tuple[float, float]:
     a, b = free_ports()  # fixed ports: the targets here may log at ERROR, without their ports
     with tempfile.TemporaryDirectory() as out:
         campaign = Campaign(options(launch, seconds, Path(out), port=a, second_port=b))
