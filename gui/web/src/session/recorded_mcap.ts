@@ -115,7 +115,9 @@ export function lastAtOrBefore(sorted: bigint[], x: bigint): number {
 }
 
 const toNs = (t: number): bigint => BigInt(Math.round(t * 1e6)) * 1000n; // µs: a session's resolution
-const toS = (ns: bigint): number => Number(ns / 1000n) / 1e6;
+/** s from ns, through the whole µs nearest (as recorded.ts and the session file's reader take them): cut to the µs
+ * below, a frame at .9049995 s showed at .904 where its recording's session file says .905 (hog run 36) */
+const toS = (ns: bigint): number => Number((ns + 500n) / 1000n) / 1e6;
 const decoder = new TextDecoder();
 
 const LOOKBACK_S = 5;
