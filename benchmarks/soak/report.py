@@ -17,16 +17,28 @@ import platform
 import re
 import statistics
 import tempfile
+from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
-from benchmarks.soak import sampling, slopes
-
-if TYPE_CHECKING:
-    from benchmarks.soak.run import Outcome
+from benchmarks.soak import integrity, sampling, slopes
+from benchmarks.soak.replay import Replayed
 
 QUANTITIES = ("rss_mb", "fds", "threads")
 SHOWN_LINES = 20  # of pltf replay's output
+
+
+@dataclass
+class Outcome:
+    """What a soak saw, for ``render``: the samples, the processes that died, and the checks after the run."""
+
+    samples: list[dict[str, Any]]
+    dead: list[str]
+    replayed: Replayed | None = None  # None: not replayed (--no-replay)
+    reconnect: str = ""
+    patrol: str = ""
+    recording_check: integrity.Integrity | None = None
+    second_port: int = 0
 
 
 def judged(args: argparse.Namespace, samples: list[dict[str, Any]]) -> list[tuple[str, str, list[slopes.Slope]]]:

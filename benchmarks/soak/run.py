@@ -16,26 +16,15 @@ import json
 import sys
 import tempfile
 import time
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from benchmarks.soak import integrity, parts, report, sampling
-from benchmarks.soak.replay import Replayed, replay
+from benchmarks.soak.replay import replay
+from benchmarks.soak.report import Outcome
 from pltf.harness.launch import LaunchError
 
 REPLAY_TIMEOUT_PAD = 600.0  # s beyond twice the recorded duration over the replay's time scale
-
-
-@dataclass
-class Outcome:
-    samples: list[dict[str, Any]]
-    dead: list[str]
-    replayed: Replayed | None = None  # None: not replayed (--no-replay)
-    reconnect: str = ""
-    patrol: str = ""
-    recording_check: integrity.Integrity | None = None
-    second_port: int = 0
 
 
 def options(argv: list[str] | None) -> argparse.Namespace:
