@@ -4,25 +4,11 @@
  * the root's and the layers' attributes, elements outside the layers, and each object's unknown children
  * (`extra`). An element kind the editor does not know is an object of that kind, kept and written back.
  */
-import type { MapObject, MapScene } from "../scene/map";
 import { readMapFast } from "./mapfast";
+import type { EditorObject, MapDoc, RootEntry } from "./mapmodel";
 import { elementsOf, parseXml, writeDocument, type XmlElement, XmlError } from "./xml";
 
-/** One child of <map>, in document order: a layer (its objects are the scene's of that index) or kept as is. */
-export type RootEntry = { layer: number; attrs: Array<[string, string]> } | { kept: XmlElement };
-
-export interface MapDoc {
-  scene: MapScene;
-  rootAttrs: Array<[string, string]>;
-  entries: RootEntry[];
-  /** The id the next new object gets. */
-  nextId: number;
-}
-
-export interface EditorObject extends MapObject {
-  /** Child elements other than point, center and radius, kept in order. */
-  extra?: XmlElement[];
-}
+export type { EditorObject, MapDoc, RootEntry } from "./mapmodel";
 
 export class MapDocError extends Error {}
 

@@ -9,7 +9,7 @@
  * the document with the general reader, so the result, or the one-line error, is always the general reader's.
  * Unknown attributes and unknown self-closing children of an object are kept as the general reader keeps them.
  */
-import type { EditorObject, MapDoc, RootEntry } from "./mapdoc";
+import type { EditorObject, MapDoc, RootEntry } from "./mapmodel";
 import { MAX_XML_CHARS, type XmlElement } from "./xml";
 
 const isSpace = (c: number): boolean => c === 32 || c === 10 || c === 13 || c === 9;
