@@ -272,7 +272,11 @@ def test_each_platform_is_drawn_with_its_own_footprint(
 
     _select(page, "p02", fleet.first["p02"])
     wait_for(lambda: all(n > 0 for n in inked("p00", default)), timeout=10, what="p00's own outline in its colour")
-    assert inked("p00", big) == [0, 0, 0]
+    # nothing of p00's blue along p02's outline: neither p00 drawn with p02's footprint (a body's own not read yet is
+    # the default one) nor the selected body (#1565c0, within the colour's tolerance) at p00's last pose
+    canvas = page.locator("canvas.map-canvas")
+    seen = {k: canvas.get_attribute(f"data-{k}") for k in ("fleet", "platform")}
+    assert inked("p00", big) == [0, 0, 0], seen
     wait_for(lambda: _outline_of(page, "p02") == big, what="the selected p02 with its own footprint")
 
 

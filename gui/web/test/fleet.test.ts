@@ -4,6 +4,7 @@ import { describe, expect, it } from "vitest";
 import {
   bodyAt,
   DocumentOwner,
+  drawnFootprint,
   FLEET_COLOURS,
   type FleetBody,
   firstSelected,
@@ -97,7 +98,16 @@ describe("the map's bodies", () => {
   it("are written to data-fleet with the footprint drawn, the selected one marked", () => {
     const long = footprint(1600, 900, 100);
     const withOwn = [bodies[0], { ...bodies[1], footprint: long }, bodies[2]];
-    expect(fleetData(withOwn, DEFAULT)).toBe("*a@0,0,90.0/-425,225,270;b@1000,0,90.0/-900,700,505;c@-");
+    expect(fleetData(withOwn, (b) => b.footprint ?? DEFAULT)).toBe(
+      "*a@0,0,90.0/-425,225,270;b@1000,0,90.0/-900,700,505;c@-",
+    );
+  });
+
+  it("a body whose own footprint is not read is drawn with the default one, never the selected platform's", () => {
+    const long = footprint(1600, 900, 100); // the session's parameters: the selected platform, a big one
+    expect(drawnFootprint(body("watched", 0, 0), long)).toEqual(DEFAULT);
+    expect(drawnFootprint(body("chosen", 0, 0, true), long)).toEqual(long); // the session's, until its own is read
+    expect(drawnFootprint({ ...body("own", 0, 0), footprint: long }, DEFAULT)).toEqual(long);
   });
 
   it("a click hits a body within its own footprint's reach (a big platform from farther away)", () => {

@@ -191,6 +191,7 @@ export function fleetPanel(
     if (after !== undefined) {
       after.status = null; // until the panels' session reads it (no stale pose from the watcher's last poll)
     }
+    map.switched(); // nor the one before's pose in the map, drawn as the selected platform's
     history.replaceState(null, "", selectedHref(window.location.href, target));
     watched.forEach(show);
     drawn();

@@ -134,6 +134,14 @@ export class MapView {
     this.controller.zoomAll();
   }
 
+  /** The panels' session now talks to another platform of the fleet (panels/fleet.ts): the last status is the one
+   * before, so the selected platform is not drawn (its pose, scan, path) until the new one's first status. */
+  switched(): void {
+    this.shown.status = null;
+    this.drawnKey = "";
+    this.renderer.invalidate();
+  }
+
   /** The fleet's platforms as the map draws them (issue 30; [] for one platform). */
   setFleet(bodies: FleetBody[]): void {
     this.shown.fleet = bodies;

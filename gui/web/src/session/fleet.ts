@@ -22,7 +22,7 @@
  *   (erratum E-GUI-012): `DocumentOwner` below.
  */
 import type { GetStatusReply } from "../pltf";
-import type { Footprint } from "../view/overlay";
+import { DEFAULT_FOOTPRINT, type Footprint } from "../view/overlay";
 
 /** Distinct on the map's white and grey (Okabe-Ito, without yellow): blue, vermilion, green, purple, ... */
 export const FLEET_COLOURS = ["#0072b2", "#d55e00", "#009e73", "#cc79a7", "#e69f00", "#56b4e9", "#000000"];
@@ -117,18 +117,23 @@ export function bodyAt(bodies: FleetBody[], x: number, y: number, radius: number
   return best;
 }
 
+/** A body's footprint as drawn: its own; until it is read, `session`'s (the panels' session's parameters) for the
+ * selected one and the default for the others - never the selected platform's: it is another platform. */
+export function drawnFootprint(b: FleetBody, session: Footprint): Footprint {
+  return b.footprint ?? (b.selected ? session : DEFAULT_FOOTPRINT);
+}
+
 /**
  * The canvas's `data-fleet`: one `name@x,y,angle/rear,front,halfWidth` per body (mm, degrees; the footprint as
- * drawn: its own, or `fallback` while its own is not known; `name@-`: pose unknown, not drawn), `*` before the
- * selected.
+ * drawn, `drawnWith` the body; `name@-`: pose unknown, not drawn), `*` before the selected.
  */
-export function fleetData(bodies: FleetBody[], fallback: Footprint): string {
+export function fleetData(bodies: FleetBody[], drawnWith: (b: FleetBody) => Footprint): string {
   return bodies
     .map((b) => {
       if (b.pose === null) {
         return `${b.selected ? "*" : ""}${b.name}@-`;
       }
-      const f = b.footprint ?? fallback;
+      const f = drawnWith(b);
       const at = `${Math.round(b.pose.x)},${Math.round(b.pose.y)},${b.pose.angle.toFixed(1)}`;
       const outline = `${Math.round(f.rear)},${Math.round(f.front)},${Math.round(f.halfWidth)}`;
       return `${b.selected ? "*" : ""}${b.name}@${at}/${outline}`;

@@ -252,6 +252,9 @@ export class PlatformSession {
       }
     };
     ws.onmessage = (ev: MessageEvent) => {
+      if (this.ws !== ws) {
+        return; // a socket left at a switch: its platform's replies are not this target's
+      }
       if (typeof ev.data === "string") {
         this.onEvent(JSON.parse(ev.data) as ConnEvent);
       } else {

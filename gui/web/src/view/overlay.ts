@@ -24,6 +24,10 @@ export function footprint(length: number, distWheels: number, centreToAxis: numb
   return { rear: -centreToAxis - length / 2, front: -centreToAxis + length / 2, halfWidth: (distWheels + 110) / 2 };
 }
 
+/** A platform whose parameters are not read yet: PltfLength 650, DistWheels 430, DistPltfCenterToWheelAxis 100 mm
+ * (their defaults, panels/map/platform.ts `platformGeometry`). */
+export const DEFAULT_FOOTPRINT = footprint(650, 430, 100);
+
 export interface UsSensor {
   x: number;
   y: number;

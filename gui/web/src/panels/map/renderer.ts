@@ -11,16 +11,16 @@
 import { type Key, t } from "../../i18n/i18n";
 import { GetStatusReply, type GetPltfParamVecReply } from "../../pltf";
 import { KINDS } from "../../scene/map";
-import { type FleetBody, fleetData, reach } from "../../session/fleet";
+import { drawnFootprint, type FleetBody, fleetData, reach } from "../../session/fleet";
 import { type Camera, toScreen, viewBounds } from "../../view/camera";
 import type { PlacedLabel } from "../../view/labels";
 import type { Layers } from "../../view/maprender";
 import {
+  DEFAULT_FOOTPRINT,
   drawFlag,
   drawPlatform,
   drawStatus,
   type Footprint,
-  footprint,
   type OverlayOptions,
   type UsSensor,
 } from "../../view/overlay";
@@ -67,7 +67,7 @@ const GHOST_ONLY: Partial<OverlayOptions> = {
 export class MapRenderer {
   private dirty = true;
   private scheduled = false;
-  private platform: Footprint = footprint(650, 430, 100);
+  private platform: Footprint = DEFAULT_FOOTPRINT;
   private usSensors: UsSensor[] = [];
   /** what the last static layer drew per kind */
   private drawn: Record<string, number> = {};
@@ -178,8 +178,11 @@ export class MapRenderer {
 
   /** The radius (mm) within which a click hits a platform's body whose own footprint is not known yet. */
   get bodyRadius(): number {
-    return reach(this.platform);
+    return reach(DEFAULT_FOOTPRINT);
   }
+
+  /** A fleet body's footprint as drawn (session/fleet.ts `drawnFootprint`). */
+  private outline = (b: FleetBody): Footprint => drawnFootprint(b, this.platform);
 
   /** The selected platform's footprint: a fleet's selected body's own (issue 30) once known, else the session's. */
   private get selectedFootprint(): Footprint {
@@ -285,7 +288,7 @@ export class MapRenderer {
         continue;
       }
       if (!b.selected) {
-        drawPlatform(ctx, c, b.pose, b.footprint ?? this.platform, b.colour, false);
+        drawPlatform(ctx, c, b.pose, this.outline(b), b.colour, false);
       }
       const [sx, sy] = toScreen(c, b.pose.x, b.pose.y);
       const label = b.selected ? `▶ ${b.name}` : b.name;
@@ -296,7 +299,7 @@ export class MapRenderer {
       ctx.fillText(label, sx + 8, sy - 8);
     }
     ctx.lineWidth = 1;
-    this.canvas.dataset.fleet = fleetData(bodies, this.platform);
+    this.canvas.dataset.fleet = fleetData(bodies, this.outline);
   }
 }
 
