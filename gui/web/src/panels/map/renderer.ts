@@ -186,7 +186,8 @@ export class MapRenderer {
 
   /** The selected platform's footprint: a fleet's selected body's own (issue 30) once known, else the session's. */
   private get selectedFootprint(): Footprint {
-    return this.shown.fleet.find((b) => b.selected)?.footprint ?? this.platform;
+    const selected = this.shown.fleet.find((b) => b.selected);
+    return selected === undefined ? this.platform : this.outline(selected);
   }
 
   /** The true pose beside the estimate and the injected faults, in words (guide units: mm, degrees). */
