@@ -92,6 +92,8 @@ def test_a_campaign_in_bulk_meets_newcomers_turned_away_as_the_per_unit_path_doe
     not asserted.)"""
     for bulk in (False, True):
         c = campaign(tmp_path, SLOW_RELEASE, bulk, monkeypatch, 700)
+        # cases served (summary.json's): both ways serve their 700 in about 1.5 s here; 300 within the 60 s it has
+        # says the campaign went on, whatever the machine's pace
         assert judged_ok(c) and c.stats.cases >= 300, (c.kinds, c.stats.cases)
 
 
